@@ -1,0 +1,15 @@
+//! The skill model of situate: signal types and values, skill declarations,
+//! parameters, and the traits a skill implements.
+//!
+//! This crate does no I/O and knows nothing of scheduling; the skill manager
+//! (`situate_manager`) builds on it, and so do the language bindings.
+
+pub mod decl;
+pub mod skill;
+pub mod types;
+pub mod value;
+
+pub use decl::{ParamSpec, ParamType, ParamValue, ParamValueError, PortSpec, SkillDecl, SkillKind};
+pub use skill::{Body, Context, Declare, FnSkill, Io, Skill, SkillError, SkillMaker, SkillType};
+pub use types::{ElemType, RecordType, SignalType, TypeParseError};
+pub use value::{record_type, record_value, RecordValue, SignalValue, Value};

@@ -1,0 +1,194 @@
+//! The skill traits.
+//!
+//! [`Skill`] is what the skill manager runs: an object-safe body that reads
+//! its inputs from and writes its outputs to plain slices. Skill authors in
+//! Rust never implement it by hand: they write a struct whose fields are the
+//! ports and parameters, put `#[derive(Skill)]` on it and implement [`Body`]
+//! (the computational body). The derive generates the declaration
+//! ([`Declare`]) and the glue between fields and slices.
+
+use std::fmt;
+use std::sync::Arc;
+
+use crate::decl::SkillDecl;
+use crate::value::Value;
+
+/// What a body sees of the world besides its ports.
+#[derive(Debug, Default)]
+pub struct Context {
+    pub(crate) cycle: u64,
+    pub(crate) time_s: f64,
+    pub(crate) prints: Vec<String>,
+}
+
+impl Context {
+    pub fn new(cycle: u64, time_s: f64) -> Self {
+        Context { cycle, time_s, prints: Vec::new() }
+    }
+
+    /// The cycle this body runs in (for threaded bodies: the cycle that
+    /// handed over the latest inputs).
+    pub fn cycle(&self) -> u64 {
+        self.cycle
+    }
+
+    /// Seconds since the manager started, on its clock (simulated or wall).
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// The skill's own print: shown live by the debugging display when the
+    /// skill is verbose, and kept in a short per-skill history.
+    pub fn print(&mut self, line: impl Into<String>) {
+        self.prints.push(line.into());
+    }
+
+    pub fn set(&mut self, cycle: u64, time_s: f64) {
+        self.cycle = cycle;
+        self.time_s = time_s;
+    }
+
+    /// Takes the prints made since the last call.
+    pub fn take_prints(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.prints)
+    }
+
+    pub fn has_prints(&self) -> bool {
+        !self.prints.is_empty()
+    }
+}
+
+/// `sprint!(cx, "x = {}", x)`: a skill's own print (see [`Context::print`]).
+#[macro_export]
+macro_rules! sprint {
+    ($cx:expr, $($arg:tt)*) => { $cx.print(::std::format!($($arg)*)) };
+}
+
+/// A body's failure. The skill is marked faulted and deactivated; the cycle
+/// goes on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SkillError {
+    pub message: String,
+}
+
+impl SkillError {
+    pub fn new(message: impl Into<String>) -> Self {
+        SkillError { message: message.into() }
+    }
+}
+
+impl fmt::Display for SkillError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for SkillError {}
+
+impl From<String> for SkillError {
+    fn from(message: String) -> Self {
+        SkillError { message }
+    }
+}
+
+impl From<&str> for SkillError {
+    fn from(message: &str) -> Self {
+        SkillError { message: message.into() }
+    }
+}
+
+/// The ports of one run of a body, as the manager hands them over.
+///
+/// `inputs[i]` belongs to the declaration's input `i`; it is `Some` for every
+/// required input and `None` for an optional input nobody produced.
+/// The body sets `outputs[j]` to `Some` for each output it produces (the
+/// manager clears them before each run).
+pub struct Io<'a> {
+    pub inputs: &'a [Option<Value>],
+    pub outputs: &'a mut [Option<Value>],
+    pub cx: &'a mut Context,
+}
+
+/// A runnable skill instance (object-safe). Implemented by `#[derive(Skill)]`.
+pub trait Skill: Send + 'static {
+    /// Runs the body once.
+    fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError>;
+
+    /// Applies parameter `index` of the declaration. The manager has already
+    /// checked `value` against the parameter's type and range.
+    fn set_param(&mut self, index: usize, value: &Value);
+}
+
+/// The computational body of a Rust skill.
+pub trait Body {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError>;
+}
+
+/// A skill type that can declare itself and make instances.
+pub trait Declare {
+    fn declaration() -> SkillDecl;
+    fn create() -> Box<dyn Skill>;
+}
+
+/// A constructor for instances of one skill type.
+pub type SkillMaker = Arc<dyn Fn() -> Result<Box<dyn Skill>, String> + Send + Sync>;
+
+/// A skill type as the registry keeps it: its declaration and a constructor.
+#[derive(Clone)]
+pub struct SkillType {
+    pub decl: Arc<SkillDecl>,
+    pub make: SkillMaker,
+}
+
+impl SkillType {
+    /// The skill type of a Rust type with `#[derive(Skill)]`.
+    pub fn of<T: Declare>() -> Self {
+        SkillType { decl: Arc::new(T::declaration()), make: Arc::new(|| Ok(T::create())) }
+    }
+
+    /// A skill type from a declaration and any constructor (used by foreign
+    /// language bindings and tests).
+    pub fn new(
+        decl: SkillDecl,
+        make: impl Fn() -> Result<Box<dyn Skill>, String> + Send + Sync + 'static,
+    ) -> Self {
+        SkillType { decl: Arc::new(decl), make: Arc::new(make) }
+    }
+}
+
+impl fmt::Debug for SkillType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SkillType").field("decl", &self.decl).finish_non_exhaustive()
+    }
+}
+
+/// A skill written as a closure over the raw [`Io`]: handy for tests and for
+/// bindings that bring their own declaration.
+pub struct FnSkill<F> {
+    body: F,
+    params: Vec<Value>,
+}
+
+impl<F> FnSkill<F>
+where
+    F: FnMut(&mut Io<'_>, &[Value]) -> Result<(), SkillError> + Send + 'static,
+{
+    pub fn new(decl: &SkillDecl, body: F) -> Self {
+        FnSkill { body, params: decl.params.iter().map(|p| p.default.clone()).collect() }
+    }
+}
+
+impl<F> Skill for FnSkill<F>
+where
+    F: FnMut(&mut Io<'_>, &[Value]) -> Result<(), SkillError> + Send + 'static,
+{
+    fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
+        (self.body)(io, &self.params)
+    }
+
+    fn set_param(&mut self, index: usize, value: &Value) {
+        if let Some(slot) = self.params.get_mut(index) {
+            *slot = value.clone();
+        }
+    }
+}

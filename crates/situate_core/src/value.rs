@@ -1,0 +1,312 @@
+//! Signal values.
+//!
+//! A [`Value`] is what travels on a signal during a cycle. Everything larger
+//! than a machine word sits behind an `Arc`, so handing one value to several
+//! consumers clones a pointer, never the data.
+//!
+//! Rust types convert to and from values through [`SignalValue`]; records are
+//! Rust structs with `#[derive(Record)]` (see the `situate` facade).
+
+use std::fmt;
+use std::sync::Arc;
+
+use crate::types::{ElemType, RecordType, SignalType};
+
+/// One value of a signal.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    Bool(bool),
+    I64(i64),
+    F64(f64),
+    Str(Arc<str>),
+    Bytes(Arc<[u8]>),
+    F32s(Arc<[f32]>),
+    F64s(Arc<[f64]>),
+    I64s(Arc<[i64]>),
+    Record(Arc<RecordValue>),
+}
+
+/// The field values of a record, in the order of its type's fields.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RecordValue {
+    pub fields: Vec<(Arc<str>, Value)>,
+}
+
+impl RecordValue {
+    pub fn get(&self, name: &str) -> Option<&Value> {
+        self.fields.iter().find(|(n, _)| &**n == name).map(|(_, v)| v)
+    }
+}
+
+impl Value {
+    /// A short name of the value's kind, for error messages.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Value::Bool(_) => "bool",
+            Value::I64(_) => "i64",
+            Value::F64(_) => "f64",
+            Value::Str(_) => "string",
+            Value::Bytes(_) => "bytes",
+            Value::F32s(_) => "f32 array",
+            Value::F64s(_) => "f64 array",
+            Value::I64s(_) => "i64 array",
+            Value::Record(_) => "record",
+        }
+    }
+
+    /// Whether this value is a valid value of type `t`.
+    pub fn conforms(&self, t: &SignalType) -> bool {
+        match (self, t) {
+            (Value::Bool(_), SignalType::Bool)
+            | (Value::I64(_), SignalType::I64)
+            | (Value::F64(_), SignalType::F64)
+            | (Value::Str(_), SignalType::Str)
+            | (Value::Bytes(_), SignalType::Bytes) => true,
+            (Value::F32s(a), SignalType::Array { elem: ElemType::F32, len }) => {
+                len.is_none_or(|n| n == a.len())
+            }
+            (Value::F64s(a), SignalType::Array { elem: ElemType::F64, len }) => {
+                len.is_none_or(|n| n == a.len())
+            }
+            (Value::I64s(a), SignalType::Array { elem: ElemType::I64, len }) => {
+                len.is_none_or(|n| n == a.len())
+            }
+            (Value::Record(r), SignalType::Record(rt)) => {
+                r.fields.len() == rt.fields.len()
+                    && r.fields
+                        .iter()
+                        .zip(&rt.fields)
+                        .all(|((n, v), (tn, tt))| **n == **tn && v.conforms(tt))
+            }
+            _ => false,
+        }
+    }
+
+    /// The number as `f64`, for bools, integers and floats.
+    pub fn as_f64(&self) -> Option<f64> {
+        match self {
+            Value::F64(x) => Some(*x),
+            Value::I64(x) => Some(*x as f64),
+            Value::Bool(b) => Some(f64::from(u8::from(*b))),
+            _ => None,
+        }
+    }
+
+    /// Element `i` of a numeric array, as `f64`.
+    pub fn index_f64(&self, i: usize) -> Option<f64> {
+        match self {
+            Value::F32s(a) => a.get(i).map(|x| f64::from(*x)),
+            Value::F64s(a) => a.get(i).copied(),
+            Value::I64s(a) => a.get(i).map(|x| *x as f64),
+            _ => None,
+        }
+    }
+
+    /// Length of an array, string or bytes value.
+    pub fn len(&self) -> Option<usize> {
+        match self {
+            Value::F32s(a) => Some(a.len()),
+            Value::F64s(a) => Some(a.len()),
+            Value::I64s(a) => Some(a.len()),
+            Value::Str(s) => Some(s.len()),
+            Value::Bytes(b) => Some(b.len()),
+            _ => None,
+        }
+    }
+
+    /// The value at a record field path (`&[]` is the value itself).
+    pub fn at_path(&self, path: &[&str]) -> Option<&Value> {
+        let mut v = self;
+        for name in path {
+            match v {
+                Value::Record(r) => v = r.get(name)?,
+                _ => return None,
+            }
+        }
+        Some(v)
+    }
+
+    /// The zero value of a type: false, 0, empty string, arrays of zeros
+    /// (of the fixed length, if any), records of zero fields.
+    pub fn zero(t: &SignalType) -> Value {
+        match t {
+            SignalType::Bool => Value::Bool(false),
+            SignalType::I64 => Value::I64(0),
+            SignalType::F64 => Value::F64(0.0),
+            SignalType::Str => Value::Str(Arc::from("")),
+            SignalType::Bytes => Value::Bytes(Arc::from(Vec::new())),
+            SignalType::Array { elem, len } => {
+                let n = len.unwrap_or(0);
+                match elem {
+                    ElemType::F32 => Value::F32s(vec![0.0; n].into()),
+                    ElemType::F64 => Value::F64s(vec![0.0; n].into()),
+                    ElemType::I64 => Value::I64s(vec![0; n].into()),
+                }
+            }
+            SignalType::Record(r) => Value::Record(Arc::new(RecordValue {
+                fields: r.fields.iter().map(|(n, t)| (Arc::from(n.as_str()), Value::zero(t))).collect(),
+            })),
+        }
+    }
+}
+
+impl fmt::Display for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fn list<T: fmt::Display>(f: &mut fmt::Formatter<'_>, items: &[T]) -> fmt::Result {
+            f.write_str("[")?;
+            for (i, x) in items.iter().enumerate() {
+                if i > 0 {
+                    f.write_str(", ")?;
+                }
+                write!(f, "{x}")?;
+            }
+            f.write_str("]")
+        }
+        match self {
+            Value::Bool(b) => write!(f, "{b}"),
+            Value::I64(x) => write!(f, "{x}"),
+            Value::F64(x) => write!(f, "{x}"),
+            Value::Str(s) => write!(f, "{s:?}"),
+            Value::Bytes(b) => write!(f, "<{} bytes>", b.len()),
+            Value::F32s(a) => list(f, a),
+            Value::F64s(a) => list(f, a),
+            Value::I64s(a) => list(f, a),
+            Value::Record(r) => {
+                f.write_str("{")?;
+                for (i, (n, v)) in r.fields.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str(", ")?;
+                    }
+                    write!(f, "{n}: {v}")?;
+                }
+                f.write_str("}")
+            }
+        }
+    }
+}
+
+/// A Rust type that travels on a signal.
+///
+/// Implemented for `bool`, `i64`, `f64`, `String`, `Arc<str>`, `Arc<[u8]>`,
+/// `Arc<[f32]>`, `Arc<[f64]>`, `Arc<[i64]>`, fixed arrays `[f32; N]`,
+/// `[f64; N]`, `[i64; N]`, and by `#[derive(Record)]` for structs.
+pub trait SignalValue: Sized {
+    fn signal_type() -> SignalType;
+    fn from_value(value: &Value) -> Option<Self>;
+    fn into_value(self) -> Value;
+}
+
+macro_rules! scalar_signal {
+    ($t:ty, $variant:ident, $st:expr) => {
+        impl SignalValue for $t {
+            fn signal_type() -> SignalType {
+                $st
+            }
+            fn from_value(value: &Value) -> Option<Self> {
+                match value {
+                    Value::$variant(x) => Some(x.clone()),
+                    _ => None,
+                }
+            }
+            fn into_value(self) -> Value {
+                Value::$variant(self)
+            }
+        }
+    };
+}
+
+scalar_signal!(bool, Bool, SignalType::Bool);
+scalar_signal!(i64, I64, SignalType::I64);
+scalar_signal!(f64, F64, SignalType::F64);
+scalar_signal!(Arc<str>, Str, SignalType::Str);
+scalar_signal!(Arc<[u8]>, Bytes, SignalType::Bytes);
+scalar_signal!(Arc<[f32]>, F32s, SignalType::array(ElemType::F32, None));
+scalar_signal!(Arc<[f64]>, F64s, SignalType::array(ElemType::F64, None));
+scalar_signal!(Arc<[i64]>, I64s, SignalType::array(ElemType::I64, None));
+
+impl SignalValue for String {
+    fn signal_type() -> SignalType {
+        SignalType::Str
+    }
+    fn from_value(value: &Value) -> Option<Self> {
+        match value {
+            Value::Str(s) => Some(s.to_string()),
+            _ => None,
+        }
+    }
+    fn into_value(self) -> Value {
+        Value::Str(Arc::from(self))
+    }
+}
+
+macro_rules! fixed_array_signal {
+    ($t:ty, $variant:ident, $elem:expr) => {
+        impl<const N: usize> SignalValue for [$t; N] {
+            fn signal_type() -> SignalType {
+                SignalType::array($elem, Some(N))
+            }
+            fn from_value(value: &Value) -> Option<Self> {
+                match value {
+                    Value::$variant(a) => <[$t; N]>::try_from(&a[..]).ok(),
+                    _ => None,
+                }
+            }
+            fn into_value(self) -> Value {
+                Value::$variant(Arc::from(&self[..]))
+            }
+        }
+    };
+}
+
+fixed_array_signal!(f32, F32s, ElemType::F32);
+fixed_array_signal!(f64, F64s, ElemType::F64);
+fixed_array_signal!(i64, I64s, ElemType::I64);
+
+/// Builds a record value from field values; used by `#[derive(Record)]`.
+pub fn record_value(fields: Vec<(&'static str, Value)>) -> Value {
+    Value::Record(Arc::new(RecordValue {
+        fields: fields.into_iter().map(|(n, v)| (Arc::from(n), v)).collect(),
+    }))
+}
+
+/// Builds a record type from field types; used by `#[derive(Record)]`.
+pub fn record_type(fields: Vec<(&'static str, SignalType)>) -> SignalType {
+    SignalType::Record(Arc::new(RecordType::new(
+        fields.into_iter().map(|(n, t)| (n.to_string(), t)).collect(),
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn conformance_checks_fixed_lengths_and_record_fields() {
+        let t = SignalType::array(ElemType::F32, Some(3));
+        assert!(Value::F32s(vec![1.0, 2.0, 3.0].into()).conforms(&t));
+        assert!(!Value::F32s(vec![1.0].into()).conforms(&t));
+        let rt = SignalType::record(vec![("x", SignalType::F64), ("ok", SignalType::Bool)]);
+        let good = record_value(vec![("x", Value::F64(1.0)), ("ok", Value::Bool(true))]);
+        let bad = record_value(vec![("x", Value::F64(1.0)), ("ok", Value::I64(1))]);
+        assert!(good.conforms(&rt));
+        assert!(!bad.conforms(&rt));
+        assert!(Value::zero(&rt).conforms(&rt));
+    }
+
+    #[test]
+    fn cloning_an_array_value_shares_the_buffer() {
+        let v = Value::F32s(vec![0.0; 1024].into());
+        let w = v.clone();
+        match (&v, &w) {
+            (Value::F32s(a), Value::F32s(b)) => assert!(Arc::ptr_eq(a, b)),
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn fixed_arrays_round_trip_and_reject_wrong_lengths() {
+        let v = [1.0f32, 2.0, 3.0].into_value();
+        assert_eq!(<[f32; 3]>::from_value(&v), Some([1.0, 2.0, 3.0]));
+        assert_eq!(<[f32; 2]>::from_value(&v), None);
+    }
+}
