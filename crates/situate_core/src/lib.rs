@@ -5,6 +5,7 @@
 //! (`situate_manager`) builds on it, and so do the language bindings.
 
 pub mod decl;
+pub mod names;
 pub mod skill;
 pub mod types;
 pub mod value;
@@ -13,3 +14,4 @@ pub use decl::{ParamSpec, ParamType, ParamValue, ParamValueError, PortSpec, Skil
 pub use skill::{Body, Context, Declare, FnSkill, Io, Skill, SkillError, SkillMaker, SkillType};
 pub use types::{ElemType, RecordType, SignalType, TypeParseError};
 pub use value::{record_type, record_value, RecordValue, SignalValue, Value};
+pub use names::{did_you_mean, suggestion};
