@@ -6,6 +6,8 @@
 
 pub use situate_core::*;
 pub use situate_derive::{Record, Skill};
+/// The skill manager: the cycle, the control API, robot files.
+// MANAGER_REEXPORT
 
 /// What generated code names; not a public API.
 #[doc(hidden)]

@@ -1,1 +1,32 @@
-//! placeholder
+//! The skill manager of situate (paper 3.2): it wires skills by their
+//! declarations, runs the periodic data-flow cycle, arbitrates resources by
+//! priority, watches monitors, and answers the sequencer's requests.
+//!
+//! - [`graph`]: signals, leaves, resources, and every static check;
+//! - [`manager`]: the cycle, the executors, the control API's handling;
+//! - [`control`]: requests, replies, events, handles;
+//! - [`expr`] and [`monitor`]: monitor conditions;
+//! - [`config`] and [`yaml`]: robot files, with positions for every error;
+//! - [`spec`]: a robot as plain data, from a file or from code.
+
+pub mod config;
+pub mod control;
+pub mod expr;
+pub mod graph;
+pub mod manager;
+pub mod monitor;
+pub mod registry;
+mod runner;
+pub mod spec;
+pub mod yaml;
+
+pub use config::{ClockKind, ExecutorKind, RobotFile};
+pub use control::{
+    Control, ControlError, Event, Handle, ManagerStats, PortInfo, Reply, Request, ResourceWinner, SignalReading,
+    SkillInfo, SkillTiming,
+};
+pub use graph::Graph;
+pub use manager::Manager;
+pub use monitor::MonitorMode;
+pub use registry::Registry;
+pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

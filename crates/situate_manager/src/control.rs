@@ -1,0 +1,357 @@
+//! The control API: what a sequencer can ask of the skill manager.
+//!
+//! Everything goes through one [`Request`] → [`Reply`] exchange, whether the
+//! caller owns the [`Manager`](crate::Manager) or holds a [`Handle`] to one
+//! running on its own thread. The sequencer link (over the network) serves
+//! exactly this API, so anything the link can do is tested here first.
+//!
+//! Requests are handled between two cycles: changes (activation, parameters,
+//! priorities) take effect from the next cycle on; queries see the state at
+//! the end of the last cycle. A refused request changes nothing.
+
+use std::time::Duration;
+
+use crossbeam_channel::{Receiver, Sender};
+use situate_core::{ParamSpec, SignalType, SkillKind, Value};
+
+use crate::monitor::MonitorMode;
+
+/// One request to the skill manager.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Request {
+    /// Activate skills from the next cycle on. With `with_providers`, also
+    /// activate (recursively) a provider of every input nobody active provides.
+    Activate { skills: Vec<String>, with_providers: bool },
+    Deactivate { skills: Vec<String> },
+    SetParam { skill: String, param: String, value: Value },
+    GetParam { skill: String, param: String },
+    SetPriority { skill: String, priority: i32 },
+    /// Send the skill's own prints as events.
+    SetVerbose { skill: String, verbose: bool },
+    /// The current value of a signal (a leaf or a whole record).
+    QuerySignal { signal: String },
+    QuerySkill { skill: String },
+    QuerySkills,
+    QueryWinners,
+    QueryGraph,
+    QueryStats,
+    AddMonitor { condition: String, mode: MonitorMode },
+    CancelMonitor { monitor: u64 },
+    ListMonitors,
+    Run,
+    Stop,
+    /// Run this many cycles now, then stop.
+    Step { cycles: u64 },
+    /// End the manager's thread (from a [`Handle`]).
+    Shutdown,
+}
+
+/// The answer to a [`Request`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Reply {
+    Done,
+    /// The skills whose activation changed, and the cycle it applies at.
+    Activation { changed: Vec<String>, at_cycle: u64 },
+    Param(Value),
+    Signal(SignalReading),
+    Skill(Box<SkillInfo>),
+    Skills(Vec<SkillInfo>),
+    Winners(Vec<ResourceWinner>),
+    Graph(GraphInfo),
+    Stats(ManagerStats),
+    MonitorAdded(u64),
+    Monitors(Vec<MonitorInfo>),
+}
+
+/// Why a request was refused. Every message names the thing and, where it
+/// can, suggests the likely intended name.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ControlError {
+    #[error("unknown skill `{name}`{suggestion}")]
+    UnknownSkill { name: String, suggestion: String },
+    #[error("skill `{skill}`: unknown parameter `{param}`{suggestion}")]
+    UnknownParam { skill: String, param: String, suggestion: String },
+    #[error("skill `{skill}`: parameter `{param}` {reason}")]
+    BadParam { skill: String, param: String, reason: String },
+    #[error("cannot activate `{skill}`: {}", missing_text(signals, providers))]
+    MissingProviders { skill: String, signals: Vec<String>, providers: Vec<String> },
+    #[error("unknown signal `{name}`{suggestion}")]
+    UnknownSignal { name: String, suggestion: String },
+    #[error("bad condition at column {column}: {message}\n{pointer}")]
+    BadCondition { column: usize, message: String, pointer: String },
+    #[error("no monitor {0}")]
+    UnknownMonitor(u64),
+    #[error("{0}")]
+    Invalid(String),
+    #[error("the skill manager is not running (its thread has ended)")]
+    Disconnected,
+}
+
+fn missing_text(signals: &[String], providers: &[String]) -> String {
+    let sig = signals.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ");
+    let mut text = format!("no active skill provides {sig}");
+    if providers.is_empty() {
+        text.push_str(" (and no skill of this robot can)");
+    } else {
+        let p = providers.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ");
+        text.push_str(&format!(" (activate {p} too, or ask to activate providers)"));
+    }
+    text
+}
+
+/// Something that happened, sent to every subscriber.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    MonitorFired { monitor: u64, condition: String, cycle: u64, time_s: f64, values: Vec<(String, Option<Value>)> },
+    ActivationApplied { activated: Vec<String>, deactivated: Vec<String>, cycle: u64 },
+    ParamChanged { skill: String, param: String, value: Value, cycle: u64 },
+    SkillFaulted { skill: String, cause: String, cycle: u64 },
+    /// A verbose skill's own print.
+    Print { skill: String, line: String, cycle: u64 },
+    ManagerStarted { cycle: u64 },
+    ManagerStopped { cycle: u64 },
+}
+
+/// A signal's current value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SignalReading {
+    pub signal: String,
+    pub ty: SignalType,
+    /// `None` until first written (for a record: until every field has been).
+    pub value: Option<Value>,
+    /// The cycle it was last written in (the oldest field's, for a record).
+    pub cycle: u64,
+    /// Who wrote it last (for a record: the writer of its first field).
+    pub writer: Option<String>,
+}
+
+/// A port and its latest value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PortInfo {
+    pub name: String,
+    pub signal: String,
+    pub ty: SignalType,
+    pub optional: bool,
+    pub value: Option<Value>,
+}
+
+/// Per-skill timing of its body.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SkillTiming {
+    pub runs: u64,
+    pub last_ns: u64,
+    pub max_ns: u64,
+    pub total_ns: u64,
+}
+
+impl SkillTiming {
+    pub fn mean_ns(&self) -> f64 {
+        if self.runs == 0 {
+            0.0
+        } else {
+            self.total_ns as f64 / self.runs as f64
+        }
+    }
+}
+
+/// Everything about one skill instance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkillInfo {
+    pub name: String,
+    pub type_name: String,
+    pub kind: SkillKind,
+    pub doc: String,
+    pub active: bool,
+    pub faulted: Option<String>,
+    pub verbose: bool,
+    pub priority: i32,
+    pub params: Vec<(ParamSpec, Value)>,
+    pub inputs: Vec<PortInfo>,
+    pub outputs: Vec<PortInfo>,
+    pub timing: SkillTiming,
+    /// The skill's latest prints (a short history), oldest first.
+    pub prints: Vec<(u64, String)>,
+}
+
+/// Who holds a resource (a signal leaf with several writers).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResourceWinner {
+    pub signal: String,
+    pub writers: Vec<String>,
+    /// The writer whose value stands this cycle, if any wrote.
+    pub winner: Option<String>,
+    pub cycle: u64,
+}
+
+/// The wiring, as built.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphInfo {
+    pub skills: Vec<GraphSkill>,
+    pub signals: Vec<GraphSignal>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphSkill {
+    pub name: String,
+    pub kind: SkillKind,
+    pub active: bool,
+    pub priority: i32,
+    pub inputs: Vec<String>,
+    pub outputs: Vec<String>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphSignal {
+    pub signal: String,
+    pub ty: SignalType,
+    pub writers: Vec<String>,
+    pub readers: Vec<String>,
+}
+
+/// Cycle statistics.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ManagerStats {
+    pub robot: String,
+    pub cycle: u64,
+    pub time_s: f64,
+    pub running: bool,
+    pub period_s: f64,
+    pub last_cycle_ns: u64,
+    pub mean_cycle_ns: f64,
+    pub max_cycle_ns: u64,
+    pub overruns: u64,
+    pub active: Vec<String>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MonitorInfo {
+    pub monitor: u64,
+    pub condition: String,
+    pub mode: MonitorMode,
+    pub fired: u64,
+    pub holds: bool,
+}
+
+/// Anything that answers requests: the manager itself, or a handle to it.
+/// The typed methods are conveniences over [`Control::request`].
+pub trait Control {
+    fn request(&mut self, request: Request) -> Result<Reply, ControlError>;
+
+    /// Activates skills; returns those whose state changed.
+    fn activate(&mut self, skills: &[&str]) -> Result<Vec<String>, ControlError> {
+        self.activate_with(skills, false)
+    }
+
+    fn activate_with(&mut self, skills: &[&str], with_providers: bool) -> Result<Vec<String>, ControlError> {
+        let skills = skills.iter().map(|s| s.to_string()).collect();
+        match self.request(Request::Activate { skills, with_providers })? {
+            Reply::Activation { changed, .. } => Ok(changed),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn deactivate(&mut self, skills: &[&str]) -> Result<Vec<String>, ControlError> {
+        let skills = skills.iter().map(|s| s.to_string()).collect();
+        match self.request(Request::Deactivate { skills })? {
+            Reply::Activation { changed, .. } => Ok(changed),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn set_param(&mut self, skill: &str, param: &str, value: Value) -> Result<(), ControlError> {
+        self.request(Request::SetParam { skill: skill.into(), param: param.into(), value }).map(|_| ())
+    }
+
+    fn get_param(&mut self, skill: &str, param: &str) -> Result<Value, ControlError> {
+        match self.request(Request::GetParam { skill: skill.into(), param: param.into() })? {
+            Reply::Param(v) => Ok(v),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn query(&mut self, signal: &str) -> Result<SignalReading, ControlError> {
+        match self.request(Request::QuerySignal { signal: signal.into() })? {
+            Reply::Signal(r) => Ok(r),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn skill(&mut self, skill: &str) -> Result<SkillInfo, ControlError> {
+        match self.request(Request::QuerySkill { skill: skill.into() })? {
+            Reply::Skill(s) => Ok(*s),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn skills(&mut self) -> Result<Vec<SkillInfo>, ControlError> {
+        match self.request(Request::QuerySkills)? {
+            Reply::Skills(s) => Ok(s),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn winners(&mut self) -> Result<Vec<ResourceWinner>, ControlError> {
+        match self.request(Request::QueryWinners)? {
+            Reply::Winners(w) => Ok(w),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn stats(&mut self) -> Result<ManagerStats, ControlError> {
+        match self.request(Request::QueryStats)? {
+            Reply::Stats(s) => Ok(s),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn add_monitor(&mut self, condition: &str, mode: MonitorMode) -> Result<u64, ControlError> {
+        match self.request(Request::AddMonitor { condition: condition.into(), mode })? {
+            Reply::MonitorAdded(id) => Ok(id),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    fn cancel_monitor(&mut self, monitor: u64) -> Result<(), ControlError> {
+        self.request(Request::CancelMonitor { monitor }).map(|_| ())
+    }
+
+    fn step(&mut self, cycles: u64) -> Result<(), ControlError> {
+        self.request(Request::Step { cycles }).map(|_| ())
+    }
+}
+
+fn unexpected(reply: Reply) -> ControlError {
+    ControlError::Invalid(format!("unexpected reply {reply:?}"))
+}
+
+pub(crate) type Envelope = (Request, Sender<Result<Reply, ControlError>>);
+
+/// A cloneable, thread-safe handle to a manager running on its own thread
+/// (see [`Manager::spawn`](crate::Manager::spawn)).
+#[derive(Clone)]
+pub struct Handle {
+    pub(crate) tx: Sender<Envelope>,
+    pub(crate) bus: crate::manager::EventBus,
+}
+
+impl Handle {
+    /// A new stream of events, from now on.
+    pub fn events(&self) -> Receiver<Event> {
+        self.bus.subscribe()
+    }
+
+    /// Like [`Control::request`], giving up after `timeout`.
+    pub fn request_timeout(&self, request: Request, timeout: Duration) -> Result<Reply, ControlError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.tx.send((request, tx)).map_err(|_| ControlError::Disconnected)?;
+        rx.recv_timeout(timeout).map_err(|_| ControlError::Disconnected)?
+    }
+}
+
+impl Control for Handle {
+    fn request(&mut self, request: Request) -> Result<Reply, ControlError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.tx.send((request, tx)).map_err(|_| ControlError::Disconnected)?;
+        rx.recv().map_err(|_| ControlError::Disconnected)?
+    }
+}

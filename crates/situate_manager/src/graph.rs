@@ -1,0 +1,557 @@
+//! Wiring: from skill declarations to the signal graph, with its static checks.
+//!
+//! Every port connects to a signal path (its own name unless remapped). A
+//! record-typed port is flattened into its *leaves* (`pose` of type
+//! `{x: f64, y: f64}` → `pose.x`, `pose.y`), and the whole graph is kept at
+//! leaf level. That one rule gives the paper's partial match: a consumer of
+//! the record `pose` is ready once every leaf has been written this cycle,
+//! whether one producer wrote the whole record or two producers wrote a field
+//! each. A leaf written by several skills is a *resource*; each cycle the
+//! highest-priority writer wins.
+//!
+//! [`Graph::build`] runs every static check `situate check` reports.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use situate_core::{suggestion, RecordType, SignalType, SkillKind, SkillType, Value};
+
+use crate::config::Section;
+use crate::registry::Registry;
+use crate::spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};
+use crate::yaml::Pos;
+
+/// A port bound to its signal.
+#[derive(Debug, Clone)]
+pub struct PortBinding {
+    pub name: String,
+    pub signal: String,
+    pub ty: SignalType,
+    pub optional: bool,
+    /// The leaf slots this port covers, in the flattened order of `ty`.
+    pub leaves: Vec<usize>,
+}
+
+/// A skill instance as wired.
+#[derive(Clone)]
+pub struct InstanceDef {
+    pub name: String,
+    pub skill_type: SkillType,
+    pub kind: SkillKind,
+    pub priority: i32,
+    pub params: Vec<Value>,
+    pub inputs: Vec<PortBinding>,
+    pub outputs: Vec<PortBinding>,
+    pub active: bool,
+    pub period_s: Option<f64>,
+}
+
+/// A leaf signal: one slot of the cycle's data.
+#[derive(Debug, Clone)]
+pub struct Leaf {
+    pub path: String,
+    pub ty: SignalType,
+    /// (instance, output port) pairs that write it, in declaration order.
+    pub writers: Vec<(usize, usize)>,
+    /// (instance, input port) pairs that read it.
+    pub readers: Vec<(usize, usize)>,
+}
+
+impl Leaf {
+    /// A leaf with several writing skills is a resource.
+    pub fn is_resource(&self) -> bool {
+        self.writers.len() > 1
+    }
+}
+
+/// The wired robot.
+#[derive(Clone)]
+pub struct Graph {
+    pub robot: String,
+    pub instances: Vec<InstanceDef>,
+    pub leaves: Vec<Leaf>,
+    pub leaf_index: HashMap<String, usize>,
+    /// Record paths (proper prefixes of leaf paths) with the type assembled
+    /// from their leaves.
+    pub records: BTreeMap<String, SignalType>,
+    pub warnings: Vec<Diagnostic>,
+}
+
+pub(crate) fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+pub(crate) fn is_signal_path(s: &str) -> bool {
+    !s.is_empty() && s.split('.').all(is_identifier)
+}
+
+/// Appends the leaves of a value of type `ty` at `path`.
+pub(crate) fn flatten(path: &str, ty: &SignalType, out: &mut Vec<(String, SignalType)>) {
+    match ty {
+        SignalType::Record(r) => {
+            for (field, fty) in &r.fields {
+                flatten(&format!("{path}.{field}"), fty, out);
+            }
+        }
+        other => out.push((path.to_string(), other.clone())),
+    }
+}
+
+/// Builds a value of type `ty` from leaf values given in flattened order.
+pub(crate) fn assemble<'v>(ty: &SignalType, leaves: &mut impl Iterator<Item = &'v Value>) -> Option<Value> {
+    match ty {
+        SignalType::Record(r) => {
+            let mut fields = Vec::with_capacity(r.fields.len());
+            for (name, fty) in &r.fields {
+                fields.push((Arc::from(name.as_str()), assemble(fty, leaves)?));
+            }
+            Some(Value::Record(Arc::new(situate_core::RecordValue { fields })))
+        }
+        _ => leaves.next().cloned(),
+    }
+}
+
+/// Splits a value of type `ty` into leaf values in flattened order; false if
+/// the value does not conform.
+pub(crate) fn decompose(ty: &SignalType, value: &Value, out: &mut Vec<Value>) -> bool {
+    match (ty, value) {
+        (SignalType::Record(rt), Value::Record(rv)) => {
+            rt.fields.len() == rv.fields.len()
+                && rt.fields.iter().zip(&rv.fields).all(|((tn, tt), (vn, vv))| {
+                    tn.as_str() == &**vn && decompose(tt, vv, out)
+                })
+        }
+        (SignalType::Record(_), _) => false,
+        (t, v) => {
+            if v.conforms(t) {
+                out.push(v.clone());
+                true
+            } else {
+                false
+            }
+        }
+    }
+}
+
+struct Checker<'a> {
+    spec: &'a RobotSpec,
+    diags: Vec<Diagnostic>,
+}
+
+impl Checker<'_> {
+    fn error(&mut self, pos: Option<Pos>, message: String) {
+        self.diags.push(self.spec.diag(Severity::Error, pos, message));
+    }
+    fn warning(&mut self, pos: Option<Pos>, message: String) {
+        self.diags.push(self.spec.diag(Severity::Warning, pos, message));
+    }
+}
+
+fn item_pos(s: &SkillSpec) -> Option<Pos> {
+    s.name_pos.or(s.pos)
+}
+
+impl Graph {
+    /// Wires a robot and runs every static check. Warnings are kept in
+    /// `warnings`; any error fails the build with all diagnostics found.
+    pub fn build(spec: &RobotSpec, registry: &Registry) -> Result<Graph, BuildError> {
+        let mut ck = Checker { spec, diags: Vec::new() };
+        if !(spec.period_s.is_finite() && spec.period_s > 0.0) {
+            ck.error(None, format!("cycle period must be > 0 s, got {}", spec.period_s));
+        }
+
+        // Instances: names, types, parameters, remaps.
+        let mut instances: Vec<InstanceDef> = Vec::new();
+        // Position of the remap (or the instance) for each port, for messages.
+        let mut port_pos: Vec<(Vec<Option<Pos>>, Vec<Option<Pos>>)> = Vec::new();
+        let mut specs: Vec<&SkillSpec> = Vec::new();
+        let mut seen: HashMap<&str, Option<Pos>> = HashMap::new();
+        for s in &spec.skills {
+            if !is_identifier(&s.name) {
+                ck.error(item_pos(s), format!("skill name `{}` is not an identifier (letters, digits, `_`)", s.name));
+                continue;
+            }
+            if let Some(first) = seen.get(s.name.as_str()) {
+                let at = first.map(|p| format!(" (first defined at line {})", p.line)).unwrap_or_default();
+                ck.error(item_pos(s), format!("duplicate skill name `{}`{at}", s.name));
+                continue;
+            }
+            seen.insert(&s.name, item_pos(s));
+            let Some(skill_type) = registry.get(&s.type_name) else {
+                let msg = format!("skill `{}`: {}", s.name, registry.unknown(&s.type_name));
+                ck.error(s.type_pos.or(item_pos(s)), msg);
+                continue;
+            };
+            let decl = &skill_type.decl;
+            match (s.section, decl.kind) {
+                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => ck.error(
+                    s.type_pos,
+                    format!("skill `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`", s.name, decl.type_name),
+                ),
+                (Some(Section::Skills), SkillKind::Device) => ck.error(
+                    s.type_pos,
+                    format!("skill `{}`: `{}` is a dskill; list it under `devices:`, not `skills:`", s.name, decl.type_name),
+                ),
+                _ => {}
+            }
+            let mut params: Vec<Value> = decl.params.iter().map(|p| p.default.clone()).collect();
+            for entry in &s.params {
+                match decl.param(&entry.name) {
+                    None => ck.error(
+                        entry.name_pos.or(item_pos(s)),
+                        format!(
+                            "skill `{}`: unknown parameter `{}`{}",
+                            s.name,
+                            entry.name,
+                            suggestion(&entry.name, decl.params.iter().map(|p| p.name.as_str()))
+                        ),
+                    ),
+                    Some((i, p)) => match p.check(&entry.value) {
+                        Ok(v) => params[i] = v,
+                        Err(e) => ck.error(
+                            entry.value_pos.or(item_pos(s)),
+                            format!("skill `{}`: parameter `{}` {e}", s.name, entry.name),
+                        ),
+                    },
+                }
+            }
+            let mut in_pos = vec![None; decl.inputs.len()];
+            let mut out_pos = vec![None; decl.outputs.len()];
+            let mut inputs: Vec<PortBinding> = decl
+                .inputs
+                .iter()
+                .map(|p| PortBinding {
+                    name: p.name.clone(),
+                    signal: p.signal.clone(),
+                    ty: p.ty.clone(),
+                    optional: p.optional,
+                    leaves: Vec::new(),
+                })
+                .collect();
+            let mut outputs: Vec<PortBinding> = decl
+                .outputs
+                .iter()
+                .map(|p| PortBinding {
+                    name: p.name.clone(),
+                    signal: p.signal.clone(),
+                    ty: p.ty.clone(),
+                    optional: false,
+                    leaves: Vec::new(),
+                })
+                .collect();
+            for r in &s.remap {
+                if !is_signal_path(&r.signal) {
+                    ck.error(
+                        r.signal_pos.or(item_pos(s)),
+                        format!("skill `{}`: remap target `{}` is not a signal name (identifiers joined by `.`)", s.name, r.signal),
+                    );
+                    continue;
+                }
+                let mut found = false;
+                for (i, p) in inputs.iter_mut().enumerate() {
+                    if p.name == r.port {
+                        p.signal = r.signal.clone();
+                        in_pos[i] = r.signal_pos;
+                        found = true;
+                    }
+                }
+                for (i, p) in outputs.iter_mut().enumerate() {
+                    if p.name == r.port {
+                        p.signal = r.signal.clone();
+                        out_pos[i] = r.signal_pos;
+                        found = true;
+                    }
+                }
+                if !found {
+                    let ports = decl.inputs.iter().chain(&decl.outputs).map(|p| p.name.as_str());
+                    ck.error(
+                        r.port_pos.or(item_pos(s)),
+                        format!("skill `{}`: remap of unknown port `{}`{}", s.name, r.port, suggestion(&r.port, ports)),
+                    );
+                }
+            }
+            for p in inputs.iter().chain(&outputs) {
+                if !is_signal_path(&p.signal) {
+                    ck.error(item_pos(s), format!("skill `{}`: port `{}` names signal `{}`, which is not a valid signal name", s.name, p.name, p.signal));
+                }
+            }
+            let period_s = s.period_ms.map(|ms| ms / 1000.0);
+            if let Some(ms) = s.period_ms {
+                if !(ms.is_finite() && ms > 0.0) {
+                    ck.error(item_pos(s), format!("skill `{}`: period_ms must be > 0, got {ms}", s.name));
+                }
+            }
+            let fallback = item_pos(s);
+            port_pos.push((
+                in_pos.into_iter().map(|p| p.or(fallback)).collect(),
+                out_pos.into_iter().map(|p| p.or(fallback)).collect(),
+            ));
+            specs.push(s);
+            instances.push(InstanceDef {
+                name: s.name.clone(),
+                kind: decl.kind,
+                priority: s.priority.unwrap_or(decl.priority),
+                skill_type: skill_type.clone(),
+                params,
+                inputs,
+                outputs,
+                active: s.active,
+                period_s,
+            });
+        }
+
+        // Leaves: every port flattened; first the outputs (so a leaf's type is
+        // its first writer's), then the inputs.
+        let mut leaves: Vec<Leaf> = Vec::new();
+        let mut leaf_index: HashMap<String, usize> = HashMap::new();
+        let mut flat = Vec::new();
+        for pass in 0..2 {
+            for (ii, inst) in instances.iter_mut().enumerate() {
+                let ports = if pass == 0 { &mut inst.outputs } else { &mut inst.inputs };
+                for (pi, port) in ports.iter_mut().enumerate() {
+                    flat.clear();
+                    flatten(&port.signal, &port.ty, &mut flat);
+                    for (path, ty) in flat.drain(..) {
+                        let li = *leaf_index.entry(path.clone()).or_insert_with(|| {
+                            leaves.push(Leaf { path, ty, writers: Vec::new(), readers: Vec::new() });
+                            leaves.len() - 1
+                        });
+                        if pass == 0 {
+                            leaves[li].writers.push((ii, pi));
+                        } else {
+                            leaves[li].readers.push((ii, pi));
+                        }
+                        port.leaves.push(li);
+                    }
+                }
+            }
+        }
+        let port_ref = |ii: usize, pi: usize, output: bool| -> (String, Option<Pos>, SignalType) {
+            let inst = &instances[ii];
+            let (p, pos) = if output {
+                (&inst.outputs[pi], port_pos[ii].1[pi])
+            } else {
+                (&inst.inputs[pi], port_pos[ii].0[pi])
+            };
+            let dir = if output { "output" } else { "input" };
+            (format!("`{}` ({dir} `{}`)", inst.name, p.name), pos, p.ty.clone())
+        };
+
+        // A path must not be both a value and a record.
+        let mut paths: Vec<&str> = leaves.iter().map(|l| l.path.as_str()).collect();
+        paths.sort_unstable();
+        for w in paths.windows(2) {
+            if w[1].starts_with(w[0]) && w[1].as_bytes().get(w[0].len()) == Some(&b'.') {
+                let a = &leaves[leaf_index[w[0]]];
+                let b = &leaves[leaf_index[w[1]]];
+                let (ai, ap) = a.writers.first().map(|&(i, p)| (i, p, true)).or(a.readers.first().map(|&(i, p)| (i, p, false))).map(|(i, p, o)| { let r = port_ref(i, p, o); (r.0, r.1) }).unwrap_or_default();
+                let (bi, _) = b.writers.first().map(|&(i, p)| (i, p, true)).or(b.readers.first().map(|&(i, p)| (i, p, false))).map(|(i, p, o)| { let r = port_ref(i, p, o); (r.0, r.1) }).unwrap_or_default();
+                ck.error(ap, format!("signal `{}` is used both as a value, by {ai}, and as a record with field `{}`, by {bi}", w[0], &w[1][w[0].len() + 1..]));
+            }
+        }
+
+        for leaf in &leaves {
+            // Writers agree on the type; every writer feeds every reader.
+            if let Some(&(w0, p0)) = leaf.writers.first() {
+                let first_ty = leaf_ty(&instances[w0].outputs[p0], &leaf.path);
+                for &(wi, pi) in &leaf.writers[1..] {
+                    let ty = leaf_ty(&instances[wi].outputs[pi], &leaf.path);
+                    if ty != first_ty {
+                        let (a, _, _) = port_ref(w0, p0, true);
+                        let (b, pos, _) = port_ref(wi, pi, true);
+                        ck.error(pos, format!("type mismatch on signal `{}`: {a} writes {first_ty}, {b} writes {ty}", leaf.path));
+                    }
+                }
+                for &(ri, pi) in &leaf.readers {
+                    let want = leaf_ty(&instances[ri].inputs[pi], &leaf.path);
+                    if !first_ty.feeds(&want) {
+                        let (a, _, _) = port_ref(w0, p0, true);
+                        let (b, pos, _) = port_ref(ri, pi, false);
+                        ck.error(pos, format!("type mismatch on signal `{}`: {a} produces {first_ty}, {b} expects {want}", leaf.path));
+                    }
+                }
+            } else {
+                for &(ri, pi) in &leaf.readers {
+                    let (b, pos, _) = port_ref(ri, pi, false);
+                    let near = suggestion(&leaf.path, leaves.iter().filter(|l| !l.writers.is_empty()).map(|l| l.path.as_str()));
+                    let msg = format!("{b} reads signal `{}`, which no skill or device provides{near}", leaf.path);
+                    if instances[ri].inputs[pi].optional {
+                        ck.warning(pos, format!("optional input: {msg}"));
+                    } else {
+                        ck.error(pos, msg);
+                    }
+                }
+            }
+            // Equal-priority writers of one resource cannot be arbitrated.
+            let mut by_inst: Vec<usize> = leaf.writers.iter().map(|&(i, _)| i).collect();
+            by_inst.dedup();
+            for (k, &a) in by_inst.iter().enumerate() {
+                for &b in &by_inst[k + 1..] {
+                    if instances[a].priority == instances[b].priority {
+                        let pos = specs[b].priority_pos.or(item_pos(specs[b]));
+                        ck.error(
+                            pos,
+                            format!(
+                                "skills `{}` and `{}` both write resource `{}` with priority {}; give them different priorities",
+                                instances[a].name, instances[b].name, leaf.path, instances[a].priority
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+        // Report each equal-priority pair once per top-level signal.
+        dedup_messages(&mut ck.diags);
+
+        // Data-flow loops among cskills.
+        let order = topo_order(&instances, &leaves, |_| true);
+        if order.len() < instances.iter().filter(|i| i.kind != SkillKind::Device).count() {
+            let in_loop: Vec<&str> = instances
+                .iter()
+                .enumerate()
+                .filter(|(i, d)| d.kind != SkillKind::Device && !order.contains(i))
+                .map(|(_, d)| d.name.as_str())
+                .collect();
+            let first = instances.iter().position(|d| d.name == in_loop[0]).and_then(|i| item_pos(specs[i]));
+            ck.error(first, format!("data-flow loop among skills {}: each waits for another's output in the same cycle", quote_list(&in_loop)));
+        }
+
+        let mut records = BTreeMap::new();
+        for leaf in &leaves {
+            let mut path = leaf.path.as_str();
+            while let Some(dot) = path.rfind('.') {
+                path = &path[..dot];
+                records.entry(path.to_string()).or_insert(SignalType::Bool);
+            }
+        }
+        let record_names: Vec<String> = records.keys().cloned().collect();
+        for name in record_names {
+            let ty = record_type_at(&name, &leaves);
+            records.insert(name, ty);
+        }
+
+        let (errors, warnings): (Vec<_>, Vec<_>) = ck.diags.into_iter().partition(Diagnostic::is_error);
+        if !errors.is_empty() {
+            return Err(BuildError { diagnostics: errors.into_iter().chain(warnings).collect() });
+        }
+        Ok(Graph { robot: spec.robot.clone(), instances, leaves, leaf_index, records, warnings })
+    }
+
+    /// The type at a signal path: a leaf's, or a record's assembled from its leaves.
+    pub fn signal_type(&self, path: &str) -> Option<SignalType> {
+        self.leaf_index
+            .get(path)
+            .map(|&i| self.leaves[i].ty.clone())
+            .or_else(|| self.records.get(path).cloned())
+    }
+
+    /// The leaves under a path (one for a leaf, all fields' for a record).
+    pub fn leaves_under(&self, path: &str) -> Vec<usize> {
+        if let Some(&i) = self.leaf_index.get(path) {
+            return vec![i];
+        }
+        match self.records.get(path) {
+            Some(ty) => {
+                let mut flat = Vec::new();
+                flatten(path, ty, &mut flat);
+                flat.iter().filter_map(|(p, _)| self.leaf_index.get(p).copied()).collect()
+            }
+            None => Vec::new(),
+        }
+    }
+
+    pub fn instance(&self, name: &str) -> Option<usize> {
+        self.instances.iter().position(|i| i.name == name)
+    }
+
+    /// All signal names, leaves and records, for suggestions.
+    pub fn signal_names(&self) -> impl Iterator<Item = &str> {
+        self.leaves.iter().map(|l| l.path.as_str()).chain(self.records.keys().map(String::as_str))
+    }
+}
+
+fn leaf_ty(port: &PortBinding, leaf_path: &str) -> SignalType {
+    let mut flat = Vec::new();
+    flatten(&port.signal, &port.ty, &mut flat);
+    flat.into_iter().find(|(p, _)| p == leaf_path).map(|(_, t)| t).unwrap_or(SignalType::Bool)
+}
+
+fn record_type_at(path: &str, leaves: &[Leaf]) -> SignalType {
+    // Fields in order of first appearance among the leaves.
+    let prefix = format!("{path}.");
+    let mut fields: Vec<(String, SignalType)> = Vec::new();
+    for leaf in leaves {
+        if let Some(rest) = leaf.path.strip_prefix(&prefix) {
+            let field = rest.split('.').next().unwrap_or(rest);
+            if fields.iter().any(|(f, _)| f == field) {
+                continue;
+            }
+            let ty = if rest.contains('.') {
+                record_type_at(&format!("{prefix}{field}"), leaves)
+            } else {
+                leaf.ty.clone()
+            };
+            fields.push((field.to_string(), ty));
+        }
+    }
+    SignalType::Record(Arc::new(RecordType::new(fields)))
+}
+
+fn dedup_messages(diags: &mut Vec<Diagnostic>) {
+    let mut seen = std::collections::HashSet::new();
+    diags.retain(|d| {
+        // "skills `a` and `b` both write resource `drive.v` …" and "… `drive.w` …"
+        // are one problem: key on the message up to the resource's first dot.
+        let key = match d.message.find("both write resource `") {
+            Some(i) => {
+                let rest = &d.message[i + 21..];
+                let top = rest.split(['.', '`']).next().unwrap_or(rest);
+                format!("{}{}", &d.message[..i], top)
+            }
+            None => format!("{:?}{}", d.pos, d.message),
+        };
+        seen.insert(key)
+    });
+}
+
+pub(crate) fn quote_list(names: &[&str]) -> String {
+    names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+}
+
+/// Kahn's algorithm over the cskills selected by `include`: producers before
+/// consumers, ties in declaration order. dskills are left out: their
+/// readings are taken before the data flow and their commands after it.
+/// Returns the instances in order; any left out (besides dskills) sit on a loop.
+pub(crate) fn topo_order(instances: &[InstanceDef], leaves: &[Leaf], include: impl Fn(usize) -> bool) -> Vec<usize> {
+    let n = instances.len();
+    let node = |i: usize| instances[i].kind != SkillKind::Device && include(i);
+    let mut indegree = vec![0usize; n];
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for leaf in leaves {
+        for &(w, _) in &leaf.writers {
+            if !node(w) {
+                continue;
+            }
+            for &(r, _) in &leaf.readers {
+                if node(r) && !succ[w].contains(&r) {
+                    succ[w].push(r);
+                    indegree[r] += 1;
+                }
+            }
+        }
+    }
+    let mut ready: std::collections::BTreeSet<usize> = (0..n).filter(|&i| node(i) && indegree[i] == 0).collect();
+    let mut order = Vec::new();
+    while let Some(i) = ready.pop_first() {
+        order.push(i);
+        for &s in &succ[i] {
+            indegree[s] -= 1;
+            if indegree[s] == 0 {
+                ready.insert(s);
+            }
+        }
+    }
+    order
+}

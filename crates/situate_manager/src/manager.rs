@@ -1,0 +1,1217 @@
+//! The skill manager and its data-flow cycle (paper 3.2).
+//!
+//! One cycle ([`Manager::cycle`], the paper's *do-periodic-step*):
+//! 1. apply what the sequencer asked between cycles (done by
+//!    [`Manager::request`] at the boundary, so it is in force now);
+//! 2. take the latest readings of every active dskill, never blocking;
+//! 3. run the active cskills level by level in order of input readiness:
+//!    a sync cskill runs when all its required inputs were written this
+//!    cycle; an async cskill hands over its latest inputs and gives back its
+//!    latest result at once. After each level its outputs are committed to
+//!    the leaf slots (the paper's *update-record*); a leaf with several
+//!    writers keeps the value of the highest-priority one (arbitration);
+//! 4. hand every active dskill the commands written this cycle;
+//! 5. evaluate monitors and send events;
+//! 6. cleanup: count the cycle, record timing.
+//!
+//! The schedule (levels of active cskills) is recompiled only when the
+//! active set changes, so inactive skills cost nothing per cycle.
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, Sender, TrySendError};
+use rayon::prelude::*;
+use situate_core::{suggestion, SignalType, SkillKind, Value};
+
+use crate::config::{ClockKind, ExecutorKind};
+use crate::control::*;
+use crate::expr::{Condition, Lookup, Resolver};
+use crate::graph::{assemble, decompose, topo_order, Graph};
+use crate::monitor::Monitors;
+use crate::registry::Registry;
+use crate::runner::{Exec, Worker};
+use crate::spec::{BuildError, RobotSpec};
+
+const PRINT_HISTORY: usize = 64;
+const EVENT_QUEUE: usize = 4096;
+
+/// One leaf slot of the cycle's data.
+#[derive(Clone, Default)]
+struct Slot {
+    value: Option<Value>,
+    /// The cycle it was last written in (0: never).
+    stamp: u64,
+    /// (priority, declaration rank) of the writer that holds it this cycle.
+    rank: (i32, u32),
+    writer: u32,
+}
+
+/// Runtime state of one instance besides its body.
+struct Inst {
+    active: bool,
+    faulted: Option<String>,
+    verbose: bool,
+    priority: i32,
+    params: Vec<Value>,
+    runs: u64,
+    last_ns: u64,
+    max_ns: u64,
+    total_ns: u64,
+    prints: VecDeque<(u64, String)>,
+    last_outputs: Vec<Option<Value>>,
+    worker: Option<Worker>,
+    /// Readings of a lockstep dskill, taken at the next cycle's start.
+    lockstep_readings: Vec<Option<Value>>,
+}
+
+#[derive(Default)]
+struct Schedule {
+    devices: Vec<usize>,
+    levels: Vec<Vec<usize>>,
+}
+
+/// The event subscribers, shared with handles.
+#[derive(Clone, Default)]
+pub struct EventBus {
+    subscribers: Arc<Mutex<Vec<Sender<Event>>>>,
+}
+
+impl EventBus {
+    pub fn subscribe(&self) -> Receiver<Event> {
+        let (tx, rx) = crossbeam_channel::bounded(EVENT_QUEUE);
+        self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).push(tx);
+        rx
+    }
+
+    fn send(&self, event: Event) {
+        let mut subs = self.subscribers.lock().unwrap_or_else(|p| p.into_inner());
+        // A subscriber that stopped reading loses events rather than holding
+        // up the cycle; one that went away is dropped.
+        subs.retain(|tx| !matches!(tx.try_send(event.clone()), Err(TrySendError::Disconnected(_))));
+    }
+
+    fn has_subscribers(&self) -> bool {
+        !self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).is_empty()
+    }
+}
+
+/// What a monitor condition can name: a leaf signal or a parameter.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum RefTarget {
+    Leaf(usize),
+    Param(usize, usize),
+}
+
+/// The skill manager.
+pub struct Manager {
+    graph: Graph,
+    clock: ClockKind,
+    period_s: f64,
+    executor: ExecutorKind,
+    pool: Option<rayon::ThreadPool>,
+    slots: Vec<Slot>,
+    insts: Vec<Inst>,
+    execs: Vec<Exec>,
+    schedule: Schedule,
+    schedule_dirty: bool,
+    cycle: u64,
+    time_s: f64,
+    started: Instant,
+    running: bool,
+    last_cycle_ns: u64,
+    max_cycle_ns: u64,
+    total_cycle_ns: u64,
+    overruns: u64,
+    monitors: Monitors,
+    refs: Vec<RefTarget>,
+    bus: EventBus,
+    /// Activation changes applied at this boundary, reported with the next cycle.
+    activated: Vec<String>,
+    deactivated: Vec<String>,
+}
+
+impl Manager {
+    /// Wires the robot, runs every static check and creates the skills.
+    pub fn build(spec: &RobotSpec, registry: &Registry) -> Result<Manager, BuildError> {
+        let graph = Graph::build(spec, registry)?;
+        let mut execs = Vec::with_capacity(graph.instances.len());
+        let mut insts = Vec::with_capacity(graph.instances.len());
+        let lockstep = spec.clock == ClockKind::Simulated;
+        for def in &graph.instances {
+            let skill = (def.skill_type.make)().map_err(|e| BuildError {
+                diagnostics: vec![spec.diag(
+                    crate::spec::Severity::Error,
+                    None,
+                    format!("skill `{}`: could not create `{}`: {e}", def.name, def.skill_type.decl.type_name),
+                )],
+            })?;
+            let mut exec = Exec::new(skill, def.inputs.len(), def.outputs.len());
+            if let Some(skill) = exec.skill.as_mut() {
+                for (i, v) in def.params.iter().enumerate() {
+                    skill.set_param(i, v);
+                }
+            }
+            let worker = (def.kind.is_threaded() && !lockstep).then(|| Worker::new(def.inputs.len(), def.outputs.len()));
+            execs.push(exec);
+            insts.push(Inst {
+                active: false,
+                faulted: None,
+                verbose: false,
+                priority: def.priority,
+                params: def.params.clone(),
+                runs: 0,
+                last_ns: 0,
+                max_ns: 0,
+                total_ns: 0,
+                prints: VecDeque::new(),
+                last_outputs: vec![None; def.outputs.len()],
+                worker,
+                lockstep_readings: vec![None; def.outputs.len()],
+            });
+        }
+        let pool = match spec.executor {
+            ExecutorKind::Serial => None,
+            ExecutorKind::Parallel => {
+                let threads = spec.threads.unwrap_or_else(|| {
+                    std::thread::available_parallelism().map(|n| n.get().min(4)).unwrap_or(2)
+                });
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .thread_name(|i| format!("situate-exec-{i}"))
+                    .build()
+                    .ok()
+            }
+        };
+        let mut manager = Manager {
+            slots: vec![Slot::default(); graph.leaves.len()],
+            clock: spec.clock,
+            period_s: spec.period_s,
+            executor: spec.executor,
+            pool,
+            insts,
+            execs,
+            schedule: Schedule::default(),
+            schedule_dirty: true,
+            cycle: 0,
+            time_s: 0.0,
+            started: Instant::now(),
+            running: false,
+            last_cycle_ns: 0,
+            max_cycle_ns: 0,
+            total_cycle_ns: 0,
+            overruns: 0,
+            monitors: Monitors::default(),
+            refs: Vec::new(),
+            bus: EventBus::default(),
+            activated: Vec::new(),
+            deactivated: Vec::new(),
+            graph,
+        };
+        let initially: Vec<usize> =
+            (0..manager.graph.instances.len()).filter(|&i| manager.graph.instances[i].active).collect();
+        for i in initially {
+            manager.set_active(i, true);
+        }
+        manager.activated.clear();
+        Ok(manager)
+    }
+
+    pub fn graph(&self) -> &Graph {
+        &self.graph
+    }
+
+    pub fn cycle_count(&self) -> u64 {
+        self.cycle
+    }
+
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    pub fn events(&self) -> Receiver<Event> {
+        self.bus.subscribe()
+    }
+
+    fn rank(&self, i: usize) -> (i32, u32) {
+        (self.insts[i].priority, u32::MAX - i as u32)
+    }
+
+    fn set_active(&mut self, i: usize, active: bool) {
+        let inst = &mut self.insts[i];
+        if inst.active == active {
+            return;
+        }
+        inst.active = active;
+        if active {
+            inst.faulted = None;
+        }
+        let def = &self.graph.instances[i];
+        if let Some(worker) = inst.worker.as_mut() {
+            let period = Duration::from_secs_f64(def.period_s.unwrap_or(self.period_s));
+            worker.set_active(active, &mut self.execs[i], def.kind, &def.name, period);
+        }
+        self.schedule_dirty = true;
+        let name = def.name.clone();
+        if active {
+            self.activated.push(name);
+        } else {
+            self.deactivated.push(name);
+        }
+    }
+
+    fn compile_schedule(&mut self) {
+        let insts = &self.insts;
+        let graph = &self.graph;
+        let order = topo_order(&graph.instances, &graph.leaves, |i| insts[i].active);
+        let mut level = vec![0usize; graph.instances.len()];
+        let mut levels: Vec<Vec<usize>> = Vec::new();
+        for &i in &order {
+            let mut l = 0;
+            for port in &graph.instances[i].inputs {
+                for &leaf in &port.leaves {
+                    for &(w, _) in &graph.leaves[leaf].writers {
+                        if w != i && insts[w].active && graph.instances[w].kind != SkillKind::Device {
+                            l = l.max(level[w] + 1);
+                        }
+                    }
+                }
+            }
+            level[i] = l;
+            if levels.len() <= l {
+                levels.resize_with(l + 1, Vec::new);
+            }
+            levels[l].push(i);
+        }
+        for l in &mut levels {
+            l.sort_unstable();
+        }
+        let devices = (0..graph.instances.len())
+            .filter(|&i| insts[i].active && graph.instances[i].kind == SkillKind::Device)
+            .collect();
+        self.schedule = Schedule { devices, levels };
+        self.schedule_dirty = false;
+    }
+
+    /// Runs one cycle.
+    pub fn cycle(&mut self) {
+        let start = Instant::now();
+        self.cycle += 1;
+        self.time_s = match self.clock {
+            ClockKind::Simulated => self.cycle as f64 * self.period_s,
+            ClockKind::Wall => self.started.elapsed().as_secs_f64(),
+        };
+        if !self.activated.is_empty() || !self.deactivated.is_empty() {
+            let event = Event::ActivationApplied {
+                activated: std::mem::take(&mut self.activated),
+                deactivated: std::mem::take(&mut self.deactivated),
+                cycle: self.cycle,
+            };
+            self.bus.send(event);
+        }
+        if self.schedule_dirty {
+            self.compile_schedule();
+        }
+        let schedule = std::mem::take(&mut self.schedule);
+
+        // 2. dskill readings.
+        for &d in &schedule.devices {
+            self.take_readings(d);
+        }
+        // 3. the data flow, level by level.
+        let mut ready: Vec<usize> = Vec::new();
+        for level in &schedule.levels {
+            ready.clear();
+            for &i in level {
+                let kind = self.graph.instances[i].kind;
+                match (kind, self.insts[i].worker.is_some()) {
+                    (SkillKind::Async, true) => self.exchange_async(i),
+                    (SkillKind::Async, false) => {
+                        if self.gather(i, false) {
+                            ready.push(i);
+                        }
+                    }
+                    _ => {
+                        if self.gather(i, true) {
+                            ready.push(i);
+                        }
+                    }
+                }
+            }
+            self.run_ready(&ready);
+            for &i in &ready {
+                self.finish(i);
+            }
+        }
+        // 4. dskill commands.
+        for &d in &schedule.devices {
+            self.hand_commands(d);
+        }
+        self.schedule = schedule;
+        // 5. monitors.
+        self.evaluate_monitors();
+        // 6. cleanup.
+        let elapsed = start.elapsed().as_nanos() as u64;
+        self.last_cycle_ns = elapsed;
+        self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
+        self.total_cycle_ns += elapsed;
+        if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
+            self.overruns += 1;
+        }
+    }
+
+    /// Collects instance `i`'s inputs into its buffers. `fresh`: every
+    /// required input must have been written this cycle (sync cskills,
+    /// dskill commands); otherwise the latest values do (async cskills).
+    /// Returns whether the skill is ready.
+    fn gather(&mut self, i: usize, fresh: bool) -> bool {
+        let def = &self.graph.instances[i];
+        let exec = &mut self.execs[i];
+        let cycle = self.cycle;
+        for (p, port) in def.inputs.iter().enumerate() {
+            let present = port.leaves.iter().all(|&l| {
+                let s = &self.slots[l];
+                s.value.is_some() && (!fresh || s.stamp == cycle)
+            });
+            exec.inputs[p] = if !present {
+                if !port.optional {
+                    return false;
+                }
+                None
+            } else if port.leaves.len() == 1 && !matches!(port.ty, SignalType::Record(_)) {
+                self.slots[port.leaves[0]].value.clone()
+            } else {
+                let slots = &self.slots;
+                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
+            };
+        }
+        true
+    }
+
+    fn run_ready(&mut self, ready: &[usize]) {
+        let (cycle, time_s) = (self.cycle, self.time_s);
+        match (&self.pool, ready.len()) {
+            (Some(pool), n) if n > 1 => {
+                // Skills sharing a claim never run at the same time: split the
+                // level into batches without a repeated claim.
+                let mut rest: Vec<usize> = ready.to_vec();
+                while !rest.is_empty() {
+                    let mut batch = Vec::new();
+                    let mut claims: Vec<&str> = Vec::new();
+                    rest.retain(|&i| {
+                        let c = &self.graph.instances[i].skill_type.decl.claims;
+                        if c.iter().any(|x| claims.contains(&x.as_str())) {
+                            return true;
+                        }
+                        claims.extend(c.iter().map(String::as_str));
+                        batch.push(i);
+                        false
+                    });
+                    let mut jobs = pick_mut(&mut self.execs, &batch);
+                    pool.install(|| jobs.par_iter_mut().for_each(|e| e.run(cycle, time_s)));
+                }
+            }
+            _ => {
+                for &i in ready {
+                    self.execs[i].run(cycle, time_s);
+                }
+            }
+        }
+    }
+
+    /// Commits a run's outputs, or marks the skill faulted.
+    fn finish(&mut self, i: usize) {
+        let exec = &mut self.execs[i];
+        let elapsed = exec.elapsed_ns;
+        let result = std::mem::replace(&mut exec.result, Ok(()));
+        let inst = &mut self.insts[i];
+        inst.runs += 1;
+        inst.last_ns = elapsed;
+        inst.max_ns = inst.max_ns.max(elapsed);
+        inst.total_ns += elapsed;
+        if exec.cx.has_prints() {
+            let prints = exec.cx.take_prints();
+            self.record_prints(i, prints);
+        }
+        if let Err(cause) = result {
+            self.fault(i, cause);
+            return;
+        }
+        let mut outputs = std::mem::take(&mut self.execs[i].outputs);
+        let outcome = self.commit(i, &mut outputs);
+        self.execs[i].outputs = outputs;
+        if let Err(cause) = outcome {
+            self.fault(i, cause);
+        }
+    }
+
+    /// Writes instance `i`'s produced outputs to their leaves.
+    fn commit(&mut self, i: usize, outputs: &mut [Option<Value>]) -> Result<(), String> {
+        let rank = self.rank(i);
+        let cycle = self.cycle;
+        let def = &self.graph.instances[i];
+        let mut parts: Vec<Value> = Vec::new();
+        for (p, port) in def.outputs.iter().enumerate() {
+            let Some(value) = outputs[p].take() else { continue };
+            if let ([leaf], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
+                if !value.conforms(&port.ty) {
+                    return Err(wrong_output(&port.name, &port.ty, &value));
+                }
+                write_leaf(&mut self.slots[*leaf], value.clone(), cycle, rank, i);
+            } else {
+                parts.clear();
+                if !decompose(&port.ty, &value, &mut parts) {
+                    return Err(wrong_output(&port.name, &port.ty, &value));
+                }
+                for (&leaf, part) in port.leaves.iter().zip(parts.drain(..)) {
+                    write_leaf(&mut self.slots[leaf], part, cycle, rank, i);
+                }
+            }
+            self.insts[i].last_outputs[p] = Some(value);
+        }
+        Ok(())
+    }
+
+    fn fault(&mut self, i: usize, cause: String) {
+        let name = self.graph.instances[i].name.clone();
+        tracing::warn!(skill = %name, %cause, "skill faulted");
+        self.set_active(i, false);
+        // The deactivation is reported as part of the fault.
+        self.deactivated.retain(|n| *n != name);
+        self.insts[i].faulted = Some(cause.clone());
+        self.bus.send(Event::SkillFaulted { skill: name, cause, cycle: self.cycle });
+    }
+
+    fn record_prints(&mut self, i: usize, prints: Vec<String>) {
+        let inst = &mut self.insts[i];
+        for line in prints {
+            if inst.verbose {
+                self.bus.send(Event::Print {
+                    skill: self.graph.instances[i].name.clone(),
+                    line: line.clone(),
+                    cycle: self.cycle,
+                });
+            }
+            if inst.prints.len() == PRINT_HISTORY {
+                inst.prints.pop_front();
+            }
+            inst.prints.push_back((self.cycle, line));
+        }
+    }
+
+    /// Async cskill on its thread: hand over the latest inputs, take the
+    /// latest result. Never waits for the body.
+    fn exchange_async(&mut self, i: usize) {
+        let ready = self.gather(i, false);
+        let Some(worker) = self.insts[i].worker.as_ref() else { return };
+        let shared = Arc::clone(&worker.shared);
+        let (outputs, fault, prints) = {
+            let mut mb = shared.lock();
+            if ready {
+                for (slot, v) in mb.inputs.iter_mut().zip(&self.execs[i].inputs) {
+                    slot.clone_from(v);
+                }
+                mb.inputs_new = true;
+                mb.cycle = self.cycle;
+                mb.time_s = self.time_s;
+            }
+            (mb.outputs.clone(), mb.fault.take(), std::mem::take(&mut mb.prints))
+        };
+        shared.notify();
+        self.threaded_results(i, outputs, fault, prints);
+    }
+
+    /// dskill readings at the start of a cycle.
+    fn take_readings(&mut self, d: usize) {
+        let (outputs, fault, prints) = match self.insts[d].worker.as_ref() {
+            Some(worker) => {
+                let mut mb = worker.shared.lock();
+                (mb.outputs.clone(), mb.fault.take(), std::mem::take(&mut mb.prints))
+            }
+            None => (self.insts[d].lockstep_readings.clone(), None, Vec::new()),
+        };
+        self.threaded_results(d, outputs, fault, prints);
+    }
+
+    fn threaded_results(&mut self, i: usize, mut outputs: Vec<Option<Value>>, fault: Option<String>, prints: Vec<String>) {
+        if let Some(worker) = self.insts[i].worker.as_ref() {
+            let stats = worker.shared.lock().stats;
+            let inst = &mut self.insts[i];
+            inst.runs = stats.runs;
+            inst.last_ns = stats.last_ns;
+            inst.max_ns = stats.max_ns;
+            inst.total_ns = stats.total_ns;
+        }
+        if !prints.is_empty() {
+            self.record_prints(i, prints);
+        }
+        if let Some(cause) = fault {
+            self.fault(i, cause);
+            return;
+        }
+        if let Err(cause) = self.commit(i, &mut outputs) {
+            self.fault(i, cause);
+        }
+    }
+
+    /// dskill commands at the end of a cycle: those written this cycle.
+    fn hand_commands(&mut self, d: usize) {
+        if !self.insts[d].active {
+            return;
+        }
+        // Every command port is optional for a device: gather never refuses.
+        let def = &self.graph.instances[d];
+        let cycle = self.cycle;
+        for (p, port) in def.inputs.iter().enumerate() {
+            let fresh = port.leaves.iter().all(|&l| self.slots[l].stamp == cycle && self.slots[l].value.is_some());
+            self.execs[d].inputs[p] = if fresh {
+                let slots = &self.slots;
+                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
+            } else {
+                None
+            };
+        }
+        match self.insts[d].worker.as_ref() {
+            Some(worker) => {
+                let mut mb = worker.shared.lock();
+                for (slot, v) in mb.inputs.iter_mut().zip(&self.execs[d].inputs) {
+                    if v.is_some() {
+                        slot.clone_from(v);
+                    }
+                }
+                mb.cycle = cycle;
+                mb.time_s = self.time_s;
+            }
+            None => {
+                // Lockstep: the device does its I/O now; its readings are
+                // taken at the start of the next cycle.
+                self.execs[d].run(cycle, self.time_s);
+                let exec = &mut self.execs[d];
+                let result = std::mem::replace(&mut exec.result, Ok(()));
+                let elapsed = exec.elapsed_ns;
+                let prints = exec.cx.take_prints();
+                let inst = &mut self.insts[d];
+                inst.runs += 1;
+                inst.last_ns = elapsed;
+                inst.max_ns = inst.max_ns.max(elapsed);
+                inst.total_ns += elapsed;
+                for (slot, out) in inst.lockstep_readings.iter_mut().zip(&mut exec.outputs) {
+                    if let Some(v) = out.take() {
+                        *slot = Some(v);
+                    }
+                }
+                if !prints.is_empty() {
+                    self.record_prints(d, prints);
+                }
+                if let Err(cause) = result {
+                    self.fault(d, cause);
+                }
+            }
+        }
+    }
+
+    fn evaluate_monitors(&mut self) {
+        if self.monitors.list.is_empty() {
+            return;
+        }
+        let mut fired: Vec<Event> = Vec::new();
+        let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts };
+        let (cycle, time_s) = (self.cycle, self.time_s);
+        self.monitors.evaluate(&env, |m| {
+            let values = m
+                .condition
+                .refs()
+                .iter()
+                .zip(m.condition.ref_names())
+                .map(|(&r, name)| (name.clone(), env.value(r).cloned()))
+                .collect();
+            fired.push(Event::MonitorFired {
+                monitor: m.id,
+                condition: m.condition.source().to_string(),
+                cycle,
+                time_s,
+                values,
+            });
+        });
+        for e in fired {
+            self.bus.send(e);
+        }
+    }
+
+    // ----- the control API -------------------------------------------------
+
+    fn find(&self, name: &str) -> Result<usize, ControlError> {
+        self.graph.instance(name).ok_or_else(|| ControlError::UnknownSkill {
+            name: name.to_string(),
+            suggestion: suggestion(name, self.graph.instances.iter().map(|d| d.name.as_str())),
+        })
+    }
+
+    fn find_param(&self, skill: &str, param: &str) -> Result<(usize, usize), ControlError> {
+        let i = self.find(skill)?;
+        let decl = &self.graph.instances[i].skill_type.decl;
+        match decl.param(param) {
+            Some((p, _)) => Ok((i, p)),
+            None => Err(ControlError::UnknownParam {
+                skill: skill.into(),
+                param: param.into(),
+                suggestion: suggestion(param, decl.params.iter().map(|p| p.name.as_str())),
+            }),
+        }
+    }
+
+    /// Required inputs of cskill `i` that no skill in `active` writes.
+    fn missing_inputs(&self, i: usize, active: &[bool]) -> Vec<usize> {
+        let def = &self.graph.instances[i];
+        if def.kind == SkillKind::Device {
+            return Vec::new();
+        }
+        def.inputs
+            .iter()
+            .filter(|p| !p.optional)
+            .flat_map(|p| p.leaves.iter().copied())
+            .filter(|&l| !self.graph.leaves[l].writers.iter().any(|&(w, _)| active[w]))
+            .collect()
+    }
+
+    fn activate(&mut self, names: &[String], with_providers: bool) -> Result<Reply, ControlError> {
+        let mut wanted = Vec::new();
+        for n in names {
+            wanted.push(self.find(n)?);
+        }
+        let mut active: Vec<bool> = self.insts.iter().map(|s| s.active).collect();
+        for &i in &wanted {
+            active[i] = true;
+        }
+        let mut queue: Vec<usize> = wanted.clone();
+        while let Some(i) = queue.pop() {
+            let missing = self.missing_inputs(i, &active);
+            if missing.is_empty() {
+                continue;
+            }
+            let providers: Vec<usize> = missing
+                .iter()
+                .filter_map(|&l| {
+                    // The best writer: highest priority, then declaration order.
+                    self.graph.leaves[l].writers.iter().map(|&(w, _)| w).max_by_key(|&w| self.rank(w))
+                })
+                .collect();
+            if !with_providers || providers.len() < missing.len() {
+                let mut signals: Vec<String> = missing.iter().map(|&l| self.graph.leaves[l].path.clone()).collect();
+                signals.dedup();
+                let mut provider_names: Vec<String> =
+                    providers.iter().map(|&w| self.graph.instances[w].name.clone()).collect();
+                provider_names.sort();
+                provider_names.dedup();
+                return Err(ControlError::MissingProviders {
+                    skill: self.graph.instances[i].name.clone(),
+                    signals,
+                    providers: provider_names,
+                });
+            }
+            for w in providers {
+                if !active[w] {
+                    active[w] = true;
+                    queue.push(w);
+                }
+            }
+        }
+        let mut changed = Vec::new();
+        for (i, &on) in active.iter().enumerate() {
+            if on && !self.insts[i].active {
+                self.set_active(i, true);
+                changed.push(self.graph.instances[i].name.clone());
+            }
+        }
+        Ok(Reply::Activation { changed, at_cycle: self.cycle + 1 })
+    }
+
+    fn deactivate(&mut self, names: &[String]) -> Result<Reply, ControlError> {
+        let mut targets = Vec::new();
+        for n in names {
+            targets.push(self.find(n)?);
+        }
+        let mut changed = Vec::new();
+        for i in targets {
+            if self.insts[i].active {
+                self.set_active(i, false);
+                changed.push(self.graph.instances[i].name.clone());
+            }
+        }
+        Ok(Reply::Activation { changed, at_cycle: self.cycle + 1 })
+    }
+
+    fn set_param(&mut self, skill: &str, param: &str, value: &Value) -> Result<Reply, ControlError> {
+        let (i, p) = self.find_param(skill, param)?;
+        let spec = &self.graph.instances[i].skill_type.decl.params[p];
+        let value = spec.check(value).map_err(|e| ControlError::BadParam {
+            skill: skill.into(),
+            param: param.into(),
+            reason: e.to_string(),
+        })?;
+        self.insts[i].params[p] = value.clone();
+        match (self.insts[i].worker.as_ref(), self.execs[i].skill.as_mut()) {
+            (_, Some(body)) => body.set_param(p, &value),
+            (Some(worker), None) => {
+                worker.shared.lock().params.push((p, value.clone()));
+                worker.shared.notify();
+            }
+            (None, None) => {}
+        }
+        self.bus.send(Event::ParamChanged { skill: skill.into(), param: param.into(), value, cycle: self.cycle + 1 });
+        Ok(Reply::Done)
+    }
+
+    fn query_signal(&self, path: &str) -> Result<SignalReading, ControlError> {
+        let ty = self.graph.signal_type(path).ok_or_else(|| ControlError::UnknownSignal {
+            name: path.into(),
+            suggestion: suggestion(path, self.graph.signal_names()),
+        })?;
+        let leaves = self.graph.leaves_under(path);
+        let complete = leaves.iter().all(|&l| self.slots[l].value.is_some());
+        let value = if complete {
+            assemble(&ty, &mut leaves.iter().filter_map(|&l| self.slots[l].value.as_ref()))
+        } else {
+            None
+        };
+        let cycle = leaves.iter().map(|&l| self.slots[l].stamp).min().unwrap_or(0);
+        let writer = leaves
+            .first()
+            .map(|&l| &self.slots[l])
+            .filter(|s| s.stamp > 0)
+            .map(|s| self.graph.instances[s.writer as usize].name.clone());
+        Ok(SignalReading { signal: path.into(), ty, value, cycle, writer })
+    }
+
+    fn skill_info(&self, i: usize) -> SkillInfo {
+        let def = &self.graph.instances[i];
+        let inst = &self.insts[i];
+        let decl = &def.skill_type.decl;
+        let port = |p: &crate::graph::PortBinding, value: Option<Value>| PortInfo {
+            name: p.name.clone(),
+            signal: p.signal.clone(),
+            ty: p.ty.clone(),
+            optional: p.optional,
+            value,
+        };
+        SkillInfo {
+            name: def.name.clone(),
+            type_name: decl.type_name.clone(),
+            kind: def.kind,
+            doc: decl.doc.clone(),
+            active: inst.active,
+            faulted: inst.faulted.clone(),
+            verbose: inst.verbose,
+            priority: inst.priority,
+            params: decl.params.iter().cloned().zip(inst.params.iter().cloned()).collect(),
+            inputs: def.inputs.iter().zip(&self.execs[i].inputs).map(|(p, v)| port(p, v.clone())).collect(),
+            outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
+            timing: SkillTiming { runs: inst.runs, last_ns: inst.last_ns, max_ns: inst.max_ns, total_ns: inst.total_ns },
+            prints: inst.prints.iter().cloned().collect(),
+        }
+    }
+
+    fn resource_winners(&self) -> Vec<ResourceWinner> {
+        self.graph
+            .leaves
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.is_resource())
+            .map(|(li, l)| {
+                let slot = &self.slots[li];
+                let mut writers: Vec<String> =
+                    l.writers.iter().map(|&(w, _)| self.graph.instances[w].name.clone()).collect();
+                writers.dedup();
+                ResourceWinner {
+                    signal: l.path.clone(),
+                    writers,
+                    winner: (slot.stamp == self.cycle && slot.stamp > 0)
+                        .then(|| self.graph.instances[slot.writer as usize].name.clone()),
+                    cycle: slot.stamp,
+                }
+            })
+            .collect()
+    }
+
+    fn graph_info(&self) -> GraphInfo {
+        let g = &self.graph;
+        GraphInfo {
+            skills: g
+                .instances
+                .iter()
+                .enumerate()
+                .map(|(i, d)| crate::control::GraphSkill {
+                    name: d.name.clone(),
+                    kind: d.kind,
+                    active: self.insts[i].active,
+                    priority: self.insts[i].priority,
+                    inputs: d.inputs.iter().map(|p| p.signal.clone()).collect(),
+                    outputs: d.outputs.iter().map(|p| p.signal.clone()).collect(),
+                })
+                .collect(),
+            signals: g
+                .leaves
+                .iter()
+                .map(|l| crate::control::GraphSignal {
+                    signal: l.path.clone(),
+                    ty: l.ty.clone(),
+                    writers: l.writers.iter().map(|&(w, _)| g.instances[w].name.clone()).collect(),
+                    readers: l.readers.iter().map(|&(r, _)| g.instances[r].name.clone()).collect(),
+                })
+                .collect(),
+        }
+    }
+
+    fn current_stats(&self) -> ManagerStats {
+        ManagerStats {
+            robot: self.graph.robot.clone(),
+            cycle: self.cycle,
+            time_s: self.time_s,
+            running: self.running,
+            period_s: self.period_s,
+            last_cycle_ns: self.last_cycle_ns,
+            mean_cycle_ns: if self.cycle == 0 { 0.0 } else { self.total_cycle_ns as f64 / self.cycle as f64 },
+            max_cycle_ns: self.max_cycle_ns,
+            overruns: self.overruns,
+            active: self
+                .insts
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.active)
+                .map(|(i, _)| self.graph.instances[i].name.clone())
+                .collect(),
+        }
+    }
+
+    fn add_monitor(&mut self, condition: &str, mode: crate::monitor::MonitorMode) -> Result<Reply, ControlError> {
+        let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
+        let compiled = Condition::compile(condition, &resolver);
+        let added = resolver.added.into_inner();
+        let compiled = compiled.map_err(|e| ControlError::BadCondition {
+            column: e.column,
+            message: e.message.clone(),
+            pointer: e.pointer(condition),
+        })?;
+        self.refs.extend(added);
+        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode)))
+    }
+
+    /// Handles one request between two cycles.
+    pub fn request(&mut self, request: Request) -> Result<Reply, ControlError> {
+        match request {
+            Request::Activate { skills, with_providers } => self.activate(&skills, with_providers),
+            Request::Deactivate { skills } => self.deactivate(&skills),
+            Request::SetParam { skill, param, value } => self.set_param(&skill, &param, &value),
+            Request::GetParam { skill, param } => {
+                let (i, p) = self.find_param(&skill, &param)?;
+                Ok(Reply::Param(self.insts[i].params[p].clone()))
+            }
+            Request::SetPriority { skill, priority } => {
+                let i = self.find(&skill)?;
+                self.insts[i].priority = priority;
+                Ok(Reply::Done)
+            }
+            Request::SetVerbose { skill, verbose } => {
+                let i = self.find(&skill)?;
+                self.insts[i].verbose = verbose;
+                Ok(Reply::Done)
+            }
+            Request::QuerySignal { signal } => self.query_signal(&signal).map(Reply::Signal),
+            Request::QuerySkill { skill } => {
+                let i = self.find(&skill)?;
+                Ok(Reply::Skill(Box::new(self.skill_info(i))))
+            }
+            Request::QuerySkills => Ok(Reply::Skills((0..self.insts.len()).map(|i| self.skill_info(i)).collect())),
+            Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
+            Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
+            Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
+            Request::AddMonitor { condition, mode } => self.add_monitor(&condition, mode),
+            Request::CancelMonitor { monitor } => {
+                if self.monitors.cancel(monitor) {
+                    Ok(Reply::Done)
+                } else {
+                    Err(ControlError::UnknownMonitor(monitor))
+                }
+            }
+            Request::ListMonitors => Ok(Reply::Monitors(
+                self.monitors
+                    .list
+                    .iter()
+                    .map(|m| MonitorInfo {
+                        monitor: m.id,
+                        condition: m.condition.source().to_string(),
+                        mode: m.mode,
+                        fired: m.fired,
+                        holds: m.holds,
+                    })
+                    .collect(),
+            )),
+            Request::Run => {
+                if !self.running {
+                    self.running = true;
+                    self.bus.send(Event::ManagerStarted { cycle: self.cycle });
+                }
+                Ok(Reply::Done)
+            }
+            Request::Stop => {
+                if self.running {
+                    self.running = false;
+                    self.bus.send(Event::ManagerStopped { cycle: self.cycle });
+                }
+                Ok(Reply::Done)
+            }
+            Request::Step { cycles } => {
+                if cycles > 1_000_000_000 {
+                    return Err(ControlError::Invalid(format!("step: {cycles} cycles is too many at once")));
+                }
+                if self.running {
+                    self.running = false;
+                    self.bus.send(Event::ManagerStopped { cycle: self.cycle });
+                }
+                for _ in 0..cycles {
+                    self.cycle();
+                }
+                Ok(Reply::Done)
+            }
+            Request::Shutdown => Ok(Reply::Done),
+        }
+    }
+
+    // ----- running ---------------------------------------------------------
+
+    /// Runs `cycles` cycles paced by the clock (wall clock: at the set rate;
+    /// simulated: as fast as possible).
+    pub fn run_cycles(&mut self, cycles: u64) {
+        let was = self.running;
+        self.running = true;
+        let period = Duration::from_secs_f64(self.period_s);
+        let mut deadline = Instant::now();
+        for _ in 0..cycles {
+            self.cycle();
+            if self.clock == ClockKind::Wall {
+                deadline += period;
+                let now = Instant::now();
+                if deadline > now {
+                    std::thread::sleep(deadline - now);
+                } else {
+                    deadline = now;
+                }
+            }
+        }
+        self.running = was;
+    }
+
+    /// Moves the manager to a thread of its own, serving requests from
+    /// handles. With `running`, the cycle starts at once.
+    pub fn spawn(mut self, running: bool) -> (Handle, std::thread::JoinHandle<Manager>) {
+        let (tx, rx) = crossbeam_channel::unbounded::<Envelope>();
+        let handle = Handle { tx, bus: self.bus.clone() };
+        let join = std::thread::Builder::new()
+            .name(format!("situate-{}", self.graph.robot))
+            .spawn(move || {
+                if running {
+                    let _ = self.request(Request::Run);
+                }
+                self.serve(rx);
+                self
+            })
+            .expect("spawning the manager thread");
+        (handle, join)
+    }
+
+    fn serve(&mut self, rx: Receiver<Envelope>) {
+        let period = Duration::from_secs_f64(self.period_s);
+        let mut deadline = Instant::now();
+        loop {
+            if self.running {
+                self.cycle();
+                match self.clock {
+                    ClockKind::Wall => {
+                        deadline += period;
+                        if deadline < Instant::now() {
+                            deadline = Instant::now();
+                        }
+                        // Serve requests until the next cycle is due.
+                        loop {
+                            match rx.recv_deadline(deadline) {
+                                Ok(env) => {
+                                    if self.serve_one(env) {
+                                        return;
+                                    }
+                                    if !self.running {
+                                        break;
+                                    }
+                                }
+                                Err(crossbeam_channel::RecvTimeoutError::Timeout) => break,
+                                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return,
+                            }
+                        }
+                    }
+                    ClockKind::Simulated => loop {
+                        match rx.try_recv() {
+                            Ok(env) => {
+                                if self.serve_one(env) {
+                                    return;
+                                }
+                            }
+                            Err(crossbeam_channel::TryRecvError::Empty) => break,
+                            Err(crossbeam_channel::TryRecvError::Disconnected) => return,
+                        }
+                    },
+                }
+            } else {
+                match rx.recv() {
+                    Ok(env) => {
+                        if self.serve_one(env) {
+                            return;
+                        }
+                        deadline = Instant::now();
+                    }
+                    Err(_) => return,
+                }
+            }
+        }
+    }
+
+    /// Answers one request; true when asked to shut down.
+    fn serve_one(&mut self, (request, reply): Envelope) -> bool {
+        let shutdown = request == Request::Shutdown;
+        let _ = reply.send(self.request(request));
+        shutdown
+    }
+
+    /// Whether anyone listens for events (the link uses this to skip work).
+    pub fn has_subscribers(&self) -> bool {
+        self.bus.has_subscribers()
+    }
+
+    /// The executor in use.
+    pub fn executor(&self) -> ExecutorKind {
+        if self.pool.is_some() {
+            ExecutorKind::Parallel
+        } else {
+            let _ = self.executor;
+            ExecutorKind::Serial
+        }
+    }
+}
+
+impl Drop for Manager {
+    fn drop(&mut self) {
+        // Worker threads are told to stop and left to end on their own: one
+        // may be stuck in a device call, and joining it would hang the caller.
+        for inst in &self.insts {
+            if let Some(w) = &inst.worker {
+                w.stop();
+            }
+        }
+    }
+}
+
+impl Control for Manager {
+    fn request(&mut self, request: Request) -> Result<Reply, ControlError> {
+        Manager::request(self, request)
+    }
+}
+
+fn write_leaf(slot: &mut Slot, value: Value, cycle: u64, rank: (i32, u32), writer: usize) {
+    if slot.stamp != cycle || rank > slot.rank {
+        slot.value = Some(value);
+        slot.stamp = cycle;
+        slot.rank = rank;
+        slot.writer = writer as u32;
+    }
+}
+
+fn wrong_output(port: &str, ty: &SignalType, value: &Value) -> String {
+    format!("output `{port}` expects {ty}, the body produced a {}", value.kind_name())
+}
+
+/// Disjoint mutable references to `v[i]` for sorted, distinct `indices`.
+fn pick_mut<'a, T>(v: &'a mut [T], indices: &[usize]) -> Vec<&'a mut T> {
+    let mut out = Vec::with_capacity(indices.len());
+    let mut rest = v;
+    let mut offset = 0;
+    for &i in indices {
+        let (_, tail) = rest.split_at_mut(i - offset);
+        let (item, tail) = tail.split_first_mut().expect("index in range");
+        out.push(item);
+        rest = tail;
+        offset = i + 1;
+    }
+    out
+}
+
+struct Env<'a> {
+    refs: &'a [RefTarget],
+    slots: &'a [Slot],
+    insts: &'a [Inst],
+}
+
+impl Lookup for Env<'_> {
+    fn value(&self, id: usize) -> Option<&Value> {
+        match self.refs.get(id)? {
+            RefTarget::Leaf(l) => self.slots.get(*l)?.value.as_ref(),
+            RefTarget::Param(i, p) => self.insts.get(*i)?.params.get(*p),
+        }
+    }
+}
+
+struct ManagerResolver<'a> {
+    manager: &'a Manager,
+    added: std::cell::RefCell<Vec<RefTarget>>,
+}
+
+impl ManagerResolver<'_> {
+    fn intern(&self, target: RefTarget) -> usize {
+        let known = &self.manager.refs;
+        if let Some(i) = known.iter().position(|t| *t == target) {
+            return i;
+        }
+        let mut added = self.added.borrow_mut();
+        if let Some(i) = added.iter().position(|t| *t == target) {
+            return known.len() + i;
+        }
+        added.push(target);
+        known.len() + added.len() - 1
+    }
+}
+
+impl Resolver for ManagerResolver<'_> {
+    fn resolve(&self, path: &str) -> Result<(usize, SignalType), String> {
+        let g = &self.manager.graph;
+        if let Some(&l) = g.leaf_index.get(path) {
+            return Ok((self.intern(RefTarget::Leaf(l)), g.leaves[l].ty.clone()));
+        }
+        if let Some(ty) = g.records.get(path) {
+            // The expression language reports records as not comparable.
+            return Ok((usize::MAX, ty.clone()));
+        }
+        if let Some((skill, param)) = path.split_once('.') {
+            if let Some(i) = g.instance(skill) {
+                let decl = &g.instances[i].skill_type.decl;
+                return match decl.param(param) {
+                    Some((p, spec)) => {
+                        let ty = match spec.ty {
+                            situate_core::ParamType::Bool => SignalType::Bool,
+                            situate_core::ParamType::I64 => SignalType::I64,
+                            situate_core::ParamType::F64 => SignalType::F64,
+                            situate_core::ParamType::Str => SignalType::Str,
+                        };
+                        Ok((self.intern(RefTarget::Param(i, p)), ty))
+                    }
+                    None => Err(format!(
+                        "skill `{skill}` has no parameter `{param}`{}",
+                        suggestion(param, decl.params.iter().map(|p| p.name.as_str()))
+                    )),
+                };
+            }
+        }
+        let names = g.signal_names().map(str::to_string).collect::<Vec<_>>();
+        Err(format!(
+            "unknown signal `{path}`{}",
+            suggestion(path, names.iter().map(String::as_str))
+        ))
+    }
+}

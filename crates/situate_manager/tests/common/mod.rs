@@ -1,0 +1,99 @@
+//! Test skills built from declarations and closures (the way foreign-language
+//! bindings register skills), and small helpers.
+#![allow(dead_code)]
+
+use std::sync::{Arc, Mutex};
+
+use situate_core::{FnSkill, Io, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillError, SkillKind, SkillType, Value};
+use situate_manager::{ClockKind, Manager, Registry, RobotSpec, SkillSpec};
+
+pub type Log = Arc<Mutex<Vec<String>>>;
+
+pub fn log() -> Log {
+    Arc::new(Mutex::new(Vec::new()))
+}
+
+pub fn entries(log: &Log) -> Vec<String> {
+    log.lock().unwrap().clone()
+}
+
+pub fn ty(text: &str) -> SignalType {
+    SignalType::parse(text).unwrap()
+}
+
+/// A declaration: `inputs`/`outputs` as (port, type); an input type ending in
+/// `?` is optional.
+pub fn decl(name: &str, kind: SkillKind, inputs: &[(&str, &str)], outputs: &[(&str, &str)]) -> SkillDecl {
+    let mut d = SkillDecl::new(name, kind);
+    for (p, t) in inputs {
+        let (t, optional) = match t.strip_suffix('?') {
+            Some(t) => (t, true),
+            None => (*t, false),
+        };
+        let mut spec = PortSpec::new(p, ty(t));
+        spec.optional = optional;
+        d.inputs.push(spec);
+    }
+    for (p, t) in outputs {
+        d.outputs.push(PortSpec::new(p, ty(t)));
+    }
+    d
+}
+
+pub fn with_param(mut d: SkillDecl, name: &str, default: f64, min: f64, max: f64) -> SkillDecl {
+    d.params.push(ParamSpec::new(name, ParamType::F64, Value::F64(default)).range(Some(min), Some(max)));
+    d
+}
+
+pub fn with_priority(mut d: SkillDecl, priority: i32) -> SkillDecl {
+    d.priority = priority;
+    d
+}
+
+/// A skill type whose body is a closure over the raw ports and parameters.
+pub fn fn_type<F>(d: SkillDecl, body: F) -> SkillType
+where
+    F: Fn(&mut Io<'_>, &[Value]) -> Result<(), SkillError> + Clone + Send + Sync + 'static,
+{
+    let decl = d.clone();
+    SkillType::new(d, move || {
+        let body = body.clone();
+        Ok(Box::new(FnSkill::new(&decl, move |io: &mut Io<'_>, params: &[Value]| body(io, params))) as _)
+    })
+}
+
+/// A source writing `value` to `out` every run.
+pub fn constant(name: &str, out_ty: &str, value: Value) -> SkillType {
+    fn_type(decl(name, SkillKind::Sync, &[], &[("out", out_ty)]), move |io, _| {
+        io.outputs[0] = Some(value.clone());
+        Ok(())
+    })
+}
+
+/// A sync cskill that logs its instance tag and the cycle, then copies
+/// input 0 (f64) plus `add` to its output.
+pub fn adder(name: &str, add: f64, log: &Log, tag: &str) -> SkillType {
+    let log = log.clone();
+    let tag = tag.to_string();
+    fn_type(decl(name, SkillKind::Sync, &[("x", "f64")], &[("y", "f64")]), move |io, _| {
+        log.lock().unwrap().push(format!("{tag}@{}", io.cx.cycle()));
+        let x = io.inputs[0].as_ref().and_then(Value::as_f64).ok_or("no x")?;
+        io.outputs[0] = Some(Value::F64(x + add));
+        Ok(())
+    })
+}
+
+pub fn simulated(robot: &str) -> RobotSpec {
+    RobotSpec::new(robot).clock(ClockKind::Simulated).period_s(0.01)
+}
+
+pub fn build(spec: &RobotSpec, registry: &Registry) -> Manager {
+    match Manager::build(spec, registry) {
+        Ok(m) => m,
+        Err(e) => panic!("build failed:\n{e}"),
+    }
+}
+
+pub fn skill(name: &str, type_name: &str) -> SkillSpec {
+    SkillSpec::new(name, type_name)
+}
