@@ -66,7 +66,7 @@ pub(crate) fn run_body(
     match catch_unwind(AssertUnwindSafe(|| skill.step(&mut io))) {
         Ok(Ok(())) => Ok(()),
         Ok(Err(e)) => Err(e.message),
-        Err(panic) => Err(format!("panicked: {}", panic_message(&panic))),
+        Err(panic) => Err(format!("panicked: {}", panic_message(&*panic))),
     }
 }
 

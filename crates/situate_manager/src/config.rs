@@ -1,0 +1,1083 @@
+//! Robot files: the YAML file that says which skills a robot runs.
+//!
+//! [`RobotFile::parse`] reads a file into a model whose every name and value
+//! keeps its position, and checks its shape: known keys, value types and
+//! ranges, identifiers. It collects every such error it finds, in file order,
+//! each reading `FILE:LINE:COL: error: message`. Whether skill types,
+//! parameters and signals exist and fit together is checked later by the
+//! manager against its registry; it reports through [`RobotFile::error`] in
+//! the same format. The format is documented in `docs/robot-files.md`.
+
+use std::path::Path;
+
+use situate_core::names::suggestion;
+use situate_core::value::Value;
+
+use crate::yaml;
+pub use crate::yaml::{Node, Pos, Spanned};
+
+/// The default cycle rate.
+pub const DEFAULT_RATE_HZ: f64 = 20.0;
+/// The fastest cycle rate a robot file may ask for.
+pub const MAX_RATE_HZ: f64 = 100_000.0;
+/// The largest parallel executor pool.
+pub const MAX_THREADS: usize = 64;
+
+const TOP_KEYS: &[&str] = &["robot", "cycle", "devices", "skills", "link", "gui"];
+const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads"];
+const ENTRY_KEYS: &[&str] = &["name", "type", "active", "priority", "period_ms", "params", "remap"];
+
+/// One error in a robot file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{file}:{line}:{col}: error: {message}")]
+pub struct ConfigError {
+    pub file: String,
+    pub line: usize,
+    pub col: usize,
+    pub message: String,
+}
+
+impl ConfigError {
+    pub fn new(file: &str, pos: Pos, message: impl Into<String>) -> ConfigError {
+        ConfigError { file: file.to_string(), line: pos.line, col: pos.col, message: message.into() }
+    }
+
+    pub fn pos(&self) -> Pos {
+        Pos::new(self.line, self.col)
+    }
+}
+
+/// Which clock drives the cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ClockKind {
+    Wall,
+    Simulated,
+}
+
+/// How the cycle runs the synchronous skills.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExecutorKind {
+    Serial,
+    Parallel,
+}
+
+/// The `cycle:` section.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CycleConfig {
+    /// Seconds between cycles.
+    pub period_s: f64,
+    pub clock: ClockKind,
+    pub executor: ExecutorKind,
+    /// The parallel executor's pool size, if given.
+    pub threads: Option<usize>,
+    /// Where `cycle:` is (1:1 if the file has none).
+    pub pos: Pos,
+}
+
+impl CycleConfig {
+    pub fn rate_hz(&self) -> f64 {
+        1.0 / self.period_s
+    }
+}
+
+impl Default for CycleConfig {
+    fn default() -> CycleConfig {
+        CycleConfig {
+            period_s: 1.0 / DEFAULT_RATE_HZ,
+            clock: ClockKind::Wall,
+            executor: ExecutorKind::Serial,
+            threads: None,
+            pos: Pos::START,
+        }
+    }
+}
+
+/// The list a skill entry came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Section {
+    /// `devices:` — dskills.
+    Devices,
+    /// `skills:` — cskills.
+    Skills,
+}
+
+impl Section {
+    /// The section's key: `devices` or `skills`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Section::Devices => "devices",
+            Section::Skills => "skills",
+        }
+    }
+
+    /// What one entry is called in messages: `device` or `skill`.
+    pub fn noun(self) -> &'static str {
+        match self {
+            Section::Devices => "device",
+            Section::Skills => "skill",
+        }
+    }
+}
+
+/// One entry of `devices:` or `skills:`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkillEntry {
+    pub section: Section,
+    /// Where the list item starts (its first key).
+    pub pos: Pos,
+    pub name: Spanned<String>,
+    pub type_name: Spanned<String>,
+    pub active: bool,
+    pub priority: Option<Spanned<i32>>,
+    /// A device's thread period, or an async skill's worker period.
+    pub period_ms: Option<Spanned<f64>>,
+    /// Parameter values in file order; positions are the keys' and values'.
+    pub params: Vec<(Spanned<String>, Spanned<Value>)>,
+    /// Port name → signal name, in file order.
+    pub remap: Vec<(Spanned<String>, Spanned<String>)>,
+}
+
+impl SkillEntry {
+    /// `skill `runaway`` or `device `sonar``, for messages.
+    pub fn label(&self) -> String {
+        format!("{} `{}`", self.section.noun(), self.name.value)
+    }
+
+    /// The value given for parameter `name`.
+    pub fn param(&self, name: &str) -> Option<&Spanned<Value>> {
+        self.params.iter().find(|(k, _)| k.value == name).map(|(_, v)| v)
+    }
+}
+
+/// A parsed robot file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotFile {
+    /// The path as given, used in messages.
+    pub file: String,
+    pub robot: Spanned<String>,
+    pub cycle: CycleConfig,
+    /// The devices, then the skills, each in file order.
+    pub skills: Vec<SkillEntry>,
+    /// The raw `link:` section, if any.
+    pub link: Option<Spanned<Node>>,
+    /// The raw `gui:` section, if any.
+    pub gui: Option<Spanned<Node>>,
+}
+
+impl RobotFile {
+    /// Parses and shape-checks a robot file; `file` names it in messages.
+    /// Returns every error found, in file order.
+    pub fn parse(file: &str, source: &str) -> Result<RobotFile, Vec<ConfigError>> {
+        let mut cx = Checker { file, errors: Vec::new() };
+        let parsed = match yaml::parse(source) {
+            Ok(root) => cx.robot_file(root),
+            Err(e) => {
+                cx.push(e.pos, e.message);
+                None
+            }
+        };
+        match parsed {
+            Some(robot) if cx.errors.is_empty() => Ok(robot),
+            _ => {
+                cx.errors.sort_by_key(ConfigError::pos);
+                Err(cx.errors)
+            }
+        }
+    }
+
+    /// Reads and parses a robot file. A read error is one error at 1:1.
+    pub fn load(path: &Path) -> Result<RobotFile, Vec<ConfigError>> {
+        let file = path.display().to_string();
+        match std::fs::read_to_string(path) {
+            Ok(source) => RobotFile::parse(&file, &source),
+            Err(e) => Err(vec![ConfigError::new(&file, Pos::START, format!("cannot read robot file: {e}"))]),
+        }
+    }
+
+    /// An error at `pos` in this file, for checks made after parsing.
+    pub fn error(&self, pos: Pos, message: impl Into<String>) -> ConfigError {
+        ConfigError::new(&self.file, pos, message)
+    }
+
+    /// The entries of one section, in file order.
+    pub fn section(&self, section: Section) -> impl Iterator<Item = &SkillEntry> {
+        self.skills.iter().filter(move |s| s.section == section)
+    }
+}
+
+/// `[A-Za-z_][A-Za-z0-9_]*`
+pub fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Identifiers joined by dots: `sonar.range`.
+pub fn is_signal_name(s: &str) -> bool {
+    s.split('.').all(is_identifier)
+}
+
+/// `[A-Za-z0-9_-]+`
+pub fn is_robot_name(s: &str) -> bool {
+    !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
+/// Walks the node tree, collecting errors.
+struct Checker<'a> {
+    file: &'a str,
+    errors: Vec<ConfigError>,
+}
+
+type Entries = Vec<(Spanned<String>, Spanned<Node>)>;
+
+impl Checker<'_> {
+    fn push(&mut self, pos: Pos, message: impl Into<String>) {
+        self.errors.push(ConfigError::new(self.file, pos, message));
+    }
+
+    fn unknown_key(&mut self, key: &Spanned<String>, place: &str, allowed: &[&str]) {
+        let hint = suggestion(&key.value, allowed.iter().copied());
+        self.push(key.pos, format!("unknown key `{}` {place}{hint}", key.value));
+    }
+
+    /// A mapping's entries; null is an empty mapping. Anything else is an
+    /// error "`key` expects {what}, got …".
+    fn mapping(&mut self, key: &str, node: Spanned<Node>, what: &str) -> Option<Entries> {
+        match node.value {
+            Node::Map(entries) => Some(entries),
+            Node::Null => Some(Vec::new()),
+            other => {
+                self.push(node.pos, format!("`{key}` expects {what}, got {}", other.describe()));
+                None
+            }
+        }
+    }
+
+    fn robot_file(&mut self, root: Spanned<Node>) -> Option<RobotFile> {
+        let entries = match root.value {
+            Node::Map(entries) => entries,
+            Node::Null => Vec::new(),
+            other => {
+                self.push(
+                    root.pos,
+                    format!(
+                        "a robot file is a mapping with keys `robot:`, `cycle:`, `devices:` and `skills:`, got {}",
+                        other.describe()
+                    ),
+                );
+                return None;
+            }
+        };
+        let mut robot = None;
+        let mut robot_given = false;
+        let mut cycle = CycleConfig::default();
+        let mut devices = Vec::new();
+        let mut skills = Vec::new();
+        let mut link = None;
+        let mut gui = None;
+        for (key, value) in entries {
+            match key.value.as_str() {
+                "robot" => {
+                    robot_given = true;
+                    robot = self.robot_name(value);
+                }
+                "cycle" => cycle = self.cycle(key.pos, value),
+                "devices" => devices = self.section(Section::Devices, value),
+                "skills" => skills = self.section(Section::Skills, value),
+                "link" => link = Some(value),
+                "gui" => gui = Some(value),
+                _ => self.unknown_key(&key, "at the top level", TOP_KEYS),
+            }
+        }
+        if !robot_given {
+            self.push(root.pos, "missing required key `robot`");
+        }
+        devices.append(&mut skills);
+        Some(RobotFile { file: self.file.to_string(), robot: robot?, cycle, skills: devices, link, gui })
+    }
+
+    fn robot_name(&mut self, value: Spanned<Node>) -> Option<Spanned<String>> {
+        match value.value.as_text() {
+            Some(name) if is_robot_name(name) => Some(Spanned::new(name.to_string(), value.pos)),
+            Some(name) => {
+                self.push(value.pos, format!("robot name `{name}` may only contain letters, digits, `_` and `-`"));
+                None
+            }
+            None => {
+                self.push(value.pos, format!("`robot` expects a name, got {}", value.value.describe()));
+                None
+            }
+        }
+    }
+
+    fn cycle(&mut self, key_pos: Pos, node: Spanned<Node>) -> CycleConfig {
+        let mut cycle = CycleConfig { pos: key_pos, ..CycleConfig::default() };
+        let Some(entries) = self.mapping("cycle", node, "a mapping (`rate_hz:`, `clock:`, `executor:`, …)") else {
+            return cycle;
+        };
+        let mut rate_key: Option<&str> = None;
+        for (key, value) in &entries {
+            let k = key.value.as_str();
+            match k {
+                "rate_hz" | "period_ms" => {
+                    if let Some(first) = rate_key {
+                        self.push(
+                            key.pos,
+                            format!("`cycle` takes either `rate_hz` or `period_ms`, not both (`{first}` is given too)"),
+                        );
+                        continue;
+                    }
+                    rate_key = Some(if k == "rate_hz" { "rate_hz" } else { "period_ms" });
+                    if k == "rate_hz" {
+                        if let Some(hz) = self.positive(k, value, Some(MAX_RATE_HZ)) {
+                            cycle.period_s = 1.0 / hz;
+                        }
+                    } else if let Some(ms) = self.positive(k, value, None) {
+                        cycle.period_s = ms / 1000.0;
+                    }
+                }
+                "clock" => {
+                    if let Some(c) =
+                        self.choice(k, value, &[("wall", ClockKind::Wall), ("simulated", ClockKind::Simulated)])
+                    {
+                        cycle.clock = c;
+                    }
+                }
+                "executor" => {
+                    if let Some(e) =
+                        self.choice(k, value, &[("serial", ExecutorKind::Serial), ("parallel", ExecutorKind::Parallel)])
+                    {
+                        cycle.executor = e;
+                    }
+                }
+                "threads" => {
+                    cycle.threads = self.integer(k, value, 1, MAX_THREADS as i64).map(|n| n as usize);
+                }
+                _ => self.unknown_key(key, "in `cycle`", CYCLE_KEYS),
+            }
+        }
+        cycle
+    }
+
+    /// A number > 0 (and ≤ `max`, or finite).
+    fn positive(&mut self, key: &str, value: &Spanned<Node>, max: Option<f64>) -> Option<f64> {
+        let Some(x) = value.value.as_f64() else {
+            self.push(value.pos, format!("`{key}` expects a number > 0, got {}", value.value.describe()));
+            return None;
+        };
+        let (ok, expects) = match max {
+            Some(max) => (x > 0.0 && x <= max, format!("a number > 0 and ≤ {max}")),
+            None => (x > 0.0 && x.is_finite(), "a finite number > 0".to_string()),
+        };
+        if ok {
+            Some(x)
+        } else {
+            self.push(value.pos, format!("`{key}` is out of range: expects {expects}, got {}", value.value.describe()));
+            None
+        }
+    }
+
+    /// An integer in `min..=max`.
+    fn integer(&mut self, key: &str, value: &Spanned<Node>, min: i64, max: i64) -> Option<i64> {
+        let Some(n) = value.value.as_i64() else {
+            self.push(value.pos, format!("`{key}` expects an integer, got {}", value.value.describe()));
+            return None;
+        };
+        if (min..=max).contains(&n) {
+            Some(n)
+        } else {
+            self.push(value.pos, format!("`{key}` is out of range: expects an integer from {min} to {max}, got {n}"));
+            None
+        }
+    }
+
+    /// One of a few words.
+    fn choice<T: Copy>(&mut self, key: &str, value: &Spanned<Node>, options: &[(&'static str, T)]) -> Option<T> {
+        let text = value.value.as_text();
+        if let Some(&(_, v)) = options.iter().find(|(w, _)| Some(*w) == text) {
+            return Some(v);
+        }
+        let words: Vec<String> = options.iter().map(|(w, _)| format!("`{w}`")).collect();
+        let hint = text.map(|t| suggestion(t, options.iter().map(|(w, _)| *w))).unwrap_or_default();
+        self.push(value.pos, format!("`{key}` expects {}, got {}{hint}", words.join(" or "), value.value.describe()));
+        None
+    }
+
+    fn section(&mut self, section: Section, node: Spanned<Node>) -> Vec<SkillEntry> {
+        let items = match node.value {
+            Node::Seq(items) => items,
+            Node::Null => Vec::new(),
+            other => {
+                self.push(
+                    node.pos,
+                    format!(
+                        "`{}` expects a list of {}s (`- name: …`), got {}",
+                        section.key(),
+                        section.noun(),
+                        other.describe()
+                    ),
+                );
+                return Vec::new();
+            }
+        };
+        items.into_iter().enumerate().filter_map(|(i, item)| self.entry(section, i, item)).collect()
+    }
+
+    fn entry(&mut self, section: Section, index: usize, item: Spanned<Node>) -> Option<SkillEntry> {
+        let Node::Map(entries) = item.value else {
+            self.push(
+                item.pos,
+                format!(
+                    "each entry of `{}` must be a mapping with `name:` and `type:`, got {}",
+                    section.key(),
+                    item.value.describe()
+                ),
+            );
+            return None;
+        };
+        let name_node = entries.iter().find(|(k, _)| k.value == "name").map(|(_, v)| v);
+        let name = name_node.and_then(|v| self.entry_name(section, v));
+        let place = match &name {
+            Some(n) => format!("{} `{}`", section.noun(), n.value),
+            None => format!("entry {} of `{}`", index + 1, section.key()),
+        };
+        let mut type_name = None;
+        let mut type_given = false;
+        let mut active = true;
+        let mut priority = None;
+        let mut period_ms = None;
+        let mut params = Vec::new();
+        let mut remap = Vec::new();
+        for (key, value) in entries.iter() {
+            let k = key.value.as_str();
+            match k {
+                "name" => {}
+                "type" => {
+                    type_given = true;
+                    type_name = match value.value.as_text() {
+                        Some(t) if !t.trim().is_empty() => Some(Spanned::new(t.to_string(), value.pos)),
+                        _ => {
+                            self.push(
+                                value.pos,
+                                format!("`type` expects a skill type name, got {}", value.value.describe()),
+                            );
+                            None
+                        }
+                    };
+                }
+                "active" => match value.value.as_bool() {
+                    Some(b) => active = b,
+                    None => {
+                        self.push(value.pos, format!("`active` expects true or false, got {}", value.value.describe()))
+                    }
+                },
+                "priority" => {
+                    priority = self
+                        .integer(k, value, i32::MIN.into(), i32::MAX.into())
+                        .and_then(|p| i32::try_from(p).ok())
+                        .map(|p| Spanned::new(p, value.pos));
+                }
+                "period_ms" => {
+                    period_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
+                }
+                "params" => params = self.params(value.clone()),
+                "remap" => remap = self.remap(value.clone()),
+                _ => self.unknown_key(key, &format!("in {place}"), ENTRY_KEYS),
+            }
+        }
+        if name_node.is_none() {
+            self.push(item.pos, format!("missing required key `name` in {place}"));
+        }
+        if !type_given {
+            self.push(item.pos, format!("missing required key `type` in {place}"));
+        }
+        Some(SkillEntry {
+            section,
+            pos: item.pos,
+            name: name?,
+            type_name: type_name?,
+            active,
+            priority,
+            period_ms,
+            params,
+            remap,
+        })
+    }
+
+    fn entry_name(&mut self, section: Section, value: &Spanned<Node>) -> Option<Spanned<String>> {
+        match value.value.as_text() {
+            Some(name) if is_identifier(name) => Some(Spanned::new(name.to_string(), value.pos)),
+            Some(name) => {
+                self.push(
+                    value.pos,
+                    format!(
+                        "{} name `{name}` is not an identifier (letters, digits and `_`, not starting with a digit)",
+                        section.noun()
+                    ),
+                );
+                None
+            }
+            None => {
+                self.push(value.pos, format!("`name` expects a name, got {}", value.value.describe()));
+                None
+            }
+        }
+    }
+
+    fn params(&mut self, node: Spanned<Node>) -> Vec<(Spanned<String>, Spanned<Value>)> {
+        let Some(entries) = self.mapping("params", node, "a mapping of parameter names to values") else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (key, value) in entries {
+            let name = &key.value;
+            let v = match &value.value {
+                Node::Scalar { .. } => value.value.to_value(),
+                Node::Seq(items) => {
+                    let mut ok = true;
+                    for item in items.iter().filter(|i| i.value.as_f64().is_none()) {
+                        ok = false;
+                        self.push(
+                            item.pos,
+                            format!(
+                                "parameter `{name}` expects a list of numbers, got {} in it",
+                                item.value.describe()
+                            ),
+                        );
+                    }
+                    if ok {
+                        value.value.to_f64s()
+                    } else {
+                        None
+                    }
+                }
+                Node::Null => {
+                    self.push(value.pos, format!("parameter `{name}` has no value"));
+                    None
+                }
+                Node::Map(_) => {
+                    self.push(
+                        value.pos,
+                        format!("parameter `{name}` expects a scalar or a list of numbers, got a mapping"),
+                    );
+                    None
+                }
+            };
+            if let Some(v) = v {
+                out.push((key, Spanned::new(v, value.pos)));
+            }
+        }
+        out
+    }
+
+    fn remap(&mut self, node: Spanned<Node>) -> Vec<(Spanned<String>, Spanned<String>)> {
+        let Some(entries) = self.mapping("remap", node, "a mapping of port names to signal names") else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (port, target) in entries {
+            match target.value.as_text() {
+                Some(signal) if is_signal_name(signal) => {
+                    let signal = Spanned::new(signal.to_string(), target.pos);
+                    out.push((port, signal));
+                }
+                Some(signal) => self.push(
+                    target.pos,
+                    format!(
+                        "remap target `{signal}` of port `{}` is not a signal name (identifiers joined by `.`, like `sonar.range`)",
+                        port.value
+                    ),
+                ),
+                None => self.push(
+                    target.pos,
+                    format!(
+                        "remap of port `{}` expects a signal name, got {}",
+                        port.value,
+                        target.value.describe()
+                    ),
+                ),
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FULL: &str = "\
+# toybot: a sonar and two behaviours
+robot: toybot
+cycle:
+  rate_hz: 50
+  clock: simulated
+  executor: parallel
+  threads: 2
+devices:
+  - name: sonar
+    type: toy.sonar
+    period_ms: 20
+    params: {noise_m: 0.01, beams: [0.1, 0.2, 3]}
+    remap: {range: sonar.range}
+skills:
+  - name: wander
+    type: toy.wander
+    active: false
+    priority: -5
+  - name: runaway
+    type: toy.runaway
+    priority: 10
+    params:
+      safe_distance: 0.5
+      label: \"near\"
+      verbose: true
+      retries: 3
+    remap:
+      sonar_range: sonar.range
+link:
+  peers: [a]
+gui: {port: 8080}
+";
+
+    fn p(line: usize, col: usize) -> Pos {
+        Pos::new(line, col)
+    }
+
+    fn s<T>(value: T, line: usize, col: usize) -> Spanned<T> {
+        Spanned::new(value, p(line, col))
+    }
+
+    /// The error lines for `source`, parsed as `robot.yaml`.
+    fn errors(source: &str) -> Vec<String> {
+        match RobotFile::parse("robot.yaml", source) {
+            Ok(r) => panic!("expected errors, got {r:?}"),
+            Err(errors) => errors.iter().map(ToString::to_string).collect(),
+        }
+    }
+
+    /// The only error for `source`.
+    fn error(source: &str) -> String {
+        let errors = errors(source);
+        assert_eq!(errors.len(), 1, "{errors:#?}");
+        errors.into_iter().next().unwrap()
+    }
+
+    /// A valid file whose one skill entry gets `extra` lines.
+    fn skill(extra: &str) -> String {
+        format!("robot: r\nskills:\n  - name: runaway\n    type: toy.runaway\n{extra}")
+    }
+
+    #[test]
+    fn a_full_file_reads_into_the_model_with_positions() {
+        let r = RobotFile::parse("toybot.yaml", FULL).unwrap();
+        assert_eq!(r.file, "toybot.yaml");
+        assert_eq!(r.robot, s("toybot".to_string(), 2, 8));
+        assert_eq!(
+            r.cycle,
+            CycleConfig {
+                period_s: 0.02,
+                clock: ClockKind::Simulated,
+                executor: ExecutorKind::Parallel,
+                threads: Some(2),
+                pos: p(3, 1),
+            }
+        );
+        assert_eq!(r.skills.len(), 3);
+
+        let sonar = &r.skills[0];
+        assert_eq!(sonar.section, Section::Devices);
+        assert_eq!(sonar.pos, p(9, 5));
+        assert_eq!(sonar.name, s("sonar".to_string(), 9, 11));
+        assert_eq!(sonar.type_name, s("toy.sonar".to_string(), 10, 11));
+        assert!(sonar.active);
+        assert_eq!(sonar.priority, None);
+        assert_eq!(sonar.period_ms, Some(s(20.0, 11, 16)));
+        assert_eq!(
+            sonar.params,
+            vec![
+                (s("noise_m".to_string(), 12, 14), s(Value::F64(0.01), 12, 23)),
+                (s("beams".to_string(), 12, 29), s(Value::F64s(vec![0.1, 0.2, 3.0].into()), 12, 36)),
+            ]
+        );
+        assert_eq!(sonar.remap, vec![(s("range".to_string(), 13, 13), s("sonar.range".to_string(), 13, 20))]);
+        assert_eq!(sonar.label(), "device `sonar`");
+
+        let wander = &r.skills[1];
+        assert_eq!(wander.section, Section::Skills);
+        assert_eq!((wander.pos, wander.active), (p(15, 5), false));
+        assert_eq!(wander.priority, Some(s(-5, 18, 15)));
+        assert!(wander.params.is_empty() && wander.remap.is_empty());
+
+        let runaway = &r.skills[2];
+        assert_eq!(runaway.pos, p(19, 5));
+        assert_eq!(runaway.priority, Some(s(10, 21, 15)));
+        let params: Vec<_> =
+            runaway.params.iter().map(|(k, v)| (k.value.as_str(), k.pos, v.value.clone(), v.pos)).collect();
+        assert_eq!(
+            params,
+            vec![
+                ("safe_distance", p(23, 7), Value::F64(0.5), p(23, 22)),
+                ("label", p(24, 7), Value::Str("near".into()), p(24, 14)),
+                ("verbose", p(25, 7), Value::Bool(true), p(25, 16)),
+                ("retries", p(26, 7), Value::I64(3), p(26, 16)),
+            ]
+        );
+        assert_eq!(runaway.param("retries").unwrap().value, Value::I64(3));
+        assert_eq!(runaway.remap, vec![(s("sonar_range".to_string(), 28, 7), s("sonar.range".to_string(), 28, 20))]);
+        assert_eq!(r.link.as_ref().unwrap().pos, p(30, 3));
+        let gui = r.gui.as_ref().unwrap();
+        assert_eq!(gui.pos, p(31, 6));
+        assert_eq!(gui.value.get("port").unwrap().value.as_i64(), Some(8080));
+        assert_eq!(r.section(Section::Skills).count(), 2);
+        assert_eq!(r.error(runaway.name.pos, "no such thing").to_string(), "toybot.yaml:19:11: error: no such thing");
+    }
+
+    #[test]
+    fn defaults_and_section_order() {
+        let r = RobotFile::parse(
+            "r.yaml",
+            "robot: my-bot_2\nskills:\n  - {name: b, type: t.b}\ndevices:\n  - {name: a, type: t.a}\n",
+        )
+        .unwrap();
+        assert_eq!(r.cycle, CycleConfig::default());
+        assert_eq!(r.cycle.rate_hz(), 20.0);
+        let names: Vec<_> = r.skills.iter().map(|e| e.name.value.as_str()).collect();
+        assert_eq!(names, ["a", "b"]);
+        assert_eq!(r.skills[0].pos, p(5, 5));
+        assert!(r.link.is_none() && r.gui.is_none());
+        let r = RobotFile::parse("r.yaml", "robot: r\ncycle:\n  period_ms: 4\ndevices:\n").unwrap();
+        assert_eq!(r.cycle.period_s, 0.004);
+        assert!(r.skills.is_empty());
+    }
+
+    #[test]
+    fn empty_file_misses_robot_at_the_start() {
+        assert_eq!(error(""), "robot.yaml:1:1: error: missing required key `robot`");
+        assert_eq!(error("# nothing yet\n"), "robot.yaml:1:1: error: missing required key `robot`");
+        assert_eq!(error("\ncycle: {rate_hz: 5}\n"), "robot.yaml:2:1: error: missing required key `robot`");
+    }
+
+    #[test]
+    fn yaml_syntax_errors_are_reported_alone() {
+        assert_eq!(
+            error("robot: r\nskills: [a, b\n"),
+            "robot.yaml:3:1: error: invalid YAML: while parsing a flow sequence, expected ',' or ']'"
+        );
+        assert_eq!(
+            error("robot: r\ncycle:\n\trate_hz: 5\n"),
+            "robot.yaml:3:1: error: tab character in indentation; indent YAML with spaces"
+        );
+        assert_eq!(
+            error("robot: r\ncycle:\n  rate_hz: 5\n  rate_hz: 6\n"),
+            "robot.yaml:4:3: error: duplicate key `rate_hz` (first given on line 3)"
+        );
+        assert_eq!(
+            error("robot: &name r\n"),
+            "robot.yaml:1:8: error: anchors and aliases (`&name`, `*name`) are not supported in robot files"
+        );
+    }
+
+    #[test]
+    fn unknown_keys_suggest_the_closest() {
+        assert_eq!(
+            error(&skill("    actve: false\n")),
+            "robot.yaml:5:5: error: unknown key `actve` in skill `runaway` — did you mean `active`?"
+        );
+        assert_eq!(
+            errors("robt: r\n"),
+            [
+                "robot.yaml:1:1: error: unknown key `robt` at the top level — did you mean `robot`?",
+                "robot.yaml:1:1: error: missing required key `robot`",
+            ]
+        );
+        assert_eq!(
+            errors("robot: r\nskils: []\ncycle: {rate_hz: 5, frobnicate: 1}\n"),
+            [
+                "robot.yaml:2:1: error: unknown key `skils` at the top level — did you mean `skills`?",
+                "robot.yaml:3:21: error: unknown key `frobnicate` in `cycle`",
+            ]
+        );
+        assert_eq!(
+            error("robot: r\ndevices:\n  - name: 1sonar\n    type: t\n"),
+            "robot.yaml:3:11: error: device name `1sonar` is not an identifier (letters, digits and `_`, not starting with a digit)"
+        );
+    }
+
+    #[test]
+    fn unknown_key_in_an_unnamed_entry_names_its_index() {
+        assert_eq!(
+            errors("robot: r\ndevices:\n  - {name: a, type: t}\n  - type: t\n    remp: {}\n"),
+            [
+                "robot.yaml:4:5: error: missing required key `name` in entry 2 of `devices`",
+                "robot.yaml:5:5: error: unknown key `remp` in entry 2 of `devices` — did you mean `remap`?",
+            ]
+        );
+    }
+
+    #[test]
+    fn wrong_value_types() {
+        assert_eq!(
+            error("robot: r\ncycle:\n  rate_hz: fast\n"),
+            "robot.yaml:3:12: error: `rate_hz` expects a number > 0, got \"fast\""
+        );
+        assert_eq!(
+            error(&skill("    active: yes\n")),
+            "robot.yaml:5:13: error: `active` expects true or false, got \"yes\""
+        );
+        assert_eq!(
+            error(&skill("    priority: 1.5\n")),
+            "robot.yaml:5:15: error: `priority` expects an integer, got 1.5"
+        );
+        assert_eq!(
+            error(&skill("    priority: 3000000000\n")),
+            "robot.yaml:5:15: error: `priority` is out of range: expects an integer from -2147483648 to 2147483647, got 3000000000"
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {clock: wal}\n"),
+            "robot.yaml:2:16: error: `clock` expects `wall` or `simulated`, got \"wal\" — did you mean `wall`?"
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {executor: [serial]}\n"),
+            "robot.yaml:2:19: error: `executor` expects `serial` or `parallel`, got a list"
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {threads: 0}\n"),
+            "robot.yaml:2:18: error: `threads` is out of range: expects an integer from 1 to 64, got 0"
+        );
+        assert_eq!(error("robot: [a]\n"), "robot.yaml:1:8: error: `robot` expects a name, got a list");
+        assert_eq!(
+            error("robot: r\ncycle: fast\n"),
+            "robot.yaml:2:8: error: `cycle` expects a mapping (`rate_hz:`, `clock:`, `executor:`, …), got \"fast\""
+        );
+        assert_eq!(
+            error("- robot: r\n"),
+            "robot.yaml:1:1: error: a robot file is a mapping with keys `robot:`, `cycle:`, `devices:` and `skills:`, got a list"
+        );
+    }
+
+    #[test]
+    fn rates_and_periods_are_range_checked() {
+        assert_eq!(
+            error("robot: r\ncycle:\n  rate_hz: 0\n"),
+            "robot.yaml:3:12: error: `rate_hz` is out of range: expects a number > 0 and ≤ 100000, got 0"
+        );
+        assert_eq!(
+            error("robot: r\ncycle:\n  rate_hz: 200000\n"),
+            "robot.yaml:3:12: error: `rate_hz` is out of range: expects a number > 0 and ≤ 100000, got 200000"
+        );
+        assert_eq!(
+            error("robot: r\ncycle:\n  rate_hz: .nan\n"),
+            "robot.yaml:3:12: error: `rate_hz` is out of range: expects a number > 0 and ≤ 100000, got .nan"
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {period_ms: -5}\n"),
+            "robot.yaml:2:20: error: `period_ms` is out of range: expects a finite number > 0, got -5"
+        );
+        assert_eq!(
+            error(&skill("    period_ms: .inf\n")),
+            "robot.yaml:5:16: error: `period_ms` is out of range: expects a finite number > 0, got .inf"
+        );
+        assert_eq!(
+            error(&skill("    period_ms: \"50\"\n")),
+            "robot.yaml:5:16: error: `period_ms` expects a number > 0, got \"50\""
+        );
+    }
+
+    #[test]
+    fn rate_and_period_together_is_an_error_at_the_second() {
+        assert_eq!(
+            error("robot: r\ncycle:\n  period_ms: 10\n  rate_hz: 100\n"),
+            "robot.yaml:4:3: error: `cycle` takes either `rate_hz` or `period_ms`, not both (`period_ms` is given too)"
+        );
+    }
+
+    #[test]
+    fn missing_required_keys() {
+        assert_eq!(
+            error("robot: r\nskills:\n  - name: runaway\n    active: true\n"),
+            "robot.yaml:3:5: error: missing required key `type` in skill `runaway`"
+        );
+        assert_eq!(error("cycle: {}\n"), "robot.yaml:1:1: error: missing required key `robot`");
+    }
+
+    #[test]
+    fn bad_names() {
+        assert_eq!(
+            error("robot: my bot\n"),
+            "robot.yaml:1:8: error: robot name `my bot` may only contain letters, digits, `_` and `-`"
+        );
+        assert_eq!(
+            error("robot: r\nskills:\n  - name: run-away\n    type: t\n"),
+            "robot.yaml:3:11: error: skill name `run-away` is not an identifier (letters, digits and `_`, not starting with a digit)"
+        );
+        assert_eq!(
+            error("robot: r\nskills:\n  - name: {a: 1}\n    type: t\n"),
+            "robot.yaml:3:11: error: `name` expects a name, got a mapping"
+        );
+        assert_eq!(
+            error("robot: r\nskills:\n  - name: a\n    type: \"\"\n"),
+            "robot.yaml:4:11: error: `type` expects a skill type name, got \"\""
+        );
+    }
+
+    #[test]
+    fn bad_remap_targets() {
+        assert_eq!(
+            error(&skill("    remap: {sonar_range: sonar..range}\n")),
+            "robot.yaml:5:26: error: remap target `sonar..range` of port `sonar_range` is not a signal name (identifiers joined by `.`, like `sonar.range`)"
+        );
+        assert_eq!(
+            error(&skill("    remap:\n      sonar_range: [a]\n")),
+            "robot.yaml:6:20: error: remap of port `sonar_range` expects a signal name, got a list"
+        );
+        assert_eq!(
+            error(&skill("    remap: [a]\n")),
+            "robot.yaml:5:12: error: `remap` expects a mapping of port names to signal names, got a list"
+        );
+    }
+
+    #[test]
+    fn bad_param_values() {
+        assert_eq!(
+            errors(&skill(
+                "    params:\n      gains: [1, x, 2, {a: 1}]\n      nested: {a: 1}\n      none:\n      ok: [1, 2]\n"
+            )),
+            [
+                "robot.yaml:6:18: error: parameter `gains` expects a list of numbers, got \"x\" in it",
+                "robot.yaml:6:24: error: parameter `gains` expects a list of numbers, got a mapping in it",
+                "robot.yaml:7:15: error: parameter `nested` expects a scalar or a list of numbers, got a mapping",
+                "robot.yaml:8:7: error: parameter `none` has no value",
+            ]
+        );
+        assert_eq!(
+            error(&skill("    params: 5\n")),
+            "robot.yaml:5:13: error: `params` expects a mapping of parameter names to values, got 5"
+        );
+    }
+
+    #[test]
+    fn list_shapes() {
+        assert_eq!(
+            error("robot: r\nskills:\n  - runaway\n"),
+            "robot.yaml:3:5: error: each entry of `skills` must be a mapping with `name:` and `type:`, got \"runaway\""
+        );
+        assert_eq!(
+            error("robot: r\nskills:\n  runaway: {type: t}\n"),
+            "robot.yaml:3:3: error: `skills` expects a list of skills (`- name: …`), got a mapping"
+        );
+        assert_eq!(
+            error("robot: r\ndevices: sonar\n"),
+            "robot.yaml:2:10: error: `devices` expects a list of devices (`- name: …`), got \"sonar\""
+        );
+    }
+
+    #[test]
+    fn many_errors_come_together_in_file_order() {
+        let src = "\
+robot: r
+skills:
+  - name: runaway
+    type: toy.runaway
+    actve: true
+    priority: high
+  - name: b@d
+    type: t
+devices:
+  - sonar
+cycle:
+  rate_hz: 0
+  clock: sundial
+";
+        assert_eq!(
+            errors(src),
+            [
+                "robot.yaml:5:5: error: unknown key `actve` in skill `runaway` — did you mean `active`?",
+                "robot.yaml:6:15: error: `priority` expects an integer, got \"high\"",
+                "robot.yaml:7:11: error: skill name `b@d` is not an identifier (letters, digits and `_`, not starting with a digit)",
+                "robot.yaml:10:5: error: each entry of `devices` must be a mapping with `name:` and `type:`, got \"sonar\"",
+                "robot.yaml:12:12: error: `rate_hz` is out of range: expects a number > 0 and ≤ 100000, got 0",
+                "robot.yaml:13:10: error: `clock` expects `wall` or `simulated`, got \"sundial\"",
+            ]
+        );
+    }
+
+    #[test]
+    fn load_reads_files_and_reports_read_errors() {
+        let dir = std::env::temp_dir().join(format!("situate-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("toybot.yaml");
+        std::fs::write(&path, FULL).unwrap();
+        let r = RobotFile::load(&path).unwrap();
+        assert_eq!(r.file, path.display().to_string());
+        let missing = dir.join("nope.yaml");
+        let errors = RobotFile::load(&missing).unwrap_err();
+        assert_eq!(errors.len(), 1);
+        let text = errors[0].to_string();
+        let prefix = format!("{}:1:1: error: cannot read robot file: ", missing.display());
+        assert!(text.starts_with(&prefix), "{text}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn no_input_panics() {
+        for (i, _) in FULL.char_indices() {
+            let _ = RobotFile::parse("t.yaml", &FULL[..i]);
+        }
+        // Random edits of the full file: replace one character at a time
+        // with YAML-significant ones, and random lines of keys and values.
+        let chars: Vec<char> = FULL.chars().collect();
+        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\".~0a1".chars().collect();
+        let words = [
+            "robot:",
+            "cycle:",
+            "rate_hz:",
+            "period_ms:",
+            "skills:",
+            "devices:",
+            "- ",
+            "name:",
+            "type:",
+            "params:",
+            "remap:",
+            "[",
+            "]",
+            "{",
+            "}",
+            "0",
+            "-1",
+            "1e9",
+            "x.y",
+            "\n  ",
+            "\n",
+            "priority:",
+            "threads:",
+            ".nan",
+            "\"\"",
+            "~",
+            "active:",
+            ", ",
+        ];
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for _ in 0..3000 {
+            let mut edited = chars.clone();
+            for _ in 0..3 {
+                let at = next() as usize % edited.len();
+                edited[at] = alphabet[next() as usize % alphabet.len()];
+            }
+            let text: String = edited.into_iter().collect();
+            let _ = RobotFile::parse("t.yaml", &text);
+        }
+        for _ in 0..5000 {
+            let n = next() as usize % 16;
+            let text: String = (0..n).map(|_| words[next() as usize % words.len()]).collect();
+            let _ = RobotFile::parse("t.yaml", &text);
+        }
+    }
+}

@@ -1,0 +1,685 @@
+//! A small YAML node tree that remembers where every node came from.
+//!
+//! Robot files are YAML, and every error about them has to point at a line
+//! and column. This module drives `yaml-rust2`'s event parser and builds a
+//! tree of [`Node`]s, each wrapped in a [`Spanned`] that carries its 1-based
+//! [`Pos`]. It accepts the plain subset of YAML that robot files need:
+//!
+//! * one document per file (an empty file is a [`Node::Null`] document);
+//! * mapping keys are scalars, and a key may appear once per mapping;
+//! * no anchors, aliases or tags;
+//! * at most [`MAX_DEPTH`] levels of nesting.
+//!
+//! Scalars keep their source text; [`Node::to_value`] types plain scalars by
+//! the YAML 1.2 core schema (`true`, `3`, `0x1f`, `0.5`, `1e-3`, `.inf`, …),
+//! while quoted and block scalars are always strings. Plain `null`, `~` and
+//! empty values are [`Node::Null`] already in the tree.
+
+use std::collections::HashMap;
+use std::fmt;
+use std::sync::Arc;
+
+use situate_core::value::Value;
+use yaml_rust2::parser::{Event, Parser};
+use yaml_rust2::scanner::{Marker, ScanError, TScalarStyle};
+
+/// The deepest nesting of lists and mappings a robot file may use.
+pub const MAX_DEPTH: usize = 64;
+
+/// A position in a source file; line and column both start at 1. Columns
+/// count characters (not bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Pos {
+    pub line: usize,
+    pub col: usize,
+}
+
+impl Pos {
+    /// Line 1, column 1.
+    pub const START: Pos = Pos { line: 1, col: 1 };
+
+    pub fn new(line: usize, col: usize) -> Pos {
+        Pos { line, col }
+    }
+
+    /// `yaml-rust2` markers have a 1-based line and a 0-based column.
+    fn from_marker(m: &Marker) -> Pos {
+        Pos { line: m.line().max(1), col: m.col() + 1 }
+    }
+}
+
+impl Default for Pos {
+    fn default() -> Pos {
+        Pos::START
+    }
+}
+
+impl fmt::Display for Pos {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}", self.line, self.col)
+    }
+}
+
+/// A value together with the position it was read from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spanned<T> {
+    pub value: T,
+    pub pos: Pos,
+}
+
+impl<T> Spanned<T> {
+    pub fn new(value: T, pos: Pos) -> Spanned<T> {
+        Spanned { value, pos }
+    }
+
+    /// The same position with another value.
+    pub fn map<U>(self, f: impl FnOnce(T) -> U) -> Spanned<U> {
+        Spanned { value: f(self.value), pos: self.pos }
+    }
+}
+
+/// One YAML node.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Node {
+    /// `null`, `~` or nothing at all.
+    Null,
+    /// A scalar's text; `plain` is false for quoted and block (`|`, `>`)
+    /// scalars, which are always strings.
+    Scalar { text: String, plain: bool },
+    /// A list.
+    Seq(Vec<Spanned<Node>>),
+    /// A mapping, in file order; keys are unique.
+    Map(Vec<(Spanned<String>, Spanned<Node>)>),
+}
+
+impl Node {
+    /// A plain scalar, as typed by the YAML 1.2 core schema.
+    pub fn plain(text: &str) -> Node {
+        Node::Scalar { text: text.to_string(), plain: true }
+    }
+
+    /// A quoted scalar: always a string.
+    pub fn quoted(text: &str) -> Node {
+        Node::Scalar { text: text.to_string(), plain: false }
+    }
+
+    /// The scalar's value: `Bool`, `I64`, `F64` or `Str`. `None` for null,
+    /// lists and mappings.
+    pub fn to_value(&self) -> Option<Value> {
+        match self {
+            Node::Scalar { text, plain: true } => Some(type_plain(text)),
+            Node::Scalar { text, plain: false } => Some(Value::Str(Arc::from(text.as_str()))),
+            _ => None,
+        }
+    }
+
+    /// A list of numbers as `Value::F64s` (integers widen); `None` if this is
+    /// not a list or an item is not a number.
+    pub fn to_f64s(&self) -> Option<Value> {
+        match self {
+            Node::Seq(items) => {
+                let xs: Option<Vec<f64>> = items.iter().map(|n| n.value.as_f64()).collect();
+                xs.map(|xs| Value::F64s(xs.into()))
+            }
+            _ => None,
+        }
+    }
+
+    /// A scalar number (integer or float) as `f64`.
+    pub fn as_f64(&self) -> Option<f64> {
+        match self.to_value()? {
+            Value::I64(x) => Some(x as f64),
+            Value::F64(x) => Some(x),
+            _ => None,
+        }
+    }
+
+    /// A scalar integer.
+    pub fn as_i64(&self) -> Option<i64> {
+        match self.to_value()? {
+            Value::I64(x) => Some(x),
+            _ => None,
+        }
+    }
+
+    /// A scalar boolean.
+    pub fn as_bool(&self) -> Option<bool> {
+        match self.to_value()? {
+            Value::Bool(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// The source text of any scalar (plain or quoted, whatever its type).
+    pub fn as_text(&self) -> Option<&str> {
+        match self {
+            Node::Scalar { text, .. } => Some(text),
+            _ => None,
+        }
+    }
+
+    pub fn is_null(&self) -> bool {
+        matches!(self, Node::Null)
+    }
+
+    /// The entries of a mapping.
+    pub fn as_map(&self) -> Option<&[(Spanned<String>, Spanned<Node>)]> {
+        match self {
+            Node::Map(entries) => Some(entries),
+            _ => None,
+        }
+    }
+
+    /// The items of a list.
+    pub fn as_seq(&self) -> Option<&[Spanned<Node>]> {
+        match self {
+            Node::Seq(items) => Some(items),
+            _ => None,
+        }
+    }
+
+    /// A mapping's value for `key`.
+    pub fn get(&self, key: &str) -> Option<&Spanned<Node>> {
+        self.as_map()?.iter().find(|(k, _)| k.value == key).map(|(_, v)| v)
+    }
+
+    /// What kind of node this is, with an article: "a list", "a string", …
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Node::Null => "null",
+            Node::Seq(_) => "a list",
+            Node::Map(_) => "a mapping",
+            Node::Scalar { .. } => match self.to_value() {
+                Some(Value::Bool(_)) => "a boolean",
+                Some(Value::I64(_)) => "an integer",
+                Some(Value::F64(_)) => "a number",
+                _ => "a string",
+            },
+        }
+    }
+
+    /// How the node reads in an error message after "got": scalars as
+    /// written (strings quoted, long ones shortened), others by kind.
+    pub fn describe(&self) -> String {
+        match self {
+            Node::Scalar { text, .. } => match self.to_value() {
+                Some(Value::Str(_)) => {
+                    let short: String = text.chars().take(40).collect();
+                    if short.len() < text.len() {
+                        format!("{:?}", short + "…")
+                    } else {
+                        format!("{text:?}")
+                    }
+                }
+                _ => text.clone(),
+            },
+            other => other.kind_name().to_string(),
+        }
+    }
+}
+
+/// Types a plain scalar by the YAML 1.2 core schema (null is handled by the
+/// tree builder).
+fn type_plain(text: &str) -> Value {
+    match text {
+        "true" | "True" | "TRUE" => return Value::Bool(true),
+        "false" | "False" | "FALSE" => return Value::Bool(false),
+        ".inf" | ".Inf" | ".INF" | "+.inf" | "+.Inf" | "+.INF" => return Value::F64(f64::INFINITY),
+        "-.inf" | "-.Inf" | "-.INF" => return Value::F64(f64::NEG_INFINITY),
+        ".nan" | ".NaN" | ".NAN" => return Value::F64(f64::NAN),
+        _ => {}
+    }
+    let radix = |prefix: &str, radix: u32| {
+        text.strip_prefix(prefix)
+            .filter(|d| !d.is_empty() && d.chars().all(|c| c.is_digit(radix)))
+            .and_then(|d| i64::from_str_radix(d, radix).ok())
+    };
+    if let Some(x) = radix("0x", 16).or_else(|| radix("0o", 8)) {
+        return Value::I64(x);
+    }
+    let digits = text.strip_prefix(['-', '+']).unwrap_or(text);
+    if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+        return match text.parse::<i64>() {
+            Ok(x) => Value::I64(x),
+            // Too large for i64: keep the magnitude as a float.
+            Err(_) => Value::F64(text.parse::<f64>().unwrap_or(f64::NAN)),
+        };
+    }
+    if is_core_float(digits) {
+        if let Ok(x) = text.parse::<f64>() {
+            return Value::F64(x);
+        }
+    }
+    Value::Str(Arc::from(text))
+}
+
+/// `(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?`, the sign already removed.
+fn is_core_float(s: &str) -> bool {
+    fn digits(s: &str) -> usize {
+        s.bytes().take_while(u8::is_ascii_digit).count()
+    }
+    let int = digits(s);
+    let mut rest = &s[int..];
+    let mut frac = 0;
+    if let Some(r) = rest.strip_prefix('.') {
+        frac = digits(r);
+        rest = &r[frac..];
+    }
+    if int == 0 && frac == 0 {
+        return false;
+    }
+    if let Some(r) = rest.strip_prefix(['e', 'E']) {
+        let r = r.strip_prefix(['-', '+']).unwrap_or(r);
+        let exp = digits(r);
+        return exp > 0 && exp == r.len();
+    }
+    rest.is_empty()
+}
+
+/// A YAML error: the file is not YAML, or uses YAML a robot file may not.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParseError {
+    pub pos: Pos,
+    pub message: String,
+}
+
+impl ParseError {
+    fn new(pos: Pos, message: impl Into<String>) -> ParseError {
+        ParseError { pos, message: message.into() }
+    }
+}
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.pos, self.message)
+    }
+}
+
+impl std::error::Error for ParseError {}
+
+/// A list or mapping being built.
+enum Frame {
+    Seq {
+        pos: Pos,
+        items: Vec<Spanned<Node>>,
+    },
+    Map {
+        pos: Pos,
+        entries: Vec<(Spanned<String>, Spanned<Node>)>,
+        key: Option<Spanned<String>>,
+        /// Each key's line, to report duplicates.
+        lines: HashMap<String, usize>,
+    },
+}
+
+impl Frame {
+    fn expects_key(&self) -> bool {
+        matches!(self, Frame::Map { key: None, .. })
+    }
+}
+
+/// Parses one YAML document into a node tree. An empty document (nothing but
+/// comments and blanks) is `Null` at 1:1. A mapping's position is its first
+/// key's (or its `{`); an empty mapping value (`key:` and nothing) is `Null`
+/// at the key's position.
+pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
+    // yaml-rust2 does not skip a byte-order mark; editors do not show one.
+    let source = source.strip_prefix('\u{feff}').unwrap_or(source);
+    let mut parser = Parser::new_from_str(source);
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut root: Option<Spanned<Node>> = None;
+    let mut documents = 0usize;
+    loop {
+        let mut implicit_null = false;
+        let (event, mark) = parser.next_token().map_err(|e| scan_error(source, &e))?;
+        let pos = Pos::from_marker(&mark);
+        let done = match event {
+            Event::StreamEnd => break,
+            Event::Nothing | Event::StreamStart | Event::DocumentEnd => continue,
+            Event::DocumentStart => {
+                documents += 1;
+                if documents > 1 {
+                    return Err(ParseError::new(
+                        pos,
+                        "a robot file holds one YAML document, but a second one starts here",
+                    ));
+                }
+                continue;
+            }
+            Event::Alias(_) => return Err(anchor_error(pos)),
+            Event::Scalar(text, style, anchor, tag) => {
+                if anchor != 0 {
+                    return Err(anchor_error(anchor_pos(source, &mark)));
+                }
+                if tag.is_some() {
+                    return Err(tag_error(pos));
+                }
+                if let Some(Frame::Map { key, lines, .. }) = stack.last_mut() {
+                    if key.is_none() {
+                        if let Some(first) = lines.insert(text.clone(), pos.line) {
+                            return Err(ParseError::new(
+                                pos,
+                                format!("duplicate key `{text}` (first given on line {first})"),
+                            ));
+                        }
+                        *key = Some(Spanned::new(text, pos));
+                        continue;
+                    }
+                }
+                let plain = style == TScalarStyle::Plain;
+                implicit_null = plain && text.is_empty();
+                let node = if plain && matches!(text.as_str(), "" | "~" | "null" | "Null" | "NULL") {
+                    Node::Null
+                } else {
+                    Node::Scalar { text, plain }
+                };
+                Spanned::new(node, pos)
+            }
+            Event::SequenceStart(anchor, ref tag) | Event::MappingStart(anchor, ref tag) => {
+                if anchor != 0 {
+                    return Err(anchor_error(anchor_pos(source, &mark)));
+                }
+                if tag.is_some() {
+                    return Err(tag_error(pos));
+                }
+                if stack.last().is_some_and(Frame::expects_key) {
+                    return Err(ParseError::new(pos, "a mapping key must be a plain name, not a list or mapping"));
+                }
+                if stack.len() >= MAX_DEPTH {
+                    return Err(ParseError::new(
+                        pos,
+                        format!("lists and mappings nest deeper than {MAX_DEPTH} levels"),
+                    ));
+                }
+                // A block mapping's start marker sits at the `:` after its
+                // first key, so `Map` takes the first key's position instead.
+                stack.push(if matches!(event, Event::SequenceStart(..)) {
+                    Frame::Seq { pos, items: Vec::new() }
+                } else {
+                    Frame::Map { pos, entries: Vec::new(), key: None, lines: HashMap::new() }
+                });
+                continue;
+            }
+            Event::SequenceEnd | Event::MappingEnd => match stack.pop() {
+                Some(Frame::Seq { pos, items }) => Spanned::new(Node::Seq(items), pos),
+                Some(Frame::Map { pos, entries, .. }) => {
+                    let pos = entries.first().map_or(pos, |(k, _)| pos.min(k.pos));
+                    Spanned::new(Node::Map(entries), pos)
+                }
+                None => return Err(ParseError::new(pos, "unbalanced YAML structure")),
+            },
+        };
+        // `done` is a complete node: hand it to its parent.
+        match stack.last_mut() {
+            None => root = Some(done),
+            Some(Frame::Seq { items, .. }) => items.push(done),
+            Some(Frame::Map { entries, key, .. }) => match key.take() {
+                // An empty value's marker is wherever the next token is;
+                // the key is a better place to point at.
+                Some(k) if done.value.is_null() && implicit_null => {
+                    let pos = k.pos;
+                    entries.push((k, Spanned::new(Node::Null, pos)));
+                }
+                Some(k) => entries.push((k, done)),
+                None => return Err(ParseError::new(done.pos, "unbalanced YAML structure")),
+            },
+        }
+    }
+    Ok(match root {
+        Some(root) if !root.value.is_null() => root,
+        _ => Spanned::new(Node::Null, Pos::START),
+    })
+}
+
+/// Where the `&` of the anchor on the node at `mark` is: the last `&` before
+/// the node's marker (a block mapping's marker sits after its first key).
+fn anchor_pos(source: &str, mark: &Marker) -> Pos {
+    let mut found = Pos::from_marker(mark);
+    let mut at = Pos::START;
+    for c in source.chars().take(mark.index()) {
+        if c == '&' {
+            found = at;
+        }
+        if c == '\n' {
+            at = Pos::new(at.line + 1, 1);
+        } else {
+            at.col += 1;
+        }
+    }
+    found
+}
+
+fn anchor_error(pos: Pos) -> ParseError {
+    ParseError::new(pos, "anchors and aliases (`&name`, `*name`) are not supported in robot files")
+}
+
+fn tag_error(pos: Pos) -> ParseError {
+    ParseError::new(
+        pos,
+        "YAML tags (`!!str`, `!name`) are not supported in robot files; quote a value to make it a string",
+    )
+}
+
+/// Turns a scanner error into a `ParseError`. Tabs in indentation get their
+/// own message, at the tab itself (the scanner reports the character after).
+fn scan_error(source: &str, e: &ScanError) -> ParseError {
+    let pos = Pos::from_marker(e.marker());
+    if e.info().contains("unknown anchor") {
+        return anchor_error(pos);
+    }
+    if e.info().contains("tab") {
+        if let Some(line) = source.lines().nth(pos.line - 1) {
+            let indent = line.chars().take_while(|c| *c == ' ' || *c == '\t');
+            if let Some(i) = indent.into_iter().position(|c| c == '\t') {
+                return ParseError::new(
+                    Pos::new(pos.line, i + 1),
+                    "tab character in indentation; indent YAML with spaces",
+                );
+            }
+        }
+    }
+    ParseError::new(pos, format!("invalid YAML: {}", e.info()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(line: usize, col: usize) -> Pos {
+        Pos::new(line, col)
+    }
+
+    fn err(source: &str) -> String {
+        parse(source).expect_err("expected an error").to_string()
+    }
+
+    #[test]
+    fn builds_a_tree_with_exact_positions() {
+        let src = "robot: toybot\ncycle:\n  rate_hz: 20\ndevices:\n  - name: sonar\n    params: {noise_m: 0.01, xs: [1, 2.5]}\n";
+        let root = parse(src).unwrap();
+        assert_eq!(root.pos, p(1, 1));
+        let map = root.value.as_map().unwrap();
+        let keys: Vec<_> = map.iter().map(|(k, _)| (k.value.as_str(), k.pos)).collect();
+        assert_eq!(keys, [("robot", p(1, 1)), ("cycle", p(2, 1)), ("devices", p(4, 1))]);
+        assert_eq!(map[0].1, Spanned::new(Node::plain("toybot"), p(1, 8)));
+        let cycle = root.value.get("cycle").unwrap();
+        assert_eq!(cycle.pos, p(3, 3));
+        let rate = cycle.value.get("rate_hz").unwrap();
+        assert_eq!((rate.pos, rate.value.to_value()), (p(3, 12), Some(Value::I64(20))));
+        let devices = root.value.get("devices").unwrap();
+        assert_eq!(devices.pos, p(5, 3));
+        let item = &devices.value.as_seq().unwrap()[0];
+        assert_eq!(item.pos, p(5, 5));
+        let params = item.value.get("params").unwrap();
+        assert_eq!(params.pos, p(6, 13));
+        let (k, v) = &params.value.as_map().unwrap()[1];
+        assert_eq!((k.value.as_str(), k.pos, v.pos), ("xs", p(6, 29), p(6, 33)));
+        assert_eq!(v.value.to_f64s(), Some(Value::F64s(vec![1.0, 2.5].into())));
+        assert_eq!(v.value.as_seq().unwrap()[1].pos, p(6, 37));
+    }
+
+    #[test]
+    fn columns_count_characters_not_bytes() {
+        let root = parse("héllo: wörld\nb: 1\n").unwrap();
+        let (k, v) = &root.value.as_map().unwrap()[0];
+        assert_eq!((k.pos, v.pos), (p(1, 1), p(1, 8)));
+    }
+
+    #[test]
+    fn plain_scalars_follow_the_core_schema() {
+        let cases: &[(&str, Option<Value>)] = &[
+            ("true", Some(Value::Bool(true))),
+            ("FALSE", Some(Value::Bool(false))),
+            ("-3", Some(Value::I64(-3))),
+            ("+7", Some(Value::I64(7))),
+            ("0x1f", Some(Value::I64(31))),
+            ("0o17", Some(Value::I64(15))),
+            ("0.5", Some(Value::F64(0.5))),
+            ("1e-3", Some(Value::F64(1e-3))),
+            ("-.5E+2", Some(Value::F64(-50.0))),
+            ("3.", Some(Value::F64(3.0))),
+            (".inf", Some(Value::F64(f64::INFINITY))),
+            ("-.inf", Some(Value::F64(f64::NEG_INFINITY))),
+            ("inf", Some(Value::Str("inf".into()))),
+            ("nan", Some(Value::Str("nan".into()))),
+            ("1e", Some(Value::Str("1e".into()))),
+            (".", Some(Value::Str(".".into()))),
+            ("0x", Some(Value::Str("0x".into()))),
+            ("yes", Some(Value::Str("yes".into()))),
+            ("toy.sonar", Some(Value::Str("toy.sonar".into()))),
+            ("99999999999999999999", Some(Value::F64(1e20))),
+        ];
+        for (text, want) in cases {
+            let src = format!("v: {text}\n");
+            let root = parse(&src).unwrap();
+            assert_eq!(&root.value.get("v").unwrap().value.to_value(), want, "{text}");
+        }
+        let root = parse("v: .nan\n").unwrap();
+        assert!(root.value.get("v").unwrap().value.as_f64().unwrap().is_nan());
+        // An empty value sits at its key; an explicit null where it is.
+        let root = parse("a:\n  b:\n  c: ~\n").unwrap();
+        let a = &root.value.get("a").unwrap().value;
+        assert_eq!(a.get("b"), Some(&Spanned::new(Node::Null, p(2, 3))));
+        assert_eq!(a.get("c"), Some(&Spanned::new(Node::Null, p(3, 6))));
+        for text in ["", "~", "null", "Null", "NULL"] {
+            let root = parse(&format!("v: {text}\n")).unwrap();
+            assert_eq!(root.value.get("v").unwrap().value, Node::Null, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn quoted_and_block_scalars_are_strings() {
+        let root = parse("a: \"3\"\nb: 'true'\nc: \"null\"\nd: |\n  5\n").unwrap();
+        let v = |k: &str| root.value.get(k).unwrap().value.to_value();
+        assert_eq!(v("a"), Some(Value::Str("3".into())));
+        assert_eq!(v("b"), Some(Value::Str("true".into())));
+        assert_eq!(v("c"), Some(Value::Str("null".into())));
+        assert_eq!(v("d"), Some(Value::Str("5\n".into())));
+        assert_eq!(root.value.get("a").unwrap().pos, p(1, 4));
+        assert_eq!(root.value.get("d").unwrap().pos, p(5, 3));
+    }
+
+    #[test]
+    fn empty_documents_are_null_at_the_start() {
+        for src in ["", "\n\n", "# only a comment\n", "---\n", "---\n...\n"] {
+            assert_eq!(parse(src).unwrap(), Spanned::new(Node::Null, Pos::START), "{src:?}");
+        }
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let root = parse("\u{feff}a: 1\n").unwrap();
+        assert_eq!(root.value.as_map().unwrap()[0].0, Spanned::new("a".to_string(), p(1, 1)));
+    }
+
+    #[test]
+    fn top_level_scalars_and_lists_are_returned_as_such() {
+        assert_eq!(parse("hello\n").unwrap(), Spanned::new(Node::plain("hello"), p(1, 1)));
+        let root = parse("- a\n- b\n").unwrap();
+        assert_eq!(root.pos, p(1, 1));
+        assert_eq!(root.value.as_seq().unwrap()[1].pos, p(2, 3));
+    }
+
+    #[test]
+    fn syntax_errors_carry_the_scanner_position() {
+        assert_eq!(err("a: [1, 2\n"), "2:1: invalid YAML: while parsing a flow sequence, expected ',' or ']'");
+        assert_eq!(
+            err("a: \"open\n"),
+            "1:4: invalid YAML: while scanning a quoted scalar, found unexpected end of stream"
+        );
+    }
+
+    #[test]
+    fn tab_indentation_points_at_the_tab() {
+        assert_eq!(err("a:\n\tb: 1\n"), "2:1: tab character in indentation; indent YAML with spaces");
+        assert_eq!(err("a:\n  b:\n  \tc: 1\n"), "3:3: tab character in indentation; indent YAML with spaces");
+    }
+
+    #[test]
+    fn duplicate_keys_name_the_first_line() {
+        assert_eq!(err("a: 1\nb:\n  x: 1\n  y: 2\n  x: 3\n"), "5:3: duplicate key `x` (first given on line 3)");
+        // Keys in different mappings do not clash.
+        assert!(parse("a: {x: 1}\nb: {x: 2}\n").is_ok());
+    }
+
+    #[test]
+    fn anchors_aliases_and_tags_are_rejected() {
+        let msg = "anchors and aliases (`&name`, `*name`) are not supported in robot files";
+        assert_eq!(err("a: &x 1\n"), format!("1:4: {msg}"));
+        assert_eq!(err("a: &x\n  b: 1\n"), format!("1:4: {msg}"));
+        assert_eq!(err("a:\n  &x b: 1\n"), format!("2:3: {msg}"));
+        assert_eq!(err("a: *x\n"), format!("1:4: {msg}"));
+        assert_eq!(err("- &x [1]\n- *x\n"), format!("1:3: {msg}"));
+        assert!(err("a: !!str 5\n").starts_with("1:10: YAML tags"));
+    }
+
+    #[test]
+    fn non_scalar_keys_and_second_documents_are_rejected() {
+        assert_eq!(err("? [a]\n: 1\n"), "1:3: a mapping key must be a plain name, not a list or mapping");
+        assert_eq!(err("a: 1\n---\nb: 2\n"), "2:1: a robot file holds one YAML document, but a second one starts here");
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_crash() {
+        let deep = "[".repeat(200) + &"]".repeat(200);
+        assert_eq!(err(&deep), "1:65: lists and mappings nest deeper than 64 levels");
+        let ok = "[".repeat(MAX_DEPTH) + &"]".repeat(MAX_DEPTH);
+        assert!(parse(&ok).is_ok());
+    }
+
+    #[test]
+    fn describe_quotes_strings_only() {
+        assert_eq!(Node::plain("fast").describe(), "\"fast\"");
+        assert_eq!(Node::plain("0").describe(), "0");
+        assert_eq!(Node::quoted("0").describe(), "\"0\"");
+        assert_eq!(Node::Seq(vec![]).describe(), "a list");
+        assert_eq!(Node::Null.describe(), "null");
+        let long = Node::plain(&"x".repeat(100)).describe();
+        assert_eq!(long, format!("\"{}…\"", "x".repeat(40)));
+    }
+
+    #[test]
+    fn no_input_panics() {
+        // Truncations of a realistic file, then random strings made of YAML's
+        // significant characters.
+        let src = "robot: toybot # c\ncycle: {rate_hz: 20}\ndevices:\n  - name: \"sonar\"\n    params: {noise_m: 0.01, v: [1, 2]}\n    remap:\n      range: sonar.range\n  - |\n    text\n  - 'q''s'\n";
+        for (i, _) in src.char_indices() {
+            let _ = parse(&src[..i]);
+        }
+        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\"%@`.~0a1eé\\x".chars().collect();
+        let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
+        for _ in 0..20_000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let len = (seed % 40) as usize;
+            let mut s = String::new();
+            let mut r = seed;
+            for _ in 0..len {
+                r = r.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s.push(alphabet[(r >> 33) as usize % alphabet.len()]);
+            }
+            let _ = parse(&s);
+        }
+    }
+}

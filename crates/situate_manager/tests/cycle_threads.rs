@@ -1,0 +1,181 @@
+//! Threaded bodies: a hung device or a slow async computation never delays
+//! the cycle. No timing is asserted: a blocked body is blocked on a gate the
+//! test holds closed, and the test checks the cycle went on regardless (a
+//! watchdog turns a hang into a failure).
+
+mod common;
+
+use std::sync::mpsc;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Duration;
+
+use common::*;
+use situate_core::{SkillKind, Value};
+use situate_manager::{ClockKind, Control, Event, Registry, RobotSpec};
+
+#[derive(Clone, Default)]
+struct Gate(Arc<(Mutex<bool>, Condvar)>);
+
+impl Gate {
+    fn pass(&self) {
+        let (open, cv) = &*self.0;
+        let mut o = open.lock().unwrap();
+        while !*o {
+            o = cv.wait(o).unwrap();
+        }
+    }
+    fn open(&self) {
+        *self.0 .0.lock().unwrap() = true;
+        self.0 .1.notify_all();
+    }
+}
+
+/// Runs `f` on a thread and fails if it does not finish within a generous
+/// bound (a hang is the failure this guards against, not slowness).
+fn within_watchdog<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(Duration::from_secs(60)).expect("the cycle blocked on a threaded body")
+}
+
+fn wall(robot: &str) -> RobotSpec {
+    RobotSpec::new(robot).clock(ClockKind::Wall).period_s(0.002)
+}
+
+#[test]
+fn a_dskill_whose_device_hangs_does_not_delay_the_cycle() {
+    let gate = Gate::default();
+    let g = gate.clone();
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("dev", SkillKind::Device, &[("cmd", "f64?")], &[("reading", "f64")]), move |io, _| {
+        g.pass();
+        io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+        Ok(())
+    }));
+    reg.add(constant("src", "f64", Value::F64(1.0)));
+    let spec = wall("hang").skill(skill("d", "dev")).skill(skill("s", "src").remap("out", "cmd"));
+    let mut m = build(&spec, &reg);
+    let mut m = within_watchdog(move || {
+        m.run_cycles(30);
+        m
+    });
+    assert_eq!(m.stats().unwrap().cycle, 30);
+    assert_eq!(m.skill("d").unwrap().timing.runs, 0, "the device never finished an exchange");
+    assert_eq!(m.query("reading").unwrap().value, None);
+    assert_eq!(m.skill("s").unwrap().timing.runs, 30, "the rest of the cycle ran every time");
+    gate.open();
+    // Once the device answers, its readings reach the cycle.
+    let m = within_watchdog(move || {
+        while m.query("reading").unwrap().value.is_none() {
+            m.run_cycles(1);
+        }
+        m
+    });
+    drop(m);
+}
+
+#[test]
+fn a_slow_async_cskill_does_not_delay_the_cycle_and_its_latest_result_is_taken() {
+    let gate = Gate::default();
+    let g = gate.clone();
+    let mut reg = Registry::new();
+    reg.add(constant("src", "f64", Value::F64(2.0)));
+    reg.add(fn_type(decl("slow", SkillKind::Async, &[("x", "f64")], &[("y", "f64")]), move |io, _| {
+        g.pass();
+        let x = io.inputs[0].as_ref().and_then(Value::as_f64).ok_or("no x")?;
+        io.outputs[0] = Some(Value::F64(x * 10.0));
+        Ok(())
+    }));
+    let log = log();
+    reg.add(adder("add", 1.0, &log, "after"));
+    let spec = wall("async")
+        .skill(skill("s", "src").remap("out", "x"))
+        .skill(skill("slow", "slow"))
+        .skill(skill("a", "add").remap("x", "y").remap("y", "z"));
+    let mut m = build(&spec, &reg);
+    let mut m = within_watchdog(move || {
+        m.run_cycles(20);
+        m
+    });
+    assert_eq!(m.stats().unwrap().cycle, 20);
+    assert_eq!(m.query("y").unwrap().value, None, "no result yet");
+    assert!(entries(&log).is_empty(), "its consumer waits for a first result");
+    gate.open();
+    let mut m = within_watchdog(move || {
+        while m.query("z").unwrap().value.is_none() {
+            m.run_cycles(1);
+        }
+        m
+    });
+    assert_eq!(m.query("y").unwrap().value, Some(Value::F64(20.0)));
+    assert_eq!(m.query("z").unwrap().value, Some(Value::F64(21.0)));
+    m.run_cycles(3);
+    // From then on the consumer runs every cycle on the latest result.
+    let n = entries(&log).len();
+    m.run_cycles(3);
+    assert_eq!(entries(&log).len(), n + 3);
+}
+
+#[test]
+fn a_device_gets_each_command_once_and_a_faulting_device_is_reported() {
+    let mut reg = Registry::new();
+    let seen = log();
+    let s2 = seen.clone();
+    reg.add(fn_type(decl("dev", SkillKind::Device, &[("cmd", "f64?")], &[("n", "i64")]), move |io, _| {
+        if let Some(v) = &io.inputs[0] {
+            s2.lock().unwrap().push(v.to_string());
+            if v.as_f64() == Some(3.0) {
+                return Err("motor driver over-current".into());
+            }
+        }
+        io.outputs[0] = Some(Value::I64(1));
+        Ok(())
+    }));
+    reg.add(fn_type(decl("counter", SkillKind::Sync, &[], &[("cmd", "f64")]), |io, _| {
+        io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+        Ok(())
+    }));
+    // Lockstep (simulated clock): the device exchanges once per cycle, in order.
+    let spec = simulated("dev").skill(skill("d", "dev")).skill(skill("c", "counter"));
+    let mut m = build(&spec, &reg);
+    let events = m.events();
+    m.step(5).unwrap();
+    assert_eq!(entries(&seen), vec!["1", "2", "3"]);
+    assert!(!m.skill("d").unwrap().active);
+    assert!(events.try_iter().any(|e| matches!(e, Event::SkillFaulted { skill, cause, cycle: 3 } if skill == "d" && cause == "motor driver over-current")));
+}
+
+#[test]
+fn a_managed_thread_serves_requests_while_it_cycles() {
+    let mut reg = Registry::new();
+    reg.add(constant("src", "f64", Value::F64(4.0)));
+    let log = log();
+    reg.add(adder("add", 1.0, &log, "a"));
+    let spec = RobotSpec::new("served")
+        .clock(ClockKind::Wall)
+        .period_s(0.001)
+        .skill(skill("s", "src").remap("out", "x"))
+        .skill(skill("a", "add").active(false));
+    let m = build(&spec, &reg);
+    let (mut handle, join) = m.spawn(true);
+    let events = handle.events();
+    handle.activate(&["a"]).unwrap();
+    // Wait, by events, for the activation to be applied.
+    let applied = events
+        .iter()
+        .find(|e| matches!(e, Event::ActivationApplied { activated, .. } if activated == &["a"]))
+        .unwrap();
+    let Event::ActivationApplied { cycle, .. } = applied else { unreachable!() };
+    assert!(cycle >= 1);
+    handle.request(situate_manager::Request::Stop).unwrap();
+    let stopped_at = handle.stats().unwrap().cycle;
+    handle.step(3).unwrap();
+    assert_eq!(handle.stats().unwrap().cycle, stopped_at + 3);
+    assert_eq!(handle.query("y").unwrap().value, Some(Value::F64(5.0)));
+    handle.request(situate_manager::Request::Shutdown).unwrap();
+    let mut m = join.join().unwrap();
+    assert_eq!(m.stats().unwrap().cycle, stopped_at + 3, "stopped means no more cycles");
+    assert!(handle.query("y").is_err(), "the handle reports the manager gone");
+}
