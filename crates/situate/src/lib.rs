@@ -7,7 +7,7 @@
 pub use situate_core::*;
 pub use situate_derive::{Record, Skill};
 /// The skill manager: the cycle, the control API, robot files.
-// MANAGER_REEXPORT
+pub use situate_manager as manager;
 
 /// What generated code names; not a public API.
 #[doc(hidden)]

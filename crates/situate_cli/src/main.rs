@@ -40,9 +40,7 @@ enum Command {
 
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
-        )
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
         .with_writer(std::io::stderr)
         .init();
     match run(Cli::parse()) {
@@ -173,7 +171,10 @@ fn print_summary(stats: &ManagerStats, skills: &[SkillInfo]) {
         stats.period_s * 1e3,
         stats.overruns
     );
-    println!("{:<16} {:<8} {:>8} {:>10} {:>10} {:>10}  state", "skill", "kind", "runs", "mean µs", "max µs", "total ms");
+    println!(
+        "{:<16} {:<8} {:>8} {:>10} {:>10} {:>10}  state",
+        "skill", "kind", "runs", "mean µs", "max µs", "total ms"
+    );
     for s in skills {
         let state = match (&s.faulted, s.active) {
             (Some(cause), _) => format!("faulted: {cause}"),

@@ -128,15 +128,7 @@ pub struct ParamValueError {
 
 impl ParamSpec {
     pub fn new(name: &str, ty: ParamType, default: Value) -> Self {
-        ParamSpec {
-            name: name.into(),
-            ty,
-            default,
-            min: None,
-            max: None,
-            unit: String::new(),
-            doc: String::new(),
-        }
+        ParamSpec { name: name.into(), ty, default, min: None, max: None, unit: String::new(), doc: String::new() }
     }
 
     pub fn range(mut self, min: Option<f64>, max: Option<f64>) -> Self {
@@ -298,8 +290,7 @@ mod tests {
 
     #[test]
     fn a_number_out_of_range_is_refused_with_the_range_named() {
-        let p = ParamSpec::new("safe_distance", ParamType::F64, Value::F64(0.5))
-            .range(Some(0.1), Some(3.0));
+        let p = ParamSpec::new("safe_distance", ParamType::F64, Value::F64(0.5)).range(Some(0.1), Some(3.0));
         assert_eq!(p.check(&Value::F64(0.3)), Ok(Value::F64(0.3)));
         assert_eq!(p.check(&Value::I64(2)), Ok(Value::F64(2.0)));
         let e = p.check(&Value::F64(7.0)).unwrap_err();

@@ -148,10 +148,7 @@ impl SkillType {
 
     /// A skill type from a declaration and any constructor (used by foreign
     /// language bindings and tests).
-    pub fn new(
-        decl: SkillDecl,
-        make: impl Fn() -> Result<Box<dyn Skill>, String> + Send + Sync + 'static,
-    ) -> Self {
+    pub fn new(decl: SkillDecl, make: impl Fn() -> Result<Box<dyn Skill>, String> + Send + Sync + 'static) -> Self {
         SkillType { decl: Arc::new(decl), make: Arc::new(make) }
     }
 }

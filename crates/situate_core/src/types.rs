@@ -39,7 +39,10 @@ pub enum SignalType {
     Str,
     Bytes,
     /// A numeric array; `len` is `Some(n)` for a fixed length.
-    Array { elem: ElemType, len: Option<usize> },
+    Array {
+        elem: ElemType,
+        len: Option<usize>,
+    },
     Record(Arc<RecordType>),
 }
 
@@ -55,11 +58,7 @@ impl RecordType {
     }
 
     pub fn field(&self, name: &str) -> Option<(usize, &SignalType)> {
-        self.fields
-            .iter()
-            .enumerate()
-            .find(|(_, (n, _))| n == name)
-            .map(|(i, (_, t))| (i, t))
+        self.fields.iter().enumerate().find(|(_, (n, _))| n == name).map(|(i, (_, t))| (i, t))
     }
 }
 
@@ -69,9 +68,7 @@ impl SignalType {
     }
 
     pub fn record(fields: Vec<(&str, SignalType)>) -> Self {
-        SignalType::Record(Arc::new(RecordType::new(
-            fields.into_iter().map(|(n, t)| (n.to_string(), t)).collect(),
-        )))
+        SignalType::Record(Arc::new(RecordType::new(fields.into_iter().map(|(n, t)| (n.to_string(), t)).collect())))
     }
 
     pub fn as_record(&self) -> Option<&RecordType> {
@@ -86,10 +83,9 @@ impl SignalType {
     /// a fixed-length array of the same element type.
     pub fn feeds(&self, consumer: &SignalType) -> bool {
         match (self, consumer) {
-            (
-                SignalType::Array { elem: a, len: la },
-                SignalType::Array { elem: b, len: lb },
-            ) => a == b && (lb.is_none() || la == lb),
+            (SignalType::Array { elem: a, len: la }, SignalType::Array { elem: b, len: lb }) => {
+                a == b && (lb.is_none() || la == lb)
+            }
             (a, b) => a == b,
         }
     }
@@ -157,9 +153,7 @@ impl TypeParser<'_> {
 
     fn ident(&mut self) -> Option<String> {
         let start = self.pos;
-        while self.pos < self.s.len()
-            && (self.s[self.pos].is_ascii_alphanumeric() || self.s[self.pos] == b'_')
-        {
+        while self.pos < self.s.len() && (self.s[self.pos].is_ascii_alphanumeric() || self.s[self.pos] == b'_') {
             self.pos += 1;
         }
         (self.pos > start).then(|| String::from_utf8_lossy(&self.s[start..self.pos]).into_owned())
@@ -259,7 +253,17 @@ mod tests {
 
     #[test]
     fn display_and_parse_round_trip() {
-        for text in ["bool", "i64", "f64", "string", "bytes", "f32[]", "f64[24]", "{x: f64, y: f64}", "{range: f32[24], ok: {a: bool}}"] {
+        for text in [
+            "bool",
+            "i64",
+            "f64",
+            "string",
+            "bytes",
+            "f32[]",
+            "f64[24]",
+            "{x: f64, y: f64}",
+            "{range: f32[24], ok: {a: bool}}",
+        ] {
             let t = SignalType::parse(text).unwrap();
             assert_eq!(t.to_string(), text);
         }

@@ -62,21 +62,12 @@ impl Value {
             | (Value::F64(_), SignalType::F64)
             | (Value::Str(_), SignalType::Str)
             | (Value::Bytes(_), SignalType::Bytes) => true,
-            (Value::F32s(a), SignalType::Array { elem: ElemType::F32, len }) => {
-                len.is_none_or(|n| n == a.len())
-            }
-            (Value::F64s(a), SignalType::Array { elem: ElemType::F64, len }) => {
-                len.is_none_or(|n| n == a.len())
-            }
-            (Value::I64s(a), SignalType::Array { elem: ElemType::I64, len }) => {
-                len.is_none_or(|n| n == a.len())
-            }
+            (Value::F32s(a), SignalType::Array { elem: ElemType::F32, len }) => len.is_none_or(|n| n == a.len()),
+            (Value::F64s(a), SignalType::Array { elem: ElemType::F64, len }) => len.is_none_or(|n| n == a.len()),
+            (Value::I64s(a), SignalType::Array { elem: ElemType::I64, len }) => len.is_none_or(|n| n == a.len()),
             (Value::Record(r), SignalType::Record(rt)) => {
                 r.fields.len() == rt.fields.len()
-                    && r.fields
-                        .iter()
-                        .zip(&rt.fields)
-                        .all(|((n, v), (tn, tt))| **n == **tn && v.conforms(tt))
+                    && r.fields.iter().zip(&rt.fields).all(|((n, v), (tn, tt))| **n == **tn && v.conforms(tt))
             }
             _ => false,
         }
@@ -112,6 +103,11 @@ impl Value {
             Value::Bytes(b) => Some(b.len()),
             _ => None,
         }
+    }
+
+    /// Whether an array, string or bytes value is empty (`None` for others).
+    pub fn is_empty(&self) -> Option<bool> {
+        self.len().map(|n| n == 0)
     }
 
     /// The value at a record field path (`&[]` is the value itself).
@@ -264,16 +260,12 @@ fixed_array_signal!(i64, I64s, ElemType::I64);
 
 /// Builds a record value from field values; used by `#[derive(Record)]`.
 pub fn record_value(fields: Vec<(&'static str, Value)>) -> Value {
-    Value::Record(Arc::new(RecordValue {
-        fields: fields.into_iter().map(|(n, v)| (Arc::from(n), v)).collect(),
-    }))
+    Value::Record(Arc::new(RecordValue { fields: fields.into_iter().map(|(n, v)| (Arc::from(n), v)).collect() }))
 }
 
 /// Builds a record type from field types; used by `#[derive(Record)]`.
 pub fn record_type(fields: Vec<(&'static str, SignalType)>) -> SignalType {
-    SignalType::Record(Arc::new(RecordType::new(
-        fields.into_iter().map(|(n, t)| (n.to_string(), t)).collect(),
-    )))
+    SignalType::Record(Arc::new(RecordType::new(fields.into_iter().map(|(n, t)| (n.to_string(), t)).collect())))
 }
 
 #[cfg(test)]

@@ -21,27 +21,56 @@ use crate::monitor::MonitorMode;
 pub enum Request {
     /// Activate skills from the next cycle on. With `with_providers`, also
     /// activate (recursively) a provider of every input nobody active provides.
-    Activate { skills: Vec<String>, with_providers: bool },
-    Deactivate { skills: Vec<String> },
-    SetParam { skill: String, param: String, value: Value },
-    GetParam { skill: String, param: String },
-    SetPriority { skill: String, priority: i32 },
+    Activate {
+        skills: Vec<String>,
+        with_providers: bool,
+    },
+    Deactivate {
+        skills: Vec<String>,
+    },
+    SetParam {
+        skill: String,
+        param: String,
+        value: Value,
+    },
+    GetParam {
+        skill: String,
+        param: String,
+    },
+    SetPriority {
+        skill: String,
+        priority: i32,
+    },
     /// Send the skill's own prints as events.
-    SetVerbose { skill: String, verbose: bool },
+    SetVerbose {
+        skill: String,
+        verbose: bool,
+    },
     /// The current value of a signal (a leaf or a whole record).
-    QuerySignal { signal: String },
-    QuerySkill { skill: String },
+    QuerySignal {
+        signal: String,
+    },
+    QuerySkill {
+        skill: String,
+    },
     QuerySkills,
     QueryWinners,
     QueryGraph,
     QueryStats,
-    AddMonitor { condition: String, mode: MonitorMode },
-    CancelMonitor { monitor: u64 },
+    AddMonitor {
+        condition: String,
+        mode: MonitorMode,
+    },
+    CancelMonitor {
+        monitor: u64,
+    },
     ListMonitors,
     Run,
     Stop,
     /// Run this many cycles now, then stop.
-    Step { cycles: u64 },
+    Step {
+        cycles: u64,
+    },
     /// End the manager's thread (from a [`Handle`]).
     Shutdown,
 }
@@ -51,7 +80,10 @@ pub enum Request {
 pub enum Reply {
     Done,
     /// The skills whose activation changed, and the cycle it applies at.
-    Activation { changed: Vec<String>, at_cycle: u64 },
+    Activation {
+        changed: Vec<String>,
+        at_cycle: u64,
+    },
     Param(Value),
     Signal(SignalReading),
     Skill(Box<SkillInfo>),
@@ -102,14 +134,41 @@ fn missing_text(signals: &[String], providers: &[String]) -> String {
 /// Something that happened, sent to every subscriber.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Event {
-    MonitorFired { monitor: u64, condition: String, cycle: u64, time_s: f64, values: Vec<(String, Option<Value>)> },
-    ActivationApplied { activated: Vec<String>, deactivated: Vec<String>, cycle: u64 },
-    ParamChanged { skill: String, param: String, value: Value, cycle: u64 },
-    SkillFaulted { skill: String, cause: String, cycle: u64 },
+    MonitorFired {
+        monitor: u64,
+        condition: String,
+        cycle: u64,
+        time_s: f64,
+        values: Vec<(String, Option<Value>)>,
+    },
+    ActivationApplied {
+        activated: Vec<String>,
+        deactivated: Vec<String>,
+        cycle: u64,
+    },
+    ParamChanged {
+        skill: String,
+        param: String,
+        value: Value,
+        cycle: u64,
+    },
+    SkillFaulted {
+        skill: String,
+        cause: String,
+        cycle: u64,
+    },
     /// A verbose skill's own print.
-    Print { skill: String, line: String, cycle: u64 },
-    ManagerStarted { cycle: u64 },
-    ManagerStopped { cycle: u64 },
+    Print {
+        skill: String,
+        line: String,
+        cycle: u64,
+    },
+    ManagerStarted {
+        cycle: u64,
+    },
+    ManagerStopped {
+        cycle: u64,
+    },
 }
 
 /// A signal's current value.

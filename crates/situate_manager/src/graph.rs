@@ -119,9 +119,11 @@ pub(crate) fn decompose(ty: &SignalType, value: &Value, out: &mut Vec<Value>) ->
     match (ty, value) {
         (SignalType::Record(rt), Value::Record(rv)) => {
             rt.fields.len() == rv.fields.len()
-                && rt.fields.iter().zip(&rv.fields).all(|((tn, tt), (vn, vv))| {
-                    tn.as_str() == &**vn && decompose(tt, vv, out)
-                })
+                && rt
+                    .fields
+                    .iter()
+                    .zip(&rv.fields)
+                    .all(|((tn, tt), (vn, vv))| tn.as_str() == &**vn && decompose(tt, vv, out))
         }
         (SignalType::Record(_), _) => false,
         (t, v) => {
@@ -188,11 +190,17 @@ impl Graph {
             match (s.section, decl.kind) {
                 (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => ck.error(
                     s.type_pos,
-                    format!("skill `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`", s.name, decl.type_name),
+                    format!(
+                        "skill `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`",
+                        s.name, decl.type_name
+                    ),
                 ),
                 (Some(Section::Skills), SkillKind::Device) => ck.error(
                     s.type_pos,
-                    format!("skill `{}`: `{}` is a dskill; list it under `devices:`, not `skills:`", s.name, decl.type_name),
+                    format!(
+                        "skill `{}`: `{}` is a dskill; list it under `devices:`, not `skills:`",
+                        s.name, decl.type_name
+                    ),
                 ),
                 _ => {}
             }
@@ -245,7 +253,10 @@ impl Graph {
                 if !is_signal_path(&r.signal) {
                     ck.error(
                         r.signal_pos.or(item_pos(s)),
-                        format!("skill `{}`: remap target `{}` is not a signal name (identifiers joined by `.`)", s.name, r.signal),
+                        format!(
+                            "skill `{}`: remap target `{}` is not a signal name (identifiers joined by `.`)",
+                            s.name, r.signal
+                        ),
                     );
                     continue;
                 }
@@ -274,7 +285,13 @@ impl Graph {
             }
             for p in inputs.iter().chain(&outputs) {
                 if !is_signal_path(&p.signal) {
-                    ck.error(item_pos(s), format!("skill `{}`: port `{}` names signal `{}`, which is not a valid signal name", s.name, p.name, p.signal));
+                    ck.error(
+                        item_pos(s),
+                        format!(
+                            "skill `{}`: port `{}` names signal `{}`, which is not a valid signal name",
+                            s.name, p.name, p.signal
+                        ),
+                    );
                 }
             }
             let period_s = s.period_ms.map(|ms| ms / 1000.0);
@@ -330,11 +347,8 @@ impl Graph {
         }
         let port_ref = |ii: usize, pi: usize, output: bool| -> (String, Option<Pos>, SignalType) {
             let inst = &instances[ii];
-            let (p, pos) = if output {
-                (&inst.outputs[pi], port_pos[ii].1[pi])
-            } else {
-                (&inst.inputs[pi], port_pos[ii].0[pi])
-            };
+            let (p, pos) =
+                if output { (&inst.outputs[pi], port_pos[ii].1[pi]) } else { (&inst.inputs[pi], port_pos[ii].0[pi]) };
             let dir = if output { "output" } else { "input" };
             (format!("`{}` ({dir} `{}`)", inst.name, p.name), pos, p.ty.clone())
         };
@@ -346,9 +360,34 @@ impl Graph {
             if w[1].starts_with(w[0]) && w[1].as_bytes().get(w[0].len()) == Some(&b'.') {
                 let a = &leaves[leaf_index[w[0]]];
                 let b = &leaves[leaf_index[w[1]]];
-                let (ai, ap) = a.writers.first().map(|&(i, p)| (i, p, true)).or(a.readers.first().map(|&(i, p)| (i, p, false))).map(|(i, p, o)| { let r = port_ref(i, p, o); (r.0, r.1) }).unwrap_or_default();
-                let (bi, _) = b.writers.first().map(|&(i, p)| (i, p, true)).or(b.readers.first().map(|&(i, p)| (i, p, false))).map(|(i, p, o)| { let r = port_ref(i, p, o); (r.0, r.1) }).unwrap_or_default();
-                ck.error(ap, format!("signal `{}` is used both as a value, by {ai}, and as a record with field `{}`, by {bi}", w[0], &w[1][w[0].len() + 1..]));
+                let (ai, ap) = a
+                    .writers
+                    .first()
+                    .map(|&(i, p)| (i, p, true))
+                    .or(a.readers.first().map(|&(i, p)| (i, p, false)))
+                    .map(|(i, p, o)| {
+                        let r = port_ref(i, p, o);
+                        (r.0, r.1)
+                    })
+                    .unwrap_or_default();
+                let (bi, _) = b
+                    .writers
+                    .first()
+                    .map(|&(i, p)| (i, p, true))
+                    .or(b.readers.first().map(|&(i, p)| (i, p, false)))
+                    .map(|(i, p, o)| {
+                        let r = port_ref(i, p, o);
+                        (r.0, r.1)
+                    })
+                    .unwrap_or_default();
+                ck.error(
+                    ap,
+                    format!(
+                        "signal `{}` is used both as a value, by {ai}, and as a record with field `{}`, by {bi}",
+                        w[0],
+                        &w[1][w[0].len() + 1..]
+                    ),
+                );
             }
         }
 
@@ -361,7 +400,10 @@ impl Graph {
                     if ty != first_ty {
                         let (a, _, _) = port_ref(w0, p0, true);
                         let (b, pos, _) = port_ref(wi, pi, true);
-                        ck.error(pos, format!("type mismatch on signal `{}`: {a} writes {first_ty}, {b} writes {ty}", leaf.path));
+                        ck.error(
+                            pos,
+                            format!("type mismatch on signal `{}`: {a} writes {first_ty}, {b} writes {ty}", leaf.path),
+                        );
                     }
                 }
                 for &(ri, pi) in &leaf.readers {
@@ -369,13 +411,22 @@ impl Graph {
                     if !first_ty.feeds(&want) {
                         let (a, _, _) = port_ref(w0, p0, true);
                         let (b, pos, _) = port_ref(ri, pi, false);
-                        ck.error(pos, format!("type mismatch on signal `{}`: {a} produces {first_ty}, {b} expects {want}", leaf.path));
+                        ck.error(
+                            pos,
+                            format!(
+                                "type mismatch on signal `{}`: {a} produces {first_ty}, {b} expects {want}",
+                                leaf.path
+                            ),
+                        );
                     }
                 }
             } else {
                 for &(ri, pi) in &leaf.readers {
                     let (b, pos, _) = port_ref(ri, pi, false);
-                    let near = suggestion(&leaf.path, leaves.iter().filter(|l| !l.writers.is_empty()).map(|l| l.path.as_str()));
+                    let near = suggestion(
+                        &leaf.path,
+                        leaves.iter().filter(|l| !l.writers.is_empty()).map(|l| l.path.as_str()),
+                    );
                     let msg = format!("{b} reads signal `{}`, which no skill or device provides{near}", leaf.path);
                     if instances[ri].inputs[pi].optional {
                         ck.warning(pos, format!("optional input: {msg}"));
@@ -415,7 +466,13 @@ impl Graph {
                 .map(|(_, d)| d.name.as_str())
                 .collect();
             let first = instances.iter().position(|d| d.name == in_loop[0]).and_then(|i| item_pos(specs[i]));
-            ck.error(first, format!("data-flow loop among skills {}: each waits for another's output in the same cycle", quote_list(&in_loop)));
+            ck.error(
+                first,
+                format!(
+                    "data-flow loop among skills {}: each waits for another's output in the same cycle",
+                    quote_list(&in_loop)
+                ),
+            );
         }
 
         let mut records = BTreeMap::new();
@@ -441,10 +498,7 @@ impl Graph {
 
     /// The type at a signal path: a leaf's, or a record's assembled from its leaves.
     pub fn signal_type(&self, path: &str) -> Option<SignalType> {
-        self.leaf_index
-            .get(path)
-            .map(|&i| self.leaves[i].ty.clone())
-            .or_else(|| self.records.get(path).cloned())
+        self.leaf_index.get(path).map(|&i| self.leaves[i].ty.clone()).or_else(|| self.records.get(path).cloned())
     }
 
     /// The leaves under a path (one for a leaf, all fields' for a record).
@@ -488,11 +542,8 @@ fn record_type_at(path: &str, leaves: &[Leaf]) -> SignalType {
             if fields.iter().any(|(f, _)| f == field) {
                 continue;
             }
-            let ty = if rest.contains('.') {
-                record_type_at(&format!("{prefix}{field}"), leaves)
-            } else {
-                leaf.ty.clone()
-            };
+            let ty =
+                if rest.contains('.') { record_type_at(&format!("{prefix}{field}"), leaves) } else { leaf.ty.clone() };
             fields.push((field.to_string(), ty));
         }
     }

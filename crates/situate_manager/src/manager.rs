@@ -153,7 +153,8 @@ impl Manager {
                     skill.set_param(i, v);
                 }
             }
-            let worker = (def.kind.is_threaded() && !lockstep).then(|| Worker::new(def.inputs.len(), def.outputs.len()));
+            let worker =
+                (def.kind.is_threaded() && !lockstep).then(|| Worker::new(def.inputs.len(), def.outputs.len()));
             execs.push(exec);
             insts.push(Inst {
                 active: false,
@@ -174,9 +175,9 @@ impl Manager {
         let pool = match spec.executor {
             ExecutorKind::Serial => None,
             ExecutorKind::Parallel => {
-                let threads = spec.threads.unwrap_or_else(|| {
-                    std::thread::available_parallelism().map(|n| n.get().min(4)).unwrap_or(2)
-                });
+                let threads = spec
+                    .threads
+                    .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get().min(4)).unwrap_or(2));
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
                     .thread_name(|i| format!("situate-exec-{i}"))
@@ -534,7 +535,13 @@ impl Manager {
         self.threaded_results(d, outputs, fault, prints);
     }
 
-    fn threaded_results(&mut self, i: usize, mut outputs: Vec<Option<Value>>, fault: Option<String>, prints: Vec<String>) {
+    fn threaded_results(
+        &mut self,
+        i: usize,
+        mut outputs: Vec<Option<Value>>,
+        fault: Option<String>,
+        prints: Vec<String>,
+    ) {
         if let Some(worker) = self.insts[i].worker.as_ref() {
             let stats = worker.shared.lock().stats;
             let inst = &mut self.insts[i];
@@ -807,7 +814,12 @@ impl Manager {
             params: decl.params.iter().cloned().zip(inst.params.iter().cloned()).collect(),
             inputs: def.inputs.iter().zip(&self.execs[i].inputs).map(|(p, v)| port(p, v.clone())).collect(),
             outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
-            timing: SkillTiming { runs: inst.runs, last_ns: inst.last_ns, max_ns: inst.max_ns, total_ns: inst.total_ns },
+            timing: SkillTiming {
+                runs: inst.runs,
+                last_ns: inst.last_ns,
+                max_ns: inst.max_ns,
+                total_ns: inst.total_ns,
+            },
             prints: inst.prints.iter().cloned().collect(),
         }
     }
@@ -1209,9 +1221,6 @@ impl Resolver for ManagerResolver<'_> {
             }
         }
         let names = g.signal_names().map(str::to_string).collect::<Vec<_>>();
-        Err(format!(
-            "unknown signal `{path}`{}",
-            suggestion(path, names.iter().map(String::as_str))
-        ))
+        Err(format!("unknown signal `{path}`{}", suggestion(path, names.iter().map(String::as_str))))
     }
 }

@@ -34,10 +34,7 @@ impl Registry {
 
     /// `unknown skill type `x` — did you mean `y`?`
     pub fn unknown(&self, type_name: &str) -> String {
-        format!(
-            "unknown skill type `{type_name}`{}",
-            suggestion(type_name, self.types.keys().map(String::as_str))
-        )
+        format!("unknown skill type `{type_name}`{}", suggestion(type_name, self.types.keys().map(String::as_str)))
     }
 
     pub fn names(&self) -> impl Iterator<Item = &str> {

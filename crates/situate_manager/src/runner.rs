@@ -132,11 +132,7 @@ pub(crate) struct Worker {
 
 impl Worker {
     pub fn new(inputs: usize, outputs: usize) -> Self {
-        let mailbox = Mailbox {
-            inputs: vec![None; inputs],
-            outputs: vec![None; outputs],
-            ..Mailbox::default()
-        };
+        let mailbox = Mailbox { inputs: vec![None; inputs], outputs: vec![None; outputs], ..Mailbox::default() };
         Worker { shared: Arc::new(Shared { mailbox: Mutex::new(mailbox), wake: Condvar::new() }), started: false }
     }
 
@@ -190,7 +186,11 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
                         if now >= next {
                             break;
                         }
-                        mb = shared.wake.wait_timeout(mb, next - now).map(|(g, _)| g).unwrap_or_else(|p| p.into_inner().0);
+                        mb = shared
+                            .wake
+                            .wait_timeout(mb, next - now)
+                            .map(|(g, _)| g)
+                            .unwrap_or_else(|p| p.into_inner().0);
                         continue;
                     } else if mb.inputs_new {
                         break;

@@ -138,12 +138,7 @@ impl SkillSpec {
     }
 
     pub fn remap(mut self, port: &str, signal: &str) -> Self {
-        self.remap.push(RemapEntry {
-            port: port.into(),
-            signal: signal.into(),
-            port_pos: None,
-            signal_pos: None,
-        });
+        self.remap.push(RemapEntry { port: port.into(), signal: signal.into(), port_pos: None, signal_pos: None });
         self
     }
 

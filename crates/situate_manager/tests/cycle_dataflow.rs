@@ -138,7 +138,10 @@ fn activating_a_skill_without_providers_names_the_missing_signals() {
         err,
         ControlError::MissingProviders { skill: "b".into(), signals: vec!["y".into()], providers: vec!["a".into()] }
     );
-    assert_eq!(err.to_string(), "cannot activate `b`: no active skill provides `y` (activate `a` too, or ask to activate providers)");
+    assert_eq!(
+        err.to_string(),
+        "cannot activate `b`: no active skill provides `y` (activate `a` too, or ask to activate providers)"
+    );
     // Refused: nothing changed.
     assert!(m.stats().unwrap().active.is_empty());
     // With providers: b needs a, which needs s.
@@ -163,17 +166,23 @@ fn a_rejected_parameter_leaves_the_old_value() {
     let log = log();
     let mut reg = Registry::new();
     let l = log.clone();
-    reg.add(fn_type(with_param(decl("p", SkillKind::Sync, &[], &[]), "safe_distance", 0.5, 0.1, 3.0), move |_, params| {
-        l.lock().unwrap().push(format!("{}", params[0]));
-        Ok(())
-    }));
+    reg.add(fn_type(
+        with_param(decl("p", SkillKind::Sync, &[], &[]), "safe_distance", 0.5, 0.1, 3.0),
+        move |_, params| {
+            l.lock().unwrap().push(format!("{}", params[0]));
+            Ok(())
+        },
+    ));
     let mut m = build(&simulated("params").skill(skill("runaway", "p")), &reg);
     let events = m.events();
     m.step(1).unwrap();
     let err = m.set_param("runaway", "safe_distance", Value::F64(7.0)).unwrap_err();
     assert_eq!(err.to_string(), "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got 7");
     let err = m.set_param("runaway", "safe_distance", Value::Str("far".into())).unwrap_err();
-    assert_eq!(err.to_string(), "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got \"far\"");
+    assert_eq!(
+        err.to_string(),
+        "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got \"far\""
+    );
     let err = m.set_param("runaway", "safe_distnce", Value::F64(1.0)).unwrap_err();
     assert_eq!(err.to_string(), "skill `runaway`: unknown parameter `safe_distnce` — did you mean `safe_distance`?");
     assert_eq!(m.get_param("runaway", "safe_distance").unwrap(), Value::F64(0.5));
@@ -185,7 +194,12 @@ fn a_rejected_parameter_leaves_the_old_value() {
     let changes: Vec<Event> = events.try_iter().collect();
     assert_eq!(
         changes,
-        vec![Event::ParamChanged { skill: "runaway".into(), param: "safe_distance".into(), value: Value::F64(0.25), cycle: 3 }]
+        vec![Event::ParamChanged {
+            skill: "runaway".into(),
+            param: "safe_distance".into(),
+            value: Value::F64(0.25),
+            cycle: 3
+        }]
     );
 }
 

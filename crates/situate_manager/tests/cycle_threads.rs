@@ -163,10 +163,8 @@ fn a_managed_thread_serves_requests_while_it_cycles() {
     let events = handle.events();
     handle.activate(&["a"]).unwrap();
     // Wait, by events, for the activation to be applied.
-    let applied = events
-        .iter()
-        .find(|e| matches!(e, Event::ActivationApplied { activated, .. } if activated == &["a"]))
-        .unwrap();
+    let applied =
+        events.iter().find(|e| matches!(e, Event::ActivationApplied { activated, .. } if activated == &["a"])).unwrap();
     let Event::ActivationApplied { cycle, .. } = applied else { unreachable!() };
     assert!(cycle >= 1);
     handle.request(situate_manager::Request::Stop).unwrap();

@@ -35,7 +35,7 @@ pub struct Pose {
 #[skill(name = "toy.sonar", kind = "device")]
 pub struct FakeSonar {
     /// Ranges in metres, sonar 0 facing forward, counter-clockwise.
-    #[output]
+    #[output(signal = "sonar.range")]
     range: [f32; 24],
     /// Radius of the room, metres.
     #[param(default = 2.0, min = 0.5, max = 20.0, unit = "m")]
@@ -117,12 +117,8 @@ pub struct Runaway {
 impl Body for Runaway {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         let n = self.sonar_range.len();
-        let Some((i, r)) = self
-            .sonar_range
-            .iter()
-            .enumerate()
-            .min_by(|a, b| a.1.total_cmp(b.1))
-            .map(|(i, r)| (i, f64::from(*r)))
+        let Some((i, r)) =
+            self.sonar_range.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).map(|(i, r)| (i, f64::from(*r)))
         else {
             return Ok(());
         };

@@ -4,7 +4,9 @@
 
 use std::sync::{Arc, Mutex};
 
-use situate_core::{FnSkill, Io, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillError, SkillKind, SkillType, Value};
+use situate_core::{
+    FnSkill, Io, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillError, SkillKind, SkillType, Value,
+};
 use situate_manager::{ClockKind, Manager, Registry, RobotSpec, SkillSpec};
 
 pub type Log = Arc<Mutex<Vec<String>>>;
