@@ -137,6 +137,9 @@ pub(crate) fn decompose(ty: &SignalType, value: &Value, out: &mut Vec<Value>) ->
     }
 }
 
+/// Where each input and output port of an instance was configured.
+type PortPositions = (Vec<Option<Pos>>, Vec<Option<Pos>>);
+
 struct Checker<'a> {
     spec: &'a RobotSpec,
     diags: Vec<Diagnostic>,
@@ -167,7 +170,7 @@ impl Graph {
         // Instances: names, types, parameters, remaps.
         let mut instances: Vec<InstanceDef> = Vec::new();
         // Position of the remap (or the instance) for each port, for messages.
-        let mut port_pos: Vec<(Vec<Option<Pos>>, Vec<Option<Pos>>)> = Vec::new();
+        let mut port_pos: Vec<PortPositions> = Vec::new();
         let mut specs: Vec<&SkillSpec> = Vec::new();
         let mut seen: HashMap<&str, Option<Pos>> = HashMap::new();
         for s in &spec.skills {
@@ -358,28 +361,17 @@ impl Graph {
         paths.sort_unstable();
         for w in paths.windows(2) {
             if w[1].starts_with(w[0]) && w[1].as_bytes().get(w[0].len()) == Some(&b'.') {
-                let a = &leaves[leaf_index[w[0]]];
-                let b = &leaves[leaf_index[w[1]]];
-                let (ai, ap) = a
-                    .writers
-                    .first()
-                    .map(|&(i, p)| (i, p, true))
-                    .or(a.readers.first().map(|&(i, p)| (i, p, false)))
-                    .map(|(i, p, o)| {
-                        let r = port_ref(i, p, o);
-                        (r.0, r.1)
-                    })
-                    .unwrap_or_default();
-                let (bi, _) = b
-                    .writers
-                    .first()
-                    .map(|&(i, p)| (i, p, true))
-                    .or(b.readers.first().map(|&(i, p)| (i, p, false)))
-                    .map(|(i, p, o)| {
-                        let r = port_ref(i, p, o);
-                        (r.0, r.1)
-                    })
-                    .unwrap_or_default();
+                let user = |leaf: &Leaf| {
+                    let (i, p, out) = match (leaf.writers.first(), leaf.readers.first()) {
+                        (Some(&(i, p)), _) => (i, p, true),
+                        (None, Some(&(i, p))) => (i, p, false),
+                        (None, None) => return (String::new(), None),
+                    };
+                    let (text, pos, _) = port_ref(i, p, out);
+                    (text, pos)
+                };
+                let (ai, ap) = user(&leaves[leaf_index[w[0]]]);
+                let (bi, _) = user(&leaves[leaf_index[w[1]]]);
                 ck.error(
                     ap,
                     format!(

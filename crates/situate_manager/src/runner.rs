@@ -44,9 +44,7 @@ impl Exec {
     pub fn run(&mut self, cycle: u64, time_s: f64) {
         let start = Instant::now();
         self.cx.set(cycle, time_s);
-        for o in &mut self.outputs {
-            *o = None;
-        }
+        self.outputs.fill(None);
         self.result = match &mut self.skill {
             Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
             None => Err("the body is not here (it runs on its own thread)".into()),
@@ -212,9 +210,7 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
         for (index, value) in &params {
             skill.set_param(*index, value);
         }
-        for o in &mut outputs {
-            *o = None;
-        }
+        outputs.fill(None);
         let start = Instant::now();
         let result = run_body(skill.as_mut(), &inputs, &mut outputs, &mut cx);
         let elapsed = start.elapsed().as_nanos() as u64;

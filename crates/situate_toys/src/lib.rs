@@ -159,7 +159,7 @@ impl Body for Wander {
         self.state ^= self.state >> 7;
         self.state ^= self.state << 17;
         let turn = ((self.state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.8;
-        if cx.cycle() % 50 == 0 {
+        if cx.cycle().is_multiple_of(50) {
             sprint!(cx, "new heading change {turn:.2} rad/s");
         }
         self.drive = Drive { v: self.speed, w: turn };

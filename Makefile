@@ -1,0 +1,25 @@
+# situate — run `make help` for the targets.
+SHELL := /bin/bash
+export PATH := $(HOME)/.cargo/bin:$(PATH)
+CARGO ?= cargo
+
+.DEFAULT_GOAL := help
+.PHONY: help demo test test-rust lint bench check-tools
+
+help: ## Show the targets.
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
+
+demo: ## Run the demo: the toy robot of examples/toybot.yaml for 10 s, then its summary.
+	$(CARGO) run --release -q -p situate_cli -- run examples/toybot.yaml --cycles 200
+
+test: lint test-rust ## Run every test in every language (what CI runs).
+
+lint: ## Formatting and lints: rustfmt, clippy -D warnings.
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --workspace --all-targets --locked -- -D warnings
+
+test-rust: ## The Rust tests (unit, integration, property, doc).
+	$(CARGO) test --workspace --locked
+
+bench: ## Run the benchmarks (ratios in one run; see bench/README.md).
+	$(CARGO) bench -p situate_bench --locked
