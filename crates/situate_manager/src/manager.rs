@@ -130,6 +130,8 @@ pub struct Manager {
     /// Activation changes applied at this boundary, reported with the next cycle.
     activated: Vec<String>,
     deactivated: Vec<String>,
+    /// When running on its own thread, stop after this cycle.
+    stop_at: Option<u64>,
 }
 
 impl Manager {
@@ -208,6 +210,7 @@ impl Manager {
             bus: EventBus::default(),
             activated: Vec::new(),
             deactivated: Vec::new(),
+            stop_at: None,
             graph,
         };
         let initially: Vec<usize> =
@@ -1032,10 +1035,19 @@ impl Manager {
         (handle, join)
     }
 
+    /// When spawned, stop cycling (and keep serving requests) once cycle
+    /// `cycle` has run.
+    pub fn stop_after(&mut self, cycle: Option<u64>) {
+        self.stop_at = cycle;
+    }
+
     fn serve(&mut self, rx: Receiver<Envelope>) {
         let period = Duration::from_secs_f64(self.period_s);
         let mut deadline = Instant::now();
         loop {
+            if self.running && self.stop_at.is_some_and(|n| self.cycle >= n) {
+                let _ = self.request(Request::Stop);
+            }
             if self.running {
                 self.cycle();
                 match self.clock {

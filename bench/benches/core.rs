@@ -1,0 +1,518 @@
+//! The skill manager's core benchmarks: every figure is a ratio or a
+//! difference of subjects measured interleaved in this run. See README.md.
+//!
+//! ```text
+//! cargo bench -p situate_bench --bench core [-- [--quick] [--samples N] [--json PATH] [NAME…]]
+//! ```
+//!
+//! `NAME`s select benchmarks by name: chain, inactive, parallel, request,
+//! monitor, parts (default: all).
+
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use situate::manager::{Manager, MonitorMode, Request, SkillSpec};
+use situate::prelude::*;
+use situate::{Declare, Io};
+use situate_bench::measure::{interleaved, paired, ratio, Settings, Summary};
+use situate_bench::report::{results_path, CpuTimes, Machine, Report, Target};
+use situate_bench::skills::{self, Flavor};
+
+const BENCHES: &[&str] = &["chain", "inactive", "parallel", "request", "monitor", "parts"];
+
+type Bench = fn(&Settings, &mut Report);
+
+struct Args {
+    settings: Settings,
+    /// Seconds to run only the N = 1000 derive chain, unmeasured (for `perf record`).
+    profile: Option<f64>,
+    only: Vec<String>,
+    json: Option<PathBuf>,
+}
+
+fn parse_args() -> Args {
+    let mut settings = Settings::default();
+    let mut samples = None;
+    let mut only = Vec::new();
+    let mut json = None;
+    let mut profile = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            // `cargo bench` passes `--bench` to every bench target.
+            "--bench" => {}
+            "--quick" => settings = Settings::quick(),
+            "--samples" => samples = args.next().and_then(|n| n.parse().ok()),
+            "--json" => json = args.next().map(PathBuf::from),
+            "--profile" => profile = args.next().and_then(|n| n.parse().ok()).or(Some(10.0)),
+            "--help" | "-h" => {
+                println!("core [--quick] [--samples N] [--json PATH] [--profile SECONDS] [{}]…", BENCHES.join("|"));
+                std::process::exit(0);
+            }
+            name if BENCHES.contains(&name) => only.push(a),
+            other => {
+                eprintln!("unknown argument `{other}` (benchmarks: {})", BENCHES.join(", "));
+                std::process::exit(2);
+            }
+        }
+    }
+    if let Some(n) = samples {
+        settings.samples = n;
+    }
+    Args { settings, profile, only, json }
+}
+
+fn main() {
+    let args = parse_args();
+    if let Some(seconds) = args.profile {
+        profile_chain(seconds);
+        return;
+    }
+    let want = |name: &str| args.only.is_empty() || args.only.iter().any(|o| o == name);
+    let cli: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let machine = Machine::detect(&cli.join(" "));
+    println!(
+        "situate core benchmarks — {} CPUs ({}), {}, load average {}; {} samples of ≥ {:?} each, interleaved",
+        machine.cpus, machine.cpu_model, machine.date, machine.loadavg, args.settings.samples, args.settings.min_sample
+    );
+    let started = Instant::now();
+    let mut report = Report::default();
+    let benches: [(&str, Bench); 6] = [
+        ("chain", chain),
+        ("inactive", inactive),
+        ("parallel", parallel),
+        ("request", request),
+        ("monitor", monitors),
+        ("parts", parts),
+    ];
+    let all = CpuTimes::now();
+    for (name, bench) in benches {
+        if want(name) {
+            let before = CpuTimes::now();
+            bench(&args.settings, &mut report);
+            if let Some(share) = before.zip(CpuTimes::now()).and_then(|(a, b)| a.since(&b)) {
+                report.note(format!("{name}: {share}"));
+            }
+        }
+    }
+    if let Some(share) = all.zip(CpuTimes::now()).and_then(|(a, b)| a.since(&b)) {
+        report.note(format!("whole run: {share}"));
+    }
+    println!();
+    println!(
+        "== targets ({:.1} s; load average {} → {})",
+        started.elapsed().as_secs_f64(),
+        machine.loadavg,
+        situate_bench::report::loadavg()
+    );
+    for t in &report.targets {
+        println!("{}", t.line());
+    }
+    let path = args.json.unwrap_or_else(|| results_path("core.json"));
+    match report.write_json(&path, &machine) {
+        Ok(()) => println!("results: {}", path.display()),
+        Err(e) => eprintln!("could not write {}: {e}", path.display()),
+    }
+}
+
+// ----- 1. the chain ----------------------------------------------------------
+
+const CHAIN_NS: [usize; 4] = [1, 10, 100, 1000];
+const FLAVORS: [Flavor; 3] = [Flavor::Derive, Flavor::DeriveArc, Flavor::Closure];
+
+/// Chains of N skills passing `[f32; 24]`, each adding a constant, against a
+/// loop of N direct calls doing the same arithmetic. One interleaved set for
+/// every N and flavour, so differences across N are paired too.
+fn chain(settings: &Settings, report: &mut Report) {
+    let bench = "chain";
+    // managers[n][f]
+    let mut managers: Vec<Vec<Manager>> = CHAIN_NS
+        .iter()
+        .map(|&n| {
+            FLAVORS
+                .iter()
+                .map(|&f| {
+                    let mut spec = skills::robot("chain");
+                    spec.skills = skills::chain("", n, f, true);
+                    let mut m = skills::build(&spec);
+                    skills::check_chain(&mut m, "", n);
+                    m
+                })
+                .collect()
+        })
+        .collect();
+    let per_n = 1 + FLAVORS.len();
+    let mut t = 0.0f32;
+    let out = interleaved(settings, CHAIN_NS.len() * per_n, &mut |s, iters| {
+        let (ni, k) = (s / per_n, s % per_n);
+        if k == 0 {
+            for _ in 0..iters {
+                black_box(skills::baseline_chain(CHAIN_NS[ni], &mut t));
+            }
+        } else {
+            let m = &mut managers[ni][k - 1];
+            for _ in 0..iters {
+                m.cycle();
+            }
+        }
+    });
+    let mut overhead: Vec<Vec<Summary>> = Vec::new();
+    for (ni, &n) in CHAIN_NS.iter().enumerate() {
+        let base = &out[ni * per_n];
+        report.figure(bench, &format!("N={n:<4} baseline: direct calls"), "ns", base);
+        let mut row = Vec::new();
+        for (fi, f) in FLAVORS.iter().enumerate() {
+            let cyc = &out[ni * per_n + 1 + fi];
+            report.figure(bench, &format!("N={n:<4} cycle, {}", f.label()), "ns", cyc);
+            let o = paired(base, cyc, |b, c| (c - b) / n as f64);
+            report.figure(bench, &format!("N={n:<4} overhead per skill, {}", f.label()), "ns", &o);
+            row.push(o);
+        }
+        overhead.push(row);
+    }
+    // Overhead(N) = fixed + N × marginal: the marginal cost from the two
+    // largest chains, the fixed part per cycle from N = 1.
+    let (i_hi, i_lo) = (CHAIN_NS.len() - 1, CHAIN_NS.len() - 2);
+    let (n_hi, n_lo) = (CHAIN_NS[i_hi] as f64, CHAIN_NS[i_lo] as f64);
+    for (fi, f) in FLAVORS.iter().enumerate() {
+        let marginal =
+            paired(&overhead[i_lo][fi], &overhead[i_hi][fi], |lo, hi| (hi * n_hi - lo * n_lo) / (n_hi - n_lo));
+        report.figure(bench, &format!("marginal per skill N={n_lo}→{n_hi}, {}", f.label()), "ns", &marginal);
+    }
+    report.print_table(
+        bench,
+        "1. chain of N sync skills passing f32[24], each adding a constant (serial, simulated clock)",
+    );
+    let worst = CHAIN_NS
+        .iter()
+        .enumerate()
+        .filter(|&(_, &n)| n >= 10)
+        .map(|(ni, &n)| (n, overhead[ni][0].median))
+        .fold((0, f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
+    let at = |n: usize| overhead[CHAIN_NS.iter().position(|&x| x == n).unwrap_or(0)][0].median;
+    report.target(Target {
+        bench: bench.into(),
+        name: "chain overhead per skill (derive [f32; 24], worst of N = 10, 100, 1000)".into(),
+        unit: "ns",
+        value: worst.1,
+        target: "≤ 50 ns".into(),
+        met: worst.1 <= 50.0,
+        note: format!(
+            "N={}: {:.1} ns; N=10: {:.1}, N=100: {:.1}, N=1000: {:.1}; N=1 (fixed cycle cost included): {:.1}",
+            worst.0,
+            worst.1,
+            at(10),
+            at(100),
+            at(1000),
+            at(1)
+        ),
+    });
+}
+
+/// Runs the N = 1000 derive chain for `seconds`, unmeasured: a steady load
+/// for `perf record`.
+fn profile_chain(seconds: f64) {
+    let mut spec = skills::robot("chain");
+    spec.skills = skills::chain("", 1000, Flavor::Derive, true);
+    let mut m = skills::build(&spec);
+    skills::check_chain(&mut m, "", 1000);
+    let end = Instant::now() + std::time::Duration::from_secs_f64(seconds);
+    while Instant::now() < end {
+        for _ in 0..100 {
+            m.cycle();
+        }
+    }
+    println!("{} cycles of a 1000-skill chain", m.cycle_count());
+}
+
+// ----- 2. inactive skills ------------------------------------------------------
+
+/// The same 100-skill chain active, alone or among 9,900 inactive skills of
+/// the same types (99 more chains of 100).
+fn inactive(settings: &Settings, report: &mut Report) {
+    let bench = "inactive";
+    const CHAINS: usize = 100;
+    const LEN: usize = 100;
+    let chains: Vec<Vec<SkillSpec>> =
+        (0..CHAINS).map(|c| skills::chain(&format!("c{c}_"), LEN, Flavor::Derive, c == 0)).collect();
+    let mut small = skills::robot("small");
+    small.skills = chains[0].clone();
+    // Contiguous: the active chain is declared first.
+    let mut contiguous = skills::robot("contiguous");
+    contiguous.skills = chains.concat();
+    // Spread: declared step by step across chains, so the active skills sit
+    // 100 instances apart (the worst case for locality).
+    let mut spread = skills::robot("spread");
+    spread.skills = (0..LEN).flat_map(|j| chains.iter().map(move |c| c[j].clone())).collect();
+    // Spread among 1,000 (10 chains): does the cost grow with the number of
+    // inactive skills, or with how far apart the active ones are?
+    let mut spread_1k = skills::robot("spread_1k");
+    spread_1k.skills = (0..LEN).flat_map(|j| chains[..10].iter().map(move |c| c[j].clone())).collect();
+    let t0 = Instant::now();
+    let mut managers: Vec<Manager> =
+        [&small, &contiguous, &spread, &spread_1k].iter().map(|s| skills::build(s)).collect();
+    let build_s = t0.elapsed().as_secs_f64();
+    for m in &mut managers {
+        skills::check_chain(m, "c0_", LEN);
+    }
+    let out = interleaved(settings, managers.len(), &mut |s, iters| {
+        let m = &mut managers[s];
+        for _ in 0..iters {
+            m.cycle();
+        }
+    });
+    report.figure(bench, "100 active of 100", "ns", &out[0]);
+    report.figure(bench, "100 active of 10,000 (active declared first)", "ns", &out[1]);
+    report.figure(bench, "100 active of 10,000 (active spread out)", "ns", &out[2]);
+    let r_cont = ratio(&out[0], &out[1]);
+    let r_spread = ratio(&out[0], &out[2]);
+    report.figure(bench, "100 active of 1,000 (active spread out)", "ns", &out[3]);
+    report.figure(bench, "ratio 10,000 / 100 (declared first)", "×", &r_cont);
+    report.figure(bench, "ratio 10,000 / 100 (spread out)", "×", &r_spread);
+    report.figure(bench, "ratio 1,000 / 100 (spread out)", "×", &ratio(&out[0], &out[3]));
+    report.print_table(bench, "2. 100 active skills among 10,000 registered vs 100 registered");
+    report.note(format!("building the four managers (21,100 instances in all) took {build_s:.2} s"));
+    let worst = r_cont.median.max(r_spread.median);
+    report.target(Target {
+        bench: bench.into(),
+        name: "inactive skills: cycle ratio 10,000 / 100 registered (worst arrangement)".into(),
+        unit: "×",
+        value: worst,
+        target: "≤ 1.05×".into(),
+        met: worst <= 1.05,
+        note: format!("declared first {:.3}×, spread out {:.3}×", r_cont.median, r_spread.median),
+    });
+}
+
+// ----- 3. parallel executor ---------------------------------------------------
+
+/// Steps of [`skills::spin`] that take about `want_ns`.
+fn calibrate_spin(want_ns: f64) -> u64 {
+    let probe = 200_000u64;
+    for _ in 0..3 {
+        black_box(skills::spin(probe, 1.0));
+    }
+    let mut per: Vec<f64> = (0..9)
+        .map(|_| {
+            let t = Instant::now();
+            black_box(skills::spin(probe, 1.0));
+            t.elapsed().as_nanos() as f64 / probe as f64
+        })
+        .collect();
+    per.sort_by(f64::total_cmp);
+    (want_ns / per[per.len() / 2]).round().max(1.0) as u64
+}
+
+/// 8 independent skills of ~50 µs each: serial vs parallel executor with 2
+/// threads.
+fn parallel(settings: &Settings, report: &mut Report) {
+    let bench = "parallel";
+    const COUNT: usize = 8;
+    let iters = calibrate_spin(50_000.0);
+    let build = |executor| {
+        let mut spec = skills::robot("parallel").executor(executor, Some(2));
+        spec.skills = skills::workers(COUNT, iters);
+        let mut m = skills::build(&spec);
+        assert_eq!(m.executor(), executor);
+        m.cycle();
+        for k in 0..COUNT {
+            let r = m.request(Request::QuerySignal { signal: format!("w{k}") });
+            assert!(
+                matches!(r, Ok(situate::manager::Reply::Signal(ref s)) if s.value.is_some()),
+                "worker {k} did not run"
+            );
+        }
+        m
+    };
+    let mut serial = build(situate::manager::ExecutorKind::Serial);
+    let mut par = build(situate::manager::ExecutorKind::Parallel);
+    let mut x = 1.0;
+    let before = CpuTimes::now();
+    let out = interleaved(settings, 3, &mut |s, n| match s {
+        0 => {
+            for _ in 0..n {
+                for _ in 0..COUNT {
+                    x = skills::spin(iters, x);
+                }
+            }
+            black_box(x);
+        }
+        1 => {
+            for _ in 0..n {
+                serial.cycle();
+            }
+        }
+        _ => {
+            for _ in 0..n {
+                par.cycle();
+            }
+        }
+    });
+    report.figure(bench, "one body alone (calibrated to 50 µs)", "ns", &out[0].map(|v| v / COUNT as f64));
+    report.figure(bench, "8 bodies, direct calls", "ns", &out[0]);
+    report.figure(bench, "cycle, serial executor", "ns", &out[1]);
+    report.figure(bench, "cycle, parallel executor (2 threads)", "ns", &out[2]);
+    report.figure(bench, "serial cycle / direct calls", "×", &ratio(&out[0], &out[1]));
+    let speedup = ratio(&out[2], &out[1]);
+    report.figure(bench, "speed-up serial / parallel", "×", &speedup);
+    let share = before.zip(CpuTimes::now()).and_then(|(a, b)| a.since(&b));
+    report.print_table(bench, "3. 8 independent skills of ~50 µs: serial vs parallel executor (2 threads)");
+    // With the scheduler's autogroups, a session gets its fair share of the
+    // CPUs: while another session compiles, this run gets about one core
+    // whatever its thread count, and a speed-up can't show.
+    let busy = match share {
+        Some(s) if s.busy() => format!(
+            "; INCONCLUSIVE, the machine was busy (other processes {:.0}%, steal {:.0}% of all CPU time): rerun on an idle machine",
+            s.others, s.steal
+        ),
+        _ => String::new(),
+    };
+    report.target(Target {
+        bench: bench.into(),
+        name: "parallel speed-up, 8 × 50 µs skills on 2 threads (serial / parallel)".into(),
+        unit: "×",
+        value: speedup.median,
+        target: "≥ 1.8×".into(),
+        met: speedup.median >= 1.8,
+        note: format!("iqr {:.2}..{:.2}{busy}", speedup.q1, speedup.q3),
+    });
+}
+
+// ----- 4. control requests ----------------------------------------------------
+
+/// The cost of a signal query between cycles, against a cycle of a
+/// 100-skill chain.
+fn request(settings: &Settings, report: &mut Report) {
+    let bench = "request";
+    let mut spec = skills::robot("request");
+    spec.skills = skills::chain("", 100, Flavor::Derive, true);
+    let mut m = skills::build(&spec);
+    skills::check_chain(&mut m, "", 100);
+    let signal = skills::chain_signal("", 50);
+    let out = interleaved(settings, 3, &mut |s, n| match s {
+        0 => {
+            for _ in 0..n {
+                m.cycle();
+            }
+        }
+        1 => {
+            for _ in 0..n {
+                black_box(m.request(Request::QuerySignal { signal: signal.clone() }).is_ok());
+            }
+        }
+        _ => {
+            for _ in 0..n {
+                black_box(m.request(Request::QuerySkill { skill: "a50".into() }).is_ok());
+            }
+        }
+    });
+    report.figure(bench, "cycle, chain of 100", "ns", &out[0]);
+    report.figure(bench, "request QuerySignal (f32[24])", "ns", &out[1]);
+    report.figure(bench, "request QuerySkill", "ns", &out[2]);
+    report.figure(bench, "QuerySignal / cycle", "×", &ratio(&out[0], &out[1]));
+    report.figure(
+        bench,
+        "QuerySignal / (cycle / 100): in skill runs",
+        "×",
+        &paired(&out[0], &out[1], |c, q| q / (c / 100.0)),
+    );
+    report.figure(bench, "QuerySkill / cycle", "×", &ratio(&out[0], &out[2]));
+    report.print_table(bench, "4. control requests between cycles (no target)");
+}
+
+// ----- 5. monitors ------------------------------------------------------------
+
+/// A 10-skill chain with and without 10 monitors `s{k}[0] > 1e9`, one on
+/// each of its signals (never holding; level mode, so evaluated every cycle).
+/// The chain is short so that the monitors' share stands out of the noise.
+fn monitors(settings: &Settings, report: &mut Report) {
+    let bench = "monitor";
+    const MONITORS: usize = 10;
+    let mut spec = skills::robot("monitor");
+    spec.skills = skills::chain("", 10, Flavor::Derive, true);
+    let mut plain = skills::build(&spec);
+    let mut watched = skills::build(&spec);
+    skills::check_chain(&mut plain, "", 10);
+    skills::check_chain(&mut watched, "", 10);
+    for k in 0..MONITORS {
+        let condition = format!("{}[0] > 1e9", skills::chain_signal("", k));
+        if let Err(e) = watched.request(Request::AddMonitor { condition, mode: MonitorMode::Level }) {
+            panic!("monitor refused: {e}");
+        }
+    }
+    let mut managers = [plain, watched];
+    let out = interleaved(settings, 2, &mut |s, n| {
+        let m = &mut managers[s];
+        for _ in 0..n {
+            m.cycle();
+        }
+    });
+    report.figure(bench, "cycle, chain of 10", "ns", &out[0]);
+    report.figure(bench, "cycle, chain of 10 + 10 monitors", "ns", &out[1]);
+    report.figure(bench, "ratio with / without", "×", &ratio(&out[0], &out[1]));
+    report.figure(
+        bench,
+        "cost per monitor per cycle",
+        "ns",
+        &paired(&out[0], &out[1], |a, b| (b - a) / MONITORS as f64),
+    );
+    report.figure(
+        bench,
+        "one monitor / one skill run",
+        "×",
+        &paired(&out[0], &out[1], |a, b| ((b - a) / MONITORS as f64) / (a / 10.0)),
+    );
+    report.print_table(bench, "5. monitor evaluation per cycle (no target)");
+}
+
+// ----- 6. parts of a skill run ------------------------------------------------
+
+/// What one skill run costs besides the body, piece by piece, to explain
+/// the chain's overhead: the pieces a manager's run of a `[f32; 24]` adder
+/// is made of, measured alone.
+fn parts(settings: &Settings, report: &mut Report) {
+    let bench = "parts";
+    let value = Value::F32s(Arc::from([1.0f32; skills::LEN]));
+    let mut skill = skills::Add::create();
+    let inputs = [Some(value.clone())];
+    let mut outputs = [None];
+    let mut cx = situate::Context::new(0, 0.0);
+    let arr = [1.0f32; skills::LEN];
+    let out = interleaved(settings, 5, &mut |s, n| match s {
+        0 => {
+            for _ in 0..n {
+                black_box(skills::add_call(black_box(&arr)));
+            }
+        }
+        1 => {
+            for _ in 0..n {
+                black_box(Instant::now());
+            }
+        }
+        2 => {
+            for _ in 0..n {
+                black_box(Arc::<[f32]>::from(black_box(arr)));
+            }
+        }
+        3 => {
+            for _ in 0..n {
+                black_box(black_box(&value).clone());
+            }
+        }
+        _ => {
+            for _ in 0..n {
+                let mut io = Io { inputs: &inputs, outputs: &mut outputs, cx: &mut cx };
+                let _ = black_box(skill.step(&mut io));
+            }
+        }
+    });
+    report.figure(bench, "adder arithmetic, direct call", "ns", &out[0]);
+    report.figure(bench, "Instant::now()", "ns", &out[1]);
+    report.figure(bench, "Arc<[f32]> of 24: allocate + free", "ns", &out[2]);
+    report.figure(bench, "Value::F32s clone + drop (atomic inc/dec)", "ns", &out[3]);
+    report.figure(bench, "derived Add::step via dyn Skill (glue + body)", "ns", &out[4]);
+    report.figure(bench, "derive glue = step − direct call", "ns", &paired(&out[0], &out[4], |a, b| b - a));
+    report.print_table(bench, "6. pieces of one skill run, measured alone (no target; explains benchmark 1)");
+}

@@ -1,0 +1,144 @@
+//! A blocking client of the link, for the `situate` program's client verbs
+//! and for Rust sequencers.
+
+use std::time::Duration;
+
+use serde_json::Value as Json;
+use zenoh::{Session, Wait};
+
+use crate::session::client_config;
+use crate::LinkError;
+
+/// An error reply from the manager: its `kind` and message.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct RemoteError {
+    pub kind: String,
+    pub message: String,
+    /// The whole error object (extra members such as `column`).
+    pub detail: Json,
+}
+
+/// Why a client call failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ClientError {
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    #[error(transparent)]
+    Remote(#[from] RemoteError),
+    #[error(
+        "no skill manager answered `{key}` within {timeout:?} (is `situate run` running and reachable at {endpoints}?)"
+    )]
+    NoAnswer { key: String, timeout: Duration, endpoints: String },
+    #[error("several robots answered ({0}); name one with --robot")]
+    Ambiguous(String),
+    #[error("a reply that is not the protocol's JSON: {0}")]
+    BadReply(String),
+}
+
+/// A connection to the Zenoh network the managers are on.
+pub struct Client {
+    session: Session,
+    endpoints: Vec<String>,
+    pub timeout: Duration,
+}
+
+impl Client {
+    pub fn connect(endpoints: &[String]) -> Result<Client, LinkError> {
+        let session =
+            zenoh::open(client_config(endpoints, None)?).wait().map_err(|e| LinkError::Open(e.to_string()))?;
+        Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5) })
+    }
+
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    fn no_answer(&self, key: &str) -> ClientError {
+        ClientError::NoAnswer { key: key.into(), timeout: self.timeout, endpoints: self.endpoints.join(", ") }
+    }
+
+    /// Sends one request; returns the `ok` result or the error reply.
+    pub fn request(&self, robot: &str, verb: &str, args: &Json) -> Result<Json, ClientError> {
+        let key = format!("situate/{robot}/req/{verb}");
+        let replies = self
+            .session
+            .get(&key)
+            .payload(args.to_string())
+            .timeout(self.timeout)
+            .wait()
+            .map_err(|e| LinkError::Open(e.to_string()))?;
+        let reply = replies.recv().map_err(|_| self.no_answer(&key))?;
+        let sample = reply.result().map_err(|e| ClientError::BadReply(format!("{e:?}")))?;
+        let body: Json =
+            serde_json::from_slice(&sample.payload().to_bytes()).map_err(|e| ClientError::BadReply(e.to_string()))?;
+        if let Some(ok) = body.get("ok") {
+            return Ok(ok.clone());
+        }
+        match body.get("error") {
+            Some(err) => Err(RemoteError {
+                kind: err.get("kind").and_then(Json::as_str).unwrap_or("unknown").into(),
+                message: err.get("message").and_then(Json::as_str).unwrap_or("").into(),
+                detail: err.clone(),
+            }
+            .into()),
+            None => Err(ClientError::BadReply(body.to_string())),
+        }
+    }
+
+    /// The robots whose managers answer `hello`.
+    pub fn robots(&self) -> Result<Vec<String>, ClientError> {
+        let replies = self
+            .session
+            .get("situate/*/req/hello")
+            .timeout(self.timeout.min(Duration::from_secs(2)))
+            .wait()
+            .map_err(|e| LinkError::Open(e.to_string()))?;
+        let mut robots = Vec::new();
+        while let Ok(reply) = replies.recv() {
+            if let Ok(sample) = reply.result() {
+                if let Ok(body) = serde_json::from_slice::<Json>(&sample.payload().to_bytes()) {
+                    if let Some(r) = body.pointer("/ok/robot").and_then(Json::as_str) {
+                        robots.push(r.to_string());
+                    }
+                }
+            }
+        }
+        robots.sort();
+        robots.dedup();
+        Ok(robots)
+    }
+
+    /// The robot to talk to: `name` if given, else the only one answering.
+    pub fn resolve_robot(&self, name: Option<&str>) -> Result<String, ClientError> {
+        if let Some(n) = name {
+            return Ok(n.to_string());
+        }
+        let robots = self.robots()?;
+        match robots.len() {
+            0 => Err(self.no_answer("situate/*/req/hello")),
+            1 => Ok(robots[0].clone()),
+            _ => Err(ClientError::Ambiguous(robots.join(", "))),
+        }
+    }
+
+    /// Subscribes to `situate/<robot>/<suffix>`; each payload is parsed as JSON.
+    pub fn subscribe(
+        &self,
+        robot: &str,
+        suffix: &str,
+    ) -> Result<(zenoh::pubsub::Subscriber<()>, crossbeam_channel::Receiver<Json>), LinkError> {
+        let (tx, rx) = crossbeam_channel::unbounded();
+        let sub = self
+            .session
+            .declare_subscriber(format!("situate/{robot}/{suffix}"))
+            .callback(move |sample| {
+                if let Ok(j) = serde_json::from_slice::<Json>(&sample.payload().to_bytes()) {
+                    let _ = tx.send(j);
+                }
+            })
+            .wait()
+            .map_err(|e| LinkError::Open(e.to_string()))?;
+        Ok((sub, rx))
+    }
+}

@@ -1,0 +1,205 @@
+//! The manager's side of the link: queryables for requests, publishers for
+//! events and telemetry.
+//!
+//! Zenoh delivers queries on its own threads; they are handed to one bridge
+//! thread that decodes them, asks the manager through its [`Handle`] and
+//! replies. A malformed request is answered by the bridge without the
+//! manager ever seeing it, so no payload can disturb the cycle; a
+//! well-formed one is handled between two cycles like any in-process
+//! request.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use crossbeam_channel::{Receiver, RecvTimeoutError};
+use serde_json::{json, Map, Value as Json};
+use situate_manager::{Handle, Reply, Request};
+use zenoh::query::Query;
+use zenoh::{Session, Wait};
+
+use crate::json::{self, Decoded};
+use crate::session::LinkConfig;
+use crate::LinkError;
+
+/// How long the bridge waits for the manager before answering `unavailable`.
+const MANAGER_TIMEOUT: Duration = Duration::from_secs(30);
+
+struct Telemetry {
+    signals: Vec<String>,
+    rate_hz: f64,
+}
+
+/// A running link. Dropping it closes the session and ends its threads.
+pub struct Link {
+    session: Session,
+    stop: Arc<AtomicBool>,
+    threads: Vec<JoinHandle<()>>,
+    robot: String,
+}
+
+impl Link {
+    /// Opens a Zenoh session for robot `robot` and serves `handle` over it.
+    pub fn serve(robot: &str, handle: Handle, config: &LinkConfig) -> Result<Link, LinkError> {
+        let session = zenoh::open(config.zenoh_config()?).wait().map_err(|e| LinkError::Open(e.to_string()))?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let telemetry = Arc::new(Mutex::new(Telemetry { signals: Vec::new(), rate_hz: config.telemetry_hz }));
+        let (tx, rx) = crossbeam_channel::bounded::<Query>(1024);
+        let prefix = format!("situate/{robot}/req/");
+        session
+            .declare_queryable(format!("{prefix}*"))
+            .callback(move |query| {
+                // A full queue means someone floods the link: refuse at once
+                // rather than queue without bound.
+                if let Err(crossbeam_channel::TrySendError::Full(q)) = tx.try_send(query) {
+                    reply(
+                        &q,
+                        &json::wire_error(&json::WireError {
+                            kind: "unavailable",
+                            message: "the link is busy; try again".into(),
+                        }),
+                    );
+                }
+            })
+            .background()
+            .wait()
+            .map_err(|e| LinkError::Open(e.to_string()))?;
+
+        let mut threads = Vec::new();
+        {
+            let (handle, telemetry, robot) = (handle.clone(), Arc::clone(&telemetry), robot.to_string());
+            let prefix = prefix.clone();
+            threads.push(spawn("situate-link-req", move || bridge(rx, handle, telemetry, &robot, &prefix))?);
+        }
+        {
+            let (session, events, stop, robot) =
+                (session.clone(), handle.events(), Arc::clone(&stop), robot.to_string());
+            threads.push(spawn("situate-link-events", move || publish_events(&session, events, &stop, &robot))?);
+        }
+        {
+            let (session, stop, robot) = (session.clone(), Arc::clone(&stop), robot.to_string());
+            threads.push(spawn("situate-link-telemetry", move || {
+                publish_telemetry(&session, handle, telemetry, &stop, &robot)
+            })?);
+        }
+        Ok(Link { session, stop, threads, robot: robot.to_string() })
+    }
+
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    pub fn robot(&self) -> &str {
+        &self.robot
+    }
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        let _ = self.session.close().wait();
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+fn spawn(name: &str, f: impl FnOnce() + Send + 'static) -> Result<JoinHandle<()>, LinkError> {
+    std::thread::Builder::new().name(name.into()).spawn(f).map_err(|e| LinkError::Open(e.to_string()))
+}
+
+/// Replies on a concrete key: a query may come with wildcards
+/// (`situate/*/req/hello` finds every robot).
+fn reply_on(query: &Query, key: &str, body: &Json) {
+    if let Err(e) = query.reply(key, body.to_string()).wait() {
+        tracing::debug!(error = %e, "could not reply");
+    }
+}
+
+fn reply(query: &Query, body: &Json) {
+    if let Err(e) = query.reply(query.key_expr().clone(), body.to_string()).wait() {
+        tracing::debug!(error = %e, "could not reply");
+    }
+}
+
+fn bridge(rx: Receiver<Query>, handle: Handle, telemetry: Arc<Mutex<Telemetry>>, robot: &str, prefix: &str) {
+    while let Ok(query) = rx.recv() {
+        // The last chunk names the verb; a wildcard there names none.
+        let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("").to_string();
+        let concrete = if verb.contains(['*', '$']) { "unknown" } else { verb.as_str() };
+        let reply_key = format!("{prefix}{concrete}");
+        let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
+        let body = match json::decode_request(&verb, &payload) {
+            Err(e) => json::wire_error(&e),
+            Ok(Decoded::Hello) => {
+                json::ok(json!({"protocol": json::PROTOCOL, "robot": robot, "version": env!("CARGO_PKG_VERSION")}))
+            }
+            Ok(Decoded::Telemetry { signals, rate_hz }) => {
+                let mut t = telemetry.lock().unwrap_or_else(|p| p.into_inner());
+                t.signals = signals;
+                if let Some(r) = rate_hz {
+                    t.rate_hz = r;
+                }
+                json::ok(Json::Null)
+            }
+            Ok(Decoded::Manager(Request::Shutdown)) => {
+                json::wire_error(&json::WireError::bad_request("shutdown is not a link request"))
+            }
+            Ok(Decoded::Manager(request)) => match handle.request_timeout(request, MANAGER_TIMEOUT) {
+                Ok(r) => json::ok(json::reply_to_json(&r)),
+                Err(e) => json::control_error(&e),
+            },
+        };
+        reply_on(&query, &reply_key, &body);
+    }
+}
+
+fn publish_events(session: &Session, events: Receiver<situate_manager::Event>, stop: &AtomicBool, robot: &str) {
+    while !stop.load(Ordering::SeqCst) {
+        match events.recv_timeout(Duration::from_millis(100)) {
+            Ok(event) => {
+                let (kind, body) = json::event_to_json(&event);
+                if let Err(e) = session.put(format!("situate/{robot}/events/{kind}"), body.to_string()).wait() {
+                    tracing::debug!(error = %e, "could not publish an event");
+                }
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => return,
+        }
+    }
+}
+
+fn publish_telemetry(
+    session: &Session,
+    handle: Handle,
+    telemetry: Arc<Mutex<Telemetry>>,
+    stop: &AtomicBool,
+    robot: &str,
+) {
+    let key = format!("situate/{robot}/telemetry");
+    while !stop.load(Ordering::SeqCst) {
+        let (signals, rate_hz) = {
+            let t = telemetry.lock().unwrap_or_else(|p| p.into_inner());
+            (t.signals.clone(), t.rate_hz)
+        };
+        std::thread::sleep(Duration::from_secs_f64(1.0 / rate_hz));
+        // Sampled between cycles through the handle: never on the cycle's thread.
+        let Ok(Reply::Stats(stats)) = handle.request_timeout(Request::QueryStats, Duration::from_secs(1)) else {
+            continue;
+        };
+        let mut values = Map::new();
+        for s in &signals {
+            let v = match handle.request_timeout(Request::QuerySignal { signal: s.clone() }, Duration::from_secs(1)) {
+                Ok(Reply::Signal(r)) => json::opt_value_to_json(&r.value),
+                _ => Json::Null,
+            };
+            values.insert(s.clone(), v);
+        }
+        let mut body = json::stats_to_json(&stats);
+        body["signals"] = Json::Object(values);
+        if let Err(e) = session.put(key.as_str(), body.to_string()).wait() {
+            tracing::debug!(error = %e, "could not publish telemetry");
+        }
+    }
+}
