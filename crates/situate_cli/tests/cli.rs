@@ -147,7 +147,7 @@ fn check_prints_warnings_and_still_succeeds() {
     let err = stderr(&out);
     assert!(!err.is_empty());
     for line in lines(&err) {
-        assert!(line.starts_with(&format!("{p}:3:11: warning: optional input: `wheels` (input `drive`)")), "{line}");
+        assert!(line.starts_with(&format!("{p}:3:11: warning: `wheels` (optional input `drive`)")), "{line}");
     }
 }
 

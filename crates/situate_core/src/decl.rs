@@ -177,9 +177,9 @@ impl ParamSpec {
 fn describe(value: &Value) -> String {
     match value {
         Value::Str(s) => format!("{s:?}"),
-        Value::Record(_) | Value::Bytes(_) | Value::F32s(_) | Value::F64s(_) | Value::I64s(_) => {
-            format!("a {}", value.kind_name())
-        }
+        Value::F32s(_) | Value::F64s(_) | Value::I64s(_) => "a list of numbers".to_string(),
+        Value::Record(_) => "a record".to_string(),
+        Value::Bytes(_) => "bytes".to_string(),
         other => other.to_string(),
     }
 }

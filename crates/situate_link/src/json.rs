@@ -598,7 +598,7 @@ mod tests {
     fn random_bytes_never_panic_the_decoder() {
         let mut x: u64 = 0x243F_6A88_85A3_08D3;
         for i in 0..20_000 {
-            let len = (i % 64) as usize;
+            let len = i % 64;
             let bytes: Vec<u8> = (0..len)
                 .map(|_| {
                     x ^= x << 13;

@@ -172,21 +172,40 @@ impl Graph {
         // Position of the remap (or the instance) for each port, for messages.
         let mut port_pos: Vec<PortPositions> = Vec::new();
         let mut specs: Vec<&SkillSpec> = Vec::new();
+        // Duplicates are found in file order, so "first" means first in the file
+        // whichever section comes first.
+        let mut by_pos: Vec<usize> = (0..spec.skills.len()).collect();
+        by_pos.sort_by_key(|&i| item_pos(&spec.skills[i]).map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
+        let mut duplicate = vec![false; spec.skills.len()];
         let mut seen: HashMap<&str, Option<Pos>> = HashMap::new();
-        for s in &spec.skills {
-            if !is_identifier(&s.name) {
-                ck.error(item_pos(s), format!("skill name `{}` is not an identifier (letters, digits, `_`)", s.name));
-                continue;
-            }
+        for &i in &by_pos {
+            let s = &spec.skills[i];
             if let Some(first) = seen.get(s.name.as_str()) {
                 let at = first.map(|p| format!(" (first defined at line {})", p.line)).unwrap_or_default();
                 ck.error(item_pos(s), format!("duplicate skill name `{}`{at}", s.name));
+                duplicate[i] = true;
+            } else {
+                seen.insert(&s.name, item_pos(s));
+            }
+        }
+        // An entry left out (bad name, duplicate, unknown type) would make its
+        // consumers' inputs look unprovided: one typo, many errors. Skip that check then.
+        let mut incomplete = false;
+        for (si, s) in spec.skills.iter().enumerate() {
+            let noun = if s.section == Some(Section::Devices) { "device" } else { "skill" };
+            if !is_identifier(&s.name) {
+                ck.error(item_pos(s), format!("{noun} name `{}` is not an identifier (letters, digits, `_`)", s.name));
+                incomplete = true;
                 continue;
             }
-            seen.insert(&s.name, item_pos(s));
+            if duplicate[si] {
+                incomplete = true;
+                continue;
+            }
             let Some(skill_type) = registry.get(&s.type_name) else {
-                let msg = format!("skill `{}`: {}", s.name, registry.unknown(&s.type_name));
+                let msg = format!("{noun} `{}`: {}", s.name, registry.unknown(&s.type_name));
                 ck.error(s.type_pos.or(item_pos(s)), msg);
+                incomplete = true;
                 continue;
             };
             let decl = &skill_type.decl;
@@ -194,7 +213,7 @@ impl Graph {
                 (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => ck.error(
                     s.type_pos,
                     format!(
-                        "skill `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`",
+                        "device `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`",
                         s.name, decl.type_name
                     ),
                 ),
@@ -383,6 +402,7 @@ impl Graph {
             }
         }
 
+        let mut reported_pairs = std::collections::HashSet::new();
         for leaf in &leaves {
             // Writers agree on the type; every writer feeds every reader.
             if let Some(&(w0, p0)) = leaf.writers.first() {
@@ -412,59 +432,80 @@ impl Graph {
                         );
                     }
                 }
-            } else {
-                for &(ri, pi) in &leaf.readers {
-                    let (b, pos, _) = port_ref(ri, pi, false);
-                    let near = suggestion(
-                        &leaf.path,
-                        leaves.iter().filter(|l| !l.writers.is_empty()).map(|l| l.path.as_str()),
+            }
+            // Equal-priority writers of one resource cannot be arbitrated; name
+            // the resource as the later writer's port does (`drive`, not `drive.v`).
+            for (k, &(a, _)) in leaf.writers.iter().enumerate() {
+                for &(b, pb) in &leaf.writers[k + 1..] {
+                    if a == b || instances[a].priority != instances[b].priority {
+                        continue;
+                    }
+                    let resource = instances[b].outputs[pb].signal.clone();
+                    if !reported_pairs.insert((a, b, resource.clone())) {
+                        continue;
+                    }
+                    let pos = specs[b].priority_pos.or(specs[a].priority_pos).or(item_pos(specs[b]));
+                    ck.error(
+                        pos,
+                        format!(
+                            "skills `{}` and `{}` both write resource `{resource}` with priority {}; give them different priorities",
+                            instances[a].name, instances[b].name, instances[a].priority
+                        ),
                     );
-                    let msg = format!("{b} reads signal `{}`, which no skill or device provides{near}", leaf.path);
-                    if instances[ri].inputs[pi].optional {
-                        ck.warning(pos, format!("optional input: {msg}"));
+                }
+            }
+        }
+
+        // Inputs nobody can provide: one message per port.
+        if !incomplete {
+            for (ii, inst) in instances.iter().enumerate() {
+                for (pi, port) in inst.inputs.iter().enumerate() {
+                    let missing: Vec<&str> = port
+                        .leaves
+                        .iter()
+                        .filter(|&&l| leaves[l].writers.is_empty())
+                        .map(|&l| leaves[l].path.as_str())
+                        .collect();
+                    if missing.is_empty() {
+                        continue;
+                    }
+                    let dir = if port.optional { "optional input" } else { "input" };
+                    let what = if missing.len() == port.leaves.len() { port.signal.as_str() } else { missing[0] };
+                    let provided = leaves.iter().filter(|l| !l.writers.is_empty()).map(|l| l.path.as_str());
+                    let near = suggestion(what, provided);
+                    let fields = if missing.len() == port.leaves.len() || missing.len() == 1 {
+                        String::new()
+                    } else {
+                        format!(" (nor {})", quote_list(&missing[1..]))
+                    };
+                    let msg = format!(
+                        "`{}` ({dir} `{}`) reads signal `{what}`{fields}, which no skill or device provides{near}",
+                        inst.name, port.name
+                    );
+                    let pos = port_pos[ii].0[pi];
+                    if port.optional {
+                        ck.warning(pos, msg);
                     } else {
                         ck.error(pos, msg);
                     }
                 }
             }
-            // Equal-priority writers of one resource cannot be arbitrated.
-            let mut by_inst: Vec<usize> = leaf.writers.iter().map(|&(i, _)| i).collect();
-            by_inst.dedup();
-            for (k, &a) in by_inst.iter().enumerate() {
-                for &b in &by_inst[k + 1..] {
-                    if instances[a].priority == instances[b].priority {
-                        let pos = specs[b].priority_pos.or(item_pos(specs[b]));
-                        ck.error(
-                            pos,
-                            format!(
-                                "skills `{}` and `{}` both write resource `{}` with priority {}; give them different priorities",
-                                instances[a].name, instances[b].name, leaf.path, instances[a].priority
-                            ),
-                        );
-                    }
-                }
-            }
         }
-        // Report each equal-priority pair once per top-level signal.
-        dedup_messages(&mut ck.diags);
 
-        // Data-flow loops among cskills.
-        let order = topo_order(&instances, &leaves, |_| true);
-        if order.len() < instances.iter().filter(|i| i.kind != SkillKind::Device).count() {
-            let in_loop: Vec<&str> = instances
-                .iter()
-                .enumerate()
-                .filter(|(i, d)| d.kind != SkillKind::Device && !order.contains(i))
-                .map(|(_, d)| d.name.as_str())
-                .collect();
-            let first = instances.iter().position(|d| d.name == in_loop[0]).and_then(|i| item_pos(specs[i]));
-            ck.error(
-                first,
+        // Data-flow loops among cskills: each strongly connected group of
+        // skills that wait for one another in the same cycle.
+        for group in loops(&instances, &leaves) {
+            let names: Vec<&str> = group.iter().map(|&i| instances[i].name.as_str()).collect();
+            let first = group.iter().filter_map(|&i| item_pos(specs[i])).min_by_key(|p| (p.line, p.col));
+            let msg = if names.len() == 1 {
+                format!("data-flow loop: skill `{}` reads its own output in the same cycle", names[0])
+            } else {
                 format!(
                     "data-flow loop among skills {}: each waits for another's output in the same cycle",
-                    quote_list(&in_loop)
-                ),
-            );
+                    quote_list(&names)
+                )
+            };
+            ck.error(first, msg);
         }
 
         let mut records = BTreeMap::new();
@@ -481,6 +522,7 @@ impl Graph {
             records.insert(name, ty);
         }
 
+        ck.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
         let (errors, warnings): (Vec<_>, Vec<_>) = ck.diags.into_iter().partition(Diagnostic::is_error);
         if !errors.is_empty() {
             return Err(BuildError { diagnostics: errors.into_iter().chain(warnings).collect() });
@@ -542,25 +584,84 @@ fn record_type_at(path: &str, leaves: &[Leaf]) -> SignalType {
     SignalType::Record(Arc::new(RecordType::new(fields)))
 }
 
-fn dedup_messages(diags: &mut Vec<Diagnostic>) {
-    let mut seen = std::collections::HashSet::new();
-    diags.retain(|d| {
-        // "skills `a` and `b` both write resource `drive.v` …" and "… `drive.w` …"
-        // are one problem: key on the message up to the resource's first dot.
-        let key = match d.message.find("both write resource `") {
-            Some(i) => {
-                let rest = &d.message[i + 21..];
-                let top = rest.split(['.', '`']).next().unwrap_or(rest);
-                format!("{}{}", &d.message[..i], top)
-            }
-            None => format!("{:?}{}", d.pos, d.message),
-        };
-        seen.insert(key)
-    });
-}
-
 pub(crate) fn quote_list(names: &[&str]) -> String {
     names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+}
+
+/// The data-flow loops among cskills (Tarjan's strongly connected
+/// components): groups of two or more, or one skill reading its own output.
+fn loops(instances: &[InstanceDef], leaves: &[Leaf]) -> Vec<Vec<usize>> {
+    let n = instances.len();
+    let node = |i: usize| instances[i].kind != SkillKind::Device;
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for leaf in leaves {
+        for &(w, _) in &leaf.writers {
+            for &(r, _) in &leaf.readers {
+                if node(w) && node(r) && !succ[w].contains(&r) {
+                    succ[w].push(r);
+                }
+            }
+        }
+    }
+    struct Tarjan<'a> {
+        succ: &'a [Vec<usize>],
+        index: Vec<Option<usize>>,
+        low: Vec<usize>,
+        on_stack: Vec<bool>,
+        stack: Vec<usize>,
+        next: usize,
+        groups: Vec<Vec<usize>>,
+    }
+    impl Tarjan<'_> {
+        fn visit(&mut self, v: usize) {
+            self.index[v] = Some(self.next);
+            self.low[v] = self.next;
+            self.next += 1;
+            self.stack.push(v);
+            self.on_stack[v] = true;
+            for k in 0..self.succ[v].len() {
+                let w = self.succ[v][k];
+                match self.index[w] {
+                    None => {
+                        self.visit(w);
+                        self.low[v] = self.low[v].min(self.low[w]);
+                    }
+                    Some(iw) if self.on_stack[w] => self.low[v] = self.low[v].min(iw),
+                    Some(_) => {}
+                }
+            }
+            if Some(self.low[v]) == self.index[v] {
+                let mut group = Vec::new();
+                while let Some(w) = self.stack.pop() {
+                    self.on_stack[w] = false;
+                    group.push(w);
+                    if w == v {
+                        break;
+                    }
+                }
+                if group.len() > 1 || self.succ[v].contains(&v) {
+                    group.sort_unstable();
+                    self.groups.push(group);
+                }
+            }
+        }
+    }
+    let mut t = Tarjan {
+        succ: &succ,
+        index: vec![None; n],
+        low: vec![0; n],
+        on_stack: vec![false; n],
+        stack: Vec::new(),
+        next: 0,
+        groups: Vec::new(),
+    };
+    for v in 0..n {
+        if node(v) && t.index[v].is_none() {
+            t.visit(v);
+        }
+    }
+    t.groups.sort();
+    t.groups
 }
 
 /// Kahn's algorithm over the cskills selected by `include`: producers before
