@@ -165,8 +165,10 @@ where
 }
 
 struct Loaded {
+    file: RobotFile,
     spec: RobotSpec,
     link: LinkConfig,
+    remote: Vec<(String, situate_core::SkillDecl)>,
 }
 
 fn load(file: &Path) -> Result<Loaded, ExitCode> {
@@ -193,7 +195,17 @@ fn load(file: &Path) -> Result<Loaded, ExitCode> {
             }
         },
     };
-    Ok(Loaded { spec: RobotSpec::from_file(&robot_file), link })
+    let remote = match robot_file.remote_decls() {
+        Ok(r) => r,
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("{e}");
+            }
+            count_line(file, errors.len());
+            return Err(ExitCode::FAILURE);
+        }
+    };
+    Ok(Loaded { spec: RobotSpec::from_file(&robot_file), link, remote, file: robot_file })
 }
 
 fn count_line(file: &Path, n: usize) {
@@ -393,11 +405,15 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
 }
 
 fn check(file: &Path) -> anyhow::Result<ExitCode> {
-    let registry = situate_toys::registry();
+    let mut registry = situate_toys::registry();
     let loaded = match load(file) {
         Ok(s) => s,
         Err(code) => return Ok(code),
     };
+    for (_, decl) in &loaded.remote {
+        // Checking needs the declaration only; nothing is created.
+        registry.add(situate_core::SkillType::new(decl.clone(), || Err("not created by `check`".into())));
+    }
     match situate::manager::Graph::build(&loaded.spec, &registry) {
         Ok(graph) => {
             for w in &graph.warnings {
@@ -431,11 +447,15 @@ fn run_robot(
     no_link: bool,
     listen: Vec<String>,
 ) -> anyhow::Result<ExitCode> {
-    let registry = situate_toys::registry();
-    let Loaded { mut spec, mut link } = match load(file) {
+    let mut registry = situate_toys::registry();
+    let Loaded { mut spec, mut link, remote, file: robot_file } = match load(file) {
         Ok(s) => s,
         Err(code) => return Ok(code),
     };
+    if no_link && !remote.is_empty() {
+        let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();
+        anyhow::bail!("remote skills ({}) need the link; drop --no-link", names.join(", "));
+    }
     if let Some(e) = executor {
         spec.executor = if e == "parallel" { ExecutorKind::Parallel } else { ExecutorKind::Serial };
     }
@@ -444,6 +464,21 @@ fn run_robot(
     }
     if !listen.is_empty() {
         link.listen = listen;
+    }
+    let session = if no_link {
+        None
+    } else {
+        Some(Link::open(&link).with_context(|| {
+            format!(
+                "opening the link on {} (is another robot using it? try --listen or --no-link)",
+                link.listen.join(", ")
+            )
+        })?)
+    };
+    if let Some(session) = &session {
+        for (name, decl) in remote {
+            registry.add(situate_link::RemoteSkill::skill_type(session, &robot_file.robot.value, &name, decl));
+        }
     }
     let mut manager = match Manager::build(&spec, &registry) {
         Ok(m) => m,
@@ -459,16 +494,9 @@ fn run_robot(
     manager.stop_after(cycles);
     let events = manager.events();
     let (mut handle, join) = manager.spawn(true);
-    let served = if no_link {
-        None
-    } else {
-        let l = Link::serve(&spec.robot, handle.clone(), &link).with_context(|| {
-            format!(
-                "serving the link on {} (is another robot using it? try --listen or --no-link)",
-                link.listen.join(", ")
-            )
-        });
-        match l {
+    let served = match session {
+        None => None,
+        Some(session) => match Link::serve(&spec.robot, handle.clone(), session, &link).context("serving the link") {
             Ok(l) => {
                 eprintln!(
                     "situate: robot `{}` serving situate/{}/** on {}",
@@ -483,7 +511,7 @@ fn run_robot(
                 let _ = join.join();
                 return Err(e);
             }
-        }
+        },
     };
     let interrupted = interrupt_flag()?;
     let started = Instant::now();

@@ -4,10 +4,12 @@
 
 pub mod client;
 pub mod json;
+pub mod remote;
 pub mod server;
 pub mod session;
 
 pub use client::{Client, ClientError, RemoteError};
+pub use remote::RemoteSkill;
 pub use server::Link;
 pub use session::{LinkConfig, DEFAULT_ENDPOINT};
 

@@ -40,9 +40,14 @@ pub struct Link {
 }
 
 impl Link {
-    /// Opens a Zenoh session for robot `robot` and serves `handle` over it.
-    pub fn serve(robot: &str, handle: Handle, config: &LinkConfig) -> Result<Link, LinkError> {
-        let session = zenoh::open(config.zenoh_config()?).wait().map_err(|e| LinkError::Open(e.to_string()))?;
+    /// Opens the manager's Zenoh session (before the manager is built, when
+    /// remote skills need it).
+    pub fn open(config: &LinkConfig) -> Result<Session, LinkError> {
+        zenoh::open(config.zenoh_config()?).wait().map_err(|e| LinkError::Open(e.to_string()))
+    }
+
+    /// Serves `handle` for robot `robot` on `session`.
+    pub fn serve(robot: &str, handle: Handle, session: Session, config: &LinkConfig) -> Result<Link, LinkError> {
         let stop = Arc::new(AtomicBool::new(false));
         let telemetry = Arc::new(Mutex::new(Telemetry { signals: Vec::new(), rate_hz: config.telemetry_hz }));
         let (tx, rx) = crossbeam_channel::bounded::<Query>(1024);

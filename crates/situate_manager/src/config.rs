@@ -25,7 +25,7 @@ pub const MAX_THREADS: usize = 64;
 
 const TOP_KEYS: &[&str] = &["robot", "cycle", "devices", "skills", "link", "gui"];
 const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads"];
-const ENTRY_KEYS: &[&str] = &["name", "type", "active", "priority", "period_ms", "params", "remap"];
+const ENTRY_KEYS: &[&str] = &["name", "type", "remote", "active", "priority", "period_ms", "params", "remap"];
 
 /// One error in a robot file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -135,6 +135,9 @@ pub struct SkillEntry {
     pub params: Vec<(Spanned<String>, Spanned<Value>)>,
     /// Port name → signal name, in file order.
     pub remap: Vec<(Spanned<String>, Spanned<String>)>,
+    /// A remote skill's manifest (`remote:` instead of `type:`); its type
+    /// name is then `remote.<name>`.
+    pub remote: Option<Spanned<Node>>,
 }
 
 impl SkillEntry {
@@ -165,6 +168,27 @@ pub struct RobotFile {
 }
 
 impl RobotFile {
+    /// The declarations of the file's remote skills (`remote:` entries), as
+    /// `(instance name, declaration of type remote.<name>)`.
+    pub fn remote_decls(&self) -> Result<Vec<(String, situate_core::SkillDecl)>, Vec<ConfigError>> {
+        let mut out = Vec::new();
+        let mut errors = Vec::new();
+        for e in &self.skills {
+            let Some(manifest) = &e.remote else { continue };
+            match crate::manifest::decl_from_node(manifest, &e.type_name.value, situate_core::SkillKind::Async) {
+                Ok(decl) => out.push((e.name.value.clone(), decl)),
+                Err(errs) => errors.extend(
+                    errs.into_iter().map(|(pos, msg)| self.error(pos, format!("skill `{}`: {msg}", e.name.value))),
+                ),
+            }
+        }
+        if errors.is_empty() {
+            Ok(out)
+        } else {
+            Err(errors)
+        }
+    }
+
     /// Parses and shape-checks a robot file; `file` names it in messages.
     /// Returns every error found, in file order.
     pub fn parse(file: &str, source: &str) -> Result<RobotFile, Vec<ConfigError>> {
@@ -448,10 +472,29 @@ impl Checker<'_> {
         let mut period_ms = None;
         let mut params = Vec::new();
         let mut remap = Vec::new();
+        let mut remote = None;
         for (key, value) in entries.iter() {
             let k = key.value.as_str();
             match k {
                 "name" => {}
+                "remote" => {
+                    if section == Section::Devices {
+                        self.push(
+                            key.pos,
+                            "a remote skill is an asynchronous cskill: list it under `skills:`".to_string(),
+                        );
+                    } else if !matches!(value.value, Node::Map(_)) {
+                        self.push(
+                            value.pos,
+                            format!(
+                                "`remote` expects the skill's manifest (inputs, outputs, params), got {}",
+                                value.value.describe()
+                            ),
+                        );
+                    } else {
+                        remote = Some(value.clone());
+                    }
+                }
                 "type" => {
                     type_given = true;
                     type_name = match value.value.as_text() {
@@ -488,8 +531,14 @@ impl Checker<'_> {
         if name_node.is_none() {
             self.push(item.pos, format!("missing required key `name` in {place}"));
         }
-        if !type_given {
+        let remote_given = entries.iter().any(|(k, _)| k.value == "remote");
+        if type_given && remote_given {
+            self.push(item.pos, format!("{place} has both `type` and `remote`; a remote skill has no type"));
+        } else if !type_given && !remote_given {
             self.push(item.pos, format!("missing required key `type` in {place}"));
+        }
+        if let (Some(r), Some(n)) = (&remote, &name) {
+            type_name = Some(Spanned::new(format!("remote.{}", n.value), r.pos));
         }
         Some(SkillEntry {
             section,
@@ -501,6 +550,7 @@ impl Checker<'_> {
             period_ms,
             params,
             remap,
+            remote,
         })
     }
 

@@ -14,6 +14,7 @@ pub mod control;
 pub mod expr;
 pub mod graph;
 pub mod manager;
+pub mod manifest;
 pub mod monitor;
 pub mod registry;
 mod runner;

@@ -1,0 +1,339 @@
+//! The link end to end over real Zenoh sessions on loopback: requests and
+//! replies, events, the default session's sockets, remote skills, and a
+//! flood of bad requests that must change nothing.
+
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use serde_json::{json, Value as Json};
+use situate::manager::{ClockKind, Handle, Manager, Request, RobotFile, RobotSpec};
+use situate_link::{Client, ClientError, Link, LinkConfig, RemoteSkill};
+use zenoh::Wait;
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+const ROBOT: &str = "\
+robot: linkbot
+cycle: {rate_hz: 200}
+devices:
+  - name: sonar
+    type: toy.sonar
+  - name: wheels
+    type: toy.wheels
+skills:
+  - name: runaway
+    type: toy.runaway
+  - name: wander
+    type: toy.wander
+    active: false
+  - name: doubler
+    remote:
+      inputs: {x: \"f32[]\"}
+      outputs: {y: f64}
+      params: {gain: {type: f64, default: 2.0, min: 0, max: 10}}
+    remap: {x: sonar.range}
+    active: false
+";
+
+struct Running {
+    handle: Handle,
+    link: Option<Link>,
+    join: Option<std::thread::JoinHandle<Manager>>,
+    endpoint: String,
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        drop(self.link.take());
+        let _ = self.handle.request_timeout(Request::Shutdown, Duration::from_secs(5));
+        if let Some(j) = self.join.take() {
+            let _ = j.join();
+        }
+    }
+}
+
+fn start(clock: ClockKind) -> Running {
+    let file = RobotFile::parse("linkbot.yaml", ROBOT).unwrap();
+    let port = free_port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+    let session = Link::open(&config).unwrap();
+    let mut registry = situate_toys::registry();
+    for (name, decl) in file.remote_decls().unwrap() {
+        registry.add(RemoteSkill::skill_type(&session, "linkbot", &name, decl));
+    }
+    let spec = RobotSpec::from_file(&file).clock(clock);
+    let manager = Manager::build(&spec, &registry).unwrap();
+    let (handle, join) = manager.spawn(true);
+    let link = Link::serve("linkbot", handle.clone(), session, &config).unwrap();
+    Running { handle, link: Some(link), join: Some(join), endpoint }
+}
+
+fn client(r: &Running) -> Client {
+    let mut c = Client::connect(std::slice::from_ref(&r.endpoint)).unwrap();
+    c.timeout = Duration::from_secs(10);
+    c
+}
+
+fn remote_err(e: ClientError) -> (String, String) {
+    match e {
+        ClientError::Remote(r) => (r.kind, r.message),
+        other => panic!("expected an error reply, got {other}"),
+    }
+}
+
+#[test]
+fn requests_and_errors_travel_over_zenoh() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    assert_eq!(c.resolve_robot(None).unwrap(), "linkbot");
+    let hello = c.request("linkbot", "hello", &json!({})).unwrap();
+    assert_eq!(hello["protocol"], 1);
+    let (kind, msg) = remote_err(c.request("linkbot", "activate", &json!({"skills": ["wandr"]})).unwrap_err());
+    assert_eq!((kind.as_str(), msg.as_str()), ("unknown_skill", "unknown skill `wandr` — did you mean `wander`?"));
+    let changed = c.request("linkbot", "activate", &json!({"skills": ["wander"]})).unwrap();
+    assert_eq!(changed["changed"], json!(["wander"]));
+    let (kind, msg) = remote_err(
+        c.request("linkbot", "set_param", &json!({"skill": "runaway", "param": "safe_distance", "value": "far"}))
+            .unwrap_err(),
+    );
+    assert_eq!(kind, "bad_param");
+    assert_eq!(msg, "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got \"far\"");
+    c.request("linkbot", "set_param", &json!({"skill": "runaway", "param": "safe_distance", "value": 0.3})).unwrap();
+    assert_eq!(
+        c.request("linkbot", "get_param", &json!({"skill": "runaway", "param": "safe_distance"})).unwrap(),
+        json!(0.3)
+    );
+    // Wait (bounded) for a first sonar reading, then read it over the link.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let reading = loop {
+        let q = c.request("linkbot", "query", &json!({"signal": "sonar.range"})).unwrap();
+        if !q["value"].is_null() || Instant::now() > deadline {
+            break q;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(reading["type"], "f32[24]");
+    assert_eq!(reading["value"].as_array().map(Vec::len), Some(24));
+    assert_eq!(reading["writer"], "sonar");
+    let (kind, msg) =
+        remote_err(c.request("linkbot", "monitor_add", &json!({"condition": "sonar.range[0] < "})).unwrap_err());
+    assert_eq!(kind, "bad_condition");
+    assert!(msg.starts_with("column 18: "), "{msg}");
+}
+
+#[test]
+fn events_are_published_as_they_happen() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    let (_sub, events) = c.subscribe("linkbot", "events/**").unwrap();
+    // The subscription must be known to the manager's session before we act.
+    std::thread::sleep(Duration::from_millis(300));
+    c.request("linkbot", "activate", &json!({"skills": ["wander"]})).unwrap();
+    c.request("linkbot", "monitor_add", &json!({"condition": "wander.speed > 0", "mode": "once"})).unwrap();
+    let mut kinds = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while Instant::now() < deadline
+        && !(kinds.contains(&"activation_applied".to_string()) && kinds.contains(&"monitor_fired".to_string()))
+    {
+        if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
+            kinds.push(e["kind"].as_str().unwrap_or("").to_string());
+        }
+    }
+    assert!(kinds.contains(&"activation_applied".to_string()), "{kinds:?}");
+    assert!(kinds.contains(&"monitor_fired".to_string()), "{kinds:?}");
+}
+
+#[test]
+fn the_default_session_listens_on_loopback_tcp_only() {
+    // The default configuration, on a free port so tests can run side by side.
+    let port = free_port();
+    let config = LinkConfig { listen: vec![format!("tcp/127.0.0.1:{port}")], ..LinkConfig::default() };
+    assert_eq!(LinkConfig::default().listen, vec!["tcp/127.0.0.1:7447".to_string()]);
+    let session = Link::open(&config).unwrap();
+    let out = std::process::Command::new("ss").args(["-H", "-tuanp"]).output().expect("ss (iproute2) is installed");
+    let pid = format!("pid={},", std::process::id());
+    let ours: Vec<String> =
+        String::from_utf8_lossy(&out.stdout).lines().filter(|l| l.contains(&pid)).map(str::to_string).collect();
+    assert!(!ours.is_empty(), "ss shows no socket of this process");
+    for line in &ours {
+        assert!(!line.starts_with("udp"), "a UDP socket is open: {line}");
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if fields.get(1) == Some(&"LISTEN") {
+            assert!(fields[4].starts_with("127.0.0.1:"), "a listener not on loopback: {line}");
+        }
+    }
+    assert!(ours.iter().any(|l| l.contains(&format!("127.0.0.1:{port}"))), "{ours:?}");
+    drop(session);
+}
+
+/// A remote skill, as another process would serve it: subscribe to its
+/// inputs, publish outputs. The manager never waits for it.
+#[test]
+fn a_remote_skill_joins_the_cycle_through_the_link() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    let remote = zenoh::open(situate_link::session::client_config(std::slice::from_ref(&r.endpoint), None).unwrap())
+        .wait()
+        .unwrap();
+    let publisher = remote.clone();
+    let _sub = remote
+        .declare_subscriber("situate/linkbot/remote/doubler/inputs")
+        .callback(move |sample| {
+            let msg: Json = serde_json::from_slice(&sample.payload().to_bytes()).unwrap();
+            let gain = msg["params"]["gain"].as_f64().unwrap();
+            let min =
+                msg["inputs"]["x"].as_array().unwrap().iter().filter_map(Json::as_f64).fold(f64::INFINITY, f64::min);
+            let out = json!({"cycle": msg["cycle"], "outputs": {"y": min * gain}, "prints": ["computed"]});
+            publisher.put("situate/linkbot/remote/doubler/outputs", out.to_string()).wait().unwrap();
+        })
+        .wait()
+        .unwrap();
+    c.request("linkbot", "set_param", &json!({"skill": "doubler", "param": "gain", "value": 3})).unwrap();
+    c.request("linkbot", "activate", &json!({"skills": ["doubler"]})).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let (y, range) = loop {
+        let y = c.request("linkbot", "query", &json!({"signal": "y"})).unwrap();
+        let range = c.request("linkbot", "query", &json!({"signal": "sonar.range"})).unwrap();
+        if !y["value"].is_null() || Instant::now() > deadline {
+            break (y, range);
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let y = y["value"].as_f64().expect("the remote result reached the cycle");
+    let room = range["value"].as_array().unwrap().iter().filter_map(Json::as_f64).fold(0.0, f64::max);
+    assert!(y > 0.0 && y <= room * 3.0 + 1e-9, "y = {y}");
+    let info = c.request("linkbot", "skill", &json!({"skill": "doubler"})).unwrap();
+    assert_eq!(info["kind"], "async");
+    assert!(info["prints"].as_array().unwrap().iter().any(|p| p[1] == "computed"), "{info}");
+    // A remote error faults the skill like any other.
+    let failing = remote.clone();
+    failing
+        .put("situate/linkbot/remote/doubler/outputs", json!({"cycle": 0, "error": "division by zero"}).to_string())
+        .wait()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let faulted = loop {
+        let info = c.request("linkbot", "skill", &json!({"skill": "doubler"})).unwrap();
+        if !info["faulted"].is_null() || Instant::now() > deadline {
+            break info["faulted"].clone();
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(faulted, json!("the remote skill failed: division by zero"));
+}
+
+/// Strips what changes by itself (time, counters) from the state.
+fn state(c: &Client) -> BTreeMap<String, Json> {
+    let mut out = BTreeMap::new();
+    for s in c.request("linkbot", "skills", &json!({})).unwrap().as_array().unwrap() {
+        let keep = json!({"active": s["active"], "faulted": s["faulted"], "priority": s["priority"], "params": s["params"], "verbose": s["verbose"]});
+        out.insert(s["name"].as_str().unwrap().to_string(), keep);
+    }
+    out.insert("monitors".into(), c.request("linkbot", "monitor_list", &json!({})).unwrap());
+    out
+}
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn pick<'a>(&mut self, items: &[&'a str]) -> &'a str {
+        items[(self.next() % items.len() as u64) as usize]
+    }
+}
+
+/// A random request that must be refused: random bytes, or well-formed JSON
+/// with wrong names, types or values.
+fn bad_payload(rng: &mut Rng, verb: &str) -> Vec<u8> {
+    let junk_values = [
+        json!(null),
+        json!("x"),
+        json!(1e300),
+        json!(-1),
+        json!([1, "a"]),
+        json!({"a": 1}),
+        json!(true),
+        json!(""),
+        json!("wandr"),
+        json!(7.5),
+    ];
+    match rng.next() % 6 {
+        0 => (0..rng.next() % 80).map(|_| (rng.next() & 0xff) as u8).collect(),
+        1 => format!("{{\"skills\": {}}}", junk_values[(rng.next() % 10) as usize]).into_bytes(),
+        2 => json!({"skill": rng.pick(&["wandr", "", "runawy", "sonar.range", "\u{1F916}"]), "param": "safe_distance", "value": 0.3, "signal": "nosuch", "condition": "sonar.range[0] <", "skills": ["nosuch"], "cycles": 0, "monitor": 99999, "verbose": "yes", "priority": "high"}).to_string().into_bytes(),
+        3 => json!({"skill": "runaway", "param": rng.pick(&["safe_distnce", "speed", "safe_distance"]), "value": junk_values[(rng.next() % 10) as usize]}).to_string().into_bytes(),
+        4 => format!("{{\"protocol\": {}, \"{}\": 1}}", rng.next() % 5 + 2, verb).into_bytes(),
+        _ => json!({"signal": rng.pick(&["sonr.range", "sonar.range[0]", "", "odom.z"]), "condition": rng.pick(&["((((", "sonar.range[-1] < 1", "1 +", "odom.x < \"a\""]), "mode": rng.pick(&["always", "", "ONCE"]), "cycles": -5, "skills": 7}).to_string().into_bytes(),
+    }
+}
+
+#[test]
+fn a_flood_of_bad_requests_changes_nothing_and_the_cycle_goes_on() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    let before = state(&c);
+    let stats_before = c.request("linkbot", "stats", &json!({})).unwrap();
+    let verbs: Vec<&str> = situate_link::json::VERBS
+        .iter()
+        .copied()
+        .filter(|v| {
+            !matches!(*v, "run" | "stop" | "step" | "hello" | "skills" | "winners" | "graph" | "stats" | "monitor_list")
+        })
+        .chain(["nosuch", "activate_"])
+        .collect();
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let total = 100_000;
+    let mut sent = 0;
+    let mut answered = 0;
+    let mut accepted = Vec::new();
+    let started = Instant::now();
+    while sent < total {
+        // Batches of concurrent queries; every one must get an error reply.
+        let mut pending = Vec::new();
+        for _ in 0..500 {
+            let verb = rng.pick(&verbs);
+            let payload = bad_payload(&mut rng, verb);
+            let replies = c
+                .session()
+                .get(format!("situate/linkbot/req/{verb}"))
+                .payload(payload.clone())
+                .timeout(Duration::from_secs(60))
+                .wait()
+                .unwrap();
+            pending.push((verb, payload, replies));
+            sent += 1;
+        }
+        for (verb, payload, replies) in pending {
+            if let Ok(reply) = replies.recv() {
+                answered += 1;
+                let body: Json = serde_json::from_slice(&reply.result().unwrap().payload().to_bytes()).unwrap();
+                if body.get("error").is_none() {
+                    accepted.push(format!("{verb} {}", String::from_utf8_lossy(&payload)));
+                }
+            }
+        }
+    }
+    let elapsed = started.elapsed();
+    let stats_after = c.request("linkbot", "stats", &json!({})).unwrap();
+    assert!(accepted.is_empty(), "accepted: {:?}", &accepted[..accepted.len().min(5)]);
+    assert_eq!(answered, total, "every request gets a reply");
+    assert_eq!(state(&c), before, "the manager's state is exactly as before");
+    assert_eq!(stats_after["running"], true);
+    let cycles = stats_after["cycle"].as_u64().unwrap() - stats_before["cycle"].as_u64().unwrap();
+    assert!(cycles > 0, "the cycle went on");
+    // Reported, not asserted (timing): the rate held during the flood.
+    let expected = elapsed.as_secs_f64() * 200.0;
+    eprintln!(
+        "{total} bad requests in {elapsed:.1?}: {cycles} cycles ({:.0}% of the 200 Hz rate), overruns {} → {}",
+        100.0 * cycles as f64 / expected,
+        stats_before["overruns"],
+        stats_after["overruns"]
+    );
+}

@@ -1,0 +1,230 @@
+//! Skill manifests: a skill's declaration written as data (YAML), for skills
+//! whose code the manager does not hold — remote skills served by another
+//! process today, C and C++ skills later.
+//!
+//! ```yaml
+//! doc: Doubles its input.           # optional
+//! priority: 0                       # optional
+//! inputs:  {x: f64, bump: "bool?"}  # port: type; a trailing `?` makes it optional
+//! outputs: {y: f64}
+//! params:
+//!   gain: 2.0                       # a default alone (its type is the default's)
+//!   limit: {type: f64, default: 1.0, min: 0, max: 10, unit: m, doc: "…"}
+//! ```
+
+use situate_core::{suggestion, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillKind, Value};
+
+use crate::config::{Node, Spanned};
+use crate::yaml::Pos;
+
+const MANIFEST_KEYS: &[&str] = &["doc", "priority", "inputs", "outputs", "params"];
+const PARAM_KEYS: &[&str] = &["type", "default", "min", "max", "unit", "doc"];
+
+/// Reads a manifest into a declaration of `type_name` and `kind`. Errors
+/// carry the position of the offending key or value.
+pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) -> Result<SkillDecl, Vec<(Pos, String)>> {
+    let mut errors = Vec::new();
+    let mut decl = SkillDecl::new(type_name, kind);
+    let Some(entries) = node.value.as_map() else {
+        return Err(vec![(node.pos, format!("a skill manifest is a mapping, got {}", node.value.describe()))]);
+    };
+    for (key, value) in entries {
+        match key.value.as_str() {
+            "doc" => match value.value.as_text() {
+                Some(t) => decl.doc = t.to_string(),
+                None => errors.push((value.pos, format!("`doc` expects text, got {}", value.value.describe()))),
+            },
+            "priority" => match value.value.as_i64().and_then(|p| i32::try_from(p).ok()) {
+                Some(p) => decl.priority = p,
+                None => {
+                    errors.push((value.pos, format!("`priority` expects an integer, got {}", value.value.describe())))
+                }
+            },
+            "inputs" | "outputs" => {
+                let output = key.value == "outputs";
+                let Some(ports) = value.value.as_map() else {
+                    errors.push((value.pos, format!("`{}` expects a mapping of port: type", key.value)));
+                    continue;
+                };
+                for (port, ty) in ports {
+                    if !crate::graph::is_identifier(&port.value) {
+                        errors.push((port.pos, format!("port name `{}` is not an identifier", port.value)));
+                        continue;
+                    }
+                    let Some(text) = ty.value.as_text() else {
+                        errors.push((
+                            ty.pos,
+                            format!(
+                                "port `{}` expects a type such as f64 or f32[24], got {}",
+                                port.value,
+                                ty.value.describe()
+                            ),
+                        ));
+                        continue;
+                    };
+                    let (text, optional) = match text.trim().strip_suffix('?') {
+                        Some(t) if !output => (t, true),
+                        _ => (text.trim(), false),
+                    };
+                    match SignalType::parse(text) {
+                        Ok(t) => {
+                            let mut spec = PortSpec::new(&port.value, t);
+                            spec.optional = optional;
+                            if output {
+                                decl.outputs.push(spec);
+                            } else {
+                                decl.inputs.push(spec);
+                            }
+                        }
+                        Err(e) => errors.push((
+                            Pos { line: ty.pos.line, col: ty.pos.col + e.column - 1 },
+                            format!("port `{}`: {}", port.value, e.message),
+                        )),
+                    }
+                }
+            }
+            "params" => {
+                let Some(params) = value.value.as_map() else {
+                    errors.push((
+                        value.pos,
+                        "`params` expects a mapping of name: default or name: {type, default, …}".into(),
+                    ));
+                    continue;
+                };
+                for (name, spec) in params {
+                    match param_spec(&name.value, spec) {
+                        Ok(p) => decl.params.push(p),
+                        Err(e) => errors.push(e),
+                    }
+                }
+            }
+            other => errors.push((
+                key.pos,
+                format!(
+                    "unknown key `{other}` in the skill manifest{}",
+                    suggestion(other, MANIFEST_KEYS.iter().copied())
+                ),
+            )),
+        }
+    }
+    if errors.is_empty() {
+        Ok(decl)
+    } else {
+        Err(errors)
+    }
+}
+
+fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, String)> {
+    let scalar_type = |v: &Value| match v {
+        Value::Bool(_) => Some(ParamType::Bool),
+        Value::I64(_) => Some(ParamType::I64),
+        Value::F64(_) => Some(ParamType::F64),
+        Value::Str(_) => Some(ParamType::Str),
+        _ => None,
+    };
+    if let Some(default) = node.value.to_value() {
+        let ty = scalar_type(&default).ok_or((node.pos, format!("parameter `{name}`: a default must be a scalar")))?;
+        return Ok(ParamSpec::new(name, ty, default));
+    }
+    let Some(entries) = node.value.as_map() else {
+        return Err((
+            node.pos,
+            format!("parameter `{name}` expects a default value or {{type, default, min, max, unit, doc}}"),
+        ));
+    };
+    let mut ty = None;
+    let mut default = None;
+    let (mut min, mut max, mut unit, mut doc) = (None, None, String::new(), String::new());
+    for (key, value) in entries {
+        match key.value.as_str() {
+            "type" => {
+                ty = Some(match value.value.as_text() {
+                    Some("bool") => ParamType::Bool,
+                    Some("i64" | "int") => ParamType::I64,
+                    Some("f64" | "float") => ParamType::F64,
+                    Some("string" | "str") => ParamType::Str,
+                    _ => {
+                        return Err((
+                            value.pos,
+                            format!(
+                                "parameter `{name}`: `type` is bool, i64, f64 or string, got {}",
+                                value.value.describe()
+                            ),
+                        ))
+                    }
+                })
+            }
+            "default" => default = Some((value.value.to_value(), value.pos)),
+            "min" => {
+                min = Some(
+                    value.value.as_f64().ok_or((value.pos, format!("parameter `{name}`: `min` expects a number")))?,
+                )
+            }
+            "max" => {
+                max = Some(
+                    value.value.as_f64().ok_or((value.pos, format!("parameter `{name}`: `max` expects a number")))?,
+                )
+            }
+            "unit" => unit = value.value.as_text().unwrap_or_default().to_string(),
+            "doc" => doc = value.value.as_text().unwrap_or_default().to_string(),
+            other => {
+                return Err((
+                    key.pos,
+                    format!(
+                        "parameter `{name}`: unknown key `{other}`{}",
+                        suggestion(other, PARAM_KEYS.iter().copied())
+                    ),
+                ))
+            }
+        }
+    }
+    let (default, pos) = match default {
+        Some((Some(v), pos)) => (v, pos),
+        _ => return Err((node.pos, format!("parameter `{name}` needs a `default`"))),
+    };
+    let ty = match ty.or_else(|| scalar_type(&default)) {
+        Some(t) => t,
+        None => return Err((pos, format!("parameter `{name}`: a default must be a scalar"))),
+    };
+    let mut spec = ParamSpec::new(name, ty, default.clone()).range(min, max);
+    spec.unit = unit;
+    spec.doc = doc;
+    spec.default = spec.check(&default).map_err(|e| (pos, format!("parameter `{name}`: the default {e}")))?;
+    Ok(spec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn manifest(src: &str) -> Result<SkillDecl, Vec<(Pos, String)>> {
+        let tree = crate::yaml::parse(src).unwrap();
+        decl_from_node(&tree, "remote.t", SkillKind::Async)
+    }
+
+    #[test]
+    fn a_manifest_declares_ports_and_parameters() {
+        let d = manifest(
+            "doc: Doubles.\ninputs: {x: f64, bump: \"bool?\"}\noutputs: {y: f64}\nparams:\n  gain: 2.0\n  limit: {type: f64, default: 1, min: 0, max: 10, unit: m}\n",
+        )
+        .unwrap();
+        assert_eq!(d.doc, "Doubles.");
+        assert_eq!(d.inputs.len(), 2);
+        assert!(d.inputs[1].optional && !d.inputs[0].optional);
+        assert_eq!(d.outputs[0].ty, SignalType::F64);
+        assert_eq!(d.params[0].default, Value::F64(2.0));
+        assert_eq!(d.params[1].default, Value::F64(1.0));
+        assert_eq!(d.params[1].expectation(), "a number in [0.0, 10.0]");
+    }
+
+    #[test]
+    fn manifest_errors_point_at_the_problem() {
+        let e = manifest("inputs: {x: f46}\n").unwrap_err();
+        assert_eq!(e[0].0, Pos { line: 1, col: 13 });
+        assert!(e[0].1.starts_with("port `x`: unknown type `f46`"), "{}", e[0].1);
+        let e = manifest("ouputs: {}\n").unwrap_err();
+        assert_eq!(e[0].1, "unknown key `ouputs` in the skill manifest — did you mean `outputs`?");
+        let e = manifest("params:\n  g: {type: f64, default: 5, max: 1}\n").unwrap_err();
+        assert_eq!(e[0].1, "parameter `g`: the default expects a number ≤ 1.0, got 5");
+    }
+}
