@@ -42,6 +42,9 @@ struct Remote {
     /// Print the protocol's JSON instead of text.
     #[arg(long, global = true)]
     json: bool,
+    /// A JSON5 file merged into the client's Zenoh configuration (credentials, TLS).
+    #[arg(long, global = true, env = "SITUATE_ZENOH_CONFIG")]
+    zenoh: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -383,7 +386,14 @@ fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
 }
 
 fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<()>) -> anyhow::Result<ExitCode> {
-    let mut client = Client::connect(&remote.connect).context("connecting to the link")?;
+    let extra = match &remote.zenoh {
+        None => None,
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            Some(json5::from_str::<Json>(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
+        }
+    };
+    let mut client = Client::connect_with(&remote.connect, extra.as_ref()).context("connecting to the link")?;
     client.timeout = Duration::from_secs_f64(remote.timeout.max(0.1));
     let robot = match client.resolve_robot(remote.robot.as_deref()) {
         Ok(r) => r,

@@ -27,7 +27,7 @@ pub enum ClientError {
     #[error(transparent)]
     Remote(#[from] RemoteError),
     #[error(
-        "no skill manager answered `{key}` within {timeout:?} (is `situate run` running and reachable at {endpoints}?)"
+        "no skill manager answered `{key}` within {timeout:?} (is `situate run` running and reachable at {endpoints}, and do its access rules allow this request?)"
     )]
     NoAnswer { key: String, timeout: Duration, endpoints: String },
     #[error("several robots answered ({0}); name one with --robot")]
@@ -45,8 +45,13 @@ pub struct Client {
 
 impl Client {
     pub fn connect(endpoints: &[String]) -> Result<Client, LinkError> {
+        Client::connect_with(endpoints, None)
+    }
+
+    /// Connects with extra Zenoh configuration merged in (credentials, TLS).
+    pub fn connect_with(endpoints: &[String], extra: Option<&Json>) -> Result<Client, LinkError> {
         let session =
-            zenoh::open(client_config(endpoints, None)?).wait().map_err(|e| LinkError::Open(e.to_string()))?;
+            zenoh::open(client_config(endpoints, extra)?).wait().map_err(|e| LinkError::Open(e.to_string()))?;
         Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5) })
     }
 
