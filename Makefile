@@ -4,7 +4,7 @@ export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-rust lint bench check-tools
+.PHONY: help demo test test-rust test-python python lint bench
 
 help: ## Show the targets.
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
@@ -12,7 +12,7 @@ help: ## Show the targets.
 demo: ## Run the demo: the toy robot of examples/toybot.yaml for 10 s, then its summary.
 	$(CARGO) run --release -q -p situate_cli -- run examples/toybot.yaml --cycles 200
 
-test: lint test-rust ## Run every test in every language (what CI runs).
+test: lint test-rust test-python ## Run every test in every language (what CI runs).
 
 lint: ## Formatting and lints: rustfmt, clippy -D warnings.
 	$(CARGO) fmt --all -- --check
@@ -20,6 +20,12 @@ lint: ## Formatting and lints: rustfmt, clippy -D warnings.
 
 test-rust: ## The Rust tests (unit, integration, property, doc).
 	$(CARGO) test --workspace --locked
+
+python: ## Build the Python package (wheel) and install it into .venv.
+	scripts/python.sh
+
+test-python: ## Python: ruff, ruff format --check, mypy --strict, pytest (builds the wheel first).
+	scripts/python.sh test
 
 bench: ## Run the benchmarks (ratios in one run; see bench/README.md).
 	$(CARGO) bench -p situate_bench --locked

@@ -25,13 +25,23 @@ pub struct Target {
     pub target: String,
     pub met: bool,
     pub note: String,
+    /// Why the verdict can't be trusted (a busy machine), if it can't.
+    pub inconclusive: Option<String>,
 }
 
 impl Target {
     /// `TARGET chain overhead per skill: 38 ns (target ≤ 50 ns): met`.
     pub fn line(&self) -> String {
-        let met = if self.met { "met" } else { "NOT met" };
-        let note = if self.note.is_empty() { String::new() } else { format!(" — {}", self.note) };
+        let met = match (&self.inconclusive, self.met) {
+            (Some(_), true) => "met, INCONCLUSIVE",
+            (Some(_), false) => "NOT met, INCONCLUSIVE",
+            (None, true) => "met",
+            (None, false) => "NOT met",
+        };
+        let mut note = if self.note.is_empty() { String::new() } else { format!(" — {}", self.note) };
+        if let Some(why) = &self.inconclusive {
+            note.push_str(&format!(" — INCONCLUSIVE: {why}"));
+        }
         let sep = if self.unit == "×" { "" } else { " " };
         let value = fmt_value(self.value, self.unit);
         format!("TARGET {}: {value}{sep}{} (target {}): {met}{note}", self.name, self.unit, self.target)
@@ -123,13 +133,14 @@ impl Report {
         for (i, t) in self.targets.iter().enumerate() {
             let _ = write!(
                 out,
-                "    {{\"bench\": {}, \"name\": {}, \"value\": {}, \"unit\": {}, \"target\": {}, \"met\": {}, \"line\": {}}}",
+                "    {{\"bench\": {}, \"name\": {}, \"value\": {}, \"unit\": {}, \"target\": {}, \"met\": {}, \"inconclusive\": {}, \"line\": {}}}",
                 json_str(&t.bench),
                 json_str(&t.name),
                 json_num(t.value),
                 json_str(t.unit),
                 json_str(&t.target),
                 t.met,
+                t.inconclusive.is_some(),
                 json_str(&t.line())
             );
             out.push_str(if i + 1 < self.targets.len() { ",\n" } else { "\n" });
@@ -360,6 +371,7 @@ mod tests {
             target: "≤ 50 ns".into(),
             met: true,
             note: String::new(),
+            inconclusive: None,
         });
         let m = Machine {
             date: "d".into(),

@@ -393,7 +393,7 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
             Some(json5::from_str::<Json>(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
         }
     };
-    let mut client = Client::connect_with(&remote.connect, extra.as_ref()).context("connecting to the link")?;
+    let mut client = Client::connect_with(&remote.connect, extra.as_ref())?;
     client.timeout = Duration::from_secs_f64(remote.timeout.max(0.1));
     let robot = match client.resolve_robot(remote.robot.as_deref()) {
         Ok(r) => r,

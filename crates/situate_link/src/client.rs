@@ -30,6 +30,8 @@ pub enum ClientError {
         "no skill manager answered `{key}` within {timeout:?} (is `situate run` running and reachable at {endpoints}, and do its access rules allow this request?)"
     )]
     NoAnswer { key: String, timeout: Duration, endpoints: String },
+    #[error("no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running? ({detail})")]
+    NotReachable { endpoints: String, detail: String },
     #[error("several robots answered ({0}); name one with --robot")]
     Ambiguous(String),
     #[error("a reply that is not the protocol's JSON: {0}")]
@@ -44,14 +46,16 @@ pub struct Client {
 }
 
 impl Client {
-    pub fn connect(endpoints: &[String]) -> Result<Client, LinkError> {
+    pub fn connect(endpoints: &[String]) -> Result<Client, ClientError> {
         Client::connect_with(endpoints, None)
     }
 
     /// Connects with extra Zenoh configuration merged in (credentials, TLS).
-    pub fn connect_with(endpoints: &[String], extra: Option<&Json>) -> Result<Client, LinkError> {
-        let session =
-            zenoh::open(client_config(endpoints, extra)?).wait().map_err(|e| LinkError::Open(e.to_string()))?;
+    pub fn connect_with(endpoints: &[String], extra: Option<&Json>) -> Result<Client, ClientError> {
+        let session = zenoh::open(client_config(endpoints, extra)?).wait().map_err(|e| ClientError::NotReachable {
+            endpoints: endpoints.join(", "),
+            detail: e.to_string().split(" at ").next().unwrap_or_default().to_string(),
+        })?;
         Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5) })
     }
 

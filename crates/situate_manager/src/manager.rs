@@ -1212,7 +1212,9 @@ impl Resolver for ManagerResolver<'_> {
             // The expression language reports records as not comparable.
             return Ok((usize::MAX, ty.clone()));
         }
-        if let Some((skill, param)) = path.split_once('.') {
+        let first = path.split('.').next().unwrap_or(path);
+        let is_signal_prefix = g.records.contains_key(first) || g.leaf_index.contains_key(first);
+        if let Some((skill, param)) = path.split_once('.').filter(|_| !is_signal_prefix) {
             if let Some(i) = g.instance(skill) {
                 let decl = &g.instances[i].skill_type.decl;
                 return match decl.param(param) {

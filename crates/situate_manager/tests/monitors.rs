@@ -118,6 +118,9 @@ fn bad_conditions_are_refused_with_the_column_and_change_nothing() {
     assert_eq!(*column, 26);
     assert!(message.contains("barcde") && message.contains("did you mean `barcode.id`?"), "{message}");
     assert!(pointer.ends_with("                         ^"), "{pointer:?}");
+    // `sonar` is both a skill and a record signal: a typo in the field is a signal typo.
+    let err = m.add_monitor("sonar.rang[0] < 1", MonitorMode::Once).unwrap_err();
+    assert!(err.to_string().contains("unknown signal `sonar.rang` — did you mean `sonar.range`?"), "{err}");
     let err = m.add_monitor("runaway.safe_distanse > 1", MonitorMode::Once).unwrap_err();
     assert!(err.to_string().contains("did you mean `safe_distance`?"), "{err}");
     let err = m.add_monitor("sonar.range[0] + 1", MonitorMode::Once).unwrap_err();

@@ -1,0 +1,138 @@
+"""situate from Python: sequence a robot's skills, and write skills in Python.
+
+Situate is the reactive layer of a robot: a skill manager runs *skills* in a
+periodic data-flow cycle. This package is a *sequencer*'s side of it — it
+connects to a running manager over the link (``docs/protocol.md``) and
+switches skills on and off, tunes their parameters, queries signals and
+waits for conditions — and the home of *remote skills*, asynchronous skills
+whose body is a Python function in another process.
+
+Sequencing, with asyncio::
+
+    async with situate.connect("toybot") as robot:
+        await robot.activate("wander", "runaway")
+        await robot.set_param("runaway", "safe_distance", 0.3)
+        event = await robot.when("sonar.range[0] < 0.25", timeout=30)
+
+A remote skill::
+
+    @situate.remote_skill(inputs={"x": "f64"}, outputs={"y": "f64"}, params={"gain": 2.0})
+    def doubler(x: float, gain: float) -> dict[str, object]:
+        return {"y": x * gain}
+
+    situate.serve_skill(doubler, robot="toybot", name="doubler")
+
+The ``situate`` command installed with this package is the same program as
+the Rust build's (``situate run robot.yaml``, ``situate skills``, ...), plus
+``situate serve-skill MODULE:ATTR``. The user guide is ``docs/python.md``.
+"""
+
+from __future__ import annotations
+
+from .client import DEFAULT_ENDPOINT, Connector, Robot, Stream, connect
+from .errors import (
+    AmbiguousRobot,
+    BadCondition,
+    BadParam,
+    BadReply,
+    BadRequest,
+    Invalid,
+    MissingProviders,
+    NotRunning,
+    ProtocolMismatch,
+    SituateError,
+    Unavailable,
+    UnknownMonitor,
+    UnknownParam,
+    UnknownSignal,
+    UnknownSkill,
+    UnknownVerb,
+)
+from .events import (
+    ActivationApplied,
+    Event,
+    ManagerStarted,
+    ManagerStopped,
+    MonitorEvent,
+    MonitorFired,
+    OtherEvent,
+    ParamChanged,
+    Print,
+    SkillFaulted,
+    Telemetry,
+)
+from .info import (
+    Graph,
+    GraphSignal,
+    GraphSkill,
+    Hello,
+    MonitorInfo,
+    ParamInfo,
+    PortInfo,
+    Reading,
+    SkillInfo,
+    Stats,
+    Timing,
+    Winner,
+)
+from .remote import RemoteSkill, RemoteSkillServer, remote_skill, serve_skill
+
+
+def version() -> str:
+    """The version of the ``situate`` program built into this package."""
+    from . import _native
+
+    return _native.version()
+
+
+__all__ = [
+    "DEFAULT_ENDPOINT",
+    "ActivationApplied",
+    "AmbiguousRobot",
+    "BadCondition",
+    "BadParam",
+    "BadReply",
+    "BadRequest",
+    "Connector",
+    "Event",
+    "Graph",
+    "GraphSignal",
+    "GraphSkill",
+    "Hello",
+    "Invalid",
+    "ManagerStarted",
+    "ManagerStopped",
+    "MissingProviders",
+    "MonitorEvent",
+    "MonitorFired",
+    "MonitorInfo",
+    "NotRunning",
+    "OtherEvent",
+    "ParamChanged",
+    "ParamInfo",
+    "PortInfo",
+    "Print",
+    "ProtocolMismatch",
+    "Reading",
+    "RemoteSkill",
+    "RemoteSkillServer",
+    "Robot",
+    "SituateError",
+    "SkillFaulted",
+    "SkillInfo",
+    "Stats",
+    "Stream",
+    "Telemetry",
+    "Timing",
+    "Unavailable",
+    "UnknownMonitor",
+    "UnknownParam",
+    "UnknownSignal",
+    "UnknownSkill",
+    "UnknownVerb",
+    "Winner",
+    "connect",
+    "remote_skill",
+    "serve_skill",
+    "version",
+]

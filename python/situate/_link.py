@@ -1,0 +1,197 @@
+"""Blocking plumbing shared by the sequencer client and the remote-skill server.
+
+Zenoh's Python API is blocking; :mod:`situate.client` runs these functions
+off the event loop. Nothing here is public: the protocol itself is
+``docs/protocol.md``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any, Union
+
+import zenoh
+
+from .errors import AmbiguousRobot, BadReply, NotRunning, SituateError, from_reply
+
+#: Where a manager listens unless its robot file says otherwise.
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+
+#: The protocol version this package speaks.
+PROTOCOL = 1
+
+Endpoints = Union[str, Sequence[str]]
+"""One endpoint such as ``"tcp/127.0.0.1:7447"``, or several."""
+
+
+def default_endpoints() -> list[str]:
+    """``$SITUATE_CONNECT`` (comma-separated) if set, else the default endpoint.
+
+    The ``situate`` program reads the same variable, so one setting serves both.
+    """
+    env = os.environ.get("SITUATE_CONNECT", "").strip()
+    return [e.strip() for e in env.split(",") if e.strip()] if env else [DEFAULT_ENDPOINT]
+
+
+def endpoint_list(endpoints: Endpoints | None) -> list[str]:
+    """``endpoints`` as a non-empty list (``None``: :func:`default_endpoints`)."""
+    if endpoints is None:
+        return default_endpoints()
+    if isinstance(endpoints, str):
+        return [endpoints]
+    listed = list(endpoints)
+    if not listed:
+        raise ValueError("at least one endpoint is needed, e.g. 'tcp/127.0.0.1:7447'")
+    return listed
+
+
+ZenohSettings = Mapping[str, Any]
+"""Further Zenoh configuration (TLS, user and password, ...), as in Zenoh's configuration file."""
+
+
+def _merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
+    """``extra`` merged into ``base``, mappings member by member (as the manager does)."""
+    out = dict(base)
+    for key, value in extra.items():
+        if isinstance(value, Mapping) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def zenoh_config(
+    *,
+    connect: Sequence[str] = (),
+    listen: Sequence[str] = (),
+    mode: str = "client",
+    extra: ZenohSettings | None = None,
+) -> zenoh.Config:
+    """A Zenoh configuration that discovers nothing: multicast and gossip scouting off.
+
+    A sequencer or a remote skill is a ``client`` that connects to the
+    manager's endpoint and listens on nothing (``docs/protocol.md``, "Session").
+    ``extra`` is merged last: TLS certificates (``transport.link.tls``),
+    credentials (``transport.auth.usrpwd``) for a manager with access control.
+    """
+    config: dict[str, Any] = {
+        "mode": mode,
+        "connect": {"endpoints": list(connect)},
+        "listen": {"endpoints": list(listen)},
+        "scouting": {"multicast": {"enabled": False}, "gossip": {"enabled": False}},
+    }
+    if extra:
+        config = _merge(config, extra)
+    parsed: zenoh.Config = zenoh.Config.from_json5(json.dumps(config))
+    return parsed
+
+
+def open_session(endpoints: Sequence[str], extra: ZenohSettings | None = None) -> zenoh.Session:
+    """Opens a client session to ``endpoints``; :class:`NotRunning` if none accepts."""
+    try:
+        return zenoh.open(zenoh_config(connect=endpoints, extra=extra))
+    except zenoh.ZError as e:
+        where = ", ".join(endpoints)
+        raise NotRunning(
+            f"no skill manager answered at {where}: could not connect ({e}); "
+            "is `situate run` running and reachable there?"
+        ) from e
+
+
+def payload_json(payload: zenoh.ZBytes) -> Any:
+    """A payload's JSON, or :class:`BadReply` saying what came instead."""
+    raw = payload.to_bytes()
+    try:
+        return json.loads(raw)
+    except ValueError as e:
+        raise BadReply(f"a reply that is not JSON: {raw[:80]!r}") from e
+
+
+def request(
+    session: zenoh.Session,
+    robot: str,
+    verb: str,
+    args: dict[str, Any],
+    *,
+    timeout: float,
+    endpoints: Sequence[str],
+) -> Any:
+    """Sends one request and returns its ``ok`` result, or raises the reply's error.
+
+    Blocks for at most ``timeout`` seconds; no answer at all is :class:`NotRunning`.
+    """
+    key = f"situate/{robot}/req/{verb}"
+    try:
+        replies = session.get(key, payload=json.dumps(args), timeout=timeout)
+    except zenoh.ZError as e:
+        raise NotRunning(f"could not send `{key}`: {e}") from e
+    for reply in replies:
+        if reply.ok is None:
+            detail = reply.err.payload.to_string() if reply.err is not None else "no payload"
+            raise BadReply(f"`{key}` failed: {detail}")
+        body = payload_json(reply.ok.payload)
+        if not isinstance(body, dict):
+            raise BadReply(f"`{key}`: a reply that is not a JSON object: {body!r}")
+        if "ok" in body:
+            return body["ok"]
+        error = body.get("error")
+        if isinstance(error, dict):
+            raise from_reply(error)
+        raise BadReply(f"`{key}`: a reply with neither `ok` nor `error`: {body!r}")
+    raise NotRunning(
+        f"no skill manager answered `{key}` within {timeout:g} s "
+        f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
+        "and do its access rules allow this request?)"
+    )
+
+
+def robots(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:
+    """The ``hello`` results of every manager answering ``situate/*/req/hello``, by robot name."""
+    found: dict[str, dict[str, Any]] = {}
+    for reply in session.get("situate/*/req/hello", timeout=timeout):
+        if reply.ok is None:
+            continue
+        try:
+            body = payload_json(reply.ok.payload)
+        except SituateError:
+            continue
+        hello = body.get("ok") if isinstance(body, dict) else None
+        if isinstance(hello, dict) and isinstance(hello.get("robot"), str):
+            found[hello["robot"]] = hello
+    return [found[name] for name in sorted(found)]
+
+
+def hello(
+    session: zenoh.Session, robot: str | None, *, timeout: float, endpoints: Sequence[str]
+) -> dict[str, Any]:
+    """The ``hello`` of robot ``robot``, or of the only robot answering when ``None``."""
+    if robot is not None:
+        result = request(session, robot, "hello", {}, timeout=timeout, endpoints=endpoints)
+        if not isinstance(result, dict):
+            raise BadReply(f"`hello`: expected an object, got {result!r}")
+        return result
+    answered = robots(session, timeout=timeout)
+    if not answered:
+        raise NotRunning(
+            f"no skill manager answered `situate/*/req/hello` within {timeout:g} s "
+            f"(is `situate run` running and reachable at {', '.join(endpoints)}?)"
+        )
+    if len(answered) > 1:
+        names = ", ".join(h["robot"] for h in answered)
+        raise AmbiguousRobot(f"several robots answered ({names}); name one with robot=")
+    return answered[0]
+
+
+def undeclare(entity: zenoh.Subscriber[Any] | zenoh.Publisher) -> None:
+    """Undeclares a subscriber or publisher; one of a closed session is already gone."""
+    with contextlib.suppress(zenoh.ZError):
+        entity.undeclare()  # type: ignore[no-untyped-call]  # zenoh's stub lacks `-> None`
+
+
+def close_session(session: zenoh.Session) -> None:
+    """Closes a session; closing a closed one does nothing."""
+    with contextlib.suppress(zenoh.ZError):
+        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub lacks `-> None`

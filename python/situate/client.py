@@ -1,0 +1,440 @@
+"""The sequencer client: drive a running skill manager from asyncio.
+
+In the paper's three tiers a *sequencer* turns skills on and off, tunes
+them and waits for conditions, while the skill manager runs the skills in
+its periodic cycle. :func:`connect` gives a sequencer a :class:`Robot`, one
+coroutine per request of ``docs/protocol.md``::
+
+    import asyncio
+    import situate
+
+    async def main() -> None:
+        async with situate.connect("toybot") as robot:
+            await robot.activate("wander", "runaway")
+            await robot.set_param("runaway", "safe_distance", 0.3)
+            event = await robot.when("sonar.range[0] < 0.25", timeout=30)
+            print("obstacle ahead at cycle", event.cycle, event.values)
+            await robot.deactivate("wander")
+
+    asyncio.run(main())
+
+How it works
+------------
+The robot is reached over Zenoh: the client opens a session in *client*
+mode that connects to the manager's endpoint (default
+``tcp/127.0.0.1:7447``, or ``$SITUATE_CONNECT``) and discovers nothing
+else. A request is a Zenoh ``get`` on ``situate/<robot>/req/<verb>``;
+Zenoh's Python API blocks, so each request runs on a worker thread and the
+event loop stays free. Events and telemetry arrive on Zenoh's threads and
+are handed to the loop with ``call_soon_threadsafe``.
+
+Changes take effect from the manager's *next* cycle; queries answer with
+the state at the end of the last one. A refused request raises a
+:class:`~situate.SituateError` subclass carrying the manager's message word
+for word, and changes nothing.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+from collections.abc import Callable, Generator, Mapping, Sequence
+from types import TracebackType
+from typing import Any, Generic, TypeVar
+
+import zenoh
+
+from . import _link
+from .errors import NotRunning, SituateError
+from .events import Event, MonitorFired, Telemetry, parse_event, parse_telemetry
+from .info import Graph, Hello, MonitorInfo, Reading, SkillInfo, Stats, Winner
+from .values import decode_untyped, encode
+
+__all__ = ["DEFAULT_ENDPOINT", "Connector", "Robot", "Stream", "connect"]
+
+DEFAULT_ENDPOINT = _link.DEFAULT_ENDPOINT
+
+#: The monitor modes of ``monitor_add``.
+MONITOR_MODES = ("once", "edge", "level")
+
+T = TypeVar("T")
+
+
+class Stream(Generic[T]):
+    """A subscription whose messages are awaited one by one: ``async for item in stream``.
+
+    The subscription is declared when the stream is made, so nothing
+    published after that is missed, even before the first ``await``.
+    Messages queue up until read (the queue is unbounded: read what you
+    subscribe to, or :meth:`close` the stream). The stream ends when it is
+    closed or its :class:`Robot` is closed; ``async with`` closes it.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        keys: Sequence[str],
+        parse: Callable[[dict[str, Any]], T],
+    ) -> None:
+        self._robot = robot
+        self._parse = parse
+        self._loop = asyncio.get_running_loop()
+        self._queue: asyncio.Queue[T | None] = asyncio.Queue()
+        self._closed = False
+        self._ended = False
+        self._subscribers = [robot._session.declare_subscriber(k, self._on_sample) for k in keys]
+        robot._streams.add(self)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        # Runs on a Zenoh thread: parse here, then hand over to the loop.
+        try:
+            data = json.loads(sample.payload.to_bytes())
+        except ValueError:
+            return
+        if not isinstance(data, dict):
+            return
+        try:
+            item = self._parse(data)
+        except (KeyError, TypeError, ValueError):  # not the protocol's shape: drop it
+            return
+        with contextlib.suppress(RuntimeError):  # the loop is closed: nobody is listening
+            self._loop.call_soon_threadsafe(self._queue.put_nowait, item)
+
+    def close(self) -> None:
+        """Ends the subscription; an ``async for`` over the stream then ends."""
+        if self._closed:
+            return
+        self._closed = True
+        for subscriber in self._subscribers:
+            _link.undeclare(subscriber)
+        self._robot._streams.discard(self)
+        self._queue.put_nowait(None)
+
+    def __aiter__(self) -> Stream[T]:
+        return self
+
+    async def __anext__(self) -> T:
+        # After close(), what had arrived is still handed out, then the stream ends for good.
+        if self._ended:
+            raise StopAsyncIteration
+        item = await self._queue.get()
+        if item is None:
+            self._ended = True
+            raise StopAsyncIteration
+        return item
+
+    async def next(self, timeout: float | None = None) -> T:
+        """The next message, waiting at most ``timeout`` seconds (``TimeoutError``)."""
+        return await asyncio.wait_for(self.__anext__(), timeout)
+
+    async def __aenter__(self) -> Stream[T]:
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+class Robot:
+    """A connection to one robot's skill manager. Make one with :func:`connect`.
+
+    Every request is a coroutine; arguments and results are those of
+    ``docs/protocol.md``, with results as dataclasses (:mod:`situate.info`)
+    and values decoded (:mod:`situate.values`).
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        hello: Hello,
+        *,
+        endpoints: Sequence[str],
+        timeout: float,
+    ) -> None:
+        self._session = session
+        self._endpoints = list(endpoints)
+        self._streams: set[Stream[Any]] = set()
+        #: What the manager said in ``hello``: protocol, robot name, version.
+        self.hello: Hello = hello
+        #: The robot's name (its robot file's ``robot:``).
+        self.name: str = hello.robot
+        #: Seconds to wait for each reply before :class:`~situate.NotRunning`.
+        self.timeout: float = timeout
+
+    def __repr__(self) -> str:
+        return f"<situate.Robot {self.name!r} at {', '.join(self._endpoints)}>"
+
+    # ----- plumbing --------------------------------------------------------------
+
+    async def request(self, verb: str, **args: Any) -> Any:
+        """Sends any request verb with its arguments and returns the raw ``ok`` result.
+
+        The typed methods below are built on this; use it for verbs a newer
+        manager adds. Argument values are encoded with :func:`situate.values.encode`.
+        """
+        payload = {k: encode(v) for k, v in args.items()}
+        return await asyncio.to_thread(
+            _link.request,
+            self._session,
+            self.name,
+            verb,
+            payload,
+            timeout=self.timeout,
+            endpoints=self._endpoints,
+        )
+
+    async def close(self) -> None:
+        """Ends every stream and closes the Zenoh session."""
+        for stream in list(self._streams):
+            stream.close()
+        await asyncio.to_thread(_link.close_session, self._session)
+
+    async def __aenter__(self) -> Robot:
+        return self
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        await self.close()
+
+    # ----- activation ------------------------------------------------------------
+
+    async def activate(self, *skills: str, with_providers: bool = False) -> list[str]:
+        """Switches skills on from the next cycle; returns those whose state changed.
+
+        A skill whose required inputs nobody active would provide is refused
+        with :class:`~situate.MissingProviders` (it names the signals and the
+        skills that could provide them); ``with_providers=True`` switches those
+        providers on too.
+        """
+        result = await self.request("activate", skills=list(skills), with_providers=with_providers)
+        return [str(s) for s in result["changed"]]
+
+    async def deactivate(self, *skills: str) -> list[str]:
+        """Switches skills off from the next cycle; returns those whose state changed."""
+        result = await self.request("deactivate", skills=list(skills))
+        return [str(s) for s in result["changed"]]
+
+    async def set_priority(self, skill: str, priority: int) -> None:
+        """Sets a skill's priority (the higher wins a contested resource)."""
+        await self.request("set_priority", skill=skill, priority=priority)
+
+    async def set_verbose(self, skill: str, verbose: bool = True) -> None:
+        """Makes a skill's prints arrive as :class:`~situate.Print` events (or stop)."""
+        await self.request("set_verbose", skill=skill, verbose=verbose)
+
+    # ----- parameters ------------------------------------------------------------
+
+    async def set_param(self, skill: str, param: str, value: Any) -> None:
+        """Sets a parameter from the next cycle.
+
+        A wrong type or a value out of range is :class:`~situate.BadParam`.
+        """
+        await self.request("set_param", skill=skill, param=param, value=value)
+
+    async def get_param(self, skill: str, param: str) -> Any:
+        """A parameter's current value."""
+        return decode_untyped(await self.request("get_param", skill=skill, param=param))
+
+    # ----- queries ---------------------------------------------------------------
+
+    async def query(self, signal: str) -> Reading:
+        """A signal's value at the end of the last cycle.
+
+        ``signal`` is a leaf (``sonar.range``) or a whole record (``odom``).
+        """
+        return Reading.from_json(await self.request("query", signal=signal))
+
+    async def skill(self, name: str) -> SkillInfo:
+        """Everything about one skill: state, parameters, ports, timing, recent prints."""
+        return SkillInfo.from_json(await self.request("skill", skill=name))
+
+    async def skills(self) -> list[SkillInfo]:
+        """Every skill of the robot, devices first, in robot-file order."""
+        return [SkillInfo.from_json(s) for s in await self.request("skills")]
+
+    async def winners(self) -> list[Winner]:
+        """For each contested signal (resource), who wrote it and who won."""
+        return [Winner.from_json(w) for w in await self.request("winners")]
+
+    async def graph(self) -> Graph:
+        """The data-flow graph: skills with their signals, signals with writers and readers."""
+        return Graph.from_json(await self.request("graph"))
+
+    async def stats(self) -> Stats:
+        """Cycle statistics: cycle number, clock, running or not, cycle times, active skills."""
+        return Stats.from_json(await self.request("stats"))
+
+    # ----- the cycle -------------------------------------------------------------
+
+    async def run(self) -> None:
+        """Starts (or resumes) the periodic cycle."""
+        await self.request("run")
+
+    async def stop(self) -> None:
+        """Stops the cycle after the current one; requests are still answered."""
+        await self.request("stop")
+
+    async def step(self, cycles: int = 1) -> None:
+        """Runs exactly ``cycles`` cycles (1 to 1,000,000) on a stopped manager."""
+        await self.request("step", cycles=cycles)
+
+    # ----- monitors and events ---------------------------------------------------
+
+    async def monitor(self, condition: str, mode: str = "once") -> int:
+        """Registers a monitor and returns its id; it fires :class:`~situate.MonitorFired` events.
+
+        ``mode`` is ``"once"`` (the first cycle the condition holds, then the
+        monitor is gone), ``"edge"`` (each cycle it becomes true) or
+        ``"level"`` (every cycle it holds). A condition that does not parse
+        is :class:`~situate.BadCondition`, whose ``pointer`` shows where.
+        Subscribe with :meth:`events` *before* registering, or use :meth:`when`.
+        """
+        result = await self.request("monitor_add", condition=condition, mode=mode)
+        return int(result["monitor"])
+
+    async def cancel_monitor(self, monitor: int) -> None:
+        """Removes a monitor; an unknown id is :class:`~situate.UnknownMonitor`."""
+        await self.request("monitor_cancel", monitor=monitor)
+
+    async def monitors(self) -> list[MonitorInfo]:
+        """The registered monitors."""
+        return [MonitorInfo.from_json(m) for m in await self.request("monitor_list")]
+
+    def events(self, *kinds: str) -> Stream[Event]:
+        """A stream of the robot's events: all of them, or only ``kinds`` (``"print"``, ...).
+
+        Must be called with an event loop running (from a coroutine). The
+        subscription starts now, so an event caused by a request sent after
+        this call is never missed.
+        """
+        keys = [f"situate/{self.name}/events/{k}" for k in kinds]
+        return Stream(self, keys or [f"situate/{self.name}/events/**"], parse_event)
+
+    async def when(self, condition: str, *, timeout: float | None = None) -> MonitorFired:
+        """Waits until ``condition`` holds and returns the :class:`~situate.MonitorFired` event.
+
+        A ``once`` monitor is registered for it; if the wait ends another way
+        (``timeout`` seconds pass: ``TimeoutError``; the task is cancelled)
+        the monitor is cancelled, so nothing is left behind on the robot.
+        """
+        async with self.events("monitor_fired") as stream:
+            monitor = await self.monitor(condition, "once")
+            try:
+                return await asyncio.wait_for(_fired(stream, monitor), timeout)
+            except BaseException:
+                # It may have fired meanwhile (then it is already gone): fine.
+                with contextlib.suppress(SituateError):
+                    await self.cancel_monitor(monitor)
+                raise
+
+    # ----- telemetry -------------------------------------------------------------
+
+    async def telemetry(self, signals: Sequence[str], rate_hz: float | None = None) -> None:
+        """Chooses the signals telemetry carries and, optionally, its rate (0 < rate_hz ≤ 100)."""
+        args: dict[str, Any] = {"signals": list(signals)}
+        if rate_hz is not None:
+            args["rate_hz"] = rate_hz
+        await self.request("telemetry", **args)
+
+    def telemetry_stream(self) -> Stream[Telemetry]:
+        """A stream of :class:`~situate.Telemetry` samples (call from a coroutine)."""
+        return Stream(self, [f"situate/{self.name}/telemetry"], parse_telemetry)
+
+
+async def _fired(stream: Stream[Event], monitor: int) -> MonitorFired:
+    async for event in stream:
+        if isinstance(event, MonitorFired) and event.monitor == monitor:
+            return event
+    raise NotRunning(f"the connection closed before monitor {monitor} fired")
+
+
+class Connector:
+    """What :func:`connect` returns: use it with ``async with``, or ``await`` it.
+
+    ``async with situate.connect(...) as robot`` closes the connection at
+    the end of the block; ``robot = await situate.connect(...)`` leaves that
+    to you (``await robot.close()``).
+    """
+
+    def __init__(
+        self,
+        robot: str | None,
+        endpoints: list[str],
+        timeout: float,
+        zenoh_config: _link.ZenohSettings | None,
+    ) -> None:
+        self._robot = robot
+        self._endpoints = endpoints
+        self._timeout = timeout
+        self._zenoh_config = zenoh_config
+        self._opened: Robot | None = None
+
+    async def _open(self) -> Robot:
+        session = await asyncio.to_thread(_link.open_session, self._endpoints, self._zenoh_config)
+        try:
+            hello = await asyncio.to_thread(
+                _link.hello,
+                session,
+                self._robot,
+                timeout=self._timeout,
+                endpoints=self._endpoints,
+            )
+        except BaseException:
+            await asyncio.to_thread(_link.close_session, session)
+            raise
+        return Robot(
+            session, Hello.from_json(hello), endpoints=self._endpoints, timeout=self._timeout
+        )
+
+    def __await__(self) -> Generator[Any, None, Robot]:
+        return self._open().__await__()
+
+    async def __aenter__(self) -> Robot:
+        self._opened = await self._open()
+        return self._opened
+
+    async def __aexit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if self._opened is not None:
+            await self._opened.close()
+            self._opened = None
+
+
+def connect(
+    robot: str | None = None,
+    *,
+    endpoint: _link.Endpoints | None = None,
+    timeout: float = 5.0,
+    zenoh_config: Mapping[str, Any] | None = None,
+) -> Connector:
+    """Connects to a robot's skill manager.
+
+    Args:
+        robot: The robot's name (its robot file's ``robot:``). ``None``: the
+            only robot answering ``situate/*/req/hello``
+            (:class:`~situate.AmbiguousRobot` if several do).
+        endpoint: The manager's endpoint, e.g. ``"tcp/127.0.0.1:7447"``, or a
+            list of them; default ``$SITUATE_CONNECT`` or ``tcp/127.0.0.1:7447``.
+        timeout: Seconds to wait for each reply.
+        zenoh_config: Further Zenoh configuration, merged last, for a manager
+            that is not on loopback: TLS (``{"transport": {"link": {"tls":
+            {...}}}}``) or credentials (``{"transport": {"auth": {"usrpwd":
+            {"user": ..., "password": ...}}}}``); see ``docs/robot-files.md``, ``link``.
+
+    Raises:
+        NotRunning: nothing accepted the connection, or no manager answered ``hello``.
+    """
+    return Connector(robot, _link.endpoint_list(endpoint), timeout, zenoh_config)

@@ -1,0 +1,213 @@
+"""What a skill manager tells its sequencers without being asked: events and telemetry.
+
+A manager publishes an event on ``situate/<robot>/events/<kind>`` each time
+something a sequencer may care about happens (``docs/protocol.md``,
+"Events"). Each kind is a frozen dataclass here, and :func:`parse_event`
+turns a payload into one::
+
+    async for event in robot.events():
+        match event:
+            case situate.MonitorFired(monitor=m, values=v): ...
+            case situate.SkillFaulted(skill=s, cause=c): ...
+
+An event kind this version does not know (a newer manager) arrives as
+:class:`OtherEvent` rather than being dropped, and members a newer manager
+adds to a known kind are ignored: the protocol grows by addition.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Union
+
+from .values import decode_untyped
+
+__all__ = [
+    "ActivationApplied",
+    "Event",
+    "ManagerStarted",
+    "ManagerStopped",
+    "MonitorEvent",
+    "MonitorFired",
+    "OtherEvent",
+    "ParamChanged",
+    "Print",
+    "SkillFaulted",
+    "Telemetry",
+    "parse_event",
+    "parse_telemetry",
+]
+
+
+@dataclass(frozen=True)
+class MonitorFired:
+    """A monitor's condition held.
+
+    A ``once`` monitor fires the first time, ``edge`` each time the
+    condition becomes true, ``level`` every cycle it holds.
+
+    ``values`` holds the value of each name the condition reads, at that cycle.
+    """
+
+    monitor: int
+    condition: str
+    cycle: int
+    time_s: float
+    values: dict[str, Any] = field(default_factory=dict)
+
+
+MonitorEvent = MonitorFired
+"""What :meth:`situate.Robot.when` returns: the :class:`MonitorFired` event it waited for."""
+
+
+@dataclass(frozen=True)
+class ActivationApplied:
+    """An activation change took effect at the start of ``cycle``."""
+
+    activated: list[str]
+    deactivated: list[str]
+    cycle: int
+
+
+@dataclass(frozen=True)
+class ParamChanged:
+    """A parameter got a new value, in force from ``cycle``."""
+
+    skill: str
+    param: str
+    value: Any
+    cycle: int
+
+
+@dataclass(frozen=True)
+class SkillFaulted:
+    """A skill's body failed (error, panic, wrongly typed output): it was deactivated."""
+
+    skill: str
+    cause: str
+    cycle: int
+
+
+@dataclass(frozen=True)
+class Print:
+    """A line a verbose skill printed (see :meth:`situate.Robot.set_verbose`)."""
+
+    skill: str
+    line: str
+    cycle: int
+
+
+@dataclass(frozen=True)
+class ManagerStarted:
+    """The cycle started running (``run``)."""
+
+    cycle: int
+
+
+@dataclass(frozen=True)
+class ManagerStopped:
+    """The cycle stopped (``stop``, a bounded run's end, or shutdown)."""
+
+    cycle: int
+
+
+@dataclass(frozen=True)
+class OtherEvent:
+    """An event of a kind this version of the package does not know, kept whole."""
+
+    kind: str
+    data: dict[str, Any]
+
+
+Event = Union[
+    MonitorFired,
+    ActivationApplied,
+    ParamChanged,
+    SkillFaulted,
+    Print,
+    ManagerStarted,
+    ManagerStopped,
+    OtherEvent,
+]
+"""Any event a manager publishes."""
+
+
+def _strings(j: Any) -> list[str]:
+    return [str(x) for x in j] if isinstance(j, list) else []
+
+
+def parse_event(data: dict[str, Any]) -> Event:
+    """The event for one payload (already parsed from JSON).
+
+    Malformed known kinds (a member missing) come back as :class:`OtherEvent`.
+    """
+    kind = str(data.get("kind", ""))
+    try:
+        if kind == "monitor_fired":
+            values = data.get("values") or {}
+            return MonitorFired(
+                monitor=int(data["monitor"]),
+                condition=str(data["condition"]),
+                cycle=int(data["cycle"]),
+                time_s=float(data["time_s"]),
+                values={str(k): decode_untyped(v) for k, v in values.items()},
+            )
+        if kind == "activation_applied":
+            return ActivationApplied(
+                activated=_strings(data.get("activated")),
+                deactivated=_strings(data.get("deactivated")),
+                cycle=int(data["cycle"]),
+            )
+        if kind == "param_changed":
+            return ParamChanged(
+                skill=str(data["skill"]),
+                param=str(data["param"]),
+                value=decode_untyped(data.get("value")),
+                cycle=int(data["cycle"]),
+            )
+        if kind == "skill_faulted":
+            return SkillFaulted(
+                skill=str(data["skill"]), cause=str(data["cause"]), cycle=int(data["cycle"])
+            )
+        if kind == "print":
+            return Print(skill=str(data["skill"]), line=str(data["line"]), cycle=int(data["cycle"]))
+        if kind == "manager_started":
+            return ManagerStarted(cycle=int(data["cycle"]))
+        if kind == "manager_stopped":
+            return ManagerStopped(cycle=int(data["cycle"]))
+    except (KeyError, TypeError, ValueError, AttributeError):
+        pass
+    return OtherEvent(kind=kind, data=data)
+
+
+@dataclass(frozen=True)
+class Telemetry:
+    """One telemetry sample: cycle statistics and the signals chosen with ``Robot.telemetry``.
+
+    Signal values come without their types on the wire; they are decoded as
+    in :func:`situate.values.decode_untyped`.
+    """
+
+    cycle: int
+    time_s: float
+    mean_cycle_ns: float
+    last_cycle_ns: int
+    max_cycle_ns: int
+    overruns: int
+    active: list[str]
+    signals: dict[str, Any]
+
+
+def parse_telemetry(data: dict[str, Any]) -> Telemetry:
+    """The :class:`Telemetry` of one payload (already parsed from JSON)."""
+    signals = data.get("signals") or {}
+    return Telemetry(
+        cycle=int(data.get("cycle", 0)),
+        time_s=float(data.get("time_s", 0.0)),
+        mean_cycle_ns=float(data.get("mean_cycle_ns", 0.0)),
+        last_cycle_ns=int(data.get("last_cycle_ns", 0)),
+        max_cycle_ns=int(data.get("max_cycle_ns", 0)),
+        overruns=int(data.get("overruns", 0)),
+        active=_strings(data.get("active")),
+        signals={str(k): decode_untyped(v) for k, v in signals.items()},
+    )

@@ -1,0 +1,151 @@
+"""Helpers: real `situate run` managers on free ports, and the installed `situate` program.
+
+Every test that needs a manager starts its own (`situate run ... --listen
+tcp/127.0.0.1:<free port>`, the console script of the installed wheel) and
+stops it afterwards, so tests never share state and never touch 7447.
+Readiness is a bounded poll of the protocol's `hello`, never a sleep.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Awaitable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TypeVar
+
+import pytest
+
+from situate import _link
+from situate.errors import SituateError
+
+REPO = Path(__file__).resolve().parents[2]
+TOYBOT = REPO / "examples" / "toybot.yaml"
+T = TypeVar("T")
+
+#: Generous bounds for things that normally take milliseconds (CI machines are slow and shared).
+STARTUP_S = 60.0
+EVENT_S = 20.0
+
+
+def run(coro: Awaitable[T]) -> T:
+    """Runs a coroutine to completion (tests use plain asyncio, no plugin)."""
+
+    async def main() -> T:
+        return await coro
+
+    return asyncio.run(main())
+
+
+def situate_program() -> str:
+    """The `situate` console script installed next to this interpreter."""
+    here = Path(sys.executable).parent / "situate"
+    if here.exists():
+        return str(here)
+    pytest.fail("the `situate` console script is not installed: run scripts/python.sh first")
+
+
+def free_port() -> int:
+    """A TCP port nobody listens on right now."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+def program_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env.pop("SITUATE_CONNECT", None)
+    env.setdefault("RUST_LOG", "warn,zenoh=error")
+    return env
+
+
+def situate(
+    *args: str, timeout: float = 60.0, cwd: Path | None = None
+) -> subprocess.CompletedProcess[str]:
+    """Runs the installed `situate` program and returns its result (never raises on exit code)."""
+    return subprocess.run(
+        [situate_program(), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=program_env(),
+        cwd=cwd or REPO,
+        check=False,
+    )
+
+
+@dataclass
+class Manager:
+    """A running `situate run` process serving one robot on its own endpoint."""
+
+    process: subprocess.Popen[str]
+    robot: str
+    endpoint: str
+
+    @property
+    def connect_args(self) -> list[str]:
+        """The CLI arguments that reach this manager."""
+        return ["--connect", self.endpoint, "--robot", self.robot]
+
+    def stop(self) -> str:
+        """Stops the process (Ctrl-C, then kill) and returns what it wrote to stderr."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(timeout=20)
+        _, err = self.process.communicate()
+        return err or ""
+
+
+def wait_for_hello(process: subprocess.Popen[str], endpoint: str, robot: str) -> None:
+    """Polls `hello` until the manager answers (bounded), failing early if it exited."""
+    deadline = time.monotonic() + STARTUP_S
+    last: Exception | None = None
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            _, err = process.communicate()
+            pytest.fail(f"`situate run` exited with {process.returncode}:\n{err}")
+        try:
+            session = _link.open_session([endpoint])
+        except SituateError as e:  # not listening yet
+            last = e
+            time.sleep(0.05)
+            continue
+        try:
+            _link.hello(session, robot, timeout=2.0, endpoints=[endpoint])
+            return
+        except SituateError as e:
+            last = e
+        finally:
+            _link.close_session(session)
+    pytest.fail(f"the manager did not answer `hello` within {STARTUP_S} s: {last}")
+
+
+def start_manager(robot_file: Path, robot: str, *extra: str) -> Manager:
+    """Starts `situate run ROBOT_FILE` on a free port and waits until it answers."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    process = subprocess.Popen(
+        [situate_program(), "run", str(robot_file), "--listen", endpoint, *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=program_env(),
+        cwd=REPO,
+    )
+    try:
+        wait_for_hello(process, endpoint, robot)
+    except BaseException:
+        process.kill()
+        process.communicate()
+        raise
+    return Manager(process, robot, endpoint)

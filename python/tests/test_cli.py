@@ -1,0 +1,200 @@
+"""The `situate` console script of the wheel: the Rust program's verbs, run as subprocesses."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+from support import EVENT_S, TOYBOT, Manager, free_port, program_env, situate, situate_program
+
+import situate as situate_pkg
+
+
+def test_version_and_help_come_from_the_rust_program() -> None:
+    result = situate("--version")
+    assert result.returncode == 0
+    assert result.stdout.strip() == f"situate {situate_pkg.version()}"
+    assert "check" in situate("--help").stdout
+
+
+def test_check_and_types_work_offline() -> None:
+    result = situate("check", str(TOYBOT))
+    assert result.returncode == 0, result.stderr
+    assert "ok — robot `toybot`" in result.stdout
+    assert "toy.runaway" in situate("types").stdout
+
+
+def test_a_bad_command_line_exits_2() -> None:
+    result = situate("activat", "wander")
+    assert result.returncode == 2
+    assert "activate" in result.stderr  # clap suggests the verb
+
+
+def test_skills_lists_the_robot(toybot: Manager) -> None:
+    result = situate("skills", *toybot.connect_args)
+    assert result.returncode == 0, result.stderr
+    names = [line.split()[0] for line in result.stdout.splitlines()]
+    assert names == ["sonar", "wheels", "runaway", "wander"]
+    as_json = json.loads(situate("skills", "--json", *toybot.connect_args).stdout)
+    assert [s["name"] for s in as_json] == names
+
+
+def test_activate_and_deactivate(toybot: Manager) -> None:
+    off = situate("deactivate", "wander", *toybot.connect_args)
+    assert off.returncode == 0, off.stderr
+    assert off.stdout.startswith("deactivated wander from cycle")
+    assert situate("deactivate", "wander", *toybot.connect_args).stdout.startswith("nothing")
+    on = situate("activate", "wander", "--with-providers", *toybot.connect_args)
+    assert on.stdout.startswith("activated wander from cycle"), on.stderr
+    bad = situate("activate", "wandr", *toybot.connect_args)
+    assert bad.returncode == 1
+    assert "did you mean `wander`?" in bad.stderr
+
+
+def test_param_get_and_set(toybot: Manager) -> None:
+    set_ = situate("param", "set", "runaway", "safe_distance", "0.3", *toybot.connect_args)
+    assert set_.returncode == 0, set_.stderr
+    assert "runaway.safe_distance = 0.3" in set_.stdout
+    get = situate("param", "get", "runaway", "safe_distance", *toybot.connect_args)
+    assert get.stdout.strip() == "0.3"
+    bad = situate("param", "set", "runaway", "safe_distance", "far", *toybot.connect_args)
+    assert bad.returncode == 1
+    assert "far" in bad.stderr
+    unknown = situate("param", "get", "runaway", "safe_distanc", *toybot.connect_args)
+    assert unknown.returncode == 1
+    assert "did you mean `safe_distance`" in unknown.stderr
+
+
+def test_query(toybot: Manager) -> None:
+    result = situate("query", "sonar.range", *toybot.connect_args)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("sonar.range = [")
+    assert "(f32[24]" in result.stdout
+    reading = json.loads(situate("query", "odom", "--json", *toybot.connect_args).stdout)
+    assert set(reading["value"]) == {"x", "y", "theta"}
+    bad = situate("query", "sonar.rnge", *toybot.connect_args)
+    assert bad.returncode == 1
+    assert "did you mean `sonar.range`" in bad.stderr
+
+
+def test_monitor_prints_its_event(toybot: Manager) -> None:
+    result = situate("monitor", "sonar.range[0] < 100", *toybot.connect_args, timeout=EVENT_S + 30)
+    assert result.returncode == 0, result.stderr
+    assert "registered (once)" in result.stderr
+    assert "sonar.range[0] < 100" in result.stdout
+    bad = situate("monitor", "sonar.range[0] <", *toybot.connect_args)
+    assert bad.returncode == 1
+    assert "^" in bad.stderr  # the pointer under the problem
+
+
+def test_events_count(toybot: Manager) -> None:
+    events = subprocess.Popen(
+        [situate_program(), "events", "--count", "3", *toybot.connect_args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=program_env(),
+    )
+    try:
+        out, err = _wait_or_nudge(events, toybot)
+    finally:
+        if events.poll() is None:
+            events.kill()
+            events.communicate()
+    assert events.returncode == 0, err
+    lines = [json.loads(line) for line in out.splitlines()]
+    assert len(lines) == 3
+    assert all(e["kind"] == "param_changed" for e in lines)
+
+
+def _wait_or_nudge(process: subprocess.Popen[str], toybot: Manager) -> tuple[str, str]:
+    """Waits for `situate events` to end, making events (parameter changes) until it does.
+
+    Events published before its subscription is in place are not seen, so
+    the test keeps making them: a poll-until, bounded, with no fixed sleep.
+    """
+    for value in range(200):
+        try:
+            return process.communicate(timeout=0.2)
+        except subprocess.TimeoutExpired:
+            situate("param", "set", "wander", "seed", str(value), *toybot.connect_args)
+    pytest.fail("`situate events --count 3` saw fewer than 3 events")
+
+
+def test_stats_and_cycle(toybot: Manager) -> None:
+    stats = situate("stats", *toybot.connect_args)
+    assert stats.returncode == 0, stats.stderr
+    assert stats.stdout.startswith("robot `toybot`: cycle")
+    assert "running" in stats.stdout
+    assert situate("cycle", "stop", *toybot.connect_args).returncode == 0
+    before = json.loads(situate("stats", "--json", *toybot.connect_args).stdout)
+    assert situate("cycle", "step", "3", *toybot.connect_args).returncode == 0
+    after = json.loads(situate("stats", "--json", *toybot.connect_args).stdout)
+    assert after["cycle"] == before["cycle"] + 3
+    assert not after["running"]
+    assert situate("cycle", "run", *toybot.connect_args).returncode == 0
+    assert json.loads(situate("stats", "--json", *toybot.connect_args).stdout)["running"]
+    bad = situate("cycle", "step", "0", *toybot.connect_args)
+    assert bad.returncode == 1
+    assert "cycles" in bad.stderr
+
+
+def test_the_robot_is_found_without_naming_it(toybot: Manager) -> None:
+    result = situate("stats", "--connect", toybot.endpoint)
+    assert result.returncode == 0, result.stderr
+    assert "robot `toybot`" in result.stdout
+
+
+def test_no_manager_running_is_a_clear_error() -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    result = situate("skills", "--connect", endpoint, "--timeout", "1")
+    assert result.returncode != 0
+    assert "no skill manager answered" in result.stderr, result.stderr
+
+
+def test_no_manager_for_a_named_robot_is_a_clear_error(toybot: Manager) -> None:
+    result = situate("stats", "--connect", toybot.endpoint, "--robot", "wallE", "--timeout", "1")
+    assert result.returncode != 0
+    assert "no skill manager answered" in result.stderr, result.stderr
+
+
+NATIVE_IN_A_THREAD = """
+import sys, threading
+from situate import _link, _native
+
+robot_file, endpoint = sys.argv[1], sys.argv[2]
+codes = []
+args = ["situate", "run", robot_file, "--listen", endpoint, "--cycles", "1000"]
+runner = threading.Thread(target=lambda: codes.append(_native.main(args)))
+runner.start()
+# Python code in this thread talks to the program while it runs: only possible if it let go
+# of the GIL. Then stepping past its last cycle ends it.
+session = None
+while session is None:
+    try:
+        session = _link.open_session([endpoint])
+    except _link.NotRunning:
+        pass
+robot = _link.hello(session, None, timeout=30, endpoints=[endpoint])["robot"]
+_link.request(session, robot, "step", {"cycles": 1000}, timeout=30, endpoints=[endpoint])
+_link.close_session(session)
+runner.join()
+bad = _native.main(["situate", "check", "/nonexistent/robot.yaml"])
+print("result:", robot, codes[0], bad)
+"""
+
+
+def test_the_native_program_releases_the_gil_and_returns_its_exit_code() -> None:
+    result = subprocess.run(
+        [sys.executable, "-c", NATIVE_IN_A_THREAD, str(TOYBOT), f"tcp/127.0.0.1:{free_port()}"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=program_env(),
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("robot `toybot`: ")  # the program's own summary
+    assert result.stdout.splitlines()[-1] == "result: toybot 0 1"

@@ -1,0 +1,199 @@
+"""Monitors firing (once, edge, level), `when`, and every event kind, over a real manager.
+
+Counting tests are deterministic: the manager is stopped, monitors are
+registered, then `step N` runs exactly N cycles before its reply. The
+manager's own count (`monitor_list`'s `fired`) says how many events to wait
+for; the wait is bounded by a generous timeout, never a sleep.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+from support import EVENT_S, Manager, run
+
+import situate
+from situate import Event, MonitorFired, Robot, Stream
+
+ALWAYS = "runaway.safe_distance > 0"  # a parameter: true from the first cycle, no device involved
+
+
+async def take(stream: Stream[Event], n: int) -> list[Event]:
+    """The next ``n`` events of ``stream`` (bounded wait)."""
+
+    async def gather() -> list[Event]:
+        return [await stream.__anext__() for _ in range(n)]
+
+    return await asyncio.wait_for(gather(), EVENT_S)
+
+
+async def fired(robot: Robot, monitor: int) -> int:
+    for m in await robot.monitors():
+        if m.monitor == monitor:
+            return m.fired
+    return -1
+
+
+def test_a_once_monitor_fires_once_and_is_gone(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            async with robot.events("monitor_fired") as stream:
+                monitor = await robot.monitor(ALWAYS, "once")
+                before = (await robot.stats()).cycle
+                await robot.step(5)
+                [event] = await take(stream, 1)
+            assert isinstance(event, MonitorFired)
+            assert (event.monitor, event.condition) == (monitor, ALWAYS)
+            assert event.cycle == before + 1
+            assert event.values == {"runaway.safe_distance": pytest.approx(0.6)}
+            assert monitor not in [m.monitor for m in await robot.monitors()]
+
+    run(main())
+
+
+def test_an_edge_monitor_fires_each_time_its_condition_becomes_true(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            async with robot.events("monitor_fired") as stream:
+                monitor = await robot.monitor("runaway.safe_distance > 1", "edge")
+                await robot.step(2)  # false
+                await robot.set_param("runaway", "safe_distance", 2.0)
+                await robot.step(3)  # true: one edge
+                await robot.set_param("runaway", "safe_distance", 0.5)
+                await robot.step(2)  # false
+                await robot.set_param("runaway", "safe_distance", 2.5)
+                await robot.step(3)  # true again: a second edge
+                assert await fired(robot, monitor) == 2
+                events = await take(stream, 2)
+            assert all(isinstance(e, MonitorFired) and e.monitor == monitor for e in events)
+            values = [
+                e.values["runaway.safe_distance"] for e in events if isinstance(e, MonitorFired)
+            ]
+            assert values == [pytest.approx(2.0), pytest.approx(2.5)]
+
+    run(main())
+
+
+def test_a_level_monitor_fires_every_cycle_its_condition_holds(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            async with robot.events("monitor_fired") as stream:
+                monitor = await robot.monitor(ALWAYS, "level")
+                start = (await robot.stats()).cycle
+                await robot.step(4)
+                assert await fired(robot, monitor) == 4
+                events = await take(stream, 4)
+            cycles = [e.cycle for e in events if isinstance(e, MonitorFired)]
+            assert cycles == [start + 1, start + 2, start + 3, start + 4]
+            await robot.cancel_monitor(monitor)
+
+    run(main())
+
+
+def test_when_returns_the_event_of_its_condition(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            # The toy sonar's drifting box keeps some sonar near: range 0 of 24 is under 100 m.
+            event = await robot.when("sonar.range[0] < 100", timeout=EVENT_S)
+            assert event.condition == "sonar.range[0] < 100"
+            assert event.values["sonar.range"][0] < 100  # the values of the names it reads
+            assert await robot.monitors() == []
+
+    run(main())
+
+
+def test_when_cancels_its_monitor_on_timeout_and_on_cancellation(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()  # nothing can fire
+            with pytest.raises(asyncio.TimeoutError):
+                await robot.when(ALWAYS, timeout=0.5)
+            assert await robot.monitors() == []
+
+            task = asyncio.ensure_future(robot.when(ALWAYS))
+            while not await robot.monitors():  # poll until registered
+                await asyncio.sleep(0.02)
+            task.cancel()
+            with pytest.raises(asyncio.CancelledError):
+                await task
+            assert await robot.monitors() == []
+
+            # A condition that does not parse fails at once, with nothing left behind.
+            with pytest.raises(situate.BadCondition):
+                await robot.when("sonar.range[0] <")
+
+    run(main())
+
+
+def test_activation_and_parameter_changes_are_events(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            async with robot.events("activation_applied", "param_changed") as stream:
+                await robot.deactivate("wander")
+                await robot.set_param("runaway", "safe_distance", 0.4)
+                await robot.step(1)
+                events = await take(stream, 2)
+            applied = [e for e in events if isinstance(e, situate.ActivationApplied)]
+            changed = [e for e in events if isinstance(e, situate.ParamChanged)]
+            assert applied[0].deactivated == ["wander"]
+            assert applied[0].activated == []
+            assert (changed[0].skill, changed[0].param) == ("runaway", "safe_distance")
+            assert changed[0].value == pytest.approx(0.4)
+
+    run(main())
+
+
+def test_prints_of_a_verbose_skill_are_events(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            async with robot.events("print") as stream:
+                await robot.set_verbose("runaway", True)
+                # runaway prints every cycle an obstacle is near; the toy sonar's box always is.
+                event = await stream.next(timeout=EVENT_S)
+            assert isinstance(event, situate.Print)
+            assert event.skill == "runaway"
+            assert "running away" in event.line
+            await robot.set_verbose("runaway", False)
+            prints = (await robot.skill("runaway")).prints
+            assert prints
+            assert "running away" in prints[-1][1]
+
+    run(main())
+
+
+def test_stopping_and_running_the_cycle_are_events(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            async with robot.events() as stream:  # every kind
+                await robot.stop()
+                await robot.run()
+                kinds: list[type] = []
+                while len(kinds) < 2:
+                    event = await stream.next(timeout=EVENT_S)
+                    if isinstance(event, (situate.ManagerStarted, situate.ManagerStopped)):
+                        kinds.append(type(event))
+            assert kinds == [situate.ManagerStopped, situate.ManagerStarted]
+
+    run(main())
+
+
+# skill_faulted: no toy skill faults; test_remote_e2e.py makes a remote skill raise.
+
+
+def test_streams_end_when_the_robot_is_closed(toybot: Manager) -> None:
+    async def main() -> None:
+        robot = await situate.connect("toybot", endpoint=toybot.endpoint)
+        stream = robot.events()
+        await robot.close()
+
+        async def drain() -> int:
+            return len([e async for e in stream])
+
+        await asyncio.wait_for(drain(), EVENT_S)  # ends instead of waiting forever
+
+    run(main())

@@ -1,0 +1,383 @@
+"""Every request verb of docs/protocol.md, with its success and its error replies.
+
+Each test starts its own toybot manager (`situate run examples/toybot.yaml`)
+on a free port and drives it with `situate.connect`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+
+import pytest
+from support import Manager, free_port, run
+
+import situate
+from situate import _link
+
+# ----- hello / connect ---------------------------------------------------------------
+
+
+def test_connect_finds_the_only_robot_and_says_hello(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect(endpoint=toybot.endpoint) as robot:
+            assert robot.name == "toybot"
+            assert robot.hello.protocol == 1
+            assert robot.hello.robot == "toybot"
+            assert robot.hello.version
+        robot = await situate.connect("toybot", endpoint=toybot.endpoint)
+        try:
+            assert robot.name == "toybot"
+        finally:
+            await robot.close()
+
+    run(main())
+
+
+def test_connect_to_an_unknown_robot_says_no_manager_answered(toybot: Manager) -> None:
+    async def main() -> None:
+        with pytest.raises(situate.NotRunning, match="no skill manager answered `situate/wallE/"):
+            async with situate.connect("wallE", endpoint=toybot.endpoint, timeout=1.0):
+                pass
+
+    run(main())
+
+
+def test_connect_with_nothing_listening_says_no_manager_answered() -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+
+    async def main() -> None:
+        with pytest.raises(situate.NotRunning, match="no skill manager answered") as e:
+            async with situate.connect(endpoint=endpoint, timeout=1.0):
+                pass
+        assert endpoint in str(e.value)
+        assert e.value.kind == "not_running"
+
+    run(main())
+
+
+# ----- activate / deactivate -----------------------------------------------------------
+
+
+def test_activate_and_deactivate_report_what_changed(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            assert await robot.deactivate("wander") == ["wander"]
+            assert await robot.deactivate("wander") == []
+            assert "wander" not in (await robot.stats()).active
+            assert await robot.activate("wander", "runaway") == ["wander"]
+            assert (await robot.skill("wander")).active
+
+    run(main())
+
+
+def test_activating_an_unknown_skill_suggests_a_name(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            with pytest.raises(situate.UnknownSkill) as e:
+                await robot.activate("wandr")
+            assert e.value.kind == "unknown_skill"
+            assert "`wandr`" in e.value.message
+            assert "did you mean `wander`?" in e.value.message
+            with pytest.raises(situate.UnknownSkill, match="did you mean `runaway`"):
+                await robot.deactivate("runaway_")
+            # A refused request changes nothing.
+            assert set((await robot.stats()).active) == {"sonar", "wheels", "runaway", "wander"}
+
+    run(main())
+
+
+UNPROVIDED = """
+    robot: lonely
+    cycle: {rate_hz: 50}
+    devices:
+      - {name: sonar, type: toy.sonar, active: false}
+      - {name: wheels, type: toy.wheels}
+    skills:
+      - {name: runaway, type: toy.runaway, active: false}
+      - {name: wander, type: toy.wander}
+"""
+
+
+def test_activating_a_skill_without_providers_is_refused_with_them(
+    manager_for: Callable[[str, str], Manager],
+) -> None:
+    m = manager_for(UNPROVIDED, "lonely")
+
+    async def main() -> None:
+        async with situate.connect("lonely", endpoint=m.endpoint) as robot:
+            with pytest.raises(situate.MissingProviders) as e:
+                await robot.activate("runaway")
+            assert e.value.signals == ["sonar.range"]
+            assert e.value.providers == ["sonar"]
+            assert "sonar.range" in e.value.message
+            assert not (await robot.skill("runaway")).active  # refused: nothing changed
+            changed = await robot.activate("runaway", with_providers=True)
+            assert sorted(changed) == ["runaway", "sonar"]
+            assert (await robot.skill("sonar")).active
+
+    run(main())
+
+
+# ----- parameters ------------------------------------------------------------------------
+
+
+def test_parameters_are_set_and_read_back(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            assert await robot.get_param("runaway", "safe_distance") == pytest.approx(0.6)
+            await robot.set_param("runaway", "safe_distance", 0.3)
+            assert await robot.get_param("runaway", "safe_distance") == pytest.approx(0.3)
+            await robot.set_param("runaway", "safe_distance", 2)  # an integer is fine for f64
+            assert await robot.get_param("runaway", "safe_distance") == pytest.approx(2.0)
+            await robot.set_param("wander", "seed", 11)
+            assert await robot.get_param("wander", "seed") == 11
+            info = (await robot.skill("runaway")).param("safe_distance")
+            assert (info.type, info.min, info.max, info.unit) == ("f64", 0.1, 3.0, "m")
+            assert info.value == pytest.approx(2.0)
+            assert info.default == pytest.approx(0.5)
+
+    run(main())
+
+
+def test_bad_parameter_values_name_the_expected_type_and_range(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            with pytest.raises(situate.BadParam) as wrong_type:
+                await robot.set_param("runaway", "safe_distance", "far")
+            assert "safe_distance" in wrong_type.value.message
+            assert "far" in wrong_type.value.message
+            with pytest.raises(situate.BadParam) as out_of_range:
+                await robot.set_param("runaway", "safe_distance", 5.0)
+            assert "0.1" in out_of_range.value.message
+            assert "3" in out_of_range.value.message
+            with pytest.raises(situate.BadParam):
+                await robot.set_param("wander", "seed", 1.5)
+            assert await robot.get_param("runaway", "safe_distance") == pytest.approx(0.6)
+
+    run(main())
+
+
+def test_unknown_parameters_and_skills_suggest_names(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            with pytest.raises(situate.UnknownParam, match="did you mean `safe_distance`"):
+                await robot.set_param("runaway", "safe_distanc", 0.3)
+            with pytest.raises(situate.UnknownParam, match="did you mean `speed`"):
+                await robot.get_param("wander", "sped")
+            with pytest.raises(situate.UnknownSkill, match="did you mean `runaway`"):
+                await robot.get_param("runawy", "speed")
+
+    run(main())
+
+
+# ----- priority and verbosity ----------------------------------------------------------
+
+
+def test_priority_and_verbosity_are_set(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            assert (await robot.skill("wander")).priority == 10
+            await robot.set_priority("wander", 30)
+            assert (await robot.skill("wander")).priority == 30
+            await robot.set_verbose("runaway", True)
+            assert (await robot.skill("runaway")).verbose
+            await robot.set_verbose("runaway", False)
+            assert not (await robot.skill("runaway")).verbose
+            with pytest.raises(situate.UnknownSkill, match="did you mean `wander`"):
+                await robot.set_priority("wandr", 1)
+            with pytest.raises(situate.BadRequest, match="priority"):
+                await robot.set_priority("wander", 2**40)
+            with pytest.raises(situate.UnknownSkill):
+                await robot.set_verbose("nobody", True)
+
+    run(main())
+
+
+# ----- queries -------------------------------------------------------------------------
+
+
+def test_signals_are_queried_with_their_type_and_writer(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.step(2)  # stopped, two cycles run: every device has reported
+            sonar = await robot.query("sonar.range")
+            assert (sonar.signal, sonar.type, sonar.writer) == ("sonar.range", "f32[24]", "sonar")
+            assert len(sonar.value) == 24
+            assert all(isinstance(r, float) and 0 < r <= 2.0 for r in sonar.value)
+            odom = await robot.query("odom")
+            assert odom.type == "{x: f64, y: f64, theta: f64}"
+            assert set(odom.value) == {"x", "y", "theta"}
+            assert all(math.isfinite(v) for v in odom.value.values())
+            x = await robot.query("odom.x")
+            assert x.type == "f64"
+            assert isinstance(x.value, float)
+            with pytest.raises(situate.UnknownSignal, match=r"did you mean `sonar\.range`"):
+                await robot.query("sonar.rnge")
+
+    run(main())
+
+
+def test_skills_describe_themselves(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            skills = await robot.skills()
+            assert [s.name for s in skills] == ["sonar", "wheels", "runaway", "wander"]
+            assert [s.kind for s in skills] == ["device", "device", "sync", "sync"]
+            runaway = await robot.skill("runaway")
+            assert runaway.type_name == "toy.runaway"
+            assert runaway.doc.startswith("Turns away from the nearest obstacle")
+            assert runaway.faulted is None
+            assert runaway.active
+            assert [(p.name, p.signal, p.type) for p in runaway.inputs] == [
+                ("sonar_range", "sonar.range", "f32[]")
+            ]
+            assert [p.name for p in runaway.outputs] == ["drive"]
+            assert runaway.timing.runs >= 0
+            with pytest.raises(situate.UnknownSkill, match="did you mean `wheels`"):
+                await robot.skill("wheel")
+
+    run(main())
+
+
+def test_winners_graph_and_stats(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.step(1)
+            winners = {w.signal: w for w in await robot.winners()}
+            assert set(winners) == {"drive.v", "drive.w"}
+            assert set(winners["drive.v"].writers) == {"runaway", "wander"}
+            graph = await robot.graph()
+            assert [s.name for s in graph.skills] == ["sonar", "wheels", "runaway", "wander"]
+            signals = {s.signal: s for s in graph.signals}
+            assert signals["sonar.range"].writers == ["sonar"]
+            assert signals["sonar.range"].readers == ["runaway"]
+            stats = await robot.stats()
+            assert stats.robot == "toybot"
+            assert not stats.running
+            assert stats.period_s == pytest.approx(0.05)
+            assert stats.cycle >= 1
+
+    run(main())
+
+
+# ----- the cycle ---------------------------------------------------------------------------
+
+
+def test_the_cycle_stops_steps_and_runs(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            assert (await robot.stats()).running
+            await robot.stop()
+            before = await robot.stats()
+            assert not before.running
+            await robot.step(5)
+            after = await robot.stats()
+            assert after.cycle == before.cycle + 5
+            assert not after.running
+            with pytest.raises(situate.BadRequest, match="cycles"):
+                await robot.step(0)
+            with pytest.raises(situate.BadRequest, match="1000000"):
+                await robot.step(1_000_001)
+            assert (await robot.stats()).cycle == after.cycle
+            await robot.run()
+            assert (await robot.stats()).running
+
+    run(main())
+
+
+# ----- monitors (registration; firing is in test_client_monitors.py) ------------------------
+
+
+def test_monitors_are_added_listed_and_cancelled(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            first = await robot.monitor("sonar.range[0] < 0.25", "edge")
+            second = await robot.monitor("runaway.safe_distance > 1", "level")
+            listed = {m.monitor: m for m in await robot.monitors()}
+            assert listed[first].condition == "sonar.range[0] < 0.25"
+            assert (listed[first].mode, listed[second].mode) == ("edge", "level")
+            assert listed[second].fired == 0
+            await robot.cancel_monitor(first)
+            assert [m.monitor for m in await robot.monitors()] == [second]
+            with pytest.raises(situate.UnknownMonitor):
+                await robot.cancel_monitor(first)
+
+    run(main())
+
+
+def test_bad_conditions_point_at_the_problem(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            with pytest.raises(situate.BadCondition) as e:
+                await robot.monitor("sonar.range[0] < ")
+            assert e.value.column > 0
+            assert "^" in e.value.pointer
+            assert e.value.message.startswith(f"column {e.value.column}")
+            with pytest.raises(situate.BadCondition, match=r"did you mean `sonar\.range`") as e:
+                await robot.monitor("sonr.range[0] < 1")
+            assert e.value.pointer == "sonr.range[0] < 1\n^"
+            with pytest.raises(situate.BadRequest, match="did you mean `edge`"):
+                await robot.monitor("sonar.range[0] < 1", "edg")
+            assert await robot.monitors() == []
+
+    run(main())
+
+
+# ----- telemetry ----------------------------------------------------------------------------
+
+
+def test_telemetry_carries_the_chosen_signals(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            async with robot.telemetry_stream() as samples:
+                await robot.telemetry(["sonar.range", "odom.x"], rate_hz=50)
+                async for sample in samples:
+                    if sample.signals.get("sonar.range") is not None:
+                        break
+            assert len(sample.signals["sonar.range"]) == 24
+            assert "odom.x" in sample.signals
+            assert sample.cycle > 0
+            assert "runaway" in sample.active
+            with pytest.raises(situate.BadRequest, match="rate_hz"):
+                await robot.telemetry(["odom.x"], rate_hz=0)
+            with pytest.raises(situate.BadRequest, match="rate_hz"):
+                await robot.telemetry(["odom.x"], rate_hz=1000)
+
+    run(main())
+
+
+# ----- malformed requests -------------------------------------------------------------
+
+
+def test_malformed_requests_are_refused_and_named(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            with pytest.raises(situate.UnknownVerb, match="did you mean `activate`"):
+                await robot.request("activte", skills=["wander"])
+            with pytest.raises(situate.BadRequest, match="unknown argument `extra`"):
+                await robot.request("query", signal="odom.x", extra=1)
+            with pytest.raises(situate.BadRequest, match="missing argument `signal`"):
+                await robot.request("query")
+            with pytest.raises(situate.BadRequest, match="list of strings"):
+                await robot.request("activate", skills=3)
+            with pytest.raises(situate.ProtocolMismatch, match="protocol 2"):
+                await robot.request("stats", protocol=2)
+            assert (await robot.request("stats", protocol=1))["robot"] == "toybot"
+
+    run(main())
+
+
+def test_a_payload_that_is_not_json_is_a_bad_request(toybot: Manager) -> None:
+    session = _link.open_session([toybot.endpoint])
+    try:
+        replies = list(session.get("situate/toybot/req/stats", payload=b"{not json", timeout=10))
+        assert len(replies) == 1
+        assert replies[0].ok is not None
+        body = json.loads(replies[0].ok.payload.to_bytes())
+        assert body["error"]["kind"] == "bad_request"
+        assert "not JSON" in body["error"]["message"]
+    finally:
+        _link.close_session(session)

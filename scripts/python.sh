@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# The Python package (python/situate, crates/situate_py): sets up .venv at the repository root
+# with the tools, builds the wheel and installs it there. Safe to run again: the tools are
+# installed only when their list changed, and cargo rebuilds only what changed.
+#
+#   scripts/python.sh          set up and install
+#   scripts/python.sh test     ... then ruff, mypy (strict) and pytest
+#
+# Environment: PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
+# SITUATE_PY_PROFILE=release|debug (default release; debug reuses `cargo test`'s build).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
+
+PYTHON=${PYTHON:-python3}
+VENV=.venv
+TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==1.10.2")
+TARGET=${CARGO_TARGET_DIR:-target}
+PROFILE=${SITUATE_PY_PROFILE:-release}
+say() { printf '\033[1mpython.sh:\033[0m %s\n' "$*"; }
+
+# 1. The virtualenv and the tools (re-installed only when the list above changes).
+if [[ ! -x $VENV/bin/python ]]; then
+    say "creating $VENV with $($PYTHON --version)"
+    "$PYTHON" -m venv "$VENV"
+fi
+stamp=$VENV/.situate-tools
+if [[ ! -f $stamp || "$(cat "$stamp")" != "${TOOLS[*]}" ]]; then
+    say "installing ${TOOLS[*]}"
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check "${TOOLS[@]}"
+    printf '%s' "${TOOLS[*]}" >"$stamp"
+fi
+
+# 2. The wheel (abi3: one wheel for CPython 3.9+), installed like any user's.
+wheels=$TARGET/situate-wheels
+rm -rf "$wheels"
+profile_flag=(--release)
+[[ $PROFILE == debug ]] && profile_flag=()
+say "building the wheel ($PROFILE)"
+start=$SECONDS
+"$VENV/bin/maturin" build "${profile_flag[@]}" --quiet --interpreter "$VENV/bin/python" \
+    --out "$wheels" 2> >(grep -vE '^\s*(Compiling|Checking|Downloaded|Downloading|Locking|Adding|Updating)' >&2)
+wheel=$(ls "$wheels"/situate-*.whl)
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps --force-reinstall "$wheel"
+say "installed $(basename "$wheel") in $((SECONDS - start)) s"
+
+# 3. Lints and tests.
+if [[ ${1:-} == test ]]; then
+    source "$VENV/bin/activate"
+    say "ruff"
+    ruff check python
+    ruff format --check python
+    say "mypy --strict"
+    mypy python/situate
+    say "pytest"
+    pytest -q python/tests
+fi
