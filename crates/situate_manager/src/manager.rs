@@ -22,7 +22,6 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, Sender, TrySendError};
-use rayon::prelude::*;
 use situate_core::{suggestion, SignalType, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
@@ -132,6 +131,8 @@ pub struct Manager {
     deactivated: Vec<String>,
     /// When running on its own thread, stop after this cycle.
     stop_at: Option<u64>,
+    /// The ready skills of a level (kept to reuse its allocation).
+    ready: Vec<usize>,
 }
 
 impl Manager {
@@ -180,8 +181,10 @@ impl Manager {
                 let threads = spec
                     .threads
                     .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get().min(4)).unwrap_or(2));
+                // The cycle's own thread takes part in each parallel level, so
+                // the pool holds one thread fewer.
                 rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
+                    .num_threads(threads.saturating_sub(1).max(1))
                     .thread_name(|i| format!("situate-exec-{i}"))
                     .build()
                     .ok()
@@ -211,6 +214,7 @@ impl Manager {
             activated: Vec::new(),
             deactivated: Vec::new(),
             stop_at: None,
+            ready: Vec::new(),
             graph,
         };
         let initially: Vec<usize> =
@@ -324,7 +328,7 @@ impl Manager {
             self.take_readings(d);
         }
         // 3. the data flow, level by level.
-        let mut ready: Vec<usize> = Vec::new();
+        let mut ready = std::mem::take(&mut self.ready);
         for level in &schedule.levels {
             ready.clear();
             for &i in level {
@@ -348,6 +352,7 @@ impl Manager {
                 self.finish(i);
             }
         }
+        self.ready = ready;
         // 4. dskill commands.
         for &d in &schedule.devices {
             self.hand_commands(d);
@@ -412,13 +417,13 @@ impl Manager {
                         batch.push(i);
                         false
                     });
-                    let mut jobs = pick_mut(&mut self.execs, &batch);
-                    pool.install(|| jobs.par_iter_mut().for_each(|e| e.run(cycle, time_s)));
+                    run_parallel(pool, pick_mut(&mut self.execs, &batch), cycle, time_s);
                 }
             }
             _ => {
+                let mut t = Instant::now();
                 for &i in ready {
-                    self.execs[i].run(cycle, time_s);
+                    t = self.execs[i].run(cycle, time_s, t);
                 }
             }
         }
@@ -439,6 +444,7 @@ impl Manager {
             self.record_prints(i, prints);
         }
         if let Err(cause) = result {
+            self.execs[i].outputs.fill(None);
             self.fault(i, cause);
             return;
         }
@@ -596,7 +602,7 @@ impl Manager {
             None => {
                 // Lockstep: the device does its I/O now; its readings are
                 // taken at the start of the next cycle.
-                self.execs[d].run(cycle, self.time_s);
+                self.execs[d].run(cycle, self.time_s, Instant::now());
                 let exec = &mut self.execs[d];
                 let result = std::mem::replace(&mut exec.result, Ok(()));
                 let elapsed = exec.elapsed_ns;
@@ -607,7 +613,8 @@ impl Manager {
                 inst.max_ns = inst.max_ns.max(elapsed);
                 inst.total_ns += elapsed;
                 for (slot, out) in inst.lockstep_readings.iter_mut().zip(&mut exec.outputs) {
-                    if let Some(v) = out.take() {
+                    // A failed exchange's readings are dropped.
+                    if let (Some(v), true) = (out.take(), result.is_ok()) {
                         *slot = Some(v);
                     }
                 }
@@ -1150,6 +1157,27 @@ fn write_leaf(slot: &mut Slot, value: Value, cycle: u64, rank: (i32, u32), write
 
 fn wrong_output(port: &str, ty: &SignalType, value: &Value) -> String {
     format!("output `{port}` expects {ty}, the body produced a {}", value.kind_name())
+}
+
+/// Runs the bodies of one parallel batch: the pool's threads and the
+/// calling thread each take the next body until none is left, so the
+/// cycle's thread works instead of waiting for the pool to wake up.
+fn run_parallel(pool: &rayon::ThreadPool, jobs: Vec<&mut Exec>, cycle: u64, time_s: f64) {
+    let jobs: Vec<Mutex<&mut Exec>> = jobs.into_iter().map(Mutex::new).collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let drain = || loop {
+        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let Some(job) = jobs.get(k) else { break };
+        let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
+        exec.run(cycle, time_s, Instant::now());
+    };
+    let helpers = pool.current_num_threads().min(jobs.len() - 1);
+    pool.in_place_scope(|scope| {
+        for _ in 0..helpers {
+            scope.spawn(|_| drain());
+        }
+        drain();
+    });
 }
 
 /// Disjoint mutable references to `v[i]` for sorted, distinct `indices`.

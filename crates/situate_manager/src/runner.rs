@@ -39,17 +39,21 @@ impl Exec {
         }
     }
 
-    /// Runs the body once on the gathered inputs, timing it and catching
-    /// panics.
-    pub fn run(&mut self, cycle: u64, time_s: f64) {
-        let start = Instant::now();
+    /// Runs the body once on the gathered inputs, catching panics, and times
+    /// it from `start`; returns the time it ended, so a caller running bodies
+    /// back to back reads the clock once per body.
+    ///
+    /// Outputs are `None` on entry: the manager takes every produced output
+    /// when it commits, and clears them when a body fails.
+    pub fn run(&mut self, cycle: u64, time_s: f64, start: Instant) -> Instant {
         self.cx.set(cycle, time_s);
-        self.outputs.fill(None);
         self.result = match &mut self.skill {
             Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
             None => Err("the body is not here (it runs on its own thread)".into()),
         };
-        self.elapsed_ns = start.elapsed().as_nanos() as u64;
+        let end = Instant::now();
+        self.elapsed_ns = end.duration_since(start).as_nanos() as u64;
+        end
     }
 }
 
