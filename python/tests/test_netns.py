@@ -115,8 +115,10 @@ def stop(p: subprocess.Popen[str]) -> str:
 
 def query_in(ns: str, endpoint: str, signal_name: str) -> dict[str, object] | None:
     done = subprocess.run(
-        ["ip", "netns", "exec", ns, situate_program(), "query", signal_name, "--json"]
-        + ["--connect", endpoint, "--robot", "nsbot", "--timeout", "2"],
+        [
+            *("ip", "netns", "exec", ns, situate_program(), "query", signal_name, "--json"),
+            *("--connect", endpoint, "--robot", "nsbot", "--timeout", "2"),
+        ],
         capture_output=True,
         text=True,
         env=program_env(),
@@ -158,10 +160,14 @@ def test_a_remote_skill_on_another_host_joins_the_cycle(hosts: Hosts, tmp_path: 
             reading = query_in(hosts.a, endpoint, "y")
         assert reading["writer"] == "nearest"
         value = reading["value"]
-        assert isinstance(value, float) and value > 0
+        assert isinstance(value, float)
+        assert value > 0
         # The manager listens on host A's veth address only: nothing on loopback.
         listeners = subprocess.run(
-            ["ip", "netns", "exec", hosts.a, "ss", "-H", "-tuln"], capture_output=True, text=True, check=False
+            ["ip", "netns", "exec", hosts.a, "ss", "-H", "-tuln"],
+            capture_output=True,
+            text=True,
+            check=False,
         ).stdout
         assert f"{hosts.a_addr}:7447" in listeners, listeners
         assert "udp" not in listeners, listeners
