@@ -108,7 +108,6 @@ pub struct Manager {
     graph: Graph,
     clock: ClockKind,
     period_s: f64,
-    executor: ExecutorKind,
     pool: Option<rayon::ThreadPool>,
     slots: Vec<Slot>,
     insts: Vec<Inst>,
@@ -187,6 +186,7 @@ impl Manager {
                     .num_threads(threads.saturating_sub(1).max(1))
                     .thread_name(|i| format!("situate-exec-{i}"))
                     .build()
+                    .map_err(|e| tracing::warn!(error = %e, "no thread pool: the serial executor runs instead"))
                     .ok()
             }
         };
@@ -194,7 +194,6 @@ impl Manager {
             slots: vec![Slot::default(); graph.leaves.len()],
             clock: spec.clock,
             period_s: spec.period_s,
-            executor: spec.executor,
             pool,
             insts,
             execs,
@@ -1117,12 +1116,11 @@ impl Manager {
         self.bus.has_subscribers()
     }
 
-    /// The executor in use.
+    /// The executor in use (parallel falls back to serial if no pool could be made).
     pub fn executor(&self) -> ExecutorKind {
         if self.pool.is_some() {
             ExecutorKind::Parallel
         } else {
-            let _ = self.executor;
             ExecutorKind::Serial
         }
     }
