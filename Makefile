@@ -4,7 +4,7 @@ export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-rust test-python python lint bench
+.PHONY: help demo test test-rust test-python python lint bench system-deps
 
 help: ## Show the targets.
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
@@ -12,7 +12,10 @@ help: ## Show the targets.
 demo: ## Run the demo: the toy robot of examples/toybot.yaml for 10 s, then its summary.
 	$(CARGO) run --release -q -p situate_cli -- run examples/toybot.yaml --cycles 200
 
-test: lint test-rust test-python ## Run every test in every language (what CI runs).
+test: system-deps lint test-rust test-python ## Run every test in every language (what CI runs).
+
+system-deps: ## Install the system tools the tests use (iproute2), when missing.
+	scripts/system-deps.sh
 
 lint: ## Formatting and lints: rustfmt, clippy -D warnings.
 	$(CARGO) fmt --all -- --check
