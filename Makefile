@@ -30,5 +30,6 @@ python: ## Build the Python package (wheel) and install it into .venv.
 test-python: ## Python: ruff, ruff format --check, mypy --strict, pytest (builds the wheel first).
 	scripts/python.sh test
 
-bench: ## Run the benchmarks (ratios in one run; see bench/README.md).
-	$(CARGO) bench -p situate_bench --locked
+bench: python ## Run the benchmarks (ratios in one run; see bench/README.md): the core, then the link.
+	$(CARGO) bench -p situate_bench --locked --bench core
+	bench/link/run.sh
