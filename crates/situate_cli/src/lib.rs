@@ -394,7 +394,12 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
         }
     };
     let mut client = Client::connect_with(&remote.connect, extra.as_ref())?;
-    client.timeout = Duration::from_secs_f64(remote.timeout.max(0.1));
+    // Clamped: `--timeout inf` or `nan` must not panic.
+    client.timeout = Duration::from_secs_f64(if remote.timeout.is_finite() {
+        remote.timeout.clamp(0.1, 86_400.0)
+    } else {
+        86_400.0
+    });
     let robot = match client.resolve_robot(remote.robot.as_deref()) {
         Ok(r) => r,
         Err(e) => return Err(anyhow::Error::new(e)),

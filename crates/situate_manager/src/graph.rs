@@ -163,8 +163,8 @@ impl Graph {
     /// `warnings`; any error fails the build with all diagnostics found.
     pub fn build(spec: &RobotSpec, registry: &Registry) -> Result<Graph, BuildError> {
         let mut ck = Checker { spec, diags: Vec::new() };
-        if !(spec.period_s.is_finite() && spec.period_s > 0.0) {
-            ck.error(None, format!("cycle period must be > 0 s, got {}", spec.period_s));
+        if !(spec.period_s.is_finite() && spec.period_s > 0.0 && spec.period_s <= 86_400.0) {
+            ck.error(None, format!("cycle period must be > 0 s and at most a day, got {:?} s", spec.period_s));
         }
 
         // Instances: names, types, parameters, remaps.
@@ -318,8 +318,11 @@ impl Graph {
             }
             let period_s = s.period_ms.map(|ms| ms / 1000.0);
             if let Some(ms) = s.period_ms {
-                if !(ms.is_finite() && ms > 0.0) {
-                    ck.error(item_pos(s), format!("skill `{}`: period_ms must be > 0, got {ms}", s.name));
+                if !(ms.is_finite() && ms > 0.0 && ms <= 86_400_000.0) {
+                    ck.error(
+                        item_pos(s),
+                        format!("skill `{}`: period_ms must be > 0 and at most a day, got {ms:?}", s.name),
+                    );
                 }
             }
             let fallback = item_pos(s);
