@@ -129,6 +129,12 @@ enum Command {
     },
     /// Cycle statistics of a running robot.
     Stats(#[command(flatten)] Remote),
+    /// Serve a Python remote skill (`module:function`); provided by the Python package's `situate`.
+    #[command(name = "serve-skill", disable_help_flag = true)]
+    ServeSkill {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Start, stop or step a running robot's cycle: `cycle run`, `cycle stop`, `cycle step 5`.
     Cycle {
         #[arg(value_parser = ["run", "stop", "step"])]
@@ -353,6 +359,12 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 }
                 Ok(())
             })
+        }
+        Command::ServeSkill { .. } => {
+            anyhow::bail!(
+                "`serve-skill` serves Python skills: run it with the `situate` that the Python package installs \
+                 (scripts/python.sh, then .venv/bin/situate serve-skill MODULE:FUNCTION --robot ROBOT)"
+            )
         }
         Command::Cycle { action, cycles, remote } => client_verb(&remote, |c, robot| {
             match action.as_str() {
