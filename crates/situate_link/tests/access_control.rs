@@ -239,11 +239,19 @@ fn the_rules_let_the_sequencer_control_and_the_viewer_only_read() {
     assert_eq!(param(&ok(&sequencer, "skill", &json!({"skill": "runaway"})), "safe_distance"), json!(1.5));
     // …and the viewer sees the change.
     assert_eq!(ok(&viewer, "get_param", &safe_distance), json!(1.5));
+    // The sequencer may subscribe to events. Should its subscription reach the
+    // manager late, later activation changes still show it.
     let deadline = Instant::now() + ALLOWED_TIMEOUT;
     let mut kinds = Vec::new();
+    let mut next_toggle = Instant::now() + Duration::from_secs(1);
+    let mut on = true;
     while Instant::now() < deadline && !kinds.contains(&"activation_applied".to_string()) {
         if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
             kinds.push(e["kind"].as_str().unwrap_or("").to_string());
+        } else if Instant::now() > next_toggle {
+            on = !on;
+            ok(&sequencer, if on { "activate" } else { "deactivate" }, &json!({"skills": ["wander"]}));
+            next_toggle = Instant::now() + Duration::from_secs(1);
         }
     }
     assert!(kinds.contains(&"activation_applied".to_string()), "{kinds:?}");
