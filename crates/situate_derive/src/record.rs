@@ -4,34 +4,12 @@ use proc_macro2::TokenStream;
 use quote::{quote, quote_spanned};
 use syn::ext::IdentExt;
 use syn::spanned::Spanned;
-use syn::{Data, DeriveInput, Fields};
+use syn::DeriveInput;
 
 use crate::util;
 
 pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
-    let fields = match &input.data {
-        Data::Struct(s) => match &s.fields {
-            Fields::Named(named) => named,
-            other => {
-                return Err(syn::Error::new_spanned(
-                    other,
-                    "#[derive(Record)] needs a struct with named fields (the record's fields)",
-                ))
-            }
-        },
-        Data::Enum(e) => {
-            return Err(syn::Error::new_spanned(
-                e.enum_token,
-                "#[derive(Record)] needs a struct with named fields, not an enum",
-            ))
-        }
-        Data::Union(u) => {
-            return Err(syn::Error::new_spanned(
-                u.union_token,
-                "#[derive(Record)] needs a struct with named fields, not a union",
-            ))
-        }
-    };
+    let fields = util::named_fields(input, "Record", "the record's fields")?;
     let core = quote!(::situate::__core);
     let ident = &input.ident;
 

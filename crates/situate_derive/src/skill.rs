@@ -4,7 +4,7 @@ use proc_macro2::{Span, TokenStream};
 use quote::{quote, quote_spanned};
 use syn::ext::IdentExt;
 use syn::spanned::Spanned;
-use syn::{Attribute, Data, DeriveInput, Expr, Fields, Ident, Lit, LitFloat, Type};
+use syn::{Attribute, DeriveInput, Expr, Ident, Lit, LitFloat, Type};
 
 use crate::util::{self, Errors, SignedLit};
 
@@ -83,29 +83,7 @@ struct SkillAttrs {
 }
 
 pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
-    let fields = match &input.data {
-        Data::Struct(s) => match &s.fields {
-            Fields::Named(named) => named,
-            other => {
-                return Err(syn::Error::new_spanned(
-                    other,
-                    "#[derive(Skill)] needs a struct with named fields (its ports, params and state)",
-                ))
-            }
-        },
-        Data::Enum(e) => {
-            return Err(syn::Error::new_spanned(
-                e.enum_token,
-                "#[derive(Skill)] needs a struct with named fields, not an enum",
-            ))
-        }
-        Data::Union(u) => {
-            return Err(syn::Error::new_spanned(
-                u.union_token,
-                "#[derive(Skill)] needs a struct with named fields, not a union",
-            ))
-        }
-    };
+    let fields = util::named_fields(input, "Skill", "its ports, params and state")?;
 
     let mut errors = Errors::default();
     let attrs = skill_attrs(&input.attrs, &mut errors);

@@ -321,6 +321,28 @@ pub fn snake_case(name: &str) -> String {
     out
 }
 
+/// The named fields of the struct a derive is applied to, or an error
+/// saying what `derive` needs (`what` names the fields' role).
+pub fn named_fields<'a>(input: &'a syn::DeriveInput, derive: &str, what: &str) -> syn::Result<&'a syn::FieldsNamed> {
+    match &input.data {
+        syn::Data::Struct(s) => match &s.fields {
+            syn::Fields::Named(named) => Ok(named),
+            other => Err(syn::Error::new_spanned(
+                other,
+                format!("#[derive({derive})] needs a struct with named fields ({what})"),
+            )),
+        },
+        syn::Data::Enum(e) => Err(syn::Error::new_spanned(
+            e.enum_token,
+            format!("#[derive({derive})] needs a struct with named fields, not an enum"),
+        )),
+        syn::Data::Union(u) => Err(syn::Error::new_spanned(
+            u.union_token,
+            format!("#[derive({derive})] needs a struct with named fields, not a union"),
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
