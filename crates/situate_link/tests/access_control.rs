@@ -7,10 +7,13 @@
 //! the client gets no reply at all (no error, no timeout), and nothing
 //! changes.
 
+mod common;
+
+use common::{free_port, Running};
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value as Json};
-use situate::manager::{ClockKind, Handle, Manager, Request, RobotFile, RobotSpec};
+use situate::manager::{ClockKind, Manager, RobotFile, RobotSpec};
 use situate_link::{Link, LinkConfig};
 use zenoh::{Session, Wait};
 
@@ -74,29 +77,8 @@ const REFUSED_TIMEOUT: Duration = Duration::from_secs(2);
 /// How long an allowed client waits: generous, an answer always comes.
 const ALLOWED_TIMEOUT: Duration = Duration::from_secs(10);
 
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
-
 fn robot_file(port: u16) -> String {
     ROBOT.replace("{PORT}", &port.to_string()).replace("{USERS}", USERS)
-}
-
-struct Running {
-    handle: Handle,
-    link: Option<Link>,
-    join: Option<std::thread::JoinHandle<Manager>>,
-    endpoint: String,
-}
-
-impl Drop for Running {
-    fn drop(&mut self) {
-        drop(self.link.take());
-        let _ = self.handle.request_timeout(Request::Shutdown, Duration::from_secs(5));
-        if let Some(j) = self.join.take() {
-            let _ = j.join();
-        }
-    }
 }
 
 /// Starts the manager with the link its robot file describes.

@@ -2,17 +2,16 @@
 //! replies, events, the default session's sockets, remote skills, and a
 //! flood of bad requests that must change nothing.
 
+mod common;
+
+use common::{free_port, Running};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value as Json};
-use situate::manager::{ClockKind, Handle, Manager, Request, RobotFile, RobotSpec};
+use situate::manager::{ClockKind, Manager, RobotFile, RobotSpec};
 use situate_link::{Client, ClientError, Link, LinkConfig, RemoteSkill};
 use zenoh::Wait;
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
 
 const ROBOT: &str = "\
 robot: linkbot
@@ -36,23 +35,6 @@ skills:
     remap: {x: sonar.range}
     active: false
 ";
-
-struct Running {
-    handle: Handle,
-    link: Option<Link>,
-    join: Option<std::thread::JoinHandle<Manager>>,
-    endpoint: String,
-}
-
-impl Drop for Running {
-    fn drop(&mut self) {
-        drop(self.link.take());
-        let _ = self.handle.request_timeout(Request::Shutdown, Duration::from_secs(5));
-        if let Some(j) = self.join.take() {
-            let _ = j.join();
-        }
-    }
-}
 
 fn start(clock: ClockKind) -> Running {
     let file = RobotFile::parse("linkbot.yaml", ROBOT).unwrap();
