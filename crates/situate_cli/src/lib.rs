@@ -13,7 +13,7 @@ use anyhow::Context as _;
 use clap::{Args, Parser, Subcommand};
 use serde_json::{json, Value as Json};
 use situate::manager::{
-    ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, RobotFile, RobotSpec, SkillInfo,
+    ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, Registry, RobotFile, RobotSpec, SkillInfo,
 };
 use situate_link::{Client, ClientError, Link, LinkConfig};
 
@@ -145,8 +145,28 @@ enum Command {
     },
 }
 
+/// Loads the skill types of one `python:` file of a robot file.
+pub type PythonLoader = Arc<dyn Fn(&Path) -> Result<Vec<situate_core::SkillType>, String> + Send + Sync>;
+
+/// What a host adds to the program. The Python package's `situate` passes a
+/// [`PythonLoader`], so robot files run from it can hold in-process Python
+/// skills; the Rust binary has none and says where to get one.
+#[derive(Default, Clone)]
+pub struct Extensions {
+    pub python: Option<PythonLoader>,
+}
+
 /// Runs the program with these arguments (the first is the program name).
 pub fn main<I, T>(args: I) -> ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    main_with(args, Extensions::default())
+}
+
+/// [`main`] with a host's [`Extensions`].
+pub fn main_with<I, T>(args: I, ext: Extensions) -> ExitCode
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
@@ -164,7 +184,7 @@ where
             return if e.use_stderr() { ExitCode::from(2) } else { ExitCode::SUCCESS };
         }
     };
-    match run(cli) {
+    match run(cli, &ext) {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -221,11 +241,11 @@ fn count_line(file: &Path, n: usize) {
     eprintln!("{}: {n} error{}", file.display(), if n == 1 { "" } else { "s" });
 }
 
-fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Command::Check { file } => check(&file),
+        Command::Check { file } => check(&file, ext),
         Command::Run { file, cycles, executor, clock, no_link, listen } => {
-            run_robot(&file, cycles, executor, clock, no_link, listen)
+            run_robot(&file, cycles, executor, clock, no_link, listen, ext)
         }
         Command::Types => {
             types();
@@ -431,11 +451,66 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
     }
 }
 
-fn check(file: &Path) -> anyhow::Result<ExitCode> {
+/// The skill types a robot file can name: the built-in libraries, then the
+/// file's own `libraries:` and `python:` files. Errors name the file's line.
+fn registry_for(robot_file: &RobotFile, ext: &Extensions) -> Result<Registry, Vec<String>> {
     let mut registry = situate_toys::registry();
+    let mut errors = Vec::new();
+    for lib in &robot_file.libraries {
+        let path = robot_file.resolve(&lib.value);
+        match load_library(&path) {
+            Ok(types) => {
+                for t in types {
+                    registry.add(t);
+                }
+            }
+            Err(e) => errors.push(robot_file.error(lib.pos, e).to_string()),
+        }
+    }
+    for py in &robot_file.python {
+        let path = robot_file.resolve(&py.value);
+        let result = match &ext.python {
+            Some(loader) => loader(&path),
+            None => Err(format!(
+                "`{}`: Python skills run in the Python package's `situate` (install the wheel: `make python`, \
+                 then `.venv/bin/situate`); this binary has no Python inside",
+                py.value
+            )),
+        };
+        match result {
+            Ok(types) => {
+                for t in types {
+                    registry.add(t);
+                }
+            }
+            Err(e) => errors.push(robot_file.error(py.pos, e).to_string()),
+        }
+    }
+    if errors.is_empty() {
+        Ok(registry)
+    } else {
+        Err(errors)
+    }
+}
+
+fn load_library(path: &Path) -> Result<Vec<situate_core::SkillType>, String> {
+    Err(format!("cannot load `{}`: C/C++ skill libraries are not supported by this build", path.display()))
+}
+
+fn check(file: &Path, ext: &Extensions) -> anyhow::Result<ExitCode> {
     let loaded = match load(file) {
         Ok(s) => s,
         Err(code) => return Ok(code),
+    };
+    let mut registry = match registry_for(&loaded.file, ext) {
+        Ok(r) => r,
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("{e}");
+            }
+            count_line(file, errors.len());
+            return Ok(ExitCode::FAILURE);
+        }
     };
     for (_, decl) in &loaded.remote {
         // Checking needs the declaration only; nothing is created.
@@ -473,11 +548,21 @@ fn run_robot(
     clock: Option<String>,
     no_link: bool,
     listen: Vec<String>,
+    ext: &Extensions,
 ) -> anyhow::Result<ExitCode> {
-    let mut registry = situate_toys::registry();
     let Loaded { mut spec, mut link, remote, file: robot_file } = match load(file) {
         Ok(s) => s,
         Err(code) => return Ok(code),
+    };
+    let mut registry = match registry_for(&robot_file, ext) {
+        Ok(r) => r,
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("{e}");
+            }
+            count_line(file, errors.len());
+            return Ok(ExitCode::FAILURE);
+        }
     };
     if no_link && !remote.is_empty() {
         let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();

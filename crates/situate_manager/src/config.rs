@@ -23,7 +23,7 @@ pub const MAX_RATE_HZ: f64 = 100_000.0;
 /// The largest parallel executor pool.
 pub const MAX_THREADS: usize = 64;
 
-const TOP_KEYS: &[&str] = &["robot", "cycle", "devices", "skills", "link", "gui"];
+const TOP_KEYS: &[&str] = &["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui"];
 const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads"];
 const ENTRY_KEYS: &[&str] = &["name", "type", "remote", "active", "priority", "period_ms", "params", "remap"];
 
@@ -165,6 +165,14 @@ pub struct RobotFile {
     pub link: Option<Spanned<Node>>,
     /// The raw `gui:` section, if any.
     pub gui: Option<Spanned<Node>>,
+    /// `libraries:`: shared libraries of C/C++ skill types, as written (see
+    /// [`RobotFile::resolve`]).
+    pub libraries: Vec<Spanned<String>>,
+    /// `python:`: Python source files of `@situate.skill` types, as written.
+    pub python: Vec<Spanned<String>>,
+    /// The raw `simulator:` section, if any (read by the program that runs
+    /// a simulator).
+    pub simulator: Option<Spanned<Node>>,
 }
 
 impl RobotFile {
@@ -216,6 +224,13 @@ impl RobotFile {
             Ok(source) => RobotFile::parse(&file, &source),
             Err(e) => Err(vec![ConfigError::new(&file, Pos::START, format!("cannot read robot file: {e}"))]),
         }
+    }
+
+    /// A path written in this file, relative to the file's own directory
+    /// (absolute paths stay as they are).
+    pub fn resolve(&self, path: &str) -> std::path::PathBuf {
+        let dir = Path::new(&self.file).parent().unwrap_or(Path::new(""));
+        dir.join(path)
     }
 
     /// An error at `pos` in this file, for checks made after parsing.
@@ -299,6 +314,9 @@ impl Checker<'_> {
         let mut skills = Vec::new();
         let mut link = None;
         let mut gui = None;
+        let mut libraries = Vec::new();
+        let mut python = Vec::new();
+        let mut simulator = None;
         for (key, value) in entries {
             match key.value.as_str() {
                 "robot" => {
@@ -310,6 +328,9 @@ impl Checker<'_> {
                 "skills" => skills = self.section(Section::Skills, value),
                 "link" => link = Some(value),
                 "gui" => gui = Some(value),
+                "libraries" => libraries = self.paths("libraries", "shared libraries of C/C++ skills", value),
+                "python" => python = self.paths("python", "Python files of `@situate.skill` types", value),
+                "simulator" => simulator = Some(value),
                 _ => self.unknown_key(&key, "at the top level", TOP_KEYS),
             }
         }
@@ -317,7 +338,36 @@ impl Checker<'_> {
             self.push(root.pos, "missing required key `robot`");
         }
         devices.append(&mut skills);
-        Some(RobotFile { file: self.file.to_string(), robot: robot?, cycle, skills: devices, link, gui })
+        Some(RobotFile {
+            file: self.file.to_string(),
+            robot: robot?,
+            cycle,
+            skills: devices,
+            link,
+            gui,
+            libraries,
+            python,
+            simulator,
+        })
+    }
+
+    /// A list of paths: `key: [a, b]` or one per line.
+    fn paths(&mut self, key: &str, what: &str, value: Spanned<Node>) -> Vec<Spanned<String>> {
+        if value.value.is_null() {
+            return Vec::new();
+        }
+        let Some(items) = value.value.as_seq() else {
+            self.push(value.pos, format!("`{key}` expects a list of paths ({what}), got {}", value.value.describe()));
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for item in items {
+            match item.value.as_text() {
+                Some(text) if !text.trim().is_empty() => out.push(Spanned::new(text.to_string(), item.pos)),
+                _ => self.push(item.pos, format!("`{key}` expects paths, got {}", item.value.describe())),
+            }
+        }
+        out
     }
 
     fn robot_name(&mut self, value: Spanned<Node>) -> Option<Spanned<String>> {
@@ -1129,5 +1179,29 @@ cycle:
             let text: String = (0..n).map(|_| words[next() as usize % words.len()]).collect();
             let _ = RobotFile::parse("t.yaml", &text);
         }
+    }
+
+    #[test]
+    fn libraries_python_and_simulator_sections_are_kept_and_paths_resolve_from_the_file() {
+        let src = "robot: r\nlibraries: [build/librunaway.so, /abs/lib.so]\npython:\n  - skills/runaway.py\nsimulator: {map: maps/default.yaml, seed: 3}\n";
+        let r = RobotFile::parse("robots/r.yaml", src).unwrap();
+        assert_eq!(r.libraries, vec![s("build/librunaway.so".to_string(), 2, 13), s("/abs/lib.so".to_string(), 2, 34)]);
+        assert_eq!(r.python, vec![s("skills/runaway.py".to_string(), 4, 5)]);
+        assert_eq!(r.resolve(&r.libraries[0].value), std::path::PathBuf::from("robots/build/librunaway.so"));
+        assert_eq!(r.resolve(&r.libraries[1].value), std::path::PathBuf::from("/abs/lib.so"));
+        let sim = r.simulator.as_ref().unwrap();
+        assert_eq!(sim.value.get("seed").and_then(|n| n.value.as_i64()), Some(3));
+    }
+
+    #[test]
+    fn a_library_list_that_is_not_a_list_of_paths_is_an_error_at_its_place() {
+        assert_eq!(
+            error("robot: r\nlibraries: 3\n"),
+            "robot.yaml:2:12: error: `libraries` expects a list of paths (shared libraries of C/C++ skills), got 3"
+        );
+        assert_eq!(
+            error("robot: r\npython: [a.py, {x: 1}]\n"),
+            "robot.yaml:2:16: error: `python` expects paths, got a mapping"
+        );
     }
 }
