@@ -1,0 +1,19 @@
+//! A deterministic 2-D simulator of a Denning-like robot in a multi-floor
+//! building (the delivery experiment of the paper's section 6): fixed time
+//! step, seeded noise, identical runs for identical seeds.
+//!
+//! - [`load_map`] reads a building (format: `docs/maps.md`);
+//! - [`World`] simulates it: differential drive, 24 sonars, barcode reader,
+//!   button arm, speaker, four elevator cars;
+//! - [`registry`] makes the dskills (`sim.sonar`, `sim.base`, `sim.barcode`,
+//!   `sim.arm`, `sim.speaker`, `sim.altimeter`, `sim.truth`) over one shared
+//!   world, with the ports of the robot's signal contract (`situate_robot`).
+
+pub mod geom;
+pub mod map;
+pub mod skills;
+pub mod world;
+
+pub use map::{load_map, Map, MapError};
+pub use skills::{register, registry, SharedWorld};
+pub use world::{BaseLimits, SonarSettings, World, WorldConfig};

@@ -1,0 +1,624 @@
+//! The simulated world: robot physics, sensors, elevator, all advanced in
+//! fixed steps by time (never by calls), so the result does not depend on
+//! which device asks first or how often.
+
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{RngCore, SeedableRng};
+use situate_robot::{sonar_bearing, SONARS};
+
+use crate::geom::{cast, wrap, Seg, P2};
+use crate::map::{Barcode, Map};
+
+/// Settings of the physics that are not a device's parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorldConfig {
+    /// Fixed physics step, s.
+    pub dt: f64,
+    /// Odometry: relative noise of each step's travelled distance (std dev).
+    pub odom_dist_noise: f64,
+    /// Odometry: relative noise of each step's turn (std dev).
+    pub odom_turn_noise: f64,
+    /// Odometry: heading drift per metre travelled, rad/m (std dev).
+    pub odom_drift: f64,
+}
+
+impl Default for WorldConfig {
+    fn default() -> Self {
+        WorldConfig { dt: 0.01, odom_dist_noise: 0.02, odom_turn_noise: 0.02, odom_drift: 0.01 }
+    }
+}
+
+/// Speed and acceleration limits of the base.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaseLimits {
+    /// m/s
+    pub max_v: f64,
+    /// rad/s
+    pub max_w: f64,
+    /// m/s²
+    pub acc_v: f64,
+    /// rad/s²
+    pub acc_w: f64,
+}
+
+impl Default for BaseLimits {
+    fn default() -> Self {
+        BaseLimits { max_v: 0.8, max_w: 2.0, acc_v: 1.0, acc_w: 3.0 }
+    }
+}
+
+/// The sonar ring's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SonarSettings {
+    pub min_range: f64,
+    pub max_range: f64,
+    /// Cone width, rad.
+    pub cone: f64,
+    /// Rays per cone (≥ 1).
+    pub rays: usize,
+    /// Gaussian noise, m (std dev).
+    pub noise: f64,
+    /// Probability of a missed echo (reads `max_range`).
+    pub dropout: f64,
+}
+
+impl Default for SonarSettings {
+    fn default() -> Self {
+        SonarSettings { min_range: 0.1, max_range: 4.0, cone: 15f64.to_radians(), rays: 5, noise: 0.02, dropout: 0.01 }
+    }
+}
+
+/// The robot's true state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotState {
+    pub x: f64,
+    pub y: f64,
+    pub theta: f64,
+    pub v: f64,
+    pub w: f64,
+    pub floor: i64,
+}
+
+/// What an elevator car is doing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CarPhase {
+    /// Doors closed, standing.
+    Idle,
+    /// Moving (or waiting, when `from` is `to`) to floor `to`, arriving at `until`.
+    Travel { from: f64, to: i64, start: f64, until: f64 },
+    /// Doors opening.
+    Opening,
+    /// Doors open until the time given.
+    Open { until: f64 },
+    /// Doors closing (they open again for the robot in the doorway or a call).
+    Closing,
+}
+
+/// One car's state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CarState {
+    /// Floor position (fractional while moving).
+    pub pos: f64,
+    /// Door opening, 0 closed … 1 open.
+    pub door: f64,
+    pub phase: CarPhase,
+    /// A floor pressed on the panel, not yet served.
+    pub target: Option<i64>,
+}
+
+impl CarState {
+    /// The floor the car is at or nearest to.
+    pub fn floor(&self) -> i64 {
+        self.pos.round() as i64
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Pending {
+    Call(i64),
+    Panel { car: usize, floor: i64 },
+    Say { text: String, at: f64 },
+}
+
+/// Streams of the per-reading random numbers, so sensors never share one.
+const SONAR_STREAM: u64 = 1;
+
+/// The simulated building and robot.
+#[derive(Debug, Clone)]
+pub struct World {
+    map: Arc<Map>,
+    seed: u64,
+    cfg: WorldConfig,
+    step: u64,
+    rng: ChaCha8Rng,
+    robot: RobotState,
+    target: (f64, f64),
+    limits: BaseLimits,
+    odom: (f64, f64, f64, f64, f64),
+    cars: Vec<CarState>,
+    calls: Vec<i64>,
+    pending: Vec<Pending>,
+    pending_drive: Option<((f64, f64), BaseLimits)>,
+    said: Vec<String>,
+    delivered_at: Option<f64>,
+    arm_attempts: i64,
+    arm_presses: i64,
+    /// Fixed segments per floor (same order as `map.floors`).
+    statics: Vec<Vec<Seg>>,
+}
+
+/// A uniform number in [0, 1).
+fn uniform(rng: &mut ChaCha8Rng) -> f64 {
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// A standard normal number (Box–Muller).
+fn gauss(rng: &mut ChaCha8Rng) -> f64 {
+    let u1 = 1.0 - uniform(rng);
+    let u2 = uniform(rng);
+    (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+}
+
+impl World {
+    /// A world on `map` with the robot at the mission's start, cars idle on
+    /// the lowest floor; `seed` drives every random number.
+    pub fn new(map: Map, seed: u64) -> World {
+        World::with_config(map, seed, WorldConfig::default())
+    }
+
+    /// [`World::new`] with physics settings.
+    pub fn with_config(map: Map, seed: u64, cfg: WorldConfig) -> World {
+        let m = &map.mission;
+        let robot = RobotState { x: m.start.0, y: m.start.1, theta: m.start.2, v: 0.0, w: 0.0, floor: m.start_floor };
+        let lowest = map.floors.iter().map(|f| f.level).min().unwrap_or(0);
+        let cars = vec![
+            CarState { pos: lowest as f64, door: 0.0, phase: CarPhase::Idle, target: None };
+            map.elevator.cars.len()
+        ];
+        let statics = map.floors.iter().map(|f| map.static_segments(f)).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(0);
+        World {
+            map: Arc::new(map),
+            seed,
+            cfg,
+            step: 0,
+            rng,
+            robot,
+            target: (0.0, 0.0),
+            limits: BaseLimits::default(),
+            odom: (0.0, 0.0, 0.0, 0.0, 0.0),
+            cars,
+            calls: Vec::new(),
+            pending: Vec::new(),
+            pending_drive: None,
+            said: Vec::new(),
+            delivered_at: None,
+            arm_attempts: 0,
+            arm_presses: 0,
+            statics,
+        }
+    }
+
+    /// The building.
+    pub fn map(&self) -> &Map {
+        &self.map
+    }
+
+    /// Simulated time, s.
+    pub fn time_s(&self) -> f64 {
+        self.step as f64 * self.cfg.dt
+    }
+
+    /// Physics steps done.
+    pub fn steps(&self) -> u64 {
+        self.step
+    }
+
+    /// The robot's true state.
+    pub fn robot(&self) -> RobotState {
+        self.robot
+    }
+
+    /// Moves the robot (tests, scenarios); its speed drops to zero.
+    pub fn place_robot(&mut self, floor: i64, x: f64, y: f64, theta: f64) {
+        self.robot = RobotState { x, y, theta, v: 0.0, w: 0.0, floor };
+    }
+
+    /// The cars' states, car 1 first.
+    pub fn cars(&self) -> &[CarState] {
+        &self.cars
+    }
+
+    /// Odometry: `(x, y, theta, v, w)` in the start frame.
+    pub fn odom(&self) -> (f64, f64, f64, f64, f64) {
+        self.odom
+    }
+
+    /// Utterances said so far.
+    pub fn said(&self) -> &[String] {
+        &self.said
+    }
+
+    /// When the message was said inside the goal office.
+    pub fn delivered_at(&self) -> Option<f64> {
+        self.delivered_at
+    }
+
+    /// The arm's counters: `(attempts, presses)`.
+    pub fn arm_counts(&self) -> (i64, i64) {
+        (self.arm_attempts, self.arm_presses)
+    }
+
+    /// Steps the physics in fixed steps up to time `t` (no-op when there
+    /// already). Every device calls this first with its cycle time.
+    pub fn advance_to(&mut self, t: f64) {
+        let target = (t / self.cfg.dt + 1e-6).floor().max(0.0) as u64;
+        while self.step < target {
+            self.step_once();
+        }
+    }
+
+    /// Sets the velocity command, applied from the next physics step.
+    pub fn set_drive(&mut self, v: f64, w: f64, limits: BaseLimits) {
+        self.pending_drive = Some(((v, w), limits));
+    }
+
+    /// Tries to push the button labelled `label` within `reach` (m, from the
+    /// robot's centre) and `fov` (rad, either side of the heading). Returns
+    /// whether a button was hit; its effect starts at the next physics step.
+    pub fn press(&mut self, label: i64, reach: f64, fov: f64) -> bool {
+        self.arm_attempts += 1;
+        let effect = self.buttons().into_iter().find(|(p, facing, l)| {
+            let rel = p.minus(self.pos());
+            let in_front = wrap(rel.y.atan2(rel.x) - self.robot.theta).abs() <= fov;
+            // The robot must be on the button's side.
+            let facing_ok = P2::dir(*facing).dot(rel.scale(-1.0)) > 0.0;
+            let accepts = match l {
+                ButtonKind::Call => true,
+                ButtonKind::Panel(_) => self.map.floor(label).is_some(),
+            };
+            rel.norm() <= reach && in_front && facing_ok && accepts
+        });
+        match effect {
+            Some((_, _, ButtonKind::Call)) => self.pending.push(Pending::Call(self.robot.floor)),
+            Some((_, _, ButtonKind::Panel(car))) => self.pending.push(Pending::Panel { car, floor: label }),
+            None => return false,
+        }
+        self.arm_presses += 1;
+        true
+    }
+
+    /// Says `text`; counts as the delivery when the robot is in the office.
+    pub fn say(&mut self, text: &str) {
+        let at = self.time_s();
+        self.pending.push(Pending::Say { text: text.to_string(), at });
+    }
+
+    /// Utterances said or about to be (the speaker's counter).
+    pub fn speaker_count(&self) -> i64 {
+        (self.said.len() + self.pending.iter().filter(|p| matches!(p, Pending::Say { .. })).count()) as i64
+    }
+
+    fn pos(&self) -> P2 {
+        P2::new(self.robot.x, self.robot.y)
+    }
+
+    fn floor_index(&self, level: i64) -> Option<usize> {
+        self.map.floors.iter().position(|f| f.level == level)
+    }
+
+    /// The robot's car, if it is inside one.
+    pub fn robot_car(&self) -> Option<usize> {
+        let p = self.pos();
+        self.map.elevator.cars.iter().position(|c| c.contains(p))
+    }
+
+    /// Every segment that blocks motion and sensing on `level` now: walls,
+    /// obstacles, shafts, closed (or closing) car doors.
+    pub fn segments(&self, level: i64) -> Vec<Seg> {
+        let mut segs = self.floor_index(level).map(|i| self.statics[i].clone()).unwrap_or_default();
+        for (c, s) in self.map.elevator.cars.iter().zip(&self.cars) {
+            let closed =
+                if s.floor() == level && !matches!(s.phase, CarPhase::Travel { .. }) { 1.0 - s.door } else { 1.0 };
+            if closed > 1e-6 {
+                let d = c.door();
+                segs.push(Seg::new(d.a, d.at(closed)));
+            }
+        }
+        segs
+    }
+
+    /// Barcodes present on `level` now (cars' only when the car is there).
+    fn barcodes_on(&self, level: i64) -> Vec<Barcode> {
+        let mut out: Vec<Barcode> = Vec::new();
+        if let Some(f) = self.map.floor(level) {
+            out.extend(f.barcodes.iter().cloned());
+            out.extend(f.doors.iter().filter_map(|d| d.barcode.clone()));
+            if let Some(l) = &f.lobby {
+                out.push(Barcode { id: l.barcode, at: l.button, facing: Some(l.facing), line: l.line });
+            }
+            if let Some(o) = &f.office {
+                out.push(o.barcode.clone());
+            }
+        }
+        for (c, s) in self.map.elevator.cars.iter().zip(&self.cars) {
+            if s.floor() == level {
+                let (at, facing) = c.panel();
+                out.push(Barcode { id: c.barcode, at, facing: Some(facing), line: c.line });
+            }
+        }
+        out
+    }
+
+    fn buttons(&self) -> Vec<(P2, f64, ButtonKind)> {
+        let mut out = Vec::new();
+        if let Some(l) = self.map.floor(self.robot.floor).and_then(|f| f.lobby.as_ref()) {
+            out.push((l.button, l.facing, ButtonKind::Call));
+        }
+        for (k, (c, s)) in self.map.elevator.cars.iter().zip(&self.cars).enumerate() {
+            if s.floor() == self.robot.floor && c.contains(self.pos()) {
+                let (p, facing) = c.panel();
+                out.push((p, facing, ButtonKind::Panel(k)));
+            }
+        }
+        out
+    }
+
+    /// Whether the robot's disc is in car `k`'s doorway on the car's floor.
+    fn in_doorway(&self, k: usize) -> bool {
+        let c = &self.map.elevator.cars[k];
+        self.cars[k].floor() == self.robot.floor && c.door().dist_to(self.pos()) < self.map.robot_radius + 0.05
+    }
+
+    fn step_once(&mut self) {
+        let dt = self.cfg.dt;
+        let now = self.time_s();
+        if let Some((t, l)) = self.pending_drive.take() {
+            self.target = t;
+            self.limits = l;
+        }
+        for p in std::mem::take(&mut self.pending) {
+            match p {
+                Pending::Call(f) => {
+                    if !self.calls.contains(&f) {
+                        self.calls.push(f);
+                    }
+                }
+                Pending::Panel { car, floor } => {
+                    if self.map.floor(floor).is_some() {
+                        self.cars[car].target = Some(floor);
+                        if let CarPhase::Open { until } = self.cars[car].phase {
+                            self.cars[car].phase = CarPhase::Open { until: until.min(now + 2.0) };
+                        }
+                    }
+                }
+                Pending::Say { text, at } => {
+                    if self.delivered_at.is_none() && self.map.in_office(self.robot.floor, self.pos()) {
+                        self.delivered_at = Some(at);
+                        tracing::info!(at, "message delivered");
+                    }
+                    self.said.push(text);
+                }
+            }
+        }
+        self.step_elevator(now, dt);
+        self.step_robot(dt);
+        self.step += 1;
+    }
+
+    fn step_elevator(&mut self, now: f64, dt: f64) {
+        let el = self.map.elevator.clone();
+        let inside = self.robot_car();
+        // Calls: served by a car already there, else a random idle car.
+        let mut calls = std::mem::take(&mut self.calls);
+        calls.retain(|&f| {
+            let there = self.cars.iter().any(|c| {
+                c.floor() == f && matches!(c.phase, CarPhase::Opening | CarPhase::Open { .. })
+                    || matches!(c.phase, CarPhase::Travel { to, .. } if to == f)
+            });
+            if there {
+                return false;
+            }
+            // A car closing its doors here opens them again.
+            if let Some(c) = self.cars.iter_mut().find(|c| c.floor() == f && c.phase == CarPhase::Closing) {
+                c.phase = CarPhase::Opening;
+                return false;
+            }
+            let idle: Vec<usize> = (0..self.cars.len())
+                .filter(|&k| self.cars[k].phase == CarPhase::Idle && self.cars[k].target.is_none() && inside != Some(k))
+                .collect();
+            if idle.is_empty() {
+                return true;
+            }
+            let k = idle[(self.rng.next_u64() % idle.len() as u64) as usize];
+            let delay = el.arrive_s.0 + uniform(&mut self.rng) * (el.arrive_s.1 - el.arrive_s.0);
+            let from = self.cars[k].pos;
+            self.cars[k].phase = CarPhase::Travel { from, to: f, start: now, until: now + delay.max(dt) };
+            tracing::debug!(car = k + 1, floor = f, delay, "car dispatched");
+            false
+        });
+        self.calls = calls;
+        let door_rate = dt / el.door_move_s;
+        for k in 0..self.cars.len() {
+            let mut c = self.cars[k];
+            match c.phase {
+                CarPhase::Idle => {
+                    if let Some(t) = c.target.take() {
+                        let dur = (t as f64 - c.pos).abs() * el.travel_s_per_floor;
+                        c.phase = if dur < 1e-9 {
+                            CarPhase::Opening
+                        } else {
+                            CarPhase::Travel { from: c.pos, to: t, start: now, until: now + dur }
+                        };
+                    }
+                }
+                CarPhase::Travel { from, to, start, until } => {
+                    if now + dt >= until {
+                        c.pos = to as f64;
+                        c.phase = CarPhase::Opening;
+                    } else {
+                        c.pos = from + (to as f64 - from) * ((now + dt - start) / (until - start));
+                    }
+                }
+                CarPhase::Opening => {
+                    c.door = (c.door + door_rate).min(1.0);
+                    if c.door >= 1.0 {
+                        let hold = if c.target.is_some() {
+                            2.0
+                        } else {
+                            el.open_s.0 + uniform(&mut self.rng) * (el.open_s.1 - el.open_s.0)
+                        };
+                        c.phase = CarPhase::Open { until: now + hold };
+                    }
+                }
+                CarPhase::Open { until } => {
+                    if now + dt >= until {
+                        c.phase = CarPhase::Closing;
+                    }
+                }
+                CarPhase::Closing => {
+                    if self.in_doorway(k) {
+                        c.phase = CarPhase::Opening;
+                    } else {
+                        c.door = (c.door - door_rate).max(0.0);
+                        if c.door <= 0.0 {
+                            c.phase = CarPhase::Idle;
+                        }
+                    }
+                }
+            }
+            self.cars[k] = c;
+        }
+        if let Some(k) = inside {
+            self.robot.floor = self.cars[k].floor();
+        }
+    }
+
+    fn step_robot(&mut self, dt: f64) {
+        let l = self.limits;
+        let approach = |cur: f64, want: f64, acc: f64| cur + (want - cur).clamp(-acc * dt, acc * dt);
+        let (tv, tw) = (self.target.0.clamp(-l.max_v, l.max_v), self.target.1.clamp(-l.max_w, l.max_w));
+        let mut v = approach(self.robot.v, tv, l.acc_v);
+        let w = approach(self.robot.w, tw, l.acc_w);
+        let dth = w * dt;
+        let mid = self.robot.theta + dth / 2.0;
+        let from = self.pos();
+        let want = from.plus(P2::dir(mid).scale(v * dt));
+        let segs = self.segments(self.robot.floor);
+        let r = self.map.robot_radius;
+        let frac = if blocked(from, want, &segs, r) {
+            // The largest part of the move that stays clear.
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..20 {
+                let m = (lo + hi) / 2.0;
+                if blocked(from, from.plus(want.minus(from).scale(m)), &segs, r) {
+                    hi = m;
+                } else {
+                    lo = m;
+                }
+            }
+            v = 0.0;
+            lo
+        } else {
+            1.0
+        };
+        let to = from.plus(want.minus(from).scale(frac));
+        let ds = to.minus(from).norm() * if self.robot.v + v < 0.0 { -1.0 } else { 1.0 };
+        self.robot.x = to.x;
+        self.robot.y = to.y;
+        self.robot.theta = wrap(self.robot.theta + dth);
+        self.robot.v = v;
+        self.robot.w = w;
+        // Odometry from the true motion, with noise.
+        let c = &self.cfg;
+        let ds_m = ds * (1.0 + c.odom_dist_noise * gauss(&mut self.rng));
+        let dth_m =
+            dth * (1.0 + c.odom_turn_noise * gauss(&mut self.rng)) + c.odom_drift * ds.abs() * gauss(&mut self.rng);
+        let (ox, oy, ot, _, _) = self.odom;
+        let om = ot + dth_m / 2.0;
+        self.odom = (ox + ds_m * om.cos(), oy + ds_m * om.sin(), wrap(ot + dth_m), ds_m / dt, dth_m / dt);
+    }
+
+    /// The 24 sonar ranges now (from the robot's centre), with noise and
+    /// missed echoes from a random stream tied to the seed and the step.
+    pub fn sonar(&self, s: &SonarSettings) -> [f32; SONARS] {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream(SONAR_STREAM);
+        rng.set_word_pos(u128::from(self.step) * 1024);
+        let segs = self.segments(self.robot.floor);
+        let p = self.pos();
+        let mut out = [0f32; SONARS];
+        let rays = s.rays.max(1);
+        for (i, o) in out.iter_mut().enumerate() {
+            let axis = self.robot.theta + sonar_bearing(i);
+            let mut best = f64::INFINITY;
+            for k in 0..rays {
+                let off = if rays == 1 { 0.0 } else { s.cone * (k as f64 / (rays - 1) as f64 - 0.5) };
+                if let Some(d) = cast(p, P2::dir(axis + off), &segs) {
+                    best = best.min(d);
+                }
+            }
+            let noisy = best + s.noise * gauss(&mut rng);
+            let missed = uniform(&mut rng) < s.dropout;
+            let r =
+                if missed || !noisy.is_finite() || noisy > s.max_range { s.max_range } else { noisy.max(s.min_range) };
+            *o = r as f32;
+        }
+        out
+    }
+
+    /// Barcodes within `range` (m) and `fov` (rad either side of the
+    /// heading), facing the robot and not hidden: `(id, bearing, distance)`,
+    /// nearest first.
+    pub fn barcodes(&self, range: f64, fov: f64) -> Vec<(i64, f64, f64)> {
+        let p = self.pos();
+        let segs = self.segments(self.robot.floor);
+        let mut seen: Vec<(i64, f64, f64)> = self
+            .barcodes_on(self.robot.floor)
+            .into_iter()
+            .filter_map(|b| {
+                let rel = b.at.minus(p);
+                let d = rel.norm();
+                let bearing = wrap(rel.y.atan2(rel.x) - self.robot.theta);
+                if d > range || bearing.abs() > fov || d < 1e-9 {
+                    return None;
+                }
+                if let Some(f) = b.facing {
+                    // Readable only from in front of the label (within 80°).
+                    if P2::dir(f).dot(rel.scale(-1.0 / d)) < 10f64.to_radians().sin() {
+                        return None;
+                    }
+                }
+                let dir = rel.scale(1.0 / d);
+                let hidden = cast(p, dir, &segs).is_some_and(|h| h < d - 0.01);
+                (!hidden).then_some((b.id, bearing, d))
+            })
+            .collect();
+        seen.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
+        seen
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ButtonKind {
+    Call,
+    Panel(usize),
+}
+
+/// Whether moving the robot's disc (radius `r`) from `a` to `b` hits a
+/// segment. A disc already overlapping a segment may move away from it.
+fn blocked(a: P2, b: P2, segs: &[Seg], r: f64) -> bool {
+    let path = Seg::new(a, b);
+    segs.iter().any(|s| {
+        let d0 = s.dist_to(a);
+        if d0 >= r {
+            s.dist_to_seg(&path) < r
+        } else {
+            s.dist_to(b) < d0
+        }
+    })
+}
