@@ -1,0 +1,661 @@
+//! Skills that write the `drive` resource.
+//!
+//! Every one of them claims `drive` and is arbitrated by priority (runaway
+//! 50, avoid 40, pass_door/enter_car/leave_car 35, home/home_position 30,
+//! follow_hallway/turn 25, wander 10). A skill with nothing to say this cycle
+//! leaves `drive` unset, so a lower-priority writer's command stands.
+
+use std::f64::consts::FRAC_PI_2;
+
+use situate::prelude::*;
+use situate_robot::{sonar_bearing, Drive, Odom, Target, SONARS};
+
+use crate::util::{centre_range, echo_point, nearest_in, side_wall, wrap, Activation, LEFT, RIGHT, ROBOT_RADIUS};
+
+fn clamp_abs(x: f64, limit: f64) -> f64 {
+    let limit = limit.abs();
+    x.clamp(-limit, limit)
+}
+
+/// Runs away from anything nearer than `safe_distance` (the paper's
+/// runaway): sums a push away from every such echo and drives along it —
+/// forward when the push points ahead, backing up when it points behind,
+/// turning so the robot's front (or back) follows the push. Writes `drive`
+/// only while something is that near; silent otherwise.
+#[derive(Skill, Default)]
+#[skill(name = "std.runaway", priority = 50)]
+pub struct Runaway {
+    /// Sonar ranges, m (sonar i looks at bearing i·15°).
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// The velocity command, written only while an obstacle is too near.
+    #[output]
+    drive: Option<Drive>,
+    /// Clearance (rim to echo) under which the robot runs away, m.
+    #[param(default = 0.4, min = 0.1, max = 3.0, unit = "m")]
+    safe_distance: f64,
+    /// Speed while running away, m/s.
+    #[param(default = 0.25, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+}
+
+impl Body for Runaway {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let (mut fx, mut fy, mut near) = (0.0, 0.0, f64::INFINITY);
+        for i in 0..SONARS {
+            let r = centre_range(&self.sonar, i) - ROBOT_RADIUS;
+            if r < self.safe_distance {
+                let push = (self.safe_distance - r) / self.safe_distance;
+                let b = sonar_bearing(i);
+                fx -= push * b.cos();
+                fy -= push * b.sin();
+                near = near.min(r);
+            }
+        }
+        if near.is_infinite() {
+            return Ok(());
+        }
+        if fx.hypot(fy) < 1e-6 {
+            // Pushed equally from all sides: turn in place to find a way out.
+            self.drive = Some(Drive { v: 0.0, w: self.max_turn });
+            return Ok(());
+        }
+        let psi = fy.atan2(fx);
+        // Turn the front towards the push, or the back when it points well behind.
+        let turn = if psi.cos() >= -0.2 { psi } else { wrap(psi - std::f64::consts::PI) };
+        self.drive = Some(Drive { v: self.speed * psi.cos(), w: clamp_abs(2.0 * turn, self.max_turn) });
+        sprint!(cx, "obstacle at {near:.2} m: running towards {:.0}°", psi.to_degrees());
+        Ok(())
+    }
+}
+
+/// How far beyond the robot's sides `std.avoid` looks for obstacles in its path, m.
+const LANE_MARGIN: f64 = 0.2;
+
+/// Obstacle avoidance: when an echo in the robot's path (within ±60° and
+/// 0.2 m beyond its sides) is nearer than `distance` along the heading, slows down (to a stop at `stop_distance`) and turns towards
+/// the freer side. Writes `drive` only then; silent when the way is clear.
+#[derive(Skill, Default)]
+#[skill(name = "std.avoid", priority = 40)]
+pub struct Avoid {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// The velocity command, written only while an obstacle is near ahead.
+    #[output]
+    drive: Option<Drive>,
+    /// Clearance ahead (rim to echo) under which the robot avoids, m.
+    #[param(default = 0.7, min = 0.1, max = 3.0, unit = "m")]
+    distance: f64,
+    /// Clearance ahead at which forward speed reaches zero, m.
+    #[param(default = 0.25, min = 0.0, max = 3.0, unit = "m")]
+    stop_distance: f64,
+    /// Forward speed when the obstacle is at `distance`, m/s.
+    #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Turn rate when the obstacle is at `stop_distance`, rad/s.
+    #[param(default = 0.8, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    /// The side last turned to (+1 left, −1 right), kept while the sides are alike.
+    side: f64,
+}
+
+impl Body for Avoid {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        // The nearest echo in the robot's path (a lane a little wider than the robot), along the heading.
+        let near = (0..SONARS)
+            .filter(|&i| sonar_bearing(i).abs() <= 60f64.to_radians() + 1e-9)
+            .map(|i| echo_point(&self.sonar, i))
+            .filter(|&(x, y)| x > 0.0 && y.abs() < ROBOT_RADIUS + LANE_MARGIN)
+            .map(|(x, _)| x - ROBOT_RADIUS)
+            .fold(f64::INFINITY, f64::min);
+        if near >= self.distance {
+            return Ok(());
+        }
+        let cap = 2.0 * self.distance + ROBOT_RADIUS;
+        let space = |idx: &[usize]| idx.iter().map(|&i| centre_range(&self.sonar, i).min(cap)).sum::<f64>();
+        let (left, right) = (space(&[1, 2, 3, 4, 5]), space(&[19, 20, 21, 22, 23]));
+        if self.side == 0.0 || (left - right).abs() > 0.3 {
+            self.side = if left >= right { 1.0 } else { -1.0 };
+        }
+        let span = (self.distance - self.stop_distance).max(1e-3);
+        let urgency = ((self.distance - near) / span).clamp(0.0, 1.0);
+        self.drive =
+            Some(Drive { v: self.speed * (1.0 - urgency), w: self.side * self.max_turn * (0.3 + 0.7 * urgency) });
+        Ok(())
+    }
+}
+
+/// Smooth random exploration: drives at `speed` while the turn rate drifts
+/// towards a new random value in ±`max_turn` every `change_s` seconds (a
+/// random walk fixed by `seed`). Writes `drive` every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.wander", priority = 10)]
+pub struct Wander {
+    /// The velocity command, written every run.
+    #[output]
+    drive: Drive,
+    /// Forward speed, m/s.
+    #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Seed of the random walk: the same seed gives the same walk.
+    #[param(default = 1)]
+    seed: i64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 0.5, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    /// Time between new turn rates, s.
+    #[param(default = 2.0, min = 0.1, max = 60.0, unit = "s")]
+    change_s: f64,
+    rng: u64,
+    seeded: Option<i64>,
+    goal: f64,
+    w: f64,
+    last_t: Option<f64>,
+    next_change: f64,
+}
+
+impl Wander {
+    /// A uniform number in [−1, 1) (splitmix64).
+    fn uniform(&mut self) -> f64 {
+        self.rng = self.rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.rng;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+impl Body for Wander {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let now = cx.time_s();
+        if self.seeded != Some(self.seed) {
+            self.seeded = Some(self.seed);
+            self.rng = self.seed as u64;
+            self.next_change = now;
+            self.w = 0.0;
+        }
+        let dt = self.last_t.map_or(0.0, |t| (now - t).clamp(0.0, 0.5));
+        self.last_t = Some(now);
+        if now >= self.next_change {
+            self.goal = self.uniform() * self.max_turn;
+            self.next_change = now + self.change_s;
+        }
+        // First-order approach to the goal turn rate (time constant 0.5 s).
+        self.w += (self.goal - self.w) * (dt / 0.5).min(1.0);
+        self.drive = Drive { v: self.speed, w: clamp_abs(self.w, self.max_turn) };
+        Ok(())
+    }
+}
+
+/// Follows a corridor: keeps centred between the two side walls, heading
+/// along them; when one wall is missing (a door, a side corridor), keeps
+/// from the other the half-width last seen since activation, or else
+/// `wall_distance`; straight on when no wall is seen.
+/// Slows to a stop when the range ahead falls to `stop_distance`. Writes
+/// `drive` every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.follow_hallway", priority = 25)]
+pub struct FollowHallway {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// The velocity command, written every run.
+    #[output]
+    drive: Drive,
+    /// Forward speed, m/s.
+    #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Distance kept from the robot's centre to the one wall seen when the corridor's width is unknown, m.
+    #[param(default = 0.9, min = 0.3, max = 3.0, unit = "m")]
+    wall_distance: f64,
+    /// Side echoes farther than this from the centre are no wall, m.
+    #[param(default = 2.0, min = 0.5, max = 5.0, unit = "m")]
+    max_wall: f64,
+    /// Clearance ahead (rim to echo) at which the robot stops, m.
+    #[param(default = 0.4, min = 0.0, max = 3.0, unit = "m")]
+    stop_distance: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 0.8, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    activation: Activation,
+    half: Option<f64>,
+}
+
+impl Body for FollowHallway {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let left = side_wall(&self.sonar, LEFT, self.max_wall, 0.15);
+        let right = side_wall(&self.sonar, RIGHT, self.max_wall, 0.15);
+        if self.activation.fresh(cx.cycle()) {
+            self.half = None;
+        }
+        // Half the corridor's width while both walls are seen, remembered past openings.
+        if let (Some(l), Some(r)) = (left, right) {
+            let half = (l.distance + r.distance) / 2.0;
+            self.half = Some(self.half.map_or(half, |h| 0.9 * h + 0.1 * half));
+        }
+        let keep = self.half.unwrap_or(self.wall_distance);
+        // Offset to the left of where the robot should be, and the walls' direction.
+        let (offset, angle) = match (left, right) {
+            (Some(l), Some(r)) => ((l.distance - r.distance) / 2.0, (l.angle + r.angle) / 2.0),
+            (Some(l), None) => (l.distance - keep, l.angle),
+            (None, Some(r)) => (keep - r.distance, r.angle),
+            (None, None) => (0.0, 0.0),
+        };
+        // Heading wanted relative to the corridor, then relative to the robot.
+        let wanted = clamp_abs(1.2 * offset, 0.5);
+        let error = wrap(wanted + angle);
+        let w = clamp_abs(1.5 * error, self.max_turn);
+        let ahead = nearest_in(&self.sonar, 0.0, 16f64.to_radians()).map_or(f64::INFINITY, |(_, r)| r - ROBOT_RADIUS);
+        let slow = ((ahead - self.stop_distance) / 1.0).clamp(0.0, 1.0);
+        let v = self.speed * slow * error.cos().max(0.3);
+        self.drive = Drive { v, w };
+        Ok(())
+    }
+}
+
+/// Drives towards a bearing and distance: turns in place while the bearing
+/// exceeds `turn_angle` (until it is under half of it), else drives with a
+/// proportional turn, slowing over the last `slow_m`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Approach {
+    turning: bool,
+}
+
+impl Approach {
+    fn command(&mut self, bearing: f64, to_go: f64, speed: f64, turn_angle: f64, max_turn: f64) -> Drive {
+        const SLOW_M: f64 = 0.5;
+        if bearing.abs() > turn_angle {
+            self.turning = true;
+        } else if bearing.abs() < turn_angle / 2.0 {
+            self.turning = false;
+        }
+        let w = clamp_abs(1.5 * bearing, max_turn);
+        if self.turning {
+            return Drive { v: 0.0, w: if w.abs() < 0.2 { 0.2f64.copysign(bearing) } else { w } };
+        }
+        let v = speed * (to_go / SLOW_M).clamp(0.15, 1.0);
+        Drive { v, w }
+    }
+}
+
+/// Homes on the tracked barcode (`target`): turns in place first when its
+/// bearing exceeds `turn_angle`, then drives towards it until it is
+/// `stop_distance` away, then stops facing it. Writes `drive` while the
+/// target is seen (a stop once there); silent when it is not.
+#[derive(Skill, Default)]
+#[skill(name = "std.home", priority = 30)]
+pub struct Home {
+    /// The tracked barcode (from `std.track_barcode`).
+    #[input]
+    target: Target,
+    /// The velocity command, written while the target is seen.
+    #[output]
+    drive: Option<Drive>,
+    /// Forward speed, m/s.
+    #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Distance from the robot's centre to the barcode at which it stops, m.
+    #[param(default = 0.5, min = 0.0, max = 5.0, unit = "m")]
+    stop_distance: f64,
+    /// Bearing above which the robot turns in place first, rad.
+    #[param(default = 0.4, min = 0.05, max = 3.2, unit = "rad")]
+    turn_angle: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    approach: Approach,
+}
+
+impl Body for Home {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        let t = self.target;
+        if !t.seen || !t.bearing.is_finite() || !t.distance.is_finite() {
+            return Ok(());
+        }
+        let bearing = wrap(t.bearing);
+        self.drive = Some(if t.distance <= self.stop_distance {
+            Drive { v: 0.0, w: if bearing.abs() < 0.05 { 0.0 } else { clamp_abs(1.5 * bearing, self.max_turn) } }
+        } else {
+            self.approach.command(bearing, t.distance - self.stop_distance, self.speed, self.turn_angle, self.max_turn)
+        });
+        Ok(())
+    }
+}
+
+/// Drives to the point (`x`, `y`) of the odometry frame: turns in place
+/// first when it lies more than `turn_angle` off the heading, then drives to
+/// it and stops within `stop_distance`. Writes `drive` every run (a stop
+/// once there).
+#[derive(Skill, Default)]
+#[skill(name = "std.home_position", priority = 30)]
+pub struct HomePosition {
+    /// Odometry.
+    #[input]
+    odom: Odom,
+    /// The velocity command, written every run.
+    #[output]
+    drive: Drive,
+    /// Goal x in the odometry frame, m.
+    #[param(default = 0.0, min = -1000.0, max = 1000.0, unit = "m")]
+    x: f64,
+    /// Goal y in the odometry frame, m.
+    #[param(default = 0.0, min = -1000.0, max = 1000.0, unit = "m")]
+    y: f64,
+    /// Forward speed, m/s.
+    #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Distance to the goal at which the robot stops, m.
+    #[param(default = 0.1, min = 0.01, max = 5.0, unit = "m")]
+    stop_distance: f64,
+    /// Bearing above which the robot turns in place first, rad.
+    #[param(default = 0.4, min = 0.05, max = 3.2, unit = "rad")]
+    turn_angle: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    approach: Approach,
+    arrived: bool,
+}
+
+impl Body for HomePosition {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        let o = self.odom;
+        let (dx, dy) = (self.x - o.x, self.y - o.y);
+        let to_go = dx.hypot(dy);
+        // Arrive within stop_distance; leave again only when pushed well beyond it.
+        if to_go <= self.stop_distance {
+            self.arrived = true;
+        } else if to_go > 2.0 * self.stop_distance {
+            self.arrived = false;
+        }
+        self.drive = if self.arrived || !to_go.is_finite() {
+            Drive::default()
+        } else {
+            let bearing = wrap(dy.atan2(dx) - o.theta);
+            self.approach.command(bearing, to_go - self.stop_distance, self.speed, self.turn_angle, self.max_turn)
+        };
+        Ok(())
+    }
+}
+
+/// Turns in place by `angle` relative to the heading at activation
+/// (measured with odometry, so any angle, even beyond a half turn), then
+/// falls silent. Writes `drive` until the turn is done within `tolerance`.
+#[derive(Skill, Default)]
+#[skill(name = "std.turn", priority = 25)]
+pub struct Turn {
+    /// Odometry.
+    #[input]
+    odom: Odom,
+    /// The velocity command, written until the turn is done.
+    #[output]
+    drive: Option<Drive>,
+    /// Angle to turn, rad (positive: left).
+    #[param(default = FRAC_PI_2, min = -12.6, max = 12.6, unit = "rad")]
+    angle: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 0.8, min = 0.05, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    /// The turn is done when this close to `angle`, rad.
+    #[param(default = 0.03, min = 0.001, max = 0.5, unit = "rad")]
+    tolerance: f64,
+    activation: Activation,
+    turned: f64,
+    last_theta: f64,
+    done: bool,
+}
+
+impl Body for Turn {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let theta = self.odom.theta;
+        if !theta.is_finite() {
+            tracing::warn!(skill = "std.turn", theta, "odometry heading is not finite: silent this cycle");
+            return Ok(());
+        }
+        if self.activation.fresh(cx.cycle()) {
+            self.turned = 0.0;
+            self.done = false;
+        } else {
+            self.turned += wrap(theta - self.last_theta);
+        }
+        self.last_theta = theta;
+        let remaining = self.angle - self.turned;
+        if !self.done && remaining.abs() <= self.tolerance {
+            self.done = true;
+            sprint!(cx, "turned {:.1}°", self.turned.to_degrees());
+        }
+        if self.done {
+            return Ok(());
+        }
+        let w = clamp_abs(2.0 * remaining, self.max_turn);
+        let w = if w.abs() < 0.1 { 0.1f64.copysign(remaining) } else { w };
+        self.drive = Some(Drive { v: 0.0, w });
+        Ok(())
+    }
+}
+
+/// Echoes farther than this from the centre are no jamb, m.
+const JAMB_RANGE: f64 = 1.5;
+
+/// The parameters of a [`Passage`].
+#[derive(Clone, Copy, Debug)]
+struct PassageLimits {
+    speed: f64,
+    distance: f64,
+    stop_distance: f64,
+    max_turn: f64,
+}
+
+/// Drives through a narrow opening straight ahead, centred between its
+/// jambs by sonar, until `distance` travelled (odometry) since activation;
+/// shared by `std.pass_door`, `std.enter_car` and `std.leave_car`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Passage {
+    activation: Activation,
+    start: (f64, f64),
+    heading: f64,
+    done: bool,
+}
+
+impl Passage {
+    /// The command this cycle; `self.done` tells whether the passage is over.
+    fn step(&mut self, cycle: u64, sonar: &[f32; SONARS], odom: &Odom, limits: PassageLimits) -> Drive {
+        let PassageLimits { speed, distance, stop_distance, max_turn } = limits;
+        if !(odom.x.is_finite() && odom.y.is_finite() && odom.theta.is_finite()) {
+            tracing::warn!(?odom, "passage: odometry is not finite: stopping this cycle");
+            return Drive::default();
+        }
+        if self.activation.fresh(cycle) {
+            *self = Passage { activation: self.activation, start: (odom.x, odom.y), heading: odom.theta, done: false };
+        }
+        let travelled = (odom.x - self.start.0).hypot(odom.y - self.start.1);
+        let ahead = nearest_in(sonar, 0.0, 16f64.to_radians()).map_or(f64::INFINITY, |(_, r)| r - ROBOT_RADIUS);
+        if travelled >= distance || ahead <= stop_distance {
+            self.done = true;
+        }
+        if self.done {
+            return Drive::default();
+        }
+        // The jambs: the echoes nearest the robot's line on either side, near and not behind.
+        let (mut left, mut right) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..SONARS {
+            let (x, y) = echo_point(sonar, i);
+            let b = sonar_bearing(i).abs();
+            let near = x.hypot(y) <= JAMB_RANGE;
+            if !near
+                || !(15f64.to_radians() - 1e-9..=120f64.to_radians() + 1e-9).contains(&b)
+                || !(-0.3..=1.2).contains(&x)
+            {
+                continue;
+            }
+            if y > 0.0 {
+                left = left.min(y);
+            } else {
+                right = right.max(y);
+            }
+        }
+        let wanted = if left.is_finite() && right.is_finite() {
+            // Aim at the middle between the jambs, a little ahead.
+            ((left + right) / 2.0).atan2(0.8)
+        } else {
+            // Hold the heading of activation.
+            wrap(self.heading - odom.theta)
+        };
+        let w = clamp_abs(2.0 * wanted, max_turn);
+        let slow = ((ahead - stop_distance) / 0.5).clamp(0.2, 1.0);
+        Drive { v: speed * slow * wanted.cos().max(0.0), w }
+    }
+}
+
+/// Goes through the door opening straight ahead (turn to face it first,
+/// e.g. with `std.turn` by `door.bearing`), centred between the jambs by
+/// sonar; stops after `distance` travelled since activation (odometry), or
+/// when something is `stop_distance` ahead. Writes `drive` every run (a stop
+/// once done) and `door_passed` (false until done).
+#[derive(Skill, Default)]
+#[skill(name = "std.pass_door", priority = 35)]
+pub struct PassDoor {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// Odometry.
+    #[input]
+    odom: Odom,
+    /// The velocity command, written every run.
+    #[output]
+    drive: Drive,
+    /// Whether the robot has gone `distance` since activation.
+    #[output(signal = "door_passed")]
+    passed: bool,
+    /// Forward speed, m/s.
+    #[param(default = 0.2, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Distance to travel from activation, m.
+    #[param(default = 1.5, min = 0.0, max = 20.0, unit = "m")]
+    distance: f64,
+    /// Clearance ahead (rim to echo) at which the robot stops early, m.
+    #[param(default = 0.3, min = 0.0, max = 3.0, unit = "m")]
+    stop_distance: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 0.6, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    passage: Passage,
+}
+
+impl Body for PassDoor {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let limits = PassageLimits {
+            speed: self.speed,
+            distance: self.distance,
+            stop_distance: self.stop_distance,
+            max_turn: self.max_turn,
+        };
+        let p = &mut self.passage;
+        self.drive = p.step(cx.cycle(), &self.sonar, &self.odom, limits);
+        self.passed = p.done;
+        Ok(())
+    }
+}
+
+/// Enters the elevator car whose open door is straight ahead: drives through
+/// the opening centred by sonar until `distance` travelled since activation
+/// (odometry) or the back wall is `stop_distance` ahead, then stops. Writes
+/// `drive` every run (a stop once inside) and `car_entered`.
+#[derive(Skill, Default)]
+#[skill(name = "std.enter_car", priority = 35)]
+pub struct EnterCar {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// Odometry.
+    #[input]
+    odom: Odom,
+    /// The velocity command, written every run.
+    #[output]
+    drive: Drive,
+    /// Whether the robot is inside (done).
+    #[output(signal = "car_entered")]
+    entered: bool,
+    /// Forward speed, m/s.
+    #[param(default = 0.2, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Distance to travel from activation, m.
+    #[param(default = 1.7, min = 0.0, max = 10.0, unit = "m")]
+    distance: f64,
+    /// Clearance ahead (rim to echo) at which the robot stops early, m.
+    #[param(default = 0.3, min = 0.0, max = 3.0, unit = "m")]
+    stop_distance: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 0.6, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    passage: Passage,
+}
+
+impl Body for EnterCar {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let limits = PassageLimits {
+            speed: self.speed,
+            distance: self.distance,
+            stop_distance: self.stop_distance,
+            max_turn: self.max_turn,
+        };
+        let p = &mut self.passage;
+        self.drive = p.step(cx.cycle(), &self.sonar, &self.odom, limits);
+        self.entered = p.done;
+        Ok(())
+    }
+}
+
+/// Leaves the elevator car through its open door straight ahead (turn to
+/// face it first): drives out centred by sonar until `distance` travelled
+/// since activation (odometry) or something is `stop_distance` ahead, then
+/// stops. Writes `drive` every run (a stop once outside) and `car_exited`.
+#[derive(Skill, Default)]
+#[skill(name = "std.leave_car", priority = 35)]
+pub struct LeaveCar {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// Odometry.
+    #[input]
+    odom: Odom,
+    /// The velocity command, written every run.
+    #[output]
+    drive: Drive,
+    /// Whether the robot is outside (done).
+    #[output(signal = "car_exited")]
+    exited: bool,
+    /// Forward speed, m/s.
+    #[param(default = 0.2, min = 0.0, max = 1.0, unit = "m/s")]
+    speed: f64,
+    /// Distance to travel from activation, m.
+    #[param(default = 1.6, min = 0.0, max = 10.0, unit = "m")]
+    distance: f64,
+    /// Clearance ahead (rim to echo) at which the robot stops early, m.
+    #[param(default = 0.3, min = 0.0, max = 3.0, unit = "m")]
+    stop_distance: f64,
+    /// Largest turn rate, rad/s.
+    #[param(default = 0.6, min = 0.0, max = 3.0, unit = "rad/s")]
+    max_turn: f64,
+    passage: Passage,
+}
+
+impl Body for LeaveCar {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let limits = PassageLimits {
+            speed: self.speed,
+            distance: self.distance,
+            stop_distance: self.stop_distance,
+            max_turn: self.max_turn,
+        };
+        let p = &mut self.passage;
+        self.drive = p.step(cx.cycle(), &self.sonar, &self.odom, limits);
+        self.exited = p.done;
+        Ok(())
+    }
+}

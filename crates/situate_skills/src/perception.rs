@@ -1,0 +1,407 @@
+//! Skills that turn sensor readings into the signals the sequencer waits on:
+//! `door`, `junction`, `target`, `car`.
+
+use situate::prelude::*;
+use situate_robot::{sonar_bearing, Barcodes, Door, Junction, Target, SONARS};
+
+use crate::util::{centre_range, side_wall, Activation, Hysteresis, LEFT, RIGHT, ROBOT_RADIUS};
+
+/// An opening in a side wall beside the robot, as seen by one scan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Opening {
+    /// Width along the wall, m, between the jambs seen by the sonars either
+    /// side of the ones seeing through.
+    pub width: f64,
+    /// Sonars seeing through.
+    pub rays: usize,
+    /// Bearing of the opening's centre, rad.
+    pub bearing: f64,
+}
+
+/// Tracks the distance to one side wall and finds openings in it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SideOpenings {
+    /// Perpendicular distance from the centre to the wall, m, once seen.
+    wall: Option<f64>,
+    /// The widths of the opening beside in the last scans (newest first),
+    /// since the side sonar first saw through it.
+    recent: [Option<f64>; 3],
+    /// Which sonars (k = 0..=10 from ahead, on this side) saw through in the last scan.
+    was_open: [bool; 11],
+    /// The far and near jambs of the last scan's opening, m along the heading.
+    jambs: Option<(f64, f64)>,
+    /// The wall's distance measured in the last scan, if it was seen.
+    seen: Option<f64>,
+}
+
+/// Both sides of a corridor: while both walls are seen, their distances
+/// sum to the corridor's width; while one is not (an opening), its distance
+/// follows from the width and the other wall, so the robot drifting
+/// sideways past an opening does not skew the jambs.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Corridor {
+    sides: [SideOpenings; 2],
+    width: Option<f64>,
+}
+
+impl Corridor {
+    /// Scans both sides ([`LEFT`], [`RIGHT`]).
+    pub fn scan(&mut self, range: &[f32; SONARS], max_wall: f64, depth: f64) -> [Option<Opening>; 2] {
+        let out = [self.sides[0].scan(range, LEFT, max_wall, depth), self.sides[1].scan(range, RIGHT, max_wall, depth)];
+        match (self.sides[0].seen, self.sides[1].seen) {
+            (Some(l), Some(r)) => self.width = Some(self.width.map_or(l + r, |w| 0.8 * w + 0.2 * (l + r))),
+            (Some(l), None) => {
+                if let Some(w) = self.width {
+                    self.sides[1].wall = Some(w - l);
+                }
+            }
+            (None, Some(r)) => {
+                if let Some(w) = self.width {
+                    self.sides[0].wall = Some(w - r);
+                }
+            }
+            (None, None) => {}
+        }
+        out
+    }
+}
+
+impl SideOpenings {
+    /// Updates the wall distance from `range` and returns the opening
+    /// beside the robot (one that the side sonar, at ±90°, sees through),
+    /// its width the median of the last three scans (fewer at first).
+    pub fn scan(&mut self, range: &[f32; SONARS], side: usize, max_wall: f64, depth: f64) -> Option<Opening> {
+        let Some(mut opening) = self.opening(range, side, max_wall, depth) else {
+            self.recent = [None; 3];
+            return None;
+        };
+        if opening.width.is_nan() {
+            return Some(opening);
+        }
+        self.recent = [Some(opening.width), self.recent[0], self.recent[1]];
+        let mut w: Vec<f64> = self.recent.iter().flatten().copied().collect();
+        w.sort_by(f64::total_cmp);
+        // Of two, the smaller: a missed echo beside the run only ever widens it.
+        opening.width = if w.len() == 2 { w[0] } else { w[w.len() / 2] };
+        Some(opening)
+    }
+
+    fn opening(&mut self, range: &[f32; SONARS], side: usize, max_wall: f64, depth: f64) -> Option<Opening> {
+        let was_open = std::mem::take(&mut self.was_open);
+        let jambs = self.jambs.take();
+        self.seen = None;
+        if let Some(w) = side_wall(range, side, max_wall, 0.1) {
+            // Only a wall roughly parallel to the heading gives the distance: the
+            // nearest echo of the three side sonars, whose cones hold the perpendicular.
+            if w.angle.abs() < 0.35 {
+                let dist = [side - 1, side, side + 1]
+                    .map(|i| centre_range(range, i))
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min);
+                self.wall = Some(match self.wall {
+                    Some(d) => 0.7 * d + 0.3 * dist,
+                    None => dist,
+                });
+                self.seen = self.wall;
+            }
+            return None;
+        }
+        let d = self.wall?;
+        // Sonars from 30° to 150° on this side, front to back: k = 2..=10 (left) or 22..=14 (right).
+        let sonar = |k: usize| if side == LEFT { k } else { SONARS - k };
+        // Sonar k sees through when its echo lies `depth` beyond the wall line, along its
+        // axis, in this scan and the last (a missed echo also reads far, but one scan only).
+        for k in 2..=10 {
+            let i = sonar(k);
+            self.was_open[k] = centre_range(range, i) > d / sonar_bearing(i).sin().abs() + depth;
+        }
+        let now = self.was_open;
+        let open = |k: usize| now[k] && was_open[k];
+        if !open(6) {
+            return None;
+        }
+        let (mut first, mut last) = (6, 6);
+        while first > 2 && open(first - 1) {
+            first -= 1;
+        }
+        while last < 10 && open(last + 1) {
+            last += 1;
+        }
+        // The sonars either side of the run hit the wall, their cones reaching the opening
+        // (cones tile the ring): their nearest echo is the jamb, sqrt(ρ² − d²) along the wall.
+        // One that reads far this scan (a missed echo) leaves the last scan's jamb standing.
+        let jamb = |k: usize| {
+            let i = sonar(k);
+            let rho = centre_range(range, i);
+            let deep = rho > d / sonar_bearing(i).sin().abs() + depth;
+            (!deep).then(|| (rho * rho - d * d).max(0.0).sqrt())
+        };
+        let last_jambs = jambs;
+        let far = jamb(first - 1).or(last_jambs.map(|j| j.0));
+        let near = jamb(last + 1).map(|a| -a).or(last_jambs.map(|j| j.1));
+        let (Some(far), Some(near)) = (far, near) else {
+            return Some(Opening { width: f64::NAN, rays: last - first + 1, bearing: f64::NAN });
+        };
+        self.jambs = Some((far, near));
+        let (width, centre) = (far - near, (far + near) / 2.0);
+        let y = if side == LEFT { d } else { -d };
+        Some(Opening { width, rays: last - first + 1, bearing: y.atan2(centre) })
+    }
+}
+
+/// Detects a door: an opening in a side wall, beside the robot, seen
+/// through by at least two sonars, at most `max_width` wide (the median of
+/// three scans), for `confirm` cycles in a row. The width is measured
+/// between the jambs, which the sonars either side of the opening see.
+/// Tracks each side wall's distance while it is
+/// continuous; `door.left`/`door.right` stay on until `release` cycles
+/// without the opening; `door.bearing` is the last opening's centre
+/// (positive: left). Writes `door` every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.detect_door")]
+pub struct DetectDoor {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// The doors beside the robot, written every run.
+    #[output]
+    door: Door,
+    /// Largest width of a door, m (wider openings are junctions).
+    #[param(default = 1.6, min = 0.1, max = 5.0, unit = "m")]
+    max_width: f64,
+    /// How far beyond the wall an echo must be to see through it, m.
+    #[param(default = 0.5, min = 0.1, max = 3.0, unit = "m")]
+    depth: f64,
+    /// Side echoes farther than this from the centre are no wall, m.
+    #[param(default = 2.0, min = 0.5, max = 5.0, unit = "m")]
+    max_wall: f64,
+    /// Cycles an opening must be seen before a door is reported.
+    #[param(default = 3, min = 1, max = 100)]
+    confirm: i64,
+    /// Cycles without the opening before the report ends.
+    #[param(default = 3, min = 1, max = 100)]
+    release: i64,
+    activation: Activation,
+    corridor: Corridor,
+    flags: [Hysteresis; 2],
+}
+
+impl Body for DetectDoor {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        if self.activation.fresh(cx.cycle()) {
+            self.corridor = Corridor::default();
+            self.flags = Default::default();
+            self.door = Door::default();
+        }
+        let mut out = Door { bearing: self.door.bearing, ..Door::default() };
+        let openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
+        for (k, side) in [LEFT, RIGHT].into_iter().enumerate() {
+            let door = openings[k].filter(|o| o.rays >= 2 && o.width <= self.max_width);
+            let on = self.flags[k].update(door.is_some(), self.confirm, self.release);
+            if let (true, Some(o)) = (on, door.filter(|o| o.bearing.is_finite())) {
+                out.bearing = o.bearing;
+            }
+            if side == LEFT {
+                out.left = on;
+            } else {
+                out.right = on;
+            }
+        }
+        if out.left != self.door.left || out.right != self.door.right {
+            sprint!(cx, "door: left {} right {} bearing {:.0}°", out.left, out.right, out.bearing.to_degrees());
+        }
+        self.door = out;
+        Ok(())
+    }
+}
+
+/// Detects an intersection: a side opening beside the robot at least
+/// `min_width` wide (the median of three scans; `junction.left`,
+/// `junction.right`), and whether the way ahead is open (`junction.ahead`:
+/// nothing within `ahead_distance` straight ahead).
+/// Each flag changes after `confirm` cycles agreeing (`release` to turn a
+/// side off). Writes `junction` every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.detect_intersection")]
+pub struct DetectIntersection {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// The open ways, written every run.
+    #[output]
+    junction: Junction,
+    /// Smallest width of a side corridor, m (narrower openings are doors).
+    #[param(default = 1.7, min = 0.1, max = 10.0, unit = "m")]
+    min_width: f64,
+    /// How far beyond the wall an echo must be to see through it, m.
+    #[param(default = 0.5, min = 0.1, max = 3.0, unit = "m")]
+    depth: f64,
+    /// Side echoes farther than this from the centre are no wall, m.
+    #[param(default = 2.0, min = 0.5, max = 5.0, unit = "m")]
+    max_wall: f64,
+    /// Clearance straight ahead (sonar 0, rim to echo) under which the way ahead counts as closed, m.
+    #[param(default = 1.5, min = 0.1, max = 10.0, unit = "m")]
+    ahead_distance: f64,
+    /// Cycles an observation must hold before a flag changes.
+    #[param(default = 3, min = 1, max = 100)]
+    confirm: i64,
+    /// Cycles without a side opening before its flag turns off.
+    #[param(default = 3, min = 1, max = 100)]
+    release: i64,
+    activation: Activation,
+    corridor: Corridor,
+    flags: [Hysteresis; 3],
+}
+
+impl Body for DetectIntersection {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        // Sonar 0 alone: the ones at ±15° see the side walls of a narrow corridor.
+        let ahead_now = centre_range(&self.sonar, 0) - ROBOT_RADIUS >= self.ahead_distance;
+        if self.activation.fresh(cx.cycle()) {
+            self.corridor = Corridor::default();
+            self.flags = Default::default();
+            // The way ahead starts as seen, not as "closed".
+            let mut h = Hysteresis::default();
+            if ahead_now {
+                h.update(true, 1, 1);
+            }
+            self.flags[2] = h;
+        }
+        let mut open = [false; 2];
+        let openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
+        for k in 0..2 {
+            let wide = openings[k].is_some_and(|o| o.width >= self.min_width);
+            open[k] = self.flags[k].update(wide, self.confirm, self.release);
+        }
+        let ahead = self.flags[2].update(ahead_now, self.confirm, self.confirm);
+        let out = Junction { left: open[0], right: open[1], ahead };
+        if out != self.junction {
+            sprint!(cx, "junction: left {} right {} ahead {}", out.left, out.right, out.ahead);
+        }
+        self.junction = out;
+        Ok(())
+    }
+}
+
+/// The entry of barcode `id` (or the nearest one when `id` < 0), as
+/// `(id, bearing, distance)`; arrays of unequal length are read up to the
+/// shortest.
+fn pick(b: &Barcodes, id: i64) -> Option<(i64, f64, f64)> {
+    let n = b.ids.len().min(b.bearing.len()).min(b.distance.len());
+    (0..n)
+        .filter(|&k| (id < 0 || b.ids[k] == id) && b.bearing[k].is_finite() && b.distance[k].is_finite())
+        .min_by(|&a, &c| b.distance[a].total_cmp(&b.distance[c]))
+        .map(|k| (b.ids[k], b.bearing[k], b.distance[k]))
+}
+
+/// Tracks one barcode: `target` is barcode `id` (the nearest when `id` is
+/// −1) while in view. When it drops out for up to `hold` cycles (a flicker),
+/// the last bearing and distance are kept with `seen` true; after that
+/// `seen` is false (the last values stay). Writes `target` every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.track_barcode")]
+pub struct TrackBarcode {
+    /// The barcodes in view.
+    #[input]
+    barcodes: Barcodes,
+    /// The tracked barcode, written every run.
+    #[output]
+    target: Target,
+    /// The barcode to track (−1: the nearest in view).
+    #[param(default = -1, min = -1)]
+    id: i64,
+    /// Cycles a lost barcode is still reported as seen.
+    #[param(default = 5, min = 0, max = 1000)]
+    hold: i64,
+    activation: Activation,
+    tracking: Option<i64>,
+    missed: i64,
+}
+
+impl Body for TrackBarcode {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        if self.activation.fresh(cx.cycle()) || self.tracking != Some(self.id) {
+            self.tracking = Some(self.id);
+            self.target = Target { seen: false, id: self.id, bearing: 0.0, distance: 0.0 };
+            self.missed = i64::MAX / 2;
+        }
+        // The nearest barcode, once tracked, stays the one followed while held.
+        let wanted = if self.id < 0 && self.target.seen { self.target.id } else { self.id };
+        let found = pick(&self.barcodes, wanted).or_else(|| if self.id < 0 { pick(&self.barcodes, -1) } else { None });
+        match found {
+            Some((id, bearing, distance)) => {
+                if !self.target.seen {
+                    sprint!(cx, "barcode {id} in view at {distance:.2} m");
+                }
+                self.target = Target { seen: true, id, bearing, distance };
+                self.missed = 0;
+            }
+            None => {
+                self.missed = self.missed.saturating_add(1);
+                if self.missed > self.hold && self.target.seen {
+                    self.target.seen = false;
+                    sprint!(cx, "barcode {} lost", self.target.id);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Identifies the elevator car in view: `car` is k when the barcode
+/// `first_id` + k − 1 (1 ≤ k ≤ `cars`) is in view (the nearest such when
+/// several), kept for `hold` cycles when it drops out, else 0. Writes `car`
+/// every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.identify_car")]
+pub struct IdentifyCar {
+    /// The barcodes in view.
+    #[input]
+    barcodes: Barcodes,
+    /// The car number seen (0: none), written every run.
+    #[output]
+    car: i64,
+    /// Barcode id of car 1 (201 in the simulator's default building).
+    #[param(default = 201, min = 0)]
+    first_id: i64,
+    /// Number of cars.
+    #[param(default = 4, min = 1, max = 1000)]
+    cars: i64,
+    /// Cycles a car is still reported after its barcode drops out.
+    #[param(default = 3, min = 0, max = 1000)]
+    hold: i64,
+    activation: Activation,
+    missed: i64,
+}
+
+impl Body for IdentifyCar {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        if self.activation.fresh(cx.cycle()) {
+            self.car = 0;
+            self.missed = 0;
+        }
+        let b = &self.barcodes;
+        let n = b.ids.len().min(b.distance.len());
+        let last = self.first_id.saturating_add(self.cars - 1);
+        let seen = (0..n)
+            .filter(|&k| (self.first_id..=last).contains(&b.ids[k]))
+            .min_by(|&a, &c| b.distance[a].total_cmp(&b.distance[c]))
+            .map(|k| b.ids[k] - self.first_id + 1);
+        match seen {
+            Some(car) => {
+                if car != self.car {
+                    sprint!(cx, "car {car} in view");
+                }
+                self.car = car;
+                self.missed = 0;
+            }
+            None => {
+                self.missed += 1;
+                if self.missed > self.hold {
+                    self.car = 0;
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,183 @@
+//! Door and intersection detection, barcode tracking, car identification.
+
+use situate_robot::{Barcodes, Door, Junction, Target, SONARS};
+use situate_skills::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
+use std::sync::Arc;
+
+use crate::harness::{val, Harness};
+use crate::scene::{Noise, Pose, Scene};
+
+/// Drives straight along y = `y` from x = `x0` to `x1`, 1.5 cm per cycle,
+/// feeding (noisy) sonar to the skill; (x, output) per cycle.
+fn sweep<T: situate::SignalValue>(
+    h: &mut Harness,
+    port: &str,
+    scene: &Scene,
+    y: f64,
+    x0: f64,
+    x1: f64,
+    noise: &mut Noise,
+) -> Vec<(f64, T)> {
+    let mut out = Vec::new();
+    let mut x = x0;
+    while x < x1 {
+        let r = noise.apply(scene.sonar(Pose::new(x, y, 0.0)));
+        out.push((x, h.run(&[("sonar", val::<[f32; SONARS]>(r))]).get::<T>(port).expect("written every run")));
+        x += 0.015;
+    }
+    out
+}
+
+/// The x range over which `flag` held, or None.
+fn span<T>(trace: &[(f64, T)], flag: impl Fn(&T) -> bool) -> Option<(f64, f64)> {
+    let xs: Vec<f64> = trace.iter().filter(|(_, o)| flag(o)).map(|(x, _)| *x).collect();
+    Some((*xs.first()?, *xs.last()?))
+}
+
+/// A corridor 2 m wide along x from −1 to 20: a door `door` m wide on the
+/// left from x = 8 and, when `side` > 0, a side corridor `side` m wide on
+/// the right from x = 13.
+fn corridor(door: f64, side: f64) -> Scene {
+    let s = Scene::new().wall(-1.0, 1.0, 8.0, 1.0).wall(8.0 + door, 1.0, 20.0, 1.0);
+    if side > 0.0 {
+        s.wall(-1.0, -1.0, 13.0, -1.0).wall(13.0 + side, -1.0, 20.0, -1.0).wall(13.0, -1.0, 13.0, -6.0).wall(
+            13.0 + side,
+            -1.0,
+            13.0 + side,
+            -6.0,
+        )
+    } else {
+        s.wall(-1.0, -1.0, 20.0, -1.0)
+    }
+}
+
+#[test]
+fn detect_door_fires_beside_a_door_only_despite_noise() {
+    let runs = (1..=6u64).flat_map(|seed| [(seed, -0.35), (seed, 0.0), (seed, 0.25)]);
+    for ((seed, y), (door, side)) in runs.zip([(1.0, 1.8), (1.2, 2.0)].into_iter().cycle()) {
+        let mut h = Harness::new::<DetectDoor>();
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let trace: Vec<(f64, Door)> = sweep(&mut h, "door", &corridor(door, side), y, 0.0, 18.0, &mut noise);
+        assert!(
+            trace.iter().all(|(_, d)| !d.right),
+            "seed {seed}, y {y}: no door on the right (a side corridor is no door)"
+        );
+        let (a, b) =
+            span(&trace, |d| d.left).unwrap_or_else(|| panic!("seed {seed}, y {y}: the {door} m door was missed"));
+        assert!(a > 7.6 && b < 8.4 + door, "seed {seed}, y {y}: door reported over x {a:.2}..{b:.2}");
+        let (x, d) = trace.iter().find(|(_, d)| d.left).unwrap();
+        let truth = (1.0 - y).atan2(8.0 + door / 2.0 - x);
+        assert!((d.bearing - truth).abs() < 0.35, "y {y}: bearing {:.2}, truth {truth:.2}", d.bearing);
+    }
+}
+
+#[test]
+fn detect_door_is_quiet_along_a_plain_wall_with_noise() {
+    let scene = Scene::new().wall(-1.0, 1.0, 20.0, 1.0).wall(-1.0, -1.2, 20.0, -1.2);
+    let mut h = Harness::new::<DetectDoor>();
+    let trace: Vec<(f64, Door)> = sweep(&mut h, "door", &scene, 0.0, 0.0, 18.0, &mut Noise::new(9, 0.03, 0.05));
+    assert!(trace.iter().all(|(_, d)| !d.left && !d.right));
+}
+
+#[test]
+fn detect_intersection_sees_a_side_corridor_but_not_a_door() {
+    let runs = (1..=4u64).flat_map(|seed| [(seed, -0.3), (seed, 0.0), (seed, 0.3)]);
+    for ((seed, y), (door, side)) in runs.zip([(1.0, 1.8), (1.2, 2.0)].into_iter().cycle()) {
+        let mut h = Harness::new::<DetectIntersection>();
+        let trace: Vec<(f64, Junction)> =
+            sweep(&mut h, "junction", &corridor(door, side), y, 0.0, 18.0, &mut Noise::new(seed, 0.03, 0.02));
+        assert!(trace.iter().all(|(_, j)| !j.left), "seed {seed}, y {y}: the {door} m door on the left is no junction");
+        let (a, b) = span(&trace, |j| j.right).expect("the side corridor on the right");
+        assert!(a > 12.4 && b < 13.6 + side, "seed {seed}, y {y}: junction right over x {a:.2}..{b:.2}");
+        let closed = trace.iter().find(|(x, j)| *x < 17.0 && !j.ahead);
+        assert!(closed.is_none(), "seed {seed}, y {y}: the way ahead stays open: {closed:?}");
+    }
+}
+
+/// A stem corridor (y ±1) along x up to a crossing corridor x 10..12; `plus`:
+/// the stem goes on beyond it, else a wall closes the crossing at x = 12 (a T).
+fn crossing(plus: bool) -> Scene {
+    let mut s = Scene::new()
+        .wall(-1.0, 1.0, 10.0, 1.0)
+        .wall(-1.0, -1.0, 10.0, -1.0)
+        .wall(10.0, 1.0, 10.0, 8.0)
+        .wall(10.0, -1.0, 10.0, -8.0);
+    if plus {
+        s = s
+            .wall(12.0, 1.0, 12.0, 8.0)
+            .wall(12.0, -1.0, 12.0, -8.0)
+            .wall(12.0, 1.0, 20.0, 1.0)
+            .wall(12.0, -1.0, 20.0, -1.0);
+    } else {
+        s = s.wall(12.0, -8.0, 12.0, 8.0);
+    }
+    s
+}
+
+#[test]
+fn detect_intersection_fires_at_a_t_and_a_plus_junction() {
+    for (plus, seed, y) in [(false, 6, 0.3), (false, 5, 0.0), (true, 5, 0.0), (true, 7, -0.3)] {
+        let mut h = Harness::new::<DetectIntersection>();
+        let trace: Vec<(f64, Junction)> =
+            sweep(&mut h, "junction", &crossing(plus), y, 0.0, 11.0, &mut Noise::new(seed, 0.03, 0.02));
+        let before: Vec<&Junction> = trace.iter().filter(|(x, _)| *x < 8.5).map(|(_, j)| j).collect();
+        let odd = before.iter().find(|j| j.left || j.right || !j.ahead);
+        assert!(odd.is_none(), "plus {plus}: a plain corridor first: {odd:?}");
+        let (_, at) = trace.last().unwrap();
+        assert_eq!(*at, Junction { left: true, right: true, ahead: plus }, "plus {plus}: in the crossing");
+        let (a, _) = span(&trace, |j| j.left && j.right).unwrap();
+        assert!(a > 9.6, "plus {plus}: sides open from x {a:.2}");
+    }
+}
+
+fn codes(ids: &[i64], bearing: &[f64], distance: &[f64]) -> situate::Value {
+    val(Barcodes { ids: Arc::from(ids), bearing: Arc::from(bearing), distance: Arc::from(distance) })
+}
+
+fn target(h: &mut Harness, b: situate::Value) -> Target {
+    h.run(&[("barcodes", b)]).get::<Target>("target").expect("written every run")
+}
+
+#[test]
+fn track_barcode_follows_its_id_through_flicker_and_reports_the_loss() {
+    let mut h = Harness::new::<TrackBarcode>().param("id", val(7i64)).param("hold", val(3i64));
+    assert!(!target(&mut h, codes(&[3], &[0.0], &[1.0])).seen, "another barcode is not the target");
+    let t = target(&mut h, codes(&[3, 7], &[0.1, -0.2], &[1.0, 2.0]));
+    assert_eq!(t, Target { seen: true, id: 7, bearing: -0.2, distance: 2.0 });
+    for _ in 0..3 {
+        assert_eq!(target(&mut h, codes(&[], &[], &[])), t, "held through a flicker");
+    }
+    let lost = target(&mut h, codes(&[], &[], &[]));
+    assert!(!lost.seen && lost.id == 7);
+    assert!(target(&mut h, codes(&[7], &[0.0], &[1.5])).seen);
+    // Malformed input (arrays of unequal length) is read up to the shortest.
+    let t = target(&mut h, codes(&[7, 7], &[0.3], &[1.2, 0.1]));
+    assert_eq!((t.bearing, t.distance), (0.3, 1.2));
+}
+
+#[test]
+fn track_barcode_with_id_minus_one_takes_the_nearest() {
+    let mut h = Harness::new::<TrackBarcode>();
+    let t = target(&mut h, codes(&[3, 9, 5], &[0.1, 0.2, 0.3], &[2.0, 0.8, 1.5]));
+    assert_eq!((t.seen, t.id), (true, 9));
+    // It keeps following 9 while 9 is in view, even when 5 comes nearer.
+    let t = target(&mut h, codes(&[9, 5], &[0.2, 0.3], &[0.9, 0.5]));
+    assert_eq!(t.id, 9);
+}
+
+#[test]
+fn identify_car_maps_barcode_ids_to_car_numbers() {
+    let mut h = Harness::new::<IdentifyCar>().param("first_id", val(100i64)).param("hold", val(2i64));
+    let mut car = |ids: &[i64], d: &[f64]| {
+        let b = vec![0.0; ids.len()];
+        h.run(&[("barcodes", codes(ids, &b, d))]).get::<i64>("car").unwrap()
+    };
+    assert_eq!(car(&[], &[]), 0);
+    assert_eq!(car(&[100], &[1.0]), 1);
+    assert_eq!(car(&[103, 101], &[2.0, 1.0]), 2, "the nearest car barcode");
+    assert_eq!(car(&[103], &[1.0]), 4);
+    assert_eq!(car(&[99, 104, 7], &[1.0, 1.0, 1.0]), 4, "no car barcode: held");
+    assert_eq!(car(&[], &[]), 4, "held");
+    assert_eq!(car(&[], &[]), 0, "then none");
+    assert_eq!(car(&[99, 104], &[1.0, 1.0]), 0, "99 and 104 are no cars");
+}
