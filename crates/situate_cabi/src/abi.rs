@@ -1,0 +1,165 @@
+//! The C ABI, as `#[repr(C)]` definitions. `include/situate.h` is generated
+//! from this file by cbindgen (a test fails when the committed header is
+//! stale); keep every item here plain C.
+//!
+//! A library exports one function, [`SITUATE_ENTRY_SYMBOL`], returning a
+//! [`situate_library`]: the ABI version it was built for and its skill types.
+//! Values cross as C-layout structs (see `layout`): scalars and fixed arrays
+//! inline, variable arrays, strings and bytes as pointer + length into buffers
+//! that stay valid during the call only.
+#![allow(non_camel_case_types)]
+
+use std::ffi::{c_char, c_void};
+
+/// The version of this ABI. A library built for another version is refused
+/// at load time with a clear error.
+pub const SITUATE_ABI_VERSION: u32 = 1;
+
+/// A call succeeded.
+pub const SITUATE_OK: i32 = 0;
+
+/// A call failed; the error's message says why.
+pub const SITUATE_ERROR: i32 = 1;
+
+/// The capacity of an error's message, NUL included.
+pub const SITUATE_ERROR_CAPACITY: usize = 512;
+
+/// What every call returns: `SITUATE_OK` or an error (any other value).
+pub type situate_status = i32;
+
+/// Why a call failed: a NUL-terminated UTF-8 message (truncated to fit).
+#[repr(C)]
+pub struct situate_error {
+    pub message: [c_char; SITUATE_ERROR_CAPACITY],
+}
+
+/// A read-only UTF-8 string (not NUL-terminated), or bytes.
+#[repr(C)]
+pub struct situate_str {
+    pub ptr: *const c_char,
+    pub len: usize,
+}
+
+/// Bytes: pointer and length.
+#[repr(C)]
+pub struct situate_bytes {
+    pub ptr: *const u8,
+    pub len: usize,
+}
+
+/// A variable-length `f32[]` array: pointer and number of elements.
+#[repr(C)]
+pub struct situate_f32_slice {
+    pub ptr: *const f32,
+    pub len: usize,
+}
+
+/// A variable-length `f64[]` array: pointer and number of elements.
+#[repr(C)]
+pub struct situate_f64_slice {
+    pub ptr: *const f64,
+    pub len: usize,
+}
+
+/// A variable-length `i64[]` array: pointer and number of elements.
+#[repr(C)]
+pub struct situate_i64_slice {
+    pub ptr: *const i64,
+    pub len: usize,
+}
+
+/// The host's services, valid during the call.
+#[repr(C)]
+pub struct situate_host {
+    /// Adds a line (UTF-8, `len` bytes) to the skill's own prints.
+    pub print: Option<unsafe extern "C" fn(host_data: *mut c_void, line: *const c_char, len: usize)>,
+}
+
+/// What a body sees besides its ports; valid during the call only.
+#[repr(C)]
+pub struct situate_context {
+    /// The cycle this body runs in.
+    pub cycle: u64,
+    /// Seconds since the manager started, on its clock.
+    pub time_s: f64,
+    /// Where a failing body writes its message (never NULL from the host).
+    pub error: *mut situate_error,
+    /// The host's services.
+    pub host: *const situate_host,
+    /// Passed back to the host's services.
+    pub host_data: *mut c_void,
+}
+
+/// Constructs a skill instance in `state` (host-allocated, zeroed,
+/// `state_size` bytes aligned to `state_align`) from its initial parameters.
+pub type situate_init_fn = Option<
+    unsafe extern "C" fn(state: *mut c_void, params: *const c_void, error: *mut situate_error) -> situate_status,
+>;
+
+/// Destroys the instance in `state` (the host frees the memory).
+pub type situate_fini_fn = Option<unsafe extern "C" fn(state: *mut c_void)>;
+
+/// Runs the body once: reads `inputs`, writes `outputs` (zeroed by the host;
+/// set each produced output's `has_` flag).
+pub type situate_step_fn = Option<
+    unsafe extern "C" fn(
+        state: *mut c_void,
+        inputs: *const c_void,
+        outputs: *mut c_void,
+        params: *const c_void,
+        cx: *mut situate_context,
+    ) -> situate_status,
+>;
+
+/// Parameter `index` changed; `params` holds the new values.
+pub type situate_set_param_fn = Option<
+    unsafe extern "C" fn(
+        state: *mut c_void,
+        index: u32,
+        params: *const c_void,
+        error: *mut situate_error,
+    ) -> situate_status,
+>;
+
+/// One skill type of a library.
+#[repr(C)]
+pub struct situate_skill_type {
+    /// The declaration: a NUL-terminated YAML manifest with a `name`.
+    pub manifest: *const c_char,
+    /// `sizeof` the generated inputs, outputs and params structs, checked
+    /// against the layout the host computes from the manifest.
+    pub inputs_size: usize,
+    pub outputs_size: usize,
+    pub params_size: usize,
+    /// Size and alignment of an instance's state.
+    pub state_size: usize,
+    pub state_align: usize,
+    /// Optional (NULL: the zeroed state is ready).
+    pub init: situate_init_fn,
+    /// Optional.
+    pub fini: situate_fini_fn,
+    /// Required.
+    pub step: situate_step_fn,
+    /// Optional.
+    pub set_param: situate_set_param_fn,
+}
+
+/// What a library's entry function returns.
+#[repr(C)]
+pub struct situate_library {
+    /// `SITUATE_ABI_VERSION` as the library was built. Always the first field.
+    pub abi_version: u32,
+    /// `sizeof(situate_skill_type)` as the library was built.
+    pub skill_type_size: u32,
+    /// The number of skill types in `skills`.
+    pub skill_count: u32,
+    pub skills: *const situate_skill_type,
+}
+
+/// The name of the function a library exports:
+/// `const situate_library* situate_library_entry(void)` (in C, the
+/// `SITUATE_ENTRY_SYMBOL` macro of the helpers).
+pub const SITUATE_ENTRY_SYMBOL: &str = "situate_library_entry";
+
+/// The entry function's type.
+pub type situate_entry_fn = unsafe extern "C" fn() -> *const situate_library;

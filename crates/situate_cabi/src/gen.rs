@@ -1,0 +1,429 @@
+//! `situate gen c|cpp|python MANIFEST`: typed I/O for a skill from its
+//! manifest, so its author writes only the body.
+//!
+//! - C: `<prefix>.h` with `<prefix>_inputs`, `<prefix>_outputs` (a `has_`
+//!   flag per output), `<prefix>_params`, `<prefix>_manifest`, and the glue
+//!   from the generic ABI to `<prefix>_step(...)` that the author writes;
+//! - C++: `<prefix>.hpp` with the same structs in `namespace <prefix>` and
+//!   a base class `<prefix>::Skill` naming them for `situate.hpp`;
+//! - Python: `<prefix>.py` with dataclasses `Inputs`, `Outputs`, `Params`.
+//!
+//! The structs follow [`crate::layout`] field by field.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use situate_core::{ElemType, ParamType, SkillDecl, Value};
+
+use crate::layout::{elem_c, Field, FieldKind, SkillLayout, StructLayout};
+use crate::manifest::{parse_manifest, ManifestError};
+
+/// A language the generator writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Lang {
+    C,
+    Cpp,
+    Python,
+}
+
+impl Lang {
+    /// `c`, `cpp` (or `c++`), `python` (or `py`).
+    pub fn parse(text: &str) -> Option<Lang> {
+        match text {
+            "c" => Some(Lang::C),
+            "cpp" | "c++" | "cxx" => Some(Lang::Cpp),
+            "python" | "py" => Some(Lang::Python),
+            _ => None,
+        }
+    }
+}
+
+/// One generated file: a name relative to the output directory, and text.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GeneratedFile {
+    pub path: PathBuf,
+    pub contents: String,
+}
+
+/// Why nothing was generated.
+#[derive(Debug, thiserror::Error)]
+pub enum GenError {
+    #[error("{path}: cannot read the manifest: {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("{path}: {source}")]
+    Manifest { path: String, source: ManifestError },
+    #[error("{path}: skill `{skill}`: {message}")]
+    Layout { path: String, skill: String, message: String },
+    #[error("{path}: cannot write: {source}")]
+    Write { path: String, source: std::io::Error },
+}
+
+/// Writes generated files into `dir` (created if needed) and returns their
+/// paths. A file whose contents are unchanged is left alone, so build
+/// systems do not rebuild.
+pub fn write_generated(files: &[GeneratedFile], dir: &Path) -> Result<Vec<PathBuf>, GenError> {
+    let write_err = |path: &Path, source| GenError::Write { path: path.display().to_string(), source };
+    std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
+    let mut written = Vec::new();
+    for f in files {
+        let path = dir.join(&f.path);
+        if !std::fs::read_to_string(&path).is_ok_and(|old| old == f.contents) {
+            std::fs::write(&path, &f.contents).map_err(|e| write_err(&path, e))?;
+        }
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// Generates the files of `lang` for the manifest at `manifest_path`.
+pub fn generate(lang: Lang, manifest_path: &Path) -> Result<Vec<GeneratedFile>, GenError> {
+    let path = manifest_path.display().to_string();
+    let text =
+        std::fs::read_to_string(manifest_path).map_err(|source| GenError::Read { path: path.clone(), source })?;
+    generate_text(lang, &text, &path)
+}
+
+/// Generates from a manifest's text; `origin` names it in messages.
+pub fn generate_text(lang: Lang, text: &str, origin: &str) -> Result<Vec<GeneratedFile>, GenError> {
+    let decl = parse_manifest(text).map_err(|source| GenError::Manifest { path: origin.to_string(), source })?;
+    let layout = SkillLayout::of(&decl).map_err(|message| GenError::Layout {
+        path: origin.to_string(),
+        skill: decl.type_name.clone(),
+        message,
+    })?;
+    let origin_name = Path::new(origin).file_name().map_or(origin.to_string(), |n| n.to_string_lossy().into_owned());
+    let (ext, contents) = match lang {
+        Lang::C => ("h", c_header(&decl, &layout, text, &origin_name)),
+        Lang::Cpp => ("hpp", cpp_header(&decl, &layout, text, &origin_name)),
+        Lang::Python => ("py", python_module(&decl, &layout, text, &origin_name)),
+    };
+    Ok(vec![GeneratedFile { path: PathBuf::from(format!("{}.{ext}", layout.prefix)), contents }])
+}
+
+/// A C (and C++) string literal, one source line per manifest line.
+fn c_string(text: &str) -> String {
+    let mut out = String::from("\"");
+    for (i, b) in text.bytes().enumerate() {
+        match b {
+            b'\\' => out.push_str("\\\\"),
+            b'"' => out.push_str("\\\""),
+            b'\n' if i + 1 < text.len() => out.push_str("\\n\"\n    \""),
+            b'\n' => out.push_str("\\n"),
+            b'\t' => out.push_str("\\t"),
+            b'?' => out.push_str("\\?"), // no trigraphs
+            0x20..=0x7e => out.push(b as char),
+            _ => {
+                let _ = write!(out, "\\{b:03o}");
+            }
+        }
+    }
+    out.push('"');
+    out
+}
+
+fn slice_c(elem: ElemType) -> &'static str {
+    match elem {
+        ElemType::F32 => "situate_f32_slice",
+        ElemType::F64 => "situate_f64_slice",
+        ElemType::I64 => "situate_i64_slice",
+    }
+}
+
+/// `type name` (with `[N]` for fixed arrays) of a field; `record` names a
+/// nested struct type.
+fn c_field(f: &Field, record: &dyn Fn(&str) -> String) -> String {
+    match &f.kind {
+        FieldKind::Flag | FieldKind::Bool => format!("bool {}", f.name),
+        FieldKind::I64 => format!("int64_t {}", f.name),
+        FieldKind::F64 => format!("double {}", f.name),
+        FieldKind::Str => format!("situate_str {}", f.name),
+        FieldKind::Bytes => format!("situate_bytes {}", f.name),
+        FieldKind::Fixed { elem, len } => format!("{} {}[{len}]", elem_c(*elem), f.name),
+        FieldKind::Var { elem } => format!("{} {}", slice_c(*elem), f.name),
+        FieldKind::Record { c_name, .. } => format!("{} {}", record(c_name), f.name),
+    }
+}
+
+/// Every record struct, innermost first, each once.
+fn records<'a>(layout: &'a StructLayout, out: &mut Vec<(&'a str, &'a StructLayout)>) {
+    for f in &layout.fields {
+        if let FieldKind::Record { c_name, layout } = &f.kind {
+            records(layout, out);
+            if !out.iter().any(|(n, _)| n == c_name) {
+                out.push((c_name, layout));
+            }
+        }
+    }
+}
+
+fn all_records(l: &SkillLayout) -> Vec<(&str, &StructLayout)> {
+    let mut out = Vec::new();
+    records(&l.inputs, &mut out);
+    records(&l.outputs, &mut out);
+    out
+}
+
+fn port_comment(decl: &SkillDecl, f: &Field, outputs: bool) -> String {
+    let ports = if outputs { &decl.outputs } else { &decl.inputs };
+    match ports.iter().find(|p| *p.name == *f.name) {
+        Some(p) => {
+            let opt = if p.optional { ", optional" } else { "" };
+            let doc = if p.doc.is_empty() { String::new() } else { format!(": {}", p.doc) };
+            format!(" /* {}{opt} (signal `{}`){doc} */", p.ty, p.signal)
+        }
+        None if f.name.starts_with("has_") => " /* set when present */".to_string(),
+        None => String::new(),
+    }
+}
+
+fn param_comment(decl: &SkillDecl, f: &Field) -> String {
+    match decl.param(&f.name) {
+        Some((_, p)) => {
+            let unit = if p.unit.is_empty() { String::new() } else { format!(" {}", p.unit) };
+            format!(" /* {}, default {}{unit}: {} */", p.ty.name(), p.default, p.expectation())
+        }
+        None => String::new(),
+    }
+}
+
+fn c_struct(out: &mut String, name: &str, layout: &StructLayout, comment: &dyn Fn(&Field) -> String) {
+    let _ = writeln!(out, "typedef struct {name} {{");
+    for f in &layout.fields {
+        let _ = writeln!(out, "    {};{}", c_field(f, &|n| n.to_string()), comment(f));
+    }
+    let _ = writeln!(out, "}} {name};\n");
+}
+
+fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> String {
+    let p = &l.prefix;
+    let guard = format!("SITUATE_GEN_{}_H", p.to_ascii_uppercase());
+    let mut o = String::new();
+    let _ = writeln!(o, "/* Generated by situate-gen from {origin}: skill `{}`. Do not edit. */", decl.type_name);
+    let _ = writeln!(o, "#ifndef {guard}\n#define {guard}\n\n#include <situate.h>\n");
+    let _ = writeln!(o, "#ifdef __cplusplus\nextern \"C\" {{\n#endif\n");
+    for (name, layout) in all_records(l) {
+        c_struct(&mut o, name, layout, &|_| String::new());
+    }
+    c_struct(&mut o, &format!("{p}_inputs"), &l.inputs, &|f| port_comment(decl, f, false));
+    c_struct(&mut o, &format!("{p}_outputs"), &l.outputs, &|f| port_comment(decl, f, true));
+    c_struct(&mut o, &format!("{p}_params"), &l.params, &|f| param_comment(decl, f));
+    for (i, param) in decl.params.iter().enumerate() {
+        let _ = writeln!(o, "#define {}_PARAM_{} {i}u", p.to_ascii_uppercase(), param.name.to_ascii_uppercase());
+    }
+    let _ = writeln!(o, "\n/* The manifest this header was generated from. */");
+    let _ = writeln!(o, "static const char {p}_manifest[] =\n    {};\n", c_string(text));
+    let _ = writeln!(
+        o,
+        "/* You write: the state (any struct, zeroed before use) and the body. */\n\
+         typedef struct {p}_state {p}_state;\n\
+         situate_status {p}_step({p}_state* state, const {p}_inputs* in, {p}_outputs* out,\n    \
+         const {p}_params* params, situate_context* cx);\n\n\
+         /* With SITUATE_SKILL_HOOKS({p}) you also write these. */\n\
+         situate_status {p}_init({p}_state* state, const {p}_params* params, situate_error* error);\n\
+         void {p}_fini({p}_state* state);\n\
+         situate_status {p}_set_param({p}_state* state, uint32_t index, const {p}_params* params,\n    \
+         situate_error* error);\n"
+    );
+    let _ = writeln!(
+        o,
+        "/* Glue from the generic ABI to your functions (used by SITUATE_SKILL). */\n\
+         static inline situate_status {p}__step(void* s, const void* i, void* o, const void* p, situate_context* cx) {{\n    \
+         return {p}_step(({p}_state*)s, (const {p}_inputs*)i, ({p}_outputs*)o, (const {p}_params*)p, cx);\n}}\n\
+         static inline situate_status {p}__init(void* s, const void* p, situate_error* e) {{\n    \
+         return {p}_init(({p}_state*)s, (const {p}_params*)p, e);\n}}\n\
+         static inline void {p}__fini(void* s) {{\n    {p}_fini(({p}_state*)s);\n}}\n\
+         static inline situate_status {p}__set_param(void* s, uint32_t i, const void* p, situate_error* e) {{\n    \
+         return {p}_set_param(({p}_state*)s, i, (const {p}_params*)p, e);\n}}\n"
+    );
+    let _ = writeln!(o, "#ifdef __cplusplus\n}}\n#endif\n\n#endif /* {guard} */");
+    o
+}
+
+fn cpp_record_name(prefix: &str, c_name: &str) -> String {
+    format!("{}_t", c_name.strip_prefix(prefix).unwrap_or(c_name).trim_start_matches('_'))
+}
+
+fn cpp_struct(out: &mut String, name: &str, layout: &StructLayout, prefix: &str, comment: &dyn Fn(&Field) -> String) {
+    let _ = writeln!(out, "struct {name} {{");
+    for f in &layout.fields {
+        let _ = writeln!(out, "    {};{}", c_field(f, &|n| cpp_record_name(prefix, n)), comment(f));
+    }
+    let _ = writeln!(out, "}};\n");
+}
+
+fn cpp_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> String {
+    let p = &l.prefix;
+    let mut o = String::new();
+    let _ = writeln!(o, "// Generated by situate-gen from {origin}: skill `{}`. Do not edit.", decl.type_name);
+    let _ = writeln!(o, "#pragma once\n\n#include <situate.hpp>\n\nnamespace {p} {{\n");
+    for (name, layout) in all_records(l) {
+        cpp_struct(&mut o, &cpp_record_name(p, name), layout, p, &|_| String::new());
+    }
+    cpp_struct(&mut o, "Inputs", &l.inputs, p, &|f| port_comment(decl, f, false));
+    cpp_struct(&mut o, "Outputs", &l.outputs, p, &|f| port_comment(decl, f, true));
+    cpp_struct(&mut o, "Params", &l.params, p, &|f| param_comment(decl, f));
+    let _ = writeln!(o, "/// Parameter indices, as `on_param` receives them.\nnamespace param {{");
+    for (i, param) in decl.params.iter().enumerate() {
+        let _ = writeln!(o, "inline constexpr uint32_t {} = {i};", param.name);
+    }
+    let _ = writeln!(o, "}}  // namespace param\n");
+    let _ = writeln!(
+        o,
+        "/// The manifest this header was generated from.\ninline constexpr char manifest[] =\n    {};\n",
+        c_string(text)
+    );
+    let _ = writeln!(
+        o,
+        "/// Derive your skill class from this; it names the types `situate.hpp` needs.\n\
+         ///\n\
+         /// ```cpp\n\
+         /// class MySkill : public {p}::Skill {{\n\
+         ///  public:\n\
+         ///   explicit MySkill(const Params& params);  // optional (else default-constructed)\n\
+         ///   void step(const Inputs& in, Outputs& out, const Params& params, situate::Context& cx);\n\
+         ///   void on_param(uint32_t index, const Params& params);  // optional\n\
+         /// }};\n\
+         /// SITUATE_CPP_LIBRARY(MySkill)\n\
+         /// ```\n\
+         /// Throwing from any of them faults the skill with the exception's `what()`.\n\
+         struct Skill {{\n    \
+         using Inputs = {p}::Inputs;\n    \
+         using Outputs = {p}::Outputs;\n    \
+         using Params = {p}::Params;\n    \
+         static const char* manifest() {{ return {p}::manifest; }}\n\
+         }};\n\n\
+         }}  // namespace {p}"
+    );
+    o
+}
+
+fn camel(s: &str) -> String {
+    s.split('_').filter(|w| !w.is_empty()).map(|w| w[..1].to_ascii_uppercase() + &w[1..]).collect()
+}
+
+fn py_type(f: &Field, prefix: &str) -> String {
+    match &f.kind {
+        FieldKind::Flag | FieldKind::Bool => "bool".into(),
+        FieldKind::I64 => "int".into(),
+        FieldKind::F64 => "float".into(),
+        FieldKind::Str => "str".into(),
+        FieldKind::Bytes => "bytes".into(),
+        FieldKind::Fixed { elem: ElemType::I64, .. } | FieldKind::Var { elem: ElemType::I64 } => "Sequence[int]".into(),
+        FieldKind::Fixed { .. } | FieldKind::Var { .. } => "Sequence[float]".into(),
+        FieldKind::Record { c_name, .. } => camel(c_name.strip_prefix(prefix).unwrap_or(c_name)),
+    }
+}
+
+fn py_literal(v: &Value) -> String {
+    match v {
+        Value::Bool(true) => "True".into(),
+        Value::Bool(false) => "False".into(),
+        Value::I64(x) => x.to_string(),
+        Value::F64(x) => format!("{x:?}"),
+        Value::Str(s) => format!("{:?}", s.to_string()),
+        other => format!("{other:?}"),
+    }
+}
+
+fn python_module(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> String {
+    let p = &l.prefix;
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "\"\"\"Typed I/O of skill `{}`. Generated by situate-gen from {origin}; do not edit.\"\"\"\n",
+        decl.type_name
+    );
+    let _ = writeln!(o, "from __future__ import annotations\n\nfrom dataclasses import dataclass\nfrom typing import Optional, Sequence\n");
+    let _ = writeln!(o, "TYPE_NAME = {:?}\nMANIFEST = {:?}\n", decl.type_name, text);
+    for (name, layout) in all_records(l) {
+        let _ = writeln!(o, "\n@dataclass\nclass {}:", camel(name.strip_prefix(p.as_str()).unwrap_or(name)));
+        for f in &layout.fields {
+            let _ = writeln!(o, "    {}: {}", f.name, py_type(f, p));
+        }
+    }
+    let _ = writeln!(o, "\n@dataclass\nclass Inputs:");
+    // Required inputs first: dataclass fields with defaults come last.
+    for optional in [false, true] {
+        for port in decl.inputs.iter().filter(|p| p.optional == optional) {
+            let Some(f) = l.inputs.fields.iter().find(|f| *f.name == *port.name) else { continue };
+            if optional {
+                let _ = writeln!(o, "    {}: Optional[{}] = None", f.name, py_type(f, p));
+            } else {
+                let _ = writeln!(o, "    {}: {}", f.name, py_type(f, p));
+            }
+        }
+    }
+    if decl.inputs.is_empty() {
+        o.push_str("    pass\n");
+    }
+    let _ = writeln!(o, "\n@dataclass\nclass Outputs:");
+    for port in &decl.outputs {
+        let Some(f) = l.outputs.fields.iter().find(|f| *f.name == *port.name) else { continue };
+        let _ = writeln!(o, "    {}: Optional[{}] = None", f.name, py_type(f, p));
+    }
+    if decl.outputs.is_empty() {
+        o.push_str("    pass\n");
+    }
+    let _ = writeln!(o, "\n@dataclass\nclass Params:");
+    for param in &decl.params {
+        let ty = match param.ty {
+            ParamType::Bool => "bool",
+            ParamType::I64 => "int",
+            ParamType::F64 => "float",
+            ParamType::Str => "str",
+        };
+        let _ = writeln!(o, "    {}: {ty} = {}", param.name, py_literal(&param.default));
+    }
+    if decl.params.is_empty() {
+        o.push_str("    pass\n");
+    }
+    o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MANIFEST: &str =
+        "name: c.t\ninputs: {x: f64, pose: \"{x: f64, y: f64}\"}\noutputs: {y: f64}\nparams:\n  gain: 2.0\n";
+
+    #[test]
+    fn c_header_names_structs_after_the_prefix() {
+        let files = generate_text(Lang::C, MANIFEST, "t.yaml").unwrap();
+        assert_eq!(files[0].path, PathBuf::from("c_t.h"));
+        let h = &files[0].contents;
+        for needle in [
+            "typedef struct c_t_pose {\n    double x;\n    double y;\n} c_t_pose;",
+            "    c_t_pose pose;",
+            "    bool has_y;",
+            "    double gain;",
+            "#define C_T_PARAM_GAIN 0u",
+            "situate_status c_t_step(c_t_state* state",
+        ] {
+            assert!(h.contains(needle), "missing {needle:?} in\n{h}");
+        }
+    }
+
+    #[test]
+    fn strings_are_escaped_for_c() {
+        assert_eq!(c_string("a: \"b\\\"\n"), "\"a: \\\"b\\\\\\\"\\n\"");
+        assert_eq!(c_string("é"), "\"\\303\\251\"");
+    }
+
+    #[test]
+    fn python_declares_dataclasses_with_defaults() {
+        let files = generate_text(Lang::Python, MANIFEST, "t.yaml").unwrap();
+        let py = &files[0].contents;
+        assert!(py.contains("class Pose:\n    x: float\n    y: float"), "{py}");
+        assert!(py.contains("    y: Optional[float] = None"), "{py}");
+        assert!(py.contains("    gain: float = 2.0"), "{py}");
+    }
+
+    #[test]
+    fn errors_name_the_manifest_and_line() {
+        let e = generate_text(Lang::C, "name: c.t\ninputs: {int: f64}\n", "m.yaml").unwrap_err();
+        assert_eq!(e.to_string(), "m.yaml: skill `c.t`: input `int` is a C/C++ keyword; rename it");
+        let e = generate_text(Lang::C, "name: c.t\noutputs: {y: f46}\n", "m.yaml").unwrap_err();
+        assert!(e.to_string().starts_with("m.yaml: line 2, column"), "{e}");
+    }
+}

@@ -1,0 +1,166 @@
+// situate.hpp: C++ skills over the C ABI of situate.h (header-only, C++17).
+//
+// A skill is a class deriving from the `<prefix>::Skill` base that
+// `situate gen cpp MANIFEST` writes (it names the typed Inputs, Outputs and
+// Params structs and the manifest):
+//
+//     #include "cpp_runaway.hpp"
+//     class Runaway : public cpp_runaway::Skill {
+//      public:
+//       explicit Runaway(const Params& params);   // optional: else default-constructed
+//       void step(const Inputs& in, Outputs& out, const Params& params, situate::Context& cx);
+//       void on_param(uint32_t index, const Params& params);   // optional
+//     };
+//     SITUATE_CPP_LIBRARY(Runaway)   // once per library; several classes may be listed
+//
+// An exception thrown by the constructor, `step` or `on_param` becomes an
+// error status carrying its `what()`: the skill is faulted, the cycle goes on.
+// Nothing here is a second FFI: the library exports the C ABI.
+#pragma once
+
+#include <situate.h>
+
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+
+namespace situate {
+
+/// What a body sees besides its ports: the cycle, the time, its own prints.
+class Context {
+ public:
+  explicit Context(situate_context* cx) noexcept : cx_(cx) {}
+
+  /// The cycle this body runs in.
+  std::uint64_t cycle() const noexcept { return cx_->cycle; }
+
+  /// Seconds since the manager started, on its clock.
+  double time_s() const noexcept { return cx_->time_s; }
+
+  /// Adds a line to the skill's own prints.
+  void print(std::string_view line) const noexcept {
+    if (cx_->host != nullptr && cx_->host->print != nullptr) {
+      cx_->host->print(cx_->host_data, line.data(), line.size());
+    }
+  }
+
+  /// The underlying C context.
+  situate_context* raw() const noexcept { return cx_; }
+
+ private:
+  situate_context* cx_;
+};
+
+/// A string input or parameter as a view (valid during the call).
+inline std::string_view view(const situate_str& s) noexcept {
+  return s.len == 0 ? std::string_view() : std::string_view(s.ptr, s.len);
+}
+
+namespace detail {
+
+inline situate_status fail(situate_error* error, const char* message) noexcept {
+  if (error != nullptr) {
+    std::strncpy(error->message, message, SITUATE_ERROR_CAPACITY - 1);
+    error->message[SITUATE_ERROR_CAPACITY - 1] = '\0';
+  }
+  return SITUATE_ERROR;
+}
+
+// Runs `f`, turning any exception into an error status with its what().
+template <class F>
+situate_status guarded(situate_error* error, F&& f) noexcept {
+  try {
+    std::forward<F>(f)();
+    return SITUATE_OK;
+  } catch (const std::exception& e) {
+    return fail(error, e.what());
+  } catch (...) {
+    return fail(error, "unknown C++ exception");
+  }
+}
+
+template <class S, class = void>
+struct has_on_param : std::false_type {};
+template <class S>
+struct has_on_param<S, std::void_t<decltype(std::declval<S&>().on_param(std::uint32_t{},
+                                                                         std::declval<const typename S::Params&>()))>>
+    : std::true_type {};
+
+template <class S>
+situate_status init(void* state, const void* params, situate_error* error) noexcept {
+  using P = typename S::Params;
+  return guarded(error, [&] {
+    if constexpr (std::is_constructible_v<S, const P&>) {
+      new (state) S(*static_cast<const P*>(params));
+    } else {
+      new (state) S();
+    }
+  });
+}
+
+template <class S>
+void fini(void* state) noexcept {
+  static_cast<S*>(state)->~S();
+}
+
+template <class S>
+situate_status step(void* state, const void* inputs, void* outputs, const void* params,
+                    situate_context* cx) noexcept {
+  return guarded(cx->error, [&] {
+    Context context(cx);
+    static_cast<S*>(state)->step(*static_cast<const typename S::Inputs*>(inputs),
+                                 *static_cast<typename S::Outputs*>(outputs),
+                                 *static_cast<const typename S::Params*>(params), context);
+  });
+}
+
+template <class S>
+situate_status set_param(void* state, std::uint32_t index, const void* params, situate_error* error) noexcept {
+  return guarded(error, [&] {
+    static_cast<S*>(state)->on_param(index, *static_cast<const typename S::Params*>(params));
+  });
+}
+
+}  // namespace detail
+
+/// The C ABI's skill type entry of class `S`.
+template <class S>
+situate_skill_type skill_type() noexcept {
+  static_assert(std::is_standard_layout_v<typename S::Inputs>, "Inputs must be the generated struct");
+  situate_set_param_fn on_param = nullptr;
+  if constexpr (detail::has_on_param<S>::value) {
+    on_param = &detail::set_param<S>;
+  }
+  return situate_skill_type{S::manifest(),
+                            sizeof(typename S::Inputs),
+                            sizeof(typename S::Outputs),
+                            sizeof(typename S::Params),
+                            sizeof(S),
+                            alignof(S),
+                            &detail::init<S>,
+                            &detail::fini<S>,
+                            &detail::step<S>,
+                            on_param};
+}
+
+/// The library table of skill classes `S...`.
+template <class... S>
+const situate_library* library() noexcept {
+  static const situate_skill_type types[] = {skill_type<S>()...};
+  static const situate_library lib{SITUATE_ABI_VERSION, static_cast<std::uint32_t>(sizeof(situate_skill_type)),
+                                   static_cast<std::uint32_t>(sizeof...(S)), types};
+  return &lib;
+}
+
+}  // namespace situate
+
+/// Exports the library's skill classes: SITUATE_CPP_LIBRARY(A, B). Once per library.
+#define SITUATE_CPP_LIBRARY(...)                                                           \
+  extern "C" SITUATE_EXPORT const situate_library* situate_library_entry(void) noexcept { \
+    return ::situate::library<__VA_ARGS__>();                                              \
+  }
