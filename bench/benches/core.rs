@@ -485,7 +485,7 @@ fn monitors(settings: &Settings, report: &mut Report) {
     skills::check_chain(&mut watched, "", 10);
     for k in 0..MONITORS {
         let condition = format!("{}[0] > 1e9", skills::chain_signal("", k));
-        if let Err(e) = watched.request(Request::AddMonitor { condition, mode: MonitorMode::Level }) {
+        if let Err(e) = watched.request(Request::AddMonitor { condition, mode: MonitorMode::Level, pause: false }) {
             panic!("monitor refused: {e}");
         }
     }

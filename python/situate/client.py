@@ -289,16 +289,22 @@ class Robot:
 
     # ----- monitors and events ---------------------------------------------------
 
-    async def monitor(self, condition: str, mode: str = "once") -> int:
+    async def monitor(self, condition: str, mode: str = "once", *, pause: bool = False) -> int:
         """Registers a monitor and returns its id; it fires :class:`~situate.MonitorFired` events.
 
         ``mode`` is ``"once"`` (the first cycle the condition holds, then the
         monitor is gone), ``"edge"`` (each cycle it becomes true) or
-        ``"level"`` (every cycle it holds). A condition that does not parse
-        is :class:`~situate.BadCondition`, whose ``pointer`` shows where.
+        ``"level"`` (every cycle it holds). With ``pause``, the manager also
+        stops its cycle at the end of the cycle the monitor fires in, until
+        :meth:`run`: the sequencer then acts at exactly that cycle, however
+        slow the link. A condition that does not parse is
+        :class:`~situate.BadCondition`, whose ``pointer`` shows where.
         Subscribe with :meth:`events` *before* registering, or use :meth:`when`.
         """
-        result = await self.request("monitor_add", condition=condition, mode=mode)
+        args: dict[str, Any] = {"condition": condition, "mode": mode}
+        if pause:
+            args["pause"] = True
+        result = await self.request("monitor_add", **args)
         return int(result["monitor"])
 
     async def cancel_monitor(self, monitor: int) -> None:
@@ -319,22 +325,42 @@ class Robot:
         keys = [f"situate/{self.name}/events/{k}" for k in kinds]
         return Stream(self, keys or [f"situate/{self.name}/events/**"], parse_event)
 
-    async def when(self, condition: str, *, timeout: float | None = None) -> MonitorFired:
+    async def when(self, condition: str, *, timeout: float | None = None, pause: bool = False) -> MonitorFired:
         """Waits until ``condition`` holds and returns the :class:`~situate.MonitorFired` event.
 
         A ``once`` monitor is registered for it; if the wait ends another way
         (``timeout`` seconds pass: ``TimeoutError``; the task is cancelled)
         the monitor is cancelled, so nothing is left behind on the robot.
+        With ``pause`` the cycle stops where the condition held (see
+        :meth:`monitor`); resume it with :meth:`run`.
         """
+        _, fired = await self.first(condition, timeout=timeout, pause=pause)
+        return fired
+
+    async def first(
+        self, *conditions: str, timeout: float | None = None, pause: bool = False
+    ) -> tuple[int, MonitorFired]:
+        """Waits until one of ``conditions`` holds: returns its index and the event.
+
+        The way a sequencer waits for "done, or failed, or too late": e.g.
+        ``first("target.seen", "time > 120")``. The other monitors are
+        cancelled. ``timeout`` is in seconds of wall time (``TimeoutError``);
+        for time on the robot's clock use the ``time`` name in a condition.
+        """
+        if not conditions:
+            raise ValueError("first() needs at least one condition")
         async with self.events("monitor_fired") as stream:
-            monitor = await self.monitor(condition, "once")
+            ids: list[int] = []
             try:
-                return await asyncio.wait_for(_fired(stream, monitor), timeout)
-            except BaseException:
-                # It may have fired meanwhile (then it is already gone): fine.
-                with contextlib.suppress(SituateError):
-                    await self.cancel_monitor(monitor)
-                raise
+                for c in conditions:
+                    ids.append(await self.monitor(c, "once", pause=pause))
+                fired = await asyncio.wait_for(_fired_any(stream, ids), timeout)
+                return ids.index(fired.monitor), fired
+            finally:
+                # The one that fired is already gone; others may have fired too.
+                for monitor in ids:
+                    with contextlib.suppress(SituateError):
+                        await self.cancel_monitor(monitor)
 
     # ----- telemetry -------------------------------------------------------------
 
@@ -350,11 +376,11 @@ class Robot:
         return Stream(self, [f"situate/{self.name}/telemetry"], parse_telemetry)
 
 
-async def _fired(stream: Stream[Event], monitor: int) -> MonitorFired:
+async def _fired_any(stream: Stream[Event], monitors: list[int]) -> MonitorFired:
     async for event in stream:
-        if isinstance(event, MonitorFired) and event.monitor == monitor:
+        if isinstance(event, MonitorFired) and event.monitor in monitors:
             return event
-    raise NotRunning(f"the connection closed before monitor {monitor} fired")
+    raise NotRunning(f"the connection closed before monitor {monitors} fired")
 
 
 class Connector:

@@ -328,6 +328,7 @@ class MonitorInfo:
     mode: str
     fired: int
     holds: bool
+    pause: bool = False
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> MonitorInfo:
@@ -338,4 +339,5 @@ class MonitorInfo:
             mode=str(j.get("mode", "")),
             fired=int(j.get("fired", 0)),
             holds=bool(j.get("holds", False)),
+            pause=bool(j.get("pause", False)),
         )

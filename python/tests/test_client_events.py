@@ -197,3 +197,21 @@ def test_streams_end_when_the_robot_is_closed(toybot: Manager) -> None:
         await asyncio.wait_for(drain(), EVENT_S)  # ends instead of waiting forever
 
     run(main())
+
+
+def test_a_pausing_monitor_stops_the_cycle_where_its_condition_held(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            start = (await robot.stats()).cycle
+            target = start + 40
+            index, event = await robot.first("time < 0", f"cycle >= {target}", pause=True, timeout=30)
+            assert (index, event.cycle) == (1, target)
+            stats = await robot.stats()
+            # The cycle stopped right there, however long the event took to arrive.
+            assert (stats.running, stats.cycle) == (False, target)
+            # Both monitors are gone: the one that fired and the one cancelled.
+            assert await robot.monitors() == []
+            await robot.run()
+            await robot.when(f"cycle > {target + 2}", timeout=30)
+
+    run(main())

@@ -345,7 +345,8 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
                 })?,
                 Some(other) => return Err(a.wrong("mode", "\"once\", \"edge\" or \"level\"", &other)),
             };
-            Decoded::Manager(Request::AddMonitor { condition, mode })
+            let pause = a.boolean("pause", Some(false))?;
+            Decoded::Manager(Request::AddMonitor { condition, mode, pause })
         }
         "monitor_cancel" => {
             Decoded::Manager(Request::CancelMonitor { monitor: a.integer("monitor", 0, i64::MAX)? as u64 })
@@ -475,7 +476,10 @@ fn graph_to_json(g: &GraphInfo) -> Json {
 }
 
 fn monitor_to_json(m: &MonitorInfo) -> Json {
-    json!({"monitor": m.monitor, "condition": m.condition, "mode": m.mode.name(), "fired": m.fired, "holds": m.holds})
+    json!({
+        "monitor": m.monitor, "condition": m.condition, "mode": m.mode.name(), "fired": m.fired, "holds": m.holds,
+        "pause": m.pause,
+    })
 }
 
 /// A manager reply's `ok` result.

@@ -57,9 +57,12 @@ pub enum Request {
     QueryWinners,
     QueryGraph,
     QueryStats,
+    /// Watch `condition` (see [`crate::expr`]); with `pause`, also stop the
+    /// cycle at the end of each cycle the monitor fires in.
     AddMonitor {
         condition: String,
         mode: MonitorMode,
+        pause: bool,
     },
     CancelMonitor {
         monitor: u64,
@@ -289,6 +292,7 @@ pub struct MonitorInfo {
     pub mode: MonitorMode,
     pub fired: u64,
     pub holds: bool,
+    pub pause: bool,
 }
 
 /// Anything that answers requests: the manager itself, or a handle to it.
@@ -364,7 +368,7 @@ pub trait Control {
     }
 
     fn add_monitor(&mut self, condition: &str, mode: MonitorMode) -> Result<u64, ControlError> {
-        match self.request(Request::AddMonitor { condition: condition.into(), mode })? {
+        match self.request(Request::AddMonitor { condition: condition.into(), mode, pause: false })? {
             Reply::MonitorAdded(id) => Ok(id),
             other => Err(unexpected(other)),
         }

@@ -101,6 +101,10 @@ impl EventBus {
 enum RefTarget {
     Leaf(usize),
     Param(usize, usize),
+    /// `time`: seconds on the manager's clock.
+    Time,
+    /// `cycle`: the cycle counter.
+    Cycle,
 }
 
 /// The skill manager.
@@ -130,6 +134,8 @@ pub struct Manager {
     deactivated: Vec<String>,
     /// When running on its own thread, stop after this cycle.
     stop_at: Option<u64>,
+    /// Pacing of the simulated clock when spawned (see [`Manager::set_speed`]).
+    speed: Option<f64>,
     /// The ready skills of a level (kept to reuse its allocation).
     ready: Vec<usize>,
 }
@@ -213,6 +219,7 @@ impl Manager {
             activated: Vec::new(),
             deactivated: Vec::new(),
             stop_at: None,
+            speed: None,
             ready: Vec::new(),
             graph,
         };
@@ -632,9 +639,12 @@ impl Manager {
             return;
         }
         let mut fired: Vec<Event> = Vec::new();
-        let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts };
+        let mut pause = false;
+        let clock = [Value::F64(self.time_s), Value::I64(self.cycle as i64)];
+        let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts, clock: &clock };
         let (cycle, time_s) = (self.cycle, self.time_s);
         self.monitors.evaluate(&env, |m| {
+            pause |= m.pause;
             let values = m
                 .condition
                 .refs()
@@ -652,6 +662,9 @@ impl Manager {
         });
         for e in fired {
             self.bus.send(e);
+        }
+        if pause && self.running {
+            let _ = self.request(Request::Stop);
         }
     }
 
@@ -905,7 +918,12 @@ impl Manager {
         }
     }
 
-    fn add_monitor(&mut self, condition: &str, mode: crate::monitor::MonitorMode) -> Result<Reply, ControlError> {
+    fn add_monitor(
+        &mut self,
+        condition: &str,
+        mode: crate::monitor::MonitorMode,
+        pause: bool,
+    ) -> Result<Reply, ControlError> {
         let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
         let compiled = Condition::compile(condition, &resolver);
         let added = resolver.added.into_inner();
@@ -915,7 +933,7 @@ impl Manager {
             pointer: e.pointer(condition),
         })?;
         self.refs.extend(added);
-        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode)))
+        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode, pause)))
     }
 
     /// Handles one request between two cycles.
@@ -947,7 +965,7 @@ impl Manager {
             Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
             Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
             Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
-            Request::AddMonitor { condition, mode } => self.add_monitor(&condition, mode),
+            Request::AddMonitor { condition, mode, pause } => self.add_monitor(&condition, mode, pause),
             Request::CancelMonitor { monitor } => {
                 if self.monitors.cancel(monitor) {
                     Ok(Reply::Done)
@@ -965,6 +983,7 @@ impl Manager {
                         mode: m.mode,
                         fired: m.fired,
                         holds: m.holds,
+                        pause: m.pause,
                     })
                     .collect(),
             )),
@@ -1047,9 +1066,20 @@ impl Manager {
         self.stop_at = cycle;
     }
 
+    /// On the simulated clock, pace the cycle at `speed` × real time when
+    /// spawned (`None`, the default: as fast as possible). The wall clock is
+    /// always paced at its rate.
+    pub fn set_speed(&mut self, speed: Option<f64>) {
+        self.speed = speed.filter(|s| s.is_finite() && *s > 0.0);
+    }
+
     fn serve(&mut self, rx: Receiver<Envelope>) {
         raise_thread_priority();
-        let period = Duration::from_secs_f64(self.period_s);
+        let paced = match self.clock {
+            ClockKind::Wall => Some(self.period_s),
+            ClockKind::Simulated => self.speed.map(|s| self.period_s / s),
+        };
+        let period = Duration::from_secs_f64(paced.unwrap_or(self.period_s).clamp(1e-6, 1e6));
         let mut deadline = Instant::now();
         loop {
             if self.running && self.stop_at.is_some_and(|n| self.cycle >= n) {
@@ -1057,8 +1087,8 @@ impl Manager {
             }
             if self.running {
                 self.cycle();
-                match self.clock {
-                    ClockKind::Wall => {
+                match paced {
+                    Some(_) => {
                         deadline += period;
                         if deadline < Instant::now() {
                             deadline = Instant::now();
@@ -1079,7 +1109,7 @@ impl Manager {
                             }
                         }
                     }
-                    ClockKind::Simulated => loop {
+                    None => loop {
                         match rx.try_recv() {
                             Ok(env) => {
                                 if self.serve_one(env) {
@@ -1216,6 +1246,8 @@ struct Env<'a> {
     refs: &'a [RefTarget],
     slots: &'a [Slot],
     insts: &'a [Inst],
+    /// `[time, cycle]`.
+    clock: &'a [Value; 2],
 }
 
 impl Lookup for Env<'_> {
@@ -1223,6 +1255,8 @@ impl Lookup for Env<'_> {
         match self.refs.get(id)? {
             RefTarget::Leaf(l) => self.slots.get(*l)?.value.as_ref(),
             RefTarget::Param(i, p) => self.insts.get(*i)?.params.get(*p),
+            RefTarget::Time => Some(&self.clock[0]),
+            RefTarget::Cycle => Some(&self.clock[1]),
         }
     }
 }
@@ -1256,6 +1290,11 @@ impl Resolver for ManagerResolver<'_> {
         if let Some(ty) = g.records.get(path) {
             // The expression language reports records as not comparable.
             return Ok((usize::MAX, ty.clone()));
+        }
+        match path {
+            "time" => return Ok((self.intern(RefTarget::Time), SignalType::F64)),
+            "cycle" => return Ok((self.intern(RefTarget::Cycle), SignalType::I64)),
+            _ => {}
         }
         let first = path.split('.').next().unwrap_or(path);
         let is_signal_prefix = g.records.contains_key(first) || g.leaf_index.contains_key(first);

@@ -13,6 +13,12 @@
 //!
 //! A condition whose values are missing (never written, index out of range)
 //! does not hold.
+//!
+//! A monitor added with `pause` also stops the cycle at the end of the cycle
+//! it fires in (the manager then serves requests until told to run again).
+//! A sequencer that reacts to the event and then resumes the cycle makes
+//! its decisions at exactly the cycle the condition held, however slow the
+//! link: runs on the simulated clock replay exactly.
 
 use std::fmt;
 
@@ -56,6 +62,7 @@ pub(crate) struct Monitor {
     pub mode: MonitorMode,
     pub holds: bool,
     pub fired: u64,
+    pub pause: bool,
 }
 
 #[derive(Default)]
@@ -65,10 +72,10 @@ pub(crate) struct Monitors {
 }
 
 impl Monitors {
-    pub fn add(&mut self, condition: Condition, mode: MonitorMode) -> u64 {
+    pub fn add(&mut self, condition: Condition, mode: MonitorMode, pause: bool) -> u64 {
         self.next_id += 1;
         let id = self.next_id;
-        self.list.push(Monitor { id, condition, mode, holds: false, fired: 0 });
+        self.list.push(Monitor { id, condition, mode, holds: false, fired: 0, pause });
         id
     }
 

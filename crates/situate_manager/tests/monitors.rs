@@ -139,3 +139,44 @@ fn a_cancelled_monitor_stops_firing() {
     assert_eq!(fired(&events), vec![(id, 2)]);
     assert_eq!(m.cancel_monitor(id).unwrap_err(), ControlError::UnknownMonitor(id));
 }
+
+#[test]
+fn time_and_cycle_are_names_every_condition_can_use() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let id = m.add_monitor("cycle == 3 && time > 0", MonitorMode::Edge).unwrap();
+    m.step(6).unwrap();
+    assert_eq!(fired(&events), vec![(id, 3)]);
+}
+
+#[test]
+fn a_pausing_monitor_stops_the_cycle_at_the_cycle_it_fires_in() {
+    let m = robot(SCRIPT);
+    let events = m.events();
+    let (mut handle, join) = m.spawn(false);
+    let reply = handle
+        .request(Request::AddMonitor {
+            condition: "sonar.range[0] < 0.25".into(),
+            mode: MonitorMode::Edge,
+            pause: true,
+        })
+        .unwrap();
+    let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
+    let wait_stopped = || loop {
+        match events.recv_timeout(std::time::Duration::from_secs(60)).expect("the manager stops") {
+            Event::ManagerStopped { cycle } => return cycle,
+            _ => continue,
+        }
+    };
+    handle.request(Request::Run).unwrap();
+    // However fast the cycle runs, it stops where the condition first held…
+    assert_eq!(wait_stopped(), 2);
+    assert_eq!(handle.stats().unwrap().cycle, 2);
+    // …and again at the next rising edge once resumed.
+    handle.request(Request::Run).unwrap();
+    assert_eq!(wait_stopped(), 5);
+    let situate_manager::Reply::Monitors(list) = handle.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!((list[0].monitor, list[0].fired, list[0].pause), (id, 2, true));
+    handle.request(Request::Shutdown).unwrap();
+    join.join().unwrap();
+}
