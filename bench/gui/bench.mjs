@@ -1,0 +1,96 @@
+// GUI overhead: the mean cycle time of one robot with two GUI tabs attached vs none, in one run.
+// Phases alternate (none, tabs, tabs, none, …) so drift hits both sides alike; each phase's mean
+// cycle time comes from the manager's own stats (cycle counter and mean) read over the link at its
+// start and end. Nothing asserts on timing: the verdict is printed.
+
+import { writeFileSync, mkdirSync } from "node:fs";
+import os from "node:os";
+import path from "node:path";
+import { cli, startBrowser, startTestbed, stopBrowser, stopTestbed } from "../../web/tests/harness.mjs";
+
+const opt = (name, dflt) => {
+  const i = process.argv.indexOf(`--${name}`);
+  return i >= 0 && process.argv[i + 1] !== undefined ? process.argv[i + 1] : dflt;
+};
+const phaseS = Number(opt("phase-s", "15"));
+const rounds = Number(opt("rounds", "3"));
+const robot = opt("robot", "");
+const out = opt("json", "");
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+async function phase(tb, label) {
+  const a = await cli(tb.linkPort, "stats");
+  await sleep(phaseS * 1000);
+  const b = await cli(tb.linkPort, "stats");
+  const cycles = b.cycle - a.cycle;
+  const meanNs = cycles > 0 ? (b.mean_cycle_ns * b.cycle - a.mean_cycle_ns * a.cycle) / cycles : NaN;
+  const overruns = b.overruns - a.overruns;
+  console.log(`${label.padEnd(6)} ${String(cycles).padStart(6)} cycles, mean cycle time ${(meanNs / 1000).toFixed(2)} µs, overruns ${overruns}`);
+  return { label, cycles, mean_ns: meanNs, overruns };
+}
+
+const load0 = os.loadavg()[0];
+const tb = await startTestbed(["--no-circle", ...(robot ? ["--robot", robot] : [])]);
+let browser;
+const results = [];
+try {
+  browser = await startBrowser();
+  // Let the robot settle before measuring.
+  await sleep(2000);
+  for (let r = 0; r < rounds; r++) {
+    const order = r % 2 === 0 ? ["none", "tabs"] : ["tabs", "none"];
+    for (const what of order) {
+      if (what === "none") {
+        results.push(await phase(tb, "none"));
+      } else {
+        const pages = [];
+        for (let i = 0; i < 2; i++) {
+          const p = await browser.context.newPage();
+          await p.goto(tb.url);
+          await p.getByTestId("switch-wander").waitFor({ timeout: 20_000 });
+          for (const s of ["odom.x", "sonar.range[0]"]) {
+            await p.getByTestId("plot-signal").fill(s);
+            await p.getByTestId("plot-add").click();
+          }
+          for (const name of ["runaway", "wheels"]) {
+            await p.getByTestId(`skill-${name}`).locator("summary").click();
+            await p.getByTestId(`show-input-${name}`).check();
+            await p.getByTestId(`show-output-${name}`).check();
+          }
+          pages.push(p);
+        }
+        try {
+          results.push(await phase(tb, "tabs"));
+        } finally {
+          for (const p of pages) await p.close();
+        }
+      }
+    }
+  }
+} finally {
+  await stopBrowser(browser).catch(() => undefined);
+  await stopTestbed(tb);
+}
+
+const mean = (label) => {
+  const rs = results.filter((r) => r.label === label);
+  const cycles = rs.reduce((s, r) => s + r.cycles, 0);
+  return rs.reduce((s, r) => s + r.mean_ns * r.cycles, 0) / cycles;
+};
+const none = mean("none");
+const tabs = mean("tabs");
+const ratio = tabs / none;
+console.log(`\nmean cycle time: none ${(none / 1000).toFixed(2)} µs, two tabs ${(tabs / 1000).toFixed(2)} µs`);
+console.log(`ratio (two tabs / none): ${ratio.toFixed(3)}×`);
+const load1 = os.loadavg()[0];
+const cpus = os.cpus().length;
+// Other work on the machine swamps a 5 % effect: then the verdict is not a verdict.
+const busy = Math.max(load0, load1) > cpus;
+console.log(`load average ${load0.toFixed(2)} → ${load1.toFixed(2)} on ${cpus} CPUs${busy ? " (busy machine)" : ""}`);
+console.log(`TARGET two tabs ≤ 1.05× none: ${busy ? "INCONCLUSIVE (load above the CPU count), " : ""}${ratio <= 1.05 ? "met" : "NOT met"}`);
+if (out) {
+  mkdirSync(path.dirname(out), { recursive: true });
+  writeFileSync(out, JSON.stringify({ phase_s: phaseS, rounds, none_mean_ns: none, tabs_mean_ns: tabs, ratio, load_avg: [load0, load1], cpus, inconclusive: busy, phases: results }, null, 2));
+  console.log(`figures: ${out}`);
+}

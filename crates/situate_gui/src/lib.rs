@@ -1,0 +1,697 @@
+//! The debugging GUI in the browser (paper sections 4–5): a small web server
+//! beside a running skill manager that serves the built web app (`web/dist`,
+//! embedded at compile time) and speaks to it over one WebSocket per tab.
+//!
+//! Everything the GUI does goes through the manager's control API: a browser
+//! request is decoded by the sequencer link's own decoder
+//! ([`situate_link::json::decode_request`]) into a [`Request`] and sent through
+//! the [`Handle`], and replies, errors and events use the link's JSON forms
+//! (docs/protocol.md). So the GUI can never do what the link refuses.
+//!
+//! Telemetry (manager stats, every skill's state, resource winners, the
+//! signals some tab watches and the world view's signals) is sampled by one
+//! thread, off the cycle's thread, at [`GuiConfig::sample_hz`], and only while
+//! at least one browser is connected; each sample is broadcast to every tab.
+//! Events from [`Handle::events`] are forwarded live.
+//!
+//! ## Messages (JSON text frames)
+//! Browser → server: `{"id": 7, "verb": "activate", "args": {"skills": ["wander"]}}` with any verb of
+//! the link's protocol except `telemetry`, plus the GUI's own `{"id": 8, "verb": "watch", "args":
+//! {"signals": ["odom", "sonar.range"]}}` (the signals this tab plots).
+//! Server → browser: `{"type": "hello", …}` once, `{"type": "reply", "id": 7, "ok": …}` or
+//! `{"type": "reply", "id": 7, "error": {"kind", "message"}}`, `{"type": "telemetry", …}` at the
+//! sampling rate and `{"type": "event", "event": {…}}` as they happen.
+
+use std::collections::{BTreeSet, HashMap, HashSet};
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::http::{header, HeaderMap, StatusCode, Uri};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use axum::Router;
+use crossbeam_channel::{Receiver, Sender};
+use serde_json::{json, Value as Json};
+use situate_link::json as wire;
+use situate_manager::{ControlError, Handle, Reply, Request};
+use tokio::sync::{broadcast, watch};
+
+mod assets {
+    include!(concat!(env!("OUT_DIR"), "/assets.rs"));
+}
+
+/// How long a browser's request may wait for the manager.
+const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
+/// The largest message a browser may send.
+const MAX_MESSAGE: usize = 64 * 1024;
+/// The signals the world view draws, when they exist.
+const WORLD_SIGNALS: [&str; 3] = ["truth.pose", "sonar.range", "truth.cars"];
+
+/// Where and how the GUI serves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GuiConfig {
+    /// The address to listen on (port 0: pick a free one). Bind only where told: the `situate`
+    /// program's default is 127.0.0.1.
+    pub listen: SocketAddr,
+    /// The simulator's map (floors, walls, doors, barcodes, cars) for the world view, if any.
+    pub world: Option<Json>,
+    /// Telemetry samples per second while a browser is connected (default 10).
+    pub sample_hz: f64,
+}
+
+impl Default for GuiConfig {
+    fn default() -> Self {
+        GuiConfig { listen: SocketAddr::from(([127, 0, 0, 1], 0)), world: None, sample_hz: 10.0 }
+    }
+}
+
+/// Why the GUI could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum GuiError {
+    /// The listening socket could not be opened.
+    #[error("the GUI cannot listen on {addr}: {source} (is the port in use? choose another, or 0 for a free one)")]
+    Bind {
+        addr: SocketAddr,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A configuration value is out of range.
+    #[error("GUI configuration: {0}")]
+    Config(String),
+    /// The server's threads or runtime could not start.
+    #[error("could not start the GUI server: {0}")]
+    Start(#[source] std::io::Error),
+}
+
+/// A running GUI server. Dropping it stops it, like [`GuiServer::stop`].
+pub struct GuiServer {
+    addr: SocketAddr,
+    shutdown: watch::Sender<bool>,
+    stop: Arc<AtomicBool>,
+    wake: Sender<()>,
+    threads: Vec<JoinHandle<()>>,
+    shared: Arc<Shared>,
+}
+
+impl GuiServer {
+    /// The address actually bound (with the port picked when 0 was asked).
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// The URL a browser opens.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.addr)
+    }
+
+    /// How many browser tabs are connected now.
+    pub fn clients(&self) -> usize {
+        self.shared.clients.load(Ordering::SeqCst)
+    }
+
+    /// Stops serving: closes every socket, ends the sampler and the server's threads, and waits
+    /// for them.
+    pub fn stop(mut self) {
+        self.stop_inner();
+    }
+
+    fn stop_inner(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        let _ = self.shutdown.send(true);
+        let _ = self.wake.send(());
+        for t in self.threads.drain(..) {
+            if t.join().is_err() {
+                tracing::warn!("a GUI thread panicked");
+            }
+        }
+    }
+}
+
+impl Drop for GuiServer {
+    fn drop(&mut self) {
+        self.stop_inner();
+    }
+}
+
+/// What every connection shares.
+struct Shared {
+    handle: Handle,
+    world: Option<Json>,
+    sample_hz: f64,
+    clients: AtomicUsize,
+    next_client: AtomicU64,
+    /// Per connected tab, the signals it watches.
+    watched: Mutex<HashMap<u64, Vec<String>>>,
+    telemetry: broadcast::Sender<Utf8Bytes>,
+    events: broadcast::Sender<Utf8Bytes>,
+    wake: Sender<()>,
+    shutdown: watch::Receiver<bool>,
+}
+
+/// Serves the GUI for the manager behind `handle`: binds `config.listen` now (so a busy port is
+/// reported here), then serves on its own threads until [`GuiServer::stop`].
+pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
+    if !(config.sample_hz.is_finite() && config.sample_hz > 0.0 && config.sample_hz <= 100.0) {
+        return Err(GuiError::Config(format!("sample_hz must be in (0, 100], got {}", config.sample_hz)));
+    }
+    let std_listener =
+        std::net::TcpListener::bind(config.listen).map_err(|source| GuiError::Bind { addr: config.listen, source })?;
+    let addr = std_listener.local_addr().map_err(GuiError::Start)?;
+    std_listener.set_nonblocking(true).map_err(GuiError::Start)?;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .max_blocking_threads(4)
+        .thread_name("situate-gui")
+        .enable_all()
+        .build()
+        .map_err(GuiError::Start)?;
+    let listener = {
+        let _guard = runtime.enter();
+        tokio::net::TcpListener::from_std(std_listener).map_err(GuiError::Start)?
+    };
+    let (shutdown_tx, shutdown_rx) = watch::channel(false);
+    let (wake_tx, wake_rx) = crossbeam_channel::unbounded();
+    let stop = Arc::new(AtomicBool::new(false));
+    let shared = Arc::new(Shared {
+        handle: handle.clone(),
+        world: config.world,
+        sample_hz: config.sample_hz,
+        clients: AtomicUsize::new(0),
+        next_client: AtomicU64::new(1),
+        watched: Mutex::new(HashMap::new()),
+        telemetry: broadcast::channel(16).0,
+        events: broadcast::channel(1024).0,
+        wake: wake_tx.clone(),
+        shutdown: shutdown_rx.clone(),
+    });
+    let mut threads = Vec::new();
+    let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
+        std::thread::Builder::new().name(name.into()).spawn(f).map_err(GuiError::Start)
+    };
+    // Events: subscribed now, forwarded to every tab as they come.
+    let events = handle.events();
+    let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
+    threads.push(spawn("situate-gui-events", Box::new(move || forward_events(&s, &events, &st)))?);
+    let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
+    threads.push(spawn("situate-gui-sampler", Box::new(move || sample_loop(&s, &wake_rx, &st)))?);
+    let app = Router::new()
+        .route("/ws", get(ws_upgrade))
+        .route("/api/world", get(world))
+        .fallback(static_file)
+        .with_state(Arc::clone(&shared));
+    let mut shutdown_wait = shutdown_rx;
+    threads.push(spawn(
+        "situate-gui-server",
+        Box::new(move || {
+            runtime.block_on(async move {
+                let graceful = async move {
+                    let _ = shutdown_wait.wait_for(|s| *s).await.map(|_| ());
+                };
+                if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(graceful).await {
+                    tracing::error!(error = %e, "the GUI server ended");
+                }
+            });
+            runtime.shutdown_timeout(Duration::from_secs(2));
+        }),
+    )?);
+    tracing::info!(%addr, "GUI serving");
+    Ok(GuiServer { addr, shutdown: shutdown_tx, stop, wake: wake_tx, threads, shared })
+}
+
+// ----- events and telemetry -------------------------------------------------------------------
+
+fn forward_events(shared: &Shared, events: &Receiver<situate_manager::Event>, stop: &AtomicBool) {
+    while !stop.load(Ordering::SeqCst) {
+        match events.recv_timeout(Duration::from_millis(100)) {
+            Ok(e) => {
+                if shared.clients.load(Ordering::SeqCst) == 0 {
+                    continue;
+                }
+                let (_, body) = wire::event_to_json(&e);
+                let _ = shared.events.send(json!({"type": "event", "event": body}).to_string().into());
+            }
+            Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+            Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
+        }
+    }
+}
+
+/// One sampler for every tab: samples only while someone is connected.
+fn sample_loop(shared: &Shared, wake: &Receiver<()>, stop: &AtomicBool) {
+    let period = Duration::from_secs_f64(1.0 / shared.sample_hz);
+    let mut absent: HashSet<String> = HashSet::new();
+    let mut next = Instant::now();
+    while !stop.load(Ordering::SeqCst) {
+        if shared.clients.load(Ordering::SeqCst) == 0 {
+            // Idle: no request reaches the manager until a browser connects.
+            let _ = wake.recv_timeout(Duration::from_millis(500));
+            next = Instant::now();
+            continue;
+        }
+        let sample = take_sample(shared, &mut absent);
+        let _ = shared.telemetry.send(sample.to_string().into());
+        next += period;
+        let now = Instant::now();
+        if next < now {
+            // Too slow for the rate: skip ahead rather than piling up requests.
+            next = now + period;
+        }
+        let _ = wake.recv_timeout(next - now);
+        while wake.try_recv().is_ok() {}
+    }
+}
+
+fn ask(handle: &Handle, request: Request) -> Result<Reply, ControlError> {
+    handle.request_timeout(request, REQUEST_TIMEOUT)
+}
+
+fn reply_json(r: Result<Reply, ControlError>) -> Json {
+    match r {
+        Ok(reply) => wire::reply_to_json(&reply),
+        Err(e) => wire::control_error(&e),
+    }
+}
+
+fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
+    let h = &shared.handle;
+    let stats = reply_json(ask(h, Request::QueryStats));
+    let skills = reply_json(ask(h, Request::QuerySkills));
+    let winners = reply_json(ask(h, Request::QueryWinners));
+    let mut wanted: BTreeSet<String> =
+        shared.watched.lock().unwrap_or_else(|p| p.into_inner()).values().flat_map(|v| v.iter().cloned()).collect();
+    wanted.extend(WORLD_SIGNALS.iter().map(|s| s.to_string()));
+    let mut signals = serde_json::Map::new();
+    for name in wanted {
+        if absent.contains(&name) {
+            continue;
+        }
+        match ask(h, Request::QuerySignal { signal: name.clone() }) {
+            Ok(reply) => {
+                signals.insert(name, wire::reply_to_json(&reply));
+            }
+            Err(e @ ControlError::UnknownSignal { .. }) => {
+                // The wiring never changes while running: don't ask again.
+                if !WORLD_SIGNALS.contains(&name.as_str()) {
+                    signals.insert(name.clone(), wire::control_error(&e));
+                }
+                absent.insert(name);
+            }
+            Err(e) => {
+                signals.insert(name, wire::control_error(&e));
+            }
+        }
+    }
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default().as_secs_f64();
+    json!({"type": "telemetry", "wall_s": now, "stats": stats, "skills": skills, "winners": winners, "signals": signals})
+}
+
+// ----- HTTP -----------------------------------------------------------------------------------
+
+async fn world(State(shared): State<Arc<Shared>>) -> Response {
+    axum::Json(shared.world.clone().unwrap_or(Json::Null)).into_response()
+}
+
+fn content_type(path: &str) -> &'static str {
+    match path.rsplit('.').next().unwrap_or("") {
+        "html" => "text/html; charset=utf-8",
+        "js" | "mjs" => "text/javascript; charset=utf-8",
+        "css" => "text/css; charset=utf-8",
+        "json" | "map" => "application/json",
+        "svg" => "image/svg+xml",
+        "png" => "image/png",
+        "ico" => "image/x-icon",
+        "woff2" => "font/woff2",
+        _ => "application/octet-stream",
+    }
+}
+
+/// The page served when the web app was not built into this program.
+pub const PLACEHOLDER: &str = "<!doctype html><html><head><meta charset=\"utf-8\"><title>situate GUI</title></head>\
+<body><h1>situate GUI: the web app is not built</h1><p>This program was compiled without <code>web/dist</code>. \
+Run <code>make gui</code> (or <code>scripts/gui.sh build</code>), then rebuild the program.</p></body></html>";
+
+/// Whether the web app was embedded at compile time.
+pub fn has_web_app() -> bool {
+    !assets::ASSETS.is_empty()
+}
+
+async fn static_file(uri: Uri) -> Response {
+    let path = uri.path().trim_start_matches('/');
+    let path = if path.is_empty() { "index.html" } else { path };
+    if let Some((_, bytes)) = assets::ASSETS.iter().find(|(p, _)| *p == path) {
+        let cache = if path.starts_with("assets/") { "public, max-age=31536000, immutable" } else { "no-cache" };
+        return ([(header::CONTENT_TYPE, content_type(path)), (header::CACHE_CONTROL, cache)], *bytes).into_response();
+    }
+    if path == "favicon.ico" {
+        return StatusCode::NO_CONTENT.into_response();
+    }
+    if path == "index.html" {
+        return ([(header::CONTENT_TYPE, "text/html; charset=utf-8")], PLACEHOLDER).into_response();
+    }
+    (StatusCode::NOT_FOUND, format!("no such file: /{path}")).into_response()
+}
+
+/// A browser's WebSocket must come from a page of this server (no cross-site WebSocket): a
+/// request with an `Origin` header is accepted only when its host is the request's `Host`.
+fn same_origin(headers: &HeaderMap) -> bool {
+    let Some(origin) = headers.get(header::ORIGIN) else { return true };
+    let (Ok(origin), Some(Ok(host))) = (origin.to_str(), headers.get(header::HOST).map(|h| h.to_str())) else {
+        return false;
+    };
+    origin.strip_prefix("http://").or_else(|| origin.strip_prefix("https://")) == Some(host)
+}
+
+async fn ws_upgrade(State(shared): State<Arc<Shared>>, headers: HeaderMap, ws: WebSocketUpgrade) -> Response {
+    if !same_origin(&headers) {
+        tracing::warn!("refused a WebSocket from another origin");
+        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
+    }
+    ws.max_message_size(MAX_MESSAGE).on_upgrade(move |socket| session(shared, socket))
+}
+
+/// Counts a connected tab for as long as it lives.
+struct ClientGuard {
+    shared: Arc<Shared>,
+    id: u64,
+}
+
+impl Drop for ClientGuard {
+    fn drop(&mut self) {
+        self.shared.watched.lock().unwrap_or_else(|p| p.into_inner()).remove(&self.id);
+        self.shared.clients.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
+    let id = shared.next_client.fetch_add(1, Ordering::SeqCst);
+    let mut telemetry = shared.telemetry.subscribe();
+    let mut events = shared.events.subscribe();
+    let mut shutdown = shared.shutdown.clone();
+    shared.clients.fetch_add(1, Ordering::SeqCst);
+    let _guard = ClientGuard { shared: Arc::clone(&shared), id };
+    let _ = shared.wake.send(());
+    tracing::debug!(client = id, "GUI tab connected");
+    let hello = json!({
+        "type": "hello",
+        "client": id,
+        "protocol": wire::PROTOCOL,
+        "sample_hz": shared.sample_hz,
+        "world": shared.world,
+        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(["watch"].iter()).collect::<Vec<_>>(),
+    });
+    if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
+        return;
+    }
+    let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Utf8Bytes>();
+    loop {
+        tokio::select! {
+            _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
+                let _ = socket.send(Message::Close(None)).await;
+                break;
+            }
+            incoming = socket.recv() => match incoming {
+                Some(Ok(Message::Text(text))) => {
+                    let shared = Arc::clone(&shared);
+                    let tx = reply_tx.clone();
+                    tokio::task::spawn_blocking(move || {
+                        let reply = handle_message(&shared, id, text.as_str());
+                        let _ = tx.send(reply.to_string().into());
+                    });
+                }
+                Some(Ok(Message::Binary(_))) => {
+                    let e = json!({"type": "reply", "id": null,
+                        "error": {"kind": "bad_request", "message": "send JSON text frames, not binary"}});
+                    if socket.send(Message::Text(e.to_string().into())).await.is_err() {
+                        break;
+                    }
+                }
+                Some(Ok(_)) => {}
+                Some(Err(_)) | None => break,
+            },
+            Some(reply) = reply_rx.recv() => {
+                if socket.send(Message::Text(reply)).await.is_err() {
+                    break;
+                }
+            }
+            t = telemetry.recv() => match t {
+                Ok(text) => {
+                    if socket.send(Message::Text(text)).await.is_err() {
+                        break;
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => break,
+            },
+            e = events.recv() => match e {
+                Ok(text) => {
+                    if socket.send(Message::Text(text)).await.is_err() {
+                        break;
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(n)) => {
+                    let note = json!({"type": "lagged", "missed": n});
+                    if socket.send(Message::Text(note.to_string().into())).await.is_err() {
+                        break;
+                    }
+                }
+                Err(broadcast::error::RecvError::Closed) => break,
+            },
+        }
+    }
+    tracing::debug!(client = id, "GUI tab disconnected");
+}
+
+/// Answers one browser message (blocking: it may wait for the manager).
+fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
+    let parsed: Json = match serde_json::from_str(text) {
+        Ok(j) => j,
+        Err(e) => return error_reply(&Json::Null, "bad_request", &format!("the message is not JSON: {e}")),
+    };
+    let id = parsed.get("id").cloned().unwrap_or(Json::Null);
+    let Some(verb) = parsed.get("verb").and_then(Json::as_str) else {
+        return error_reply(&id, "bad_request", "the message needs a `verb` (a string)");
+    };
+    let args = parsed.get("args").cloned().unwrap_or_else(|| json!({}));
+    if verb == "watch" {
+        return watch_signals(shared, client, &id, &args);
+    }
+    if verb == "telemetry" {
+        return error_reply(&id, "bad_request", "the GUI samples telemetry itself: use `watch` to choose signals");
+    }
+    let payload = args.to_string();
+    match wire::decode_request(verb, payload.as_bytes()) {
+        Err(e) => json!({"type": "reply", "id": id, "error": {"kind": e.kind, "message": e.message}}),
+        Ok(wire::Decoded::Hello) => match ask(&shared.handle, Request::QueryStats) {
+            Ok(Reply::Stats(s)) => json!({"type": "reply", "id": id, "ok": {
+                "robot": s.robot, "protocol": wire::PROTOCOL, "verbs": wire::VERBS}}),
+            Ok(other) => error_reply(&id, "invalid", &format!("unexpected reply {other:?}")),
+            Err(e) => with_id(wire::control_error(&e), &id),
+        },
+        Ok(wire::Decoded::Telemetry { .. }) => error_reply(&id, "bad_request", "use `watch`"),
+        Ok(wire::Decoded::Manager(request)) => {
+            tracing::debug!(?request, client, "GUI request");
+            match ask(&shared.handle, request) {
+                Ok(reply) => json!({"type": "reply", "id": id, "ok": wire::reply_to_json(&reply)}),
+                Err(e) => with_id(wire::control_error(&e), &id),
+            }
+        }
+    }
+}
+
+fn with_id(mut body: Json, id: &Json) -> Json {
+    body["type"] = json!("reply");
+    body["id"] = id.clone();
+    body
+}
+
+fn error_reply(id: &Json, kind: &str, message: &str) -> Json {
+    json!({"type": "reply", "id": id, "error": {"kind": kind, "message": message}})
+}
+
+/// `watch`: the signals this tab plots (a list of signal names, at most 32).
+fn watch_signals(shared: &Shared, client: u64, id: &Json, args: &Json) -> Json {
+    let Some(list) = args.get("signals").and_then(Json::as_array) else {
+        return error_reply(id, "bad_request", "`watch`: argument `signals` must be a list of strings");
+    };
+    let mut signals = Vec::new();
+    for s in list {
+        match s.as_str() {
+            Some(name) if !name.is_empty() && name.len() <= 200 => signals.push(name.to_string()),
+            _ => return error_reply(id, "bad_request", "`watch`: every signal must be a non-empty string"),
+        }
+    }
+    if signals.len() > 32 {
+        return error_reply(id, "bad_request", "`watch`: at most 32 signals per tab");
+    }
+    for name in &signals {
+        if let Err(e) = ask(&shared.handle, Request::QuerySignal { signal: name.clone() }) {
+            return with_id(wire::control_error(&e), id);
+        }
+    }
+    shared.watched.lock().unwrap_or_else(|p| p.into_inner()).insert(client, signals.clone());
+    json!({"type": "reply", "id": id, "ok": {"signals": signals}})
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::{Read, Write};
+    use std::net::TcpStream;
+
+    use situate::manager::{Control, Manager, RobotSpec, SkillSpec};
+
+    use super::*;
+
+    fn robot() -> (Handle, std::thread::JoinHandle<Manager>) {
+        let spec = RobotSpec::new("guitest")
+            .skill(SkillSpec::new("sonar", "toy.sonar"))
+            .skill(SkillSpec::new("wheels", "toy.wheels"))
+            .skill(SkillSpec::new("runaway", "toy.runaway"))
+            .skill(SkillSpec::new("wander", "toy.wander").active(false));
+        let manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
+        manager.spawn(true)
+    }
+
+    fn shared(handle: Handle) -> Shared {
+        let (wake, _) = crossbeam_channel::unbounded();
+        Shared {
+            handle,
+            world: None,
+            sample_hz: 10.0,
+            clients: AtomicUsize::new(0),
+            next_client: AtomicU64::new(1),
+            watched: Mutex::new(HashMap::new()),
+            telemetry: broadcast::channel(4).0,
+            events: broadcast::channel(4).0,
+            wake,
+            shutdown: watch::channel(false).1,
+        }
+    }
+
+    fn http(addr: SocketAddr, request: &str) -> String {
+        let mut s = TcpStream::connect(addr).expect("connect");
+        s.set_read_timeout(Some(Duration::from_secs(10))).expect("timeout");
+        s.write_all(request.as_bytes()).expect("write");
+        let mut buf = Vec::new();
+        let mut chunk = [0u8; 4096];
+        // Read the head (and whatever body came with it); upgrades never close the stream.
+        while let Ok(n) = s.read(&mut chunk) {
+            if n == 0 {
+                break;
+            }
+            buf.extend_from_slice(&chunk[..n]);
+            let text = String::from_utf8_lossy(&buf);
+            // An upgrade request keeps the connection open: its head is the whole answer.
+            if request.contains("Upgrade: websocket") && text.contains("\r\n\r\n") {
+                break;
+            }
+        }
+        String::from_utf8_lossy(&buf).into_owned()
+    }
+
+    #[test]
+    fn requests_go_through_the_links_decoder_and_the_control_api() {
+        let (mut handle, join) = robot();
+        let s = shared(handle.clone());
+        let r = handle_message(&s, 1, r#"{"id": 1, "verb": "activate", "args": {"skills": ["wander"]}}"#);
+        assert_eq!(r["id"], 1);
+        assert_eq!(r["ok"]["changed"], json!(["wander"]));
+        let r = handle_message(
+            &s,
+            1,
+            r#"{"id": 2, "verb": "set_param", "args": {"skill": "runaway", "param": "safe_distance", "value": 9}}"#,
+        );
+        assert_eq!(r["error"]["kind"], "bad_param");
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("[0.1, 3.0]"), "{r}");
+        assert_eq!(handle.get_param("runaway", "safe_distance"), Ok(situate_core::Value::F64(0.5)));
+        let r = handle_message(&s, 1, r#"{"id": 3, "verb": "shutdown"}"#);
+        assert_eq!(r["error"]["kind"], "unknown_verb", "{r}");
+        let r = handle_message(&s, 1, r#"{"id": 4, "verb": "telemetry", "args": {"signals": ["odom"]}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request");
+        let r = handle_message(&s, 1, "not json");
+        assert_eq!(r["error"]["kind"], "bad_request");
+        assert_eq!(r["id"], Json::Null);
+        let r = handle_message(&s, 1, r#"{"id": 5, "verb": "step", "args": {"cycles": "x"}}"#);
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("cycles"), "{r}");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn watch_checks_signals_and_the_sample_carries_them() {
+        let (mut handle, join) = robot();
+        let s = shared(handle.clone());
+        let r = handle_message(&s, 7, r#"{"id": 1, "verb": "watch", "args": {"signals": ["odom", "sonar.rang"]}}"#);
+        assert_eq!(r["error"]["kind"], "unknown_signal", "{r}");
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("sonar.range"), "suggests the name: {r}");
+        let r = handle_message(&s, 7, r#"{"id": 2, "verb": "watch", "args": {"signals": ["odom"]}}"#);
+        assert_eq!(r["ok"]["signals"], json!(["odom"]));
+        handle.step(3).expect("step");
+        let sample = take_sample(&s, &mut HashSet::new());
+        assert_eq!(sample["type"], "telemetry");
+        assert_eq!(sample["stats"]["robot"], "guitest");
+        assert_eq!(sample["skills"].as_array().map(Vec::len), Some(4));
+        assert_eq!(sample["signals"]["odom"]["signal"], "odom");
+        assert!(sample["signals"]["sonar.range"]["value"].is_array(), "the world view's sonar: {sample}");
+        assert!(sample["signals"].get("truth.pose").is_none(), "absent world signals are left out");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn serves_the_app_the_world_and_refuses_cross_origin_sockets() {
+        let (mut handle, join) = robot();
+        let world = json!({"floors": [], "cars": [], "robot_radius": 0.25});
+        let gui =
+            serve(handle.clone(), GuiConfig { world: Some(world.clone()), ..GuiConfig::default() }).expect("serve");
+        let addr = gui.local_addr();
+        assert!(addr.ip().is_loopback());
+        assert_ne!(addr.port(), 0);
+        let page = http(addr, "GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        assert!(page.starts_with("HTTP/1.1 200"), "{page}");
+        assert!(page.contains("<html") || page.contains("<!doctype html>"), "{page}");
+        if !has_web_app() {
+            assert!(page.contains("make gui"), "the placeholder says what to run: {page}");
+        }
+        let w = http(addr, "GET /api/world HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        assert!(w.contains("\"robot_radius\":0.25"), "{w}");
+        let missing = http(addr, "GET /nope.js HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        assert!(missing.starts_with("HTTP/1.1 404"), "{missing}");
+        let upgrade = |origin: &str| {
+            format!(
+                "GET /ws HTTP/1.1\r\nHost: {addr}\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n\
+                 Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n{origin}\r\n"
+            )
+        };
+        let evil = http(addr, &upgrade("Origin: http://evil.example\r\n"));
+        assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
+        let ok = http(addr, &upgrade(&format!("Origin: http://{addr}\r\n")));
+        assert!(ok.starts_with("HTTP/1.1 101"), "{ok}");
+        gui.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_busy_port_and_a_bad_rate_are_clear_errors() {
+        let (mut handle, join) = robot();
+        let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
+        let addr = taken.local_addr().expect("addr");
+        match serve(handle.clone(), GuiConfig { listen: addr, ..GuiConfig::default() }) {
+            Err(e @ GuiError::Bind { .. }) => assert!(e.to_string().contains(&addr.to_string()), "{e}"),
+            Err(other) => panic!("expected a bind error, got {other}"),
+            Ok(_) => panic!("expected a bind error"),
+        }
+        match serve(handle.clone(), GuiConfig { sample_hz: 0.0, ..GuiConfig::default() }) {
+            Err(GuiError::Config(m)) => assert!(m.contains("sample_hz"), "{m}"),
+            Err(other) => panic!("expected a config error, got {other}"),
+            Ok(_) => panic!("expected a config error"),
+        }
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+}

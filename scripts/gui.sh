@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# The debugging GUI: build the web app (web/dist, embedded by crates/situate_gui), and test it in a
+# real browser.
+#
+#   scripts/gui.sh build   npm ci when needed, then type-check and build web/dist
+#   scripts/gui.sh test    build, then build the testbed and the `situate` CLI, install Debian's
+#                          chromium when /usr/bin/chromium is missing, and run the browser tests
+#
+# Respects CARGO_TARGET_DIR. Fails loudly (non-zero exit) on any failure.
+set -euo pipefail
+
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+export PATH="$HOME/.cargo/bin:$PATH"
+CARGO=${CARGO:-cargo}
+TARGET=${CARGO_TARGET_DIR:-$ROOT/target}
+ACTION=${1:-build}
+
+die() { echo "gui.sh: $*" >&2; exit 1; }
+
+need() { command -v "$1" >/dev/null 2>&1 || die "$1 is needed ($2)"; }
+
+npm_ready() {
+    need node "Node 20 or newer"
+    need npm "Node's npm"
+    local major
+    major=$(node -p 'process.versions.node.split(".")[0]')
+    [ "$major" -ge 20 ] || die "Node 20 or newer is needed, found $(node --version)"
+    # npm ci when node_modules is missing or older than the lock file.
+    if [ ! -d web/node_modules ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
+        echo "gui.sh: npm ci in web/"
+        (cd web && npm ci --no-audit --no-fund)
+    fi
+}
+
+build_web() {
+    npm_ready
+    echo "gui.sh: building web/dist"
+    (cd web && npm run build)
+    [ -f web/dist/index.html ] || die "web/dist/index.html was not built"
+}
+
+install_chromium() {
+    if [ -x /usr/bin/chromium ]; then
+        return
+    fi
+    echo "gui.sh: /usr/bin/chromium is missing: installing Debian's chromium"
+    local sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        need sudo "to install chromium with apt-get (or install the chromium package yourself)"
+        sudo="sudo"
+    fi
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get update -q
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends chromium
+    [ -x /usr/bin/chromium ] || die "chromium was not installed at /usr/bin/chromium"
+}
+
+case "$ACTION" in
+    build)
+        build_web
+        ;;
+    test)
+        build_web
+        install_chromium
+        echo "gui.sh: building the testbed and the situate CLI (debug, in $TARGET)"
+        # The testbed embeds web/dist at compile time: build it after the web app.
+        $CARGO build -p situate_gui --example testbed
+        $CARGO build -p situate_cli --bin situate
+        export TESTBED_BIN="$TARGET/debug/examples/testbed"
+        export SITUATE_BIN="$TARGET/debug/situate"
+        echo "gui.sh: running the browser tests (screenshots in web/test-results/)"
+        (cd web && npm test)
+        ;;
+    *)
+        die "usage: scripts/gui.sh [build|test]"
+        ;;
+esac

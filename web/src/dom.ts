@@ -1,0 +1,84 @@
+// Tiny DOM helpers (no UI framework).
+
+import type { Json } from "./conn";
+
+type Attrs = Record<string, string | number | boolean | undefined>;
+type Child = Node | string | null | undefined | false;
+
+/** Creates an element with attributes (`on*` values are not supported: use addEventListener). */
+export function h<K extends keyof HTMLElementTagNameMap>(
+  tag: K,
+  attrs: Attrs = {},
+  ...children: Child[]
+): HTMLElementTagNameMap[K] {
+  const el = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (v === undefined || v === false) continue;
+    if (k === "class") el.className = String(v);
+    else el.setAttribute(k, v === true ? "" : String(v));
+  }
+  for (const c of children) {
+    if (c === null || c === undefined || c === false) continue;
+    el.append(typeof c === "string" ? document.createTextNode(c) : c);
+  }
+  return el;
+}
+
+/** Sets an element's text only when it changed (keeps selections and avoids layout churn). */
+export function setText(el: Element, text: string): void {
+  if (el.textContent !== text) el.textContent = text;
+}
+
+/** A value in the JSON form of the link, shortened for display. */
+export function show(v: Json | undefined, max = 400): string {
+  if (v === undefined) return "—";
+  const s = typeof v === "string" ? JSON.stringify(v) : JSON.stringify(v, (_k, x: unknown) => roundNumbers(x));
+  return s.length > max ? s.slice(0, max) + "…" : s;
+}
+
+function roundNumbers(x: unknown): unknown {
+  if (typeof x === "number" && !Number.isInteger(x)) return Number(x.toPrecision(6));
+  return x;
+}
+
+/** Flattens the numeric leaves of a value: `{x: 1, r: [2, 3]}` → `[[".x", 1], [".r[0]", 2], [".r[1]", 3]]`. */
+export function numericLeaves(v: Json | undefined, prefix = "", out: [string, number][] = []): [string, number][] {
+  if (typeof v === "number") out.push([prefix, v]);
+  else if (typeof v === "boolean") out.push([prefix, v ? 1 : 0]);
+  else if (typeof v === "string" && (v === "inf" || v === "-inf" || v === "nan")) out.push([prefix, Number(v === "nan" ? NaN : v === "inf" ? Infinity : -Infinity)]);
+  else if (Array.isArray(v)) v.forEach((x, i) => numericLeaves(x, `${prefix}[${i}]`, out));
+  else if (v !== null && typeof v === "object") for (const [k, x] of Object.entries(v)) numericLeaves(x, `${prefix}.${k}`, out);
+  return out;
+}
+
+/** Reads `path` (like `.x`, `[3]`, `.pose.theta`) inside a value. */
+export function pick(v: Json | undefined, path: string): Json | undefined {
+  const re = /\.([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]/gy;
+  let cur: Json | undefined = v;
+  let m: RegExpExecArray | null;
+  let consumed = 0;
+  while ((m = re.exec(path)) !== null) {
+    consumed = re.lastIndex;
+    if (m[1] !== undefined) {
+      cur = cur !== null && typeof cur === "object" && !Array.isArray(cur) ? cur[m[1]] : undefined;
+    } else if (m[2] !== undefined) {
+      cur = Array.isArray(cur) ? cur[Number(m[2])] : undefined;
+    }
+  }
+  return consumed === path.length ? cur : undefined;
+}
+
+export function num(v: Json | undefined, fallback = 0): number {
+  if (typeof v === "number") return v;
+  if (v === "inf") return Infinity;
+  if (v === "-inf") return -Infinity;
+  return fallback;
+}
+
+export function str(v: Json | undefined, fallback = ""): string {
+  return typeof v === "string" ? v : fallback;
+}
+
+export function errorText(e: unknown): string {
+  return e instanceof Error ? e.message : String(e);
+}

@@ -1,0 +1,435 @@
+// The manager panel (paper: the skill manager window) and one panel per skill (the skill window).
+
+import { Connection, isObject, type Json, type JsonObject } from "./conn";
+import { errorText, h, num, setText, show, str } from "./dom";
+
+const LOG_LINES = 200;
+
+function keep(list: HTMLElement, line: string): void {
+  list.prepend(h("div", { class: "logline" }, line));
+  while (list.childElementCount > LOG_LINES) list.lastElementChild?.remove();
+}
+
+export class ManagerPanel {
+  readonly el: HTMLElement;
+  private readonly fields = new Map<string, HTMLElement>();
+  private readonly switches: HTMLElement;
+  private readonly switchMap = new Map<string, HTMLInputElement>();
+  private readonly error: HTMLElement;
+  private last: { cycle: number; wall: number } | null = null;
+  private rate = 0;
+
+  constructor(private readonly conn: Connection) {
+    const stepCount = h("input", { type: "number", min: 1, max: 1000000, value: 1, step: 1, "data-testid": "step-count", class: "short" });
+    const run = h("button", { "data-testid": "run" }, "Run");
+    const stop = h("button", { "data-testid": "stop" }, "Stop");
+    const step = h("button", { "data-testid": "step" }, "Step");
+    run.addEventListener("click", () => void this.act("run", {}));
+    stop.addEventListener("click", () => void this.act("stop", {}));
+    step.addEventListener("click", () => {
+      const n = Number(stepCount.value);
+      if (!Number.isInteger(n) || n < 1) {
+        setText(this.error, "the number of cycles to step is a whole number ≥ 1");
+        return;
+      }
+      void this.act("step", { cycles: n });
+    });
+    const grid = h("dl", { class: "stats" });
+    for (const [key, label] of [
+      ["state", "state"],
+      ["cycle", "cycle"],
+      ["rate", "cycle rate"],
+      ["period", "period"],
+      ["last", "cycle time (last)"],
+      ["mean", "cycle time (mean)"],
+      ["max", "cycle time (max)"],
+      ["overruns", "overruns"],
+    ] as const) {
+      const dd = h("dd", { "data-testid": `stat-${key}` }, "—");
+      this.fields.set(key, dd);
+      grid.append(h("dt", {}, label), dd);
+    }
+    this.switches = h("div", { class: "switches" });
+    this.error = h("div", { class: "error", "data-testid": "manager-error" });
+    this.el = h(
+      "section",
+      { class: "panel", id: "manager" },
+      h("h2", {}, "Skill manager"),
+      h("div", { class: "row" }, run, stop, step, stepCount, "cycles"),
+      grid,
+      h("h3", {}, "Activation"),
+      this.switches,
+      this.error,
+    );
+  }
+
+  private async act(verb: string, args: JsonObject): Promise<void> {
+    try {
+      await this.conn.request(verb, args);
+      setText(this.error, "");
+    } catch (e) {
+      setText(this.error, errorText(e));
+    }
+  }
+
+  update(stats: Json | undefined, skills: JsonObject[], wall: number): void {
+    if (isObject(stats)) {
+      const cycle = num(stats["cycle"]);
+      if (this.last && wall > this.last.wall) {
+        const r = (cycle - this.last.cycle) / (wall - this.last.wall);
+        this.rate = this.rate === 0 ? r : 0.7 * this.rate + 0.3 * r;
+      }
+      this.last = { cycle, wall };
+      const us = (ns: Json | undefined) => `${(num(ns) / 1000).toFixed(1)} µs`;
+      this.set("state", stats["running"] === true ? "running" : "stopped");
+      this.set("cycle", String(cycle));
+      this.set("rate", `${this.rate.toFixed(1)} Hz`);
+      this.set("period", `${(num(stats["period_s"]) * 1000).toFixed(1)} ms`);
+      this.set("last", us(stats["last_cycle_ns"]));
+      this.set("mean", us(stats["mean_cycle_ns"]));
+      this.set("max", us(stats["max_cycle_ns"]));
+      this.set("overruns", String(num(stats["overruns"])));
+    }
+    for (const s of skills) {
+      const name = str(s["name"]);
+      let box = this.switchMap.get(name);
+      if (!box) {
+        const input = h("input", { type: "checkbox", "data-testid": `switch-${name}` });
+        input.addEventListener("change", () => {
+          const verb = input.checked ? "activate" : "deactivate";
+          void this.act(verb, { skills: [name] });
+        });
+        this.switchMap.set(name, input);
+        this.switches.append(h("label", { class: "switch" }, input, ` ${name}`));
+        box = input;
+      }
+      const active = s["active"] === true;
+      if (document.activeElement !== box || box.checked === active) box.checked = active;
+      box.parentElement?.classList.toggle("faulted", s["faulted"] !== null && s["faulted"] !== undefined);
+    }
+  }
+
+  private set(key: string, text: string): void {
+    const el = this.fields.get(key);
+    if (el) setText(el, text);
+  }
+}
+
+/** A typed editor for one parameter. */
+class ParamEditor {
+  readonly row: HTMLTableRowElement;
+  private readonly input: HTMLInputElement;
+  private readonly current: HTMLElement;
+  private readonly error: HTMLElement;
+  private readonly type: string;
+
+  constructor(
+    private readonly conn: Connection,
+    private readonly skill: string,
+    private readonly spec: JsonObject,
+  ) {
+    const name = str(spec["name"]);
+    this.type = str(spec["type"]);
+    const min = spec["min"];
+    const max = spec["max"];
+    const id = `param-${skill}-${name}`;
+    if (this.type === "bool") {
+      this.input = h("input", { type: "checkbox", "data-testid": id });
+    } else if (this.type === "i64" || this.type === "f64") {
+      this.input = h("input", {
+        type: "number",
+        step: this.type === "i64" ? 1 : "any",
+        min: typeof min === "number" ? min : undefined,
+        max: typeof max === "number" ? max : undefined,
+        "data-testid": id,
+        class: "num",
+      });
+    } else {
+      this.input = h("input", { type: "text", "data-testid": id });
+    }
+    this.setValue(spec["value"]);
+    const set = h("button", { "data-testid": `${id}-set` }, "Set");
+    set.addEventListener("click", () => void this.submit());
+    this.input.addEventListener("keydown", (e) => {
+      if (e.key === "Enter") void this.submit();
+    });
+    if (this.type === "bool") this.input.addEventListener("change", () => void this.submit());
+    this.current = h("span", { class: "mono", "data-testid": `${id}-value` }, show(spec["value"]));
+    this.error = h("div", { class: "error", "data-testid": `${id}-error` });
+    const range =
+      typeof min === "number" || typeof max === "number"
+        ? `[${typeof min === "number" ? min : "−∞"}, ${typeof max === "number" ? max : "∞"}]`
+        : "";
+    const unit = str(spec["unit"]);
+    this.row = h(
+      "tr",
+      {},
+      h("td", { title: str(spec["doc"]) }, name),
+      h("td", { class: "dim" }, `${this.type} ${range} ${unit}`.trim()),
+      h("td", {}, this.current),
+      h("td", {}, this.input, this.type === "bool" ? null : set, this.error),
+    );
+  }
+
+  private setValue(v: Json | undefined): void {
+    if (this.type === "bool") this.input.checked = v === true;
+    else if (typeof v === "number") this.input.value = String(v);
+    else if (typeof v === "string") this.input.value = v;
+  }
+
+  /** The editor's value in its type, or why it is not one. */
+  private parse(): { ok: Json } | { err: string } {
+    const text = this.input.value.trim();
+    switch (this.type) {
+      case "bool":
+        return { ok: this.input.checked };
+      case "i64": {
+        if (!/^[-+]?\d+$/.test(text)) return { err: `${str(this.spec["name"])} is an integer (i64), got "${text}"` };
+        const n = Number(text);
+        if (!Number.isSafeInteger(n)) return { err: `the integer ${text} is too large for this editor` };
+        return { ok: n };
+      }
+      case "f64": {
+        const n = Number(text);
+        if (text === "" || !Number.isFinite(n)) return { err: `${str(this.spec["name"])} is a number (f64), got "${text}"` };
+        return { ok: n };
+      }
+      default:
+        return { ok: this.input.value };
+    }
+  }
+
+  private async submit(): Promise<void> {
+    const parsed = this.parse();
+    if ("err" in parsed) {
+      setText(this.error, parsed.err);
+      return;
+    }
+    // JSON has one number type: an integral f64 travels as an integer, which the manager accepts.
+    const value = parsed.ok;
+    try {
+      await this.conn.request("set_param", { skill: this.skill, param: str(this.spec["name"]), value });
+      setText(this.error, "");
+      this.input.classList.remove("refused");
+    } catch (e) {
+      setText(this.error, errorText(e));
+      this.input.classList.add("refused");
+    }
+  }
+
+  update(spec: JsonObject): void {
+    setText(this.current, show(spec["value"]));
+    if (document.activeElement !== this.input && this.error.textContent === "") this.setValue(spec["value"]);
+  }
+}
+
+function portTable(ports: Json | undefined, testid: string): HTMLElement {
+  const t = h("table", { class: "ports", "data-testid": testid });
+  t.append(h("tr", {}, h("th", {}, "port"), h("th", {}, "signal"), h("th", {}, "type"), h("th", {}, "value")));
+  if (Array.isArray(ports)) {
+    for (const p of ports) {
+      if (!isObject(p)) continue;
+      t.append(
+        h(
+          "tr",
+          { "data-signal": str(p["signal"]) },
+          h("td", {}, str(p["name"])),
+          h("td", { class: "mono" }, str(p["signal"])),
+          h("td", { class: "dim" }, str(p["type"])),
+          h("td", { class: "mono value", "data-value": JSON.stringify(p["value"] ?? null) }, show(p["value"])),
+        ),
+      );
+    }
+  }
+  return t;
+}
+
+class SkillPanel {
+  readonly el: HTMLDetailsElement;
+  private readonly name: string;
+  private readonly head: HTMLElement;
+  private readonly state: HTMLElement;
+  private readonly activate: HTMLButtonElement;
+  private readonly params = new Map<string, ParamEditor>();
+  private readonly paramBody: HTMLTableElement;
+  private readonly timing: HTMLElement;
+  private readonly showData: HTMLInputElement;
+  private readonly showInput: HTMLInputElement;
+  private readonly showOutput: HTMLInputElement;
+  private readonly dataBox: HTMLElement;
+  private readonly inputBox: HTMLElement;
+  private readonly outputBox: HTMLElement;
+  private readonly logParams: HTMLInputElement;
+  private readonly paramLog: HTMLElement;
+  private readonly verbose: HTMLInputElement;
+  private readonly prints: HTMLElement;
+  private readonly error: HTMLElement;
+  private active = false;
+  private lastParams: [string, Json][] = [];
+  private lastCycle = 0;
+
+  constructor(
+    private readonly conn: Connection,
+    info: JsonObject,
+  ) {
+    this.name = str(info["name"]);
+    const n = this.name;
+    this.state = h("span", { class: "state", "data-testid": `state-${n}` });
+    this.head = h("summary", {}, h("strong", {}, n), ` ${str(info["type_name"])} · ${str(info["kind"])} `, this.state);
+    this.activate = h("button", { "data-testid": `activate-${n}` }, "Activate");
+    this.activate.addEventListener("click", () => void this.toggle());
+    this.error = h("div", { class: "error", "data-testid": `skill-error-${n}` });
+    this.paramBody = h("table", { class: "params" });
+    for (const p of Array.isArray(info["params"]) ? info["params"] : []) {
+      if (!isObject(p)) continue;
+      const ed = new ParamEditor(conn, n, p);
+      this.params.set(str(p["name"]), ed);
+      this.paramBody.append(ed.row);
+    }
+    const toggle = (label: string, testid: string) => {
+      const box = h("input", { type: "checkbox", "data-testid": testid });
+      return [box, h("label", { class: "toggle" }, box, ` ${label}`)] as const;
+    };
+    const [sd, sdl] = toggle("show data", `show-data-${n}`);
+    const [si, sil] = toggle("show input", `show-input-${n}`);
+    const [so, sol] = toggle("show output", `show-output-${n}`);
+    const [lp, lpl] = toggle("log parameters", `log-params-${n}`);
+    const [vb, vbl] = toggle("verbose", `verbose-${n}`);
+    this.showData = sd;
+    this.showInput = si;
+    this.showOutput = so;
+    this.logParams = lp;
+    this.verbose = vb;
+    this.dataBox = h("pre", { class: "box", hidden: true, "data-testid": `data-${n}` });
+    this.inputBox = h("div", { hidden: true, "data-testid": `inputs-${n}` });
+    this.outputBox = h("div", { hidden: true, "data-testid": `outputs-${n}` });
+    this.paramLog = h("div", { class: "log", hidden: true, "data-testid": `param-log-${n}` });
+    this.prints = h("div", { class: "log", hidden: true, "data-testid": `prints-${n}` });
+    sd.addEventListener("change", () => (this.dataBox.hidden = !sd.checked));
+    si.addEventListener("change", () => (this.inputBox.hidden = !si.checked));
+    so.addEventListener("change", () => (this.outputBox.hidden = !so.checked));
+    lp.addEventListener("change", () => {
+      this.paramLog.hidden = !lp.checked;
+      if (lp.checked) {
+        keep(this.paramLog, `logging parameters of ${n} from now on`);
+        for (const [param, value] of this.lastParams) keep(this.paramLog, `cycle ${this.lastCycle}: ${param} = ${show(value)}`);
+      }
+    });
+    vb.addEventListener("change", () => void this.setVerbose(vb.checked));
+    this.timing = h("span", { class: "mono", "data-testid": `timing-${n}` });
+    this.el = h(
+      "details",
+      { class: "skill", "data-skill": n, "data-testid": `skill-${n}` },
+      this.head,
+      h("p", { class: "dim" }, str(info["doc"])),
+      h("div", { class: "row" }, this.activate, " priority ", h("span", { class: "mono" }, String(num(info["priority"]))), " · timing ", this.timing),
+      this.error,
+      this.paramBody,
+      h("div", { class: "row" }, sdl, sil, sol, lpl, vbl),
+      this.dataBox,
+      this.inputBox,
+      this.outputBox,
+      this.paramLog,
+      this.prints,
+    );
+    this.update(info);
+  }
+
+  private async toggle(): Promise<void> {
+    try {
+      await this.conn.request(this.active ? "deactivate" : "activate", { skills: [this.name] });
+      setText(this.error, "");
+    } catch (e) {
+      setText(this.error, errorText(e));
+    }
+  }
+
+  private async setVerbose(on: boolean): Promise<void> {
+    this.prints.hidden = !on;
+    try {
+      await this.conn.request("set_verbose", { skill: this.name, verbose: on });
+      setText(this.error, "");
+    } catch (e) {
+      setText(this.error, errorText(e));
+    }
+  }
+
+  update(info: JsonObject, cycle = 0): void {
+    this.lastCycle = cycle;
+    this.active = info["active"] === true;
+    const fault = info["faulted"];
+    const state = typeof fault === "string" ? `faulted: ${fault}` : this.active ? "active" : "inactive";
+    setText(this.state, state);
+    this.el.classList.toggle("active", this.active);
+    this.el.classList.toggle("faulted", typeof fault === "string");
+    setText(this.activate, this.active ? "Deactivate" : "Activate");
+    const t = info["timing"];
+    if (isObject(t)) {
+      const runs = num(t["runs"]);
+      const mean = runs > 0 ? num(t["total_ns"]) / runs / 1000 : 0;
+      setText(
+        this.timing,
+        `${runs} runs, last ${(num(t["last_ns"]) / 1000).toFixed(1)} µs, mean ${mean.toFixed(1)} µs, max ${(num(t["max_ns"]) / 1000).toFixed(1)} µs`,
+      );
+    }
+    this.lastParams = [];
+    for (const p of Array.isArray(info["params"]) ? info["params"] : []) {
+      if (!isObject(p)) continue;
+      this.params.get(str(p["name"]))?.update(p);
+      this.lastParams.push([str(p["name"]), p["value"] ?? null]);
+    }
+    if (!this.el.open) return;
+    if (this.showData.checked) {
+      const params: JsonObject = {};
+      for (const p of Array.isArray(info["params"]) ? info["params"] : []) if (isObject(p)) params[str(p["name"])] = p["value"] ?? null;
+      const data = { name: info["name"], type: info["type_name"], kind: info["kind"], active: info["active"], faulted: info["faulted"], priority: info["priority"], verbose: info["verbose"], params, timing: info["timing"] };
+      setText(this.dataBox, JSON.stringify(data, null, 2));
+    }
+    if (this.showInput.checked) this.inputBox.replaceChildren(portTable(info["inputs"], `input-table-${this.name}`));
+    if (this.showOutput.checked) this.outputBox.replaceChildren(portTable(info["outputs"], `output-table-${this.name}`));
+    if (info["verbose"] === true && !this.verbose.checked && document.activeElement !== this.verbose) {
+      this.verbose.checked = true;
+      this.prints.hidden = false;
+    }
+  }
+
+  event(e: JsonObject): void {
+    const kind = e["kind"];
+    if (kind === "print" && this.verbose.checked) {
+      keep(this.prints, `cycle ${num(e["cycle"])}: ${str(e["line"])}`);
+    } else if (kind === "param_changed" && this.logParams.checked) {
+      keep(this.paramLog, `cycle ${num(e["cycle"])}: ${str(e["param"])} = ${show(e["value"])}`);
+    } else if (kind === "skill_faulted") {
+      setText(this.error, `faulted at cycle ${num(e["cycle"])}: ${str(e["cause"])}`);
+    }
+  }
+}
+
+export class SkillPanels {
+  readonly el: HTMLElement;
+  private readonly panels = new Map<string, SkillPanel>();
+  private readonly list: HTMLElement;
+
+  constructor(private readonly conn: Connection) {
+    this.list = h("div", {});
+    this.el = h("section", { class: "panel", id: "skills" }, h("h2", {}, "Skills"), this.list);
+  }
+
+  update(skills: JsonObject[], cycle: number): void {
+    for (const s of skills) {
+      const name = str(s["name"]);
+      const p = this.panels.get(name);
+      if (p) p.update(s, cycle);
+      else {
+        const panel = new SkillPanel(this.conn, s);
+        this.panels.set(name, panel);
+        this.list.append(panel.el);
+      }
+    }
+  }
+
+  event(e: JsonObject): void {
+    const skill = e["skill"];
+    if (typeof skill === "string") this.panels.get(skill)?.event(e);
+  }
+}

@@ -1,0 +1,204 @@
+// The GUI in a real browser against the testbed; every effect is checked over the sequencer link
+// with the `situate` client CLI, never in the page alone.
+
+import assert from "node:assert/strict";
+import { after, before, afterEach, describe, test } from "node:test";
+import { cli, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+
+/** Deep equality of two JSON values, whatever the key order, numbers within 1e-9 (relative). */
+function same(a, b) {
+  if (typeof a === "number" && typeof b === "number") return Math.abs(a - b) <= 1e-9 * Math.max(1, Math.abs(a), Math.abs(b));
+  if (Array.isArray(a) || Array.isArray(b)) return Array.isArray(a) && Array.isArray(b) && a.length === b.length && a.every((x, i) => same(x, b[i]));
+  if (a && b && typeof a === "object" && typeof b === "object") {
+    const ka = Object.keys(a).sort();
+    const kb = Object.keys(b).sort();
+    return same(ka, kb) && ka.every((k) => same(a[k], b[k]));
+  }
+  return a === b;
+}
+
+describe("situate GUI", () => {
+  let tb;
+  let browser;
+  let page;
+
+  before(async () => {
+    try {
+      tb = await startTestbed();
+      browser = await startBrowser();
+      page = await browser.context.newPage();
+      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
+      await page.goto(tb.url);
+      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 20_000 });
+      // The first telemetry sample has built the panels.
+      await page.getByTestId("switch-wander").waitFor({ timeout: 20_000 });
+    } catch (e) {
+      await stopBrowser(browser).catch(() => undefined);
+      await stopTestbed(tb).catch(() => undefined);
+      throw e;
+    }
+  });
+
+  after(async () => {
+    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
+    await stopTestbed(tb);
+  });
+
+  afterEach(async (t) => {
+    if (page) await page.screenshot({ path: screenshotPath(t.name.replace(/[^a-z0-9]+/gi, "-")), fullPage: true }).catch(() => undefined);
+  });
+
+  const skillsOverLink = async () => Object.fromEntries((await cli(tb.linkPort, "skills")).map((s) => [s.name, s]));
+
+  test("toggling a skill in the GUI activates it in the manager", async () => {
+    const before = await skillsOverLink();
+    assert.equal(before.wander.active, true, "wander starts active (examples/toybot.yaml)");
+    const sw = page.getByTestId("switch-wander");
+    await sw.uncheck();
+    await until(async () => (await skillsOverLink()).wander.active === false, "wander inactive over the link");
+    await sw.check();
+    await until(async () => (await skillsOverLink()).wander.active === true, "wander active again over the link");
+    // The skill panel's own button does the same.
+    await page.getByTestId("skill-runaway").locator("summary").click();
+    await page.getByTestId("activate-runaway").click();
+    await until(async () => (await skillsOverLink()).runaway.active === false, "runaway inactive over the link");
+    await page.getByTestId("activate-runaway").click();
+    await until(async () => (await skillsOverLink()).runaway.active === true, "runaway active again over the link");
+  });
+
+  test("a parameter edit changes the value; an out-of-range edit shows the error and changes nothing", async () => {
+    const panel = page.getByTestId("skill-runaway");
+    if (!(await panel.evaluate((d) => d.open))) await panel.locator("summary").click();
+    await page.getByTestId("log-params-runaway").check();
+    const input = page.getByTestId("param-runaway-safe_distance");
+    await input.fill("0.8");
+    await page.getByTestId("param-runaway-safe_distance-set").click();
+    await until(async () => (await cli(tb.linkPort, "param", "get", "runaway", "safe_distance")) === 0.8, "safe_distance = 0.8 over the link");
+    const log = page.getByTestId("param-log-runaway");
+    await until(async () => /cycle \d+: safe_distance = 0\.8/.test((await log.textContent()) ?? ""), "the change in the parameter log");
+    await input.fill("9");
+    await page.getByTestId("param-runaway-safe_distance-set").click();
+    const error = page.getByTestId("param-runaway-safe_distance-error");
+    await until(async () => (await error.textContent()).includes("[0.1, 3.0]"), "the manager's refusal in the page");
+    const text = await error.textContent();
+    assert.match(text, /safe_distance/);
+    assert.match(text, /got 9/);
+    assert.equal(await cli(tb.linkPort, "param", "get", "runaway", "safe_distance"), 0.8, "the refused value changed nothing");
+    // A wrongly typed value never leaves the page.
+    const seed = page.getByTestId("param-wander-seed");
+    await page.getByTestId("skill-wander").locator("summary").click();
+    await seed.fill("2.5");
+    await page.getByTestId("param-wander-seed-set").click();
+    await until(async () => (await page.getByTestId("param-wander-seed-error").textContent()).includes("integer"), "the type error");
+    assert.equal(await cli(tb.linkPort, "param", "get", "wander", "seed"), 7);
+  });
+
+  test("show input and show output display what a link query returns", async () => {
+    // Stopped, the values hold still so the page and the link can be compared exactly.
+    await page.getByTestId("stop").click();
+    await until(async () => (await cli(tb.linkPort, "stats")).running === false, "the manager stopped over the link");
+    const panel = page.getByTestId("skill-wheels");
+    if (!(await panel.evaluate((d) => d.open))) await panel.locator("summary").click();
+    await page.getByTestId("show-input-wheels").check();
+    await page.getByTestId("show-output-wheels").check();
+    try {
+    for (const [table, signal] of [["input-table-wheels", "drive"], ["output-table-wheels", "odom"]]) {
+      const reading = await cli(tb.linkPort, "query", signal);
+      assert.notEqual(reading.value, null, `${signal} has a value`);
+      const cell = page.getByTestId(table).locator(`tr[data-signal="${signal}"] td.value`);
+      await until(async () => {
+        const shown = JSON.parse((await cell.getAttribute("data-value")) ?? "null");
+        return same(shown, reading.value);
+      }, `${signal} in the page equal to the link's ${JSON.stringify(reading.value)}`);
+      const text = await cell.textContent();
+      assert.ok(text.length > 0);
+    }
+    } finally {
+      await page.getByTestId("run").click();
+    }
+    await until(async () => (await cli(tb.linkPort, "stats")).running === true, "running again over the link");
+  });
+
+  test("verbose shows a skill's prints", async () => {
+    const panel = page.getByTestId("skill-circle");
+    if (!(await panel.evaluate((d) => d.open))) await panel.locator("summary").click();
+    await page.getByTestId("verbose-circle").check();
+    await until(async () => (await skillsOverLink()).circle.verbose === true, "circle verbose over the link");
+    const prints = page.getByTestId("prints-circle");
+    await until(async () => /circle run \d+ at/.test((await prints.textContent()) ?? ""), "a print of circle in its panel");
+    await page.getByTestId("verbose-circle").uncheck();
+  });
+
+  test("a plot receives points", async () => {
+    await page.getByTestId("plot-signal").fill("odom.x");
+    await page.getByTestId("plot-add").click();
+    await page.getByTestId("plot-signal").fill("sonar.range[3]");
+    await page.getByTestId("plot-add").click();
+    const canvases = page.getByTestId("plot-canvas");
+    await until(async () => (await canvases.count()) === 2, "two plots");
+    for (let i = 0; i < 2; i++) {
+      await until(async () => Number(await canvases.nth(i).getAttribute("data-points")) >= 5, `plot ${i} has points`);
+    }
+    // An unknown signal is refused with the manager's message.
+    await page.getByTestId("plot-signal").fill("no.such.signal");
+    await page.getByTestId("plot-add").click();
+    await until(async () => (await page.getByTestId("plot-error").textContent()).includes("unknown signal"), "unknown signal refused");
+  });
+
+  test("the world view draws the robot", async () => {
+    const canvas = page.getByTestId("world-canvas");
+    await until(async () => Number(await canvas.getAttribute("data-draws")) >= 3, "the robot drawn");
+    const pixels = await canvas.evaluate((c) => {
+      const x = Number(c.dataset.robotPx);
+      const y = Number(c.dataset.robotPy);
+      const r = Number(c.dataset.robotPr);
+      const ctx = c.getContext("2d");
+      // Eight points inside the robot's disc (its heading line crosses at most two of them), and a corner.
+      const ring = [...Array(8).keys()].map((k) => {
+        const a = (k * Math.PI) / 4 + 0.2;
+        return [...ctx.getImageData(Math.round(x + 0.6 * r * Math.cos(a)), Math.round(y + 0.6 * r * Math.sin(a)), 1, 1).data];
+      });
+      return { ring, corner: [...ctx.getImageData(2, 2, 1, 1).data] };
+    });
+    const red = pixels.ring.filter(([r, g, b]) => r > 150 && g < 90 && b < 90).length;
+    assert.ok(red >= 5, `the robot's disc is red at its position: ${JSON.stringify(pixels.ring)}`);
+    const [cr, cg, cb] = pixels.corner;
+    assert.ok(!(cr > 150 && cg < 90 && cb < 90), "the corner is not the robot's colour");
+    const info = await page.getByTestId("world-info").textContent();
+    assert.match(info, /robot at \(/);
+  });
+
+  test("monitors are listed and their events appear live; a bad condition shows the manager's pointer", async () => {
+    await page.getByTestId("monitor-condition").fill("odom.x < 1000");
+    // An edge monitor stays registered after it fires (a once monitor is gone at once).
+    await page.getByTestId("monitor-mode").selectOption("edge");
+    await page.getByTestId("monitor-add").click();
+    await until(async () => ((await page.getByTestId("monitors").textContent()) ?? "").includes("odom.x < 1000"), "the monitor listed");
+    await until(async () => (await page.locator('[data-testid="event-log"] [data-kind="monitor_fired"]').count()) > 0, "its event in the log");
+    await page.getByTestId("monitors").getByRole("button", { name: "Cancel" }).first().click();
+    await until(async () => !((await page.getByTestId("monitors").textContent()) ?? "").includes("odom.x < 1000"), "the monitor cancelled");
+    await page.getByTestId("monitor-condition").fill("odom.x <");
+    await page.getByTestId("monitor-add").click();
+    await until(async () => ((await page.getByTestId("monitor-error").textContent()) ?? "").includes("column"), "the condition's error");
+  });
+
+  test("two tabs watch at once", async () => {
+    const second = await browser.context.newPage();
+    try {
+      await second.goto(tb.url);
+      await second.getByTestId("switch-wander").waitFor({ timeout: 20_000 });
+      const samples = async (p) => Number((await p.evaluate(() => document.body.dataset.samples)) ?? 0);
+      const a0 = await samples(page);
+      const b0 = await samples(second);
+      await until(async () => (await samples(page)) > a0 + 2 && (await samples(second)) > b0 + 2, "both tabs receive telemetry");
+      await second.getByTestId("switch-wander").uncheck();
+      await until(async () => (await skillsOverLink()).wander.active === false, "wander inactive over the link");
+      await until(async () => (await page.getByTestId("switch-wander").isChecked()) === false, "the first tab sees it");
+      await second.getByTestId("switch-wander").check();
+      await until(async () => (await skillsOverLink()).wander.active === true, "wander active over the link");
+      await second.screenshot({ path: screenshotPath("second-tab"), fullPage: true });
+    } finally {
+      await second.close();
+    }
+  });
+});

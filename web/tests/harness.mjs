@@ -1,0 +1,147 @@
+// Test harness: starts the GUI testbed (the toy robot + GUI + link) on free ports, a headless
+// Debian chromium through playwright-core, and runs the `situate` client CLI over the link.
+// Everything started here is stopped by `stopAll`, also when a test fails.
+
+import { spawn, execFile } from "node:child_process";
+import { mkdtempSync, mkdirSync, rmSync, existsSync } from "node:fs";
+import net from "node:net";
+import os from "node:os";
+import path from "node:path";
+import { fileURLToPath } from "node:url";
+import { chromium } from "playwright-core";
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+export const webDir = path.resolve(here, "..");
+export const repo = path.resolve(webDir, "..");
+export const results = path.join(webDir, "test-results");
+const target = process.env.CARGO_TARGET_DIR || path.join(repo, "target");
+export const testbedBin = process.env.TESTBED_BIN || path.join(target, "debug", "examples", "testbed");
+export const situateBin = process.env.SITUATE_BIN || path.join(target, "debug", "situate");
+export const chromiumPath = process.env.CHROMIUM || "/usr/bin/chromium";
+
+export const CHROMIUM_ARGS = [
+  "--headless",
+  "--no-sandbox",
+  "--disable-gpu",
+  "--disable-quic",
+  "--no-first-run",
+  "--disable-background-networking",
+  "--disable-component-update",
+  "--disable-sync",
+];
+
+/** A free TCP port on 127.0.0.1 (asked of the OS, then released). */
+export function freePort() {
+  return new Promise((resolve, reject) => {
+    const srv = net.createServer();
+    srv.on("error", reject);
+    srv.listen(0, "127.0.0.1", () => {
+      const addr = srv.address();
+      const port = typeof addr === "object" && addr ? addr.port : 0;
+      srv.close(() => resolve(port));
+    });
+  });
+}
+
+/** Starts the testbed; resolves when it prints READY. */
+export async function startTestbed(extraArgs = []) {
+  for (const [what, p] of [["testbed", testbedBin], ["situate CLI", situateBin], ["chromium", chromiumPath]]) {
+    if (!existsSync(p)) throw new Error(`${what} not found at ${p} (run scripts/gui.sh test, or set its env variable)`);
+  }
+  const guiPort = await freePort();
+  const linkPort = await freePort();
+  const args = ["--gui-port", String(guiPort), "--link-port", String(linkPort), "--stdin", ...extraArgs];
+  const child = spawn(testbedBin, args, { stdio: ["pipe", "pipe", "pipe"], env: { ...process.env, RUST_LOG: process.env.RUST_LOG || "warn,zenoh=error" } });
+  let out = "";
+  let err = "";
+  child.stdout.on("data", (d) => (out += d));
+  child.stderr.on("data", (d) => (err += d));
+  await new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`testbed not ready after 60 s\nstdout:\n${out}\nstderr:\n${err}`)), 60_000);
+    const check = () => {
+      if (out.includes("READY")) {
+        clearTimeout(timer);
+        resolve();
+      }
+    };
+    child.stdout.on("data", check);
+    child.on("exit", (code) => {
+      clearTimeout(timer);
+      reject(new Error(`testbed exited (${code}) before READY\nstdout:\n${out}\nstderr:\n${err}`));
+    });
+  });
+  child.removeAllListeners("exit");
+  return { child, guiPort, linkPort, url: `http://127.0.0.1:${guiPort}/`, logs: () => ({ out, err }) };
+}
+
+/** Stops the testbed: closes its stdin (it then shuts down), then kills it if it lingers. */
+export async function stopTestbed(tb) {
+  if (!tb || tb.child.exitCode !== null || tb.child.signalCode !== null) return;
+  const exited = new Promise((resolve) => tb.child.once("exit", resolve));
+  tb.child.stdin.end();
+  const timer = setTimeout(() => tb.child.kill("SIGKILL"), 10_000);
+  await exited;
+  clearTimeout(timer);
+}
+
+/** A fresh headless chromium (its own profile directory). */
+export async function startBrowser() {
+  const profile = mkdtempSync(path.join(os.tmpdir(), "situate-gui-chromium-"));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: chromiumPath,
+    headless: true,
+    args: CHROMIUM_ARGS,
+    viewport: { width: 1400, height: 1000 },
+  });
+  return { context, profile };
+}
+
+export async function stopBrowser(b) {
+  if (!b) return;
+  try {
+    await b.context.close();
+  } finally {
+    rmSync(b.profile, { recursive: true, force: true });
+  }
+}
+
+/** Runs `situate ARGS --connect tcp/127.0.0.1:PORT --json`; returns its stdout parsed as JSON. */
+export function cli(linkPort, ...args) {
+  return new Promise((resolve, reject) => {
+    execFile(
+      situateBin,
+      [...args, "--connect", `tcp/127.0.0.1:${linkPort}`, "--json", "--timeout", "10"],
+      { timeout: 30_000, env: { ...process.env, RUST_LOG: "error" } },
+      (error, stdout, stderr) => {
+        if (error) return reject(new Error(`situate ${args.join(" ")} failed: ${error.message}\n${stderr}`));
+        try {
+          resolve(JSON.parse(stdout));
+        } catch {
+          reject(new Error(`situate ${args.join(" ")} printed no JSON: ${stdout}\n${stderr}`));
+        }
+      },
+    );
+  });
+}
+
+/** Polls `f` until it returns a truthy value (or throws the last error after `timeoutMs`). */
+export async function until(f, what, timeoutMs = 15_000) {
+  const end = Date.now() + timeoutMs;
+  let last;
+  while (Date.now() < end) {
+    try {
+      const v = await f();
+      if (v) return v;
+      last = undefined;
+    } catch (e) {
+      last = e;
+    }
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  throw new Error(`timed out waiting for ${what}${last ? `: ${last.message}` : ""}`);
+}
+
+export function screenshotPath(name) {
+  mkdirSync(results, { recursive: true });
+  return path.join(results, `${name}.png`);
+}
