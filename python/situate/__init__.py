@@ -22,6 +22,15 @@ A remote skill::
 
     situate.serve_skill(doubler, robot="toybot", name="doubler")
 
+An in-process skill, run inside the manager's cycle (list its file in the
+robot file's ``python:`` section)::
+
+    @situate.skill(name="py.doubler", outputs={"y": "f64"})
+    def doubler(x: float, gain: float = situate.param(2.0, min=0.0)) -> dict[str, float]:
+        return {"y": x * gain}
+
+    result = situate.run("robot.yaml", cycles=100, clock="simulated", record=["y"])
+
 The ``situate`` command installed with this package is the same program as
 the Rust build's (``situate run robot.yaml``, ``situate skills``, ...), plus
 ``situate serve-skill MODULE:ATTR``. The user guide is ``docs/python.md``.
@@ -29,6 +38,7 @@ the Rust build's (``situate run robot.yaml``, ``situate skills``, ...), plus
 
 from __future__ import annotations
 
+from ._loader import SkillLoadError
 from .client import DEFAULT_ENDPOINT, Connector, Robot, Stream, connect
 from .errors import (
     AmbiguousRobot,
@@ -75,7 +85,9 @@ from .info import (
     Timing,
     Winner,
 )
+from .local import LocalRobot, RunResult, run
 from .remote import RemoteSkill, RemoteSkillServer, remote_skill, serve_skill
+from .skill import Param, Port, Skill, SkillDeclarationError, param, port, skill
 
 
 def version() -> str:
@@ -100,6 +112,7 @@ __all__ = [
     "GraphSkill",
     "Hello",
     "Invalid",
+    "LocalRobot",
     "ManagerStarted",
     "ManagerStopped",
     "MissingProviders",
@@ -108,8 +121,10 @@ __all__ = [
     "MonitorInfo",
     "NotRunning",
     "OtherEvent",
+    "Param",
     "ParamChanged",
     "ParamInfo",
+    "Port",
     "PortInfo",
     "Print",
     "ProtocolMismatch",
@@ -117,9 +132,13 @@ __all__ = [
     "RemoteSkill",
     "RemoteSkillServer",
     "Robot",
+    "RunResult",
     "SituateError",
+    "Skill",
+    "SkillDeclarationError",
     "SkillFaulted",
     "SkillInfo",
+    "SkillLoadError",
     "Stats",
     "Stream",
     "Telemetry",
@@ -132,7 +151,11 @@ __all__ = [
     "UnknownVerb",
     "Winner",
     "connect",
+    "param",
+    "port",
     "remote_skill",
+    "run",
     "serve_skill",
+    "skill",
     "version",
 ]

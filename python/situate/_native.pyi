@@ -1,10 +1,65 @@
-"""The native half of the package: the Rust `situate` program (crate `situate_py`)."""
+"""The native half of the package (crate `situate_py`): the `situate` program, in-process skills."""
+
+from typing import Any
 
 def main(argv: list[str]) -> int:
     """Runs the `situate` program with `argv` (first item: the program name); returns its exit code.
 
-    The GIL is released while it runs.
+    The GIL is released while it runs; robot files may list `python:` skill files.
     """
 
 def version() -> str:
     """The version of the built-in `situate` program."""
+
+def load_file(path: str) -> list[str]:
+    """Loads a `python:` file's skill types as the program would; returns their descriptions."""
+
+def convert_check(value: Any, ty: str) -> Any:
+    """Converts `value` to signal type `ty` and back, as a skill output would be."""
+
+def declare(
+    name: str,
+    kind: str,
+    priority: int,
+    doc: str,
+    inputs: list[tuple[str, str, str, bool, str]],
+    outputs: list[tuple[str, str, str, str]],
+    params: list[tuple[str, str, Any, float | None, float | None, str, str]],
+    call: list[tuple[str, str]],
+    positional: bool,
+) -> Declaration:
+    """Builds a skill declaration (raises `ValueError` naming the skill and port)."""
+
+class Declaration:
+    """A declared Python skill type."""
+
+    @property
+    def type_name(self) -> str: ...
+    def describe(self) -> str: ...
+
+class SkillStdout:
+    """`sys.stdout` while Python skills exist: captures a skill's prints during its calls."""
+
+    @property
+    def wrapped(self) -> Any: ...
+    def write(self, text: str) -> int: ...
+    def flush(self) -> None: ...
+
+class SharedArray:
+    """The owner of an input array's memory (numpy's `base`)."""
+
+    @property
+    def __array_interface__(self) -> dict[str, Any]: ...
+    def __len__(self) -> int: ...
+
+class LocalRobot:
+    """A robot file's manager in this process."""
+
+    def __init__(
+        self, path: str, clock: str | None = None, executor: str | None = None
+    ) -> None: ...
+    @property
+    def name(self) -> str: ...
+    def step(self, cycles: int, record: list[str] = ...) -> str: ...
+    def request(self, verb: str, payload: str) -> str: ...
+    def events(self) -> list[str]: ...

@@ -325,7 +325,9 @@ class Robot:
         keys = [f"situate/{self.name}/events/{k}" for k in kinds]
         return Stream(self, keys or [f"situate/{self.name}/events/**"], parse_event)
 
-    async def when(self, condition: str, *, timeout: float | None = None, pause: bool = False) -> MonitorFired:
+    async def when(
+        self, condition: str, *, timeout: float | None = None, pause: bool = False
+    ) -> MonitorFired:
         """Waits until ``condition`` holds and returns the :class:`~situate.MonitorFired` event.
 
         A ``once`` monitor is registered for it; if the wait ends another way

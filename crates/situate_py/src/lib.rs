@@ -1,19 +1,32 @@
-//! `situate._native`: the `situate` program, callable from Python.
+//! `situate._native`: the `situate` program, and Python skills in the cycle.
 //!
-//! The Python package's console script `situate` hands its arguments to
-//! [`main`], which runs [`situate_cli::main`] — the very program the Rust
-//! build installs as the `situate` binary — so both installs behave the
-//! same. The GIL is released while the program runs: `situate run` can
-//! serve a robot for hours, and other Python threads (a remote skill, a
-//! sequencer in the same process) keep running meanwhile.
+//! - [`main`] runs the `situate` program ([`situate_cli::main_with`], the very
+//!   program the Rust build installs) with a Python loader, so robot files run
+//!   from the Python package can list `python:` files of `@situate.skill`
+//!   types. The GIL is released while the program runs: the manager's threads
+//!   take it for each Python skill call, and other Python threads keep going.
+//! - [`skill`]: the declaration of a Python skill ([`skill::declare`]) and its
+//!   instances in the cycle ([`skill::PySkill`]).
+//! - [`convert`]: values between the cycle and Python (arrays without a copy).
+//! - [`loader`]: the `python:` files of a robot file, imported.
+//! - [`robot`]: a robot file run in process (`situate.LocalRobot`).
 
 use pyo3::prelude::*;
+
+pub mod bench;
+pub mod convert;
+pub mod loader;
+pub mod robot;
+pub mod skill;
 
 /// Runs the `situate` program with `argv` (the first item is the program
 /// name, as in `sys.argv`) and returns its exit code.
 #[pyfunction]
 fn main(py: Python<'_>, argv: Vec<String>) -> i32 {
-    let code = py.detach(move || situate_cli::main(argv));
+    // Other extensions (added by the program later) keep their defaults.
+    #[allow(clippy::needless_update)]
+    let ext = situate_cli::Extensions { python: Some(loader::python_loader()), ..Default::default() };
+    let code = py.detach(move || situate_cli::main_with(argv, ext));
     exit_code_to_int(code)
 }
 
@@ -21,6 +34,14 @@ fn main(py: Python<'_>, argv: Vec<String>) -> i32 {
 #[pyfunction]
 fn version() -> &'static str {
     env!("CARGO_PKG_VERSION")
+}
+
+/// The skill types of one Python file, described (what `python:` would load);
+/// raises `ValueError` with the loader's message.
+#[pyfunction]
+fn load_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Vec<String>> {
+    let types = py.detach(|| loader::load_file(&path)).map_err(pyo3::exceptions::PyValueError::new_err)?;
+    Ok(types.iter().map(|t| skill::describe(&t.decl)).collect())
 }
 
 /// `ExitCode` is opaque; its `Debug` form is the only portable window on
@@ -38,7 +59,23 @@ fn exit_code_to_int(code: std::process::ExitCode) -> i32 {
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(main, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(load_file, m)?)?;
+    m.add_function(wrap_pyfunction!(skill::declare, m)?)?;
+    m.add_function(wrap_pyfunction!(convert_check, m)?)?;
+    m.add_class::<skill::Declaration>()?;
+    m.add_class::<skill::SkillStdout>()?;
+    m.add_class::<convert::SharedArray>()?;
+    m.add_class::<robot::LocalRobot>()?;
     Ok(())
+}
+
+/// Converts `value` to signal type `ty` and back, as a skill's output would
+/// be (for tests of the conversions); raises `TypeError` on a mismatch.
+#[pyfunction]
+fn convert_check<'py>(value: &Bound<'py, PyAny>, ty: &str) -> PyResult<Bound<'py, PyAny>> {
+    let st = situate_core::SignalType::parse(ty).map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    let v = convert::from_py(value, &st).map_err(|m| pyo3::exceptions::PyTypeError::new_err(m.to_string()))?;
+    convert::to_py(value.py(), &v)
 }
 
 #[cfg(test)]

@@ -1,0 +1,193 @@
+"""Loading `python:` skill files: in process and through the `situate` program of the wheel.
+
+Every load error names the file (and the line when Python gives one), both from
+`situate.LocalRobot` and from `situate check`/`situate run`, which report it at
+the robot file's `python:` entry.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from support import EVENT_S, run, situate, start_manager
+
+import situate as sit
+
+Write = Callable[[str, str], Path]
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> Write:
+    def write(name: str, text: str) -> Path:
+        path = tmp_path / name
+        path.write_text(textwrap.dedent(text))
+        return path
+
+    return write
+
+
+def robot(python: str) -> str:
+    return (
+        "robot: loadtest\ncycle: {rate_hz: 100, clock: simulated}\n"
+        f"python: [{python}]\n"
+        "skills:\n  - {name: s, type: ok.skill}\n"
+    )
+
+
+GOOD = """
+import situate
+
+@situate.skill(name="ok.skill", outputs={"y": "f64"})
+def ok_skill() -> dict[str, float]:
+    print("tick")
+    return {"y": 1.5}
+"""
+
+
+@pytest.mark.parametrize(
+    ("source", "expected"),
+    [
+        (None, "skills.py: no such Python file"),
+        ("def broken(:\n    pass\n", "skills.py:1:12: syntax error"),
+        ("import situate\nx = 1\n", "skills.py: declares no skill"),
+        (
+            "import situate\n\n\n@situate.skill(name='ok.skill')\ndef f(x: list) -> None:\n"
+            "    pass\n",
+            "skills.py:4: skill `ok.skill`: input `x`: cannot tell its signal type from the "
+            "annotation `list`",
+        ),
+        (
+            "import situate\nraise RuntimeError('no robot here')\n",
+            "skills.py:2: RuntimeError while importing: no robot here",
+        ),
+        (
+            "import situate\n@situate.skill(name='ok.skill', outputs={'y': 'f32[x]'})\n"
+            "def f() -> None:\n    pass\n",
+            "skills.py:2: skill `ok.skill`, output `y`: bad type `f32[x]`",
+        ),
+    ],
+)
+def test_load_errors_name_the_file_and_line(
+    files: Write, source: str | None, expected: str
+) -> None:
+    if source is not None:
+        files("skills.py", source)
+    path = files("robot.yaml", robot("skills.py"))
+    with pytest.raises(ValueError, match=r"skills\.py") as info:
+        sit.LocalRobot(path)
+    message = str(info.value)
+    assert "robot.yaml:3:" in message  # the `python:` entry of the robot file
+    assert expected in message
+    # The program says the same, at the same place.
+    result = situate("check", str(path))
+    assert result.returncode == 1
+    assert expected in result.stderr
+    assert "robot.yaml:3:" in result.stderr
+
+
+def test_check_and_run_accept_python_skills(files: Write) -> None:
+    files("skills.py", GOOD)
+    path = files("robot.yaml", robot("skills.py"))
+    result = situate("check", str(path))
+    assert result.returncode == 0, result.stderr
+    assert "ok" in result.stdout
+    result = situate("run", str(path), "--cycles", "20", "--no-link")
+    assert result.returncode == 0, result.stderr
+    line = next(x for x in result.stdout.splitlines() if x.startswith("s "))
+    assert "ok.skill" not in line  # the summary lists instances by name
+    assert line.split()[2] == "20", result.stdout  # runs
+    assert "active" in line
+    # The body's prints are the skill's own, not the program's output.
+    assert "tick" not in result.stdout
+
+
+def test_a_wrong_type_name_in_the_robot_file_suggests_the_python_one(files: Write) -> None:
+    files("skills.py", GOOD)
+    path = files("robot.yaml", robot("skills.py").replace("type: ok.skill", "type: ok.skil"))
+    result = situate("check", str(path))
+    assert result.returncode == 1
+    assert "ok.skill" in result.stderr
+
+
+def test_a_python_skill_over_the_link_prints_and_faults_as_events(files: Write) -> None:
+    from situate.events import Print, SkillFaulted
+
+    files(
+        "skills.py",
+        """
+        import situate
+
+        @situate.skill(name="ok.skill", outputs={"y": "f64"})
+        def ok_skill(fail: bool = False) -> dict[str, float]:
+            print("tick")
+            if fail:
+                raise ValueError("asked to fail")
+            return {"y": 1.5}
+        """,
+    )
+    path = files(
+        "robot.yaml",
+        robot("skills.py").replace("clock: simulated", "clock: wall"),
+    )
+    manager = start_manager(path, "loadtest")
+    try:
+
+        async def scenario() -> tuple[float, Print, SkillFaulted, str]:
+            async with sit.connect("loadtest", endpoint=manager.endpoint) as r:
+                reading = await r.query("y")
+                async with r.events("print", "skill_faulted") as events:
+                    await r.set_verbose("s")
+                    printed = await events.next(timeout=EVENT_S)
+                    await r.set_param("s", "fail", True)
+                    while True:
+                        event = await events.next(timeout=EVENT_S)
+                        if isinstance(event, SkillFaulted):
+                            break
+                info = await r.skill("s")
+                assert isinstance(printed, Print)
+                return reading.value, printed, event, info.faulted or ""
+
+        value, printed, fault, cause = run(scenario())
+    finally:
+        stderr = manager.stop()
+    assert value == 1.5
+    assert (printed.skill, printed.line) == ("s", "tick")
+    assert fault.skill == "s"
+    assert "ValueError: asked to fail" in fault.cause
+    assert cause == fault.cause
+    assert "skill `s` faulted" in stderr
+
+
+def test_two_skills_of_one_name_in_a_file_are_refused(files: Write) -> None:
+    files(
+        "skills.py",
+        GOOD + "\n\n@situate.skill(name='ok.skill')\ndef again() -> None:\n    pass\n",
+    )
+    path = files("robot.yaml", robot("skills.py"))
+    with pytest.raises(ValueError, match=r"two skills are named `ok\.skill`"):
+        sit.LocalRobot(path)
+
+
+def test_a_skill_class_must_be_made_without_arguments() -> None:
+    class NeedsArgs:
+        def __init__(self, port: str) -> None:
+            self.port = port
+
+        def step(self) -> None:
+            pass
+
+    with pytest.raises(sit.SkillDeclarationError, match="__init__ needs port"):
+        sit.skill(NeedsArgs)
+
+
+def test_the_in_process_robot_leaves_c_libraries_to_the_program(files: Write) -> None:
+    files("skills.py", GOOD)
+    path = files(
+        "robot.yaml", robot("skills.py").replace("python:", "libraries: [libx.so]\npython:")
+    )
+    with pytest.raises(ValueError, match="loaded by the `situate` program only"):
+        sit.LocalRobot(path)
