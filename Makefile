@@ -4,15 +4,15 @@ export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-rust test-python python lint bench system-deps
+.PHONY: help demo test test-rust test-python test-gui python gui lint bench system-deps
 
 help: ## Show the targets.
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
 
-demo: ## Run the demo: the toy robot of examples/toybot.yaml for 10 s, then its summary.
-	$(CARGO) run --release -q -p situate_cli -- run examples/toybot.yaml --cycles 200
+demo: python gui ## The delivery demo: simulator, manager, Python sequencer; GUI on http://127.0.0.1:8080.
+	$(CARGO) run --release -q -p situate_cli -- demo --python .venv/bin/python $(DEMO_ARGS)
 
-test: system-deps lint test-rust test-python ## Run every test in every language (what CI runs).
+test: system-deps gui lint test-rust test-python test-gui ## Run every test in every language (what CI runs).
 
 system-deps: ## Install the system tools the tests use (iproute2), when missing.
 	scripts/system-deps.sh
@@ -24,12 +24,21 @@ lint: ## Formatting and lints: rustfmt, clippy -D warnings.
 test-rust: ## The Rust tests (unit, integration, property, doc).
 	$(CARGO) test --workspace --locked
 
+gui: ## Build the GUI's web app (web/dist, embedded into the `situate` program).
+	scripts/gui.sh build
+
+test-gui: ## The GUI in a real browser (headless Chromium, installed when missing).
+	scripts/gui.sh test
+
 python: ## Build the Python package (wheel) and install it into .venv.
 	scripts/python.sh
 
 test-python: ## Python: ruff, ruff format --check, mypy --strict, pytest (builds the wheel first).
 	scripts/python.sh test
 
-bench: python ## Run the benchmarks (ratios in one run; see bench/README.md): the core, then the link.
+bench: python gui ## Run the benchmarks (ratios in one run; see bench/README.md).
 	$(CARGO) bench -p situate_bench --locked --bench core
+	$(CARGO) bench -p situate_bench --locked --bench languages
+	.venv/bin/python bench/python/overhead.py
 	bench/link/run.sh
+	bench/gui/run.sh

@@ -69,6 +69,69 @@ enum Command {
         /// Override the link's listen endpoints (e.g. tcp/127.0.0.1:7448).
         #[arg(long)]
         listen: Vec<String>,
+        /// Override the simulator's map file (robot files with `simulator:`).
+        #[arg(long)]
+        map: Option<PathBuf>,
+        /// Override the simulator's seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// On the simulated clock, run at this many times real time (default: as fast as possible).
+        #[arg(long)]
+        speed: Option<f64>,
+        /// Serve the debugging GUI at this address (e.g. 127.0.0.1:8080, or a port).
+        #[arg(long)]
+        gui: Option<String>,
+        /// No GUI, even if the robot file has a `gui:` section.
+        #[arg(long, conflicts_with = "gui")]
+        no_gui: bool,
+    },
+    /// The delivery demo: the simulated robot, the skill manager and the Python sequencer of
+    /// demo/deliver.py (and the GUI unless --headless). Prints one line per phase and the outcome.
+    Demo {
+        /// The demo's robot file.
+        #[arg(long, default_value = "demo/robot.yaml")]
+        robot: PathBuf,
+        /// Another building (a map file; see docs/maps.md).
+        #[arg(long)]
+        map: Option<PathBuf>,
+        /// The simulator's seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// No GUI, and the simulated clock as fast as possible.
+        #[arg(long)]
+        headless: bool,
+        /// `sequenced`: the sequencer switches skills on and off (the paper's way);
+        /// `all-active`: every skill always on, priority arbitration only.
+        #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active"])]
+        mode: String,
+        /// The sequencer program.
+        #[arg(long, default_value = "demo/deliver.py")]
+        sequencer: PathBuf,
+        /// The Python interpreter for the sequencer (default: .venv/bin/python, else python3).
+        #[arg(long, env = "SITUATE_PYTHON")]
+        python: Option<PathBuf>,
+        /// With the GUI: simulated time runs this many times faster than real time.
+        #[arg(long, default_value_t = 4.0)]
+        speed: f64,
+        /// The GUI's address (not with --headless).
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        gui: String,
+        /// Give up after this much simulated time, s.
+        #[arg(long, default_value_t = 1800.0)]
+        limit_s: f64,
+        /// Print the outcome as one JSON line.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Generate a skill's typed I/O (structs or classes and the glue) from its YAML manifest.
+    Gen {
+        /// `c`, `cpp` or `python`.
+        #[arg(value_parser = ["c", "cpp", "c++", "python", "py"])]
+        lang: String,
+        manifest: PathBuf,
+        /// The directory to write into.
+        #[arg(short, long, default_value = ".")]
+        out: PathBuf,
     },
     /// List the skill types this program knows, with their declarations.
     Types,
@@ -203,13 +266,7 @@ struct Loaded {
 fn load(file: &Path) -> Result<Loaded, ExitCode> {
     let robot_file = match RobotFile::load(file) {
         Ok(f) => f,
-        Err(errors) => {
-            for e in &errors {
-                eprintln!("{e}");
-            }
-            count_line(file, errors.len());
-            return Err(ExitCode::FAILURE);
-        }
+        Err(errors) => return Err(report(file, &errors)),
     };
     let link = match &robot_file.link {
         None => LinkConfig::default(),
@@ -226,15 +283,18 @@ fn load(file: &Path) -> Result<Loaded, ExitCode> {
     };
     let remote = match robot_file.remote_decls() {
         Ok(r) => r,
-        Err(errors) => {
-            for e in &errors {
-                eprintln!("{e}");
-            }
-            count_line(file, errors.len());
-            return Err(ExitCode::FAILURE);
-        }
+        Err(errors) => return Err(report(file, &errors)),
     };
     Ok(Loaded { spec: RobotSpec::from_file(&robot_file), link, remote, file: robot_file })
+}
+
+/// Prints every error, then the count line; the exit code of a failure.
+fn report(file: &Path, errors: &[impl std::fmt::Display]) -> ExitCode {
+    for e in errors {
+        eprintln!("{e}");
+    }
+    count_line(file, errors.len());
+    ExitCode::FAILURE
 }
 
 fn count_line(file: &Path, n: usize) {
@@ -244,9 +304,26 @@ fn count_line(file: &Path, n: usize) {
 fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check { file } => check(&file, ext),
-        Command::Run { file, cycles, executor, clock, no_link, listen } => {
-            run_robot(&file, cycles, executor, clock, no_link, listen, ext)
+        Command::Run { file, cycles, executor, clock, no_link, listen, map, seed, speed, gui, no_gui } => {
+            let opts = RunOptions {
+                cycles,
+                executor,
+                clock,
+                no_link,
+                listen,
+                sim: SimOverrides { map, seed },
+                speed,
+                stopped: false,
+                gui,
+                no_gui,
+            };
+            run_robot(&file, &opts, ext)
         }
+        Command::Demo { robot, map, seed, headless, mode, sequencer, python, speed, gui, limit_s, json } => {
+            let demo = DemoOptions { robot, map, seed, headless, mode, sequencer, python, speed, gui, limit_s, json };
+            run_demo(&demo, ext)
+        }
+        Command::Gen { lang, manifest, out } => generate(&lang, &manifest, &out),
         Command::Types => {
             types();
             Ok(ExitCode::SUCCESS)
@@ -451,10 +528,90 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
     }
 }
 
-/// The skill types a robot file can name: the built-in libraries, then the
-/// file's own `libraries:` and `python:` files. Errors name the file's line.
-fn registry_for(robot_file: &RobotFile, ext: &Extensions) -> Result<Registry, Vec<String>> {
-    let mut registry = situate_toys::registry();
+/// The simulated building a robot file runs in (its `simulator:` section).
+pub struct Simulation {
+    pub map_path: PathBuf,
+    pub map: situate_sim::Map,
+    pub world: situate_sim::SharedWorld,
+    pub seed: u64,
+}
+
+/// Overrides of a robot file's `simulator:` section from the command line.
+#[derive(Default, Clone)]
+struct SimOverrides {
+    map: Option<PathBuf>,
+    seed: Option<u64>,
+}
+
+/// Reads `simulator: {map: FILE, seed: N}` and builds the world.
+fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simulation>, Vec<String>> {
+    let Some(node) = &robot_file.simulator else {
+        if over.map.is_some() || over.seed.is_some() {
+            return Err(vec![format!(
+                "{}: --map and --seed need a robot file with a `simulator:` section",
+                robot_file.file
+            )]);
+        }
+        return Ok(None);
+    };
+    let mut errors = Vec::new();
+    let mut map_path = None;
+    let mut seed = 1u64;
+    match node.value.as_map() {
+        Some(entries) => {
+            for (key, value) in entries {
+                match key.value.as_str() {
+                    "map" => match value.value.as_text() {
+                        Some(p) => map_path = Some(robot_file.resolve(p)),
+                        None => errors.push(robot_file.error(value.pos, "`map` expects the path of a map file")),
+                    },
+                    "seed" => match value.value.as_i64().filter(|s| *s >= 0) {
+                        Some(n) => seed = n as u64,
+                        None => errors.push(robot_file.error(value.pos, "`seed` expects a whole number ≥ 0")),
+                    },
+                    other => errors.push(robot_file.error(
+                        key.pos,
+                        format!(
+                            "unknown key `{other}` in `simulator`{}",
+                            situate_core::suggestion(other, ["map", "seed"])
+                        ),
+                    )),
+                }
+            }
+        }
+        None => errors.push(robot_file.error(node.pos, "`simulator` expects a mapping with `map:` and `seed:`")),
+    }
+    if let Some(m) = &over.map {
+        map_path = Some(m.clone());
+    }
+    if let Some(s) = over.seed {
+        seed = s;
+    }
+    if map_path.is_none() && errors.is_empty() {
+        errors.push(robot_file.error(node.pos, "`simulator` needs `map:` (the building's map file)"));
+    }
+    if !errors.is_empty() {
+        return Err(errors.into_iter().map(|e| e.to_string()).collect());
+    }
+    let map_path = map_path.unwrap_or_default();
+    let map = situate_sim::load_map(&map_path).map_err(|e| vec![e.to_string()])?;
+    let world = Arc::new(std::sync::Mutex::new(situate_sim::World::new(map.clone(), seed)));
+    Ok(Some(Simulation { map_path, map, world, seed }))
+}
+
+/// The skill types a robot file can name: the built-in libraries, the
+/// simulator's devices when it has a `simulator:` section, then the file's
+/// own `libraries:` and `python:` files. Errors name the file's line.
+fn registry_for(
+    robot_file: &RobotFile,
+    ext: &Extensions,
+    over: &SimOverrides,
+) -> Result<(Registry, Option<Simulation>), Vec<String>> {
+    let mut registry = builtin_registry();
+    let sim = simulation(robot_file, over)?;
+    if let Some(sim) = &sim {
+        situate_sim::register(&mut registry, sim.world.clone());
+    }
     let mut errors = Vec::new();
     for lib in &robot_file.libraries {
         let path = robot_file.resolve(&lib.value);
@@ -487,14 +644,22 @@ fn registry_for(robot_file: &RobotFile, ext: &Extensions) -> Result<Registry, Ve
         }
     }
     if errors.is_empty() {
-        Ok(registry)
+        Ok((registry, sim))
     } else {
         Err(errors)
     }
 }
 
+/// The skill types every robot file can name: the toys and the standard
+/// skill library (`std.*`).
+fn builtin_registry() -> Registry {
+    let mut registry = situate_toys::registry();
+    situate_skills::register(&mut registry);
+    registry
+}
+
 fn load_library(path: &Path) -> Result<Vec<situate_core::SkillType>, String> {
-    Err(format!("cannot load `{}`: C/C++ skill libraries are not supported by this build", path.display()))
+    situate_cabi::load_library(path).map_err(|e| e.to_string())
 }
 
 fn check(file: &Path, ext: &Extensions) -> anyhow::Result<ExitCode> {
@@ -502,15 +667,9 @@ fn check(file: &Path, ext: &Extensions) -> anyhow::Result<ExitCode> {
         Ok(s) => s,
         Err(code) => return Ok(code),
     };
-    let mut registry = match registry_for(&loaded.file, ext) {
+    let (mut registry, _sim) = match registry_for(&loaded.file, ext, &SimOverrides::default()) {
         Ok(r) => r,
-        Err(errors) => {
-            for e in &errors {
-                eprintln!("{e}");
-            }
-            count_line(file, errors.len());
-            return Ok(ExitCode::FAILURE);
-        }
+        Err(errors) => return Ok(report(file, &errors)),
     };
     for (_, decl) in &loaded.remote {
         // Checking needs the declaration only; nothing is created.
@@ -541,51 +700,87 @@ fn check(file: &Path, ext: &Extensions) -> anyhow::Result<ExitCode> {
     }
 }
 
-fn run_robot(
-    file: &Path,
+/// How to run a robot file: the command line's overrides.
+#[derive(Default, Clone)]
+struct RunOptions {
     cycles: Option<u64>,
     executor: Option<String>,
     clock: Option<String>,
     no_link: bool,
     listen: Vec<String>,
-    ext: &Extensions,
-) -> anyhow::Result<ExitCode> {
+    sim: SimOverrides,
+    /// Pacing of the simulated clock (× real time).
+    speed: Option<f64>,
+    /// Start with the cycle stopped (a sequencer starts it).
+    stopped: bool,
+    /// Serve the GUI here (overrides the file's `gui:` section).
+    gui: Option<String>,
+    /// No GUI even if the file asks for one.
+    no_gui: bool,
+}
+
+/// A robot running on its own threads, serving the link.
+struct Running {
+    handle: situate::manager::Handle,
+    join: std::thread::JoinHandle<Manager>,
+    events: crossbeam_channel::Receiver<Event>,
+    served: Option<Link>,
+    gui: Option<situate_gui::GuiServer>,
+    sim: Option<Simulation>,
+    robot: String,
+}
+
+impl Running {
+    /// Stops everything; returns the final statistics.
+    fn finish(mut self) -> anyhow::Result<(ManagerStats, Vec<SkillInfo>)> {
+        let stats = self.handle.stats().map_err(anyhow::Error::msg);
+        let skills = self.handle.skills().map_err(anyhow::Error::msg);
+        if let Some(gui) = self.gui.take() {
+            gui.stop();
+        }
+        drop(self.served.take());
+        let _ = self.handle.request(situate::manager::Request::Shutdown);
+        let _ = self.join.join();
+        Ok((stats?, skills?))
+    }
+}
+
+/// Loads, checks and starts a robot file. `Err(Ok(code))`: the problems
+/// were reported already.
+fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> Result<Running, anyhow::Result<ExitCode>> {
     let Loaded { mut spec, mut link, remote, file: robot_file } = match load(file) {
         Ok(s) => s,
-        Err(code) => return Ok(code),
+        Err(code) => return Err(Ok(code)),
     };
-    let mut registry = match registry_for(&robot_file, ext) {
+    let (mut registry, sim) = match registry_for(&robot_file, ext, &opts.sim) {
         Ok(r) => r,
-        Err(errors) => {
-            for e in &errors {
-                eprintln!("{e}");
-            }
-            count_line(file, errors.len());
-            return Ok(ExitCode::FAILURE);
-        }
+        Err(errors) => return Err(Ok(report(file, &errors))),
     };
-    if no_link && !remote.is_empty() {
+    if opts.no_link && !remote.is_empty() {
         let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();
-        anyhow::bail!("remote skills ({}) need the link; drop --no-link", names.join(", "));
+        return Err(Err(anyhow::anyhow!("remote skills ({}) need the link; drop --no-link", names.join(", "))));
     }
-    if let Some(e) = executor {
+    if let Some(e) = &opts.executor {
         spec.executor = if e == "parallel" { ExecutorKind::Parallel } else { ExecutorKind::Serial };
     }
-    if let Some(c) = clock {
+    if let Some(c) = &opts.clock {
         spec.clock = if c == "simulated" { ClockKind::Simulated } else { ClockKind::Wall };
     }
-    if !listen.is_empty() {
-        link.listen = listen;
+    if !opts.listen.is_empty() {
+        link.listen = opts.listen.clone();
     }
-    let session = if no_link {
+    let session = if opts.no_link {
         None
     } else {
-        Some(Link::open(&link).with_context(|| {
+        match Link::open(&link).with_context(|| {
             format!(
                 "opening the link on {} (is another robot using it? try --listen or --no-link)",
                 link.listen.join(", ")
             )
-        })?)
+        }) {
+            Ok(s) => Some(s),
+            Err(e) => return Err(Err(e)),
+        }
     };
     if let Some(session) = &session {
         for (name, decl) in remote {
@@ -597,15 +792,16 @@ fn run_robot(
         Err(e) => {
             eprintln!("{e}");
             count_line(file, e.diagnostics.iter().filter(|d| d.is_error()).count());
-            return Ok(ExitCode::FAILURE);
+            return Err(Ok(ExitCode::FAILURE));
         }
     };
     for w in &manager.graph().warnings {
         eprintln!("{w}");
     }
-    manager.stop_after(cycles);
+    manager.stop_after(opts.cycles);
+    manager.set_speed(opts.speed);
     let events = manager.events();
-    let (mut handle, join) = manager.spawn(true);
+    let (mut handle, join) = manager.spawn(!opts.stopped);
     let served = match session {
         None => None,
         Some(session) => match Link::serve(&spec.robot, handle.clone(), session, &link).context("serving the link") {
@@ -621,17 +817,102 @@ fn run_robot(
             Err(e) => {
                 let _ = handle.request(situate::manager::Request::Shutdown);
                 let _ = join.join();
-                return Err(e);
+                return Err(Err(e));
             }
         },
     };
+    let gui_listen = match gui_address(&robot_file, opts) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("{e}");
+            let _ = handle.request(situate::manager::Request::Shutdown);
+            let _ = join.join();
+            return Err(Ok(ExitCode::FAILURE));
+        }
+    };
+    let gui = match gui_listen {
+        None => None,
+        Some(listen) => {
+            let world = sim.as_ref().map(|s| s.map.world_json());
+            let config = situate_gui::GuiConfig { listen, world, ..situate_gui::GuiConfig::default() };
+            match situate_gui::serve(handle.clone(), config) {
+                Ok(g) => {
+                    eprintln!("situate: GUI on {}", g.url());
+                    Some(g)
+                }
+                Err(e) => {
+                    let _ = handle.request(situate::manager::Request::Shutdown);
+                    let _ = join.join();
+                    return Err(Err(anyhow::anyhow!("starting the GUI on {listen}: {e}")));
+                }
+            }
+        }
+    };
+    Ok(Running { handle, join, events, served, gui, sim, robot: spec.robot.clone() })
+}
+
+/// Where to serve the GUI: `--gui ADDR`, else the file's `gui: {listen: ADDR}`
+/// (or `gui: {port: N}` on 127.0.0.1), else nowhere.
+fn gui_address(robot_file: &RobotFile, opts: &RunOptions) -> Result<Option<std::net::SocketAddr>, String> {
+    if opts.no_gui {
+        return Ok(None);
+    }
+    let parse = |text: &str| -> Result<std::net::SocketAddr, String> {
+        text.parse().or_else(|_| {
+            text.parse::<u16>()
+                .map(|port| std::net::SocketAddr::from(([127, 0, 0, 1], port)))
+                .map_err(|_| format!("`{text}` is not an address like 127.0.0.1:8080 or a port number"))
+        })
+    };
+    if let Some(text) = &opts.gui {
+        return parse(text).map(Some).map_err(|e| format!("--gui: {e}"));
+    }
+    let Some(node) = &robot_file.gui else { return Ok(None) };
+    let Some(entries) = node.value.as_map() else {
+        return Err(robot_file
+            .error(node.pos, "`gui` expects a mapping such as `{listen: 127.0.0.1:8080}`")
+            .to_string());
+    };
+    let mut addr = None;
+    for (key, value) in entries {
+        let text = value.value.as_text().map(str::to_string).or_else(|| value.value.as_i64().map(|n| n.to_string()));
+        match (key.value.as_str(), text) {
+            ("listen" | "port", Some(t)) => match parse(&t) {
+                Ok(a) => addr = Some(a),
+                Err(e) => return Err(robot_file.error(value.pos, format!("`gui.{}`: {e}", key.value)).to_string()),
+            },
+            ("listen" | "port", None) => {
+                return Err(robot_file.error(value.pos, format!("`gui.{}` expects an address", key.value)).to_string())
+            }
+            (other, _) => {
+                return Err(robot_file
+                    .error(
+                        key.pos,
+                        format!(
+                            "unknown key `{other}` in `gui`{}",
+                            situate_core::suggestion(other, ["listen", "port"])
+                        ),
+                    )
+                    .to_string())
+            }
+        }
+    }
+    Ok(addr)
+}
+
+fn run_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
+    let mut running = match start_robot(file, opts, ext) {
+        Ok(r) => r,
+        Err(done) => return done,
+    };
+    let cycles = opts.cycles;
     let interrupted = interrupt_flag()?;
     let started = Instant::now();
     loop {
         if interrupted.load(Ordering::SeqCst) {
             break;
         }
-        match events.recv_timeout(Duration::from_millis(100)) {
+        match running.events.recv_timeout(Duration::from_millis(100)) {
             Ok(Event::SkillFaulted { skill, cause, cycle }) => {
                 eprintln!("cycle {cycle}: skill `{skill}` faulted: {cause}")
             }
@@ -640,24 +921,141 @@ fn run_robot(
         }
         if cycles.is_some() && started.elapsed() > Duration::from_secs(1) {
             // A stop requested over the link also ends a bounded run.
-            if let Ok(s) = handle.stats() {
+            if let Ok(s) = running.handle.stats() {
                 if cycles.is_some_and(|n| s.cycle >= n) && !s.running {
                     break;
                 }
             }
         }
     }
-    let stats = handle.stats().map_err(anyhow::Error::msg)?;
-    let skills = handle.skills().map_err(anyhow::Error::msg)?;
-    drop(served);
-    let _ = handle.request(situate::manager::Request::Shutdown);
-    let _ = join.join();
+    let (stats, skills) = running.finish()?;
     print_summary(&stats, &skills);
     Ok(ExitCode::SUCCESS)
 }
 
+fn generate(lang: &str, manifest: &Path, out: &Path) -> anyhow::Result<ExitCode> {
+    let lang = situate_cabi::Lang::parse(lang).ok_or_else(|| anyhow::anyhow!("unknown language `{lang}`"))?;
+    let files = match situate_cabi::generate(lang, manifest) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("{e}");
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    std::fs::create_dir_all(out).with_context(|| format!("creating `{}`", out.display()))?;
+    for f in files {
+        let path = out.join(&f.path);
+        std::fs::write(&path, f.contents).with_context(|| format!("writing `{}`", path.display()))?;
+        println!("{}", path.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+struct DemoOptions {
+    robot: PathBuf,
+    map: Option<PathBuf>,
+    seed: u64,
+    headless: bool,
+    mode: String,
+    sequencer: PathBuf,
+    python: Option<PathBuf>,
+    speed: f64,
+    gui: String,
+    limit_s: f64,
+    json: bool,
+}
+
+/// A free TCP port on the loopback interface.
+fn free_port() -> anyhow::Result<u16> {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").context("finding a free port")?;
+    Ok(l.local_addr()?.port())
+}
+
+fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
+    if !demo.sequencer.is_file() {
+        anyhow::bail!(
+            "no sequencer at `{}` (run the demo from the repository's top directory, or give --sequencer)",
+            demo.sequencer.display()
+        );
+    }
+    let port = free_port()?;
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let opts = RunOptions {
+        clock: Some("simulated".into()),
+        listen: vec![endpoint.clone()],
+        sim: SimOverrides { map: demo.map.clone(), seed: Some(demo.seed) },
+        speed: if demo.headless { None } else { Some(demo.speed) },
+        stopped: true,
+        gui: (!demo.headless).then(|| demo.gui.clone()),
+        no_gui: demo.headless,
+        ..RunOptions::default()
+    };
+    let running = match start_robot(&demo.robot, &opts, ext) {
+        Ok(r) => r,
+        Err(done) => return done,
+    };
+    let Some(sim) = &running.sim else {
+        let _ = running.finish();
+        anyhow::bail!("`{}` has no `simulator:` section: the demo needs the simulated robot", demo.robot.display());
+    };
+    let mission = sim.map.mission_json().to_string();
+    let python = demo.python.clone().unwrap_or_else(|| {
+        let venv = PathBuf::from(".venv/bin/python");
+        if venv.is_file() {
+            venv
+        } else {
+            PathBuf::from("python3")
+        }
+    });
+    let started = Instant::now();
+    let status = std::process::Command::new(&python)
+        .arg(&demo.sequencer)
+        .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
+        .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
+        .args(if demo.json { &["--quiet"][..] } else { &[][..] })
+        .status()
+        .with_context(|| format!("starting the sequencer with `{}`", python.display()));
+    let wall_s = started.elapsed().as_secs_f64();
+    let (delivered_at, sim_time) = {
+        let w = sim.world.lock().map_err(|_| anyhow::anyhow!("the simulator failed"))?;
+        (w.delivered_at(), w.time_s())
+    };
+    let (stats, skills) = running.finish()?;
+    let status = status?;
+    let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
+    let cpu_ns: u64 =
+        skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.total_ns).sum();
+    let outcome = json!({
+        "seed": demo.seed,
+        "mode": demo.mode,
+        "delivered": delivered_at.is_some(),
+        "mission_time_s": delivered_at.unwrap_or(sim_time),
+        "cycles": stats.cycle,
+        "skill_runs": runs,
+        "skill_cpu_ms": cpu_ns as f64 / 1e6,
+        "wall_s": wall_s,
+        "speedup": if wall_s > 0.0 { sim_time / wall_s } else { 0.0 },
+        "sequencer_exit": status.code(),
+    });
+    if demo.json {
+        println!("{outcome}");
+    } else {
+        match delivered_at {
+            Some(t) => println!("demo: message delivered at t = {t:.1} s (seed {})", demo.seed),
+            None => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
+        }
+        println!(
+            "demo: {} cycles, {runs} skill runs, {:.1} ms in skills, {wall_s:.1} s wall ({:.0}× real time)",
+            stats.cycle,
+            cpu_ns as f64 / 1e6,
+            if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
+        );
+    }
+    Ok(if delivered_at.is_some() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
 fn types() {
-    let registry = situate_toys::registry();
+    let registry = builtin_registry();
     for name in registry.names() {
         let Some(t) = registry.get(name) else { continue };
         let d = &t.decl;

@@ -263,3 +263,112 @@ fn types_lists_runaway_with_its_safe_distance_and_range() {
         assert!(all.iter().any(|l| l.starts_with(&format!("{name} ("))), "{name} missing:\n{text}");
     }
 }
+
+const MAPS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../maps");
+
+/// A simulated robot: the default building, the sim's devices, two standard skills.
+fn sim_robot(extra: &str) -> String {
+    format!(
+        "robot: simbot\ncycle: {{rate_hz: 10, clock: simulated}}\nsimulator: {{map: {MAPS}/default.yaml, seed: 4}}\n\
+         devices:\n  - {{name: sonar, type: sim.sonar}}\n  - {{name: base, type: sim.base}}\n  - {{name: truth, type: sim.truth}}\n\
+         skills:\n  - {{name: runaway, type: std.runaway}}\n  - {{name: wander, type: std.wander}}\n{extra}"
+    )
+}
+
+#[test]
+fn a_simulated_robot_checks_and_runs_with_the_standard_skills() {
+    let (_dir, path) = robot_file("sim.yaml", &sim_robot(""));
+    let out = situate(["check".as_ref(), path.as_os_str()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = situate(["run".as_ref(), path.as_os_str(), "--no-link".as_ref(), "--cycles".as_ref(), "50".as_ref()]);
+    assert_no_panic(&out);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("robot `simbot`: 50 cycles, 5.000 s on its clock"), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("wander ") && l.contains("active")), "{text}");
+}
+
+#[test]
+fn a_simulator_section_with_a_bad_map_or_key_names_the_place() {
+    let source = "robot: s\nsimulator: {map: nowhere.yaml, sed: 3}\n";
+    let (_dir, path) = robot_file("s.yaml", source);
+    let out = situate(["check".as_ref(), path.as_os_str()]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains(&format!(
+            "{}:2:32: error: unknown key `sed` in `simulator` — did you mean `seed`?",
+            shown(&path)
+        )),
+        "{}",
+        stderr(&out)
+    );
+
+    let (_dir, path) = robot_file("s.yaml", "robot: s\nsimulator: {map: nowhere.yaml}\n");
+    let out = situate(["check".as_ref(), path.as_os_str()]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("nowhere.yaml"), "{}", stderr(&out));
+}
+
+#[test]
+fn map_and_seed_overrides_need_a_simulator() {
+    let out = situate(["run", TOYBOT, "--no-link", "--cycles", "2", "--seed", "3"]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("--map and --seed need a robot file with a `simulator:` section"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn a_missing_library_or_a_python_file_in_the_rust_binary_is_an_error_at_its_line() {
+    let source = "robot: l\nlibraries: [no/such/lib.so]\npython: [skills.py]\n";
+    let (_dir, path) = robot_file("l.yaml", source);
+    let out = situate(["check".as_ref(), path.as_os_str()]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains(&format!("{}:2:13: error:", shown(&path))) && err.contains("lib.so"), "{err}");
+    assert!(err.contains(&format!("{}:3:10: error:", shown(&path))) && err.contains("Python package"), "{err}");
+}
+
+#[test]
+fn gen_writes_the_typed_io_of_a_manifest_and_refuses_a_bad_one() {
+    let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/c/runaway/runaway.yaml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = situate(["gen".as_ref(), "c".as_ref(), manifest.as_ref(), "-o".as_ref(), dir.path().as_os_str()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let written: Vec<String> = stdout(&out).lines().map(str::to_string).collect();
+    assert!(!written.is_empty());
+    let header = std::fs::read_to_string(&written[0]).unwrap();
+    assert!(header.contains("safe_distance"), "{header}");
+
+    let (_d, bad) = robot_file("bad.yaml", "name: c.bad\ninputs: {x: f99}\n");
+    let out = situate(["gen".as_ref(), "python".as_ref(), bad.as_os_str(), "-o".as_ref(), dir.path().as_os_str()]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains(&shown(&bad)), "{}", stderr(&out));
+}
+
+#[test]
+fn a_gui_address_that_is_not_one_is_refused_before_anything_runs() {
+    let out = situate(["run", TOYBOT, "--no-link", "--cycles", "2", "--gui", "somewhere"]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--gui: `somewhere` is not an address"), "{}", stderr(&out));
+}
+
+#[test]
+fn the_demo_without_its_sequencer_says_where_to_run_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_situate"))
+        .args(["demo", "--headless"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("no sequencer at `demo/deliver.py`"), "{}", stderr(&out));
+}

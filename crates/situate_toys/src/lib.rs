@@ -243,7 +243,64 @@ pub fn register(registry: &mut Registry) {
         .register::<FakeWheels>()
         .register::<Runaway>()
         .register::<Wander>()
-        .register::<MemDevice>();
+        .register::<MemDevice>()
+        .register::<example::Runaway>()
+        .register::<Agree>();
+}
+
+/// The Rust one of the four runaway examples (`examples/{rust,c,cpp,python}/runaway`), built in so
+/// robot files can name `rust.runaway` next to the others.
+#[path = "../../../examples/rust/runaway/runaway.rs"]
+pub mod example;
+
+/// Checks that up to four writers of a `drive` command agree exactly: every
+/// cycle, either none of `a`, `b`, `c`, `d` was written or all were, with
+/// bit-identical values (an absent input counts as silence).
+#[derive(Skill, Default)]
+#[skill(name = "toy.agree")]
+pub struct Agree {
+    #[input]
+    a: Option<Drive>,
+    #[input]
+    b: Option<Drive>,
+    #[input]
+    c: Option<Drive>,
+    #[input]
+    d: Option<Drive>,
+    /// Cycles checked so far.
+    #[output(signal = "agree.cycles")]
+    cycles: i64,
+    /// Cycles in which all four wrote (and agreed).
+    #[output(signal = "agree.commands")]
+    commands: i64,
+    /// Cycles in which they did not agree.
+    #[output(signal = "agree.mismatches")]
+    mismatches: i64,
+}
+
+impl Body for Agree {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let bits = |d: &Option<Drive>| d.map(|d| (d.v.to_bits(), d.w.to_bits()));
+        let all = [bits(&self.a), bits(&self.b), bits(&self.c), bits(&self.d)];
+        self.cycles += 1;
+        if all.iter().all(|x| *x == all[0]) {
+            if all[0].is_some() {
+                self.commands += 1;
+            }
+        } else {
+            self.mismatches += 1;
+            sprint!(
+                cx,
+                "cycle {}: the writers disagree: {:?} {:?} {:?} {:?}",
+                cx.cycle(),
+                self.a,
+                self.b,
+                self.c,
+                self.d
+            );
+        }
+        Ok(())
+    }
 }
 
 /// A registry holding the toy skills.

@@ -1,0 +1,86 @@
+"""The runaway skill in Rust, C, C++ and Python, side by side in one cycle, agree exactly."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from support import REPO, run, start_manager
+
+import situate
+
+MIXED = REPO / "examples" / "mixed" / "robot.yaml"
+
+
+def situate_gen() -> Path:
+    """The generator CMake runs: built by `cargo test --workspace`, else built now."""
+    target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+    for profile in ("debug", "release"):
+        exe = target / profile / "situate-gen"
+        if exe.is_file():
+            return exe
+    subprocess.run(
+        ["cargo", "build", "-q", "-p", "situate_cabi", "--bin", "situate-gen"], cwd=REPO, check=True
+    )
+    return target / "debug" / "situate-gen"
+
+
+def build_library(lang: str) -> None:
+    """Builds examples/<lang>/runaway with the CMake package, where robot.yaml expects it."""
+    if shutil.which("cmake") is None:
+        pytest.fail("cmake is needed to build the C and C++ examples")
+    build = REPO / "build" / f"{lang}_runaway"
+    configure = [
+        "cmake",
+        "-S",
+        str(REPO / "examples" / lang / "runaway"),
+        "-B",
+        str(build),
+        f"-DCMAKE_PREFIX_PATH={REPO / 'cmake'}",
+        f"-DSITUATE_GEN={situate_gen()}",
+    ]
+    subprocess.run(configure, check=True, capture_output=True)
+    subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True)
+
+
+def test_four_languages_agree_bit_for_bit_over_a_thousand_cycles() -> None:
+    for lang in ("c", "cpp"):
+        build_library(lang)
+    manager = start_manager(MIXED, "mixed")
+    try:
+
+        async def main() -> tuple[int, int, int]:
+            async with situate.connect("mixed", endpoint=manager.endpoint) as robot:
+
+                async def counts() -> list[int]:
+                    names = ("cycles", "commands", "mismatches")
+                    return [int((await robot.query(f"agree.{n}")).value) for n in names]
+
+                # The cycle runs as fast as it can: stop it, then count 1,000 more cycles
+                # from there, pausing exactly at the last one.
+                await robot.stop()
+                start = await counts()
+                waiting = asyncio.ensure_future(
+                    robot.when(f"agree.cycles >= {start[0] + 1000}", pause=True, timeout=120)
+                )
+                while not await robot.monitors():
+                    await asyncio.sleep(0.01)
+                await robot.run()
+                await waiting
+                end = await counts()
+                faulted = [s.name for s in await robot.skills() if s.faulted]
+                assert faulted == []
+                return end[0] - start[0], end[1] - start[1], end[2]
+
+        cycles, commands, mismatches = run(main())
+    finally:
+        manager.stop()
+    assert cycles == 1000
+    # No disagreement in any cycle since the start.
+    assert mismatches == 0
+    # Both branches were exercised: commands in some cycles, silence in others.
+    assert 0 < commands < cycles
