@@ -204,7 +204,9 @@ def test_a_pausing_monitor_stops_the_cycle_where_its_condition_held(toybot: Mana
         async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
             start = (await robot.stats()).cycle
             target = start + 40
-            index, event = await robot.first("time < 0", f"cycle >= {target}", pause=True, timeout=30)
+            index, event = await robot.first(
+                "time < 0", f"cycle >= {target}", pause=True, timeout=30
+            )
             assert (index, event.cycle) == (1, target)
             stats = await robot.stats()
             # The cycle stopped right there, however long the event took to arrive.
