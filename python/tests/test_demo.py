@@ -1,0 +1,194 @@
+"""The delivery demo (demo/deliver.py) on the simulated robot, through `situate demo`.
+
+Runs the `situate` program ($SITUATE_BIN, else the package's console script next to this
+interpreter: the release build `scripts/python.sh` installs): a headless sample of seeds of the
+whole delivery, and per-phase scenarios whose maps (maps/scenarios/) start the robot at that phase,
+the sequencer told where to start and stop with DELIVER_FROM / DELIVER_TO. No timing
+assertions: outcomes are read from the simulator's ground truth (`--json`).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _binary() -> Path | None:
+    given = os.environ.get("SITUATE_BIN")
+    if given:
+        return Path(given)
+    script = Path(sys.executable).parent / "situate"
+    return script if script.is_file() else None
+
+
+BIN = _binary()
+needs_bin = pytest.mark.usefixtures("situate_bin")
+
+
+@pytest.fixture
+def situate_bin() -> Path:
+    """The program under test; its absence is a failure, not a skip."""
+    if BIN is None or not BIN.is_file():
+        pytest.fail("no situate program: run scripts/python.sh (or set SITUATE_BIN)")
+    return BIN
+
+
+def demo(
+    seed: int,
+    *,
+    map_file: str | None = None,
+    first: str | None = None,
+    last: str | None = None,
+    limit_s: float = 1800,
+) -> dict[str, Any]:
+    assert BIN is not None
+    cmd = [str(BIN), "demo", "--headless", "--json", "--seed", str(seed)]
+    cmd += ["--python", sys.executable, "--limit-s", str(limit_s)]
+    if map_file:
+        cmd += ["--map", str(ROOT / map_file)]
+    env = dict(os.environ)
+    env.pop("DELIVER_DEBUG", None)
+    env["DELIVER_FROM"] = first or ""
+    env["DELIVER_TO"] = last or ""
+    done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    lines = [ln for ln in done.stdout.splitlines() if ln.startswith("{")]
+    assert lines, f"no outcome from `situate demo`:\n{done.stdout}\n{done.stderr[-3000:]}"
+    outcome: dict[str, Any] = json.loads(lines[-1])
+    outcome["stderr"] = done.stderr[-3000:]
+    return outcome
+
+
+@needs_bin
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_whole_delivery_succeeds_headless(seed: int) -> None:
+    out = demo(seed)
+    assert out["delivered"], out
+    assert out["sequencer_exit"] == 0, out
+    assert out["skill_runs"] > 0
+    assert out["mission_time_s"] > 0
+
+
+@needs_bin
+def test_lab_exit_phase() -> None:
+    # From the start pose in the cluttered lab to just outside its door.
+    out = demo(4, first="lab", last="lab", limit_s=900)
+    assert out["sequencer_exit"] == 0, out
+    assert not out["delivered"]
+
+
+@needs_bin
+def test_hallways_to_the_lobby_phase() -> None:
+    # From just outside the lab door: the route hints, hallway following, the junctions.
+    out = demo(1, map_file="maps/scenarios/corridor.yaml", first="corridor", last="corridor")
+    assert out["sequencer_exit"] == 0, out
+
+
+@needs_bin
+def test_lobby_and_car_phases() -> None:
+    # From the corridor below the lobby: call, wait, identify the car, enter, ride, leave.
+    out = demo(2, map_file="maps/scenarios/lobby.yaml", first="lobby", last="ride", limit_s=900)
+    assert out["sequencer_exit"] == 0, out
+
+
+@needs_bin
+def test_fourth_floor_corridor_to_the_office() -> None:
+    out = demo(1, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
+    assert out["delivered"], out
+    assert out["sequencer_exit"] == 0, out
+
+
+@needs_bin
+def test_another_building() -> None:
+    # maps/scenarios/annex.yaml: other layout, two cars, goal floor 2, other route hints.
+    out = demo(1, map_file="maps/scenarios/annex.yaml")
+    assert out["delivered"], out
+    assert out["sequencer_exit"] == 0, out
+
+
+@needs_bin
+def test_a_seed_replays_exactly() -> None:
+    a = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
+    b = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
+    for key in ("delivered", "mission_time_s", "cycles", "skill_runs"):
+        assert a[key] == b[key], key
+
+
+# ----- the sequencer's own geometry, without a robot ----------------------------------------
+
+
+def _deliver() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("deliver", ROOT / "demo" / "deliver.py")
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["deliver"] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+def _scan(walls: list[tuple[float, float, float, float]], max_range: float = 4.0) -> list[float]:
+    """Sonar ranges from the origin (heading +x) to segments, one ray per sonar."""
+    out = []
+    for i in range(24):
+        b = i * 2 * math.pi / 24
+        dx, dy = math.cos(b), math.sin(b)
+        best = max_range
+        for x1, y1, x2, y2 in walls:
+            ex, ey = x2 - x1, y2 - y1
+            den = dx * ey - dy * ex
+            if abs(den) < 1e-12:
+                continue
+            t = (x1 * ey - y1 * ex) / den
+            u = (x1 * dy - y1 * dx) / den
+            if t > 0 and 0 <= u <= 1:
+                best = min(best, t)
+        out.append(best)
+    return out
+
+
+def test_locate_door_finds_the_opening_beside_the_barcode() -> None:
+    d = _deliver()
+    # A wall 1 m ahead (x = 1) with an opening from y = -0.15 to y = -1.35 (to the right),
+    # a far wall 2 m beyond it.
+    walls = [(1.0, -0.15, 1.0, 5.0), (1.0, -1.35, 1.0, -5.0), (3.0, -5.0, 3.0, 5.0)]
+    fix = d.locate_door(_scan(walls))
+    assert fix is not None
+    assert abs(fix.normal) < 0.05
+    assert abs(fix.wall - 1.0) < 0.05
+    assert -1.1 < fix.centre[1] < -0.4
+
+
+def test_wall_ahead_is_none_in_the_open() -> None:
+    d = _deliver()
+    assert d.wall_ahead([4.0] * 24) is None
+
+
+def test_mission_reads_the_maps_mission_section() -> None:
+    d = _deliver()
+    text = json.dumps(
+        {
+            "start": {"floor": -1, "x": 1.5, "y": 1.5, "theta": 0.0},
+            "goal_floor": 4,
+            "lab_door_barcode": 10,
+            "call_button_barcode": 30,
+            "office_barcode": 40,
+            "car_barcode_first": 201,
+            "cars": 4,
+            "message": "Hi",
+            "route": {"car_to_office": [{"turn": "right"}, {"home": 40}]},
+        }
+    )
+    m = d.Mission.from_json(text)
+    assert (m.goal_floor, m.start_floor, m.cars, m.message) == (4, -1, 4, "Hi")
+    assert m.route["car_to_office"][1] == {"home": 40}
