@@ -48,10 +48,10 @@ say "installed $(basename "$wheel") in $((SECONDS - start)) s"
 if [[ ${1:-} == test ]]; then
     source "$VENV/bin/activate"
     say "ruff"
-    ruff check python
-    ruff format --check python
+    ruff check python demo scripts examples bench/python
+    ruff format --check python demo scripts examples bench/python
     say "mypy --strict"
-    mypy python/situate
+    mypy python/situate demo/deliver.py scripts/experiment.py
     say "pytest"
     pytest -q python/tests
 fi
