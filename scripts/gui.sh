@@ -2,7 +2,7 @@
 # The debugging GUI: build the web app (web/dist, embedded by crates/situate_gui), and test it in a
 # real browser.
 #
-#   scripts/gui.sh build   npm ci when needed, then type-check and build web/dist
+#   scripts/gui.sh build   npm install when needed, then type-check and build web/dist
 #   scripts/gui.sh test    build, then build the testbed and the `situate` CLI, install Debian's
 #                          chromium when /usr/bin/chromium is missing, and run the browser tests
 #
@@ -26,10 +26,13 @@ npm_ready() {
     local major
     major=$(node -p 'process.versions.node.split(".")[0]')
     [ "$major" -ge 20 ] || die "Node 20 or newer is needed, found $(node --version)"
-    # npm ci when node_modules is missing or older than the lock file.
+    # Install when node_modules is missing or older than the lock file. `npm install` with the
+    # committed lock, not `npm ci`: the lock has no entries for the platform packages of
+    # rollup that the registry here does not serve, and `npm ci` refuses such a lock as
+    # "out of sync" while `npm install` installs the locked versions and leaves it as it is.
     if [ ! -d web/node_modules ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
-        echo "gui.sh: npm ci in web/"
-        (cd web && npm ci --no-audit --no-fund)
+        echo "gui.sh: npm install in web/ (versions from package-lock.json)"
+        (cd web && npm install --no-audit --no-fund)
     fi
 }
 
