@@ -136,6 +136,9 @@ pub struct Manager {
     stop_at: Option<u64>,
     /// Pacing of the simulated clock when spawned (see [`Manager::set_speed`]).
     speed: Option<f64>,
+    /// A pausing monitor fired in the last cycle: a running cycle stops, a
+    /// step ends early.
+    paused: bool,
     /// The ready skills of a level (kept to reuse its allocation).
     ready: Vec<usize>,
 }
@@ -220,6 +223,7 @@ impl Manager {
             deactivated: Vec::new(),
             stop_at: None,
             speed: None,
+            paused: false,
             ready: Vec::new(),
             graph,
         };
@@ -635,6 +639,7 @@ impl Manager {
     }
 
     fn evaluate_monitors(&mut self) {
+        self.paused = false;
         if self.monitors.list.is_empty() {
             return;
         }
@@ -663,6 +668,7 @@ impl Manager {
         for e in fired {
             self.bus.send(e);
         }
+        self.paused = pause;
         if pause && self.running {
             let _ = self.request(Request::Stop);
         }
@@ -1011,6 +1017,10 @@ impl Manager {
                 }
                 for _ in 0..cycles {
                     self.cycle();
+                    if self.paused {
+                        // A pausing monitor ends a step where it fired, as it stops a run.
+                        break;
+                    }
                 }
                 Ok(Reply::Done)
             }

@@ -15,7 +15,8 @@
 //! does not hold.
 //!
 //! A monitor added with `pause` also stops the cycle at the end of the cycle
-//! it fires in (the manager then serves requests until told to run again).
+//! it fires in (the manager then serves requests until told to run again),
+//! and ends a `step` there.
 //! A sequencer that reacts to the event and then resumes the cycle makes
 //! its decisions at exactly the cycle the condition held, however slow the
 //! link: runs on the simulated clock replay exactly.

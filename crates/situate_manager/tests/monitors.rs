@@ -180,3 +180,24 @@ fn a_pausing_monitor_stops_the_cycle_at_the_cycle_it_fires_in() {
     handle.request(Request::Shutdown).unwrap();
     join.join().unwrap();
 }
+
+#[test]
+fn a_pausing_monitor_also_ends_a_step_where_it_fires() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let reply = m
+        .request(Request::AddMonitor {
+            condition: "sonar.range[0] < 0.25".into(),
+            mode: MonitorMode::Edge,
+            pause: true,
+        })
+        .unwrap();
+    let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
+    m.request(Request::Step { cycles: 6 }).unwrap();
+    assert_eq!(fired(&events), vec![(id, 2)]);
+    assert_eq!(m.stats().unwrap().cycle, 2);
+    // The next step goes on from there to the next rising edge.
+    m.request(Request::Step { cycles: 6 }).unwrap();
+    assert_eq!(fired(&events), vec![(id, 5)]);
+    assert_eq!(m.stats().unwrap().cycle, 5);
+}
