@@ -760,6 +760,13 @@ fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> Result<Runni
         let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();
         return Err(Err(anyhow::anyhow!("remote skills ({}) need the link; drop --no-link", names.join(", "))));
     }
+    let gui_listen = match gui_address(&robot_file, opts) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("{e}");
+            return Err(Ok(ExitCode::FAILURE));
+        }
+    };
     if let Some(e) = &opts.executor {
         spec.executor = if e == "parallel" { ExecutorKind::Parallel } else { ExecutorKind::Serial };
     }
@@ -801,10 +808,10 @@ fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> Result<Runni
     manager.stop_after(opts.cycles);
     manager.set_speed(opts.speed);
     let events = manager.events();
-    let (mut handle, join) = manager.spawn(!opts.stopped);
-    let served = match session {
-        None => None,
-        Some(session) => match Link::serve(&spec.robot, handle.clone(), session, &link).context("serving the link") {
+    let (handle, join) = manager.spawn(!opts.stopped);
+    let mut running = Running { handle, join, events, served: None, gui: None, sim, robot: spec.robot.clone() };
+    if let Some(session) = session {
+        match Link::serve(&spec.robot, running.handle.clone(), session, &link).context("serving the link") {
             Ok(l) => {
                 eprintln!(
                     "situate: robot `{}` serving situate/{}/** on {}",
@@ -812,43 +819,29 @@ fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> Result<Runni
                     spec.robot,
                     link.listen.join(", ")
                 );
-                Some(l)
+                running.served = Some(l);
             }
             Err(e) => {
-                let _ = handle.request(situate::manager::Request::Shutdown);
-                let _ = join.join();
+                let _ = running.finish();
                 return Err(Err(e));
             }
-        },
-    };
-    let gui_listen = match gui_address(&robot_file, opts) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("{e}");
-            let _ = handle.request(situate::manager::Request::Shutdown);
-            let _ = join.join();
-            return Err(Ok(ExitCode::FAILURE));
         }
-    };
-    let gui = match gui_listen {
-        None => None,
-        Some(listen) => {
-            let world = sim.as_ref().map(|s| s.map.world_json());
-            let config = situate_gui::GuiConfig { listen, world, ..situate_gui::GuiConfig::default() };
-            match situate_gui::serve(handle.clone(), config) {
-                Ok(g) => {
-                    eprintln!("situate: GUI on {}", g.url());
-                    Some(g)
-                }
-                Err(e) => {
-                    let _ = handle.request(situate::manager::Request::Shutdown);
-                    let _ = join.join();
-                    return Err(Err(anyhow::anyhow!("starting the GUI on {listen}: {e}")));
-                }
+    }
+    if let Some(listen) = gui_listen {
+        let world = running.sim.as_ref().map(|s| s.map.world_json());
+        let config = situate_gui::GuiConfig { listen, world, ..situate_gui::GuiConfig::default() };
+        match situate_gui::serve(running.handle.clone(), config) {
+            Ok(g) => {
+                eprintln!("situate: GUI on {}", g.url());
+                running.gui = Some(g);
+            }
+            Err(e) => {
+                let _ = running.finish();
+                return Err(Err(anyhow::anyhow!("starting the GUI on {listen}: {e}")));
             }
         }
-    };
-    Ok(Running { handle, join, events, served, gui, sim, robot: spec.robot.clone() })
+    }
+    Ok(running)
 }
 
 /// Where to serve the GUI: `--gui ADDR`, else the file's `gui: {listen: ADDR}`
