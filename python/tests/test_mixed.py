@@ -47,6 +47,13 @@ def build_library(lang: str) -> None:
     subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True)
 
 
+async def fired(stream: situate.Stream[situate.Event], monitor: int) -> None:
+    async for event in stream:
+        if isinstance(event, situate.MonitorFired) and event.monitor == monitor:
+            return
+    raise AssertionError("the link closed before the monitor fired")
+
+
 def test_four_languages_agree_bit_for_bit_over_a_thousand_cycles() -> None:
     for lang in ("c", "cpp"):
         build_library(lang)
@@ -64,13 +71,11 @@ def test_four_languages_agree_bit_for_bit_over_a_thousand_cycles() -> None:
                 # from there, pausing exactly at the last one.
                 await robot.stop()
                 start = await counts()
-                waiting = asyncio.ensure_future(
-                    robot.when(f"agree.cycles >= {start[0] + 1000}", pause=True, timeout=120)
-                )
-                while not await robot.monitors():
-                    await asyncio.sleep(0.01)
-                await robot.run()
-                await waiting
+                async with robot.events("monitor_fired") as stream:
+                    condition = f"agree.cycles >= {start[0] + 1000}"
+                    monitor = await robot.monitor(condition, "once", pause=True)
+                    await robot.run()
+                    await asyncio.wait_for(fired(stream, monitor), 120)
                 end = await counts()
                 faulted = [s.name for s in await robot.skills() if s.faulted]
                 assert faulted == []
