@@ -3,7 +3,8 @@
 Every command is the Rust program's (``situate_cli``, built into
 :mod:`situate._native`), so ``situate run``, ``situate skills`` and the rest
 behave exactly as with the Rust install. One command is Python's own, since
-it runs Python code: ``situate serve-skill MODULE:ATTR --robot ROBOT``.
+it runs Python code: ``situate serve-skill MODULE:ATTR --robot ROBOT`` (a skill *type*,
+``situate serve-skill c.runaway --library ...``, is the Rust program's again).
 """
 
 from __future__ import annotations
@@ -19,12 +20,38 @@ __all__ = ["main", "serve_skill_main"]
 def main(argv: Sequence[str] | None = None) -> None:
     """Runs ``situate`` with ``argv`` (default ``sys.argv``) and exits with its status."""
     args = list(sys.argv if argv is None else argv)
-    if len(args) > 1 and args[1] == "serve-skill":
+    if len(args) > 1 and args[1] == "serve-skill" and _names_python_function(args[2:]):
         sys.exit(serve_skill_main(args[2:]))
     from . import _native
 
     sys.stdout.flush()
     sys.exit(_native.main(["situate", *args[1:]]))
+
+
+def _names_python_function(argv: Sequence[str]) -> bool:
+    """Whether ``serve-skill``'s arguments name a ``MODULE:FUNCTION`` (served here, in Python).
+
+    Anything else names a skill type (``c.runaway``), which the Rust program serves, loading
+    ``--library`` and ``--python`` files itself.
+    """
+    takes_value = {
+        "--robot",
+        "--name",
+        "--connect",
+        "--timeout",
+        "--library",
+        "--python",
+        "--zenoh",
+    }
+    skip = False
+    for arg in argv:
+        if skip:
+            skip = False
+        elif arg in takes_value:
+            skip = True
+        elif not arg.startswith("-"):
+            return ":" in arg
+    return False
 
 
 def serve_skill_main(argv: Sequence[str]) -> int:

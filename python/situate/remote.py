@@ -281,6 +281,11 @@ class RemoteSkillServer:
         """Where the skill publishes its results."""
         return f"situate/{self.robot}/remote/{self.name}/outputs"
 
+    @property
+    def alive_key(self) -> str:
+        """The liveliness token this server holds while it serves."""
+        return f"situate/{self.robot}/remote/{self.name}/alive"
+
     def wait_ready(self, timeout: float | None = None) -> bool:
         """Waits until the server is subscribed (from another thread); ``False`` on timeout."""
         return self._ready.wait(timeout)
@@ -324,6 +329,9 @@ class RemoteSkillServer:
         try:
             publisher = session.declare_publisher(self.outputs_key)
             subscriber = session.declare_subscriber(self.inputs_key, self._on_inputs)
+            # Withdrawn by Zenoh when this session ends, however it ends: the
+            # manager then faults the skill instead of reusing a dead answer.
+            token = session.liveliness().declare_token(self.alive_key)
             self._ready.set()
             try:
                 while (message := self._next(stop)) is not None:
@@ -336,6 +344,8 @@ class RemoteSkillServer:
             except KeyboardInterrupt:
                 pass
             finally:
+                with contextlib.suppress(zenoh.ZError):
+                    token.undeclare()  # type: ignore[no-untyped-call]
                 _link.undeclare(subscriber)
                 _link.undeclare(publisher)
         finally:

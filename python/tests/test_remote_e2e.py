@@ -113,3 +113,82 @@ def test_a_remote_skill_that_raises_is_faulted(served: Manager) -> None:
             assert not info.active
 
     run(main())
+
+
+HOSTED_ROBOT = """
+    robot: hbot
+    cycle: {rate_hz: 50}
+    devices:
+      - {name: sonar, type: toy.sonar}
+    skills:
+      - name: runaway
+        remote:
+          inputs: {sonar_range: "f32[24]"}
+          outputs: {drive: "{v: f64, w: f64}"}
+          params:
+            safe_distance: {type: f64, default: 0.5, min: 0.1, max: 3.0}
+        params: {safe_distance: 3.0}
+        remap: {sonar_range: sonar.range}
+"""
+
+
+def test_a_skill_type_served_out_of_process_is_faulted_when_its_process_dies(
+    manager_for: Callable[[str, str], Manager],
+) -> None:
+    """`serve-skill TYPE --python FILE`: an in-process Python type, hosted by the Rust host.
+
+    The host holds a liveliness token; when it is killed (as a crash in a C
+    skill would kill it) the manager faults the skill and runs on.
+    """
+    manager = manager_for(HOSTED_ROBOT, "hbot")
+    example = Path(__file__).parents[2] / "examples/python/runaway/runaway.py"
+    server = subprocess.Popen(
+        [
+            situate_program(),
+            *("serve-skill", "py.runaway", "--python", str(example)),
+            *("--name", "runaway", "--robot", "hbot", "--connect", manager.endpoint),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=program_env(),
+    )
+
+    async def main() -> None:
+        async with situate.connect("hbot", endpoint=manager.endpoint) as robot:
+            # In the 2 m toy room every wall is nearer than 3 m: runaway drives.
+            await robot.when("drive.w > -10", timeout=EVENT_S)
+            drive = await robot.query("drive")
+            assert drive.writer == "runaway"
+            async with robot.events("skill_faulted") as faults:
+                server.kill()
+                event = await asyncio.wait_for(faults.__anext__(), EVENT_S)
+            assert isinstance(event, situate.SkillFaulted)
+            assert event.skill == "runaway"
+            assert "is gone" in event.cause
+            before = (await robot.stats()).cycle
+            await robot.when(f"cycle > {before + 5}", timeout=EVENT_S)  # the cycle goes on
+
+    try:
+        run(main())
+    finally:
+        server.kill()
+        server.communicate(timeout=EVENT_S)
+
+
+@pytest.mark.parametrize(
+    ("argv", "python"),
+    [
+        (["mybot.skills:doubler", "--robot", "r"], True),
+        (["--robot", "r", "--name", "n", "pkg:fn"], True),
+        (["c.runaway", "--library", "lib.so", "--robot", "r"], False),
+        (["--python", "a:b.py", "py.runaway"], False),
+        (["--help"], False),
+    ],
+)
+def test_serve_skill_goes_to_python_only_for_a_module_function(
+    argv: list[str], python: bool
+) -> None:
+    from situate._cli import _names_python_function
+
+    assert _names_python_function(argv) is python

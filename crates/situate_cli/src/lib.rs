@@ -192,11 +192,25 @@ enum Command {
     },
     /// Cycle statistics of a running robot.
     Stats(#[command(flatten)] Remote),
-    /// Serve a Python remote skill (`module:function`); provided by the Python package's `situate`.
-    #[command(name = "serve-skill", disable_help_flag = true)]
+    /// Serve a skill out of process, as a running robot's remote skill (an asynchronous cskill
+    /// over the link): a type from a C/C++ library (`--library`), a built-in type, a Python file's
+    /// type (`--python`, in the Python package's `situate`), or a Python function `MODULE:FUNCTION`
+    /// decorated with @situate.remote_skill (the Python package's `situate` only).
+    #[command(name = "serve-skill")]
     ServeSkill {
-        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-        args: Vec<String>,
+        /// The skill type (e.g. `c.runaway`), or `MODULE:FUNCTION` for a Python remote skill.
+        skill: String,
+        /// The skill's name in the robot file (default: the type's name after its last dot).
+        #[arg(long)]
+        name: Option<String>,
+        /// A shared library to load skill types from (repeatable).
+        #[arg(long)]
+        library: Vec<PathBuf>,
+        /// A Python file to load skill types from (repeatable; the Python package's `situate`).
+        #[arg(long)]
+        python: Vec<PathBuf>,
+        #[command(flatten)]
+        remote: Remote,
     },
     /// Start, stop or step a running robot's cycle: `cycle run`, `cycle stop`, `cycle step 5`.
     Cycle {
@@ -457,11 +471,8 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
                 Ok(())
             })
         }
-        Command::ServeSkill { .. } => {
-            anyhow::bail!(
-                "`serve-skill` serves Python skills: run it with the `situate` that the Python package installs \
-                 (scripts/python.sh, then .venv/bin/situate serve-skill MODULE:FUNCTION --robot ROBOT)"
-            )
+        Command::ServeSkill { skill, name, library, python, remote } => {
+            serve_skill(&skill, name, &library, &python, &remote, ext)
         }
         Command::Cycle { action, cycles, remote } => client_verb(&remote, |c, robot| {
             match action.as_str() {
@@ -484,6 +495,73 @@ fn print_change(remote: &Remote, r: &Json, what: &str) {
     } else {
         println!("{what} {} from cycle {}", changed.join(", "), r["at_cycle"]);
     }
+}
+
+/// `situate serve-skill`: one instance of a skill type, served out of
+/// process until Ctrl-C (docs/protocol.md, "Remote skills").
+fn serve_skill(
+    skill: &str,
+    name: Option<String>,
+    libraries: &[PathBuf],
+    python: &[PathBuf],
+    remote: &Remote,
+    ext: &Extensions,
+) -> anyhow::Result<ExitCode> {
+    if skill.contains(':') {
+        anyhow::bail!(
+            "`{skill}` names a Python function (MODULE:FUNCTION): serve it with the `situate` that the Python \
+             package installs (scripts/python.sh, then .venv/bin/situate serve-skill {skill} --robot ROBOT)"
+        );
+    }
+    let mut registry = builtin_registry();
+    for path in libraries {
+        for t in load_library(path).map_err(|e| anyhow::anyhow!("--library {}: {e}", path.display()))? {
+            registry.add(t);
+        }
+    }
+    for path in python {
+        let loader = ext.python.as_ref().ok_or_else(|| {
+            anyhow::anyhow!(
+                "--python {}: Python skills run in the Python package's `situate` (`make python`, then \
+                 `.venv/bin/situate`); this binary has no Python inside",
+                path.display()
+            )
+        })?;
+        for t in loader(path).map_err(|e| anyhow::anyhow!("--python {}: {e}", path.display()))? {
+            registry.add(t);
+        }
+    }
+    let Some(ty) = registry.get(skill) else {
+        let known: Vec<&str> = registry.names().collect();
+        anyhow::bail!(
+            "no skill type `{skill}`{}; give the library that defines it with --library (known here: {})",
+            situate_core::suggestion(skill, known.iter().copied()),
+            known.join(", ")
+        );
+    };
+    let name = name.unwrap_or_else(|| skill.rsplit('.').next().unwrap_or(skill).to_string());
+    let mut result = Ok(ExitCode::SUCCESS);
+    client_verb(remote, |client, robot| {
+        let stop = interrupt_flag()?;
+        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, &stop, || {
+            eprintln!(
+                "situate: serving `{name}` (type `{skill}`) of robot `{robot}` on situate/{robot}/remote/{name}/inputs; \
+                 Ctrl-C stops"
+            );
+        });
+        match stats {
+            Ok(s) => eprintln!(
+                "situate: stopped; {} inputs received, {} runs, {} dropped as stale, {} errors",
+                s.received, s.computed, s.dropped, s.errors
+            ),
+            Err(e) => {
+                eprintln!("error: {e}");
+                result = Ok(ExitCode::FAILURE);
+            }
+        }
+        Ok(())
+    })?;
+    result
 }
 
 fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {

@@ -9,7 +9,7 @@ pub mod server;
 pub mod session;
 
 pub use client::{Client, ClientError, RemoteError};
-pub use remote::RemoteSkill;
+pub use remote::{serve_skill, HostError, HostStats, RemoteSkill};
 pub use server::Link;
 pub use session::{LinkConfig, DEFAULT_ENDPOINT};
 

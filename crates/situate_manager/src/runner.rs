@@ -141,7 +141,15 @@ impl Worker {
     /// Starts the worker thread the first time the skill is activated,
     /// moving the body there.
     pub fn set_active(&mut self, active: bool, exec: &mut Exec, kind: SkillKind, name: &str, period: Duration) {
-        self.shared.lock().active = active;
+        {
+            let mut mb = self.shared.lock();
+            mb.active = active;
+            if !active {
+                // A handoff not yet taken belongs to the cycles the skill was
+                // active in: a reactivated body must not run on it.
+                mb.inputs_new = false;
+            }
+        }
         self.shared.notify();
         if active && !self.started {
             if let Some(skill) = exec.skill.take() {
@@ -236,6 +244,8 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
                 Err(e) => {
                     mb.fault = Some(e);
                     mb.active = false;
+                    // As for a deactivation (see `set_active`).
+                    mb.inputs_new = false;
                 }
             }
         }
