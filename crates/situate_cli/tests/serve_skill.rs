@@ -166,10 +166,10 @@ fn a_c_skill_served_out_of_process_joins_the_cycle_and_its_crash_is_contained() 
     std::fs::write(
         &robot,
         format!(
+            // The remote skill is declared by the very manifest the C type was built from.
             "robot: hosted\ncycle: {{rate_hz: 50}}\nlibraries: [{}]\nskills:\n  \
              - {{name: source, type: t.source}}\n  \
-             - name: scale\n    remote:\n      inputs: {{x: f64}}\n      outputs: {{y: f64}}\n      \
-             params:\n        gain: {{type: f64, default: 2.0, min: 0, max: 10}}\n",
+             - {{name: scale, remote: t_scale.yaml}}\n",
             lib.display()
         ),
     )

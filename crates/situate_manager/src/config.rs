@@ -183,11 +183,19 @@ impl RobotFile {
         let mut errors = Vec::new();
         for e in &self.skills {
             let Some(manifest) = &e.remote else { continue };
+            let skill = &e.name.value;
+            if let Some(path) = manifest.value.as_text() {
+                match self.manifest_file(path, manifest.pos, &e.type_name.value, skill) {
+                    Ok(decl) => out.push((skill.clone(), decl)),
+                    Err(errs) => errors.extend(errs),
+                }
+                continue;
+            }
             match crate::manifest::decl_from_node(manifest, &e.type_name.value, situate_core::SkillKind::Async) {
-                Ok(decl) => out.push((e.name.value.clone(), decl)),
-                Err(errs) => errors.extend(
-                    errs.into_iter().map(|(pos, msg)| self.error(pos, format!("skill `{}`: {msg}", e.name.value))),
-                ),
+                Ok(decl) => out.push((skill.clone(), decl)),
+                Err(errs) => {
+                    errors.extend(errs.into_iter().map(|(pos, msg)| self.error(pos, format!("skill `{skill}`: {msg}"))))
+                }
             }
         }
         if errors.is_empty() {
@@ -195,6 +203,42 @@ impl RobotFile {
         } else {
             Err(errors)
         }
+    }
+
+    /// A remote skill's manifest read from a file (`remote: path.yaml`): the
+    /// same manifest a C, C++ or Python skill type is declared with, so the
+    /// declaration is written once. Its `name` and `kind` are ignored (a
+    /// remote skill is an asynchronous cskill named by the robot file);
+    /// errors name the manifest file's line.
+    fn manifest_file(
+        &self,
+        path: &str,
+        pos: Pos,
+        type_name: &str,
+        skill: &str,
+    ) -> Result<situate_core::SkillDecl, Vec<ConfigError>> {
+        let resolved = self.resolve(path.trim());
+        let shown = resolved.display().to_string();
+        let text = std::fs::read_to_string(&resolved)
+            .map_err(|e| vec![self.error(pos, format!("skill `{skill}`: cannot read the manifest `{shown}`: {e}"))])?;
+        let in_manifest = |pos: Pos, msg: String| ConfigError::new(&shown, pos, format!("skill `{skill}`: {msg}"));
+        let tree = yaml::parse(&text).map_err(|e| vec![in_manifest(e.pos, e.message)])?;
+        let node = match &tree.value {
+            Node::Map(entries) => Spanned::new(
+                Node::Map(
+                    entries.iter().filter(|(k, _)| !matches!(k.value.as_str(), "name" | "kind")).cloned().collect(),
+                ),
+                tree.pos,
+            ),
+            other => {
+                return Err(vec![in_manifest(
+                    tree.pos,
+                    format!("a skill manifest is a mapping, got {}", other.describe()),
+                )])
+            }
+        };
+        crate::manifest::decl_from_node(&node, type_name, situate_core::SkillKind::Async)
+            .map_err(|errs| errs.into_iter().map(|(pos, msg)| in_manifest(pos, msg)).collect())
     }
 
     /// Parses and shape-checks a robot file; `file` names it in messages.
@@ -533,11 +577,14 @@ impl Checker<'_> {
                             key.pos,
                             "a remote skill is an asynchronous cskill: list it under `skills:`".to_string(),
                         );
-                    } else if !matches!(value.value, Node::Map(_)) {
+                    } else if !matches!(value.value, Node::Map(_))
+                        && value.value.as_text().is_none_or(|t| t.trim().is_empty())
+                    {
                         self.push(
                             value.pos,
                             format!(
-                                "`remote` expects the skill's manifest (inputs, outputs, params), got {}",
+                                "`remote` expects the skill's manifest (inputs, outputs, params) or the path of a \
+                                 manifest file, got {}",
                                 value.value.describe()
                             ),
                         );
@@ -1203,5 +1250,36 @@ cycle:
             error("robot: r\npython: [a.py, {x: 1}]\n"),
             "robot.yaml:2:16: error: `python` expects paths, got a mapping"
         );
+    }
+
+    #[test]
+    fn a_remote_manifest_can_be_a_file_whose_errors_name_its_own_lines() {
+        let dir = std::env::temp_dir().join(format!("situate-remote-manifest-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("scale.yaml"),
+            "name: c.scale\nkind: sync\ninputs: {x: f64}\noutputs: {y: f64}\nparams:\n  gain: {type: f64, default: 2.0, min: 0, max: 10}\n",
+        )
+        .unwrap();
+        std::fs::write(dir.join("bad.yaml"), "name: c.bad\ninputs: {x: f64}\noutputs: {y: nonsense}\n").unwrap();
+        let file = dir.join("robot.yaml").display().to_string();
+        let src = "robot: r\nskills:\n  - {name: scale, remote: scale.yaml}\n";
+        let decls = RobotFile::parse(&file, src).unwrap().remote_decls().unwrap();
+        let (name, decl) = &decls[0];
+        assert_eq!(name, "scale");
+        assert_eq!(decl.type_name, "remote.scale");
+        assert_eq!(decl.kind, situate_core::SkillKind::Async, "served out of process it is asynchronous");
+        assert_eq!((decl.inputs[0].name.as_str(), decl.outputs[0].name.as_str()), ("x", "y"));
+        assert_eq!(decl.params[0].max, Some(10.0));
+
+        let src = "robot: r\nskills:\n  - {name: bad, remote: bad.yaml}\n  - {name: gone, remote: nowhere.yaml}\n";
+        let errors: Vec<String> =
+            RobotFile::parse(&file, src).unwrap().remote_decls().unwrap_err().iter().map(|e| e.to_string()).collect();
+        let bad = dir.join("bad.yaml").display().to_string();
+        assert!(errors[0].starts_with(&format!("{bad}:3:")) && errors[0].contains("skill `bad`"), "{errors:?}");
+        assert!(errors[1].starts_with(&format!("{file}:4:")) && errors[1].contains("nowhere.yaml"), "{errors:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+
+        assert!(error("robot: r\nskills:\n  - {name: x, remote: [a, b]}\n").contains("or the path of a manifest file"));
     }
 }
