@@ -133,8 +133,16 @@ enum Command {
         #[arg(short, long, default_value = ".")]
         out: PathBuf,
     },
-    /// List the skill types this program knows, with their declarations.
-    Types,
+    /// List the skill types this program knows, with their declarations (and those of the
+    /// libraries and Python files given).
+    Types {
+        /// A shared library of C/C++ skill types (repeatable).
+        #[arg(long)]
+        library: Vec<PathBuf>,
+        /// A Python file of @situate.skill types (repeatable; the Python package's `situate`).
+        #[arg(long)]
+        python: Vec<PathBuf>,
+    },
     /// List the skills of a running robot.
     Skills(#[command(flatten)] Remote),
     /// Activate skills of a running robot (from its next cycle on).
@@ -338,8 +346,8 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             run_demo(&demo, ext)
         }
         Command::Gen { lang, manifest, out } => generate(&lang, &manifest, &out),
-        Command::Types => {
-            types();
+        Command::Types { library, python } => {
+            types(&registry_with(&library, &python, ext)?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Skills(remote) => client_verb(&remote, |c, robot| {
@@ -497,22 +505,8 @@ fn print_change(remote: &Remote, r: &Json, what: &str) {
     }
 }
 
-/// `situate serve-skill`: one instance of a skill type, served out of
-/// process until Ctrl-C (docs/protocol.md, "Remote skills").
-fn serve_skill(
-    skill: &str,
-    name: Option<String>,
-    libraries: &[PathBuf],
-    python: &[PathBuf],
-    remote: &Remote,
-    ext: &Extensions,
-) -> anyhow::Result<ExitCode> {
-    if skill.contains(':') {
-        anyhow::bail!(
-            "`{skill}` names a Python function (MODULE:FUNCTION): serve it with the `situate` that the Python \
-             package installs (scripts/python.sh, then .venv/bin/situate serve-skill {skill} --robot ROBOT)"
-        );
-    }
+/// The built-in skill types and those of `--library` and `--python` files.
+fn registry_with(libraries: &[PathBuf], python: &[PathBuf], ext: &Extensions) -> anyhow::Result<Registry> {
     let mut registry = builtin_registry();
     for path in libraries {
         for t in load_library(path).map_err(|e| anyhow::anyhow!("--library {}: {e}", path.display()))? {
@@ -531,6 +525,26 @@ fn serve_skill(
             registry.add(t);
         }
     }
+    Ok(registry)
+}
+
+/// `situate serve-skill`: one instance of a skill type, served out of
+/// process until Ctrl-C (docs/protocol.md, "Remote skills").
+fn serve_skill(
+    skill: &str,
+    name: Option<String>,
+    libraries: &[PathBuf],
+    python: &[PathBuf],
+    remote: &Remote,
+    ext: &Extensions,
+) -> anyhow::Result<ExitCode> {
+    if skill.contains(':') {
+        anyhow::bail!(
+            "`{skill}` names a Python function (MODULE:FUNCTION): serve it with the `situate` that the Python \
+             package installs (scripts/python.sh, then .venv/bin/situate serve-skill {skill} --robot ROBOT)"
+        );
+    }
+    let registry = registry_with(libraries, python, ext)?;
     let Some(ty) = registry.get(skill) else {
         let known: Vec<&str> = registry.names().collect();
         anyhow::bail!(
@@ -1125,8 +1139,7 @@ fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
     Ok(if delivered_at.is_some() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
-fn types() {
-    let registry = builtin_registry();
+fn types(registry: &Registry) {
     for name in registry.names() {
         let Some(t) = registry.get(name) else { continue };
         let d = &t.decl;

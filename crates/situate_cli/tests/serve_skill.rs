@@ -161,6 +161,11 @@ fn fault_of(events: &crossbeam_channel::Receiver<Json>, skill: &str) -> String {
 fn a_c_skill_served_out_of_process_joins_the_cycle_and_its_crash_is_contained() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let lib = build_library(dir.path());
+    // `situate types --library` lists the library's types with their declarations.
+    let out = Command::new(env!("CARGO_BIN_EXE_situate")).arg("types").arg("--library").arg(&lib).output().unwrap();
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(listed.contains("t.scale (sync, priority 0)"), "{listed}");
+    assert!(listed.contains("param gain: f64 = 2 (a number in [0.0, 10.0])"), "{listed}");
     let endpoint = free_endpoint();
     let robot = dir.path().join("robot.yaml");
     std::fs::write(
