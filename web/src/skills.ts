@@ -250,6 +250,8 @@ class SkillPanel {
   private readonly head: HTMLElement;
   private readonly state: HTMLElement;
   private readonly activate: HTMLButtonElement;
+  private readonly priority: HTMLInputElement;
+  private readonly priorityError: HTMLElement;
   private readonly params = new Map<string, ParamEditor>();
   private readonly paramBody: HTMLTableElement;
   private readonly timing: HTMLElement;
@@ -279,6 +281,15 @@ class SkillPanel {
     this.activate = h("button", { "data-testid": `activate-${n}` }, "Activate");
     this.activate.addEventListener("click", () => void this.toggle());
     this.error = h("div", { class: "error", "data-testid": `skill-error-${n}` });
+    // The priority decides contention over a resource; the manager applies a change from the next cycle.
+    this.priority = h("input", { type: "number", step: "1", class: "short", "data-testid": `priority-${n}` });
+    this.priority.value = String(num(info["priority"]));
+    this.priorityError = h("span", { class: "error", "data-testid": `priority-${n}-error` });
+    const setPriority = h("button", { "data-testid": `priority-${n}-set` }, "Set");
+    setPriority.addEventListener("click", () => void this.submitPriority());
+    this.priority.addEventListener("keydown", (e) => {
+      if (e.key === "Enter") void this.submitPriority();
+    });
     this.paramBody = h("table", { class: "params" });
     for (const p of Array.isArray(info["params"]) ? info["params"] : []) {
       if (!isObject(p)) continue;
@@ -322,7 +333,7 @@ class SkillPanel {
       { class: "skill", "data-skill": n, "data-testid": `skill-${n}` },
       this.head,
       h("p", { class: "dim" }, str(info["doc"])),
-      h("div", { class: "row" }, this.activate, " priority ", h("span", { class: "mono" }, String(num(info["priority"]))), " · timing ", this.timing),
+      h("div", { class: "row" }, this.activate, " priority ", this.priority, setPriority, this.priorityError, " · timing ", this.timing),
       this.error,
       this.paramBody,
       h("div", { class: "row" }, sdl, sil, sol, lpl, vbl),
@@ -341,6 +352,22 @@ class SkillPanel {
       setText(this.error, "");
     } catch (e) {
       setText(this.error, errorText(e));
+    }
+  }
+
+  private async submitPriority(): Promise<void> {
+    const text = this.priority.value.trim();
+    const value = Number(text);
+    // The manager takes a 32-bit signed priority; anything else never leaves the page.
+    if (!/^[-+]?\d+$/.test(text) || value < -2147483648 || value > 2147483647) {
+      setText(this.priorityError, `the priority is a 32-bit integer, got "${text}"`);
+      return;
+    }
+    try {
+      await this.conn.request("set_priority", { skill: this.name, priority: value });
+      setText(this.priorityError, "");
+    } catch (e) {
+      setText(this.priorityError, errorText(e));
     }
   }
 
@@ -363,6 +390,9 @@ class SkillPanel {
     this.el.classList.toggle("active", this.active);
     this.el.classList.toggle("faulted", typeof fault === "string");
     setText(this.activate, this.active ? "Deactivate" : "Activate");
+    if (document.activeElement !== this.priority && this.priorityError.textContent === "") {
+      this.priority.value = String(num(info["priority"]));
+    }
     const t = info["timing"];
     if (isObject(t)) {
       const runs = num(t["runs"]);

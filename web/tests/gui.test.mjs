@@ -93,6 +93,24 @@ describe("situate GUI", () => {
     assert.equal(await cli(tb.linkPort, "param", "get", "wander", "seed"), 7);
   });
 
+  test("a priority edit changes the skill's priority; a non-integer is refused in the page", async () => {
+    const panel = page.getByTestId("skill-wander");
+    if (!(await panel.evaluate((d) => d.open))) await panel.locator("summary").click();
+    const before = (await skillsOverLink()).wander.priority;
+    const input = page.getByTestId("priority-wander");
+    await input.fill(String(before + 7));
+    await page.getByTestId("priority-wander-set").click();
+    await until(async () => (await skillsOverLink()).wander.priority === before + 7, "the new priority over the link");
+    await input.fill("2.5");
+    await page.getByTestId("priority-wander-set").click();
+    await until(async () => (await page.getByTestId("priority-wander-error").textContent()).includes("32-bit integer"), "the refusal");
+    assert.equal((await skillsOverLink()).wander.priority, before + 7, "the refused value changed nothing");
+    await input.fill(String(before));
+    await page.getByTestId("priority-wander-set").click();
+    await until(async () => (await skillsOverLink()).wander.priority === before, "the priority restored");
+    assert.equal(await page.getByTestId("priority-wander-error").textContent(), "");
+  });
+
   test("show input and show output display what a link query returns", async () => {
     // Stopped, the values hold still so the page and the link can be compared exactly.
     await page.getByTestId("stop").click();
