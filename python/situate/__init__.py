@@ -38,7 +38,9 @@ the Rust build's (``situate run robot.yaml``, ``situate skills``, ...), plus
 
 from __future__ import annotations
 
-from ._loader import SkillLoadError
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .client import DEFAULT_ENDPOINT, Connector, Robot, Stream, connect
 from .errors import (
     AmbiguousRobot,
@@ -85,9 +87,38 @@ from .info import (
     Timing,
     Winner,
 )
-from .local import LocalRobot, RunResult, run
-from .remote import RemoteSkill, RemoteSkillServer, remote_skill, serve_skill
 from .skill import Param, Port, Skill, SkillDeclarationError, param, port, skill
+
+if TYPE_CHECKING:
+    from ._loader import SkillLoadError
+    from .local import LocalRobot, RunResult, run
+    from .remote import RemoteSkill, RemoteSkillServer, remote_skill, serve_skill
+
+#: Names imported on first use, and their modules: running a robot in-process
+#: and serving remote skills cost a sequencer nothing when it starts.
+_LAZY = {
+    "SkillLoadError": "._loader",
+    "LocalRobot": ".local",
+    "RunResult": ".local",
+    "run": ".local",
+    "RemoteSkill": ".remote",
+    "RemoteSkillServer": ".remote",
+    "remote_skill": ".remote",
+    "serve_skill": ".remote",
+}
+
+if not TYPE_CHECKING:  # type checkers see the imports above (and no catch-all)
+
+    def __getattr__(name: str) -> Any:
+        module = _LAZY.get(name)
+        if module is None:
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(module, __name__), name)
+        globals()[name] = value
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted({*globals(), *_LAZY})
 
 
 def version() -> str:

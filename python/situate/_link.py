@@ -1,8 +1,9 @@
-"""Blocking plumbing shared by the sequencer client and the remote-skill server.
+"""Plumbing shared by the sequencer client and the remote-skill server.
 
-Zenoh's Python API is blocking; :mod:`situate.client` runs these functions
-off the event loop. Nothing here is public: the protocol itself is
-``docs/protocol.md``.
+Zenoh's Python API is blocking; :mod:`situate.client` runs the blocking
+functions off the event loop, and sends its requests with :func:`send`,
+whose answer comes back through a callback. Nothing here is public: the
+protocol itself is ``docs/protocol.md``.
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-from collections.abc import Mapping, Sequence
+import threading
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Union
 
 import zenoh
@@ -110,6 +112,30 @@ def payload_json(payload: zenoh.ZBytes) -> Any:
         raise BadReply(f"a reply that is not JSON: {raw[:80]!r}") from e
 
 
+def _result(key: str, reply: zenoh.Reply) -> Any:
+    """The ``ok`` result of one reply to ``key``, or the reply's error raised."""
+    if reply.ok is None:
+        detail = reply.err.payload.to_string() if reply.err is not None else "no payload"
+        raise BadReply(f"`{key}` failed: {detail}")
+    body = payload_json(reply.ok.payload)
+    if not isinstance(body, dict):
+        raise BadReply(f"`{key}`: a reply that is not a JSON object: {body!r}")
+    if "ok" in body:
+        return body["ok"]
+    error = body.get("error")
+    if isinstance(error, dict):
+        raise from_reply(error)
+    raise BadReply(f"`{key}`: a reply with neither `ok` nor `error`: {body!r}")
+
+
+def _no_answer(key: str, timeout: float, endpoints: Sequence[str]) -> NotRunning:
+    return NotRunning(
+        f"no skill manager answered `{key}` within {timeout:g} s "
+        f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
+        "and do its access rules allow this request?)"
+    )
+
+
 def request(
     session: zenoh.Session,
     robot: str,
@@ -129,23 +155,63 @@ def request(
     except zenoh.ZError as e:
         raise NotRunning(f"could not send `{key}`: {e}") from e
     for reply in replies:
-        if reply.ok is None:
-            detail = reply.err.payload.to_string() if reply.err is not None else "no payload"
-            raise BadReply(f"`{key}` failed: {detail}")
-        body = payload_json(reply.ok.payload)
-        if not isinstance(body, dict):
-            raise BadReply(f"`{key}`: a reply that is not a JSON object: {body!r}")
-        if "ok" in body:
-            return body["ok"]
-        error = body.get("error")
-        if isinstance(error, dict):
-            raise from_reply(error)
-        raise BadReply(f"`{key}`: a reply with neither `ok` nor `error`: {body!r}")
-    raise NotRunning(
-        f"no skill manager answered `{key}` within {timeout:g} s "
-        f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
-        "and do its access rules allow this request?)"
-    )
+        return _result(key, reply)
+    raise _no_answer(key, timeout, endpoints)
+
+
+Done = Callable[[Any, Union[BaseException, None]], None]
+"""Called once with a request's outcome: ``(result, None)`` or ``(None, error)``."""
+
+
+def send(
+    session: zenoh.Session,
+    robot: str,
+    verb: str,
+    args: dict[str, Any],
+    *,
+    timeout: float,
+    endpoints: Sequence[str],
+    done: Done,
+) -> None:
+    """Sends one request now, without waiting for its answer.
+
+    ``done`` is called exactly once, on a Zenoh thread, with the ``ok``
+    result or the error :func:`request` would raise. Requests sent one after
+    another on a session reach the manager, and are answered, in that order.
+    Raises :class:`NotRunning` at once if the request cannot be sent.
+    """
+    key = f"situate/{robot}/req/{verb}"
+    lock = threading.Lock()
+    finished = False
+
+    def finish(result: Any, error: BaseException | None) -> None:
+        nonlocal finished
+        with lock:
+            if finished:
+                return
+            finished = True
+        done(result, error)
+
+    def on_reply(reply: zenoh.Reply) -> None:
+        # Runs on a Zenoh thread: nothing may escape from here.
+        try:
+            result = _result(key, reply)
+        except Exception as e:  # handed over to `done`, not swallowed
+            finish(None, e)
+        else:
+            finish(result, None)
+
+    def on_end() -> None:
+        # The query is over (all replies in, or the time-out): no reply means no manager.
+        finish(None, _no_answer(key, timeout, endpoints))
+
+    # Called on Zenoh's own thread (not one more thread per request): the
+    # callbacks only decode the reply and hand it over.
+    handler = zenoh.handlers.Callback(on_reply, on_end, indirect=False)
+    try:
+        session.get(key, handler, payload=json.dumps(args), timeout=timeout)
+    except zenoh.ZError as e:
+        raise NotRunning(f"could not send `{key}`: {e}") from e
 
 
 def robots(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:

@@ -23,10 +23,11 @@ How it works
 The robot is reached over Zenoh: the client opens a session in *client*
 mode that connects to the manager's endpoint (default
 ``tcp/127.0.0.1:7447``, or ``$SITUATE_CONNECT``) and discovers nothing
-else. A request is a Zenoh ``get`` on ``situate/<robot>/req/<verb>``;
-Zenoh's Python API blocks, so each request runs on a worker thread and the
-event loop stays free. Events and telemetry arrive on Zenoh's threads and
-are handed to the loop with ``call_soon_threadsafe``.
+else. A request is a Zenoh ``get`` on ``situate/<robot>/req/<verb>``, sent
+at once without blocking the event loop; its reply, events and telemetry
+arrive on Zenoh's threads and are handed to the loop with
+``call_soon_threadsafe``. Requests are handled in the order they are sent,
+so several can be sent before awaiting their replies (:meth:`Robot.send`).
 
 Changes take effect from the manager's *next* cycle; queries answer with
 the state at the end of the last one. A refused request raises a
@@ -83,7 +84,9 @@ class Stream(Generic[T]):
         self._queue: asyncio.Queue[T | None] = asyncio.Queue()
         self._closed = False
         self._ended = False
-        self._subscribers = [robot._session.declare_subscriber(k, self._on_sample) for k in keys]
+        # The callback runs on Zenoh's own thread, not on one more thread per subscriber.
+        handler = zenoh.handlers.Callback(self._on_sample, indirect=False)
+        self._subscribers = [robot._session.declare_subscriber(k, handler) for k in keys]
         robot._streams.add(self)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
@@ -177,16 +180,42 @@ class Robot:
         The typed methods below are built on this; use it for verbs a newer
         manager adds. Argument values are encoded with :func:`situate.values.encode`.
         """
+        return await self.send(verb, **args)
+
+    def send(self, verb: str, **args: Any) -> asyncio.Future[Any]:
+        """Sends a request now and returns a future of its raw ``ok`` result (or error).
+
+        Like :meth:`request`, but the request leaves before this returns, and
+        the manager handles requests in the order they were sent: a sequencer
+        can send several changes and then await them all, paying for one round
+        trip instead of one each::
+
+            sent = [robot.send("set_param", skill="avoid", param="distance", value=0.5),
+                    robot.send("activate", skills=["avoid"])]
+            await asyncio.gather(*sent)
+
+        Await every future (a refused request raises there), from a coroutine
+        of the loop that sent it.
+        """
+        loop = asyncio.get_running_loop()
+        future: asyncio.Future[Any] = loop.create_future()
+
+        def done(result: Any, error: BaseException | None) -> None:
+            # On a Zenoh thread: hand the outcome over to the loop.
+            with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
+                loop.call_soon_threadsafe(_settle, future, result, error)
+
         payload = {k: encode(v) for k, v in args.items()}
-        return await asyncio.to_thread(
-            _link.request,
+        _link.send(
             self._session,
             self.name,
             verb,
             payload,
             timeout=self.timeout,
             endpoints=self._endpoints,
+            done=done,
         )
+        return future
 
     async def close(self) -> None:
         """Ends every stream and closes the Zenoh session."""
@@ -376,6 +405,16 @@ class Robot:
     def telemetry_stream(self) -> Stream[Telemetry]:
         """A stream of :class:`~situate.Telemetry` samples (call from a coroutine)."""
         return Stream(self, [f"situate/{self.name}/telemetry"], parse_telemetry)
+
+
+def _settle(future: asyncio.Future[Any], result: Any, error: BaseException | None) -> None:
+    """Completes a request's future (unless its waiter gave up on it)."""
+    if future.done():
+        return
+    if error is not None:
+        future.set_exception(error)
+    else:
+        future.set_result(result)
 
 
 async def _fired_any(stream: Stream[Event], monitors: list[int]) -> MonitorFired:

@@ -27,6 +27,7 @@ Types are written as in robot files::
 from __future__ import annotations
 
 import base64
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -179,6 +180,13 @@ def parse_type(text: str) -> SignalType:
     return parsed
 
 
+@functools.lru_cache(maxsize=256)
+def _parse_type_cached(text: str) -> SignalType:
+    # Types are immutable and a robot has few of them: every reading of a
+    # signal parses the same text.
+    return parse_type(text)
+
+
 def _float(j: Any) -> Any:
     if isinstance(j, str) and j in _NON_FINITE:
         return _NON_FINITE[j]
@@ -194,7 +202,7 @@ def decode(j: Any, ty: SignalType | str) -> Any:
     than refused: a client should show what the manager sent.
     """
     if isinstance(ty, str):
-        ty = parse_type(ty)
+        ty = _parse_type_cached(ty)
     if j is None:
         return None
     if isinstance(ty, Scalar):

@@ -7,6 +7,12 @@
 //! manager ever seeing it, so no payload can disturb the cycle; a
 //! well-formed one is handled between two cycles like any in-process
 //! request.
+//!
+//! Requests are handled in the order they arrive. The bridge takes every
+//! query already waiting and submits them to the manager together before
+//! waiting for the first reply: a sequencer that sends several requests
+//! without awaiting each (a burst of changes, then a query) costs one wake-up
+//! of each thread on the way, not one per request.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -15,7 +21,7 @@ use std::time::Duration;
 
 use crossbeam_channel::{Receiver, RecvTimeoutError};
 use serde_json::{json, Map, Value as Json};
-use situate_manager::{Handle, Reply, Request};
+use situate_manager::{Handle, Pending, Reply, Request};
 use zenoh::query::Query;
 use zenoh::{Session, Wait};
 
@@ -128,36 +134,78 @@ fn reply(query: &Query, body: &Json) {
     }
 }
 
+/// At most this many waiting queries are taken together.
+const BURST: usize = 64;
+
+/// A query being answered: its reply key and the answer, ready or to come.
+struct InFlight {
+    query: Query,
+    reply_key: String,
+    answer: Answer,
+}
+
+enum Answer {
+    Ready(Json),
+    Manager(Pending),
+}
+
 fn bridge(rx: Receiver<Query>, handle: Handle, telemetry: Arc<Mutex<Telemetry>>, robot: &str, prefix: &str) {
-    while let Ok(query) = rx.recv() {
-        // The last chunk names the verb; a wildcard there names none.
-        let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("").to_string();
-        let concrete = if verb.contains(['*', '$']) { "unknown" } else { verb.as_str() };
-        let reply_key = format!("{prefix}{concrete}");
-        let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
-        let body = match json::decode_request(&verb, &payload) {
-            Err(e) => json::wire_error(&e),
-            Ok(Decoded::Hello) => {
-                json::ok(json!({"protocol": json::PROTOCOL, "robot": robot, "version": env!("CARGO_PKG_VERSION")}))
-            }
-            Ok(Decoded::Telemetry { signals, rate_hz }) => {
-                let mut t = telemetry.lock().unwrap_or_else(|p| p.into_inner());
-                t.signals = signals;
-                if let Some(r) = rate_hz {
-                    t.rate_hz = r;
-                }
-                json::ok(Json::Null)
-            }
-            Ok(Decoded::Manager(Request::Shutdown)) => {
-                json::wire_error(&json::WireError::bad_request("shutdown is not a link request"))
-            }
-            Ok(Decoded::Manager(request)) => match handle.request_timeout(request, MANAGER_TIMEOUT) {
-                Ok(r) => json::ok(json::reply_to_json(&r)),
-                Err(e) => json::control_error(&e),
-            },
-        };
-        reply_on(&query, &reply_key, &body);
+    let mut burst: Vec<InFlight> = Vec::with_capacity(BURST);
+    while let Ok(first) = rx.recv() {
+        // Everything already waiting goes to the manager before any reply is
+        // awaited; the order of the requests is kept.
+        let mut next = Some(first);
+        while let Some(query) = next {
+            let answer = answer(&query, &handle, &telemetry, robot);
+            burst.push(InFlight { reply_key: reply_key(&query, prefix), query, answer });
+            next = if burst.len() < BURST { rx.try_recv().ok() } else { None };
+        }
+        for InFlight { query, reply_key, answer } in burst.drain(..) {
+            let body = match answer {
+                Answer::Ready(body) => body,
+                Answer::Manager(pending) => match pending.wait(MANAGER_TIMEOUT) {
+                    Ok(r) => json::ok(json::reply_to_json(&r)),
+                    Err(e) => json::control_error(&e),
+                },
+            };
+            reply_on(&query, &reply_key, &body);
+        }
     }
+}
+
+/// The key a query is answered on: the last chunk names the verb; a wildcard
+/// there names none.
+fn reply_key(query: &Query, prefix: &str) -> String {
+    let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("");
+    let concrete = if verb.contains(['*', '$']) { "unknown" } else { verb };
+    format!("{prefix}{concrete}")
+}
+
+/// Decodes a query and answers it, or submits it to the manager.
+fn answer(query: &Query, handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str) -> Answer {
+    let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("");
+    let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
+    Answer::Ready(match json::decode_request(verb, &payload) {
+        Err(e) => json::wire_error(&e),
+        Ok(Decoded::Hello) => {
+            json::ok(json!({"protocol": json::PROTOCOL, "robot": robot, "version": env!("CARGO_PKG_VERSION")}))
+        }
+        Ok(Decoded::Telemetry { signals, rate_hz }) => {
+            let mut t = telemetry.lock().unwrap_or_else(|p| p.into_inner());
+            t.signals = signals;
+            if let Some(r) = rate_hz {
+                t.rate_hz = r;
+            }
+            json::ok(Json::Null)
+        }
+        Ok(Decoded::Manager(Request::Shutdown)) => {
+            json::wire_error(&json::WireError::bad_request("shutdown is not a link request"))
+        }
+        Ok(Decoded::Manager(request)) => match handle.submit(request) {
+            Ok(pending) => return Answer::Manager(pending),
+            Err(e) => json::control_error(&e),
+        },
+    })
 }
 
 fn publish_events(session: &Session, events: Receiver<situate_manager::Event>, stop: &AtomicBool, robot: &str) {

@@ -405,9 +405,30 @@ impl Handle {
 
     /// Like [`Control::request`], giving up after `timeout`.
     pub fn request_timeout(&self, request: Request, timeout: Duration) -> Result<Reply, ControlError> {
+        self.submit(request)?.wait(timeout)
+    }
+
+    /// Sends `request` without waiting for its reply, which comes through the
+    /// returned [`Pending`]. The manager handles requests in the order they
+    /// were submitted, so several can be submitted before waiting for any:
+    /// the manager's thread then wakes once for all of them.
+    pub fn submit(&self, request: Request) -> Result<Pending, ControlError> {
         let (tx, rx) = crossbeam_channel::bounded(1);
         self.tx.send((request, tx)).map_err(|_| ControlError::Disconnected)?;
-        rx.recv_timeout(timeout).map_err(|_| ControlError::Disconnected)?
+        Ok(Pending { rx })
+    }
+}
+
+/// The reply to come to a request sent with [`Handle::submit`].
+#[derive(Debug)]
+pub struct Pending {
+    rx: Receiver<Result<Reply, ControlError>>,
+}
+
+impl Pending {
+    /// Waits for the reply, at most `timeout` ([`ControlError::Disconnected`] after that).
+    pub fn wait(self, timeout: Duration) -> Result<Reply, ControlError> {
+        self.rx.recv_timeout(timeout).map_err(|_| ControlError::Disconnected)?
     }
 }
 
@@ -416,5 +437,35 @@ impl Control for Handle {
         let (tx, rx) = crossbeam_channel::bounded(1);
         self.tx.send((request, tx)).map_err(|_| ControlError::Disconnected)?;
         rx.recv().map_err(|_| ControlError::Disconnected)?
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{ClockKind, Manager, Registry, RobotSpec};
+
+    #[test]
+    fn submitted_requests_are_handled_in_the_order_sent() {
+        let spec = RobotSpec::new("order").clock(ClockKind::Simulated).period_s(0.01);
+        let m = Manager::build(&spec, &Registry::new()).unwrap_or_else(|e| panic!("{e}"));
+        let (handle, join) = m.spawn(false);
+        let limit = Duration::from_secs(60);
+        // Every request is submitted before any reply is awaited.
+        let pending: Vec<Pending> =
+            [Request::Step { cycles: 3 }, Request::QueryStats, Request::Step { cycles: 2 }, Request::QueryStats]
+                .into_iter()
+                .map(|r| handle.submit(r).unwrap())
+                .collect();
+        let cycles: Vec<u64> = pending
+            .into_iter()
+            .filter_map(|p| match p.wait(limit).unwrap() {
+                Reply::Stats(s) => Some(s.cycle),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(cycles, [3, 5]);
+        handle.request_timeout(Request::Shutdown, limit).unwrap();
+        join.join().unwrap();
     }
 }

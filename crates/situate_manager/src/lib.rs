@@ -23,8 +23,8 @@ pub mod yaml;
 
 pub use config::{ClockKind, ExecutorKind, RobotFile};
 pub use control::{
-    Control, ControlError, Event, Handle, ManagerStats, PortInfo, Reply, Request, ResourceWinner, SignalReading,
-    SkillInfo, SkillTiming,
+    Control, ControlError, Event, Handle, ManagerStats, Pending, PortInfo, Reply, Request, ResourceWinner,
+    SignalReading, SkillInfo, SkillTiming,
 };
 pub use graph::Graph;
 pub use manager::Manager;

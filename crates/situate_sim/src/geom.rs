@@ -143,6 +143,155 @@ pub fn cast(origin: P2, dir: P2, segs: &[Seg]) -> Option<f64> {
     segs.iter().filter_map(|s| ray_hit(origin, dir, s)).min_by(f64::total_cmp)
 }
 
+/// An axis-aligned box, to skip segments that cannot matter to a query
+/// before doing any exact geometry with them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub lo: P2,
+    pub hi: P2,
+}
+
+impl Aabb {
+    /// The box of the points within `r` of `p` (in each coordinate).
+    pub fn around(p: P2, r: f64) -> Aabb {
+        Aabb { lo: P2::new(p.x - r, p.y - r), hi: P2::new(p.x + r, p.y + r) }
+    }
+
+    /// The smallest box holding `a` and `b`.
+    pub fn spanning(a: P2, b: P2) -> Aabb {
+        Aabb { lo: P2::new(a.x.min(b.x), a.y.min(b.y)), hi: P2::new(a.x.max(b.x), a.y.max(b.y)) }
+    }
+
+    /// The box grown by `r` on every side.
+    pub fn grown(self, r: f64) -> Aabb {
+        Aabb { lo: P2::new(self.lo.x - r, self.lo.y - r), hi: P2::new(self.hi.x + r, self.hi.y + r) }
+    }
+
+    /// Whether the segment's own box meets this one. When it does not, every
+    /// point of the segment is farther from every point of this box than the
+    /// gap between the two boxes along x or y.
+    pub fn meets(&self, s: &Seg) -> bool {
+        s.a.x.max(s.b.x) >= self.lo.x
+            && s.a.x.min(s.b.x) <= self.hi.x
+            && s.a.y.max(s.b.y) >= self.lo.y
+            && s.a.y.min(s.b.y) <= self.hi.y
+    }
+}
+
+/// Many rays from one origin against the same segments: [`cast`] with the
+/// parts of [`ray_hit`] that do not depend on the ray worked out once per
+/// segment, and the segments no ray of a narrow cone can reach left out
+/// (see [`RayFan::select`]). Every result is bit for bit that of [`cast`] on
+/// all the segments.
+#[derive(Debug, Clone)]
+pub struct RayFan {
+    parts: Vec<Part>,
+    /// `cos` and `sin` of the cones' half width, with a margin.
+    spread: Option<(f64, f64)>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Part {
+    /// `b - a`, `a - origin` and their cross product, as in `ray_hit`.
+    e: P2,
+    w: P2,
+    w_e: f64,
+    /// The unit direction halfway between the segment's ends, seen from the
+    /// origin, and the cosine and sine of half the angle between them; `None`
+    /// for a segment too near the origin (or around it) to tell.
+    wedge: Option<(P2, f64, f64)>,
+}
+
+/// Segments nearer the origin than this (at an end), or seen at more than
+/// [`WIDE_COS`], are offered to every ray.
+const NEAR: f64 = 0.01;
+/// `cos` of 172°.
+const WIDE_COS: f64 = -0.99;
+/// Margin on the angles compared, rad: far more than their rounding and than
+/// the [`END_SLACK`] seen from [`NEAR`].
+const ANGLE_MARGIN: f64 = 0.01;
+
+impl RayFan {
+    /// Prepares rays from `origin` against `segs`, each ray to be cast
+    /// within `spread` rad of the direction given to [`RayFan::select`].
+    pub fn new(origin: P2, segs: &[Seg], spread: f64) -> RayFan {
+        let parts = segs
+            .iter()
+            .map(|seg| {
+                let e = seg.b.minus(seg.a);
+                let w = seg.a.minus(origin);
+                let v = seg.b.minus(origin);
+                let (lw, lv) = (w.dot(w).sqrt(), v.dot(v).sqrt());
+                let wedge = (lw > NEAR && lv > NEAR)
+                    .then(|| {
+                        let (uw, uv) = (w.scale(1.0 / lw), v.scale(1.0 / lv));
+                        let c = uw.dot(uv);
+                        (c > WIDE_COS).then(|| {
+                            let mid = uw.plus(uv);
+                            let c = c.min(1.0);
+                            (mid.scale(1.0 / mid.dot(mid).sqrt()), ((1.0 + c) / 2.0).sqrt(), ((1.0 - c) / 2.0).sqrt())
+                        })
+                    })
+                    .flatten();
+                Part { e, w, w_e: w.cross(e), wedge }
+            })
+            .collect();
+        // Cones of half a turn or more (or not a number) are not narrowed.
+        let half = spread.abs() + ANGLE_MARGIN;
+        let spread = (half < std::f64::consts::FRAC_PI_2).then(|| (half.cos(), half.sin()));
+        RayFan { parts, spread }
+    }
+
+    /// The segments (indices, ascending, into `out`) that a ray within the
+    /// spread of unit direction `axis` can hit: a hit lies in the wedge from
+    /// the origin through the segment, so the ray is within the wedge's half
+    /// angle of its middle; other segments are left out.
+    pub fn select(&self, axis: P2, out: &mut Vec<usize>) {
+        out.clear();
+        for (i, part) in self.parts.iter().enumerate() {
+            let keep = match (part.wedge, self.spread) {
+                (Some((mid, ch, sh)), Some((cs, ss))) => {
+                    // The angle from `axis` to `mid` is at most half + spread:
+                    // its cosine at least cos(half + spread), both below 180°.
+                    axis.dot(mid) >= ch * cs - sh * ss
+                }
+                _ => true,
+            };
+            if keep {
+                out.push(i);
+            }
+        }
+    }
+
+    /// The nearest hit of the ray in unit direction `dir` on every segment, as [`cast`].
+    pub fn cast(&self, dir: P2) -> Option<f64> {
+        self.nearest(dir, self.parts.iter())
+    }
+
+    /// [`RayFan::cast`] on the segments `among` (from [`RayFan::select`]
+    /// for a direction `dir` is within the spread of).
+    pub fn cast_among(&self, dir: P2, among: &[usize]) -> Option<f64> {
+        self.nearest(dir, among.iter().map(|&i| &self.parts[i]))
+    }
+
+    fn nearest<'a>(&self, dir: P2, parts: impl Iterator<Item = &'a Part>) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        for part in parts {
+            // The arithmetic of `ray_hit`, in the same order.
+            let denom = dir.cross(part.e);
+            if denom.abs() < 1e-15 {
+                continue;
+            }
+            let t = part.w_e / denom;
+            let u = part.w.cross(dir) / denom;
+            if t >= 0.0 && (-END_SLACK..=1.0 + END_SLACK).contains(&u) && best.is_none_or(|b| t.total_cmp(&b).is_lt()) {
+                best = Some(t);
+            }
+        }
+        best
+    }
+}
+
 /// Whether `p` is inside the polygon (even-odd rule).
 pub fn in_polygon(p: P2, poly: &[P2]) -> bool {
     let mut inside = false;
@@ -183,6 +332,71 @@ mod tests {
             let d = cast(P2::new(1.0, 1.0), P2::dir(a), &segs).expect("a ray through a corner must hit");
             assert!((d - 2f64.sqrt()).abs() < 1e-9, "angle {a}: {d}");
         }
+    }
+
+    /// Segments in every direction and at every distance, with ends on the
+    /// axes and diagonals of the origins below.
+    fn clutter() -> Vec<Seg> {
+        let mut segs = Vec::new();
+        for k in 0..60 {
+            let a = k as f64 * 0.37;
+            let c = P2::new((k as f64 * 1.3).sin() * 3.0, (k as f64 * 0.7).cos() * 3.0);
+            segs.push(Seg::new(c, c.plus(P2::dir(a).scale(0.05 + (k % 7) as f64 * 0.4))));
+        }
+        let sq = [P2::new(-2.0, -2.0), P2::new(2.0, -2.0), P2::new(2.0, 2.0), P2::new(-2.0, 2.0)];
+        segs.extend((0..4).map(|i| Seg::new(sq[i], sq[(i + 1) % 4])));
+        // Through the origin, ending at it, and just beside it.
+        segs.push(Seg::new(P2::new(-1.0, 0.0), P2::new(1.0, 0.0)));
+        segs.push(Seg::new(P2::new(0.0, 0.0), P2::new(0.0, 1.0)));
+        segs.push(Seg::new(P2::new(0.005, -1.0), P2::new(0.005, 1.0)));
+        segs.push(Seg::new(P2::new(0.3, -1.1), P2::new(0.3, -1.1)));
+        segs
+    }
+
+    #[test]
+    fn a_ray_fan_casts_exactly_as_cast() {
+        let segs = clutter();
+        let origins = [P2::new(0.0, 0.0), P2::new(0.3, -1.1), P2::new(5.0, 5.0), P2::new(-2.0, 0.0), P2::new(1.0, 2.0)];
+        let mut among = Vec::new();
+        for origin in origins {
+            for spread in [0.0, 0.01, 7.5f64.to_radians(), 0.5, 1.4, 3.0, f64::NAN] {
+                let fan = RayFan::new(origin, &segs, spread);
+                for k in 0..360 {
+                    let axis = k as f64 * std::f64::consts::TAU / 360.0 - 3.0;
+                    fan.select(P2::dir(axis), &mut among);
+                    for r in -2..=2 {
+                        let off = if spread.is_nan() { 0.3 * r as f64 } else { spread * r as f64 / 2.0 };
+                        let dir = P2::dir(axis + off);
+                        let want = cast(origin, dir, &segs).map(f64::to_bits);
+                        assert_eq!(fan.cast(dir).map(f64::to_bits), want, "origin {origin:?} ray {k}/{r}");
+                        assert_eq!(
+                            fan.cast_among(dir, &among).map(f64::to_bits),
+                            want,
+                            "origin {origin:?} spread {spread} ray {k}/{r}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_narrow_cone_leaves_most_segments_out() {
+        let segs = clutter();
+        let fan = RayFan::new(P2::new(0.0, 0.0), &segs, 7.5f64.to_radians());
+        let mut among = Vec::new();
+        fan.select(P2::dir(0.3), &mut among);
+        assert!(among.len() < segs.len() / 2, "{} of {}", among.len(), segs.len());
+    }
+
+    #[test]
+    fn a_box_meets_the_segments_that_reach_into_it() {
+        let b = Aabb::spanning(P2::new(1.0, 2.0), P2::new(0.0, 0.0)).grown(0.5);
+        assert!(b.meets(&Seg::new(P2::new(-3.0, 1.0), P2::new(3.0, 1.0))));
+        assert!(b.meets(&Seg::new(P2::new(1.5, 2.5), P2::new(4.0, 4.0))));
+        assert!(!b.meets(&Seg::new(P2::new(1.6, -5.0), P2::new(1.6, 5.0))));
+        assert!(!b.meets(&Seg::new(P2::new(-5.0, 2.6), P2::new(5.0, 2.7))));
+        assert_eq!(Aabb::around(P2::new(1.0, 1.0), 1.0), Aabb::spanning(P2::new(0.0, 0.0), P2::new(2.0, 2.0)));
     }
 
     #[test]

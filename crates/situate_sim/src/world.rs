@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 use situate_robot::{sonar_bearing, SONARS};
 
-use crate::geom::{cast, wrap, Seg, P2};
+use crate::geom::{cast, wrap, Aabb, RayFan, Seg, P2};
 use crate::map::{Barcode, Map};
 
 /// Settings of the physics that are not a device's parameter.
@@ -125,6 +125,15 @@ enum Pending {
 
 /// Streams of the per-reading random numbers, so sensors never share one.
 const SONAR_STREAM: u64 = 1;
+
+/// Slack added to every distance beyond which a segment is skipped, m: far
+/// more than the rounding of the distances compared, far less than anything
+/// the simulation resolves.
+const CULL_SLACK: f64 = 1e-6;
+
+/// A bound on `|gauss()|`: with `u1 ≥ 2⁻⁵³`, Box–Muller's radius
+/// `sqrt(-2 ln u1)` is at most `sqrt(106 ln 2) ≈ 8.57`.
+const GAUSS_BOUND: f64 = 9.0;
 
 /// The simulated building and robot.
 #[derive(Debug, Clone)]
@@ -321,15 +330,28 @@ impl World {
     /// obstacles, shafts, closed (or closing) car doors.
     pub fn segments(&self, level: i64) -> Vec<Seg> {
         let mut segs = self.floor_index(level).map(|i| self.statics[i].clone()).unwrap_or_default();
-        for (c, s) in self.map.elevator.cars.iter().zip(&self.cars) {
+        segs.extend(self.door_segments(level));
+        segs
+    }
+
+    /// The segments of [`World::segments`] whose box meets `region`, in the
+    /// same order: a query that cannot be affected by a segment outside
+    /// `region` gives the same result on these.
+    fn segments_in(&self, level: i64, region: &Aabb) -> Vec<Seg> {
+        let statics = self.floor_index(level).map(|i| self.statics[i].as_slice()).unwrap_or_default();
+        statics.iter().copied().chain(self.door_segments(level)).filter(|s| region.meets(s)).collect()
+    }
+
+    /// The closed (or closing) part of each car door on `level`.
+    fn door_segments(&self, level: i64) -> impl Iterator<Item = Seg> + '_ {
+        self.map.elevator.cars.iter().zip(&self.cars).filter_map(move |(c, s)| {
             let closed =
                 if s.floor() == level && !matches!(s.phase, CarPhase::Travel { .. }) { 1.0 - s.door } else { 1.0 };
-            if closed > 1e-6 {
+            (closed > 1e-6).then(|| {
                 let d = c.door();
-                segs.push(Seg::new(d.a, d.at(closed)));
-            }
-        }
-        segs
+                Seg::new(d.a, d.at(closed))
+            })
+        })
     }
 
     /// Barcodes present on `level` now (cars' only when the car is there).
@@ -411,7 +433,8 @@ impl World {
     }
 
     fn step_elevator(&mut self, now: f64, dt: f64) {
-        let el = self.map.elevator.clone();
+        let map = Arc::clone(&self.map);
+        let el = &map.elevator;
         let inside = self.robot_car();
         // Calls: served by a car already there, else a random idle car.
         let mut calls = std::mem::take(&mut self.calls);
@@ -508,8 +531,9 @@ impl World {
         let mid = self.robot.theta + dth / 2.0;
         let from = self.pos();
         let want = from.plus(P2::dir(mid).scale(v * dt));
-        let segs = self.segments(self.robot.floor);
         let r = self.map.robot_radius;
+        // Only segments within `r` of the move can block it (see `blocked`).
+        let segs = self.segments_in(self.robot.floor, &Aabb::spanning(from, want).grown(r + CULL_SLACK));
         let frac = if blocked(from, want, &segs, r) {
             // The largest part of the move that stays clear.
             let (mut lo, mut hi) = (0.0, 1.0);
@@ -549,16 +573,23 @@ impl World {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(SONAR_STREAM);
         rng.set_word_pos(u128::from(self.step) * 1024);
-        let segs = self.segments(self.robot.floor);
         let p = self.pos();
+        // An echo from farther than `reach` reads `max_range` whatever the
+        // noise adds to it, as does no echo at all: such segments can be left out.
+        let reach = s.max_range + GAUSS_BOUND * s.noise.abs() + CULL_SLACK;
+        let reach = if reach.is_nan() { f64::INFINITY } else { reach };
+        // Each sonar's rays are within half its cone of its axis.
+        let fan = RayFan::new(p, &self.segments_in(self.robot.floor, &Aabb::around(p, reach)), s.cone / 2.0);
+        let mut among = Vec::new();
         let mut out = [0f32; SONARS];
         let rays = s.rays.max(1);
         for (i, o) in out.iter_mut().enumerate() {
             let axis = self.robot.theta + sonar_bearing(i);
+            fan.select(P2::dir(axis), &mut among);
             let mut best = f64::INFINITY;
             for k in 0..rays {
                 let off = if rays == 1 { 0.0 } else { s.cone * (k as f64 / (rays - 1) as f64 - 0.5) };
-                if let Some(d) = cast(p, P2::dir(axis + off), &segs) {
+                if let Some(d) = fan.cast_among(P2::dir(axis + off), &among) {
                     best = best.min(d);
                 }
             }
@@ -576,7 +607,9 @@ impl World {
     /// nearest first.
     pub fn barcodes(&self, range: f64, fov: f64) -> Vec<(i64, f64, f64)> {
         let p = self.pos();
-        let segs = self.segments(self.robot.floor);
+        // A barcode is hidden only by a segment nearer than it, so within `range`.
+        let reach = if range.is_nan() { f64::INFINITY } else { range + CULL_SLACK };
+        let segs = self.segments_in(self.robot.floor, &Aabb::around(p, reach));
         let mut seen: Vec<(i64, f64, f64)> = self
             .barcodes_on(self.robot.floor)
             .into_iter()
@@ -621,4 +654,130 @@ fn blocked(a: P2, b: P2, segs: &[Seg], r: f64) -> bool {
             s.dist_to(b) < d0
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn default_map() -> Map {
+        let path = format!("{}/../../maps/default.yaml", env!("CARGO_MANIFEST_DIR"));
+        crate::load_map(path).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The sonar ring as computed before segments were culled: every ray
+    /// against every segment.
+    fn sonar_every_segment(w: &World, s: &SonarSettings) -> [f32; SONARS] {
+        let mut rng = ChaCha8Rng::seed_from_u64(w.seed);
+        rng.set_stream(SONAR_STREAM);
+        rng.set_word_pos(u128::from(w.step) * 1024);
+        let segs = w.segments(w.robot.floor);
+        let p = w.pos();
+        let mut out = [0f32; SONARS];
+        let rays = s.rays.max(1);
+        for (i, o) in out.iter_mut().enumerate() {
+            let axis = w.robot.theta + sonar_bearing(i);
+            let mut best = f64::INFINITY;
+            for k in 0..rays {
+                let off = if rays == 1 { 0.0 } else { s.cone * (k as f64 / (rays - 1) as f64 - 0.5) };
+                if let Some(d) = cast(p, P2::dir(axis + off), &segs) {
+                    best = best.min(d);
+                }
+            }
+            let noisy = best + s.noise * gauss(&mut rng);
+            let missed = uniform(&mut rng) < s.dropout;
+            let r =
+                if missed || !noisy.is_finite() || noisy > s.max_range { s.max_range } else { noisy.max(s.min_range) };
+            *o = r as f32;
+        }
+        out
+    }
+
+    /// Poses all over every floor (inside walls and obstacles too), with cars
+    /// in every door state.
+    fn worlds() -> Vec<World> {
+        let mut out = Vec::new();
+        let mut rng = ChaCha8Rng::seed_from_u64(99);
+        let base = World::new(default_map(), 5);
+        for k in 0..1500u64 {
+            let mut w = base.clone();
+            let floor = w.map.floors[(k % w.map.floors.len() as u64) as usize].level;
+            let (x, y) = (-1.0 + 23.0 * uniform(&mut rng), -1.0 + 23.0 * uniform(&mut rng));
+            w.place_robot(floor, x, y, (uniform(&mut rng) - 0.5) * 7.0);
+            w.step = k * 37;
+            for c in w.cars.iter_mut() {
+                c.pos = floor as f64;
+                c.door = [0.0, 0.3, 1.0][(k % 3) as usize];
+                c.phase = [CarPhase::Idle, CarPhase::Opening, CarPhase::Open { until: 1e9 }][(k % 3) as usize];
+            }
+            out.push(w);
+        }
+        out
+    }
+
+    #[test]
+    fn culled_sonar_readings_are_bit_for_bit_those_of_every_segment() {
+        let settings = [
+            SonarSettings::default(),
+            SonarSettings { noise: 0.0, dropout: 0.0, ..SonarSettings::default() },
+            SonarSettings { max_range: 1.0, noise: 0.5, ..SonarSettings::default() },
+            SonarSettings { max_range: 20.0, cone: 60f64.to_radians(), rays: 31, ..SonarSettings::default() },
+            SonarSettings { rays: 1, cone: 0.0, ..SonarSettings::default() },
+        ];
+        for w in worlds() {
+            for s in &settings {
+                let got = w.sonar(s).map(f32::to_bits);
+                assert_eq!(got, sonar_every_segment(&w, s).map(f32::to_bits), "{:?} {s:?}", w.robot());
+            }
+        }
+    }
+
+    #[test]
+    fn blocking_on_the_segments_near_a_move_is_blocking_on_all() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for w in worlds() {
+            let r = w.map.robot_radius;
+            let all = w.segments(w.robot.floor);
+            let from = w.pos();
+            for _ in 0..4 {
+                let step = 0.001 + 0.2 * uniform(&mut rng);
+                let to = from.plus(P2::dir(uniform(&mut rng) * 7.0).scale(step));
+                let near = w.segments_in(w.robot.floor, &Aabb::spanning(from, to).grown(r + CULL_SLACK));
+                for m in [1.0, 0.5, 0.25, 0.001] {
+                    let b = from.plus(to.minus(from).scale(m));
+                    assert_eq!(blocked(from, b, &near, r), blocked(from, b, &all, r), "{from:?} -> {b:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn barcodes_seen_with_culled_walls_are_those_seen_with_all() {
+        for w in worlds() {
+            let p = w.pos();
+            let segs = w.segments(w.robot.floor);
+            // The reader's rule with every segment.
+            let mut want: Vec<(i64, f64, f64)> = w
+                .barcodes_on(w.robot.floor)
+                .into_iter()
+                .filter_map(|b| {
+                    let rel = b.at.minus(p);
+                    let d = rel.norm();
+                    let bearing = wrap(rel.y.atan2(rel.x) - w.robot.theta);
+                    if d > 3.0 || bearing.abs() > 1.0 || d < 1e-9 {
+                        return None;
+                    }
+                    if let Some(f) = b.facing {
+                        if P2::dir(f).dot(rel.scale(-1.0 / d)) < 10f64.to_radians().sin() {
+                            return None;
+                        }
+                    }
+                    let hidden = cast(p, rel.scale(1.0 / d), &segs).is_some_and(|h| h < d - 0.01);
+                    (!hidden).then_some((b.id, bearing, d))
+                })
+                .collect();
+            want.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
+            assert_eq!(w.barcodes(3.0, 1.0), want);
+        }
+    }
 }
