@@ -87,20 +87,9 @@ SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
 HOME_PROGRESS_S = 8.0
 
-#: Records the sequencer reads after most waits, with their fields. Each wait's monitor names
-#: them in a clause that is always false (``false && …``: the condition holds exactly when it
-#: would without it); its event reports every value the condition names, so they come with the
-#: event instead of costing a query each.
-CARRIED = {"odom": ("x", "y", "theta", "v", "w"), "target": ("seen", "id", "bearing", "distance")}
-CARRY = (
-    "false && ("
-    + " || ".join(
-        f"{r}.{f}" if f == "seen" else f"{r}.{f} > 0"
-        for r, fields in CARRIED.items()
-        for f in fields
-    )
-    + ")"
-)
+#: Records the sequencer reads after most waits: each wait's monitor asks for them (``report``),
+#: so their values as of the cycle it fired in come with its event instead of a query each.
+CARRIED = ("odom", "target")
 
 
 class PhaseFailed(Exception):
@@ -394,8 +383,8 @@ class Sequencer:
         """
         stream = self.stream
         assert stream is not None
-        whole = " || ".join(f"({c})" for c in [*conds, CARRY])
-        self.send("monitor_add", condition=whole, mode="once", pause=True)
+        whole = " || ".join(f"({c})" for c in conds)
+        self.send("monitor_add", condition=whole, mode="once", pause=True, report=list(CARRIED))
         self.send("run")
         monitor = int((await self.flush())[-2]["monitor"])
         fired: MonitorFired | None = None
@@ -406,9 +395,12 @@ class Sequencer:
         if fired is None:
             raise situate.NotRunning("the link closed while waiting")
         self.t = fired.time_s
-        for record, fields in CARRIED.items():
-            values = {f: fired.values.get(f"{record}.{f}") for f in fields}
-            if all(v is not None for v in values.values()):  # else never written: a query says so
+        for record in CARRIED:
+            prefix = f"{record}."
+            values = {
+                k.removeprefix(prefix): v for k, v in fired.values.items() if k.startswith(prefix)
+            }
+            if values and all(v is not None for v in values.values()):  # else never written
                 self.carried[record] = values
         for k, c in enumerate(conds):
             if holds(c, fired.values, fired.time_s, fired.cycle):

@@ -318,7 +318,14 @@ class Robot:
 
     # ----- monitors and events ---------------------------------------------------
 
-    async def monitor(self, condition: str, mode: str = "once", *, pause: bool = False) -> int:
+    async def monitor(
+        self,
+        condition: str,
+        mode: str = "once",
+        *,
+        pause: bool = False,
+        report: Sequence[str] = (),
+    ) -> int:
         """Registers a monitor and returns its id; it fires :class:`~situate.MonitorFired` events.
 
         ``mode`` is ``"once"`` (the first cycle the condition holds, then the
@@ -328,11 +335,18 @@ class Robot:
         :meth:`run`: the sequencer then acts at exactly that cycle, however
         slow the link. A condition that does not parse is
         :class:`~situate.BadCondition`, whose ``pointer`` shows where.
+        The event's ``values`` hold every name the condition reads, and those
+        of ``report`` too (signal leaves, whole records as their leaves,
+        ``skill.param``, ``time``, ``cycle``), as of the cycle it fired in: what
+        the sequencer reads next comes with the event, without a query. An
+        unknown name in ``report`` is :class:`~situate.UnknownSignal`.
         Subscribe with :meth:`events` *before* registering, or use :meth:`when`.
         """
         args: dict[str, Any] = {"condition": condition, "mode": mode}
         if pause:
             args["pause"] = True
+        if report:
+            args["report"] = list(report)
         result = await self.request("monitor_add", **args)
         return int(result["monitor"])
 
@@ -355,7 +369,12 @@ class Robot:
         return Stream(self, keys or [f"situate/{self.name}/events/**"], parse_event)
 
     async def when(
-        self, condition: str, *, timeout: float | None = None, pause: bool = False
+        self,
+        condition: str,
+        *,
+        timeout: float | None = None,
+        pause: bool = False,
+        report: Sequence[str] = (),
     ) -> MonitorFired:
         """Waits until ``condition`` holds and returns the :class:`~situate.MonitorFired` event.
 
@@ -363,13 +382,17 @@ class Robot:
         (``timeout`` seconds pass: ``TimeoutError``; the task is cancelled)
         the monitor is cancelled, so nothing is left behind on the robot.
         With ``pause`` the cycle stops where the condition held (see
-        :meth:`monitor`); resume it with :meth:`run`.
+        :meth:`monitor`); resume it with :meth:`run`. ``report``: as for :meth:`monitor`.
         """
-        _, fired = await self.first(condition, timeout=timeout, pause=pause)
+        _, fired = await self.first(condition, timeout=timeout, pause=pause, report=report)
         return fired
 
     async def first(
-        self, *conditions: str, timeout: float | None = None, pause: bool = False
+        self,
+        *conditions: str,
+        timeout: float | None = None,
+        pause: bool = False,
+        report: Sequence[str] = (),
     ) -> tuple[int, MonitorFired]:
         """Waits until one of ``conditions`` holds: returns its index and the event.
 
@@ -384,7 +407,7 @@ class Robot:
             ids: list[int] = []
             try:
                 for c in conditions:
-                    ids.append(await self.monitor(c, "once", pause=pause))
+                    ids.append(await self.monitor(c, "once", pause=pause, report=report))
                 fired = await asyncio.wait_for(_fired_any(stream, ids), timeout)
                 return ids.index(fired.monitor), fired
             finally:

@@ -329,6 +329,8 @@ class MonitorInfo:
     fired: int
     holds: bool
     pause: bool = False
+    #: Names whose values its events carry besides the condition's, as asked.
+    report: tuple[str, ...] = ()
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> MonitorInfo:
@@ -340,4 +342,5 @@ class MonitorInfo:
             fired=int(j.get("fired", 0)),
             holds=bool(j.get("holds", False)),
             pause=bool(j.get("pause", False)),
+            report=tuple(str(r) for r in j.get("report", [])),
         )

@@ -217,3 +217,30 @@ def test_a_pausing_monitor_stops_the_cycle_where_its_condition_held(toybot: Mana
             await robot.when(f"cycle > {target + 2}", timeout=30)
 
     run(main())
+
+
+def test_a_monitor_reports_the_values_asked_for_as_of_its_cycle(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            start = (await robot.stats()).cycle
+            target = start + 10
+            event = await robot.when(
+                f"cycle >= {target}",
+                pause=True,
+                report=["odom", "runaway.safe_distance"],
+                timeout=30,
+            )
+            assert await robot.monitors() == []  # a `once` monitor is gone once fired
+            # The whole record comes as its leaves, all as of the cycle it fired in,
+            # which is where the cycle stopped: a query now reads the same values.
+            odom = await robot.query("odom")
+            assert {k: v for k, v in event.values.items() if k.startswith("odom.")} == {
+                f"odom.{field}": value for field, value in odom.value.items()
+            }
+            assert event.values["runaway.safe_distance"] == 0.6
+            with pytest.raises(situate.UnknownSignal, match="did you mean `odom`"):
+                await robot.monitor("cycle > 0", report=["odm"])
+            assert await robot.monitors() == []
+            await robot.run()
+
+    run(main())

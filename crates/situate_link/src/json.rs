@@ -202,6 +202,10 @@ impl Args<'_> {
         self.obj.remove(name)
     }
 
+    fn has(&self, name: &str) -> bool {
+        self.obj.contains_key(name)
+    }
+
     fn string(&mut self, name: &str) -> Result<String, WireError> {
         match self.take(name) {
             Some(Json::String(s)) => Ok(s),
@@ -346,7 +350,8 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
                 Some(other) => return Err(a.wrong("mode", "\"once\", \"edge\" or \"level\"", &other)),
             };
             let pause = a.boolean("pause", Some(false))?;
-            Decoded::Manager(Request::AddMonitor { condition, mode, pause })
+            let report = if a.has("report") { a.strings("report")? } else { Vec::new() };
+            Decoded::Manager(Request::AddMonitor { condition, mode, pause, report })
         }
         "monitor_cancel" => {
             Decoded::Manager(Request::CancelMonitor { monitor: a.integer("monitor", 0, i64::MAX)? as u64 })
@@ -390,6 +395,7 @@ pub fn control_error(e: &ControlError) -> Json {
         ControlError::MissingProviders { .. } => "missing_providers",
         ControlError::UnknownSignal { .. } => "unknown_signal",
         ControlError::BadCondition { .. } => "bad_condition",
+        ControlError::BadReport(_) => "unknown_signal",
         ControlError::UnknownMonitor(_) => "unknown_monitor",
         ControlError::Invalid(_) => "invalid",
         ControlError::Disconnected => "unavailable",
@@ -478,7 +484,7 @@ fn graph_to_json(g: &GraphInfo) -> Json {
 fn monitor_to_json(m: &MonitorInfo) -> Json {
     json!({
         "monitor": m.monitor, "condition": m.condition, "mode": m.mode.name(), "fired": m.fired, "holds": m.holds,
-        "pause": m.pause,
+        "pause": m.pause, "report": m.report,
     })
 }
 

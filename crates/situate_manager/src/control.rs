@@ -63,6 +63,10 @@ pub enum Request {
         condition: String,
         mode: MonitorMode,
         pause: bool,
+        /// More names whose values the monitor's events carry besides those
+        /// the condition reads: signal leaves, whole records (as their
+        /// leaves), `skill.param`, `time`, `cycle`.
+        report: Vec<String>,
     },
     CancelMonitor {
         monitor: u64,
@@ -114,6 +118,8 @@ pub enum ControlError {
     UnknownSignal { name: String, suggestion: String },
     #[error("bad condition at column {column}: {message}\n{pointer}")]
     BadCondition { column: usize, message: String, pointer: String },
+    #[error("`report`: {0}")]
+    BadReport(String),
     #[error("no monitor {0}")]
     UnknownMonitor(u64),
     #[error("{0}")]
@@ -293,6 +299,7 @@ pub struct MonitorInfo {
     pub fired: u64,
     pub holds: bool,
     pub pause: bool,
+    pub report: Vec<String>,
 }
 
 /// Anything that answers requests: the manager itself, or a handle to it.
@@ -368,7 +375,12 @@ pub trait Control {
     }
 
     fn add_monitor(&mut self, condition: &str, mode: MonitorMode) -> Result<u64, ControlError> {
-        match self.request(Request::AddMonitor { condition: condition.into(), mode, pause: false })? {
+        match self.request(Request::AddMonitor {
+            condition: condition.into(),
+            mode,
+            pause: false,
+            report: Vec::new(),
+        })? {
             Reply::MonitorAdded(id) => Ok(id),
             other => Err(unexpected(other)),
         }

@@ -656,6 +656,7 @@ impl Manager {
                 .iter()
                 .zip(m.condition.ref_names())
                 .map(|(&r, name)| (name.clone(), env.value(r).cloned()))
+                .chain(m.report.iter().map(|(name, r)| (name.clone(), env.value(*r).cloned())))
                 .collect();
             fired.push(Event::MonitorFired {
                 monitor: m.id,
@@ -929,17 +930,33 @@ impl Manager {
         condition: &str,
         mode: crate::monitor::MonitorMode,
         pause: bool,
+        report: Vec<String>,
     ) -> Result<Reply, ControlError> {
         let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
-        let compiled = Condition::compile(condition, &resolver);
-        let added = resolver.added.into_inner();
-        let compiled = compiled.map_err(|e| ControlError::BadCondition {
+        let compiled = Condition::compile(condition, &resolver).map_err(|e| ControlError::BadCondition {
             column: e.column,
             message: e.message.clone(),
             pointer: e.pointer(condition),
         })?;
-        self.refs.extend(added);
-        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode, pause)))
+        let mut reported = Vec::new();
+        for name in &report {
+            let name = name.trim();
+            // A whole record is reported as its leaves, each by its own name.
+            let prefix = format!("{name}.");
+            let mut leaves: Vec<&str> = if self.graph.records.contains_key(name) {
+                self.graph.leaf_index.keys().filter(|k| k.starts_with(&prefix)).map(String::as_str).collect()
+            } else {
+                vec![name]
+            };
+            leaves.sort_unstable();
+            for leaf in leaves {
+                let (r, _) = resolver.resolve(leaf).map_err(ControlError::BadReport)?;
+                reported.push((leaf.to_string(), r));
+            }
+        }
+        // Nothing is kept from a refused request.
+        self.refs.extend(resolver.added.into_inner());
+        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode, pause, reported, report)))
     }
 
     /// Handles one request between two cycles.
@@ -971,7 +988,7 @@ impl Manager {
             Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
             Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
             Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
-            Request::AddMonitor { condition, mode, pause } => self.add_monitor(&condition, mode, pause),
+            Request::AddMonitor { condition, mode, pause, report } => self.add_monitor(&condition, mode, pause, report),
             Request::CancelMonitor { monitor } => {
                 if self.monitors.cancel(monitor) {
                     Ok(Reply::Done)
@@ -990,6 +1007,7 @@ impl Manager {
                         fired: m.fired,
                         holds: m.holds,
                         pause: m.pause,
+                        report: m.report_asked.clone(),
                     })
                     .collect(),
             )),

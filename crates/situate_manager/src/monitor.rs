@@ -14,6 +14,10 @@
 //! A condition whose values are missing (never written, index out of range)
 //! does not hold.
 //!
+//! A monitor's events carry the value of every name its condition reads,
+//! and of the names it was asked to `report` besides: what the sequencer
+//! will read next arrives with the event, as of the cycle it fired in.
+//!
 //! A monitor added with `pause` also stops the cycle at the end of the cycle
 //! it fires in (the manager then serves requests until told to run again),
 //! and ends a `step` there.
@@ -64,6 +68,10 @@ pub(crate) struct Monitor {
     pub holds: bool,
     pub fired: u64,
     pub pause: bool,
+    /// Extra names the events carry, as written, with their reference ids.
+    pub report: Vec<(String, usize)>,
+    /// The names `report` asked for, as written (records not expanded).
+    pub report_asked: Vec<String>,
 }
 
 #[derive(Default)]
@@ -73,10 +81,17 @@ pub(crate) struct Monitors {
 }
 
 impl Monitors {
-    pub fn add(&mut self, condition: Condition, mode: MonitorMode, pause: bool) -> u64 {
+    pub fn add(
+        &mut self,
+        condition: Condition,
+        mode: MonitorMode,
+        pause: bool,
+        report: Vec<(String, usize)>,
+        report_asked: Vec<String>,
+    ) -> u64 {
         self.next_id += 1;
         let id = self.next_id;
-        self.list.push(Monitor { id, condition, mode, holds: false, fired: 0, pause });
+        self.list.push(Monitor { id, condition, mode, holds: false, fired: 0, pause, report, report_asked });
         id
     }
 

@@ -159,6 +159,7 @@ fn a_pausing_monitor_stops_the_cycle_at_the_cycle_it_fires_in() {
             condition: "sonar.range[0] < 0.25".into(),
             mode: MonitorMode::Edge,
             pause: true,
+            report: Vec::new(),
         })
         .unwrap();
     let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
@@ -190,6 +191,7 @@ fn a_pausing_monitor_also_ends_a_step_where_it_fires() {
             condition: "sonar.range[0] < 0.25".into(),
             mode: MonitorMode::Edge,
             pause: true,
+            report: Vec::new(),
         })
         .unwrap();
     let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
@@ -200,4 +202,43 @@ fn a_pausing_monitor_also_ends_a_step_where_it_fires() {
     m.request(Request::Step { cycles: 6 }).unwrap();
     assert_eq!(fired(&events), vec![(id, 5)]);
     assert_eq!(m.stats().unwrap().cycle, 5);
+}
+
+#[test]
+fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let add = |m: &mut Manager, report: &[&str]| {
+        m.request(Request::AddMonitor {
+            condition: "sonar.range[0] < 0.25".into(),
+            mode: MonitorMode::Once,
+            pause: false,
+            report: report.iter().map(|s| s.to_string()).collect(),
+        })
+    };
+    // A whole record is reported as its leaves; parameters, time and cycle too.
+    let reply = add(&mut m, &["barcode", "runaway.safe_distance", "cycle"]).unwrap();
+    let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
+    let situate_manager::Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list[0].report, vec!["barcode", "runaway.safe_distance", "cycle"]);
+    m.step(6).unwrap();
+    let values = events
+        .try_iter()
+        .find_map(|e| match e {
+            Event::MonitorFired { monitor, values, .. } if monitor == id => Some(values),
+            _ => None,
+        })
+        .expect("the monitor fired");
+    let names: Vec<&str> = values.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["sonar.range", "barcode.id", "barcode.visible", "runaway.safe_distance", "cycle"]);
+    // As of cycle 2: the barcode is not seen yet (it is from cycle 4 on).
+    assert_eq!(values[2].1, Some(Value::Bool(false)));
+    assert_eq!(values[3].1, Some(Value::F64(0.5)));
+    assert_eq!(values[4].1, Some(Value::I64(2)));
+
+    // An unknown name is refused with a suggestion, and nothing is added.
+    let err = add(&mut m, &["barcod"]).unwrap_err();
+    assert!(matches!(&err, ControlError::BadReport(msg) if msg.contains("did you mean `barcode`")), "{err}");
+    let situate_manager::Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert!(list.is_empty());
 }
