@@ -485,7 +485,12 @@ fn monitors(settings: &Settings, report: &mut Report) {
     skills::check_chain(&mut watched, "", 10);
     for k in 0..MONITORS {
         let condition = format!("{}[0] > 1e9", skills::chain_signal("", k));
-        if let Err(e) = watched.request(Request::AddMonitor { condition, mode: MonitorMode::Level, pause: false }) {
+        if let Err(e) = watched.request(Request::AddMonitor {
+            condition,
+            mode: MonitorMode::Level,
+            pause: false,
+            report: Vec::new(),
+        }) {
             panic!("monitor refused: {e}");
         }
     }
