@@ -883,7 +883,19 @@ fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> Result<Runni
     };
     if let Some(session) = &session {
         for (name, decl) in remote {
-            registry.add(situate_link::RemoteSkill::skill_type(session, &robot_file.robot.value, &name, decl));
+            let timeout = robot_file
+                .skills
+                .iter()
+                .find(|e| e.name.value == name)
+                .and_then(|e| e.timeout_ms.as_ref())
+                .map(|t| Duration::from_secs_f64(t.value.min(86_400_000.0) / 1e3));
+            registry.add(situate_link::RemoteSkill::skill_type_with_timeout(
+                session,
+                &robot_file.robot.value,
+                &name,
+                decl,
+                timeout,
+            ));
         }
     }
     let mut manager = match Manager::build(&spec, &registry) {

@@ -25,7 +25,7 @@ params:
 
 const SCALE_MANIFEST: &str = "\
 name: t.scale
-doc: y = gain * x; fails on a negative x; aborts the process on x > 100.
+doc: y = gain * x; fails on a negative x; hangs on x in (50, 100]; aborts the process on x > 100.
 inputs: {x: f64}
 outputs: {y: f64}
 params:
@@ -33,7 +33,9 @@ params:
 ";
 
 const C_SOURCE: &str = r#"
+#define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
+#include <unistd.h>
 #include "t_source.h"
 #include "t_scale.h"
 struct t_source_state { char unused; };
@@ -49,6 +51,7 @@ situate_status t_scale_step(t_scale_state* s, const t_scale_inputs* in, t_scale_
                             const t_scale_params* p, situate_context* cx) {
     s->runs++;
     if (in->x > 100.0) abort(); /* a crash no process can contain */
+    if (in->x > 50.0) sleep(3600); /* a hang: only a deadline tells */
     if (in->x < 0.0) return situate_fail(cx, "negative x = %.1f", in->x);
     if (s->runs == 1) situate_print(cx, "scale: first run, gain %.1f", p->gain);
     out->y = p->gain * in->x;
@@ -174,7 +177,7 @@ fn a_c_skill_served_out_of_process_joins_the_cycle_and_its_crash_is_contained() 
             // The remote skill is declared by the very manifest the C type was built from.
             "robot: hosted\ncycle: {{rate_hz: 50}}\nlibraries: [{}]\nskills:\n  \
              - {{name: source, type: t.source}}\n  \
-             - {{name: scale, remote: t_scale.yaml}}\n",
+             - {{name: scale, remote: t_scale.yaml, timeout_ms: 2000}}\n",
             lib.display()
         ),
     )
@@ -242,6 +245,20 @@ fn a_c_skill_served_out_of_process_joins_the_cycle_and_its_crash_is_contained() 
         let _ = c.request("hosted", "activate", &json!({"skills": ["scale"]}));
         value_of(&c, "y").filter(|y| *y == 3.0)
     });
+
+    // The C body hangs: the process lives on, only `timeout_ms` tells. (The
+    // retried activations above faulted while no host was back: skip those.)
+    c.request("hosted", "set_param", &json!({"skill": "source", "param": "x", "value": 60.0})).expect("x set");
+    let cause = loop {
+        let cause = fault_of(&events, "scale");
+        if !cause.contains("is gone") {
+            break cause;
+        }
+    };
+    assert!(cause.contains("no answer") && cause.contains("2000 ms"), "{cause}");
+    assert_eq!(skill(&c, "scale")["active"], json!(false));
+    let before = cycle(&c);
+    wait_for("the cycle to go on", || (cycle(&c) > before + 10).then_some(()));
 }
 
 #[test]

@@ -10,7 +10,7 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serde_json::{json, Map, Value as Json};
 use situate_core::{Context, Io, Skill, SkillDecl, SkillError, SkillType, Value};
@@ -33,6 +33,11 @@ struct Latest {
     /// (the host may answer several cycles' inputs after the one that failed),
     /// so a reactivated skill does not fault again on an old error.
     stale_through: Option<u64>,
+    /// The serving process has shown up (a reply or its liveliness token):
+    /// only then does a deadline apply.
+    seen: bool,
+    /// When inputs were first published after the last reply.
+    waiting_since: Option<Instant>,
 }
 
 /// The manager's proxy of one remote skill instance.
@@ -42,12 +47,27 @@ pub struct RemoteSkill {
     decl: Arc<SkillDecl>,
     params: Vec<Value>,
     latest: Arc<Mutex<Latest>>,
+    /// How long an answer may take once the process has answered before.
+    timeout: Option<Duration>,
     _subscriber: zenoh::pubsub::Subscriber<()>,
     _alive: zenoh::pubsub::Subscriber<()>,
 }
 
 impl RemoteSkill {
     pub fn new(session: &Session, robot: &str, name: &str, decl: Arc<SkillDecl>) -> Result<RemoteSkill, String> {
+        RemoteSkill::with_timeout(session, robot, name, decl, None)
+    }
+
+    /// [`RemoteSkill::new`] with a deadline: once the serving process has
+    /// answered (or declared its liveliness token), inputs left unanswered
+    /// for longer than `timeout` fault the skill — the process hangs.
+    pub fn with_timeout(
+        session: &Session,
+        robot: &str,
+        name: &str,
+        decl: Arc<SkillDecl>,
+        timeout: Option<Duration>,
+    ) -> Result<RemoteSkill, String> {
         let latest = Arc::new(Mutex::new(Latest { outputs: vec![None; decl.outputs.len()], ..Latest::default() }));
         let sink = Arc::clone(&latest);
         let outputs_decl = Arc::clone(&decl);
@@ -75,7 +95,10 @@ impl RemoteSkill {
             .callback(move |sample| {
                 let mut l = watch.lock().unwrap_or_else(|p| p.into_inner());
                 match sample.kind() {
-                    zenoh::sample::SampleKind::Put => l.gone = false,
+                    zenoh::sample::SampleKind::Put => {
+                        l.gone = false;
+                        l.seen = true;
+                    }
                     zenoh::sample::SampleKind::Delete => {
                         l.gone = true;
                         // A dead process's last answer is no answer.
@@ -92,6 +115,7 @@ impl RemoteSkill {
             params: decl.params.iter().map(|p| p.default.clone()).collect(),
             decl,
             latest,
+            timeout,
             _subscriber: subscriber,
         })
     }
@@ -99,13 +123,25 @@ impl RemoteSkill {
     /// The skill type of a remote instance: its declaration, and a maker that
     /// subscribes on `session`.
     pub fn skill_type(session: &Session, robot: &str, name: &str, decl: SkillDecl) -> SkillType {
+        RemoteSkill::skill_type_with_timeout(session, robot, name, decl, None)
+    }
+
+    /// [`RemoteSkill::skill_type`] with a deadline (see [`RemoteSkill::with_timeout`]).
+    pub fn skill_type_with_timeout(
+        session: &Session,
+        robot: &str,
+        name: &str,
+        decl: SkillDecl,
+        timeout: Option<Duration>,
+    ) -> SkillType {
         let decl = Arc::new(decl);
         let (session, robot, name) = (session.clone(), robot.to_string(), name.to_string());
         let d = Arc::clone(&decl);
         SkillType {
             decl,
             make: Arc::new(move || {
-                Ok(Box::new(RemoteSkill::new(&session, &robot, &name, Arc::clone(&d))?) as Box<dyn Skill>)
+                Ok(Box::new(RemoteSkill::with_timeout(&session, &robot, &name, Arc::clone(&d), timeout)?)
+                    as Box<dyn Skill>)
             }),
         }
     }
@@ -121,6 +157,8 @@ fn absorb(l: &mut Latest, msg: &Json, decl: &SkillDecl) {
     if l.stale_through.is_some_and(|through| cycle.is_some_and(|c| c <= through)) {
         return;
     }
+    l.seen = true;
+    l.waiting_since = None;
     if let Some(e) = msg.get("error") {
         l.error = Some(e.as_str().map_or_else(|| e.to_string(), str::to_string));
     }
@@ -169,6 +207,14 @@ impl Skill for RemoteSkill {
         for line in l.prints.drain(..) {
             io.cx.print(line);
         }
+        let now = Instant::now();
+        if l.seen {
+            l.waiting_since.get_or_insert(now);
+        }
+        let overdue = match (self.timeout, l.waiting_since) {
+            (Some(limit), Some(since)) if now.duration_since(since) > limit => Some(limit),
+            _ => None,
+        };
         let fault = if let Some(e) = l.invalid.take() {
             Some(e)
         } else if l.gone {
@@ -177,14 +223,23 @@ impl Skill for RemoteSkill {
                  then reactivate the skill"
                     .to_string(),
             )
+        } else if let Some(e) = l.error.take() {
+            Some(format!("the remote skill failed: {e}"))
         } else {
-            l.error.take().map(|e| format!("the remote skill failed: {e}"))
+            overdue.map(|limit| {
+                format!(
+                    "no answer from the process serving this remote skill for over {} ms (timeout_ms): \
+                     it may hang",
+                    limit.as_millis()
+                )
+            })
         };
         if let Some(e) = fault {
             // The skill is deactivated now: what the host still sends about
             // this cycle's inputs or earlier ones is not for its next life.
             l.stale_through = Some(io.cx.cycle());
             l.error = None;
+            l.waiting_since = None;
             l.outputs.iter_mut().for_each(|o| *o = None);
             return Err(SkillError::new(e));
         }

@@ -25,7 +25,8 @@ pub const MAX_THREADS: usize = 64;
 
 const TOP_KEYS: &[&str] = &["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui"];
 const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads"];
-const ENTRY_KEYS: &[&str] = &["name", "type", "remote", "active", "priority", "period_ms", "params", "remap"];
+const ENTRY_KEYS: &[&str] =
+    &["name", "type", "remote", "timeout_ms", "active", "priority", "period_ms", "params", "remap"];
 
 /// One error in a robot file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -138,6 +139,9 @@ pub struct SkillEntry {
     /// A remote skill's manifest (`remote:` instead of `type:`); its type
     /// name is then `remote.<name>`.
     pub remote: Option<Spanned<Node>>,
+    /// A remote skill's deadline: once its process has answered, an answer
+    /// awaited longer than this (wall-clock ms) faults the skill.
+    pub timeout_ms: Option<Spanned<f64>>,
 }
 
 impl SkillEntry {
@@ -564,6 +568,7 @@ impl Checker<'_> {
         let mut active = true;
         let mut priority = None;
         let mut period_ms = None;
+        let mut timeout_ms = None;
         let mut params = Vec::new();
         let mut remap = Vec::new();
         let mut remote = None;
@@ -620,6 +625,9 @@ impl Checker<'_> {
                 "period_ms" => {
                     period_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
                 }
+                "timeout_ms" => {
+                    timeout_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
+                }
                 "params" => params = self.params(value.clone()),
                 "remap" => remap = self.remap(value.clone()),
                 _ => self.unknown_key(key, &format!("in {place}"), ENTRY_KEYS),
@@ -637,6 +645,9 @@ impl Checker<'_> {
         if let (Some(r), Some(n)) = (&remote, &name) {
             type_name = Some(Spanned::new(format!("remote.{}", n.value), r.pos));
         }
+        if let (Some(t), false) = (&timeout_ms, remote_given) {
+            self.push(t.pos, format!("`timeout_ms` in {place} is for remote skills (how long an answer may take)"));
+        }
         Some(SkillEntry {
             section,
             pos: item.pos,
@@ -648,6 +659,7 @@ impl Checker<'_> {
             params,
             remap,
             remote,
+            timeout_ms,
         })
     }
 
@@ -1281,5 +1293,10 @@ cycle:
         let _ = std::fs::remove_dir_all(&dir);
 
         assert!(error("robot: r\nskills:\n  - {name: x, remote: [a, b]}\n").contains("or the path of a manifest file"));
+        assert_eq!(
+            error("robot: r\nskills:\n  - {name: x, type: toy.wander, timeout_ms: 500}\n"),
+            "robot.yaml:3:45: error: `timeout_ms` in skill `x` is for remote skills (how long an answer may take)"
+        );
+        assert!(error("robot: r\nskills:\n  - {name: x, remote: x.yaml, timeout_ms: 0}\n").contains("timeout_ms"));
     }
 }
