@@ -165,6 +165,30 @@ fn uniform(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// A standard normal number (Box–Muller).
+/// The ring's readings: for each sonar, `nearest(axis, ray directions)`
+/// gives the nearest echo of its cone's rays (infinity for none); noise and
+/// missed echoes are drawn from `rng` in sonar order.
+fn sonar_ring(
+    theta: f64,
+    s: &SonarSettings,
+    rng: &mut ChaCha8Rng,
+    mut nearest: impl FnMut(f64, &mut dyn Iterator<Item = f64>) -> f64,
+) -> [f32; SONARS] {
+    let mut out = [0f32; SONARS];
+    let rays = s.rays.max(1);
+    for (i, o) in out.iter_mut().enumerate() {
+        let axis = theta + sonar_bearing(i);
+        let mut dirs =
+            (0..rays).map(|k| axis + if rays == 1 { 0.0 } else { s.cone * (k as f64 / (rays - 1) as f64 - 0.5) });
+        let best = nearest(axis, &mut dirs);
+        let noisy = best + s.noise * gauss(rng);
+        let missed = uniform(rng) < s.dropout;
+        let r = if missed || !noisy.is_finite() || noisy > s.max_range { s.max_range } else { noisy.max(s.min_range) };
+        *o = r as f32;
+    }
+    out
+}
+
 fn gauss(rng: &mut ChaCha8Rng) -> f64 {
     let u1 = 1.0 - uniform(rng);
     let u2 = uniform(rng);
@@ -581,25 +605,10 @@ impl World {
         // Each sonar's rays are within half its cone of its axis.
         let fan = RayFan::new(p, &self.segments_in(self.robot.floor, &Aabb::around(p, reach)), s.cone / 2.0);
         let mut among = Vec::new();
-        let mut out = [0f32; SONARS];
-        let rays = s.rays.max(1);
-        for (i, o) in out.iter_mut().enumerate() {
-            let axis = self.robot.theta + sonar_bearing(i);
+        sonar_ring(self.robot.theta, s, &mut rng, |axis, rays| {
             fan.select(P2::dir(axis), &mut among);
-            let mut best = f64::INFINITY;
-            for k in 0..rays {
-                let off = if rays == 1 { 0.0 } else { s.cone * (k as f64 / (rays - 1) as f64 - 0.5) };
-                if let Some(d) = fan.cast_among(P2::dir(axis + off), &among) {
-                    best = best.min(d);
-                }
-            }
-            let noisy = best + s.noise * gauss(&mut rng);
-            let missed = uniform(&mut rng) < s.dropout;
-            let r =
-                if missed || !noisy.is_finite() || noisy > s.max_range { s.max_range } else { noisy.max(s.min_range) };
-            *o = r as f32;
-        }
-        out
+            rays.filter_map(|dir| fan.cast_among(P2::dir(dir), &among)).fold(f64::INFINITY, f64::min)
+        })
     }
 
     /// Barcodes within `range` (m) and `fov` (rad either side of the
@@ -673,24 +682,11 @@ mod tests {
         rng.set_word_pos(u128::from(w.step) * 1024);
         let segs = w.segments(w.robot.floor);
         let p = w.pos();
-        let mut out = [0f32; SONARS];
-        let rays = s.rays.max(1);
-        for (i, o) in out.iter_mut().enumerate() {
-            let axis = w.robot.theta + sonar_bearing(i);
-            let mut best = f64::INFINITY;
-            for k in 0..rays {
-                let off = if rays == 1 { 0.0 } else { s.cone * (k as f64 / (rays - 1) as f64 - 0.5) };
-                if let Some(d) = cast(p, P2::dir(axis + off), &segs) {
-                    best = best.min(d);
-                }
-            }
-            let noisy = best + s.noise * gauss(&mut rng);
-            let missed = uniform(&mut rng) < s.dropout;
-            let r =
-                if missed || !noisy.is_finite() || noisy > s.max_range { s.max_range } else { noisy.max(s.min_range) };
-            *o = r as f32;
-        }
-        out
+        // Every ray against every segment of the floor: the reference the
+        // culled cast must match bit for bit.
+        sonar_ring(w.robot.theta, s, &mut rng, |_, rays| {
+            rays.filter_map(|dir| cast(p, P2::dir(dir), &segs)).fold(f64::INFINITY, f64::min)
+        })
     }
 
     /// Poses all over every floor (inside walls and obstacles too), with cars
