@@ -177,7 +177,7 @@ fn a_c_skill_served_out_of_process_joins_the_cycle_and_its_crash_is_contained() 
             // The remote skill is declared by the very manifest the C type was built from.
             "robot: hosted\ncycle: {{rate_hz: 50}}\nlibraries: [{}]\nskills:\n  \
              - {{name: source, type: t.source}}\n  \
-             - {{name: scale, remote: t_scale.yaml, timeout_ms: 2000}}\n",
+             - {{name: scale, remote: t_scale.yaml, timeout_ms: 5000}}\n",
             lib.display()
         ),
     )
@@ -255,7 +255,7 @@ fn a_c_skill_served_out_of_process_joins_the_cycle_and_its_crash_is_contained() 
             break cause;
         }
     };
-    assert!(cause.contains("no answer") && cause.contains("2000 ms"), "{cause}");
+    assert!(cause.contains("no answer") && cause.contains("5000 ms"), "{cause}");
     assert_eq!(skill(&c, "scale")["active"], json!(false));
     let before = cycle(&c);
     wait_for("the cycle to go on", || (cycle(&c) > before + 10).then_some(()));

@@ -101,6 +101,9 @@ impl RemoteSkill {
                     }
                     zenoh::sample::SampleKind::Delete => {
                         l.gone = true;
+                        // A new process gets its deadline once it answers, like the first.
+                        l.seen = false;
+                        l.waiting_since = None;
                         // A dead process's last answer is no answer.
                         l.outputs.iter_mut().for_each(|o| *o = None);
                     }
