@@ -814,7 +814,7 @@ struct RunOptions {
 /// A robot running on its own threads, serving the link.
 struct Running {
     handle: situate::manager::Handle,
-    join: std::thread::JoinHandle<Manager>,
+    join: situate::manager::Joiner,
     events: crossbeam_channel::Receiver<Event>,
     served: Option<Link>,
     gui: Option<situate_gui::GuiServer>,

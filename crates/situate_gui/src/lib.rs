@@ -546,7 +546,7 @@ mod tests {
 
     use super::*;
 
-    fn robot() -> (Handle, std::thread::JoinHandle<Manager>) {
+    fn robot() -> (Handle, situate_manager::Joiner) {
         let spec = RobotSpec::new("guitest")
             .skill(SkillSpec::new("sonar", "toy.sonar"))
             .skill(SkillSpec::new("wheels", "toy.wheels"))

@@ -20,13 +20,26 @@ pub use crate::yaml::{Node, Pos, Spanned};
 pub const DEFAULT_RATE_HZ: f64 = 20.0;
 /// The fastest cycle rate a robot file may ask for.
 pub const MAX_RATE_HZ: f64 = 100_000.0;
+/// The longest execution budget or liveness deadline: a day, in ms.
+const MAX_DEADLINE_MS: f64 = 86_400_000.0;
 /// The largest parallel executor pool.
 pub const MAX_THREADS: usize = 64;
 
 const TOP_KEYS: &[&str] = &["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui"];
-const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads"];
-const ENTRY_KEYS: &[&str] =
-    &["name", "type", "remote", "timeout_ms", "active", "priority", "period_ms", "params", "remap"];
+const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads", "budget_ms", "liveness_ms"];
+const ENTRY_KEYS: &[&str] = &[
+    "name",
+    "type",
+    "remote",
+    "timeout_ms",
+    "active",
+    "priority",
+    "period_ms",
+    "budget_ms",
+    "liveness_ms",
+    "params",
+    "remap",
+];
 
 /// One error in a robot file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -71,6 +84,10 @@ pub struct CycleConfig {
     pub executor: ExecutorKind,
     /// The parallel executor's pool size, if given.
     pub threads: Option<usize>,
+    /// The default execution budget of a sync cskill's run, ms.
+    pub budget_ms: Option<f64>,
+    /// The default liveness deadline of an async cskill's or dskill's run, ms.
+    pub liveness_ms: Option<f64>,
     /// Where `cycle:` is (1:1 if the file has none).
     pub pos: Pos,
 }
@@ -88,6 +105,8 @@ impl Default for CycleConfig {
             clock: ClockKind::Wall,
             executor: ExecutorKind::Serial,
             threads: None,
+            budget_ms: None,
+            liveness_ms: None,
             pos: Pos::START,
         }
     }
@@ -132,6 +151,11 @@ pub struct SkillEntry {
     pub priority: Option<Spanned<i32>>,
     /// A device's thread period, or an async skill's worker period.
     pub period_ms: Option<Spanned<f64>>,
+    /// Execution budget of one in-cycle run, ms (overrides `cycle.budget_ms`).
+    pub budget_ms: Option<Spanned<f64>>,
+    /// Liveness deadline of one run of a threaded body, ms (overrides
+    /// `cycle.liveness_ms`).
+    pub liveness_ms: Option<Spanned<f64>>,
     /// Parameter values in file order; positions are the keys' and values'.
     pub params: Vec<(Spanned<String>, Spanned<Value>)>,
     /// Port name → signal name, in file order.
@@ -475,6 +499,8 @@ impl Checker<'_> {
                 "threads" => {
                     cycle.threads = self.integer(k, value, 1, MAX_THREADS as i64).map(|n| n as usize);
                 }
+                "budget_ms" => cycle.budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)),
+                "liveness_ms" => cycle.liveness_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)),
                 _ => self.unknown_key(key, "in `cycle`", CYCLE_KEYS),
             }
         }
@@ -569,6 +595,8 @@ impl Checker<'_> {
         let mut priority = None;
         let mut period_ms = None;
         let mut timeout_ms = None;
+        let mut budget_ms = None;
+        let mut liveness_ms = None;
         let mut params = Vec::new();
         let mut remap = Vec::new();
         let mut remote = None;
@@ -628,6 +656,12 @@ impl Checker<'_> {
                 "timeout_ms" => {
                     timeout_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
                 }
+                "budget_ms" => {
+                    budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
+                }
+                "liveness_ms" => {
+                    liveness_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
+                }
                 "params" => params = self.params(value.clone()),
                 "remap" => remap = self.remap(value.clone()),
                 _ => self.unknown_key(key, &format!("in {place}"), ENTRY_KEYS),
@@ -656,6 +690,8 @@ impl Checker<'_> {
             active,
             priority,
             period_ms,
+            budget_ms,
+            liveness_ms,
             params,
             remap,
             remote,
@@ -839,6 +875,8 @@ gui: {port: 8080}
                 clock: ClockKind::Simulated,
                 executor: ExecutorKind::Parallel,
                 threads: Some(2),
+                budget_ms: None,
+                liveness_ms: None,
                 pos: p(3, 1),
             }
         );

@@ -44,6 +44,39 @@ pub struct InstanceDef {
     pub outputs: Vec<PortBinding>,
     pub active: bool,
     pub period_s: Option<f64>,
+    /// How long one run of its body may take in the cycle (sync cskills;
+    /// under the simulated clock every body runs in the cycle, see
+    /// [`InstanceDef::in_cycle_deadline`]).
+    pub budget: std::time::Duration,
+    /// How long a threaded body (async cskill, dskill) may stay inside one run.
+    pub liveness: std::time::Duration,
+}
+
+impl InstanceDef {
+    /// The deadline of one run of the body on a cycle thread: the budget of a
+    /// sync cskill, the liveness deadline of an async cskill or a dskill
+    /// (which run in the cycle under the simulated clock).
+    pub fn in_cycle_deadline(&self) -> std::time::Duration {
+        if self.kind.is_threaded() {
+            self.liveness
+        } else {
+            self.budget
+        }
+    }
+}
+
+/// The default execution budget of a sync cskill's run: twice the cycle
+/// period, at least 200 ms (long enough that a loaded machine's scheduling
+/// never faults a healthy body, short enough that a blocked one is caught
+/// before a robot has moved far on its last command).
+pub fn default_budget(period_s: f64) -> std::time::Duration {
+    std::time::Duration::from_secs_f64((2.0 * period_s).clamp(0.2, 86_400.0))
+}
+
+/// The default liveness deadline of an async cskill or a dskill: ten of its
+/// periods, at least 2 s.
+pub fn default_liveness(period_s: f64) -> std::time::Duration {
+    std::time::Duration::from_secs_f64((10.0 * period_s).clamp(2.0, 86_400.0))
 }
 
 /// A leaf signal: one slot of the cycle's data.
@@ -165,6 +198,13 @@ impl Graph {
         let mut ck = Checker { spec, diags: Vec::new() };
         if !(spec.period_s.is_finite() && spec.period_s > 0.0 && spec.period_s <= 86_400.0) {
             ck.error(None, format!("cycle period must be > 0 s and at most a day, got {:?} s", spec.period_s));
+        }
+        for (key, ms) in [("budget_ms", spec.budget_ms), ("liveness_ms", spec.liveness_ms)] {
+            if let Some(ms) = ms {
+                if !(ms.is_finite() && ms > 0.0 && ms <= 86_400_000.0) {
+                    ck.error(None, format!("cycle {key} must be > 0 and at most a day, got {ms:?}"));
+                }
+            }
         }
 
         // Instances: names, types, parameters, remaps.
@@ -325,6 +365,26 @@ impl Graph {
                     );
                 }
             }
+            for (key, ms) in [("budget_ms", s.budget_ms), ("liveness_ms", s.liveness_ms)] {
+                if let Some(ms) = ms {
+                    if !(ms.is_finite() && ms > 0.0 && ms <= 86_400_000.0) {
+                        ck.error(
+                            item_pos(s),
+                            format!("skill `{}`: {key} must be > 0 and at most a day, got {ms:?}", s.name),
+                        );
+                    }
+                }
+            }
+            let ms = |ms: Option<f64>| ms.filter(|ms| ms.is_finite() && *ms > 0.0 && *ms <= 86_400_000.0);
+            let own_period = period_s.filter(|p| p.is_finite() && *p > 0.0).unwrap_or(spec.period_s);
+            let budget = ms(s.budget_ms)
+                .or(ms(spec.budget_ms))
+                .map(|ms| std::time::Duration::from_secs_f64(ms / 1e3))
+                .unwrap_or_else(|| default_budget(spec.period_s));
+            let liveness = ms(s.liveness_ms)
+                .or(ms(spec.liveness_ms))
+                .map(|ms| std::time::Duration::from_secs_f64(ms / 1e3))
+                .unwrap_or_else(|| default_liveness(own_period));
             let fallback = item_pos(s);
             port_pos.push((
                 in_pos.into_iter().map(|p| p.or(fallback)).collect(),
@@ -341,6 +401,8 @@ impl Graph {
                 outputs,
                 active: s.active,
                 period_s,
+                budget,
+                liveness,
             });
         }
 

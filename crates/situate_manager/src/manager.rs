@@ -30,8 +30,11 @@ use crate::expr::{Condition, Lookup, Resolver};
 use crate::graph::{assemble, decompose, topo_order, Graph};
 use crate::monitor::Monitors;
 use crate::registry::Registry;
-use crate::runner::{Exec, Worker};
+use crate::runner::{BodyClock, Exec, Worker, WorkerClock};
 use crate::spec::{BuildError, RobotSpec};
+
+mod spawned;
+pub use spawned::Joiner;
 
 const PRINT_HISTORY: usize = 64;
 const EVENT_QUEUE: usize = 4096;
@@ -63,6 +66,9 @@ struct Inst {
     worker: Option<Worker>,
     /// Readings of a lockstep dskill, taken at the next cycle's start.
     lockstep_readings: Vec<Option<Value>>,
+    /// Its body was left behind (it ran past its deadline and may never
+    /// return): a fresh one is made when it is activated again.
+    abandoned: bool,
 }
 
 #[derive(Default)]
@@ -112,7 +118,7 @@ pub struct Manager {
     graph: Graph,
     clock: ClockKind,
     period_s: f64,
-    pool: Option<rayon::ThreadPool>,
+    pool: Option<Arc<rayon::ThreadPool>>,
     slots: Vec<Slot>,
     insts: Vec<Inst>,
     execs: Vec<Exec>,
@@ -121,6 +127,8 @@ pub struct Manager {
     cycle: u64,
     time_s: f64,
     started: Instant,
+    /// When the cycle running now started.
+    cycle_start: Instant,
     running: bool,
     last_cycle_ns: u64,
     max_cycle_ns: u64,
@@ -141,6 +149,16 @@ pub struct Manager {
     paused: bool,
     /// The ready skills of a level (kept to reuse its allocation).
     ready: Vec<usize>,
+    /// The lockstep dskills whose device exchange runs this cycle.
+    exchanging: Vec<usize>,
+    /// Record outputs decomposed into leaves before a commit (reused).
+    parts: Vec<Value>,
+    /// When each instance's in-cycle body started running (for the watchdog).
+    clocks: Arc<[BodyClock]>,
+    /// Which cycle thread owns the manager when spawned: bumped when the
+    /// watchdog leaves a stuck thread behind, so that thread, if its body
+    /// ever returns, knows it is no longer the cycle.
+    generation: u64,
 }
 
 impl Manager {
@@ -181,8 +199,11 @@ impl Manager {
                 last_outputs: vec![None; def.outputs.len()],
                 worker,
                 lockstep_readings: vec![None; def.outputs.len()],
+                abandoned: false,
             });
         }
+        let started = Instant::now();
+        let clocks: Arc<[BodyClock]> = graph.instances.iter().map(|_| BodyClock::new(started)).collect();
         let pool = match spec.executor {
             ExecutorKind::Serial => None,
             ExecutorKind::Parallel => {
@@ -197,6 +218,7 @@ impl Manager {
                     .build()
                     .map_err(|e| tracing::warn!(error = %e, "no thread pool: the serial executor runs instead"))
                     .ok()
+                    .map(Arc::new)
             }
         };
         let mut manager = Manager {
@@ -210,7 +232,8 @@ impl Manager {
             schedule_dirty: true,
             cycle: 0,
             time_s: 0.0,
-            started: Instant::now(),
+            started,
+            cycle_start: started,
             running: false,
             last_cycle_ns: 0,
             max_cycle_ns: 0,
@@ -225,6 +248,10 @@ impl Manager {
             speed: None,
             paused: false,
             ready: Vec::new(),
+            exchanging: Vec::new(),
+            parts: Vec::new(),
+            clocks,
+            generation: 0,
             graph,
         };
         let initially: Vec<usize> =
@@ -257,10 +284,19 @@ impl Manager {
     }
 
     fn set_active(&mut self, i: usize, active: bool) {
-        let inst = &mut self.insts[i];
-        if inst.active == active {
+        if self.insts[i].active == active {
             return;
         }
+        if active && self.insts[i].abandoned {
+            if let Err(e) = self.revive(i) {
+                let name = self.graph.instances[i].name.clone();
+                let cause = format!("could not make a fresh `{}` to replace the one left behind: {e}", name);
+                self.insts[i].faulted = Some(cause.clone());
+                self.bus.send(Event::SkillFaulted { skill: name, cause, cycle: self.cycle });
+                return;
+            }
+        }
+        let inst = &mut self.insts[i];
         inst.active = active;
         if active {
             inst.faulted = None;
@@ -268,7 +304,11 @@ impl Manager {
         let def = &self.graph.instances[i];
         if let Some(worker) = inst.worker.as_mut() {
             let period = Duration::from_secs_f64(def.period_s.unwrap_or(self.period_s));
-            worker.set_active(active, &mut self.execs[i], def.kind, &def.name, period);
+            let clock = match def.kind {
+                SkillKind::Device => WorkerClock::Wall(self.started),
+                _ => WorkerClock::Cycle,
+            };
+            worker.set_active(active, &mut self.execs[i], def.kind, &def.name, period, clock);
         }
         self.schedule_dirty = true;
         let name = def.name.clone();
@@ -277,6 +317,49 @@ impl Manager {
         } else {
             self.deactivated.push(name);
         }
+    }
+
+    /// A fresh body (and worker) for an instance whose body was left behind,
+    /// with the parameters it has now.
+    fn revive(&mut self, i: usize) -> Result<(), String> {
+        let def = &self.graph.instances[i];
+        let mut skill = (def.skill_type.make)()?;
+        for (p, v) in self.insts[i].params.iter().enumerate() {
+            skill.set_param(p, v);
+        }
+        self.execs[i] = Exec::new(skill, def.inputs.len(), def.outputs.len());
+        let inst = &mut self.insts[i];
+        if inst.worker.is_some() {
+            inst.worker = Some(Worker::new(def.inputs.len(), def.outputs.len()));
+        }
+        inst.abandoned = false;
+        Ok(())
+    }
+
+    /// Leaves instance `i`'s body behind: it has been running for `ran`,
+    /// past its deadline, and may never return. The instance is faulted;
+    /// whatever the body does when it returns is dropped.
+    fn abandon(&mut self, i: usize, ran: Duration) {
+        let def = &self.graph.instances[i];
+        let (what, deadline) =
+            if def.kind.is_threaded() { ("liveness deadline", def.liveness) } else { ("execution budget", def.budget) };
+        let place = match (&self.insts[i].worker, def.kind) {
+            (Some(_), SkillKind::Device) => "its device thread",
+            (Some(_), _) => "its thread",
+            (None, _) => "a cycle thread",
+        };
+        let cause = format!(
+            "its body has been running for {} without returning, over its {what} of {} ({}); it is left \
+             behind on {place} and the cycle goes on without it (activating it again makes a fresh one)",
+            fmt_duration(ran),
+            fmt_duration(deadline),
+            if def.kind.is_threaded() { "`liveness_ms`" } else { "`budget_ms`" },
+        );
+        if let Some(worker) = &self.insts[i].worker {
+            worker.stop();
+        }
+        self.insts[i].abandoned = true;
+        self.fault(i, cause);
     }
 
     fn compile_schedule(&mut self) {
@@ -314,7 +397,33 @@ impl Manager {
 
     /// Runs one cycle.
     pub fn cycle(&mut self) {
-        let start = Instant::now();
+        self.begin_cycle();
+        let mut level = 0;
+        while self.prepare_level(level) {
+            let ready = std::mem::take(&mut self.ready);
+            self.run_ready(&ready);
+            for &i in &ready {
+                self.finish(i);
+            }
+            self.ready = ready;
+            level += 1;
+        }
+        self.prepare_exchanges();
+        let exchanging = std::mem::take(&mut self.exchanging);
+        let mut t = Instant::now();
+        for &d in &exchanging {
+            t = self.execs[d].run(self.cycle, self.time_s, t, &self.clocks[d]);
+        }
+        for &d in &exchanging {
+            self.finish_exchange(d);
+        }
+        self.exchanging = exchanging;
+        self.end_cycle();
+    }
+
+    /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
+    fn begin_cycle(&mut self) {
+        self.cycle_start = Instant::now();
         self.cycle += 1;
         self.time_s = match self.clock {
             ClockKind::Simulated => self.cycle as f64 * self.period_s,
@@ -332,46 +441,64 @@ impl Manager {
             self.compile_schedule();
         }
         let schedule = std::mem::take(&mut self.schedule);
-
-        // 2. dskill readings.
         for &d in &schedule.devices {
             self.take_readings(d);
         }
-        // 3. the data flow, level by level.
+        self.schedule = schedule;
+    }
+
+    /// Step 3 for level `level`: exchanges with threaded async cskills, and
+    /// the skills ready to run in the cycle in `self.ready`. False when
+    /// there is no such level.
+    fn prepare_level(&mut self, level: usize) -> bool {
+        let schedule = std::mem::take(&mut self.schedule);
+        let Some(skills) = schedule.levels.get(level) else {
+            self.schedule = schedule;
+            return false;
+        };
         let mut ready = std::mem::take(&mut self.ready);
-        for level in &schedule.levels {
-            ready.clear();
-            for &i in level {
-                let kind = self.graph.instances[i].kind;
-                match (kind, self.insts[i].worker.is_some()) {
-                    (SkillKind::Async, true) => self.exchange_async(i),
-                    (SkillKind::Async, false) => {
-                        if self.gather(i, false) {
-                            ready.push(i);
-                        }
+        ready.clear();
+        for &i in skills {
+            let kind = self.graph.instances[i].kind;
+            match (kind, self.insts[i].worker.is_some()) {
+                (SkillKind::Async, true) => self.exchange_async(i),
+                (SkillKind::Async, false) => {
+                    if self.gather(i, false) {
+                        ready.push(i);
                     }
-                    _ => {
-                        if self.gather(i, true) {
-                            ready.push(i);
-                        }
+                }
+                _ => {
+                    if self.gather(i, true) {
+                        ready.push(i);
                     }
                 }
             }
-            self.run_ready(&ready);
-            for &i in &ready {
-                self.finish(i);
-            }
         }
         self.ready = ready;
-        // 4. dskill commands.
-        for &d in &schedule.devices {
-            self.hand_commands(d);
-        }
         self.schedule = schedule;
-        // 5. monitors.
+        true
+    }
+
+    /// Step 4: hand every active dskill the commands written this cycle;
+    /// the lockstep ones whose device exchange runs in the cycle go to
+    /// `self.exchanging`.
+    fn prepare_exchanges(&mut self) {
+        let schedule = std::mem::take(&mut self.schedule);
+        let mut exchanging = std::mem::take(&mut self.exchanging);
+        exchanging.clear();
+        for &d in &schedule.devices {
+            if self.hand_commands(d) {
+                exchanging.push(d);
+            }
+        }
+        self.exchanging = exchanging;
+        self.schedule = schedule;
+    }
+
+    /// Steps 5 and 6: monitors, then the cycle's statistics.
+    fn end_cycle(&mut self) {
         self.evaluate_monitors();
-        // 6. cleanup.
-        let elapsed = start.elapsed().as_nanos() as u64;
+        let elapsed = self.cycle_start.elapsed().as_nanos() as u64;
         self.last_cycle_ns = elapsed;
         self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
         self.total_cycle_ns += elapsed;
@@ -408,39 +535,59 @@ impl Manager {
         true
     }
 
+    /// Splits a level's ready skills into batches that may run at the same
+    /// time: skills sharing a claim never do.
+    fn batches(&self, ready: &[usize]) -> Vec<Vec<usize>> {
+        let mut rest: Vec<usize> = ready.to_vec();
+        let mut batches = Vec::new();
+        while !rest.is_empty() {
+            let mut batch = Vec::new();
+            let mut claims: Vec<&str> = Vec::new();
+            rest.retain(|&i| {
+                let c = &self.graph.instances[i].skill_type.decl.claims;
+                if c.iter().any(|x| claims.contains(&x.as_str())) {
+                    return true;
+                }
+                claims.extend(c.iter().map(String::as_str));
+                batch.push(i);
+                false
+            });
+            batches.push(batch);
+        }
+        batches
+    }
+
     fn run_ready(&mut self, ready: &[usize]) {
         let (cycle, time_s) = (self.cycle, self.time_s);
         match (&self.pool, ready.len()) {
-            (Some(pool), n) if n > 1 => {
-                // Skills sharing a claim never run at the same time: split the
-                // level into batches without a repeated claim.
-                let mut rest: Vec<usize> = ready.to_vec();
-                while !rest.is_empty() {
-                    let mut batch = Vec::new();
-                    let mut claims: Vec<&str> = Vec::new();
-                    rest.retain(|&i| {
-                        let c = &self.graph.instances[i].skill_type.decl.claims;
-                        if c.iter().any(|x| claims.contains(&x.as_str())) {
-                            return true;
-                        }
-                        claims.extend(c.iter().map(String::as_str));
-                        batch.push(i);
-                        false
+            (Some(_), n) if n > 1 => {
+                for batch in self.batches(ready) {
+                    let Some(pool) = &self.pool else { return };
+                    let clocks = &self.clocks;
+                    let jobs: Vec<Mutex<(&mut Exec, &BodyClock)>> = pick_mut(&mut self.execs, &batch)
+                        .into_iter()
+                        .zip(&batch)
+                        .map(|(exec, &i)| Mutex::new((exec, &clocks[i])))
+                        .collect();
+                    run_parallel(pool, &jobs, |job| {
+                        let mut job = job.lock().unwrap_or_else(|p| p.into_inner());
+                        let (exec, clock) = &mut *job;
+                        exec.run(cycle, time_s, Instant::now(), clock);
                     });
-                    run_parallel(pool, pick_mut(&mut self.execs, &batch), cycle, time_s);
                 }
             }
             _ => {
                 let mut t = Instant::now();
                 for &i in ready {
-                    t = self.execs[i].run(cycle, time_s, t);
+                    t = self.execs[i].run(cycle, time_s, t, &self.clocks[i]);
                 }
             }
         }
     }
 
-    /// Commits a run's outputs, or marks the skill faulted.
-    fn finish(&mut self, i: usize) {
+    /// Records a run's timing and prints; the cause of its fault if it failed
+    /// or ran over its deadline (its outputs are then dropped).
+    fn account(&mut self, i: usize) -> Result<(), String> {
         let exec = &mut self.execs[i];
         let elapsed = exec.elapsed_ns;
         let result = std::mem::replace(&mut exec.result, Ok(()));
@@ -453,8 +600,33 @@ impl Manager {
             let prints = exec.cx.take_prints();
             self.record_prints(i, prints);
         }
-        if let Err(cause) = result {
+        let def = &self.graph.instances[i];
+        let deadline = def.in_cycle_deadline();
+        let outcome = result.and_then(|()| {
+            if elapsed > deadline.as_nanos() as u64 {
+                let (what, key) = if def.kind.is_threaded() {
+                    ("liveness deadline", "liveness_ms")
+                } else {
+                    ("execution budget", "budget_ms")
+                };
+                Err(format!(
+                    "its body ran for {}, over its {what} of {} (`{key}`); what it produced is dropped",
+                    fmt_duration(Duration::from_nanos(elapsed)),
+                    fmt_duration(deadline)
+                ))
+            } else {
+                Ok(())
+            }
+        });
+        if outcome.is_err() {
             self.execs[i].outputs.fill(None);
+        }
+        outcome
+    }
+
+    /// Commits a run's outputs, or marks the skill faulted.
+    fn finish(&mut self, i: usize) {
+        if let Err(cause) = self.account(i) {
             self.fault(i, cause);
             return;
         }
@@ -466,25 +638,35 @@ impl Manager {
         }
     }
 
-    /// Writes instance `i`'s produced outputs to their leaves.
+    /// Writes instance `i`'s produced outputs to their leaves: all of them,
+    /// or (when one is not of its port's type) none (update-record is atomic).
     fn commit(&mut self, i: usize, outputs: &mut [Option<Value>]) -> Result<(), String> {
+        let def = &self.graph.instances[i];
+        let parts = &mut self.parts;
+        parts.clear();
+        // First check every output (records are taken apart into their leaves).
+        for (port, value) in def.outputs.iter().zip(outputs.iter()) {
+            let Some(value) = value else { continue };
+            let ok = if let ([_], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
+                value.conforms(&port.ty)
+            } else {
+                decompose(&port.ty, value, parts)
+            };
+            if !ok {
+                parts.clear();
+                return Err(wrong_output(&port.name, &port.ty, value));
+            }
+        }
+        // Then write them.
         let rank = self.rank(i);
         let cycle = self.cycle;
-        let def = &self.graph.instances[i];
-        let mut parts: Vec<Value> = Vec::new();
+        let mut parts = self.parts.drain(..);
         for (p, port) in def.outputs.iter().enumerate() {
             let Some(value) = outputs[p].take() else { continue };
             if let ([leaf], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
-                if !value.conforms(&port.ty) {
-                    return Err(wrong_output(&port.name, &port.ty, &value));
-                }
                 write_leaf(&mut self.slots[*leaf], value.clone(), cycle, rank, i);
             } else {
-                parts.clear();
-                if !decompose(&port.ty, &value, &mut parts) {
-                    return Err(wrong_output(&port.name, &port.ty, &value));
-                }
-                for (&leaf, part) in port.leaves.iter().zip(parts.drain(..)) {
+                for (&leaf, part) in port.leaves.iter().zip(parts.by_ref()) {
                     write_leaf(&mut self.slots[leaf], part, cycle, rank, i);
                 }
             }
@@ -526,7 +708,7 @@ impl Manager {
         let ready = self.gather(i, false);
         let Some(worker) = self.insts[i].worker.as_ref() else { return };
         let shared = Arc::clone(&worker.shared);
-        let (outputs, fault, prints) = {
+        let (outputs, fault, prints, busy) = {
             let mut mb = shared.lock();
             if ready {
                 for (slot, v) in mb.inputs.iter_mut().zip(&self.execs[i].inputs) {
@@ -536,22 +718,23 @@ impl Manager {
                 mb.cycle = self.cycle;
                 mb.time_s = self.time_s;
             }
-            (mb.outputs.clone(), mb.fault.take(), std::mem::take(&mut mb.prints))
+            (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), mb.busy_since)
         };
         shared.notify();
-        self.threaded_results(i, outputs, fault, prints);
+        self.threaded_results(i, outputs, fault, prints, busy);
     }
 
-    /// dskill readings at the start of a cycle.
+    /// dskill readings at the start of a cycle: those produced since the
+    /// last cycle took them.
     fn take_readings(&mut self, d: usize) {
-        let (outputs, fault, prints) = match self.insts[d].worker.as_ref() {
+        let (outputs, fault, prints, busy) = match self.insts[d].worker.as_ref() {
             Some(worker) => {
                 let mut mb = worker.shared.lock();
-                (mb.outputs.clone(), mb.fault.take(), std::mem::take(&mut mb.prints))
+                (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), mb.busy_since)
             }
-            None => (self.insts[d].lockstep_readings.clone(), None, Vec::new()),
+            None => (self.insts[d].lockstep_readings.iter_mut().map(Option::take).collect(), None, Vec::new(), None),
         };
-        self.threaded_results(d, outputs, fault, prints);
+        self.threaded_results(d, outputs, fault, prints, busy);
     }
 
     fn threaded_results(
@@ -560,6 +743,7 @@ impl Manager {
         mut outputs: Vec<Option<Value>>,
         fault: Option<String>,
         prints: Vec<String>,
+        busy_since: Option<Instant>,
     ) {
         if let Some(worker) = self.insts[i].worker.as_ref() {
             let stats = worker.shared.lock().stats;
@@ -576,15 +760,24 @@ impl Manager {
             self.fault(i, cause);
             return;
         }
+        if let Some(since) = busy_since {
+            let ran = since.elapsed();
+            if ran > self.graph.instances[i].liveness {
+                self.abandon(i, ran);
+                return;
+            }
+        }
         if let Err(cause) = self.commit(i, &mut outputs) {
             self.fault(i, cause);
         }
     }
 
-    /// dskill commands at the end of a cycle: those written this cycle.
-    fn hand_commands(&mut self, d: usize) {
+    /// dskill commands at the end of a cycle: those written this cycle. A
+    /// threaded dskill gets them in its mailbox; true for a lockstep one,
+    /// whose device exchange then runs in the cycle.
+    fn hand_commands(&mut self, d: usize) -> bool {
         if !self.insts[d].active {
-            return;
+            return false;
         }
         // Every command port is optional for a device: gather never refuses.
         let def = &self.graph.instances[d];
@@ -608,33 +801,24 @@ impl Manager {
                 }
                 mb.cycle = cycle;
                 mb.time_s = self.time_s;
+                false
             }
-            None => {
-                // Lockstep: the device does its I/O now; its readings are
-                // taken at the start of the next cycle.
-                self.execs[d].run(cycle, self.time_s, Instant::now());
-                let exec = &mut self.execs[d];
-                let result = std::mem::replace(&mut exec.result, Ok(()));
-                let elapsed = exec.elapsed_ns;
-                let prints = exec.cx.take_prints();
-                let inst = &mut self.insts[d];
-                inst.runs += 1;
-                inst.last_ns = elapsed;
-                inst.max_ns = inst.max_ns.max(elapsed);
-                inst.total_ns += elapsed;
-                for (slot, out) in inst.lockstep_readings.iter_mut().zip(&mut exec.outputs) {
-                    // A failed exchange's readings are dropped.
-                    if let (Some(v), true) = (out.take(), result.is_ok()) {
-                        *slot = Some(v);
-                    }
-                }
-                if !prints.is_empty() {
-                    self.record_prints(d, prints);
-                }
-                if let Err(cause) = result {
-                    self.fault(d, cause);
-                }
+            None => true,
+        }
+    }
+
+    /// After a lockstep dskill's device exchange: its readings are taken at
+    /// the start of the next cycle; a failed exchange's are dropped.
+    fn finish_exchange(&mut self, d: usize) {
+        let outcome = self.account(d);
+        let exec = &mut self.execs[d];
+        for (slot, out) in self.insts[d].lockstep_readings.iter_mut().zip(&mut exec.outputs) {
+            if let Some(v) = out.take() {
+                *slot = Some(v);
             }
+        }
+        if let Err(cause) = outcome {
+            self.fault(d, cause);
         }
     }
 
@@ -1026,13 +1210,8 @@ impl Manager {
                 Ok(Reply::Done)
             }
             Request::Step { cycles } => {
-                if cycles > 1_000_000_000 {
-                    return Err(ControlError::Invalid(format!("step: {cycles} cycles is too many at once")));
-                }
-                if self.running {
-                    self.running = false;
-                    self.bus.send(Event::ManagerStopped { cycle: self.cycle });
-                }
+                self.check_step(cycles)?;
+                self.halt();
                 for _ in 0..cycles {
                     self.cycle();
                     if self.paused {
@@ -1043,6 +1222,21 @@ impl Manager {
                 Ok(Reply::Done)
             }
             Request::Shutdown => Ok(Reply::Done),
+        }
+    }
+
+    fn check_step(&self, cycles: u64) -> Result<(), ControlError> {
+        if cycles > 1_000_000_000 {
+            return Err(ControlError::Invalid(format!("step: {cycles} cycles is too many at once")));
+        }
+        Ok(())
+    }
+
+    /// Stops a running cycle (before a step).
+    fn halt(&mut self) {
+        if self.running {
+            self.running = false;
+            self.bus.send(Event::ManagerStopped { cycle: self.cycle });
         }
     }
 
@@ -1070,24 +1264,6 @@ impl Manager {
         self.running = was;
     }
 
-    /// Moves the manager to a thread of its own, serving requests from
-    /// handles. With `running`, the cycle starts at once.
-    pub fn spawn(mut self, running: bool) -> (Handle, std::thread::JoinHandle<Manager>) {
-        let (tx, rx) = crossbeam_channel::unbounded::<Envelope>();
-        let handle = Handle { tx, bus: self.bus.clone() };
-        let join = std::thread::Builder::new()
-            .name(format!("situate-{}", self.graph.robot))
-            .spawn(move || {
-                if running {
-                    let _ = self.request(Request::Run);
-                }
-                self.serve(rx);
-                self
-            })
-            .expect("spawning the manager thread");
-        (handle, join)
-    }
-
     /// When spawned, stop cycling (and keep serving requests) once cycle
     /// `cycle` has run.
     pub fn stop_after(&mut self, cycle: Option<u64>) {
@@ -1101,73 +1277,14 @@ impl Manager {
         self.speed = speed.filter(|s| s.is_finite() && *s > 0.0);
     }
 
-    fn serve(&mut self, rx: Receiver<Envelope>) {
-        raise_thread_priority();
+    /// How the cycle is paced when spawned: the period between cycle
+    /// starts (`None`: as fast as possible).
+    pub(crate) fn pacing(&self) -> Option<Duration> {
         let paced = match self.clock {
             ClockKind::Wall => Some(self.period_s),
             ClockKind::Simulated => self.speed.map(|s| self.period_s / s),
         };
-        let period = Duration::from_secs_f64(paced.unwrap_or(self.period_s).clamp(1e-6, 1e6));
-        let mut deadline = Instant::now();
-        loop {
-            if self.running && self.stop_at.is_some_and(|n| self.cycle >= n) {
-                let _ = self.request(Request::Stop);
-            }
-            if self.running {
-                self.cycle();
-                match paced {
-                    Some(_) => {
-                        deadline += period;
-                        if deadline < Instant::now() {
-                            deadline = Instant::now();
-                        }
-                        // Serve requests until the next cycle is due.
-                        loop {
-                            match rx.recv_deadline(deadline) {
-                                Ok(env) => {
-                                    if self.serve_one(env) {
-                                        return;
-                                    }
-                                    if !self.running {
-                                        break;
-                                    }
-                                }
-                                Err(crossbeam_channel::RecvTimeoutError::Timeout) => break,
-                                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return,
-                            }
-                        }
-                    }
-                    None => loop {
-                        match rx.try_recv() {
-                            Ok(env) => {
-                                if self.serve_one(env) {
-                                    return;
-                                }
-                            }
-                            Err(crossbeam_channel::TryRecvError::Empty) => break,
-                            Err(crossbeam_channel::TryRecvError::Disconnected) => return,
-                        }
-                    },
-                }
-            } else {
-                match rx.recv() {
-                    Ok(env) => {
-                        if self.serve_one(env) {
-                            return;
-                        }
-                        deadline = Instant::now();
-                    }
-                    Err(_) => return,
-                }
-            }
-        }
-    }
-
-    /// Answers one request; true when asked to shut down.
-    fn serve_one(&mut self, (request, reply): Envelope) -> bool {
-        let shutdown = request == Request::Shutdown;
-        let _ = reply.send(self.request(request));
-        shutdown
+        paced.map(|p| Duration::from_secs_f64(p.clamp(1e-6, 1e6)))
     }
 
     /// Whether anyone listens for events (the link uses this to skip work).
@@ -1234,25 +1351,37 @@ fn raise_thread_priority() {
     }
 }
 
-/// Runs the bodies of one parallel batch: the pool's threads and the
-/// calling thread each take the next body until none is left, so the
-/// cycle's thread works instead of waiting for the pool to wake up.
-fn run_parallel(pool: &rayon::ThreadPool, jobs: Vec<&mut Exec>, cycle: u64, time_s: f64) {
-    let jobs: Vec<Mutex<&mut Exec>> = jobs.into_iter().map(Mutex::new).collect();
+/// Runs one parallel batch: the pool's threads and the calling thread each
+/// take the next job until none is left, so the cycle's thread works
+/// instead of waiting for the pool to wake up.
+pub(crate) fn run_parallel<J: Sync>(pool: &rayon::ThreadPool, jobs: &[J], run: impl Fn(&J) + Sync) {
     let next = std::sync::atomic::AtomicUsize::new(0);
     let drain = || loop {
         let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let Some(job) = jobs.get(k) else { break };
-        let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
-        exec.run(cycle, time_s, Instant::now());
+        run(job);
     };
-    let helpers = pool.current_num_threads().min(jobs.len() - 1);
+    let helpers = pool.current_num_threads().min(jobs.len().saturating_sub(1));
     pool.in_place_scope(|scope| {
         for _ in 0..helpers {
             scope.spawn(|_| drain());
         }
         drain();
     });
+}
+
+/// A duration for people: `2.1 s`, `250 ms`, `40 µs`.
+pub(crate) fn fmt_duration(d: Duration) -> String {
+    let s = d.as_secs_f64();
+    if s >= 10.0 {
+        format!("{s:.0} s")
+    } else if s >= 1.0 {
+        format!("{s:.1} s")
+    } else if s >= 1e-3 {
+        format!("{:.0} ms", s * 1e3)
+    } else {
+        format!("{:.0} µs", s * 1e6)
+    }
 }
 
 /// Disjoint mutable references to `v[i]` for sorted, distinct `indices`.

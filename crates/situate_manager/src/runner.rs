@@ -10,6 +10,7 @@
 //! ("lockstep"), so a simulation replays exactly.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -17,6 +18,10 @@ use std::time::{Duration, Instant};
 use situate_core::{Context, Io, Skill, SkillKind, Value};
 
 /// The runnable part of a skill instance: its body and reusable port buffers.
+///
+/// `Default` is the empty placeholder left in the manager while the real
+/// one is out running on a cycle thread (see `manager::Core`), or after its
+/// body was left behind: it has no body and its buffers hold nothing.
 pub(crate) struct Exec {
     /// `None` once the body has moved to its worker thread.
     pub skill: Option<Box<dyn Skill>>,
@@ -25,6 +30,19 @@ pub(crate) struct Exec {
     pub cx: Context,
     pub result: Result<(), String>,
     pub elapsed_ns: u64,
+}
+
+impl Default for Exec {
+    fn default() -> Self {
+        Exec {
+            skill: None,
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+            cx: Context::default(),
+            result: Ok(()),
+            elapsed_ns: 0,
+        }
+    }
 }
 
 impl Exec {
@@ -43,17 +61,66 @@ impl Exec {
     /// it from `start`; returns the time it ended, so a caller running bodies
     /// back to back reads the clock once per body.
     ///
+    /// While the body runs, `clock` holds when it started (see
+    /// [`BodyClock`]), so a watchdog can see a body that does not return.
+    ///
     /// Outputs are `None` on entry: the manager takes every produced output
     /// when it commits, and clears them when a body fails.
-    pub fn run(&mut self, cycle: u64, time_s: f64, start: Instant) -> Instant {
+    pub fn run(&mut self, cycle: u64, time_s: f64, start: Instant, clock: &BodyClock) -> Instant {
         self.cx.set(cycle, time_s);
+        let mark = clock.enter(start);
         self.result = match &mut self.skill {
             Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
             None => Err("the body is not here (it runs on its own thread)".into()),
         };
+        clock.leave(mark);
         let end = Instant::now();
         self.elapsed_ns = end.duration_since(start).as_nanos() as u64;
         end
+    }
+}
+
+/// When the body of one instance started running, for the watchdog.
+///
+/// Holds nanoseconds since the manager's epoch plus one while a body runs,
+/// and 0 when none does. The cycle's thread writes it around every in-cycle
+/// body (two relaxed stores); the watchdog only reads it, and clears it
+/// when it leaves a stuck body behind. A body's own `leave` clears only its
+/// own mark, so a late return never clears the mark of a fresh body.
+pub(crate) struct BodyClock {
+    epoch: Instant,
+    since: AtomicU64,
+}
+
+impl BodyClock {
+    pub fn new(epoch: Instant) -> Self {
+        BodyClock { epoch, since: AtomicU64::new(0) }
+    }
+
+    fn enter(&self, start: Instant) -> u64 {
+        let mark = start.saturating_duration_since(self.epoch).as_nanos() as u64 + 1;
+        self.since.store(mark, Ordering::Relaxed);
+        mark
+    }
+
+    fn leave(&self, mark: u64) {
+        let _ = self.since.compare_exchange(mark, 0, Ordering::Relaxed, Ordering::Relaxed);
+    }
+
+    /// The mark of the body running now (0: none).
+    pub fn mark(&self) -> u64 {
+        self.since.load(Ordering::Relaxed)
+    }
+
+    /// How long the body with `mark` has been running, at `now`.
+    pub fn running_for(&self, mark: u64, now: Instant) -> Duration {
+        let now_ns = now.saturating_duration_since(self.epoch).as_nanos() as u64 + 1;
+        Duration::from_nanos(now_ns.saturating_sub(mark))
+    }
+
+    /// The watchdog left the body with `mark` behind: it no longer counts.
+    pub fn forget(&self, mark: u64) {
+        self.leave(mark);
     }
 }
 
@@ -103,10 +170,27 @@ pub(crate) struct Mailbox {
     pub time_s: f64,
     /// Latest value of each output, merged across runs.
     pub outputs: Vec<Option<Value>>,
+    /// Which outputs a run produced since the cycle last took them: a value
+    /// is fresh in one cycle only, like a sync skill's (see
+    /// [`Mailbox::take_fresh`]).
+    pub fresh: Vec<bool>,
+    /// When the body started the run it is in now (`None`: between runs).
+    pub busy_since: Option<Instant>,
     pub params: Vec<(usize, Value)>,
     pub fault: Option<String>,
     pub prints: Vec<String>,
     pub stats: WorkerStats,
+}
+
+impl Mailbox {
+    /// The outputs produced since the last call (the others `None`).
+    pub fn take_fresh(&mut self) -> Vec<Option<Value>> {
+        self.outputs
+            .iter()
+            .zip(self.fresh.iter_mut())
+            .map(|(v, fresh)| if std::mem::take(fresh) { v.clone() } else { None })
+            .collect()
+    }
 }
 
 pub(crate) struct Shared {
@@ -126,6 +210,17 @@ impl Shared {
     }
 }
 
+/// How a worker's body sees time.
+#[derive(Clone, Copy)]
+pub(crate) enum WorkerClock {
+    /// The time of the cycle that handed over its inputs (async cskills).
+    Cycle,
+    /// Seconds since the manager's epoch, read at each run: a device keeps
+    /// real time even when the cycle stalls, so a base that gets no fresh
+    /// command stops after its hold time.
+    Wall(Instant),
+}
+
 /// The cycle's side of a threaded body.
 pub(crate) struct Worker {
     pub shared: Arc<Shared>,
@@ -134,13 +229,26 @@ pub(crate) struct Worker {
 
 impl Worker {
     pub fn new(inputs: usize, outputs: usize) -> Self {
-        let mailbox = Mailbox { inputs: vec![None; inputs], outputs: vec![None; outputs], ..Mailbox::default() };
+        let mailbox = Mailbox {
+            inputs: vec![None; inputs],
+            outputs: vec![None; outputs],
+            fresh: vec![false; outputs],
+            ..Mailbox::default()
+        };
         Worker { shared: Arc::new(Shared { mailbox: Mutex::new(mailbox), wake: Condvar::new() }), started: false }
     }
 
     /// Starts the worker thread the first time the skill is activated,
     /// moving the body there.
-    pub fn set_active(&mut self, active: bool, exec: &mut Exec, kind: SkillKind, name: &str, period: Duration) {
+    pub fn set_active(
+        &mut self,
+        active: bool,
+        exec: &mut Exec,
+        kind: SkillKind,
+        name: &str,
+        period: Duration,
+        clock: WorkerClock,
+    ) {
         {
             let mut mb = self.shared.lock();
             mb.active = active;
@@ -156,7 +264,7 @@ impl Worker {
                 let shared = Arc::clone(&self.shared);
                 let spawned = thread::Builder::new()
                     .name(format!("skill-{name}"))
-                    .spawn(move || worker_loop(skill, shared, kind, period));
+                    .spawn(move || worker_loop(skill, shared, kind, period, clock));
                 match spawned {
                     Ok(_) => self.started = true,
                     Err(e) => {
@@ -175,7 +283,7 @@ impl Worker {
     }
 }
 
-fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, period: Duration) {
+fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, period: Duration, clock: WorkerClock) {
     let mut cx = Context::default();
     let mut next = Instant::now();
     let (n_in, n_out) = {
@@ -209,7 +317,12 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
                 mb = shared.wake.wait(mb).unwrap_or_else(|p| p.into_inner());
             }
             mb.inputs_new = false;
-            cx.set(mb.cycle, mb.time_s);
+            let started = Instant::now();
+            mb.busy_since = Some(started);
+            match clock {
+                WorkerClock::Cycle => cx.set(mb.cycle, mb.time_s),
+                WorkerClock::Wall(epoch) => cx.set(mb.cycle, started.saturating_duration_since(epoch).as_secs_f64()),
+            }
             let inputs: Vec<Option<Value>> = if kind == SkillKind::Device {
                 // Commands are consumed: each is handed to the device once.
                 mb.inputs.iter_mut().map(Option::take).collect()
@@ -228,6 +341,12 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
         let elapsed = start.elapsed().as_nanos() as u64;
         {
             let mut mb = shared.lock();
+            mb.busy_since = None;
+            if mb.stop {
+                // Left behind (it ran past its liveness deadline) or shut
+                // down: what it produced late belongs to no cycle.
+                return;
+            }
             mb.stats.runs += 1;
             mb.stats.last_ns = elapsed;
             mb.stats.total_ns += elapsed;
@@ -235,9 +354,11 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
             mb.prints.extend(cx.take_prints());
             match result {
                 Ok(()) => {
-                    for (slot, out) in mb.outputs.iter_mut().zip(&mut outputs) {
+                    let mb = &mut *mb;
+                    for ((slot, fresh), out) in mb.outputs.iter_mut().zip(mb.fresh.iter_mut()).zip(&mut outputs) {
                         if let Some(v) = out.take() {
                             *slot = Some(v);
+                            *fresh = true;
                         }
                     }
                 }

@@ -94,6 +94,10 @@ pub struct SkillSpec {
     pub priority: Option<i32>,
     /// The worker period of a threaded skill (dskill or async cskill).
     pub period_ms: Option<f64>,
+    /// Execution budget of one in-cycle run (overrides the robot's).
+    pub budget_ms: Option<f64>,
+    /// Liveness deadline of a threaded body's run (overrides the robot's).
+    pub liveness_ms: Option<f64>,
     pub params: Vec<ParamEntry>,
     pub remap: Vec<RemapEntry>,
     /// Where the robot file put it (`devices` or `skills`), if it came from one.
@@ -112,6 +116,8 @@ impl SkillSpec {
             active: true,
             priority: None,
             period_ms: None,
+            budget_ms: None,
+            liveness_ms: None,
             params: Vec::new(),
             remap: Vec::new(),
             section: None,
@@ -146,6 +152,16 @@ impl SkillSpec {
         self.period_ms = Some(period_ms);
         self
     }
+
+    pub fn budget_ms(mut self, budget_ms: f64) -> Self {
+        self.budget_ms = Some(budget_ms);
+        self
+    }
+
+    pub fn liveness_ms(mut self, liveness_ms: f64) -> Self {
+        self.liveness_ms = Some(liveness_ms);
+        self
+    }
 }
 
 /// A whole robot: its name, its cycle and its skill instances.
@@ -156,6 +172,12 @@ pub struct RobotSpec {
     pub clock: ClockKind,
     pub executor: ExecutorKind,
     pub threads: Option<usize>,
+    /// Default execution budget of a sync cskill's run, ms (see
+    /// [`crate::graph::default_budget`] when not given).
+    pub budget_ms: Option<f64>,
+    /// Default liveness deadline of a threaded body's run, ms (see
+    /// [`crate::graph::default_liveness`]).
+    pub liveness_ms: Option<f64>,
     pub skills: Vec<SkillSpec>,
     /// The robot file it came from, for messages.
     pub file: Option<String>,
@@ -169,9 +191,23 @@ impl RobotSpec {
             clock: ClockKind::Wall,
             executor: ExecutorKind::Serial,
             threads: None,
+            budget_ms: None,
+            liveness_ms: None,
             skills: Vec::new(),
             file: None,
         }
+    }
+
+    /// The default execution budget of every sync cskill, ms.
+    pub fn budget_ms(mut self, budget_ms: f64) -> Self {
+        self.budget_ms = Some(budget_ms);
+        self
+    }
+
+    /// The default liveness deadline of every async cskill and dskill, ms.
+    pub fn liveness_ms(mut self, liveness_ms: f64) -> Self {
+        self.liveness_ms = Some(liveness_ms);
+        self
     }
 
     pub fn period_s(mut self, period_s: f64) -> Self {
@@ -203,6 +239,8 @@ impl RobotSpec {
             clock: file.cycle.clock,
             executor: file.cycle.executor,
             threads: file.cycle.threads,
+            budget_ms: file.cycle.budget_ms,
+            liveness_ms: file.cycle.liveness_ms,
             file: Some(file.file.clone()),
             skills: file
                 .skills
@@ -213,6 +251,8 @@ impl RobotSpec {
                     active: e.active,
                     priority: e.priority.as_ref().map(|p| p.value),
                     period_ms: e.period_ms.as_ref().map(|p| p.value),
+                    budget_ms: e.budget_ms.as_ref().map(|p| p.value),
+                    liveness_ms: e.liveness_ms.as_ref().map(|p| p.value),
                     params: e
                         .params
                         .iter()

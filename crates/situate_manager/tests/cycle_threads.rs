@@ -55,7 +55,10 @@ fn a_dskill_whose_device_hangs_does_not_delay_the_cycle() {
         Ok(())
     }));
     reg.add(constant("src", "f64", Value::F64(1.0)));
-    let spec = wall("hang").skill(skill("d", "dev")).skill(skill("s", "src").remap("out", "cmd"));
+    // Its liveness deadline is far away: this test is about the cycle not
+    // waiting, not about the deadline (tests/cycle_faults.rs).
+    let spec =
+        wall("hang").liveness_ms(3_600_000.0).skill(skill("d", "dev")).skill(skill("s", "src").remap("out", "cmd"));
     let mut m = build(&spec, &reg);
     let mut m = within_watchdog(move || {
         m.run_cycles(30);
@@ -91,6 +94,7 @@ fn a_slow_async_cskill_does_not_delay_the_cycle_and_its_latest_result_is_taken()
     let log = log();
     reg.add(adder("add", 1.0, &log, "after"));
     let spec = wall("async")
+        .liveness_ms(3_600_000.0)
         .skill(skill("s", "src").remap("out", "x"))
         .skill(skill("slow", "slow"))
         .skill(skill("a", "add").remap("x", "y").remap("y", "z"));
@@ -111,11 +115,17 @@ fn a_slow_async_cskill_does_not_delay_the_cycle_and_its_latest_result_is_taken()
     });
     assert_eq!(m.query("y").unwrap().value, Some(Value::F64(20.0)));
     assert_eq!(m.query("z").unwrap().value, Some(Value::F64(21.0)));
-    m.run_cycles(3);
-    // From then on the consumer runs every cycle on the latest result.
-    let n = entries(&log).len();
-    m.run_cycles(3);
-    assert_eq!(entries(&log).len(), n + 3);
+    // From then on the consumer runs on each new result, and only then: an
+    // async skill's output is fresh in the cycle it is taken in.
+    let (runs, n) = (m.skill("slow").unwrap().timing.runs, entries(&log).len());
+    let mut m = within_watchdog(move || {
+        while entries(&log).len() < n + 3 {
+            m.run_cycles(1);
+        }
+        m
+    });
+    let new_results = m.skill("slow").unwrap().timing.runs - runs;
+    assert!(new_results >= 3, "3 consumer runs need 3 new results, got {new_results}");
 }
 
 #[test]

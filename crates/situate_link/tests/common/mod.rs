@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use situate::manager::{Handle, Manager, Request};
+use situate::manager::{Handle, Request};
 use situate_link::Link;
 
 /// A TCP port nobody listens on right now.
@@ -15,7 +15,7 @@ pub fn free_port() -> u16 {
 pub struct Running {
     pub handle: Handle,
     pub link: Option<Link>,
-    pub join: Option<std::thread::JoinHandle<Manager>>,
+    pub join: Option<situate::manager::Joiner>,
     pub endpoint: String,
 }
 

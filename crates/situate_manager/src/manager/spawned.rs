@@ -1,0 +1,409 @@
+//! A manager on threads of its own: the cycle, the requests of handles, and
+//! a watchdog that leaves a stuck body behind so the cycle goes on.
+//!
+//! The manager sits behind one lock shared by its *cycle thread* and the
+//! watchdog. The cycle thread holds the lock for everything except while a
+//! body runs: it takes the body out (`Exec`, the body with its buffers),
+//! lets go of the lock, runs it, takes the lock back and returns it. Each
+//! body's [`BodyClock`] shows when it started. When one has been running
+//! past its deadline (`budget_ms` of a sync cskill; `liveness_ms` of a
+//! dskill or async cskill run in the cycle under the simulated clock), the
+//! watchdog takes the lock — free, since the body runs without it — faults
+//! the skill, bumps the manager's `generation` and starts a new cycle
+//! thread. The stuck thread is left behind with the body: should the body
+//! ever return, the thread sees that it is no longer the cycle, drops
+//! what it holds and ends. The cycle it was in is abandoned where it
+//! stood (no commands for the devices that cycle); the next one starts at
+//! once. See docs/decisions/0005-budgets-and-stuck-bodies.md.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::{self, Thread};
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
+
+use super::{raise_thread_priority, run_parallel, Manager};
+use crate::control::{ControlError, Envelope, Handle, Reply, Request};
+use crate::runner::{BodyClock, Exec};
+
+type Guard<'a> = MutexGuard<'a, Option<Manager>>;
+
+/// What the cycle threads and the watchdog share.
+struct Core {
+    /// `None` once the manager has been handed back (shutdown).
+    manager: Mutex<Option<Manager>>,
+    requests: Receiver<Envelope>,
+    /// Where the manager goes when the last cycle thread ends.
+    done: Mutex<Option<Sender<Manager>>>,
+    /// Tells the watchdog to end.
+    stop: AtomicBool,
+    watchdog: Mutex<Option<Thread>>,
+    robot: String,
+    clocks: Arc<[BodyClock]>,
+    pool: Option<Arc<rayon::ThreadPool>>,
+    /// The reply to a `Step` being run: the watchdog answers it when it
+    /// leaves the stepping thread behind.
+    step_reply: Mutex<Option<Sender<Result<Reply, ControlError>>>>,
+}
+
+impl Core {
+    fn step_reply(&self) -> MutexGuard<'_, Option<Sender<Result<Reply, ControlError>>>> {
+        self.step_reply.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn lock(&self) -> Guard<'_> {
+        self.manager.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Hands the manager back to whoever joins, and ends the watchdog.
+    fn finish(&self, g: &mut Guard<'_>) {
+        let manager = g.take();
+        self.stop.store(true, Ordering::Release);
+        if let Some(t) = self.watchdog.lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+            t.unpark();
+        }
+        let done = self.done.lock().unwrap_or_else(|p| p.into_inner()).take();
+        if let (Some(done), Some(m)) = (done, manager) {
+            let _ = done.send(m);
+        }
+    }
+}
+
+/// The manager when this thread is still its cycle thread.
+fn current<'g>(g: &'g mut Guard<'_>, generation: u64) -> Option<&'g mut Manager> {
+    g.as_mut().filter(|m| m.generation == generation)
+}
+
+/// Waits for a spawned manager to end (after [`Request::Shutdown`], or when
+/// every [`Handle`] is gone) and gives it back.
+pub struct Joiner {
+    done: Receiver<Manager>,
+    core: Arc<Core>,
+}
+
+impl Joiner {
+    /// Waits for the manager. An error when its cycle thread panicked.
+    pub fn join(self) -> thread::Result<Manager> {
+        self.done.recv().map_err(|_| Box::new("the skill manager's thread panicked") as Box<_>)
+    }
+
+    /// Waits at most `timeout`; the joiner back if the manager has not ended.
+    pub fn join_timeout(self, timeout: Duration) -> Result<thread::Result<Manager>, Joiner> {
+        match self.done.recv_timeout(timeout) {
+            Ok(m) => Ok(Ok(m)),
+            Err(RecvTimeoutError::Disconnected) => Ok(Err(Box::new("the skill manager's thread panicked") as Box<_>)),
+            Err(RecvTimeoutError::Timeout) => Err(self),
+        }
+    }
+
+    /// Whether the manager has ended (`join` will not wait).
+    pub fn is_finished(&self) -> bool {
+        !self.done.is_empty() || self.core.stop.load(Ordering::Acquire)
+    }
+}
+
+/// Ends the joiner's wait with an error if a cycle thread panics.
+struct PanicGuard<'a>(&'a Core);
+
+impl Drop for PanicGuard<'_> {
+    fn drop(&mut self) {
+        if thread::panicking() {
+            self.0.stop.store(true, Ordering::Release);
+            drop(self.0.done.lock().unwrap_or_else(|p| p.into_inner()).take());
+        }
+    }
+}
+
+impl Manager {
+    /// Moves the manager to threads of its own — the cycle and a watchdog —
+    /// serving requests from handles. With `running`, the cycle starts at
+    /// once. [`Joiner::join`] gives the manager back after a shutdown.
+    pub fn spawn(mut self, running: bool) -> (Handle, Joiner) {
+        let (tx, rx) = crossbeam_channel::unbounded::<Envelope>();
+        let (done_tx, done_rx) = crossbeam_channel::bounded(1);
+        let handle = Handle { tx, bus: self.bus.clone() };
+        if running {
+            let _ = self.request(Request::Run);
+        }
+        let deadlines: Vec<Duration> = self.graph.instances.iter().map(|d| d.in_cycle_deadline()).collect();
+        let core = Arc::new(Core {
+            requests: rx,
+            done: Mutex::new(Some(done_tx)),
+            stop: AtomicBool::new(false),
+            watchdog: Mutex::new(None),
+            robot: self.graph.robot.clone(),
+            clocks: Arc::clone(&self.clocks),
+            pool: self.pool.clone(),
+            step_reply: Mutex::new(None),
+            manager: Mutex::new(Some(self)),
+        });
+        start_cycle_thread(&core, 0);
+        let watch = Arc::clone(&core);
+        let name = format!("situate-{}-watchdog", core.robot);
+        match thread::Builder::new().name(name).spawn(move || watchdog(watch, deadlines)) {
+            Ok(t) => *core.watchdog.lock().unwrap_or_else(|p| p.into_inner()) = Some(t.thread().clone()),
+            Err(e) => tracing::warn!(error = %e, "no watchdog thread: a stuck body will stall the cycle"),
+        }
+        (handle, Joiner { done: done_rx, core })
+    }
+}
+
+fn start_cycle_thread(core: &Arc<Core>, generation: u64) {
+    let c = Arc::clone(core);
+    let name = if generation == 0 {
+        format!("situate-{}", core.robot)
+    } else {
+        format!("situate-{}-{generation}", core.robot)
+    };
+    if let Err(e) = thread::Builder::new().name(name).spawn(move || serve(&c, generation)) {
+        // Without a cycle thread nothing can go on: hand the manager back.
+        tracing::error!(error = %e, "could not start a cycle thread");
+        core.finish(&mut core.lock());
+    }
+}
+
+/// The cycle thread: cycles paced by the clock, requests between cycles.
+fn serve(core: &Core, generation: u64) {
+    let _guard = PanicGuard(core);
+    raise_thread_priority();
+    let mut deadline = Instant::now();
+    let mut g = core.lock();
+    loop {
+        let Some(m) = current(&mut g, generation) else { return };
+        if m.running && m.stop_at.is_some_and(|n| m.cycle >= n) {
+            let _ = m.request(Request::Stop);
+        }
+        if !m.running {
+            // Stopped: wait for a request without holding the lock.
+            drop(g);
+            let received = core.requests.recv();
+            g = core.lock();
+            match received {
+                Ok(envelope) => match serve_one(core, g, generation, envelope) {
+                    Served::Go(back) => g = back,
+                    Served::End => return,
+                },
+                Err(_) => return core.finish(&mut g),
+            }
+            deadline = Instant::now();
+            continue;
+        }
+        let pacing = m.pacing();
+        g = match cycle(core, g, generation) {
+            Some(g) => g,
+            None => return,
+        };
+        match pacing {
+            Some(period) => {
+                deadline += period;
+                let now = Instant::now();
+                if deadline < now {
+                    deadline = now;
+                }
+                // Serve requests until the next cycle is due.
+                loop {
+                    drop(g);
+                    let received = core.requests.recv_deadline(deadline);
+                    g = core.lock();
+                    match received {
+                        Ok(envelope) => match serve_one(core, g, generation, envelope) {
+                            Served::Go(back) => g = back,
+                            Served::End => return,
+                        },
+                        Err(RecvTimeoutError::Timeout) => break,
+                        Err(RecvTimeoutError::Disconnected) => return core.finish(&mut g),
+                    }
+                    if !current(&mut g, generation).is_some_and(|m| m.running) {
+                        break;
+                    }
+                }
+            }
+            None => loop {
+                match core.requests.try_recv() {
+                    Ok(envelope) => match serve_one(core, g, generation, envelope) {
+                        Served::Go(back) => g = back,
+                        Served::End => return,
+                    },
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => return core.finish(&mut g),
+                }
+            },
+        }
+    }
+}
+
+enum Served<'a> {
+    Go(Guard<'a>),
+    /// Shut down, or this thread was left behind.
+    End,
+}
+
+/// Answers one request. `Step` runs its cycles here, so a body that gets
+/// stuck in one is left behind like in a running cycle.
+fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, (request, reply): Envelope) -> Served<'a> {
+    let Some(m) = current(&mut g, generation) else {
+        // Not the cycle any more: the request goes back to the queue's
+        // new owner only if we could; answer that the manager moved on.
+        let _ = reply.send(Err(ControlError::Invalid(
+            "the request arrived while the cycle was restarting; send it again".into(),
+        )));
+        return Served::End;
+    };
+    match request {
+        Request::Shutdown => {
+            let _ = reply.send(Ok(Reply::Done));
+            core.finish(&mut g);
+            Served::End
+        }
+        Request::Step { cycles } => {
+            if let Err(e) = m.check_step(cycles) {
+                let _ = reply.send(Err(e));
+                return Served::Go(g);
+            }
+            m.halt();
+            *core.step_reply() = Some(reply);
+            for _ in 0..cycles {
+                g = match cycle(core, g, generation) {
+                    Some(g) => g,
+                    // Left behind: the watchdog answered the step.
+                    None => return Served::End,
+                };
+                if current(&mut g, generation).is_some_and(|m| m.paused) {
+                    break;
+                }
+            }
+            if let Some(reply) = core.step_reply().take() {
+                let _ = reply.send(Ok(Reply::Done));
+            }
+            Served::Go(g)
+        }
+        request => {
+            let _ = reply.send(m.request(request));
+            Served::Go(g)
+        }
+    }
+}
+
+/// One cycle with every body run outside the lock. `None`: this thread was
+/// left behind while a body ran.
+fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<'a>> {
+    current(&mut g, generation)?.begin_cycle();
+    let mut level = 0;
+    loop {
+        let m = current(&mut g, generation)?;
+        if !m.prepare_level(level) {
+            break;
+        }
+        let ready = std::mem::take(&mut m.ready);
+        let parallel = core.pool.is_some() && ready.len() > 1;
+        g = if parallel { run_batches(core, g, generation, &ready)? } else { run_serial(core, g, generation, &ready)? };
+        let m = current(&mut g, generation)?;
+        for &i in &ready {
+            m.finish(i);
+        }
+        m.ready = ready;
+        level += 1;
+    }
+    let m = current(&mut g, generation)?;
+    m.prepare_exchanges();
+    let exchanging = std::mem::take(&mut m.exchanging);
+    g = run_serial(core, g, generation, &exchanging)?;
+    let m = current(&mut g, generation)?;
+    for &d in &exchanging {
+        m.finish_exchange(d);
+    }
+    m.exchanging = exchanging;
+    m.end_cycle();
+    Some(g)
+}
+
+/// Runs bodies one after the other, each with the lock let go.
+fn run_serial<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, skills: &[usize]) -> Option<Guard<'a>> {
+    for &i in skills {
+        let m = current(&mut g, generation)?;
+        let (cycle, time_s) = (m.cycle, m.time_s);
+        let mut exec = std::mem::take(&mut m.execs[i]);
+        drop(g);
+        exec.run(cycle, time_s, Instant::now(), &core.clocks[i]);
+        g = core.lock();
+        // Left behind: the body's late result is dropped with it.
+        current(&mut g, generation)?.execs[i] = exec;
+    }
+    Some(g)
+}
+
+/// Runs a level on the parallel executor, batch by batch; each body goes
+/// back to the manager as soon as it returns, so one stuck body holds no
+/// other.
+fn run_batches<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, ready: &[usize]) -> Option<Guard<'a>> {
+    let pool = core.pool.as_ref()?;
+    let batches = current(&mut g, generation)?.batches(ready);
+    for batch in batches {
+        let m = current(&mut g, generation)?;
+        let (cycle, time_s) = (m.cycle, m.time_s);
+        let jobs: Vec<(usize, Mutex<Exec>)> =
+            batch.iter().map(|&i| (i, Mutex::new(std::mem::take(&mut m.execs[i])))).collect();
+        drop(g);
+        run_parallel(pool, &jobs, |(i, job)| {
+            let mut exec = std::mem::take(&mut *job.lock().unwrap_or_else(|p| p.into_inner()));
+            exec.run(cycle, time_s, Instant::now(), &core.clocks[*i]);
+            let mut g = core.lock();
+            if let Some(m) = current(&mut g, generation) {
+                m.execs[*i] = exec;
+            }
+        });
+        g = core.lock();
+        current(&mut g, generation)?;
+    }
+    Some(g)
+}
+
+/// Watches the bodies running on cycle threads; leaves behind one past its
+/// deadline and starts a new cycle thread.
+fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
+    let shortest = deadlines.iter().min().copied().unwrap_or(Duration::from_secs(1));
+    let tick = (shortest / 4).clamp(Duration::from_millis(1), Duration::from_millis(25));
+    let mut stale: Vec<(usize, u64)> = Vec::new();
+    loop {
+        thread::park_timeout(tick);
+        if core.stop.load(Ordering::Acquire) {
+            return;
+        }
+        let now = Instant::now();
+        stale.clear();
+        for (i, clock) in core.clocks.iter().enumerate() {
+            let mark = clock.mark();
+            if mark != 0 && clock.running_for(mark, now) > deadlines[i] {
+                stale.push((i, mark));
+            }
+        }
+        if stale.is_empty() {
+            continue;
+        }
+        let mut g = core.lock();
+        let Some(m) = g.as_mut() else { return };
+        let mut left = false;
+        for &(i, mark) in &stale {
+            // Still in that same run: its thread is stuck in the body.
+            let clock = &core.clocks[i];
+            if clock.mark() == mark {
+                let ran = clock.running_for(mark, Instant::now());
+                clock.forget(mark);
+                m.abandon(i, ran);
+                left = true;
+            }
+        }
+        if left {
+            m.generation += 1;
+            let generation = m.generation;
+            if let Some(reply) = core.step_reply().take() {
+                let _ = reply.send(Err(ControlError::Invalid(
+                    "a body got stuck during the step and was left behind; the cycle goes on".into(),
+                )));
+            }
+            drop(g);
+            start_cycle_thread(&core, generation);
+        }
+    }
+}

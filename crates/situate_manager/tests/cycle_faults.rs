@@ -1,0 +1,340 @@
+//! The cycle keeps its promises under faults: execution budgets, liveness
+//! deadlines, stuck bodies left behind, an atomic update-record, and outputs
+//! that are fresh in one cycle only.
+//!
+//! No timing is asserted: a stuck body is stuck on a gate the test holds
+//! closed, a slow one sleeps far past its budget, and every wait is for a
+//! condition with a generous bound (a hang is the failure guarded against).
+
+mod common;
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+use common::*;
+use crossbeam_channel::Receiver;
+use situate_core::{FnSkill, Io, SkillKind, SkillType, Value};
+use situate_manager::{ClockKind, Control, Event, Registry, Request, RobotSpec};
+
+/// Generous: a loaded machine is slow, never this slow.
+const BOUND: Duration = Duration::from_secs(60);
+
+#[derive(Clone, Default)]
+struct Gate(Arc<(Mutex<bool>, Condvar)>);
+
+impl Gate {
+    fn pass(&self) {
+        let (open, cv) = &*self.0;
+        let mut o = open.lock().unwrap();
+        while !*o {
+            o = cv.wait(o).unwrap();
+        }
+    }
+    fn open(&self) {
+        *self.0 .0.lock().unwrap() = true;
+        self.0 .1.notify_all();
+    }
+}
+
+/// Runs `f` on a thread; fails if it does not finish within [`BOUND`].
+fn within_bound<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(BOUND).expect("the cycle blocked")
+}
+
+/// The cause of the first `SkillFaulted` event for `skill`.
+fn fault_of(events: &Receiver<Event>, skill: &str) -> String {
+    let deadline = Instant::now() + BOUND;
+    loop {
+        match events.recv_deadline(deadline) {
+            Ok(Event::SkillFaulted { skill: s, cause, .. }) if s == skill => return cause,
+            Ok(_) => {}
+            Err(e) => panic!("no fault of `{skill}` reported: {e}"),
+        }
+    }
+}
+
+/// Waits until `f` holds.
+fn until(what: &str, mut f: impl FnMut() -> bool) {
+    let deadline = Instant::now() + BOUND;
+    while !f() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+/// A sync cskill writing the cycle to `y`; with parameter `mode` 1 its body
+/// blocks on `gate`, with 2 it sleeps 500 ms. `made` counts its bodies.
+fn blocker(gate: &Gate, made: &Arc<AtomicUsize>) -> SkillType {
+    let d = with_param(decl("blocker", SkillKind::Sync, &[], &[("y", "f64")]), "mode", 0.0, 0.0, 2.0);
+    let (gate, made, decl) = (gate.clone(), made.clone(), d.clone());
+    SkillType::new(d, move || {
+        made.fetch_add(1, Ordering::SeqCst);
+        let gate = gate.clone();
+        Ok(Box::new(FnSkill::new(&decl, move |io: &mut Io<'_>, params: &[Value]| {
+            match params[0].as_f64() {
+                Some(1.0) => gate.pass(),
+                Some(2.0) => std::thread::sleep(Duration::from_millis(500)),
+                _ => {}
+            }
+            io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+            Ok(())
+        })) as _)
+    })
+}
+
+#[test]
+fn a_sync_body_over_its_budget_is_faulted_and_what_it_produced_is_dropped() {
+    let (gate, made) = (Gate::default(), Arc::new(AtomicUsize::new(0)));
+    let mut reg = Registry::new();
+    reg.add(blocker(&gate, &made));
+    reg.add(constant("tick", "f64", Value::F64(1.0)));
+    let spec =
+        simulated("budget").skill(skill("b", "blocker").budget_ms(250.0)).skill(skill("t", "tick").remap("out", "z"));
+    let mut m = build(&spec, &reg);
+    let events = m.events();
+    m.step(2).unwrap();
+    assert_eq!(m.query("y").unwrap().value, Some(Value::F64(2.0)));
+    m.set_param("b", "mode", Value::F64(2.0)).unwrap();
+    m.step(1).unwrap();
+    let cause = fault_of(&events, "b");
+    assert!(cause.contains("over its execution budget of 250 ms (`budget_ms`)"), "{cause}");
+    assert!(!m.skill("b").unwrap().active);
+    let y = m.query("y").unwrap();
+    assert_eq!((y.value, y.cycle), (Some(Value::F64(2.0)), 2), "the late run's output was dropped");
+    m.step(2).unwrap();
+    assert_eq!(m.query("z").unwrap().cycle, 5, "the rest of the cycle goes on");
+}
+
+#[test]
+fn a_sync_body_that_never_returns_is_left_behind_and_the_cycle_goes_on() {
+    let (gate, made) = (Gate::default(), Arc::new(AtomicUsize::new(0)));
+    let mut reg = Registry::new();
+    reg.add(blocker(&gate, &made));
+    reg.add(constant("tick", "f64", Value::F64(1.0)));
+    let spec = RobotSpec::new("stuck")
+        .clock(ClockKind::Wall)
+        .period_s(0.002)
+        .skill(skill("b", "blocker").budget_ms(100.0))
+        .skill(skill("t", "tick").remap("out", "z"));
+    let m = build(&spec, &reg);
+    let events = m.events();
+    let (mut handle, join) = m.spawn(true);
+    handle.set_param("b", "mode", Value::F64(1.0)).unwrap();
+    let cause = fault_of(&events, "b");
+    assert!(cause.contains("without returning, over its execution budget of 100 ms"), "{cause}");
+    assert!(cause.contains("left behind"), "{cause}");
+    // The cycle goes on without it, and requests are answered.
+    let at = handle.stats().unwrap().cycle;
+    until("cycles after the fault", || handle.stats().unwrap().cycle > at + 10);
+    assert!(!handle.skill("b").unwrap().active);
+    assert!(handle.query("z").unwrap().cycle > at);
+    // Activating it again makes a fresh body, with the parameters of now.
+    handle.set_param("b", "mode", Value::F64(0.0)).unwrap();
+    handle.activate(&["b"]).unwrap();
+    let again = handle.stats().unwrap().cycle;
+    until("the fresh body's output", || handle.query("y").unwrap().cycle > again);
+    assert_eq!(made.load(Ordering::SeqCst), 2, "one body left behind, one fresh");
+    // The old body returns at last: its thread ends, the cycle is unharmed.
+    gate.open();
+    let now = handle.stats().unwrap().cycle;
+    until("cycles after the old body returned", || handle.stats().unwrap().cycle > now + 10);
+    assert!(handle.skill("b").unwrap().active);
+    handle.request(Request::Shutdown).unwrap();
+    let m = join.join_timeout(BOUND).ok().expect("the manager ended").unwrap();
+    assert!(m.cycle_count() > now);
+}
+
+#[test]
+fn a_device_that_hangs_under_the_simulated_clock_is_left_behind_and_shutdown_works() {
+    let gate = Gate::default();
+    let g = gate.clone();
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("dev", SkillKind::Device, &[], &[("reading", "f64")]), move |io, _| {
+        if io.cx.cycle() >= 3 {
+            g.pass();
+        }
+        io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+        Ok(())
+    }));
+    reg.add(constant("tick", "f64", Value::F64(1.0)));
+    let spec =
+        simulated("hang").skill(skill("d", "dev").liveness_ms(200.0)).skill(skill("t", "tick").remap("out", "z"));
+    let m = build(&spec, &reg);
+    let events = m.events();
+    let (mut handle, join) = m.spawn(true);
+    let cause = fault_of(&events, "d");
+    assert!(cause.contains("over its liveness deadline of 200 ms (`liveness_ms`)"), "{cause}");
+    let at = handle.stats().unwrap().cycle;
+    until("cycles after the fault", || handle.stats().unwrap().cycle > at + 100);
+    assert_eq!(handle.query("reading").unwrap().value, Some(Value::F64(2.0)));
+    handle.request(Request::Shutdown).unwrap();
+    assert!(join.join_timeout(BOUND).is_ok(), "a stuck device never prevents shutdown");
+    gate.open();
+}
+
+#[test]
+fn a_step_that_gets_stuck_is_answered_and_the_cycle_goes_on() {
+    let (gate, made) = (Gate::default(), Arc::new(AtomicUsize::new(0)));
+    let mut reg = Registry::new();
+    reg.add(blocker(&gate, &made));
+    reg.add(constant("tick", "f64", Value::F64(1.0)));
+    let spec =
+        simulated("step").skill(skill("b", "blocker").budget_ms(100.0)).skill(skill("t", "tick").remap("out", "z"));
+    let (mut handle, join) = build(&spec, &reg).spawn(false);
+    handle.set_param("b", "mode", Value::F64(1.0)).unwrap();
+    let err = handle.step(5).unwrap_err();
+    assert!(err.to_string().contains("left behind"), "{err}");
+    assert!(!handle.skill("b").unwrap().active);
+    handle.step(5).unwrap();
+    assert_eq!(handle.stats().unwrap().cycle, 6, "one cycle abandoned, five more");
+    handle.request(Request::Shutdown).unwrap();
+    assert!(join.join_timeout(BOUND).is_ok());
+    gate.open();
+}
+
+#[test]
+fn an_async_cskill_stuck_in_a_run_is_faulted_past_its_liveness_deadline() {
+    let gate = Gate::default();
+    let g = gate.clone();
+    let mut reg = Registry::new();
+    reg.add(constant("src", "f64", Value::F64(2.0)));
+    reg.add(fn_type(decl("slow", SkillKind::Async, &[("x", "f64")], &[("y", "f64")]), move |_, _| {
+        g.pass();
+        Ok(())
+    }));
+    let spec = RobotSpec::new("async")
+        .clock(ClockKind::Wall)
+        .period_s(0.002)
+        .skill(skill("s", "src").remap("out", "x"))
+        .skill(skill("slow", "slow").liveness_ms(100.0));
+    let mut m = build(&spec, &reg);
+    let events = m.events();
+    let mut m = within_bound(move || {
+        while m.skill("slow").unwrap().active {
+            m.run_cycles(1);
+        }
+        m
+    });
+    let cause = fault_of(&events, "slow");
+    assert!(cause.contains("over its liveness deadline of 100 ms"), "{cause}");
+    assert!(cause.contains("on its thread"), "{cause}");
+    gate.open();
+    // A fresh body on its own thread runs on reactivation.
+    m.activate(&["slow"]).unwrap();
+    let mut m = within_bound(move || {
+        while m.skill("slow").unwrap().timing.runs == 0 {
+            m.run_cycles(1);
+        }
+        m
+    });
+    assert!(m.skill("slow").unwrap().active);
+}
+
+#[test]
+fn a_threaded_device_stuck_in_an_exchange_is_faulted_past_its_liveness_deadline() {
+    let gate = Gate::default();
+    let g = gate.clone();
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("dev", SkillKind::Device, &[], &[("reading", "f64")]), move |_, _| {
+        g.pass();
+        Ok(())
+    }));
+    let spec = RobotSpec::new("dev").clock(ClockKind::Wall).period_s(0.002).skill(skill("d", "dev").liveness_ms(100.0));
+    let mut m = build(&spec, &reg);
+    let events = m.events();
+    let _m = within_bound(move || {
+        while m.skill("d").unwrap().active {
+            m.run_cycles(1);
+        }
+        m
+    });
+    let cause = fault_of(&events, "d");
+    assert!(cause.contains("over its liveness deadline of 100 ms"), "{cause}");
+    assert!(cause.contains("on its device thread"), "{cause}");
+    gate.open();
+}
+
+#[test]
+fn update_record_is_atomic_a_wrongly_typed_output_commits_none() {
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("two", SkillKind::Sync, &[], &[("a", "f64"), ("b", "f64")]), |io, _| {
+        let c = io.cx.cycle();
+        io.outputs[0] = Some(Value::F64(c as f64));
+        io.outputs[1] = Some(if c >= 2 { Value::Str("oops".into()) } else { Value::F64(0.0) });
+        Ok(())
+    }));
+    let mut m = build(&simulated("atomic").skill(skill("t", "two")), &reg);
+    let events = m.events();
+    m.step(2).unwrap();
+    let cause = fault_of(&events, "t");
+    assert!(cause.contains("output `b` expects f64"), "{cause}");
+    let a = m.query("a").unwrap();
+    assert_eq!((a.value, a.cycle), (Some(Value::F64(1.0)), 1), "`a` of the faulting run was not committed");
+}
+
+#[test]
+fn a_silent_async_writer_wins_a_resource_only_in_the_cycle_its_value_is_fresh() {
+    let mut reg = Registry::new();
+    reg.add(constant("src", "f64", Value::F64(1.0)));
+    let runs = Arc::new(AtomicUsize::new(0));
+    let r = runs.clone();
+    // Writes the resource once, in its first run, then stays silent.
+    reg.add(fn_type(
+        with_priority(decl("burst", SkillKind::Async, &[("x", "f64")], &[("drive", "f64")]), 50),
+        move |io, _| {
+            if r.fetch_add(1, Ordering::SeqCst) == 0 {
+                io.outputs[0] = Some(Value::F64(99.0));
+            }
+            Ok(())
+        },
+    ));
+    reg.add(fn_type(with_priority(decl("steady", SkillKind::Sync, &[], &[("drive", "f64")]), 10), |io, _| {
+        io.outputs[0] = Some(Value::F64(1.0));
+        Ok(())
+    }));
+    let spec = RobotSpec::new("silent")
+        .clock(ClockKind::Wall)
+        .period_s(0.002)
+        .skill(skill("s", "src").remap("out", "x"))
+        .skill(skill("burst", "burst"))
+        .skill(skill("steady", "steady"));
+    let mut m = build(&spec, &reg);
+    // Until the burst is taken, then a few cycles more.
+    let mut m = within_bound(move || {
+        while m.query("drive").unwrap().value != Some(Value::F64(99.0)) {
+            m.run_cycles(1);
+        }
+        m
+    });
+    for _ in 0..5 {
+        m.run_cycles(1);
+        let drive = m.query("drive").unwrap();
+        assert_eq!(drive.value, Some(Value::F64(1.0)), "the silent writer's old value won cycle {}", drive.cycle);
+        assert_eq!(drive.writer.as_deref(), Some("steady"));
+    }
+    assert!(runs.load(Ordering::SeqCst) >= 1);
+}
+
+#[test]
+fn a_device_keeps_real_time_while_the_cycle_stalls() {
+    let times: Arc<Mutex<Vec<f64>>> = Arc::default();
+    let t = times.clone();
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("dev", SkillKind::Device, &[("cmd", "f64?")], &[]), move |io, _| {
+        t.lock().unwrap().push(io.cx.time_s());
+        Ok(())
+    }));
+    let spec = RobotSpec::new("stall").clock(ClockKind::Wall).period_s(0.002).skill(skill("d", "dev"));
+    let mut m = build(&spec, &reg);
+    m.run_cycles(1);
+    let cycle_time = m.stats().unwrap().time_s;
+    // No more cycles: the device's clock still moves, so a base that gets
+    // no fresh command stops after its hold time (toy.wheels, sim.base).
+    until("device runs well after the last cycle", || times.lock().unwrap().iter().any(|&t| t > cycle_time + 0.05));
+}
