@@ -5,7 +5,7 @@
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -16,6 +16,8 @@ use situate::manager::{
     ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, Registry, RobotFile, RobotSpec, SkillInfo,
 };
 use situate_link::{Client, ClientError, Link, LinkConfig};
+
+mod signals;
 
 #[derive(Parser)]
 #[command(
@@ -423,7 +425,7 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             let limit = count.or(if mode == "once" { Some(1) } else { None });
             let mut seen = 0;
             let interrupted = interrupt_flag()?;
-            while limit.is_none_or(|n| seen < n) && !interrupted.load(Ordering::SeqCst) {
+            while limit.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
                     if e["monitor"].as_u64() == Some(id) {
                         seen += 1;
@@ -450,7 +452,7 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             let (_sub, events) = c.subscribe(robot, "events/**")?;
             let interrupted = interrupt_flag()?;
             let mut seen = 0;
-            while count.is_none_or(|n| seen < n) && !interrupted.load(Ordering::SeqCst) {
+            while count.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
                     println!("{e}");
                     seen += 1;
@@ -557,16 +559,27 @@ fn serve_skill(
     let mut result = Ok(ExitCode::SUCCESS);
     client_verb(remote, |client, robot| {
         let stop = interrupt_flag()?;
-        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, &stop, || {
+        // The body runs on this thread: one that never returns is left behind.
+        let stuck = format!(
+            "`{name}`'s body did not return within {} of the stop request; exiting without it",
+            signals::bound_text()
+        );
+        let watchdog = stop.watchdog(move || stuck);
+        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, stop.flag(), || {
             eprintln!(
                 "situate: serving `{name}` (type `{skill}`) of robot `{robot}` on situate/{robot}/remote/{name}/inputs; \
                  Ctrl-C stops"
             );
         });
+        drop(watchdog);
         match stats {
             Ok(s) => eprintln!(
-                "situate: stopped; {} inputs received, {} runs, {} dropped as stale, {} errors",
-                s.received, s.computed, s.dropped, s.errors
+                "situate: stopped{}; {} inputs received, {} runs, {} dropped as stale, {} errors",
+                stop.signal().map(|s| format!(" ({})", signals::name(s))).unwrap_or_default(),
+                s.received,
+                s.computed,
+                s.dropped,
+                s.errors
             ),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -578,12 +591,10 @@ fn serve_skill(
     result
 }
 
-fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let f = Arc::clone(&flag);
-    // A second handler (in one process) is refused: then Ctrl-C just ends the process.
-    let _ = ctrlc::set_handler(move || f.store(true, Ordering::SeqCst));
-    Ok(flag)
+/// SIGINT, SIGTERM and SIGHUP ask for a stop while the result lives; a
+/// second signal ends the process at once (see [`signals`]).
+fn interrupt_flag() -> anyhow::Result<signals::Stop> {
+    signals::Stop::install()
 }
 
 fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<()>) -> anyhow::Result<ExitCode> {
@@ -823,19 +834,85 @@ struct Running {
 }
 
 impl Running {
-    /// Stops everything; returns the final statistics.
-    fn finish(mut self) -> anyhow::Result<(ManagerStats, Vec<SkillInfo>)> {
-        let stats = self.handle.stats().map_err(anyhow::Error::msg);
-        let skills = self.handle.skills().map_err(anyhow::Error::msg);
-        if let Some(gui) = self.gui.take() {
-            gui.stop();
+    /// Stops everything and returns the final statistics, within
+    /// [`signals::stop_bound`]: a cycle stuck in a skill's body (or a part
+    /// that does not stop) is left behind, and the error says which.
+    fn finish(self) -> Result<(ManagerStats, Vec<SkillInfo>), Stuck> {
+        let Running { mut handle, join, served, gui, .. } = self;
+        let stage = Arc::new(std::sync::atomic::AtomicU8::new(Stage::Stats as u8));
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        let at = Arc::clone(&stage);
+        // The teardown runs on a thread of its own, so that this one can give up on it.
+        let teardown = move || {
+            let stats = handle.stats();
+            let skills = handle.skills();
+            at.store(Stage::Gui as u8, Ordering::SeqCst);
+            if let Some(gui) = gui {
+                gui.stop();
+            }
+            at.store(Stage::Link as u8, Ordering::SeqCst);
+            drop(served);
+            at.store(Stage::Cycle as u8, Ordering::SeqCst);
+            let _ = handle.request(situate::manager::Request::Shutdown);
+            let _ = join.join();
+            let _ = tx.send((stats, skills));
+        };
+        if let Err(e) = std::thread::Builder::new().name("situate-teardown".into()).spawn(teardown) {
+            return Err(Stuck { stage: Stage::Spawn, detail: e.to_string() });
         }
-        drop(self.served.take());
-        let _ = self.handle.request(situate::manager::Request::Shutdown);
-        let _ = self.join.join();
-        Ok((stats?, skills?))
+        match rx.recv_timeout(signals::stop_bound()) {
+            Ok((Ok(stats), Ok(skills))) => Ok((stats, skills)),
+            Ok((Err(e), _) | (_, Err(e))) => Err(Stuck { stage: Stage::Stats, detail: e.to_string() }),
+            Err(_) => {
+                let stage = match stage.load(Ordering::SeqCst) {
+                    s if s == Stage::Gui as u8 => Stage::Gui,
+                    s if s == Stage::Link as u8 => Stage::Link,
+                    s if s == Stage::Cycle as u8 => Stage::Cycle,
+                    _ => Stage::Stats,
+                };
+                Err(Stuck { stage, detail: String::new() })
+            }
+        }
     }
 }
+
+/// Where [`Running::finish`] was when it gave up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    Spawn,
+    Stats,
+    Gui,
+    Link,
+    Cycle,
+}
+
+/// A stop that did not complete: what did not stop.
+#[derive(Debug)]
+struct Stuck {
+    stage: Stage,
+    detail: String,
+}
+
+impl std::fmt::Display for Stuck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let bound = signals::bound_text();
+        match self.stage {
+            Stage::Spawn => write!(f, "could not stop the robot: {}", self.detail),
+            Stage::Stats if !self.detail.is_empty() => {
+                write!(f, "the manager did not give its final statistics: {}", self.detail)
+            }
+            Stage::Stats | Stage::Cycle => write!(
+                f,
+                "the cycle did not stop within {bound} of the shutdown request (it is stuck, most likely \
+                 in a skill's body that does not return); exiting without it"
+            ),
+            Stage::Gui => write!(f, "the GUI did not stop within {bound}; exiting without it"),
+            Stage::Link => write!(f, "the link did not close within {bound}; exiting without it"),
+        }
+    }
+}
+
+impl std::error::Error for Stuck {}
 
 /// Loads, checks and starts a robot file. `Err(Ok(code))`: the problems
 /// were reported already.
@@ -998,15 +1075,17 @@ fn gui_address(robot_file: &RobotFile, opts: &RunOptions) -> Result<Option<std::
 }
 
 fn run_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
-    let mut running = match start_robot(file, opts, ext) {
+    // Before starting: a signal during the start stops the robot once started.
+    let interrupted = interrupt_flag()?;
+    let running = match start_robot(file, opts, ext) {
         Ok(r) => r,
         Err(done) => return done,
     };
     let cycles = opts.cycles;
-    let interrupted = interrupt_flag()?;
     let started = Instant::now();
     loop {
-        if interrupted.load(Ordering::SeqCst) {
+        if let Some(sig) = interrupted.signal() {
+            eprintln!("situate: {}: stopping (again to exit at once)", signals::name(sig));
             break;
         }
         match running.events.recv_timeout(Duration::from_millis(100)) {
@@ -1017,17 +1096,28 @@ fn run_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> anyhow::Result
             _ => {}
         }
         if cycles.is_some() && started.elapsed() > Duration::from_secs(1) {
-            // A stop requested over the link also ends a bounded run.
-            if let Ok(s) = running.handle.stats() {
+            // A stop requested over the link also ends a bounded run. Bounded:
+            // a stuck cycle must not keep this loop from seeing a signal.
+            let asked =
+                running.handle.request_timeout(situate::manager::Request::QueryStats, Duration::from_millis(200));
+            if let Ok(situate::manager::Reply::Stats(s)) = asked {
                 if cycles.is_some_and(|n| s.cycle >= n) && !s.running {
                     break;
                 }
             }
         }
     }
-    let (stats, skills) = running.finish()?;
-    print_summary(&stats, &skills);
-    Ok(ExitCode::SUCCESS)
+    match running.finish() {
+        Ok((stats, skills)) => {
+            print_summary(&stats, &skills);
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(stuck) => {
+            eprintln!("situate: {stuck}");
+            eprintln!("situate: no summary: the manager did not answer");
+            Ok(ExitCode::FAILURE)
+        }
+    }
 }
 
 fn generate(lang: &str, manifest: &Path, out: &Path) -> anyhow::Result<ExitCode> {
