@@ -133,6 +133,11 @@ pub(crate) fn name(sig: i32) -> &'static str {
     signal_hook::low_level::signal_name(sig).unwrap_or("a signal")
 }
 
+/// The exit status of a process ended by a stop that `sig` asked for.
+pub(crate) fn status(sig: i32) -> u8 {
+    u8::try_from(128 + sig).unwrap_or(255)
+}
+
 fn on_signal(state: &State, sig: i32) {
     if state.signal.compare_exchange(0, sig, Ordering::SeqCst, Ordering::SeqCst).is_err() {
         write_stderr(b"\nsituate: ");
