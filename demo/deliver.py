@@ -33,6 +33,7 @@ import re
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from signal import SIGHUP, SIGINT, SIGTERM, Signals
 from typing import Any
 
 import situate
@@ -309,6 +310,7 @@ class Sequencer:
         self.active: set[str] = set()
         self.t = 0.0
         self.phase_no = 0
+        self.phase_text = ""
         self.car = 0
         self.button_pose: Pose | None = None
         self.stream: situate.Stream[Any] | None = None
@@ -472,6 +474,7 @@ class Sequencer:
     async def phase(self, number: int, text: str) -> None:
         """The progress line of phase ``number`` of the narrative."""
         self.phase_no = number
+        self.phase_text = text
         await self.say(f"phase {number}: {text}")
 
     # ----- behaviours the phases share -------------------------------------------------
@@ -1140,13 +1143,61 @@ async def main(argv: Sequence[str] | None = None) -> int:
             with contextlib.suppress(situate.SituateError):
                 await robot.stop()
             return 1
+        except (asyncio.CancelledError, KeyboardInterrupt):
+            # Interrupted (`run`): one line, whatever --quiet says, and the cycle stopped.
+            where = f" in phase {seq.phase_no} ({seq.phase_text})" if seq.phase_no else ""
+            name = Signals(INTERRUPTED.get("signal", SIGINT)).name
+            print(f"[{seq.t:7.1f} s] interrupted ({name}){where}, message not delivered")
+            INTERRUPTED["said"] = 1
+            with contextlib.suppress(situate.SituateError, asyncio.TimeoutError):
+                await asyncio.wait_for(robot.stop(), 2)
+            raise
         with contextlib.suppress(situate.SituateError):
             await robot.stop()
     return 0
 
 
+#: How the run was interrupted: ``signal`` (its number) and whether the outcome was ``said``.
+INTERRUPTED: dict[str, int] = {}
+
+
+async def _main_stopping_on_signals(argv: Sequence[str] | None) -> int:
+    """:func:`main`, cancelled by SIGTERM or SIGHUP as by Ctrl-C (``asyncio.run``'s own)."""
+    task = asyncio.current_task()
+    assert task is not None
+
+    def stop(sig: int) -> None:
+        if "signal" in INTERRUPTED:  # a second one: at once
+            sys.stdout.flush()
+            os._exit(128 + sig)
+        INTERRUPTED["signal"] = sig
+        task.cancel()
+
+    loop = asyncio.get_running_loop()
+    for sig in (SIGTERM, SIGHUP):
+        with contextlib.suppress(NotImplementedError, AttributeError):  # not on Windows
+            loop.add_signal_handler(sig, stop, sig)
+    return await main(argv)
+
+
+def run(argv: Sequence[str] | None = None) -> int:
+    """Runs :func:`main`; the exit status.
+
+    Ctrl-C, SIGTERM and SIGHUP end the mission with one line (the time and the phase) and
+    status 128 + the signal's number (130 for Ctrl-C), without a traceback; a second signal
+    ends the program at once.
+    """
+    try:
+        return asyncio.run(_main_stopping_on_signals(argv))
+    except (KeyboardInterrupt, asyncio.CancelledError):
+        sig = INTERRUPTED.get("signal", SIGINT)
+        if not INTERRUPTED.get("said"):
+            print(f"interrupted ({Signals(sig).name}) before the mission started")
+        return 128 + sig
+
+
 if __name__ == "__main__":
-    status = asyncio.run(main())
+    status = run()
     # The link is closed and the output written: leave without the interpreter's teardown
     # (collecting every object, stopping Zenoh's threads: some 30 ms of a headless run).
     sys.stdout.flush()

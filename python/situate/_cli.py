@@ -5,14 +5,25 @@ Every command is the Rust program's (``situate_cli``, built into
 behave exactly as with the Rust install. One command is Python's own, since
 it runs Python code: ``situate serve-skill MODULE:ATTR --robot ROBOT`` (a skill *type*,
 ``situate serve-skill c.runaway --library ...``, is the Rust program's again).
+
+Signals are handled as by the Rust program: where a command waits (``run``, ``demo``,
+``serve-skill``, ``monitor``, ``events``), SIGINT, SIGTERM and SIGHUP ask for a clean stop and a
+second signal ends it at once (status 128 + the signal); elsewhere they end the program.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Sequence
+from types import FrameType
+from typing import Any, Union
+
+_Handler = Union[Callable[[int, Union[FrameType, None]], Any], int, None]
 
 __all__ = ["main", "serve_skill_main"]
 
@@ -25,6 +36,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     from . import _native
 
     sys.stdout.flush()
+    # The program installs its own handlers where it waits. Python's SIGINT handler would also
+    # run (they are chained) and raise KeyboardInterrupt once the program has returned.
+    with contextlib.suppress(ValueError):  # not the main thread: leave them
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
     sys.exit(_native.main(["situate", *args[1:]]))
 
 
@@ -90,20 +105,93 @@ def serve_skill_main(argv: Sequence[str]) -> int:
     except (ImportError, AttributeError, TypeError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
+    stop = _StopOnSignals(opts.skill)
     try:
         robot = opts.robot or _find_robot(endpoints, opts.timeout)
         server = RemoteSkillServer(skill, robot=robot, name=opts.name, endpoint=endpoints)
         print(
             f"situate: serving remote skill `{server.name}` of robot `{robot}` "
-            f"({server.inputs_key}) via {', '.join(endpoints)}",
+            f"({server.inputs_key}) via {', '.join(endpoints)}; Ctrl-C stops",
             file=sys.stderr,
             flush=True,
         )
-        server.serve()
+        server.serve(stop.event)
     except SituateError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
+    finally:
+        stop.restore()
+    s = server.stats
+    how = f" ({signal.Signals(stop.signal).name})" if stop.signal else ""
+    print(
+        f"situate: stopped{how}; {s.received} inputs received, {s.computed} runs, "
+        f"{s.dropped} dropped as stale, {s.errors} errors",
+        file=sys.stderr,
+        flush=True,
+    )
     return 0
+
+
+def _stop_bound() -> float:
+    """How long a stop may take before the program exits without what has not stopped, s."""
+    try:
+        bound = float(os.environ.get("SITUATE_STOP_TIMEOUT_S", "2"))
+    except ValueError:
+        return 2.0
+    return bound if 0 <= bound < float("inf") else 2.0
+
+
+class _StopOnSignals:
+    """SIGINT, SIGTERM and SIGHUP set :attr:`event`, as in the Rust program's ``serve-skill``.
+
+    A second signal ends the program at once (status 128 + the signal); a function that does
+    not return within the stop bound (``$SITUATE_STOP_TIMEOUT_S``, 2 s) is left behind.
+    """
+
+    def __init__(self, what: str) -> None:
+        self.what = what
+        self.event = threading.Event()
+        self.signal = 0
+        self._previous: dict[int, _Handler] = {}
+        self._timer: threading.Timer | None = None
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            with contextlib.suppress(ValueError, AttributeError):  # not the main thread
+                self._previous[sig] = signal.signal(sig, self._on_signal)
+
+    def _on_signal(self, sig: int, _frame: FrameType | None) -> None:
+        if self.signal:
+            print(
+                f"\nsituate: {signal.Signals(sig).name} while stopping: exiting at once",
+                file=sys.stderr,
+                flush=True,
+            )
+            os._exit(128 + sig)
+        self.signal = sig
+        print(
+            f"situate: {signal.Signals(sig).name}: stopping (again to exit at once)",
+            file=sys.stderr,
+            flush=True,
+        )
+        self.event.set()
+        self._timer = threading.Timer(_stop_bound(), self._stuck)
+        self._timer.daemon = True
+        self._timer.start()
+
+    def _stuck(self) -> None:
+        print(
+            f"situate: `{self.what}` did not return within {_stop_bound():g} s of the stop "
+            "request; exiting without it",
+            file=sys.stderr,
+            flush=True,
+        )
+        os._exit(1)
+
+    def restore(self) -> None:
+        """Puts the previous handlers back; the function returned."""
+        if self._timer is not None:
+            self._timer.cancel()
+        for sig, previous in self._previous.items():
+            signal.signal(sig, previous)
 
 
 def _find_robot(endpoints: list[str], timeout: float) -> str:

@@ -5,7 +5,7 @@
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -16,6 +16,8 @@ use situate::manager::{
     ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, Registry, RobotFile, RobotSpec, SkillInfo,
 };
 use situate_link::{Client, ClientError, Link, LinkConfig};
+
+mod signals;
 
 #[derive(Parser)]
 #[command(
@@ -423,7 +425,7 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             let limit = count.or(if mode == "once" { Some(1) } else { None });
             let mut seen = 0;
             let interrupted = interrupt_flag()?;
-            while limit.is_none_or(|n| seen < n) && !interrupted.load(Ordering::SeqCst) {
+            while limit.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
                     if e["monitor"].as_u64() == Some(id) {
                         seen += 1;
@@ -450,7 +452,7 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             let (_sub, events) = c.subscribe(robot, "events/**")?;
             let interrupted = interrupt_flag()?;
             let mut seen = 0;
-            while count.is_none_or(|n| seen < n) && !interrupted.load(Ordering::SeqCst) {
+            while count.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
                     println!("{e}");
                     seen += 1;
@@ -557,16 +559,27 @@ fn serve_skill(
     let mut result = Ok(ExitCode::SUCCESS);
     client_verb(remote, |client, robot| {
         let stop = interrupt_flag()?;
-        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, &stop, || {
+        // The body runs on this thread: one that never returns is left behind.
+        let stuck = format!(
+            "`{name}`'s body did not return within {} of the stop request; exiting without it",
+            signals::bound_text()
+        );
+        let watchdog = stop.watchdog(move || stuck);
+        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, stop.flag(), || {
             eprintln!(
                 "situate: serving `{name}` (type `{skill}`) of robot `{robot}` on situate/{robot}/remote/{name}/inputs; \
                  Ctrl-C stops"
             );
         });
+        drop(watchdog);
         match stats {
             Ok(s) => eprintln!(
-                "situate: stopped; {} inputs received, {} runs, {} dropped as stale, {} errors",
-                s.received, s.computed, s.dropped, s.errors
+                "situate: stopped{}; {} inputs received, {} runs, {} dropped as stale, {} errors",
+                stop.signal().map(|s| format!(" ({})", signals::name(s))).unwrap_or_default(),
+                s.received,
+                s.computed,
+                s.dropped,
+                s.errors
             ),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -578,12 +591,10 @@ fn serve_skill(
     result
 }
 
-fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let f = Arc::clone(&flag);
-    // A second handler (in one process) is refused: then Ctrl-C just ends the process.
-    let _ = ctrlc::set_handler(move || f.store(true, Ordering::SeqCst));
-    Ok(flag)
+/// SIGINT, SIGTERM and SIGHUP ask for a stop while the result lives; a
+/// second signal ends the process at once (see [`signals`]).
+fn interrupt_flag() -> anyhow::Result<signals::Stop> {
+    signals::Stop::install()
 }
 
 fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<()>) -> anyhow::Result<ExitCode> {
@@ -823,19 +834,85 @@ struct Running {
 }
 
 impl Running {
-    /// Stops everything; returns the final statistics.
-    fn finish(mut self) -> anyhow::Result<(ManagerStats, Vec<SkillInfo>)> {
-        let stats = self.handle.stats().map_err(anyhow::Error::msg);
-        let skills = self.handle.skills().map_err(anyhow::Error::msg);
-        if let Some(gui) = self.gui.take() {
-            gui.stop();
+    /// Stops everything and returns the final statistics, within
+    /// [`signals::stop_bound`]: a cycle stuck in a skill's body (or a part
+    /// that does not stop) is left behind, and the error says which.
+    fn finish(self) -> Result<(ManagerStats, Vec<SkillInfo>), Stuck> {
+        let Running { mut handle, join, served, gui, .. } = self;
+        let stage = Arc::new(std::sync::atomic::AtomicU8::new(Stage::Stats as u8));
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        let at = Arc::clone(&stage);
+        // The teardown runs on a thread of its own, so that this one can give up on it.
+        let teardown = move || {
+            let stats = handle.stats();
+            let skills = handle.skills();
+            at.store(Stage::Gui as u8, Ordering::SeqCst);
+            if let Some(gui) = gui {
+                gui.stop();
+            }
+            at.store(Stage::Link as u8, Ordering::SeqCst);
+            drop(served);
+            at.store(Stage::Cycle as u8, Ordering::SeqCst);
+            let _ = handle.request(situate::manager::Request::Shutdown);
+            let _ = join.join();
+            let _ = tx.send((stats, skills));
+        };
+        if let Err(e) = std::thread::Builder::new().name("situate-teardown".into()).spawn(teardown) {
+            return Err(Stuck { stage: Stage::Spawn, detail: e.to_string() });
         }
-        drop(self.served.take());
-        let _ = self.handle.request(situate::manager::Request::Shutdown);
-        let _ = self.join.join();
-        Ok((stats?, skills?))
+        match rx.recv_timeout(signals::stop_bound()) {
+            Ok((Ok(stats), Ok(skills))) => Ok((stats, skills)),
+            Ok((Err(e), _) | (_, Err(e))) => Err(Stuck { stage: Stage::Stats, detail: e.to_string() }),
+            Err(_) => {
+                let stage = match stage.load(Ordering::SeqCst) {
+                    s if s == Stage::Gui as u8 => Stage::Gui,
+                    s if s == Stage::Link as u8 => Stage::Link,
+                    s if s == Stage::Cycle as u8 => Stage::Cycle,
+                    _ => Stage::Stats,
+                };
+                Err(Stuck { stage, detail: String::new() })
+            }
+        }
     }
 }
+
+/// Where [`Running::finish`] was when it gave up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    Spawn,
+    Stats,
+    Gui,
+    Link,
+    Cycle,
+}
+
+/// A stop that did not complete: what did not stop.
+#[derive(Debug)]
+struct Stuck {
+    stage: Stage,
+    detail: String,
+}
+
+impl std::fmt::Display for Stuck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let bound = signals::bound_text();
+        match self.stage {
+            Stage::Spawn => write!(f, "could not stop the robot: {}", self.detail),
+            Stage::Stats if !self.detail.is_empty() => {
+                write!(f, "the manager did not give its final statistics: {}", self.detail)
+            }
+            Stage::Stats | Stage::Cycle => write!(
+                f,
+                "the cycle did not stop within {bound} of the shutdown request (it is stuck, most likely \
+                 in a skill's body that does not return); exiting without it"
+            ),
+            Stage::Gui => write!(f, "the GUI did not stop within {bound}; exiting without it"),
+            Stage::Link => write!(f, "the link did not close within {bound}; exiting without it"),
+        }
+    }
+}
+
+impl std::error::Error for Stuck {}
 
 /// Loads, checks and starts a robot file. `Err(Ok(code))`: the problems
 /// were reported already.
@@ -998,15 +1075,17 @@ fn gui_address(robot_file: &RobotFile, opts: &RunOptions) -> Result<Option<std::
 }
 
 fn run_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
-    let mut running = match start_robot(file, opts, ext) {
+    // Before starting: a signal during the start stops the robot once started.
+    let interrupted = interrupt_flag()?;
+    let running = match start_robot(file, opts, ext) {
         Ok(r) => r,
         Err(done) => return done,
     };
     let cycles = opts.cycles;
-    let interrupted = interrupt_flag()?;
     let started = Instant::now();
     loop {
-        if interrupted.load(Ordering::SeqCst) {
+        if let Some(sig) = interrupted.signal() {
+            eprintln!("situate: {}: stopping (again to exit at once)", signals::name(sig));
             break;
         }
         match running.events.recv_timeout(Duration::from_millis(100)) {
@@ -1017,17 +1096,28 @@ fn run_robot(file: &Path, opts: &RunOptions, ext: &Extensions) -> anyhow::Result
             _ => {}
         }
         if cycles.is_some() && started.elapsed() > Duration::from_secs(1) {
-            // A stop requested over the link also ends a bounded run.
-            if let Ok(s) = running.handle.stats() {
+            // A stop requested over the link also ends a bounded run. Bounded:
+            // a stuck cycle must not keep this loop from seeing a signal.
+            let asked =
+                running.handle.request_timeout(situate::manager::Request::QueryStats, Duration::from_millis(200));
+            if let Ok(situate::manager::Reply::Stats(s)) = asked {
                 if cycles.is_some_and(|n| s.cycle >= n) && !s.running {
                     break;
                 }
             }
         }
     }
-    let (stats, skills) = running.finish()?;
-    print_summary(&stats, &skills);
-    Ok(ExitCode::SUCCESS)
+    match running.finish() {
+        Ok((stats, skills)) => {
+            print_summary(&stats, &skills);
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(stuck) => {
+            eprintln!("situate: {stuck}");
+            eprintln!("situate: no summary: the manager did not answer");
+            Ok(ExitCode::FAILURE)
+        }
+    }
 }
 
 fn generate(lang: &str, manifest: &Path, out: &Path) -> anyhow::Result<ExitCode> {
@@ -1087,6 +1177,8 @@ fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
         no_gui: demo.headless,
         ..RunOptions::default()
     };
+    // Ctrl-C (and SIGTERM, SIGHUP) stop the sequencer and end the demo with its outcome.
+    let stop = interrupt_flag()?;
     let running = match start_robot(&demo.robot, &opts, ext) {
         Ok(r) => r,
         Err(done) => return done,
@@ -1105,20 +1197,21 @@ fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
         }
     });
     let started = Instant::now();
-    let status = std::process::Command::new(&python)
+    let mut command = std::process::Command::new(&python);
+    command
         .arg(&demo.sequencer)
         .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
         .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
-        .args(if demo.json { &["--quiet"][..] } else { &[][..] })
-        .status()
-        .with_context(|| format!("starting the sequencer with `{}`", python.display()));
+        .args(if demo.json { &["--quiet"][..] } else { &[][..] });
+    let run =
+        run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
     let wall_s = started.elapsed().as_secs_f64();
     let (delivered_at, sim_time) = {
         let w = sim.world.lock().map_err(|_| anyhow::anyhow!("the simulator failed"))?;
         (w.delivered_at(), w.time_s())
     };
     let (stats, skills) = running.finish()?;
-    let status = status?;
+    let run = run?;
     let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
     let cpu_ns: u64 =
         skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.total_ns).sum();
@@ -1132,14 +1225,26 @@ fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
         "skill_cpu_ms": cpu_ns as f64 / 1e6,
         "wall_s": wall_s,
         "speedup": if wall_s > 0.0 { sim_time / wall_s } else { 0.0 },
-        "sequencer_exit": status.code(),
+        "sequencer_exit": run.status.code(),
+        "interrupted": run.interrupted.map(signals::name),
+        "phase": run.phase,
     });
     if demo.json {
         println!("{outcome}");
     } else {
-        match delivered_at {
-            Some(t) => println!("demo: message delivered at t = {t:.1} s (seed {})", demo.seed),
-            None => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
+        let delivered = match delivered_at {
+            Some(t) => format!("message delivered at t = {t:.1} s"),
+            None => "message not delivered".to_string(),
+        };
+        match (run.interrupted, delivered_at) {
+            (Some(sig), _) => println!(
+                "demo: interrupted ({}) at t = {sim_time:.1} s{}, {delivered} (seed {})",
+                signals::name(sig),
+                run.phase.as_ref().map(|p| format!(" in phase {p}")).unwrap_or_default(),
+                demo.seed
+            ),
+            (None, Some(_)) => println!("demo: {delivered} (seed {})", demo.seed),
+            (None, None) => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
         }
         println!(
             "demo: {} cycles, {runs} skill runs, {:.1} ms in skills, {wall_s:.1} s wall ({:.0}× real time)",
@@ -1148,7 +1253,106 @@ fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
             if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
         );
     }
-    Ok(if delivered_at.is_some() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+    Ok(match (run.interrupted, delivered_at) {
+        (Some(sig), _) => ExitCode::from(signals::status(sig)),
+        (None, Some(_)) => ExitCode::SUCCESS,
+        (None, None) => ExitCode::FAILURE,
+    })
+}
+
+/// How long the sequencer has to end after it is told to stop, before it is killed.
+const SEQUENCER_BOUND: Duration = Duration::from_secs(5);
+
+/// How the demo's sequencer ended.
+struct SequencerRun {
+    status: std::process::ExitStatus,
+    /// The signal that stopped the demo, if one did.
+    interrupted: Option<i32>,
+    /// The last phase the sequencer announced (`phase N: …`), as `N (what it does)`.
+    phase: Option<String>,
+}
+
+/// Runs the sequencer to its end, its output passed through (and its
+/// phases noted). On a stop request it is told to stop (SIGTERM; a Ctrl-C at
+/// a terminal reaches it directly too) and killed if it has not ended
+/// within [`SEQUENCER_BOUND`].
+fn run_sequencer(mut command: std::process::Command, stop: &signals::Stop) -> std::io::Result<SequencerRun> {
+    let mut child = command.stdout(std::process::Stdio::piped()).spawn()?;
+    let phase = Arc::new(std::sync::Mutex::new(None));
+    let relay = child.stdout.take().map(|out| {
+        let phase = Arc::clone(&phase);
+        std::thread::spawn(move || relay_lines(out, &phase))
+    });
+    let mut interrupted = None;
+    let mut deadline = None;
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
+        if let (None, Some(sig)) = (interrupted, stop.signal()) {
+            interrupted = Some(sig);
+            eprintln!("situate: {}: stopping the sequencer (again to exit at once)", signals::name(sig));
+            terminate(&mut child);
+            deadline = Some(Instant::now() + SEQUENCER_BOUND);
+        }
+        if deadline.is_some_and(|d| Instant::now() > d) {
+            eprintln!("situate: the sequencer did not stop within {} s: killed", SEQUENCER_BOUND.as_secs());
+            let _ = child.kill();
+            break child.wait()?;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    // A Ctrl-C at a terminal may end the sequencer before the loop above sees it.
+    let interrupted = interrupted.or_else(|| stop.signal());
+    if let Some(relay) = relay {
+        let _ = relay.join();
+    }
+    let phase = phase.lock().map(|p| p.clone()).unwrap_or_default();
+    Ok(SequencerRun { status, interrupted, phase })
+}
+
+/// Asks a child process to stop (SIGTERM).
+fn terminate(child: &mut std::process::Child) {
+    #[cfg(unix)]
+    {
+        if let Ok(pid) = libc::pid_t::try_from(child.id()) {
+            // SAFETY: kill(2) on our own child's id, which is not yet reaped.
+            unsafe { libc::kill(pid, libc::SIGTERM) };
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = child.kill();
+}
+
+/// Copies the sequencer's output to ours line by line, noting its phases.
+fn relay_lines(out: impl std::io::Read, phase: &std::sync::Mutex<Option<String>>) {
+    use std::io::{BufRead as _, Write as _};
+    let mut out = std::io::BufReader::new(out);
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        match out.read_until(b'\n', &mut line) {
+            Ok(0) | Err(_) => return,
+            Ok(_) => {}
+        }
+        if let Some(p) = phase_of(&String::from_utf8_lossy(&line)) {
+            if let Ok(mut slot) = phase.lock() {
+                *slot = Some(p);
+            }
+        }
+        let mut stdout = std::io::stdout().lock();
+        let _ = stdout.write_all(&line);
+        let _ = stdout.flush();
+    }
+}
+
+/// `N (what it does)` from a narrative line `[  12.3 s] phase N: what it does`.
+fn phase_of(line: &str) -> Option<String> {
+    let at = line.find("phase ")?;
+    let rest = &line[at + "phase ".len()..];
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let text = rest[digits..].strip_prefix(": ")?;
+    (digits > 0).then(|| format!("{} ({})", &rest[..digits], text.trim_end()))
 }
 
 fn types(registry: &Registry) {
