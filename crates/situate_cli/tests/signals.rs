@@ -205,13 +205,39 @@ fn run_stops_cleanly_on_sigterm_sighup_and_sigint() {
 
 #[test]
 fn a_stuck_cycle_does_not_keep_run_from_stopping() {
+    // A budget of an hour: the watchdog leaves the body alone, the cycle
+    // stays stuck, and the stop must still end.
+    let (mut run, _dir) = hanging_run("budget_ms: 3600000");
+    // Ctrl-C used to be noticed and then wait for the cycle for ever.
+    run.signal(libc::SIGINT);
+    let (status, _out, err) = run.wait_exit();
+    assert!(err.contains("situate: SIGINT: stopping"), "{err}");
+    assert_eq!(status.code(), Some(1), "{status:?}, stderr:\n{err}");
+    assert!(err.contains("the cycle did not stop within 2 s of the shutdown request"), "{err}");
+    assert!(err.contains("exiting without it"), "{err}");
+}
+
+#[test]
+fn a_body_past_its_budget_is_left_behind_and_run_stops_cleanly() {
+    let (mut run, _dir) = hanging_run("budget_ms: 100");
+    run.wait_for_line("skill `hang` faulted: its body has been running for");
+    run.signal(libc::SIGINT);
+    let (status, out, err) = run.wait_exit();
+    assert!(err.contains("over its execution budget of 100 ms"), "{err}");
+    assert_eq!(status.code(), Some(0), "{status:?}, stderr:\n{err}");
+    assert!(out.starts_with("robot `stuck`: "), "no summary:\n{out}");
+}
+
+/// `situate run` of a robot whose C skill `hang` (with `extra` in its
+/// entry) has been made to hang in its body.
+fn hanging_run(extra: &str) -> (Proc, tempfile::TempDir) {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let lib = build_library(dir.path());
     let robot = dir.path().join("robot.yaml");
     std::fs::write(
         &robot,
         format!(
-            "robot: stuck\ncycle: {{rate_hz: 50}}\nlibraries: [{}]\nskills:\n  - {{name: hang, type: t.hang}}\n",
+            "robot: stuck\ncycle: {{rate_hz: 50}}\nlibraries: [{}]\nskills:\n  - {{name: hang, type: t.hang, {extra}}}\n",
             lib.display()
         ),
     )
@@ -222,18 +248,7 @@ fn a_stuck_cycle_does_not_keep_run_from_stopping() {
     let c = client(&endpoint, "stuck");
     c.request("stuck", "set_param", &json!({"skill": "hang", "param": "hang", "value": 1.0})).expect("hang set");
     run.wait_for_line("t.hang: hanging");
-    // Ctrl-C used to be noticed and then wait for the cycle for ever.
-    run.signal(libc::SIGINT);
-    let (status, out, err) = run.wait_exit();
-    assert!(err.contains("situate: SIGINT: stopping"), "{err}");
-    if status.code() == Some(0) {
-        // A manager that leaves a body that never returns behind stops cleanly.
-        assert!(out.starts_with("robot `stuck`: "), "no summary:\n{out}");
-    } else {
-        assert_eq!(status.code(), Some(1), "{status:?}, stderr:\n{err}");
-        assert!(err.contains("the cycle did not stop within 2 s of the shutdown request"), "{err}");
-        assert!(err.contains("exiting without it"), "{err}");
-    }
+    (run, dir)
 }
 
 /// A robot with the remote skill `hang` and its host, `situate serve-skill`
