@@ -349,6 +349,41 @@ def test_an_exception_faults_the_skill_with_its_traceback_and_the_cycle_goes_on(
     assert info.faulted is None
 
 
+SLEEPY = """
+import time
+import situate
+
+@situate.skill(name="ticker", outputs={"t": "f64"})
+def ticker(k: float = 1.0) -> dict[str, float]:
+    return {"t": k}
+
+@situate.skill(name="sleepy", outputs={"y": "f64"})
+def sleepy(nap_s: float = 0.0) -> dict[str, float]:
+    time.sleep(nap_s)
+    return {"y": 1.0}
+"""
+
+
+def test_a_python_body_over_its_budget_is_faulted_and_the_cycle_goes_on(files: Write) -> None:
+    files("skills.py", SLEEPY)
+    path = files(
+        "robot.yaml",
+        robot_yaml("- {name: sleepy, type: sleepy, budget_ms: 100}\n- {name: ticker, type: ticker}\n"),
+    )
+    robot = situate.LocalRobot(path)
+    robot.step(2)
+    robot.set_param("sleepy", "nap_s", 0.5)
+    robot.step(3)
+    (fault,) = robot.events("skill_faulted")
+    assert isinstance(fault, situate.SkillFaulted)
+    assert (fault.skill, fault.cycle) == ("sleepy", 3)
+    assert "over its execution budget of 100 ms (`budget_ms`)" in fault.cause
+    y = robot.query("y")
+    assert (y.value, y.cycle) == (1.0, 2), "the late run's output was dropped"
+    ticker = robot.query("t")
+    assert (ticker.value, ticker.cycle) == (1.0, 5)
+
+
 @pytest.mark.parametrize(
     ("ty", "returned", "port", "expected", "got"),
     [
