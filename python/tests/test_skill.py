@@ -368,7 +368,9 @@ def test_a_python_body_over_its_budget_is_faulted_and_the_cycle_goes_on(files: W
     files("skills.py", SLEEPY)
     path = files(
         "robot.yaml",
-        robot_yaml("- {name: sleepy, type: sleepy, budget_ms: 100}\n- {name: ticker, type: ticker}\n"),
+        robot_yaml(
+            "- {name: sleepy, type: sleepy, budget_ms: 100}\n- {name: ticker, type: ticker}\n"
+        ),
     )
     robot = situate.LocalRobot(path)
     robot.step(2)
