@@ -207,7 +207,7 @@ fn run_stops_cleanly_on_sigterm_sighup_and_sigint() {
 fn a_stuck_cycle_does_not_keep_run_from_stopping() {
     // A budget of an hour: the watchdog leaves the body alone, the cycle
     // stays stuck, and the stop must still end.
-    let (mut run, _dir) = hanging_run("budget_ms: 3600000");
+    let (run, _dir) = hanging_run("budget_ms: 3600000");
     // Ctrl-C used to be noticed and then wait for the cycle for ever.
     run.signal(libc::SIGINT);
     let (status, _out, err) = run.wait_exit();
