@@ -12,7 +12,8 @@ help: ## Show the targets.
 demo: python gui ## The delivery demo: simulator, manager, Python sequencer; GUI on http://127.0.0.1:8080.
 	$(CARGO) run --release -q -p situate_cli -- demo --python .venv/bin/python $(DEMO_ARGS)
 
-test: system-deps gui lint test-rust test-python test-gui ## Run every test in every language (what CI runs).
+test: ## Run every test in every language (what CI runs); one line per stage with its time, and the total.
+	scripts/test.sh
 
 system-deps: ## Install the system tools the tests use (iproute2), when missing.
 	scripts/system-deps.sh

@@ -6,8 +6,10 @@ on a free port and drives it with `situate.connect`.
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
+import time
 from collections.abc import Callable
 
 import pytest
@@ -201,8 +203,16 @@ def test_priority_and_verbosity_are_set(toybot: Manager) -> None:
 def test_signals_are_queried_with_their_type_and_writer(toybot: Manager) -> None:
     async def main() -> None:
         async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
-            await robot.step(2)  # stopped, two cycles run: every device has reported
-            sonar = await robot.query("sonar.range")
+            # The toy devices read on their own threads (wall clock): step until both have
+            # reported, a minute at most (on a loaded machine that can take many cycles).
+            deadline = time.monotonic() + 60
+            while True:
+                await robot.step(1)
+                sonar = await robot.query("sonar.range")
+                if sonar.value is not None and (await robot.query("odom")).value is not None:
+                    break
+                assert time.monotonic() < deadline, "no sonar and odometry readings within a minute"
+                await asyncio.sleep(0.005)
             assert (sonar.signal, sonar.type, sonar.writer) == ("sonar.range", "f32[24]", "sonar")
             assert len(sonar.value) == 24
             assert all(isinstance(r, float) and 0 < r <= 2.0 for r in sonar.value)

@@ -174,9 +174,12 @@ export class Plots {
       await this.watch();
       setText(this.error, "");
       this.list.append(plot.el);
-      this.input.value = "";
+      // Another signal may have been typed while the server answered: keep it.
+      if (this.input.value.trim() === expr) this.input.value = "";
     } catch (e) {
-      this.plots.pop();
+      // Other adds may have been pushed meanwhile: remove this one, not the last.
+      const i = this.plots.indexOf(plot);
+      if (i >= 0) this.plots.splice(i, 1);
       await this.watch().catch(() => undefined);
       setText(this.error, errorText(e));
     }

@@ -29,9 +29,9 @@ describe("situate GUI", () => {
       page = await browser.context.newPage();
       page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
       await page.goto(tb.url);
-      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 20_000 });
+      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
       // The first telemetry sample has built the panels.
-      await page.getByTestId("switch-wander").waitFor({ timeout: 20_000 });
+      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
     } catch (e) {
       await stopBrowser(browser).catch(() => undefined);
       await stopTestbed(tb).catch(() => undefined);
@@ -53,17 +53,26 @@ describe("situate GUI", () => {
   test("toggling a skill in the GUI activates it in the manager", async () => {
     const before = await skillsOverLink();
     assert.equal(before.wander.active, true, "wander starts active (examples/toybot.yaml)");
+    // The page shows what the manager said in its last telemetry sample; a user acts on what is
+    // shown, so each step first waits for the page to show the previous step's effect (acting on
+    // an older sample once deactivated a skill twice on a loaded machine).
+    const shown = (name, state) => until(async () => (await page.getByTestId(`state-${name}`).textContent()) === state, `the page shows ${name} ${state}`);
     const sw = page.getByTestId("switch-wander");
     await sw.uncheck();
     await until(async () => (await skillsOverLink()).wander.active === false, "wander inactive over the link");
+    await shown("wander", "inactive");
     await sw.check();
     await until(async () => (await skillsOverLink()).wander.active === true, "wander active again over the link");
+    await shown("wander", "active");
     // The skill panel's own button does the same.
     await page.getByTestId("skill-runaway").locator("summary").click();
+    await shown("runaway", "active");
     await page.getByTestId("activate-runaway").click();
     await until(async () => (await skillsOverLink()).runaway.active === false, "runaway inactive over the link");
+    await shown("runaway", "inactive");
     await page.getByTestId("activate-runaway").click();
     await until(async () => (await skillsOverLink()).runaway.active === true, "runaway active again over the link");
+    await shown("runaway", "active");
   });
 
   test("a parameter edit changes the value; an out-of-range edit shows the error and changes nothing", async () => {
@@ -148,9 +157,17 @@ describe("situate GUI", () => {
   });
 
   test("a plot receives points", async () => {
-    await page.getByTestId("plot-signal").fill("odom.x");
-    await page.getByTestId("plot-add").click();
-    await page.getByTestId("plot-signal").fill("sonar.range[3]");
+    // The second signal is typed while the server answers the first add (in the same task, so
+    // always before its answer): the answer must not wipe it. It once did whenever the machine
+    // was slow enough, and only one plot appeared.
+    await page.evaluate(() => {
+      const input = document.querySelector('[data-testid="plot-signal"]');
+      input.value = "odom.x";
+      document.querySelector('[data-testid="plot-add"]').click();
+      input.value = "sonar.range[3]";
+    });
+    await until(async () => (await page.getByTestId("plot-canvas").count()) === 1, "the first plot");
+    assert.equal(await page.getByTestId("plot-signal").inputValue(), "sonar.range[3]", "what was typed meanwhile is kept");
     await page.getByTestId("plot-add").click();
     const canvases = page.getByTestId("plot-canvas");
     await until(async () => (await canvases.count()) === 2, "two plots");
@@ -204,7 +221,7 @@ describe("situate GUI", () => {
     const second = await browser.context.newPage();
     try {
       await second.goto(tb.url);
-      await second.getByTestId("switch-wander").waitFor({ timeout: 20_000 });
+      await second.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
       const samples = async (p) => Number((await p.evaluate(() => document.body.dataset.samples)) ?? 0);
       const a0 = await samples(page);
       const b0 = await samples(second);

@@ -124,8 +124,11 @@ export function cli(linkPort, ...args) {
   });
 }
 
-/** Polls `f` until it returns a truthy value (or throws the last error after `timeoutMs`). */
-export async function until(f, what, timeoutMs = 15_000) {
+/**
+ * Polls `f` until it returns a truthy value (or throws the last error after `timeoutMs`). The
+ * bound only turns a hang into a failure: it is generous so that a loaded machine never trips it.
+ */
+export async function until(f, what, timeoutMs = 60_000) {
   const end = Date.now() + timeoutMs;
   let last;
   while (Date.now() < end) {

@@ -556,6 +556,21 @@ mod tests {
         manager.spawn(true)
     }
 
+    /// Steps the robot one cycle at a time until a sample passes `ok`; a
+    /// minute without one fails the test (a hang, not a slow machine).
+    fn step_until(handle: &mut Handle, s: &Shared, ok: impl Fn(&Json) -> bool) -> Json {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            handle.step(1).expect("step");
+            let sample = take_sample(s, &mut HashSet::new());
+            if ok(&sample) {
+                return sample;
+            }
+            assert!(Instant::now() < deadline, "no such sample within a minute; the last: {sample}");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
     fn shared(handle: Handle) -> Shared {
         let (wake, _) = crossbeam_channel::unbounded();
         Shared {
@@ -630,8 +645,10 @@ mod tests {
         assert!(r["error"]["message"].as_str().unwrap_or("").contains("sonar.range"), "suggests the name: {r}");
         let r = handle_message(&s, 7, r#"{"id": 2, "verb": "watch", "args": {"signals": ["odom"]}}"#);
         assert_eq!(r["ok"]["signals"], json!(["odom"]));
-        handle.step(3).expect("step");
-        let sample = take_sample(&s, &mut HashSet::new());
+        // The toy sonar reads on its own thread (wall clock): how many cycles
+        // its first reading takes depends on the machine's load, so step
+        // until it is there (a minute at most) rather than a fixed count.
+        let sample = step_until(&mut handle, &s, |sample| sample["signals"]["sonar.range"]["value"].is_array());
         assert_eq!(sample["type"], "telemetry");
         assert_eq!(sample["stats"]["robot"], "guitest");
         assert_eq!(sample["skills"].as_array().map(Vec::len), Some(4));
