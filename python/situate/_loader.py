@@ -79,9 +79,14 @@ def load_file(path: str) -> list[Skill]:
         sys.modules.pop(module_name, None)
         line = _line_in(resolved, e.__traceback__)
         where = f"{path}:{line}" if line else path
+        # The traceback from the user's file on: the loader's and importlib's frames above it
+        # say nothing about the mistake.
+        tb = e.__traceback__
+        while tb is not None and Path(tb.tb_frame.f_code.co_filename) != resolved:
+            tb = tb.tb_next
         raise SkillLoadError(
             f"{where}: {type(e).__name__} while importing: {e}\n"
-            + "".join(traceback.format_exception(type(e), e, e.__traceback__)).rstrip()
+            + "".join(traceback.format_exception(type(e), e, tb or e.__traceback__)).rstrip()
         ) from None
     skills: list[Skill] = []
     for value in vars(module).values():

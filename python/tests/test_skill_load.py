@@ -89,6 +89,21 @@ def test_load_errors_name_the_file_and_line(
     assert "robot.yaml:3:" in result.stderr
 
 
+def test_an_import_error_shows_the_users_frames_first_without_the_loaders(files: Write) -> None:
+    files("helper_mod.py", "def fail() -> None:\n    raise ValueError('boom')\n")
+    files("skills.py", "import situate\nimport helper_mod\n\nhelper_mod.fail()\n")
+    path = files("robot.yaml", robot("skills.py"))
+    result = situate("check", str(path))
+    assert result.returncode == 1
+    err = result.stderr
+    assert "skills.py:4: ValueError while importing: boom" in err
+    frames = [line.strip() for line in err.splitlines() if line.strip().startswith('File "')]
+    # The first frame is the user's file (then the module it called); no importlib, no loader.
+    assert 'skills.py", line 4' in frames[0], err
+    assert 'helper_mod.py", line 2' in frames[1], err
+    assert not any("importlib" in f or "_loader.py" in f for f in frames), err
+
+
 def test_check_and_run_accept_python_skills(files: Write) -> None:
     files("skills.py", GOOD)
     path = files("robot.yaml", robot("skills.py"))

@@ -295,7 +295,20 @@ fn load(file: &Path) -> Result<Loaded, ExitCode> {
     let link = match &robot_file.link {
         None => LinkConfig::default(),
         Some(node) => match LinkConfig::from_node(node) {
-            Ok(l) => l,
+            // What `run` gives Zenoh is checked here too, so `check` and `run` agree.
+            Ok(l) => match l.zenoh_config() {
+                Ok(_) => l,
+                Err(e) => {
+                    let at = node
+                        .value
+                        .as_map()
+                        .and_then(|m| m.iter().find(|(k, _)| k.value == "zenoh").map(|(_, v)| v.pos))
+                        .unwrap_or(node.pos);
+                    eprintln!("{}", robot_file.error(at, format!("`link`: Zenoh refuses this configuration: {e}")));
+                    count_line(file, 1);
+                    return Err(ExitCode::FAILURE);
+                }
+            },
             Err(errors) => {
                 for e in &errors {
                     eprintln!("{}", robot_file.error(e.pos, e.message.clone()));
@@ -659,13 +672,18 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
     };
     let mut errors = Vec::new();
     let mut map_path = None;
+    // Where the robot file names the map: a map's error is reported there too.
+    let mut map_at = None;
     let mut seed = 1u64;
     match node.value.as_map() {
         Some(entries) => {
             for (key, value) in entries {
                 match key.value.as_str() {
                     "map" => match value.value.as_text() {
-                        Some(p) => map_path = Some(robot_file.resolve(p)),
+                        Some(p) => {
+                            map_path = Some(robot_file.resolve(p));
+                            map_at = Some(value.pos);
+                        }
                         None => errors.push(robot_file.error(value.pos, "`map` expects the path of a map file")),
                     },
                     "seed" => match value.value.as_i64().filter(|s| *s >= 0) {
@@ -686,6 +704,7 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
     }
     if let Some(m) = &over.map {
         map_path = Some(m.clone());
+        map_at = None;
     }
     if let Some(s) = over.seed {
         seed = s;
@@ -697,7 +716,16 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
         return Err(errors.into_iter().map(|e| e.to_string()).collect());
     }
     let map_path = map_path.unwrap_or_default();
-    let map = situate_sim::load_map(&map_path).map_err(|e| vec![e.to_string()])?;
+    let map = situate_sim::load_map(&map_path).map_err(|e| {
+        // Both places: the map's own (file:line:col), then the robot file's `map:`.
+        let named = match map_at {
+            Some(pos) => robot_file.error(pos, format!("the map `{}` named here cannot be used", map_path.display())),
+            None => {
+                robot_file.error(node.pos, format!("the map `{}` given by --map cannot be used", map_path.display()))
+            }
+        };
+        vec![format!("{e}\n{named}")]
+    })?;
     let world = Arc::new(std::sync::Mutex::new(situate_sim::World::new(map.clone(), seed)));
     Ok(Some(Simulation { map_path, map, world, seed }))
 }
@@ -774,6 +802,10 @@ fn check(file: &Path, ext: &Extensions) -> anyhow::Result<ExitCode> {
         Ok(r) => r,
         Err(errors) => return Ok(report(file, &errors)),
     };
+    // Every section `run` reads is checked by the code `run` uses.
+    if let Err(e) = gui_address(&loaded.file, &RunOptions::default()) {
+        return Ok(report(file, &[e]));
+    }
     for (_, decl) in &loaded.remote {
         // Checking needs the declaration only; nothing is created.
         registry.add(situate_core::SkillType::new(decl.clone(), || Err("not created by `check`".into())));

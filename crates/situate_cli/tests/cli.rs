@@ -311,6 +311,57 @@ fn a_simulator_section_with_a_bad_map_or_key_names_the_place() {
 }
 
 #[test]
+fn a_broken_map_is_reported_in_the_map_and_at_the_robot_files_map_line() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("broken.yaml"), "floors: [\n").unwrap();
+    let path = dir.path().join("r.yaml");
+    std::fs::write(&path, "robot: s\nsimulator:\n  map: broken.yaml\n  seed: 1\n").unwrap();
+    for verb in ["check", "run"] {
+        let out =
+            situate([verb.as_ref(), path.as_os_str(), "--no-link".as_ref()].into_iter().take(if verb == "check" {
+                2
+            } else {
+                3
+            }));
+        assert_no_panic(&out);
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        let map = shown(&dir.path().join("broken.yaml"));
+        assert!(err.lines().any(|l| l.starts_with(&format!("{map}:2:"))), "{verb}: the map's own place: {err}");
+        assert!(
+            err.contains(&format!("{}:3:8: error: the map `{map}` named here cannot be used", shown(&path))),
+            "{verb}: the robot file's `map:` line: {err}"
+        );
+    }
+}
+
+#[test]
+fn check_validates_the_gui_and_link_sections_as_run_does() {
+    let cases = [
+        ("gui: {listen: nonsense}\n", "5:15: error: `gui.listen`: `nonsense` is not an address"),
+        ("gui: {port: 8080, colour: red}\n", "5:19: error: unknown key `colour` in `gui`"),
+        ("link:\n  zenoh:\n    mode: bogus\n", "7:5: error: `link`: Zenoh refuses this configuration:"),
+        ("link:\n  listen: [nonsense]\n", "6:12: error: `link.listen` expects endpoints"),
+    ];
+    for (section, expected) in cases {
+        let source =
+            format!("robot: t\ncycle: {{clock: simulated}}\ndevices:\n  - {{name: sonar, type: toy.sonar}}\n{section}");
+        let (_dir, path) = robot_file("t.yaml", &source);
+        for verb in ["check", "run"] {
+            let out = situate(
+                [verb.as_ref(), path.as_os_str(), "--cycles".as_ref(), "1".as_ref()]
+                    .into_iter()
+                    .take(if verb == "check" { 2 } else { 4 }),
+            );
+            assert_no_panic(&out);
+            let err = stderr(&out);
+            assert!(!out.status.success(), "{verb} accepted {section:?}: {err}");
+            assert!(err.contains(&format!("{}:{expected}", shown(&path))), "{verb} {section:?}: {err}");
+        }
+    }
+}
+
+#[test]
 fn map_and_seed_overrides_need_a_simulator() {
     let out = situate(["run", TOYBOT, "--no-link", "--cycles", "2", "--seed", "3"]);
     assert_no_panic(&out);
