@@ -3,48 +3,12 @@
 from __future__ import annotations
 
 import asyncio
-import os
-import shutil
-import subprocess
-from pathlib import Path
 
-import pytest
-from support import REPO, run, start_manager
+from support import REPO, build_library, run, start_manager
 
 import situate
 
 MIXED = REPO / "examples" / "mixed" / "robot.yaml"
-
-
-def situate_gen() -> Path:
-    """The generator CMake runs: built by `cargo test --workspace`, else built now."""
-    target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
-    for profile in ("debug", "release"):
-        exe = target / profile / "situate-gen"
-        if exe.is_file():
-            return exe
-    subprocess.run(
-        ["cargo", "build", "-q", "-p", "situate_cabi", "--bin", "situate-gen"], cwd=REPO, check=True
-    )
-    return target / "debug" / "situate-gen"
-
-
-def build_library(lang: str) -> None:
-    """Builds examples/<lang>/runaway with the CMake package, where robot.yaml expects it."""
-    if shutil.which("cmake") is None:
-        pytest.fail("cmake is needed to build the C and C++ examples")
-    build = REPO / "build" / f"{lang}_runaway"
-    configure = [
-        "cmake",
-        "-S",
-        str(REPO / "examples" / lang / "runaway"),
-        "-B",
-        str(build),
-        f"-DCMAKE_PREFIX_PATH={REPO / 'cmake'}",
-        f"-DSITUATE_GEN={situate_gen()}",
-    ]
-    subprocess.run(configure, check=True, capture_output=True)
-    subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True)
 
 
 async def fired(stream: situate.Stream[situate.Event], monitor: int) -> None:
