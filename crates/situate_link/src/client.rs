@@ -27,15 +27,23 @@ pub enum ClientError {
     #[error(transparent)]
     Remote(#[from] RemoteError),
     #[error(
-        "no skill manager answered `{key}` within {timeout:?} (is `situate run` running and reachable at {endpoints}, and do its access rules allow this request?)"
+        "no skill manager answered `{key}` within {} (is `situate run` running and reachable at {endpoints}, is its cycle stuck, and do its access rules allow this request?)",
+        secs(*timeout)
     )]
     NoAnswer { key: String, timeout: Duration, endpoints: String },
+    #[error("the network refused `{key}`: {reason}")]
+    Refused { key: String, reason: String },
     #[error("no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running? ({detail})")]
     NotReachable { endpoints: String, detail: String },
     #[error("several robots answered ({0}); name one with --robot")]
     Ambiguous(String),
     #[error("a reply that is not the protocol's JSON: {0}")]
     BadReply(String),
+}
+
+/// A duration as people write it: `5 s`, `0.5 s`.
+fn secs(d: Duration) -> String {
+    format!("{} s", d.as_secs_f64())
 }
 
 /// A connection to the Zenoh network the managers are on.
@@ -78,7 +86,20 @@ impl Client {
             .wait()
             .map_err(|e| LinkError::Open(e.to_string()))?;
         let reply = replies.recv().map_err(|_| self.no_answer(&key))?;
-        let sample = reply.result().map_err(|e| ClientError::BadReply(format!("{e:?}")))?;
+        let sample = match reply.result() {
+            Ok(sample) => sample,
+            Err(e) => {
+                // Zenoh answers a query nobody finished in time with an error reply whose
+                // payload is its reason (e.g. `Timeout`): a robot that exists but did not
+                // answer, such as one whose cycle is stuck.
+                let reason = String::from_utf8_lossy(&e.payload().to_bytes()).trim().to_string();
+                return Err(if reason.eq_ignore_ascii_case("timeout") {
+                    self.no_answer(&key)
+                } else {
+                    ClientError::Refused { key, reason }
+                });
+            }
+        };
         let body: Json =
             serde_json::from_slice(&sample.payload().to_bytes()).map_err(|e| ClientError::BadReply(e.to_string()))?;
         if let Some(ok) = body.get("ok") {

@@ -223,7 +223,8 @@ impl Args<'_> {
                     other => Err(self.wrong(name, "a list of strings", &other)),
                 })
                 .collect(),
-            Some(Json::String(s)) => Ok(vec![s]),
+            // A lone string is refused like any other non-list (protocol.md): accepting it
+            // would make `"wander"` and `["wander"]` two spellings of one request.
             Some(other) => Err(self.wrong(name, "a list of strings", &other)),
             None => Err(self.missing(name, "a list of strings")),
         }
@@ -287,6 +288,18 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
                     describe(&other)
                 )))
             }
+            // serde_json refuses a number beyond f64's range (1e400) while parsing; that is a
+            // value out of range (`bad_param`, protocol.md), not malformed JSON.
+            Err(e) if e.is_syntax() && e.to_string().starts_with("number out of range") => {
+                return Err(WireError {
+                    kind: "bad_param",
+                    message: format!(
+                        "`{verb}`: a number out of range at column {}: numbers must be finite 64-bit floats \
+                         (magnitude at most 1.8e308; integers within ±9.2e18 for `i64`)",
+                        e.column()
+                    ),
+                })
+            }
             Err(e) => return Err(WireError::bad_request(format!("`{verb}`: the payload is not JSON: {e}"))),
         }
     };
@@ -311,8 +324,10 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             let skill = a.string("skill")?;
             let param = a.string("param")?;
             let raw = a.take("value").ok_or_else(|| a.missing("value", "a bool, number or string"))?;
-            let value = param_from_json(&raw).map_err(|e| {
-                WireError::bad_request(format!("`set_param`: skill `{skill}`: parameter `{param}`: {e}"))
+            // A value of the wrong kind is the parameter's problem: `bad_param` (protocol.md).
+            let value = param_from_json(&raw).map_err(|e| WireError {
+                kind: "bad_param",
+                message: format!("`set_param`: skill `{skill}`: parameter `{param}`: {e}"),
             })?;
             Decoded::Manager(Request::SetParam { skill, param, value })
         }
@@ -601,7 +616,48 @@ mod tests {
         let e = decode_request("query", b"{\"signal\": \"x\", \"extra\": 1}").unwrap_err();
         assert_eq!(e.message, "`query`: unknown argument `extra`");
         let e = decode_request("set_param", b"{\"skill\": \"r\", \"param\": \"p\", \"value\": [1]}").unwrap_err();
+        assert_eq!(e.kind, "bad_param");
         assert!(e.message.contains("a parameter value is a bool, number or string"), "{}", e.message);
+    }
+
+    #[test]
+    fn a_string_where_a_list_is_expected_is_refused() {
+        for (verb, payload, arg) in [
+            ("activate", r#"{"skills": "wander"}"#, "skills"),
+            ("deactivate", r#"{"skills": "wander"}"#, "skills"),
+            ("monitor_add", r#"{"condition": "x.y > 1", "report": "x"}"#, "report"),
+            ("telemetry", r#"{"signals": "odom"}"#, "signals"),
+        ] {
+            let e = decode_request(verb, payload.as_bytes()).unwrap_err();
+            assert_eq!(e.kind, "bad_request", "{verb}");
+            assert_eq!(
+                e.message,
+                format!(
+                    "`{verb}`: argument `{arg}` must be a list of strings, got \"{}\"",
+                    if arg == "skills" {
+                        "wander"
+                    } else if arg == "report" {
+                        "x"
+                    } else {
+                        "odom"
+                    }
+                )
+            );
+        }
+    }
+
+    #[test]
+    fn a_number_beyond_a_float_is_bad_param_not_bad_json() {
+        for payload in
+            [r#"{"skill": "r", "param": "p", "value": 1e400}"#, r#"{"skill": "r", "param": "p", "value": -1e309}"#]
+        {
+            let e = decode_request("set_param", payload.as_bytes()).unwrap_err();
+            assert_eq!(e.kind, "bad_param", "{payload}: {}", e.message);
+            assert!(e.message.contains("out of range at column"), "{}", e.message);
+            assert!(e.message.contains("1.8e308"), "names the range: {}", e.message);
+        }
+        // Truly malformed JSON stays `bad_request`.
+        assert_eq!(decode_request("set_param", b"{\"value\": 1e}").unwrap_err().kind, "bad_request");
     }
 
     #[test]

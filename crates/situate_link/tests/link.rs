@@ -328,3 +328,29 @@ fn a_flood_of_bad_requests_changes_nothing_and_the_cycle_goes_on() {
         stats_after["overruns"]
     );
 }
+
+#[test]
+fn a_robot_that_does_not_answer_in_time_is_a_sentence_not_a_debug_dump() {
+    // A "robot" whose link takes requests and never answers them, as a stuck one does: Zenoh
+    // then ends the client's query with an error reply whose payload is `Timeout`.
+    let port = free_port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let session = Link::open(&LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() }).unwrap();
+    let held = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let keep = held.clone();
+    let _queryable = session
+        .declare_queryable("situate/stuck/req/**")
+        .callback(move |q| keep.lock().unwrap_or_else(|p| p.into_inner()).push(q))
+        .wait()
+        .unwrap();
+    let mut c = Client::connect(std::slice::from_ref(&endpoint)).unwrap();
+    c.timeout = Duration::from_millis(500);
+    let e = c.request("stuck", "stats", &json!({})).unwrap_err();
+    let text = e.to_string();
+    assert!(matches!(e, ClientError::NoAnswer { .. }), "{e:?}");
+    assert!(text.starts_with("no skill manager answered `situate/stuck/req/stats` within 0.5 s"), "{text}");
+    for debris in ["Timeout", "ReplyError", "b\"", "ZBytes", "{ "] {
+        assert!(!text.contains(debris), "{debris:?} in {text}");
+    }
+    assert!(!held.lock().unwrap_or_else(|p| p.into_inner()).is_empty(), "the request reached the stuck robot");
+}
