@@ -362,6 +362,55 @@ fn check_validates_the_gui_and_link_sections_as_run_does() {
 }
 
 #[test]
+fn a_library_named_bare_next_to_the_robot_file_is_found_there() {
+    // `situate check robot.yaml` from the file's own folder: `libfoo.so` once went to dlopen as
+    // a bare name, which searches the system's library path and not the folder.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("libfoo.so"), b"not a shared library").unwrap();
+    std::fs::write(dir.path().join("robot.yaml"), "robot: l\nlibraries: [libfoo.so]\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_situate"))
+        .args(["check", "robot.yaml"])
+        .current_dir(dir.path())
+        .output()
+        .expect("the situate binary runs");
+    assert_no_panic(&out);
+    let err = stderr(&out);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("robot.yaml:2:13: error: ./libfoo.so"), "the file next to the robot file: {err}");
+    assert!(!err.to_lowercase().contains("no such file"), "it was found: {err}");
+}
+
+#[test]
+fn a_nul_byte_an_oversized_file_and_bytes_that_are_not_utf8_are_refused_with_a_place() {
+    let (_d, nul) = robot_file("nul.yaml", "robot: t\0\ndevices: [x]\n");
+    let out = situate(["check".as_ref(), nul.as_os_str()]);
+    assert_no_panic(&out);
+    assert!(!out.status.success(), "a NUL once ended the file and it checked ok");
+    assert!(
+        stderr(&out).contains(&format!("{}:1:9: error: control character U+0000 (NUL)", shown(&nul))),
+        "{}",
+        stderr(&out)
+    );
+
+    let (_d, big) = robot_file("big.yaml", &format!("robot: t\n# {}\n", "x".repeat(3 << 20)));
+    let out = situate(["check".as_ref(), big.as_os_str()]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("over the limit of 1048576 bytes (1 MiB)"), "{}", stderr(&out));
+
+    let dir = tempfile::tempdir().unwrap();
+    let latin1 = dir.path().join("latin1.yaml");
+    std::fs::write(&latin1, b"robot: t\ndoc: caf\xe9\n").unwrap();
+    let out = situate(["check".as_ref(), latin1.as_os_str()]);
+    assert_no_panic(&out);
+    assert!(
+        stderr(&out).contains(&format!("{}:2:9: error: the file is not UTF-8 text: byte 0xE9 here", shown(&latin1))),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
 fn map_and_seed_overrides_need_a_simulator() {
     let out = situate(["run", TOYBOT, "--no-link", "--cycles", "2", "--seed", "3"]);
     assert_no_panic(&out);

@@ -22,6 +22,8 @@ pub const DEFAULT_RATE_HZ: f64 = 20.0;
 pub const MAX_RATE_HZ: f64 = 100_000.0;
 /// The longest execution budget or liveness deadline: a day, in ms.
 const MAX_DEADLINE_MS: f64 = 86_400_000.0;
+/// The longest period (cycle or skill) and the longest remote timeout: a day, in ms.
+const MAX_PERIOD_MS: f64 = 86_400_000.0;
 /// The largest parallel executor pool.
 pub const MAX_THREADS: usize = 64;
 
@@ -290,18 +292,40 @@ impl RobotFile {
     }
 
     /// Reads and parses a robot file. A read error is one error at 1:1.
+    /// At most [`yaml::MAX_SOURCE_BYTES`] are read: a bigger file is refused
+    /// without being read whole.
     pub fn load(path: &Path) -> Result<RobotFile, Vec<ConfigError>> {
         let file = path.display().to_string();
-        match std::fs::read_to_string(path) {
+        let fail = |pos: Pos, message: String| Err(vec![ConfigError::new(&file, pos, message)]);
+        let bytes = match read_capped(path) {
+            Ok(Ok(bytes)) => bytes,
+            Ok(Err(size)) => return fail(Pos::START, yaml::too_big(size)),
+            Err(e) => return fail(Pos::START, format!("cannot read robot file: {e}")),
+        };
+        match String::from_utf8(bytes) {
             Ok(source) => RobotFile::parse(&file, &source),
-            Err(e) => Err(vec![ConfigError::new(&file, Pos::START, format!("cannot read robot file: {e}"))]),
+            Err(e) => {
+                let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+                // Valid up to here, so this prefix is text.
+                let text = String::from_utf8_lossy(good);
+                let line = text.matches('\n').count() + 1;
+                let col = text.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+                let byte = e.as_bytes()[good.len()];
+                fail(Pos::new(line, col), format!("the file is not UTF-8 text: byte 0x{byte:02X} here"))
+            }
         }
     }
 
     /// A path written in this file, relative to the file's own directory
     /// (absolute paths stay as they are).
     pub fn resolve(&self, path: &str) -> std::path::PathBuf {
-        let dir = Path::new(&self.file).parent().unwrap_or(Path::new(""));
+        // `robot.yaml` has the parent "": its directory is then ".", written out, so that a
+        // bare `libfoo.so` stays a path next to the file (a bare name would send `dlopen`
+        // to the system's library path instead).
+        let dir = match Path::new(&self.file).parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
         dir.join(path)
     }
 
@@ -476,9 +500,22 @@ impl Checker<'_> {
                     rate_key = Some(if k == "rate_hz" { "rate_hz" } else { "period_ms" });
                     if k == "rate_hz" {
                         if let Some(hz) = self.positive(k, value, Some(MAX_RATE_HZ)) {
-                            cycle.period_s = 1.0 / hz;
+                            if hz * 86_400.0 < 1.0 {
+                                // Checked here, where the value was written (the manager's
+                                // check of the period has no position and prints 1/hz).
+                                self.push(
+                                    value.pos,
+                                    format!(
+                                        "`rate_hz` is out of range: expects a period of at most a day \
+                                         (≥ 1/86400 Hz), got {}",
+                                        value.value.describe()
+                                    ),
+                                );
+                            } else {
+                                cycle.period_s = 1.0 / hz;
+                            }
                         }
-                    } else if let Some(ms) = self.positive(k, value, None) {
+                    } else if let Some(ms) = self.positive(k, value, Some(MAX_PERIOD_MS)) {
                         cycle.period_s = ms / 1000.0;
                     }
                 }
@@ -534,7 +571,13 @@ impl Checker<'_> {
         if (min..=max).contains(&n) {
             Some(n)
         } else {
-            self.push(value.pos, format!("`{key}` is out of range: expects an integer from {min} to {max}, got {n}"));
+            self.push(
+                value.pos,
+                format!(
+                    "`{key}` is out of range: expects an integer from {min} to {max}, got {}",
+                    value.value.describe()
+                ),
+            );
             None
         }
     }
@@ -651,10 +694,10 @@ impl Checker<'_> {
                         .map(|p| Spanned::new(p, value.pos));
                 }
                 "period_ms" => {
-                    period_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
+                    period_ms = self.positive(k, value, Some(MAX_PERIOD_MS)).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "timeout_ms" => {
-                    timeout_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
+                    timeout_ms = self.positive(k, value, Some(MAX_PERIOD_MS)).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "budget_ms" => {
                     budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
@@ -795,6 +838,20 @@ impl Checker<'_> {
         }
         out
     }
+}
+
+/// The file's bytes, or `Err(size)` when it is over [`yaml::MAX_SOURCE_BYTES`]
+/// (reading stops there).
+fn read_capped(path: &Path) -> std::io::Result<Result<Vec<u8>, u64>> {
+    use std::io::Read;
+    let f = std::fs::File::open(path)?;
+    let size = f.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut bytes = Vec::new();
+    f.take(yaml::MAX_SOURCE_BYTES as u64 + 1).read_to_end(&mut bytes)?;
+    if bytes.len() > yaml::MAX_SOURCE_BYTES {
+        return Ok(Err(size.max(bytes.len() as u64)));
+    }
+    Ok(Ok(bytes))
 }
 
 #[cfg(test)]
@@ -1069,11 +1126,20 @@ gui: {port: 8080}
         );
         assert_eq!(
             error("robot: r\ncycle: {period_ms: -5}\n"),
-            "robot.yaml:2:20: error: `period_ms` is out of range: expects a finite number > 0, got -5"
+            "robot.yaml:2:20: error: `period_ms` is out of range: expects a number > 0 and ≤ 86400000, got -5"
+        );
+        // Quoted as written, with its position (it once printed `1e297 s` and no place).
+        assert_eq!(
+            error("robot: r\ncycle: {period_ms: 1e300}\n"),
+            "robot.yaml:2:20: error: `period_ms` is out of range: expects a number > 0 and ≤ 86400000, got 1e300"
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {rate_hz: 1e-300}\n"),
+            "robot.yaml:2:18: error: `rate_hz` is out of range: expects a period of at most a day (≥ 1/86400 Hz), got 1e-300"
         );
         assert_eq!(
             error(&skill("    period_ms: .inf\n")),
-            "robot.yaml:5:16: error: `period_ms` is out of range: expects a finite number > 0, got .inf"
+            "robot.yaml:5:16: error: `period_ms` is out of range: expects a number > 0 and ≤ 86400000, got .inf"
         );
         assert_eq!(
             error(&skill("    period_ms: \"50\"\n")),

@@ -325,6 +325,10 @@ impl Frame {
 pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
     // yaml-rust2 does not skip a byte-order mark; editors do not show one.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
+    if source.len() > MAX_SOURCE_BYTES {
+        return Err(ParseError::new(Pos::START, too_big(source.len() as u64)));
+    }
+    prescan(source)?;
     let mut parser = Parser::new_from_str(source);
     let mut stack: Vec<Frame> = Vec::new();
     let mut root: Option<Spanned<Node>> = None;
@@ -460,6 +464,128 @@ fn tag_error(pos: Pos) -> ParseError {
     )
 }
 
+/// The largest robot file (or other YAML source) read: 1 MiB. Robot files
+/// are a few kB; a bigger file is almost surely the wrong one, and parsing
+/// it would cost seconds and much memory.
+pub const MAX_SOURCE_BYTES: usize = 1 << 20;
+
+/// The message for a source over [`MAX_SOURCE_BYTES`].
+pub fn too_big(bytes: u64) -> String {
+    format!(
+        "the file is {bytes} bytes, over the limit of {} bytes (1 MiB) for a YAML file here; is it the right file?",
+        MAX_SOURCE_BYTES
+    )
+}
+
+/// Refuses, with their own position, what yaml-rust2 would read silently
+/// wrong or report at another place:
+/// - control characters (a NUL ends its input: the rest of the file would
+///   be ignored); tabs are refused where they indent, CR only ends a line;
+/// - a tab in a line's indentation, also after a `- `, `? ` or `: `
+///   indicator (it indents the node after it); block scalars (`|`, `>`)
+///   may hold tabs in their text;
+/// - a fullwidth colon `：` where a key's `:` belongs.
+fn prescan(source: &str) -> Result<(), ParseError> {
+    // The indentation of the line that opened a block scalar, while in one.
+    let mut block: Option<usize> = None;
+    for (n, raw) in source.split('\n').enumerate() {
+        let line_no = n + 1;
+        let line = raw.strip_suffix('\r').unwrap_or(raw);
+        let chars: Vec<char> = line.chars().collect();
+        if let Some(i) = chars.iter().position(|c| c.is_control() && *c != '\t') {
+            let c = chars[i];
+            let name = match c {
+                '\0' => " (NUL)",
+                '\r' => " (a carriage return inside a line)",
+                '\u{1b}' => " (ESC)",
+                '\u{7f}' => " (DEL)",
+                _ => "",
+            };
+            return Err(ParseError::new(
+                Pos::new(line_no, i + 1),
+                format!("control character U+{:04X}{name} is not allowed in a robot file", c as u32),
+            ));
+        }
+        let indent = chars.iter().take_while(|c| **c == ' ').count();
+        let rest_blank = chars[indent..].iter().all(|c| *c == ' ' || *c == '\t');
+        if let Some(b) = block {
+            if rest_blank || indent > b {
+                continue;
+            }
+            block = None;
+        }
+        // The structural prefix: spaces, and indicators followed by blanks.
+        let mut i = 0;
+        loop {
+            while i < chars.len() && chars[i] == ' ' {
+                i += 1;
+            }
+            if i < chars.len() && chars[i] == '\t' {
+                let after = chars[i..].iter().find(|c| **c != ' ' && **c != '\t');
+                if after.is_none() || after == Some(&'#') {
+                    break; // a blank or comment-only line: the tab indents nothing
+                }
+                return Err(ParseError::new(
+                    Pos::new(line_no, i + 1),
+                    "tab character in indentation; indent YAML with spaces",
+                ));
+            }
+            if i + 1 < chars.len() && matches!(chars[i], '-' | '?' | ':') && matches!(chars[i + 1], ' ' | '\t') {
+                i += 1;
+                continue;
+            }
+            break;
+        }
+        let content: String = chars[i..].iter().collect();
+        if let Some(col) = fullwidth_key_colon(&content) {
+            return Err(ParseError::new(
+                Pos::new(line_no, i + col + 1),
+                "a fullwidth colon `：` (U+FF1A) where a key's `:` belongs; YAML needs the ASCII colon `:`",
+            ));
+        }
+        if opens_block_scalar(&content) {
+            block = Some(indent);
+        }
+    }
+    Ok(())
+}
+
+/// The character index of a fullwidth colon that ends a plain key (`key： value`),
+/// when the line has no ASCII key colon before it.
+fn fullwidth_key_colon(content: &str) -> Option<usize> {
+    if content.starts_with(['#', '"', '\'', '{', '[', '|', '>']) {
+        return None;
+    }
+    let chars: Vec<char> = content.chars().collect();
+    for (i, c) in chars.iter().enumerate() {
+        let next_blank = chars.get(i + 1).is_none_or(|n| *n == ' ' || *n == '\t');
+        match c {
+            ':' if next_blank => return None,
+            '#' if i > 0 && chars[i - 1] == ' ' => return None,
+            '：' if next_blank && i > 0 => return Some(i),
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Whether a line's content (after its indentation and indicators) ends with
+/// a block scalar's header: `|`, `>`, with chomping and indentation indicators.
+fn opens_block_scalar(content: &str) -> bool {
+    let text = match content.find(" #") {
+        Some(i) => &content[..i],
+        None => content,
+    }
+    .trim_end();
+    let header_start = text.rfind(['|', '>']);
+    let Some(h) = header_start else { return false };
+    let header = &text[h + 1..];
+    let before = &text[..h];
+    header.chars().all(|c| matches!(c, '+' | '-' | '1'..='9'))
+        && header.len() <= 2
+        && (before.is_empty() || before.ends_with(' '))
+}
+
 /// Turns a scanner error into a `ParseError`. Tabs in indentation get their
 /// own message, at the tab itself (the scanner reports the character after).
 fn scan_error(source: &str, e: &ScanError) -> ParseError {
@@ -476,6 +602,16 @@ fn scan_error(source: &str, e: &ScanError) -> ParseError {
                     "tab character in indentation; indent YAML with spaces",
                 );
             }
+        }
+    }
+    // A tab before the error on its line (between values, after a `:`) is
+    // the likely cause: say so, at the tab.
+    if let Some(line) = source.lines().nth(pos.line.saturating_sub(1)) {
+        if let Some(i) = line.chars().take(pos.col).position(|c| c == '\t') {
+            return ParseError::new(
+                Pos::new(pos.line, i + 1),
+                format!("tab character; robot files separate YAML with spaces ({})", e.info()),
+            );
         }
     }
     ParseError::new(pos, format!("invalid YAML: {}", e.info()))
@@ -607,6 +743,59 @@ mod tests {
             err("a: \"open\n"),
             "1:4: invalid YAML: while scanning a quoted scalar, found unexpected end of stream"
         );
+    }
+
+    #[test]
+    fn control_characters_are_refused_where_they_are() {
+        // A NUL once ended the input silently: the rest of the file was ignored.
+        assert_eq!(
+            err("robot: t\0\ndevices: x\n"),
+            "1:9: control character U+0000 (NUL) is not allowed in a robot file"
+        );
+        assert_eq!(err("a: 1\nb: \u{1b}[31m\n"), "2:4: control character U+001B (ESC) is not allowed in a robot file");
+        assert!(err("a: 1\rb: 2\n").starts_with("1:5: control character U+000D (a carriage return inside a line)"));
+        assert_eq!(err("# é \u{7f}\n"), "1:5: control character U+007F (DEL) is not allowed in a robot file");
+        // CRLF line ends are fine.
+        assert!(parse("a: 1\r\nb: 2\r\n").is_ok());
+    }
+
+    #[test]
+    fn a_tab_anywhere_in_indentation_is_named_at_the_tab() {
+        const TAB: &str = "tab character in indentation; indent YAML with spaces";
+        for (source, at) in [
+            ("a:\n\tb: 1\n", "2:1"),
+            ("a:\n  \tb: 1\n", "2:3"),
+            ("a:\n-\tb: 1\n", "2:2"),
+            ("a:\n  - \tb: 1\n", "2:5"),
+            ("a:\n  -\t{b: 1}\n", "2:4"),
+            ("a: [\n\t1]\n", "2:1"),
+            ("a: 1\n\tb: 2\n", "2:1"),
+            ("a:\n  - b: 1\n  \t  c: 2\n", "3:3"),
+        ] {
+            assert_eq!(err(source), format!("{at}: {TAB}"), "{source:?}");
+        }
+        // Blank and comment-only lines with tabs indent nothing; a block scalar's text may hold tabs.
+        assert!(parse("a: 1\n\t\n  \t# note\nb: 2\n").is_ok());
+        assert!(parse("a: |\n  one\ttwo\n   \tthree\nb: 2\n").is_ok());
+        // A tab between values is named at the tab, not after it.
+        assert!(err("a: {b:\t1}\n").starts_with("1:7: tab character; robot files separate YAML with spaces"));
+    }
+
+    #[test]
+    fn a_fullwidth_colon_in_a_key_is_named_where_it_is() {
+        const MSG: &str = "a fullwidth colon `：` (U+FF1A) where a key's `:` belongs; YAML needs the ASCII colon `:`";
+        assert_eq!(err("robot： t\ncycle:\n  rate_hz: 5\n"), format!("1:6: {MSG}"));
+        assert_eq!(err("robot: t\ncycle：\n  rate_hz: 5\n"), format!("2:6: {MSG}"));
+        assert_eq!(err("a:\n  - name： sonar\n"), format!("2:9: {MSG}"));
+        // In a value, a comment or a quoted string it is text.
+        assert!(parse("doc: \"a： b\"\nnote: 注意： x\nc: 1 # d： e\n").is_ok());
+    }
+
+    #[test]
+    fn a_source_over_the_size_cap_is_refused_before_parsing() {
+        let big = format!("a: \"{}\"\n", "x".repeat(MAX_SOURCE_BYTES));
+        let e = err(&big);
+        assert!(e.starts_with("1:1: the file is 1048582 bytes, over the limit of 1048576 bytes"), "{e}");
     }
 
     #[test]
