@@ -411,6 +411,28 @@ fn a_nul_byte_an_oversized_file_and_bytes_that_are_not_utf8_are_refused_with_a_p
 }
 
 #[test]
+fn a_device_under_skills_is_reported_as_that_and_not_as_a_priority_clash() {
+    let source = "robot: t\ndevices:\n  - {name: sonar, type: toy.sonar}\nskills:\n  - {name: w1, type: toy.wheels}\n  - {name: w2, type: toy.wheels}\n";
+    let (_dir, path) = robot_file("t.yaml", source);
+    let out = situate(["check".as_ref(), path.as_os_str()]);
+    assert_no_panic(&out);
+    let err = stderr(&out);
+    let errors: Vec<&str> = err.lines().filter(|l| l.contains(": error: ")).collect();
+    assert_eq!(errors.len(), 2, "{err}");
+    assert!(
+        errors[0].ends_with("error: skill `w1`: `toy.wheels` is a dskill; list it under `devices:`, not `skills:`"),
+        "{err}"
+    );
+    assert!(!err.contains("priorit"), "no priority clash: {err}");
+
+    let source = "robot: t\ndevices:\n  - {name: sonar, type: toy.sonar}\n  - {name: sonar2, type: toy.sonar}\n";
+    let (_dir, path) = robot_file("t.yaml", source);
+    let out = situate(["check".as_ref(), path.as_os_str()]);
+    let err = stderr(&out);
+    assert!(err.contains("4:12: error: devices `sonar` and `sonar2` both write signal `sonar.range` with priority 0; give each its own signal (e.g. `remap: {range: sonar2.range}` on `sonar2`)"), "{err}");
+}
+
+#[test]
 fn map_and_seed_overrides_need_a_simulator() {
     let out = situate(["run", TOYBOT, "--no-link", "--cycles", "2", "--seed", "3"]);
     assert_no_panic(&out);

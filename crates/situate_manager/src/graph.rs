@@ -231,6 +231,8 @@ impl Graph {
         // An entry left out (bad name, duplicate, unknown type) would make its
         // consumers' inputs look unprovided: one typo, many errors. Skip that check then.
         let mut incomplete = false;
+        // Skills listed in the wrong section (a device under `skills:`).
+        let mut misplaced: std::collections::HashSet<String> = std::collections::HashSet::new();
         for (si, s) in spec.skills.iter().enumerate() {
             let noun = if s.section == Some(Section::Devices) { "device" } else { "skill" };
             if !is_identifier(&s.name) {
@@ -265,6 +267,14 @@ impl Graph {
                     ),
                 ),
                 _ => {}
+            }
+            if matches!(
+                (s.section, decl.kind),
+                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async)
+                    | (Some(Section::Skills), SkillKind::Device)
+            ) {
+                // The real mistake is said; what follows from it (a priority clash) is not.
+                misplaced.insert(s.name.clone());
             }
             let mut params: Vec<Value> = decl.params.iter().map(|p| p.default.clone()).collect();
             for entry in &s.params {
@@ -502,11 +512,32 @@ impl Graph {
             // the resource as the later writer's port does (`drive`, not `drive.v`).
             for (k, &(a, _)) in leaf.writers.iter().enumerate() {
                 for &(b, pb) in &leaf.writers[k + 1..] {
-                    if a == b || instances[a].priority != instances[b].priority {
+                    if a == b
+                        || instances[a].priority != instances[b].priority
+                        || misplaced.contains(&instances[a].name)
+                        || misplaced.contains(&instances[b].name)
+                    {
                         continue;
                     }
                     let resource = instances[b].outputs[pb].signal.clone();
                     if !reported_pairs.insert((a, b, resource.clone())) {
+                        continue;
+                    }
+                    if instances[a].kind == SkillKind::Device && instances[b].kind == SkillKind::Device {
+                        // Two devices on one signal is most often a copy without a remap.
+                        let port = &instances[b].outputs[pb].name;
+                        ck.error(
+                            item_pos(specs[b]),
+                            format!(
+                                "devices `{}` and `{}` both write signal `{resource}` with priority {}; give each its own \
+                                 signal (e.g. `remap: {{{port}: {}.{port}}}` on `{}`) or different priorities",
+                                instances[a].name,
+                                instances[b].name,
+                                instances[a].priority,
+                                instances[b].name,
+                                instances[b].name
+                            ),
+                        );
                         continue;
                     }
                     let pos = specs[b].priority_pos.or(specs[a].priority_pos).or(item_pos(specs[b]));

@@ -30,7 +30,7 @@ use crate::expr::{Condition, Lookup, Resolver};
 use crate::graph::{assemble, decompose, topo_order, Graph};
 use crate::monitor::Monitors;
 use crate::registry::Registry;
-use crate::runner::{BodyClock, Exec, Worker, WorkerClock};
+use crate::runner::{BodyClock, Exec, Worker, WorkerClock, WorkerStats};
 use crate::spec::{BuildError, RobotSpec};
 
 mod spawned;
@@ -718,7 +718,7 @@ impl Manager {
                 mb.cycle = self.cycle;
                 mb.time_s = self.time_s;
             }
-            (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), mb.busy_since)
+            (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
         };
         shared.notify();
         self.threaded_results(i, outputs, fault, prints, busy);
@@ -730,23 +730,28 @@ impl Manager {
         let (outputs, fault, prints, busy) = match self.insts[d].worker.as_ref() {
             Some(worker) => {
                 let mut mb = worker.shared.lock();
-                (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), mb.busy_since)
+                (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
             }
-            None => (self.insts[d].lockstep_readings.iter_mut().map(Option::take).collect(), None, Vec::new(), None),
+            None => {
+                (self.insts[d].lockstep_readings.iter_mut().map(Option::take).collect(), None, Vec::new(), (None, None))
+            }
         };
         self.threaded_results(d, outputs, fault, prints, busy);
     }
 
+    /// `busy` is when the body's current run began and the worker's run
+    /// statistics, read under the same lock as `outputs` (so `runs` counts
+    /// exactly the runs whose results have been taken).
     fn threaded_results(
         &mut self,
         i: usize,
         mut outputs: Vec<Option<Value>>,
         fault: Option<String>,
         prints: Vec<String>,
-        busy_since: Option<Instant>,
+        busy: (Option<Instant>, Option<WorkerStats>),
     ) {
-        if let Some(worker) = self.insts[i].worker.as_ref() {
-            let stats = worker.shared.lock().stats;
+        let (busy_since, stats) = busy;
+        if let Some(stats) = stats {
             let inst = &mut self.insts[i];
             inst.runs = stats.runs;
             inst.last_ns = stats.last_ns;
