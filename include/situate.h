@@ -20,7 +20,7 @@
  The version of this ABI. A library built for another version is refused
  at load time with a clear error.
  */
-#define SITUATE_ABI_VERSION 1
+#define SITUATE_ABI_VERSION 2
 
 /*
  A call succeeded.
@@ -36,6 +36,58 @@
  The capacity of an error's message, NUL included.
  */
 #define SITUATE_ERROR_CAPACITY 512
+
+/*
+ A field's type in a [`situate_field`]: what the compiler saw, by
+ `SITUATE_FIELD_CODE` (C11 `_Generic`, C++ templates) in the generated
+ headers. `bool`.
+ */
+#define SITUATE_FIELD_BOOL 1
+
+/*
+ `int64_t`.
+ */
+#define SITUATE_FIELD_I64 2
+
+/*
+ `double`.
+ */
+#define SITUATE_FIELD_F64 3
+
+/*
+ `float` (the elements of an `f32[N]` array).
+ */
+#define SITUATE_FIELD_F32 4
+
+/*
+ `situate_str`.
+ */
+#define SITUATE_FIELD_STR 5
+
+/*
+ `situate_bytes`.
+ */
+#define SITUATE_FIELD_BYTES 6
+
+/*
+ `situate_f32_slice`.
+ */
+#define SITUATE_FIELD_F32_SLICE 7
+
+/*
+ `situate_f64_slice`.
+ */
+#define SITUATE_FIELD_F64_SLICE 8
+
+/*
+ `situate_i64_slice`.
+ */
+#define SITUATE_FIELD_I64_SLICE 9
+
+/*
+ `uint8_t` (the placeholder field of an empty struct).
+ */
+#define SITUATE_FIELD_U8 10
 
 /*
  Why a call failed: a NUL-terminated UTF-8 message (truncated to fit).
@@ -157,6 +209,36 @@ typedef situate_status (*situate_set_param_fn)(void *state,
                                                struct situate_error *error);
 
 /*
+ One field of a struct as the library was compiled: records are
+ flattened (`sonar.range`), a fixed array is one field of `count`
+ elements of type `code`. The host checks every one against the layout it
+ computes from the manifest, so a struct of the right size with a wrong
+ field (a `double` where the manifest says `i64`) is refused at load.
+ */
+typedef struct situate_field {
+  /*
+   NUL-terminated; nested fields joined with `.`.
+   */
+  const char *name;
+  /*
+   `SITUATE_FIELD_*`, or 0 for a type the host does not know.
+   */
+  uint32_t code;
+  /*
+   Elements of a fixed array, else 1.
+   */
+  uint32_t count;
+  /*
+   `offsetof` the field in its top-level struct.
+   */
+  size_t offset;
+  /*
+   `sizeof` the field.
+   */
+  size_t size;
+} situate_field;
+
+/*
  One skill type of a library.
  */
 typedef struct situate_skill_type {
@@ -192,6 +274,16 @@ typedef struct situate_skill_type {
    Optional.
    */
   situate_set_param_fn set_param;
+  /*
+   The fields of the inputs, outputs and params structs, as compiled
+   (the generated headers write them); required.
+   */
+  const struct situate_field *inputs_fields;
+  const struct situate_field *outputs_fields;
+  const struct situate_field *params_fields;
+  uint32_t inputs_field_count;
+  uint32_t outputs_field_count;
+  uint32_t params_field_count;
 } situate_skill_type;
 
 /*
@@ -236,9 +328,31 @@ typedef const struct situate_library *(*situate_entry_fn)(void);
 #ifdef __cplusplus
 #define SITUATE_EXTERN_C extern "C"
 #define SITUATE_ALIGNOF(t) alignof(t)
+#include <type_traits>
+template <class T> struct situate_field_code_of { static constexpr uint32_t value = 0; };
+template <> struct situate_field_code_of<bool> { static constexpr uint32_t value = SITUATE_FIELD_BOOL; };
+template <> struct situate_field_code_of<int64_t> { static constexpr uint32_t value = SITUATE_FIELD_I64; };
+template <> struct situate_field_code_of<double> { static constexpr uint32_t value = SITUATE_FIELD_F64; };
+template <> struct situate_field_code_of<float> { static constexpr uint32_t value = SITUATE_FIELD_F32; };
+template <> struct situate_field_code_of<situate_str> { static constexpr uint32_t value = SITUATE_FIELD_STR; };
+template <> struct situate_field_code_of<situate_bytes> { static constexpr uint32_t value = SITUATE_FIELD_BYTES; };
+template <> struct situate_field_code_of<situate_f32_slice> { static constexpr uint32_t value = SITUATE_FIELD_F32_SLICE; };
+template <> struct situate_field_code_of<situate_f64_slice> { static constexpr uint32_t value = SITUATE_FIELD_F64_SLICE; };
+template <> struct situate_field_code_of<situate_i64_slice> { static constexpr uint32_t value = SITUATE_FIELD_I64_SLICE; };
+template <> struct situate_field_code_of<uint8_t> { static constexpr uint32_t value = SITUATE_FIELD_U8; };
+/* The SITUATE_FIELD_* code of an lvalue's type, as the compiler sees it. */
+#define SITUATE_FIELD_CODE(x) \
+    (situate_field_code_of<typename std::remove_cv<typename std::remove_reference<decltype(x)>::type>::type>::value)
 #else
 #define SITUATE_EXTERN_C
 #define SITUATE_ALIGNOF(t) _Alignof(t)
+/* The SITUATE_FIELD_* code of an lvalue's type, as the compiler sees it. */
+#define SITUATE_FIELD_CODE(x)                                                                      \
+    _Generic((x), bool: SITUATE_FIELD_BOOL, int64_t: SITUATE_FIELD_I64, double: SITUATE_FIELD_F64, \
+             float: SITUATE_FIELD_F32, situate_str: SITUATE_FIELD_STR,                             \
+             situate_bytes: SITUATE_FIELD_BYTES, situate_f32_slice: SITUATE_FIELD_F32_SLICE,       \
+             situate_f64_slice: SITUATE_FIELD_F64_SLICE,                                           \
+             situate_i64_slice: SITUATE_FIELD_I64_SLICE, uint8_t: SITUATE_FIELD_U8, default: 0u)
 #endif
 
 /* Writes a printf-style message into `error` (may be NULL); returns SITUATE_ERROR. */
@@ -287,13 +401,21 @@ static inline void situate_print(situate_context *cx, const char *format, ...) {
  * `prefix_state` must be a complete type where this is used. */
 #define SITUATE_SKILL(prefix)                                                                       \
     { prefix##_manifest, sizeof(prefix##_inputs), sizeof(prefix##_outputs), sizeof(prefix##_params), \
-      sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), NULL, NULL, prefix##__step, NULL }
+      sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), NULL, NULL, prefix##__step, NULL,     \
+      SITUATE__FIELDS(prefix) }
+
+/* The field tables the generated header writes for `prefix`, with their lengths. */
+#define SITUATE__FIELDS(prefix)                                                                     \
+    prefix##_inputs_fields, prefix##_outputs_fields, prefix##_params_fields,                        \
+    (uint32_t)(sizeof(prefix##_inputs_fields) / sizeof(situate_field)),                             \
+    (uint32_t)(sizeof(prefix##_outputs_fields) / sizeof(situate_field)),                            \
+    (uint32_t)(sizeof(prefix##_params_fields) / sizeof(situate_field))
 
 /* The same with `prefix_init`, `prefix_fini` and `prefix_set_param` as well. */
 #define SITUATE_SKILL_HOOKS(prefix)                                                                 \
     { prefix##_manifest, sizeof(prefix##_inputs), sizeof(prefix##_outputs), sizeof(prefix##_params), \
       sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), prefix##__init, prefix##__fini,        \
-      prefix##__step, prefix##__set_param }
+      prefix##__step, prefix##__set_param, SITUATE__FIELDS(prefix) }
 
 /* Exports the library's skill types: SITUATE_LIBRARY(SITUATE_SKILL(a), SITUATE_SKILL(b)). Once per library. */
 #define SITUATE_LIBRARY(...)                                                                          \

@@ -22,6 +22,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <iterator>
 #include <exception>
 #include <new>
 #include <string>
@@ -145,7 +146,13 @@ situate_skill_type skill_type() noexcept {
                             &detail::init<S>,
                             &detail::fini<S>,
                             &detail::step<S>,
-                            on_param};
+                            on_param,
+                            S::inputs_fields(),
+                            S::outputs_fields(),
+                            S::params_fields(),
+                            S::inputs_field_count(),
+                            S::outputs_field_count(),
+                            S::params_field_count()};
 }
 
 /// The library table of skill classes `S...`.

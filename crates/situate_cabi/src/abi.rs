@@ -13,7 +13,7 @@ use std::ffi::{c_char, c_void};
 
 /// The version of this ABI. A library built for another version is refused
 /// at load time with a clear error.
-pub const SITUATE_ABI_VERSION: u32 = 1;
+pub const SITUATE_ABI_VERSION: u32 = 2;
 
 /// A call succeeded.
 pub const SITUATE_OK: i32 = 0;
@@ -121,6 +121,48 @@ pub type situate_set_param_fn = Option<
     ) -> situate_status,
 >;
 
+/// A field's type in a [`situate_field`]: what the compiler saw, by
+/// `SITUATE_FIELD_CODE` (C11 `_Generic`, C++ templates) in the generated
+/// headers. `bool`.
+pub const SITUATE_FIELD_BOOL: u32 = 1;
+/// `int64_t`.
+pub const SITUATE_FIELD_I64: u32 = 2;
+/// `double`.
+pub const SITUATE_FIELD_F64: u32 = 3;
+/// `float` (the elements of an `f32[N]` array).
+pub const SITUATE_FIELD_F32: u32 = 4;
+/// `situate_str`.
+pub const SITUATE_FIELD_STR: u32 = 5;
+/// `situate_bytes`.
+pub const SITUATE_FIELD_BYTES: u32 = 6;
+/// `situate_f32_slice`.
+pub const SITUATE_FIELD_F32_SLICE: u32 = 7;
+/// `situate_f64_slice`.
+pub const SITUATE_FIELD_F64_SLICE: u32 = 8;
+/// `situate_i64_slice`.
+pub const SITUATE_FIELD_I64_SLICE: u32 = 9;
+/// `uint8_t` (the placeholder field of an empty struct).
+pub const SITUATE_FIELD_U8: u32 = 10;
+
+/// One field of a struct as the library was compiled: records are
+/// flattened (`sonar.range`), a fixed array is one field of `count`
+/// elements of type `code`. The host checks every one against the layout it
+/// computes from the manifest, so a struct of the right size with a wrong
+/// field (a `double` where the manifest says `i64`) is refused at load.
+#[repr(C)]
+pub struct situate_field {
+    /// NUL-terminated; nested fields joined with `.`.
+    pub name: *const c_char,
+    /// `SITUATE_FIELD_*`, or 0 for a type the host does not know.
+    pub code: u32,
+    /// Elements of a fixed array, else 1.
+    pub count: u32,
+    /// `offsetof` the field in its top-level struct.
+    pub offset: usize,
+    /// `sizeof` the field.
+    pub size: usize,
+}
+
 /// One skill type of a library.
 #[repr(C)]
 pub struct situate_skill_type {
@@ -142,6 +184,14 @@ pub struct situate_skill_type {
     pub step: situate_step_fn,
     /// Optional.
     pub set_param: situate_set_param_fn,
+    /// The fields of the inputs, outputs and params structs, as compiled
+    /// (the generated headers write them); required.
+    pub inputs_fields: *const situate_field,
+    pub outputs_fields: *const situate_field,
+    pub params_fields: *const situate_field,
+    pub inputs_field_count: u32,
+    pub outputs_field_count: u32,
+    pub params_field_count: u32,
 }
 
 /// What a library's entry function returns.

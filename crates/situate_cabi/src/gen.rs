@@ -210,6 +210,13 @@ fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> Stri
     for (i, param) in decl.params.iter().enumerate() {
         let _ = writeln!(o, "#define {}_PARAM_{} {i}u", p.to_ascii_uppercase(), param.name.to_ascii_uppercase());
     }
+    let _ = writeln!(o, "/* Every field as the compiler lays it out, checked by the host against the manifest. */");
+    for (what, layout) in [("inputs", &l.inputs), ("outputs", &l.outputs), ("params", &l.params)] {
+        let ty = format!("{p}_{what}");
+        let _ = writeln!(o, "static const situate_field {ty}_fields[] = {{");
+        field_table(&mut o, &ty, &format!("((const {ty}*)0)"), layout);
+        let _ = writeln!(o, "}};");
+    }
     let _ = writeln!(o, "\n/* The manifest this header was generated from. */");
     let _ = writeln!(o, "static const char {p}_manifest[] =\n    {};\n", c_string(text));
     let _ = writeln!(
@@ -237,6 +244,24 @@ fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> Stri
     );
     let _ = writeln!(o, "#ifdef __cplusplus\n}}\n#endif\n\n#endif /* {guard} */");
     o
+}
+
+/// The entries of a field table: name, `SITUATE_FIELD_CODE` of the member
+/// (of its first element for a fixed array), element count, offset, size;
+/// `null` is `ty` as a null pointer expression (never evaluated).
+fn field_table(o: &mut String, ty: &str, null: &str, layout: &StructLayout) {
+    for f in layout.flat() {
+        let n = &f.name;
+        let (code, count) = if f.fixed {
+            (
+                format!("SITUATE_FIELD_CODE({null}->{n}[0])"),
+                format!("(uint32_t)(sizeof({null}->{n}) / sizeof({null}->{n}[0]))"),
+            )
+        } else {
+            (format!("SITUATE_FIELD_CODE({null}->{n})"), "1".to_string())
+        };
+        let _ = writeln!(o, "    {{\"{n}\", {code}, {count}, offsetof({ty}, {n}), sizeof({null}->{n})}},");
+    }
 }
 
 fn cpp_record_name(prefix: &str, c_name: &str) -> String {
@@ -272,6 +297,15 @@ fn cpp_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> St
         "/// The manifest this header was generated from.\ninline constexpr char manifest[] =\n    {};\n",
         c_string(text)
     );
+    let _ = writeln!(o, "/// Every field as the compiler lays it out, checked by the host against the manifest.");
+    for (what, name, layout) in
+        [("inputs", "Inputs", &l.inputs), ("outputs", "Outputs", &l.outputs), ("params", "Params", &l.params)]
+    {
+        let _ = writeln!(o, "inline const situate_field {what}_field_table[] = {{");
+        field_table(&mut o, name, &format!("static_cast<const {name}*>(nullptr)"), layout);
+        let _ = writeln!(o, "}};");
+    }
+    let _ = writeln!(o);
     let _ = writeln!(
         o,
         "/// Derive your skill class from this; it names the types `situate.hpp` needs.\n\
@@ -290,7 +324,13 @@ fn cpp_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> St
          using Inputs = {p}::Inputs;\n    \
          using Outputs = {p}::Outputs;\n    \
          using Params = {p}::Params;\n    \
-         static const char* manifest() {{ return {p}::manifest; }}\n\
+         static const char* manifest() {{ return {p}::manifest; }}\n    \
+         static const situate_field* inputs_fields() {{ return {p}::inputs_field_table; }}\n    \
+         static const situate_field* outputs_fields() {{ return {p}::outputs_field_table; }}\n    \
+         static const situate_field* params_fields() {{ return {p}::params_field_table; }}\n    \
+         static std::uint32_t inputs_field_count() {{ return static_cast<std::uint32_t>(std::size({p}::inputs_field_table)); }}\n    \
+         static std::uint32_t outputs_field_count() {{ return static_cast<std::uint32_t>(std::size({p}::outputs_field_table)); }}\n    \
+         static std::uint32_t params_field_count() {{ return static_cast<std::uint32_t>(std::size({p}::params_field_table)); }}\n\
          }};\n\n\
          }}  // namespace {p}"
     );

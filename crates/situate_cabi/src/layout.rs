@@ -356,3 +356,85 @@ mod tests {
         assert!(SkillLayout::of(&d).unwrap_err().contains("has_"));
     }
 }
+
+/// One field of a struct as the ABI's field tables list it
+/// ([`crate::abi::situate_field`]): records flattened with dotted names and
+/// offsets from the top-level struct; a fixed array is one field of `count`
+/// elements.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FlatField {
+    /// `sonar.range`: also the C member designator (`offsetof(T, sonar.range)`).
+    pub name: String,
+    /// `SITUATE_FIELD_*` of the field, or of the elements of a fixed array.
+    pub code: u32,
+    pub count: u32,
+    pub offset: usize,
+    pub size: usize,
+    /// A fixed array (`T name[N]`).
+    pub fixed: bool,
+}
+
+/// The C type a `SITUATE_FIELD_*` code stands for (for messages).
+pub fn code_c(code: u32) -> &'static str {
+    use crate::abi::*;
+    match code {
+        SITUATE_FIELD_BOOL => "bool",
+        SITUATE_FIELD_I64 => "int64_t",
+        SITUATE_FIELD_F64 => "double",
+        SITUATE_FIELD_F32 => "float",
+        SITUATE_FIELD_STR => "situate_str",
+        SITUATE_FIELD_BYTES => "situate_bytes",
+        SITUATE_FIELD_F32_SLICE => "situate_f32_slice",
+        SITUATE_FIELD_F64_SLICE => "situate_f64_slice",
+        SITUATE_FIELD_I64_SLICE => "situate_i64_slice",
+        SITUATE_FIELD_U8 => "uint8_t",
+        _ => "a type situate does not know",
+    }
+}
+
+fn elem_code(elem: ElemType) -> u32 {
+    use crate::abi::*;
+    match elem {
+        ElemType::F32 => SITUATE_FIELD_F32,
+        ElemType::F64 => SITUATE_FIELD_F64,
+        ElemType::I64 => SITUATE_FIELD_I64,
+    }
+}
+
+impl StructLayout {
+    /// The fields as the ABI's field tables list them, in order.
+    pub fn flat(&self) -> Vec<FlatField> {
+        let mut out = Vec::new();
+        flatten(self, "", 0, &mut out);
+        out
+    }
+}
+
+fn flatten(layout: &StructLayout, prefix: &str, base: usize, out: &mut Vec<FlatField>) {
+    use crate::abi::*;
+    for f in &layout.fields {
+        let name = format!("{prefix}{}", f.name);
+        let (code, count, fixed) = match &f.kind {
+            FieldKind::Record { layout, .. } => {
+                flatten(layout, &format!("{name}."), base + f.offset, out);
+                continue;
+            }
+            FieldKind::Flag | FieldKind::Bool => (SITUATE_FIELD_BOOL, 1, false),
+            FieldKind::I64 => (SITUATE_FIELD_I64, 1, false),
+            FieldKind::F64 => (SITUATE_FIELD_F64, 1, false),
+            FieldKind::Str => (SITUATE_FIELD_STR, 1, false),
+            FieldKind::Bytes => (SITUATE_FIELD_BYTES, 1, false),
+            FieldKind::Fixed { elem, len } => (elem_code(*elem), u32::try_from(*len).unwrap_or(u32::MAX), true),
+            FieldKind::Var { elem } => (
+                match elem {
+                    ElemType::F32 => SITUATE_FIELD_F32_SLICE,
+                    ElemType::F64 => SITUATE_FIELD_F64_SLICE,
+                    ElemType::I64 => SITUATE_FIELD_I64_SLICE,
+                },
+                1,
+                false,
+            ),
+        };
+        out.push(FlatField { name, code, count, offset: base + f.offset, size: f.size, fixed });
+    }
+}

@@ -20,11 +20,11 @@ use std::sync::Arc;
 use situate_core::{Context, ElemType, Io, ParamType, Skill, SkillDecl, SkillError, SkillType, Value};
 
 use crate::abi::{
-    situate_context, situate_entry_fn, situate_error, situate_fini_fn, situate_host, situate_init_fn, situate_library,
-    situate_set_param_fn, situate_skill_type, SITUATE_ABI_VERSION, SITUATE_ENTRY_SYMBOL, SITUATE_ERROR_CAPACITY,
-    SITUATE_OK,
+    situate_context, situate_entry_fn, situate_error, situate_field, situate_fini_fn, situate_host, situate_init_fn,
+    situate_library, situate_set_param_fn, situate_skill_type, SITUATE_ABI_VERSION, SITUATE_ENTRY_SYMBOL,
+    SITUATE_ERROR_CAPACITY, SITUATE_OK,
 };
-use crate::layout::{flag_name, Field, FieldKind, SkillLayout, StructLayout};
+use crate::layout::{code_c, flag_name, Field, FieldKind, SkillLayout, StructLayout};
 use crate::manifest::{parse_manifest, ManifestError};
 
 /// Why a library was not loaded. Every message names the library's path.
@@ -159,6 +159,15 @@ fn load_type(
             )));
         }
     }
+    // Field by field: a struct of the right size can still hold a `double` where the manifest
+    // says `i64`, or its fields in another order (a hand-edited or hand-written struct).
+    for (what, ptr, count, ours) in [
+        ("inputs", raw.inputs_fields, raw.inputs_field_count, &layout.inputs),
+        ("outputs", raw.outputs_fields, raw.outputs_field_count, &layout.outputs),
+        ("params", raw.params_fields, raw.params_field_count, &layout.params),
+    ] {
+        check_fields(&format!("{}_{what}", layout.prefix), ptr, count, ours).map_err(layout_err)?;
+    }
     let Some(step) = raw.step else {
         return Err(layout_err("the skill type has no step function".into()));
     };
@@ -188,6 +197,70 @@ fn load_type(
         vt: Vtable { init: raw.init, fini: raw.fini, step, set_param: raw.set_param },
         _lib: Arc::clone(lib),
     })
+}
+
+/// Compares a library's field table of struct `ty` with the layout computed
+/// from the manifest: the same fields, in order, each of the same type,
+/// element count, offset and size.
+fn check_fields(ty: &str, ptr: *const situate_field, count: u32, ours: &StructLayout) -> Result<(), String> {
+    let rebuild = "(regenerate its header with `situate gen` and rebuild)";
+    if ptr.is_null() {
+        return Err(format!("the library gives no field table for `{ty}` {rebuild}"));
+    }
+    let expected = ours.flat();
+    if count as usize > 4 * expected.len() + 64 {
+        return Err(format!("the field table of `{ty}` claims {count} fields; the manifest has {}", expected.len()));
+    }
+    // SAFETY: the ABI says `ptr` holds `count` entries; the count is bounded above.
+    let theirs = unsafe { std::slice::from_raw_parts(ptr, count as usize) };
+    let show = |code: u32, count: u32, fixed: bool| {
+        if fixed || count != 1 {
+            format!("{}[{count}]", code_c(code))
+        } else {
+            code_c(code).to_string()
+        }
+    };
+    for (i, want) in expected.iter().enumerate() {
+        let Some(got) = theirs.get(i) else {
+            return Err(format!(
+                "layout mismatch: `{ty}` has {count} fields in the library, {} from its manifest (the first missing is \
+                 `{}`) {rebuild}",
+                expected.len(),
+                want.name
+            ));
+        };
+        let name = if got.name.is_null() {
+            String::from("(no name)")
+        } else {
+            // SAFETY: the ABI says names are NUL-terminated.
+            unsafe { CStr::from_ptr(got.name) }.to_string_lossy().into_owned()
+        };
+        if name != want.name
+            || got.code != want.code
+            || got.count != want.count
+            || got.offset != want.offset
+            || got.size != want.size
+        {
+            return Err(format!(
+                "layout mismatch: `{ty}` field #{i}: the manifest says `{}` {} at offset {} ({} bytes), \
+                 the library has `{name}` {} at offset {} ({} bytes) {rebuild}",
+                want.name,
+                show(want.code, want.count, want.fixed),
+                want.offset,
+                want.size,
+                show(got.code, got.count, want.fixed),
+                got.offset,
+                got.size,
+            ));
+        }
+    }
+    if theirs.len() > expected.len() {
+        return Err(format!(
+            "layout mismatch: `{ty}` has {count} fields in the library, {} from its manifest {rebuild}",
+            expected.len()
+        ));
+    }
+    Ok(())
 }
 
 /// The `name:` of a manifest that does not parse, for the message.

@@ -27,5 +27,5 @@ fn the_committed_header_is_fresh() {
         "include/situate.h is stale (or missing): regenerate it with \
          `SITUATE_BLESS=1 cargo test -p situate_cabi --test header`"
     );
-    assert!(fresh.contains("#define SITUATE_ABI_VERSION 1"), "{fresh}");
+    assert!(fresh.contains("#define SITUATE_ABI_VERSION 2"), "{fresh}");
 }

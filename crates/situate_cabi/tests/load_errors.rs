@@ -20,9 +20,14 @@ const STEP: &str =
     "static situate_status step(void* s, const void* i, void* o, const void* p, situate_context* cx) {\n\
     (void)s; (void)i; (void)o; (void)p; (void)cx; return SITUATE_OK;\n}\n";
 
+/// A hand-made table for a manifest whose inputs are `{x: f64}` (or that does not parse): the
+/// inputs struct is `inputs_size` bytes, the field tables say what a compiler would.
 fn table(manifest: &str, inputs_size: &str) -> String {
     format!(
-        "{STEP}static const situate_skill_type types[] = {{{{ \"{manifest}\", {inputs_size}, 1, 1, 1, 1, NULL, NULL, step, NULL }}}};\n\
+        "{STEP}static const situate_field fin[] = {{{{ \"x\", SITUATE_FIELD_F64, 1, 0, 8 }}}};\n\
+         static const situate_field fnone[] = {{{{ \"_situate_empty\", SITUATE_FIELD_BOOL, 1, 0, 1 }}}};\n\
+         static const situate_skill_type types[] = {{{{ \"{manifest}\", {inputs_size}, 1, 1, 1, 1, NULL, NULL, step, NULL, \
+         fin, fnone, fnone, 1, 1, 1 }}}};\n\
          static const situate_library lib = {{ SITUATE_ABI_VERSION, sizeof(situate_skill_type), 1, types }};\n\
          SITUATE_EXPORT const situate_library* situate_library_entry(void) {{ return &lib; }}"
     )
@@ -61,11 +66,11 @@ fn a_library_built_for_another_abi_version_is_refused() {
                 const situate_library* situate_library_entry(void) { return &lib; }";
     let path = raw_lib("abi99", body);
     let e = load_library(&path).unwrap_err();
-    assert!(matches!(e, LoadError::AbiVersion { found: 99, expected: 1, .. }), "{e}");
+    assert!(matches!(e, LoadError::AbiVersion { found: 99, expected: 2, .. }), "{e}");
     assert_eq!(
         e.to_string(),
         format!(
-            "{}: built for ABI v99, this situate speaks v1: rebuild the library against this situate's headers",
+            "{}: built for ABI v99, this situate speaks v2: rebuild the library against this situate's headers",
             path.display()
         )
     );
@@ -132,4 +137,70 @@ fn a_robot_file_entry_that_does_not_match_the_declaration_fails_at_its_line() {
     let e = build_file(&wrong_type, &r).unwrap_err();
     // Line 6 is the consuming entry's `name: runaway`.
     assert!(e.starts_with("robot.yaml:6:") && e.contains("`runaway` (input `sonar`) expects f32[24]"), "{e}");
+}
+
+/// Builds a library for manifest `{x: i64, y: f64}` from its generated header, edited by `edit`
+/// as a user might edit it (the header says "Do not edit"; a hand-written struct is the same).
+fn edited_lib(name: &str, edit: impl Fn(String) -> String) -> std::path::PathBuf {
+    let dir = scratch(name);
+    let manifest = dir.join("wf.yaml");
+    std::fs::write(&manifest, "name: c.wf\ninputs: {x: i64, y: f64}\noutputs: {z: f64}\n").unwrap();
+    gen("c", &manifest, &dir);
+    let header = dir.join("c_wf.h");
+    let text = std::fs::read_to_string(&header).unwrap();
+    std::fs::write(&header, edit(text)).unwrap();
+    let src = "#include \"c_wf.h\"\nstruct c_wf_state { int unused; };\n\
+               situate_status c_wf_step(c_wf_state* s, const c_wf_inputs* in, c_wf_outputs* out,\n\
+               const c_wf_params* p, situate_context* cx) {\n\
+               (void)s; (void)p; (void)cx; out->has_z = true; out->z = (double)in->x + in->y; return SITUATE_OK;\n}\n\
+               SITUATE_LIBRARY(SITUATE_SKILL(c_wf))\n";
+    shared_lib(&dir, name, &[("wf.c", src)], false)
+}
+
+#[test]
+fn a_struct_of_the_right_size_with_a_wrong_field_type_is_refused_by_field() {
+    // It once loaded and the skill read the i64 input's bits as a double (1.023e-321).
+    let path = edited_lib("wrongfield", |h| h.replacen("    int64_t x;", "    double x;", 1));
+    let e = load_library(&path).unwrap_err();
+    assert!(matches!(e, LoadError::Layout { .. }), "{e}");
+    assert!(
+        e.to_string().contains(
+            "skill `c.wf`: layout mismatch: `c_wf_inputs` field #0: the manifest says `x` int64_t at offset 0 \
+             (8 bytes), the library has `x` double at offset 0 (8 bytes)"
+        ),
+        "{e}"
+    );
+    // The header as generated loads.
+    let good = edited_lib("rightfield", |h| h);
+    assert_eq!(load_library(&good).expect("loads")[0].decl.type_name, "c.wf");
+}
+
+#[test]
+fn fields_of_the_right_types_in_another_order_are_refused() {
+    let path =
+        edited_lib("reordered", |h| {
+            h.replacen("    int64_t x;", "    double y_tmp;", 1)
+                .replacen("    double y;", "    int64_t x;", 1)
+                .replacen("    double y_tmp;", "    double y;", 1)
+        });
+    let e = load_library(&path).unwrap_err();
+    assert!(
+        e.to_string().contains(
+            "`c_wf_inputs` field #0: the manifest says `x` int64_t at offset 0 (8 bytes), the library has `x` \
+             int64_t at offset 8 (8 bytes)"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_library_without_field_tables_is_refused() {
+    let body = format!(
+        "{STEP}static const situate_skill_type types[] = {{ {{ \"name: c.t\\ninputs: {{x: f64}}\\n\", 8, 1, 1, 1, 1, \
+         NULL, NULL, step, NULL, NULL, NULL, NULL, 0, 0, 0 }} }};\n\
+         static const situate_library lib = {{ SITUATE_ABI_VERSION, sizeof(situate_skill_type), 1, types }};\n\
+         SITUATE_EXPORT const situate_library* situate_library_entry(void) {{ return &lib; }}"
+    );
+    let e = load_library(&raw_lib("nofields", &body)).unwrap_err();
+    assert!(e.to_string().contains("the library gives no field table for `c_t_inputs`"), "{e}");
 }
