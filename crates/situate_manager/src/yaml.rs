@@ -503,7 +503,7 @@ fn prescan(source: &str) -> Result<(), ParseError> {
             };
             return Err(ParseError::new(
                 Pos::new(line_no, i + 1),
-                format!("control character U+{:04X}{name} is not allowed in a robot file", c as u32),
+                format!("control character U+{:04X}{name} is not allowed in the file", c as u32),
             ));
         }
         let indent = chars.iter().take_while(|c| **c == ' ').count();
@@ -748,13 +748,10 @@ mod tests {
     #[test]
     fn control_characters_are_refused_where_they_are() {
         // A NUL once ended the input silently: the rest of the file was ignored.
-        assert_eq!(
-            err("robot: t\0\ndevices: x\n"),
-            "1:9: control character U+0000 (NUL) is not allowed in a robot file"
-        );
-        assert_eq!(err("a: 1\nb: \u{1b}[31m\n"), "2:4: control character U+001B (ESC) is not allowed in a robot file");
+        assert_eq!(err("robot: t\0\ndevices: x\n"), "1:9: control character U+0000 (NUL) is not allowed in the file");
+        assert_eq!(err("a: 1\nb: \u{1b}[31m\n"), "2:4: control character U+001B (ESC) is not allowed in the file");
         assert!(err("a: 1\rb: 2\n").starts_with("1:5: control character U+000D (a carriage return inside a line)"));
-        assert_eq!(err("# é \u{7f}\n"), "1:5: control character U+007F (DEL) is not allowed in a robot file");
+        assert_eq!(err("# é \u{7f}\n"), "1:5: control character U+007F (DEL) is not allowed in the file");
         // CRLF line ends are fine.
         assert!(parse("a: 1\r\nb: 2\r\n").is_ok());
     }
