@@ -618,7 +618,10 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
             Some(json5::from_str::<Json>(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
         }
     };
-    let mut client = Client::connect_with(&remote.connect, extra.as_ref())?;
+    let mut client = match Client::connect_with(&remote.connect, extra.as_ref()) {
+        Ok(c) => c,
+        Err(e) => return Ok(client_failure(&e)),
+    };
     // Clamped: `--timeout inf` or `nan` must not panic.
     client.timeout = Duration::from_secs_f64(if remote.timeout.is_finite() {
         remote.timeout.clamp(0.1, 86_400.0)
@@ -627,21 +630,34 @@ fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<
     });
     let robot = match client.resolve_robot(remote.robot.as_deref()) {
         Ok(r) => r,
-        Err(e) => return Err(anyhow::Error::new(e)),
+        Err(e) => return Ok(client_failure(&e)),
     };
     match f(&client, &robot) {
         Ok(()) => Ok(ExitCode::SUCCESS),
-        Err(e) => match e.downcast_ref::<ClientError>() {
-            Some(ClientError::Remote(r)) => {
-                eprintln!("error: {}", r.message);
-                if let Some(p) = r.detail.get("pointer").and_then(Json::as_str) {
-                    eprintln!("{p}");
-                }
+        Err(e) => match (e.downcast_ref::<ClientError>(), e.downcast_ref::<situate_link::LinkError>()) {
+            (Some(c), _) => Ok(client_failure(c)),
+            (None, Some(l)) => {
+                eprintln!("situate: {l}");
                 Ok(ExitCode::FAILURE)
             }
-            _ => Err(e),
+            (None, None) => Err(e),
         },
     }
+}
+
+/// A client error, said as a sentence (`situate: …`): a manager's refusal
+/// with its pointer line if any, never the link's raw data.
+fn client_failure(e: &ClientError) -> ExitCode {
+    match e {
+        ClientError::Remote(r) => {
+            eprintln!("situate: {}", r.message);
+            if let Some(p) = r.detail.get("pointer").and_then(Json::as_str) {
+                eprintln!("{p}");
+            }
+        }
+        other => eprintln!("situate: {other}"),
+    }
+    ExitCode::FAILURE
 }
 
 /// The simulated building a robot file runs in (its `simulator:` section).

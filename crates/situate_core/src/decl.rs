@@ -149,14 +149,26 @@ impl ParamSpec {
             (Some(lo), Some(hi)) => format!("{what} in [{lo:?}, {hi:?}]"),
             (Some(lo), None) => format!("{what} ≥ {lo:?}"),
             (None, Some(hi)) => format!("{what} ≤ {hi:?}"),
-            (None, None) => what.to_string(),
+            // Unbounded, a parameter still has its type's range.
+            (None, None) if self.ty == ParamType::I64 => format!("{what} from {} to {}", i64::MIN, i64::MAX),
+            (None, None) => "a finite number".to_string(),
         }
     }
 
     /// Checks a candidate value and returns it in the parameter's own type
     /// (an integer given for an `f64` parameter becomes a float).
     pub fn check(&self, value: &Value) -> Result<Value, ParamValueError> {
-        let refuse = || ParamValueError { expected: self.expectation(), got: describe(value) };
+        let refuse = || ParamValueError {
+            expected: self.expectation(),
+            got: match (self.ty, value) {
+                // A float refused where an integer is due reads as one (`2.0`,
+                // not `2`), and a large one exactly (`9223372036854775808`).
+                (ParamType::I64, Value::F64(x)) if x.fract() == 0.0 && x.abs() < 1e16 => format!("{x:.1}"),
+                (ParamType::I64, Value::F64(x)) if x.abs() < 1e20 => format!("{x:.0}"),
+                (ParamType::I64, Value::F64(x)) if x.is_finite() => format!("{x:e}"),
+                _ => describe(value),
+            },
+        };
         let v = match (self.ty, value) {
             (ParamType::Bool, Value::Bool(_)) => value.clone(),
             (ParamType::Str, Value::Str(_)) => value.clone(),
@@ -306,5 +318,26 @@ mod tests {
         assert!(p.check(&Value::F64(1.5)).is_err());
         assert!(p.check(&Value::I64(-1)).is_err());
         assert_eq!(p.check(&Value::I64(4)), Ok(Value::I64(4)));
+    }
+
+    #[test]
+    fn an_unbounded_parameter_names_its_type_range() {
+        let n = ParamSpec::new("seed", ParamType::I64, Value::I64(1));
+        assert_eq!(
+            n.check(&Value::F64(9_223_372_036_854_775_808.0)).unwrap_err().to_string(),
+            "expects an integer from -9223372036854775808 to 9223372036854775807, got 9223372036854775808"
+        );
+        // A whole float where an integer is due reads as a float.
+        assert_eq!(
+            n.check(&Value::F64(2.0)).unwrap_err().to_string(),
+            "expects an integer from -9223372036854775808 to 9223372036854775807, got 2.0"
+        );
+        assert_eq!(
+            n.check(&Value::F64(-1e300)).unwrap_err().to_string(),
+            "expects an integer from -9223372036854775808 to 9223372036854775807, got -1e300"
+        );
+        let x = ParamSpec::new("gain", ParamType::F64, Value::F64(1.0));
+        assert_eq!(x.check(&Value::F64(f64::INFINITY)).unwrap_err().to_string(), "expects a finite number, got inf");
+        assert_eq!(x.check(&Value::F64(-1e300)), Ok(Value::F64(-1e300)));
     }
 }

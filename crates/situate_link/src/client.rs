@@ -19,20 +19,33 @@ pub struct RemoteError {
     pub detail: Json,
 }
 
-/// Why a client call failed.
+/// Why a client call failed. Each displays as a sentence for a person,
+/// never as the link's own data.
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     #[error(transparent)]
     Link(#[from] LinkError),
     #[error(transparent)]
     Remote(#[from] RemoteError),
+    /// Nobody answered: no manager serves that key (or its access rules
+    /// drop the request).
     #[error(
-        "no skill manager answered `{key}` within {} (is `situate run` running and reachable at {endpoints}, is its cycle stuck, and do its access rules allow this request?)",
-        secs(*timeout)
+        "no skill manager answered `{key}` within {} (is `situate run` running and reachable at {endpoints}, and do its access rules allow this request?)",
+        seconds(*timeout)
     )]
     NoAnswer { key: String, timeout: Duration, endpoints: String },
-    #[error("the network refused `{key}`: {reason}")]
-    Refused { key: String, reason: String },
+    /// The request was still unanswered when the timeout ended it: the
+    /// manager may be busy or stuck, or not there at all.
+    #[error(
+        "no answer from robot `{robot}` to `{verb}` within {} (is it running, and is its cycle stuck? a longer --timeout may help a busy one)",
+        seconds(*timeout)
+    )]
+    TimedOut { robot: String, verb: String, timeout: Duration },
+    /// The link itself refused or failed the request (Zenoh's error reply).
+    #[error("`{key}` failed on the link: {detail}")]
+    Failed { key: String, detail: String },
+    #[error("could not send `{key}`: {detail}")]
+    Send { key: String, detail: String },
     #[error("no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running? ({detail})")]
     NotReachable { endpoints: String, detail: String },
     #[error("several robots answered ({0}); name one with --robot")]
@@ -41,9 +54,22 @@ pub enum ClientError {
     BadReply(String),
 }
 
-/// A duration as people write it: `5 s`, `0.5 s`.
-fn secs(d: Duration) -> String {
+/// A duration as a person writes it: `5 s`, `0.5 s`.
+fn seconds(d: Duration) -> String {
     format!("{} s", d.as_secs_f64())
+}
+
+/// What an error reply from Zenoh says, as text (never its bytes' debug form).
+fn reply_error_text(e: &zenoh::query::ReplyError) -> String {
+    let bytes = e.payload().to_bytes();
+    let text = String::from_utf8_lossy(&bytes);
+    let text = text.trim();
+    if text.is_empty() {
+        "an error with no message".to_string()
+    } else {
+        let short: String = text.chars().take(200).collect();
+        short
+    }
 }
 
 /// A connection to the Zenoh network the managers are on.
@@ -84,22 +110,13 @@ impl Client {
             .payload(args.to_string())
             .timeout(self.timeout)
             .wait()
-            .map_err(|e| LinkError::Open(e.to_string()))?;
+            .map_err(|e| ClientError::Send { key: key.clone(), detail: e.to_string() })?;
         let reply = replies.recv().map_err(|_| self.no_answer(&key))?;
-        let sample = match reply.result() {
-            Ok(sample) => sample,
-            Err(e) => {
-                // Zenoh answers a query nobody finished in time with an error reply whose
-                // payload is its reason (e.g. `Timeout`): a robot that exists but did not
-                // answer, such as one whose cycle is stuck.
-                let reason = String::from_utf8_lossy(&e.payload().to_bytes()).trim().to_string();
-                return Err(if reason.eq_ignore_ascii_case("timeout") {
-                    self.no_answer(&key)
-                } else {
-                    ClientError::Refused { key, reason }
-                });
-            }
-        };
+        let sample = reply.result().map_err(|e| match reply_error_text(e).as_str() {
+            // Zenoh ends a query its timeout cut short with this error.
+            "Timeout" => ClientError::TimedOut { robot: robot.into(), verb: verb.into(), timeout: self.timeout },
+            detail => ClientError::Failed { key: key.clone(), detail: detail.into() },
+        })?;
         let body: Json =
             serde_json::from_slice(&sample.payload().to_bytes()).map_err(|e| ClientError::BadReply(e.to_string()))?;
         if let Some(ok) = body.get("ok") {
@@ -123,7 +140,7 @@ impl Client {
             .get("situate/*/req/hello")
             .timeout(self.timeout.min(Duration::from_secs(2)))
             .wait()
-            .map_err(|e| LinkError::Open(e.to_string()))?;
+            .map_err(|e| ClientError::Send { key: "situate/*/req/hello".into(), detail: e.to_string() })?;
         let mut robots = Vec::new();
         while let Ok(reply) = replies.recv() {
             if let Ok(sample) = reply.result() {

@@ -1,9 +1,11 @@
 //! The protocol's JSON forms (docs/protocol.md): values by type, requests,
 //! replies, errors and events.
 
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use base64::Engine as _;
+use serde_json::value::RawValue;
 use serde_json::{json, Map, Value as Json};
 use situate_core::{ElemType, ParamType, SignalType, Value};
 use situate_manager::control::{GraphInfo, MonitorInfo};
@@ -149,8 +151,8 @@ pub fn value_from_json(j: &Json, ty: &SignalType) -> Result<Value, String> {
     }
 }
 
-/// A parameter value given by a client, before the manager's range check.
-/// The type check happens in the manager too; this only maps JSON kinds.
+/// A parameter value as the manager sends it to a remote skill, before the
+/// declaration's check (which maps an integer to a float where one is due).
 pub fn param_from_json(j: &Json) -> Result<Value, String> {
     match j {
         Json::Bool(b) => Ok(Value::Bool(*b)),
@@ -192,47 +194,93 @@ pub enum Decoded {
     Telemetry { signals: Vec<String>, rate_hz: Option<f64> },
 }
 
+/// One argument as it came: JSON, or the text of a number (or of a list or
+/// object holding one) too large for a 64-bit float, which JSON allows but
+/// this decoder cannot hold.
+#[derive(Debug)]
+enum Arg {
+    Json(Json),
+    Huge(String),
+}
+
+impl Arg {
+    /// The argument as a message shows it.
+    fn describe(&self) -> String {
+        match self {
+            Arg::Json(j) => describe(j),
+            Arg::Huge(text) => describe_huge(text),
+        }
+    }
+}
+
+fn describe_huge(text: &str) -> String {
+    let text = text.trim();
+    match text.chars().next() {
+        Some('[') => "an array holding a number beyond the range of a 64-bit float".into(),
+        Some('{') => "an object holding a number beyond the range of a 64-bit float".into(),
+        _ => {
+            let mut short: String = text.chars().take(40).collect();
+            if short.len() < text.len() {
+                short.push('…');
+            }
+            format!("{short} (beyond the range of a 64-bit float)")
+        }
+    }
+}
+
 struct Args<'a> {
     verb: &'a str,
     obj: Map<String, Json>,
+    /// Members too large to hold, as their text.
+    huge: BTreeMap<String, String>,
 }
 
 impl Args<'_> {
-    fn take(&mut self, name: &str) -> Option<Json> {
-        self.obj.remove(name)
+    fn take(&mut self, name: &str) -> Option<Arg> {
+        match self.obj.remove(name) {
+            Some(j) => Some(Arg::Json(j)),
+            None => self.huge.remove(name).map(Arg::Huge),
+        }
     }
 
     fn has(&self, name: &str) -> bool {
-        self.obj.contains_key(name)
+        self.obj.contains_key(name) || self.huge.contains_key(name)
     }
 
     fn string(&mut self, name: &str) -> Result<String, WireError> {
         match self.take(name) {
-            Some(Json::String(s)) => Ok(s),
+            Some(Arg::Json(Json::String(s))) => Ok(s),
             Some(other) => Err(self.wrong(name, "a string", &other)),
             None => Err(self.missing(name, "a string")),
         }
     }
 
-    fn strings(&mut self, name: &str) -> Result<Vec<String>, WireError> {
+    /// A list of strings; a single string is refused (it is not a list of one).
+    fn strings(&mut self, name: &str, of: &str) -> Result<Vec<String>, WireError> {
+        let what = format!("a list of strings ({of})");
         match self.take(name) {
-            Some(Json::Array(items)) => items
+            Some(Arg::Json(Json::Array(items))) => items
                 .into_iter()
                 .map(|i| match i {
                     Json::String(s) => Ok(s),
-                    other => Err(self.wrong(name, "a list of strings", &other)),
+                    other => Err(self.wrong(name, &what, &Arg::Json(other))),
                 })
                 .collect(),
-            // A lone string is refused like any other non-list (protocol.md): accepting it
-            // would make `"wander"` and `["wander"]` two spellings of one request.
-            Some(other) => Err(self.wrong(name, "a list of strings", &other)),
-            None => Err(self.missing(name, "a list of strings")),
+            Some(Arg::Json(Json::String(s))) => {
+                let got = describe(&Json::String(s.clone()));
+                Err(WireError::bad_request(format!(
+                    "`{}`: argument `{name}`: expected {what}, got the string {got} (a list of one is written [{got}])",
+                    self.verb
+                )))
+            }
+            Some(other) => Err(self.wrong(name, &what, &other)),
+            None => Err(self.missing(name, &what)),
         }
     }
 
     fn boolean(&mut self, name: &str, default: Option<bool>) -> Result<bool, WireError> {
         match (self.take(name), default) {
-            (Some(Json::Bool(b)), _) => Ok(b),
+            (Some(Arg::Json(Json::Bool(b))), _) => Ok(b),
             (Some(other), _) => Err(self.wrong(name, "true or false", &other)),
             (None, Some(d)) => Ok(d),
             (None, None) => Err(self.missing(name, "true or false")),
@@ -242,17 +290,17 @@ impl Args<'_> {
     fn integer(&mut self, name: &str, lo: i64, hi: i64) -> Result<i64, WireError> {
         let what = format!("an integer in [{lo}, {hi}]");
         match self.take(name) {
-            Some(Json::Number(n)) => match n.as_i64() {
+            Some(Arg::Json(Json::Number(n))) => match n.as_i64() {
                 Some(i) if (lo..=hi).contains(&i) => Ok(i),
-                _ => Err(self.wrong(name, &what, &Json::Number(n))),
+                _ => Err(self.wrong(name, &what, &Arg::Json(Json::Number(n)))),
             },
             Some(other) => Err(self.wrong(name, &what, &other)),
             None => Err(self.missing(name, &what)),
         }
     }
 
-    fn wrong(&self, name: &str, what: &str, got: &Json) -> WireError {
-        WireError::bad_request(format!("`{}`: argument `{name}` must be {what}, got {}", self.verb, describe(got)))
+    fn wrong(&self, name: &str, what: &str, got: &Arg) -> WireError {
+        WireError::bad_request(format!("`{}`: argument `{name}`: expected {what}, got {}", self.verb, got.describe()))
     }
 
     fn missing(&self, name: &str, what: &str) -> WireError {
@@ -260,13 +308,94 @@ impl Args<'_> {
     }
 
     fn finish(self) -> Result<(), WireError> {
-        match self.obj.keys().next() {
-            Some(k) if k != "protocol" => {
-                Err(WireError::bad_request(format!("`{}`: unknown argument `{k}`", self.verb)))
-            }
-            _ => Ok(()),
+        match self.obj.keys().chain(self.huge.keys()).find(|k| *k != "protocol") {
+            Some(k) => Err(WireError::bad_request(format!("`{}`: unknown argument `{k}`", self.verb))),
+            None => Ok(()),
         }
     }
+}
+
+/// A `set_param` value, read without knowing the parameter's type: any value
+/// of some type reaches the manager, which refuses one that is not the
+/// parameter's as `bad_param`, naming the expected type and range. A number
+/// beyond a 64-bit float's range is read as infinite, as JSON readers do, and
+/// so refused. JSON that is no value of any type (`null`, a list of strings)
+/// is a wrongly typed argument.
+fn param_value(arg: &Arg) -> Option<Value> {
+    match arg {
+        Arg::Json(j) => untyped_value(j),
+        Arg::Huge(text) => match text.trim_start().chars().next() {
+            Some('-') => Some(Value::F64(f64::NEG_INFINITY)),
+            Some('[' | '{') => None,
+            _ => Some(Value::F64(f64::INFINITY)),
+        },
+    }
+}
+
+/// A value by its JSON form alone (docs/protocol.md, "Values").
+fn untyped_value(j: &Json) -> Option<Value> {
+    match j {
+        Json::Bool(b) => Some(Value::Bool(*b)),
+        Json::Number(n) => match n.as_i64() {
+            Some(i) => Some(Value::I64(i)),
+            None => n.as_f64().map(Value::F64),
+        },
+        Json::String(s) => Some(Value::Str(Arc::from(s.as_str()))),
+        Json::Array(items) => {
+            if let Some(ints) = items.iter().map(Json::as_i64).collect::<Option<Vec<_>>>() {
+                Some(Value::I64s(ints.into()))
+            } else {
+                Some(Value::F64s(items.iter().map(json_to_float).collect::<Option<Vec<_>>>()?.into()))
+            }
+        }
+        Json::Object(o) => match (o.len(), o.get("$bytes").and_then(Json::as_str)) {
+            (1, Some(b)) => {
+                base64::engine::general_purpose::STANDARD.decode(b).ok().map(|b| Value::Bytes(Arc::from(b)))
+            }
+            _ => {
+                let fields = o
+                    .iter()
+                    .map(|(name, v)| Some((Arc::from(name.as_str()), untyped_value(v)?)))
+                    .collect::<Option<Vec<_>>>()?;
+                Some(Value::Record(Arc::new(situate_core::RecordValue { fields })))
+            }
+        },
+        Json::Null => None,
+    }
+}
+
+/// The payload's members as arguments. A member JSON allows but this decoder
+/// cannot hold (a number beyond a 64-bit float) is kept aside as its text, so
+/// that its refusal names the argument.
+fn payload_args<'a>(verb: &'a str, payload: &[u8]) -> Result<Args<'a>, WireError> {
+    let mut args = Args { verb, obj: Map::new(), huge: BTreeMap::new() };
+    if payload.iter().all(u8::is_ascii_whitespace) {
+        return Ok(args);
+    }
+    let first = match serde_json::from_slice::<Json>(payload) {
+        Ok(Json::Object(obj)) => return Ok(Args { obj, ..args }),
+        Ok(other) => {
+            return Err(WireError::bad_request(format!(
+                "`{verb}`: the payload must be a JSON object, got {}",
+                describe(&other)
+            )))
+        }
+        Err(e) => e,
+    };
+    let not_json = || WireError::bad_request(format!("`{verb}`: the payload is not JSON: {first}"));
+    let raw = serde_json::from_slice::<BTreeMap<String, Box<RawValue>>>(payload).map_err(|_| not_json())?;
+    for (name, member) in raw {
+        match serde_json::from_str::<Json>(member.get()) {
+            Ok(j) => {
+                args.obj.insert(name, j);
+            }
+            Err(e) if e.to_string().starts_with("number out of range") => {
+                args.huge.insert(name, member.get().to_string());
+            }
+            Err(_) => return Err(not_json()),
+        }
+    }
+    Ok(args)
 }
 
 /// Decodes a request payload for `verb`. Never panics, whatever the bytes.
@@ -277,58 +406,34 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             message: format!("unknown request `{verb}`{}", situate_core::suggestion(verb, VERBS.iter().copied())),
         });
     }
-    let obj = if payload.iter().all(u8::is_ascii_whitespace) {
-        Map::new()
-    } else {
-        match serde_json::from_slice::<Json>(payload) {
-            Ok(Json::Object(o)) => o,
-            Ok(other) => {
-                return Err(WireError::bad_request(format!(
-                    "`{verb}`: the payload must be a JSON object, got {}",
-                    describe(&other)
-                )))
-            }
-            // serde_json refuses a number beyond f64's range (1e400) while parsing; that is a
-            // value out of range (`bad_param`, protocol.md), not malformed JSON.
-            Err(e) if e.is_syntax() && e.to_string().starts_with("number out of range") => {
-                return Err(WireError {
-                    kind: "bad_param",
-                    message: format!(
-                        "`{verb}`: a number out of range at column {}: numbers must be finite 64-bit floats \
-                         (magnitude at most 1.8e308; integers within ±9.2e18 for `i64`)",
-                        e.column()
-                    ),
-                })
-            }
-            Err(e) => return Err(WireError::bad_request(format!("`{verb}`: the payload is not JSON: {e}"))),
-        }
-    };
-    if let Some(p) = obj.get("protocol") {
-        if p.as_i64() != Some(PROTOCOL) {
+    let mut a = payload_args(verb, payload)?;
+    match a.take("protocol") {
+        None => {}
+        Some(Arg::Json(Json::Number(n))) if n.as_i64() == Some(PROTOCOL) => {}
+        Some(Arg::Json(Json::Number(n))) if n.is_i64() || n.is_u64() => {
             return Err(WireError {
                 kind: "protocol",
-                message: format!("protocol {} is not supported; this manager speaks protocol {PROTOCOL}", describe(p)),
-            });
+                message: format!("protocol {n} is not supported; this manager speaks protocol {PROTOCOL}"),
+            })
+        }
+        Some(other) => {
+            return Err(a.wrong("protocol", &format!("an integer (this manager speaks protocol {PROTOCOL})"), &other))
         }
     }
-    let mut a = Args { verb, obj };
     let decoded = match verb {
         "hello" => Decoded::Hello,
         "activate" => {
-            let skills = a.strings("skills")?;
+            let skills = a.strings("skills", "skill names")?;
             let with_providers = a.boolean("with_providers", Some(false))?;
             Decoded::Manager(Request::Activate { skills, with_providers })
         }
-        "deactivate" => Decoded::Manager(Request::Deactivate { skills: a.strings("skills")? }),
+        "deactivate" => Decoded::Manager(Request::Deactivate { skills: a.strings("skills", "skill names")? }),
         "set_param" => {
             let skill = a.string("skill")?;
             let param = a.string("param")?;
-            let raw = a.take("value").ok_or_else(|| a.missing("value", "a bool, number or string"))?;
-            // A value of the wrong kind is the parameter's problem: `bad_param` (protocol.md).
-            let value = param_from_json(&raw).map_err(|e| WireError {
-                kind: "bad_param",
-                message: format!("`set_param`: skill `{skill}`: parameter `{param}`: {e}"),
-            })?;
+            const VALUE: &str = "a value: a bool, number, string, list of numbers, bytes or record";
+            let raw = a.take("value").ok_or_else(|| a.missing("value", VALUE))?;
+            let value = param_value(&raw).ok_or_else(|| a.wrong("value", VALUE, &raw))?;
             Decoded::Manager(Request::SetParam { skill, param, value })
         }
         "get_param" => {
@@ -356,7 +461,7 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             let condition = a.string("condition")?;
             let mode = match a.take("mode") {
                 None => MonitorMode::Once,
-                Some(Json::String(s)) => MonitorMode::parse(&s).ok_or_else(|| {
+                Some(Arg::Json(Json::String(s))) => MonitorMode::parse(&s).ok_or_else(|| {
                     WireError::bad_request(format!(
                         "`monitor_add`: mode must be \"once\", \"edge\" or \"level\", got {s:?}{}",
                         situate_core::suggestion(&s, ["once", "edge", "level"])
@@ -365,7 +470,7 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
                 Some(other) => return Err(a.wrong("mode", "\"once\", \"edge\" or \"level\"", &other)),
             };
             let pause = a.boolean("pause", Some(false))?;
-            let report = if a.has("report") { a.strings("report")? } else { Vec::new() };
+            let report = if a.has("report") { a.strings("report", "signal or parameter names")? } else { Vec::new() };
             Decoded::Manager(Request::AddMonitor { condition, mode, pause, report })
         }
         "monitor_cancel" => {
@@ -373,13 +478,11 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
         }
         "monitor_list" => Decoded::Manager(Request::ListMonitors),
         "telemetry" => {
-            let signals = a.strings("signals")?;
+            let signals = a.strings("signals", "signal names")?;
             let rate_hz = match a.take("rate_hz") {
                 None => None,
-                Some(j) => match j.as_f64() {
-                    Some(r) if r > 0.0 && r <= 100.0 => Some(r),
-                    _ => return Err(a.wrong("rate_hz", "a number in (0, 100]", &j)),
-                },
+                Some(Arg::Json(Json::Number(n))) if n.as_f64().is_some_and(|r| r > 0.0 && r <= 100.0) => n.as_f64(),
+                Some(other) => return Err(a.wrong("rate_hz", "a number in (0, 100]", &other)),
             };
             Decoded::Telemetry { signals, rate_hz }
         }
@@ -606,18 +709,153 @@ mod tests {
             ("unknown_verb", "unknown request `activte` — did you mean `activate`?")
         );
         let e = decode_request("activate", b"{\"skills\": 3}").unwrap_err();
-        assert_eq!(e.message, "`activate`: argument `skills` must be a list of strings, got 3");
+        assert_eq!(e.message, "`activate`: argument `skills`: expected a list of strings (skill names), got 3");
         let e = decode_request("step", b"{\"cycles\": 0}").unwrap_err();
-        assert_eq!(e.message, "`step`: argument `cycles` must be an integer in [1, 1000000], got 0");
+        assert_eq!(e.message, "`step`: argument `cycles`: expected an integer in [1, 1000000], got 0");
         let e = decode_request("stats", b"[1]").unwrap_err();
         assert_eq!(e.message, "`stats`: the payload must be a JSON object, got an array");
         let e = decode_request("stats", b"{\"protocol\": 2}").unwrap_err();
         assert_eq!(e.kind, "protocol");
         let e = decode_request("query", b"{\"signal\": \"x\", \"extra\": 1}").unwrap_err();
         assert_eq!(e.message, "`query`: unknown argument `extra`");
-        let e = decode_request("set_param", b"{\"skill\": \"r\", \"param\": \"p\", \"value\": [1]}").unwrap_err();
-        assert_eq!(e.kind, "bad_param");
-        assert!(e.message.contains("a parameter value is a bool, number or string"), "{}", e.message);
+        let e = decode_request("set_param", b"{\"skill\": \"r\", \"param\": \"p\", \"value\": null}").unwrap_err();
+        assert_eq!(e.kind, "bad_request");
+        assert!(
+            e.message.starts_with("`set_param`: argument `value`: expected a value: a bool, number,"),
+            "{}",
+            e.message
+        );
+    }
+
+    fn refused(verb: &str, payload: &str) -> WireError {
+        match decode_request(verb, payload.as_bytes()) {
+            Ok(d) => panic!("`{verb}` {payload} was accepted as {d:?}"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn a_string_is_not_a_list_of_one() {
+        for (verb, payload, arg) in [
+            ("activate", r#"{"skills": "wander"}"#, "skills"),
+            ("deactivate", r#"{"skills": "wander"}"#, "skills"),
+            ("monitor_add", r#"{"condition": "cycle > 3", "report": "x"}"#, "report"),
+            ("telemetry", r#"{"signals": "x"}"#, "signals"),
+        ] {
+            let e = refused(verb, payload);
+            assert_eq!(e.kind, "bad_request", "{verb} {payload}");
+            assert!(
+                e.message.starts_with(&format!("`{verb}`: argument `{arg}`: expected a list of strings (")),
+                "{}",
+                e.message
+            );
+            assert!(e.message.contains(r#"(a list of one is written ["#), "{}", e.message);
+        }
+        // Objects, numbers and lists of other things are refused the same way.
+        for payload in [r#"{"skills": {"a": 1}}"#, r#"{"skills": ["a", 1]}"#, r#"{"skills": null}"#] {
+            let e = refused("deactivate", payload);
+            assert!(
+                e.message.starts_with("`deactivate`: argument `skills`: expected a list of strings"),
+                "{}",
+                e.message
+            );
+        }
+        assert_eq!(
+            decode_request("deactivate", br#"{"skills": ["wander"]}"#).unwrap(),
+            Decoded::Manager(Request::Deactivate { skills: vec!["wander".into()] })
+        );
+    }
+
+    #[test]
+    fn every_argument_is_refused_in_a_wrong_type() {
+        for (verb, payload, arg, expected) in [
+            ("activate", r#"{"skills": [], "with_providers": "yes"}"#, "with_providers", "true or false"),
+            ("set_param", r#"{"skill": ["r"], "param": "p", "value": 1}"#, "skill", "a string"),
+            ("set_param", r#"{"skill": "r", "param": 3, "value": 1}"#, "param", "a string"),
+            ("get_param", r#"{"skill": "r", "param": null}"#, "param", "a string"),
+            ("set_priority", r#"{"skill": "r", "priority": 2.0}"#, "priority", "an integer in ["),
+            ("set_priority", r#"{"skill": "r", "priority": "2"}"#, "priority", "an integer in ["),
+            ("set_priority", r#"{"skill": "r", "priority": 1e400}"#, "priority", "an integer in ["),
+            ("set_verbose", r#"{"skill": "r", "verbose": 1}"#, "verbose", "true or false"),
+            ("query", r#"{"signal": ["odom"]}"#, "signal", "a string"),
+            ("skill", r#"{"skill": 1}"#, "skill", "a string"),
+            ("monitor_add", r#"{"condition": 1}"#, "condition", "a string"),
+            ("monitor_add", r#"{"condition": "cycle > 1", "mode": 1}"#, "mode", "\"once\""),
+            ("monitor_add", r#"{"condition": "cycle > 1", "pause": "true"}"#, "pause", "true or false"),
+            ("monitor_cancel", r#"{"monitor": 1.0}"#, "monitor", "an integer in ["),
+            ("monitor_cancel", r#"{"monitor": "1"}"#, "monitor", "an integer in ["),
+            ("monitor_cancel", r#"{"monitor": 18446744073709551615}"#, "monitor", "an integer in ["),
+            ("telemetry", r#"{"signals": [], "rate_hz": "5"}"#, "rate_hz", "a number in (0, 100]"),
+            ("telemetry", r#"{"signals": [], "rate_hz": 1e400}"#, "rate_hz", "a number in (0, 100]"),
+            ("step", r#"{"cycles": 2.0}"#, "cycles", "an integer in [1, 1000000]"),
+            ("step", r#"{"cycles": "2"}"#, "cycles", "an integer in [1, 1000000]"),
+            ("step", r#"{"cycles": 1e400}"#, "cycles", "an integer in [1, 1000000]"),
+            ("stats", r#"{"protocol": "1"}"#, "protocol", "an integer"),
+            ("stats", r#"{"protocol": 1.0}"#, "protocol", "an integer"),
+        ] {
+            let e = refused(verb, payload);
+            assert_eq!(e.kind, "bad_request", "{verb} {payload}: {}", e.message);
+            let start = format!("`{verb}`: argument `{arg}`: expected {expected}");
+            assert!(e.message.starts_with(&start), "{verb} {payload}: {}", e.message);
+        }
+        let e = refused("step", r#"{"cycles": 1e400}"#);
+        assert_eq!(
+            e.message,
+            "`step`: argument `cycles`: expected an integer in [1, 1000000], got 1e400 (beyond the range of a 64-bit float)"
+        );
+        // A number beyond a float's range in an argument that is not a number
+        // is named by its argument too, and an unknown one is still unknown.
+        let e = refused("activate", r#"{"skills": ["a", -1e999]}"#);
+        assert!(e.message.starts_with("`activate`: argument `skills`: expected a list of strings"), "{}", e.message);
+        let e = refused("stats", r#"{"big": 1e400}"#);
+        assert_eq!(e.message, "`stats`: unknown argument `big`");
+        let e = refused("stats", r#"{"protocol": 2}"#);
+        assert_eq!(
+            (e.kind, e.message.as_str()),
+            ("protocol", "protocol 2 is not supported; this manager speaks protocol 1")
+        );
+    }
+
+    fn set_param_value(value: &str) -> Result<Value, WireError> {
+        let payload = format!(r#"{{"skill": "s", "param": "p", "value": {value}}}"#);
+        match decode_request("set_param", payload.as_bytes())? {
+            Decoded::Manager(Request::SetParam { value, .. }) => Ok(value),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_parameter_value_of_any_type_reaches_the_manager_to_be_checked() {
+        // The manager checks it against the parameter (and refuses it as
+        // `bad_param` naming the expected type and range): the link only
+        // reads the value.
+        assert_eq!(set_param_value("2").unwrap(), Value::I64(2));
+        assert_eq!(set_param_value("2.0").unwrap(), Value::F64(2.0));
+        assert_eq!(set_param_value("\"far\"").unwrap(), Value::Str("far".into()));
+        assert_eq!(set_param_value("[1, 2]").unwrap(), Value::I64s(vec![1, 2].into()));
+        assert_eq!(set_param_value("[1, 2.5, \"inf\"]").unwrap(), Value::F64s(vec![1.0, 2.5, f64::INFINITY].into()));
+        assert_eq!(set_param_value(r#"{"$bytes": "AP8H"}"#).unwrap(), Value::Bytes(vec![0u8, 255, 7].into()));
+        assert!(matches!(set_param_value(r#"{"x": 1}"#).unwrap(), Value::Record(_)));
+        // Beyond 64 bits: a float, which no integer parameter takes.
+        assert_eq!(set_param_value("9223372036854775808").unwrap(), Value::F64(9_223_372_036_854_775_808.0));
+        assert_eq!(set_param_value("-1e20").unwrap(), Value::F64(-1e20));
+        // Beyond a float's range: infinite, which no parameter takes.
+        assert_eq!(set_param_value("1e400").unwrap(), Value::F64(f64::INFINITY));
+        assert_eq!(set_param_value("-1e400").unwrap(), Value::F64(f64::NEG_INFINITY));
+        // JSON that is no value of any type is a wrongly typed argument.
+        for bad in ["null", "[\"a\"]", "[[1]]", r#"{"x": null}"#, "[1e400]"] {
+            let e = set_param_value(bad).unwrap_err();
+            assert_eq!(e.kind, "bad_request", "{bad}");
+            assert!(e.message.starts_with("`set_param`: argument `value`: expected a value"), "{bad}: {}", e.message);
+        }
+    }
+
+    #[test]
+    fn a_number_beyond_a_float_still_leaves_bad_json_refused() {
+        let e = refused("set_param", r#"{"skill": "s", "param": "p", "value": 1e400"#);
+        assert!(e.message.starts_with("`set_param`: the payload is not JSON: "), "{}", e.message);
+        let e = refused("set_param", r#"[1e400]"#);
+        assert!(e.message.starts_with("`set_param`: the payload is not JSON: "), "{}", e.message);
     }
 
     #[test]

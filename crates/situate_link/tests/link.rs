@@ -329,28 +329,87 @@ fn a_flood_of_bad_requests_changes_nothing_and_the_cycle_goes_on() {
     );
 }
 
-#[test]
-fn a_robot_that_does_not_answer_in_time_is_a_sentence_not_a_debug_dump() {
-    // A "robot" whose link takes requests and never answers them, as a stuck one does: Zenoh
-    // then ends the client's query with an error reply whose payload is `Timeout`.
-    let port = free_port();
-    let endpoint = format!("tcp/127.0.0.1:{port}");
-    let session = Link::open(&LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() }).unwrap();
-    let held = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-    let keep = held.clone();
-    let _queryable = session
-        .declare_queryable("situate/stuck/req/**")
-        .callback(move |q| keep.lock().unwrap_or_else(|p| p.into_inner()).push(q))
+/// Sends `payload` as it is (JSON the client's own encoder could not write,
+/// such as `1e400`) and returns the reply's `error`.
+fn refused_raw(c: &Client, verb: &str, payload: &str) -> (String, String) {
+    let replies = c
+        .session()
+        .get(format!("situate/linkbot/req/{verb}"))
+        .payload(payload.to_string())
+        .timeout(Duration::from_secs(30))
         .wait()
         .unwrap();
-    let mut c = Client::connect(std::slice::from_ref(&endpoint)).unwrap();
-    c.timeout = Duration::from_millis(500);
-    let e = c.request("stuck", "stats", &json!({})).unwrap_err();
-    let text = e.to_string();
-    assert!(matches!(e, ClientError::NoAnswer { .. }), "{e:?}");
-    assert!(text.starts_with("no skill manager answered `situate/stuck/req/stats` within 0.5 s"), "{text}");
-    for debris in ["Timeout", "ReplyError", "b\"", "ZBytes", "{ "] {
-        assert!(!text.contains(debris), "{debris:?} in {text}");
+    let reply = replies.recv().unwrap_or_else(|_| panic!("no reply to `{verb}` {payload}"));
+    let body: Json = serde_json::from_slice(&reply.result().unwrap().payload().to_bytes()).unwrap();
+    let error = body.get("error").unwrap_or_else(|| panic!("`{verb}` {payload} was accepted: {body}"));
+    (error["kind"].as_str().unwrap().to_string(), error["message"].as_str().unwrap().to_string())
+}
+
+#[test]
+fn arguments_of_the_wrong_shape_are_refused_as_the_protocol_says() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    let before = state(&c);
+    // A string where a list is expected is not a list of one.
+    for (verb, payload, arg) in [
+        ("deactivate", r#"{"skills": "runaway"}"#, "skills"),
+        ("activate", r#"{"skills": "wander"}"#, "skills"),
+        ("monitor_add", r#"{"condition": "cycle > 1", "report": "odom"}"#, "report"),
+        ("telemetry", r#"{"signals": "odom.x"}"#, "signals"),
+    ] {
+        let (kind, msg) = refused_raw(&c, verb, payload);
+        assert_eq!(kind, "bad_request", "{verb} {payload}: {msg}");
+        assert!(msg.starts_with(&format!("`{verb}`: argument `{arg}`: expected a list of strings")), "{msg}");
     }
-    assert!(!held.lock().unwrap_or_else(|p| p.into_inner()).is_empty(), "the request reached the stuck robot");
+    // A float where an integer is expected, and numbers beyond JSON readers' range.
+    for (verb, payload, arg) in [
+        ("step", r#"{"cycles": 2.0}"#, "cycles"),
+        ("step", r#"{"cycles": 1e400}"#, "cycles"),
+        ("set_priority", r#"{"skill": "wander", "priority": 1.5}"#, "priority"),
+        ("telemetry", r#"{"signals": [], "rate_hz": 1e400}"#, "rate_hz"),
+    ] {
+        let (kind, msg) = refused_raw(&c, verb, payload);
+        assert_eq!(kind, "bad_request", "{verb} {payload}: {msg}");
+        assert!(msg.starts_with(&format!("`{verb}`: argument `{arg}`: expected ")), "{msg}");
+    }
+    // A parameter value of the wrong type or out of range is `bad_param`,
+    // naming the parameter, its type and range, however far out it is.
+    for (payload, expected) in [
+        (
+            r#"{"skill": "runaway", "param": "safe_distance", "value": 1e400}"#,
+            "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got inf",
+        ),
+        (
+            r#"{"skill": "runaway", "param": "safe_distance", "value": -1e400}"#,
+            "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got -inf",
+        ),
+        (
+            r#"{"skill": "runaway", "param": "safe_distance", "value": [0.3]}"#,
+            "skill `runaway`: parameter `safe_distance` expects a number in [0.1, 3.0], got a list of numbers",
+        ),
+        (
+            r#"{"skill": "wander", "param": "seed", "value": 9223372036854775808}"#,
+            "skill `wander`: parameter `seed` expects an integer from -9223372036854775808 to 9223372036854775807, \
+             got 9223372036854775808",
+        ),
+        (
+            r#"{"skill": "wander", "param": "seed", "value": 2.0}"#,
+            "skill `wander`: parameter `seed` expects an integer from -9223372036854775808 to 9223372036854775807, \
+             got 2.0",
+        ),
+        (
+            r#"{"skill": "wander", "param": "seed", "value": 1e400}"#,
+            "skill `wander`: parameter `seed` expects an integer from -9223372036854775808 to 9223372036854775807, \
+             got inf",
+        ),
+    ] {
+        let (kind, msg) = refused_raw(&c, "set_param", payload);
+        assert_eq!((kind.as_str(), msg.as_str()), ("bad_param", expected), "{payload}");
+    }
+    // An unknown skill or parameter is still named first.
+    let (kind, _) = refused_raw(&c, "set_param", r#"{"skill": "runawy", "param": "safe_distance", "value": 1e400}"#);
+    assert_eq!(kind, "unknown_skill");
+    let (kind, msg) = refused_raw(&c, "set_param", r#"{"skill": "runaway", "param": "safe_distance", "value": null}"#);
+    assert_eq!(kind, "bad_request", "{msg}");
+    assert_eq!(state(&c), before, "nothing changed");
 }
