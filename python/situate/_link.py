@@ -112,11 +112,15 @@ def payload_json(payload: zenoh.ZBytes) -> Any:
         raise BadReply(f"a reply that is not JSON: {raw[:80]!r}") from e
 
 
-def _result(key: str, reply: zenoh.Reply) -> Any:
+def _result(key: str, reply: zenoh.Reply, timeout: float, endpoints: Sequence[str]) -> Any:
     """The ``ok`` result of one reply to ``key``, or the reply's error raised."""
     if reply.ok is None:
-        detail = reply.err.payload.to_string() if reply.err is not None else "no payload"
-        raise BadReply(f"`{key}` failed: {detail}")
+        detail = reply.err.payload.to_string().strip() if reply.err is not None else ""
+        if detail.lower() == "timeout":
+            # Zenoh ends a query nobody finished in time with this reply: a robot that
+            # took the request and did not answer (a stuck cycle, a busy machine).
+            raise _no_answer(key, timeout, endpoints)
+        raise BadReply(f"the network refused `{key}`: {detail or 'no reason given'}")
     body = payload_json(reply.ok.payload)
     if not isinstance(body, dict):
         raise BadReply(f"`{key}`: a reply that is not a JSON object: {body!r}")
@@ -132,7 +136,7 @@ def _no_answer(key: str, timeout: float, endpoints: Sequence[str]) -> NotRunning
     return NotRunning(
         f"no skill manager answered `{key}` within {timeout:g} s "
         f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
-        "and do its access rules allow this request?)"
+        "is its cycle stuck, and do its access rules allow this request?)"
     )
 
 
@@ -155,7 +159,7 @@ def request(
     except zenoh.ZError as e:
         raise NotRunning(f"could not send `{key}`: {e}") from e
     for reply in replies:
-        return _result(key, reply)
+        return _result(key, reply, timeout, endpoints)
     raise _no_answer(key, timeout, endpoints)
 
 
@@ -195,7 +199,7 @@ def send(
     def on_reply(reply: zenoh.Reply) -> None:
         # Runs on a Zenoh thread: nothing may escape from here.
         try:
-            result = _result(key, reply)
+            result = _result(key, reply, timeout, endpoints)
         except Exception as e:  # handed over to `done`, not swallowed
             finish(None, e)
         else:

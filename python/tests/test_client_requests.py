@@ -13,6 +13,7 @@ import time
 from collections.abc import Callable
 
 import pytest
+import zenoh
 from support import Manager, free_port, run
 
 import situate
@@ -57,6 +58,34 @@ def test_connect_with_nothing_listening_says_no_manager_answered() -> None:
         assert e.value.kind == "not_running"
 
     run(main())
+
+
+def test_a_robot_that_takes_requests_and_never_answers_is_a_sentence() -> None:
+    # A stuck robot: its link takes every request and never answers. Zenoh then ends the query
+    # with an error reply `Timeout`, which once surfaced as "`…/req/hello` failed: Timeout".
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    held: list[zenoh.Query] = []
+    session = zenoh.open(_link.zenoh_config(listen=[endpoint], mode="peer"))
+    try:
+        queryable = session.declare_queryable("situate/stuck/req/**", held.append)
+
+        async def main() -> None:
+            with pytest.raises(situate.NotRunning) as e:
+                async with situate.connect("stuck", endpoint=endpoint, timeout=0.5):
+                    pass
+            message = str(e.value)
+            assert message.startswith(
+                "no skill manager answered `situate/stuck/req/hello` within 0.5 s"
+            )
+            assert "is its cycle stuck" in message
+            assert "Timeout" not in message
+
+        run(main())
+        assert held, "the request reached the stuck robot"
+        queryable.undeclare()
+    finally:
+        held.clear()
+        session.close()
 
 
 # ----- activate / deactivate -----------------------------------------------------------
