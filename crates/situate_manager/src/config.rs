@@ -976,6 +976,19 @@ gui: {port: 8080}
     }
 
     #[test]
+    fn a_control_character_is_an_error_at_its_place_not_the_end_of_the_file() {
+        // Before, the NUL ended the file: `robot: r` alone read cleanly.
+        assert_eq!(
+            error("robot: r\n\0skills:\n  - {name: w, type: toy.wander}\n"),
+            "robot.yaml:2:1: error: control character U+0000 (NUL): a robot file is UTF-8 text (is this one UTF-16, \
+             or binary?)"
+        );
+        assert!(error("robot: r\ncycle: {rate_hz: 5\u{c}}\n")
+            .starts_with("robot.yaml:2:19: error: control character U+000C"));
+        assert!(RobotFile::parse("r.yaml", "robot: r\r\ncycle: {rate_hz: 5}\r\n").is_ok(), "CRLF is fine");
+    }
+
+    #[test]
     fn unknown_keys_suggest_the_closest() {
         assert_eq!(
             error(&skill("    actve: false\n")),

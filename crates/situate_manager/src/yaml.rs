@@ -5,6 +5,8 @@
 //! tree of [`Node`]s, each wrapped in a [`Spanned`] that carries its 1-based
 //! [`Pos`]. It accepts the plain subset of YAML that robot files need:
 //!
+//! * text only: no control characters but tab, line feed and the carriage
+//!   return of a CRLF line end (a NUL would silently end the file);
 //! * one document per file (an empty file is a [`Node::Null`] document);
 //! * mapping keys are scalars, and a key may appear once per mapping;
 //! * no anchors, aliases or tags;
@@ -325,6 +327,7 @@ impl Frame {
 pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
     // yaml-rust2 does not skip a byte-order mark; editors do not show one.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
+    check_control_characters(source)?;
     let mut parser = Parser::new_from_str(source);
     let mut stack: Vec<Frame> = Vec::new();
     let mut root: Option<Spanned<Node>> = None;
@@ -429,6 +432,50 @@ pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
         Some(root) if !root.value.is_null() => root,
         _ => Spanned::new(Node::Null, Pos::START),
     })
+}
+
+/// Refuses control characters, which editors hide and the scanner misreads
+/// (it takes a NUL for the end of the file). Tab, line feed and the carriage
+/// return of a CRLF line end are the only ones a robot file may contain.
+fn check_control_characters(source: &str) -> Result<(), ParseError> {
+    let mut at = Pos::START;
+    let mut chars = source.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\n' => {
+                at = Pos::new(at.line + 1, 1);
+                continue;
+            }
+            '\r' if chars.peek() == Some(&'\n') => {}
+            '\t' => {}
+            c if c.is_control() => return Err(ParseError::new(at, control_message(c))),
+            _ => {}
+        }
+        at.col += 1;
+    }
+    Ok(())
+}
+
+/// "control character U+0000 (NUL): …", with a hint at the likely cause.
+fn control_message(c: char) -> String {
+    let name = match c {
+        '\0' => " (NUL)",
+        '\u{7}' => " (bell)",
+        '\u{8}' => " (backspace)",
+        '\u{b}' => " (vertical tab)",
+        '\u{c}' => " (form feed)",
+        '\r' => " (carriage return)",
+        '\u{1b}' => " (escape)",
+        '\u{7f}' => " (delete)",
+        '\u{85}' => " (next line)",
+        _ => "",
+    };
+    let hint = match c {
+        '\0' => ": a robot file is UTF-8 text (is this one UTF-16, or binary?)",
+        '\r' => " without a line feed: end lines with LF or CRLF",
+        _ => ": a robot file may contain tabs and line breaks, but no other control characters; delete it",
+    };
+    format!("control character U+{:04X}{name}{hint}", c as u32)
 }
 
 /// Where the `&` of the anchor on the node at `mark` is: the last `&` before
@@ -616,6 +663,36 @@ mod tests {
     }
 
     #[test]
+    fn control_characters_are_refused_where_they_are() {
+        let nul = "control character U+0000 (NUL): a robot file is UTF-8 text (is this one UTF-16, or binary?)";
+        // A NUL used to end the file there: the rest was silently dropped.
+        assert_eq!(err("robot: r\n\0skills: [a]\n"), format!("2:1: {nul}"));
+        assert_eq!(err("a: 1 # note \0\n"), format!("1:13: {nul}"));
+        assert_eq!(err("a: \"x\0y\"\n"), format!("1:6: {nul}"));
+        assert_eq!(err("\0"), format!("1:1: {nul}"));
+        let other = ": a robot file may contain tabs and line breaks, but no other control characters; delete it";
+        assert_eq!(err("a: x\u{1b}[0m\n"), format!("1:5: control character U+001B (escape){other}"));
+        assert_eq!(err("a: [1]\nb: \u{7f}\n"), format!("2:4: control character U+007F (delete){other}"));
+        assert_eq!(err("a: é\u{85}\n"), format!("1:5: control character U+0085 (next line){other}"));
+        assert_eq!(err("a: \u{1}\n"), format!("1:4: control character U+0001{other}"));
+        // Columns after a multi-byte character and a tab count characters.
+        assert_eq!(err("# ：\t\u{7}\n"), format!("1:5: control character U+0007 (bell){other}"));
+        assert_eq!(
+            err("a: 1\rb: 2\n"),
+            "1:5: control character U+000D (carriage return) without a line feed: end lines with LF or CRLF"
+        );
+    }
+
+    #[test]
+    fn crlf_line_ends_are_fine_and_positions_stay_right() {
+        let root = parse("a: 1\r\nb:\r\n  c: x\r\n").unwrap();
+        let b = root.value.get("b").unwrap();
+        assert_eq!(b.pos, p(3, 3));
+        assert_eq!(b.value.get("c").unwrap(), &Spanned::new(Node::plain("x"), p(3, 6)));
+        assert_eq!(err("a: 1\r\nb: \u{0}\r\n"), format!("2:4: {}", control_message('\0')));
+    }
+
+    #[test]
     fn duplicate_keys_name_the_first_line() {
         assert_eq!(err("a: 1\nb:\n  x: 1\n  y: 2\n  x: 3\n"), "5:3: duplicate key `x` (first given on line 3)");
         // Keys in different mappings do not clash.
@@ -666,7 +743,7 @@ mod tests {
         for (i, _) in src.char_indices() {
             let _ = parse(&src[..i]);
         }
-        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\"%@`.~0a1eé\\x".chars().collect();
+        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\"%@`.~0a1eé：\\x".chars().collect();
         let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
         for _ in 0..20_000 {
             seed ^= seed << 13;
@@ -680,6 +757,25 @@ mod tests {
                 s.push(alphabet[(r >> 33) as usize % alphabet.len()]);
             }
             let _ = parse(&s);
+        }
+        // Random bytes (NUL, CR, tabs, broken UTF-8 made lossy), mostly ASCII.
+        for _ in 0..5_000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let mut r = seed;
+            let bytes: Vec<u8> = (0..seed % 48)
+                .map(|_| {
+                    r = r.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    let b = (r >> 33) as u8;
+                    if b & 0x80 == 0 || r >> 62 == 0 {
+                        b
+                    } else {
+                        b"\t\n\r :-[{"[b as usize % 8]
+                    }
+                })
+                .collect();
+            let _ = parse(&String::from_utf8_lossy(&bytes));
         }
     }
 }

@@ -1,0 +1,73 @@
+//! Broken robot files through the real `situate check`: every mistake is
+//! refused with its `FILE:LINE:COL`, nothing is silently accepted, and
+//! nothing panics.
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `situate ARGS…` in `cwd` to completion.
+fn situate_in<I, S>(cwd: &Path, args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<OsStr>,
+{
+    Command::new(env!("CARGO_BIN_EXE_situate"))
+        .args(args)
+        .current_dir(cwd)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("the situate binary runs")
+}
+
+/// `situate check FILE`, run from a directory of its own (not the file's).
+fn check(path: &Path) -> Output {
+    let elsewhere = tempfile::tempdir().expect("a temporary directory");
+    let out = situate_in(elsewhere.path(), [OsStr::new("check"), path.as_os_str()]);
+    assert_no_panic(&out);
+    out
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Writes `source` as `name` in a fresh temporary directory.
+fn robot_file(name: &str, source: impl AsRef<[u8]>) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join(name);
+    std::fs::write(&path, source).expect("the robot file is written");
+    (dir, path)
+}
+
+fn assert_no_panic(out: &Output) {
+    let err = stderr(out);
+    assert!(!err.contains("panicked"), "situate panicked:\n{err}");
+    assert_ne!(out.status.code(), Some(101), "situate panicked:\n{err}");
+}
+
+/// The file fails the check with exactly these error lines (after the file's
+/// path) and the count line.
+fn assert_errors(out: &Output, path: &Path, want: &[&str]) {
+    let shown = path.display().to_string();
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "stdout: {}\nstderr: {err}", stdout(out));
+    let mut expected: Vec<String> = want.iter().map(|w| format!("{shown}:{w}")).collect();
+    expected.push(format!("{shown}: {} error{}", want.len(), if want.len() == 1 { "" } else { "s" }));
+    assert_eq!(err.lines().collect::<Vec<_>>(), expected);
+}
+
+#[test]
+fn a_nul_byte_is_refused_at_its_place_instead_of_ending_the_file() {
+    let (_dir, path) = robot_file("nul.yaml", "robot: r\n\0skills:\n  - {name: w, type: toy.wander}\n");
+    let out = check(&path);
+    assert_errors(
+        &out,
+        &path,
+        &["2:1: error: control character U+0000 (NUL): a robot file is UTF-8 text (is this one UTF-16, or binary?)"],
+    );
+}
