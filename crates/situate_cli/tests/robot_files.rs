@@ -71,3 +71,23 @@ fn a_nul_byte_is_refused_at_its_place_instead_of_ending_the_file() {
         &["2:1: error: control character U+0000 (NUL): a robot file is UTF-8 text (is this one UTF-16, or binary?)"],
     );
 }
+
+#[test]
+fn a_tab_after_a_dash_is_refused_at_the_tab() {
+    // Accepted before: the tab silently set the column of the entry's keys.
+    let (_dir, path) = robot_file("tab.yaml", "robot: r\nskills:\n-\tname: w\n  type: toy.wander\n");
+    let out = check(&path);
+    assert_errors(&out, &path, &["3:2: error: tab character in indentation; indent YAML with spaces"]);
+}
+
+#[test]
+fn a_fullwidth_colon_is_refused_on_its_own_line_with_a_hint() {
+    // Blamed on line 5 (`simple key expect ':'`) before.
+    let (_dir, path) = robot_file("colon.yaml", "robot: r\nskills:\n  - name: w\n    type： toy.wander\n");
+    let out = check(&path);
+    assert_errors(
+        &out,
+        &path,
+        &["4:9: error: fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)"],
+    );
+}

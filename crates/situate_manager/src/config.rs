@@ -989,6 +989,25 @@ gui: {port: 8080}
     }
 
     #[test]
+    fn tabs_and_fullwidth_colons_are_errors_at_their_own_place() {
+        let indent = "error: tab character in indentation; indent YAML with spaces";
+        // Accepted before: the tab after `-` silently set the mapping's column.
+        assert_eq!(error("robot: r\nskills:\n-\tname: w\n  type: toy.wander\n"), format!("robot.yaml:3:2: {indent}"));
+        // Blamed on line 4 before.
+        assert_eq!(
+            error("robot: r\nskills:\n  -\tname: w\n    type: toy.wander\n"),
+            format!("robot.yaml:3:4: {indent}")
+        );
+        // Blamed on line 1 before.
+        assert_eq!(error("robot: r\n\tskills: []\n"), format!("robot.yaml:2:1: {indent}"));
+        // Blamed on line 5 before.
+        assert_eq!(
+            error("robot: r\nskills:\n  - name: w\n    type： toy.wander\n"),
+            "robot.yaml:4:9: error: fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)"
+        );
+    }
+
+    #[test]
     fn unknown_keys_suggest_the_closest() {
         assert_eq!(
             error(&skill("    actve: false\n")),
@@ -1237,7 +1256,7 @@ cycle:
         // Random edits of the full file: replace one character at a time
         // with YAML-significant ones, and random lines of keys and values.
         let chars: Vec<char> = FULL.chars().collect();
-        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\".~0a1".chars().collect();
+        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\".~0a1é：\0\r".chars().collect();
         let words = [
             "robot:",
             "cycle:",
