@@ -91,3 +91,25 @@ fn a_fullwidth_colon_is_refused_on_its_own_line_with_a_hint() {
         &["4:9: error: fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)"],
     );
 }
+
+#[test]
+fn a_period_out_of_range_is_quoted_as_written_at_its_place() {
+    // Before: "FILE: error: cycle period must be > 0 s and at most a day, got 1e297 s".
+    let (_dir, path) = robot_file("period.yaml", "robot: r\ncycle:\n  period_ms: 1e300\n");
+    let out = check(&path);
+    assert_errors(
+        &out,
+        &path,
+        &["3:14: error: `period_ms` is out of range: expects a number from 0.01 to 86400000 (10 µs to a day), got 1e300"],
+    );
+    let (_dir, path) = robot_file(
+        "param.yaml",
+        "robot: r\ndevices:\n  - {name: sonar, type: toy.sonar}\nskills:\n  - {name: run, type: toy.runaway, params: {safe_distance: 1e300}}\n",
+    );
+    let out = check(&path);
+    assert_errors(
+        &out,
+        &path,
+        &["5:60: error: skill `run`: parameter `safe_distance` expects a number in [0.1, 3.0], got 1e300"],
+    );
+}

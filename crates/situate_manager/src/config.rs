@@ -20,8 +20,20 @@ pub use crate::yaml::{Node, Pos, Spanned};
 pub const DEFAULT_RATE_HZ: f64 = 20.0;
 /// The fastest cycle rate a robot file may ask for.
 pub const MAX_RATE_HZ: f64 = 100_000.0;
-/// The longest execution budget or liveness deadline: a day, in ms.
-const MAX_DEADLINE_MS: f64 = 86_400_000.0;
+/// The slowest cycle rate: one cycle a day.
+pub const MIN_RATE_HZ: f64 = 1.0 / 86_400.0;
+/// The longest period, execution budget, liveness deadline or remote
+/// timeout: a day, in ms.
+pub const MAX_DEADLINE_MS: f64 = 86_400_000.0;
+/// The shortest period: that of the fastest cycle, in ms.
+pub const MIN_PERIOD_MS: f64 = 1000.0 / MAX_RATE_HZ;
+
+/// What `rate_hz` accepts, in messages.
+const RATE_RANGE: &str = "a number > 0 and ≤ 100000";
+/// What `period_ms` accepts, in messages.
+const PERIOD_RANGE: &str = "a number from 0.01 to 86400000 (10 µs to a day)";
+/// What `budget_ms`, `liveness_ms` and `timeout_ms` accept, in messages.
+const DEADLINE_RANGE: &str = "a number > 0 and ≤ 86400000 (a day)";
 /// The largest parallel executor pool.
 pub const MAX_THREADS: usize = 64;
 
@@ -139,6 +151,18 @@ impl Section {
     }
 }
 
+/// One parameter value of an entry's `params:`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// The parameter's name, where its key is.
+    pub name: Spanned<String>,
+    /// Its value, where the value is.
+    pub value: Spanned<Value>,
+    /// The value as the file writes it, for messages (`1e300`, not its
+    /// digits); `None` for a list.
+    pub written: Option<String>,
+}
+
 /// One entry of `devices:` or `skills:`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkillEntry {
@@ -156,8 +180,8 @@ pub struct SkillEntry {
     /// Liveness deadline of one run of a threaded body, ms (overrides
     /// `cycle.liveness_ms`).
     pub liveness_ms: Option<Spanned<f64>>,
-    /// Parameter values in file order; positions are the keys' and values'.
-    pub params: Vec<(Spanned<String>, Spanned<Value>)>,
+    /// Parameter values in file order.
+    pub params: Vec<Param>,
     /// Port name → signal name, in file order.
     pub remap: Vec<(Spanned<String>, Spanned<String>)>,
     /// A remote skill's manifest (`remote:` instead of `type:`); its type
@@ -176,7 +200,7 @@ impl SkillEntry {
 
     /// The value given for parameter `name`.
     pub fn param(&self, name: &str) -> Option<&Spanned<Value>> {
-        self.params.iter().find(|(k, _)| k.value == name).map(|(_, v)| v)
+        self.params.iter().find(|p| p.name.value == name).map(|p| &p.value)
     }
 }
 
@@ -475,10 +499,19 @@ impl Checker<'_> {
                     }
                     rate_key = Some(if k == "rate_hz" { "rate_hz" } else { "period_ms" });
                     if k == "rate_hz" {
-                        if let Some(hz) = self.positive(k, value, Some(MAX_RATE_HZ)) {
+                        if value.value.as_f64().is_some_and(|x| x > 0.0 && x < MIN_RATE_HZ) {
+                            self.push(
+                                value.pos,
+                                format!(
+                                    "`rate_hz` is out of range: the cycle must run at least once a day \
+                                     (rate_hz ≥ 0.0000116), got {}",
+                                    value.value.describe()
+                                ),
+                            );
+                        } else if let Some(hz) = self.number(k, value, |x| x > 0.0 && x <= MAX_RATE_HZ, RATE_RANGE) {
                             cycle.period_s = 1.0 / hz;
                         }
-                    } else if let Some(ms) = self.positive(k, value, None) {
+                    } else if let Some(ms) = self.period(k, value) {
                         cycle.period_s = ms / 1000.0;
                     }
                 }
@@ -499,25 +532,22 @@ impl Checker<'_> {
                 "threads" => {
                     cycle.threads = self.integer(k, value, 1, MAX_THREADS as i64).map(|n| n as usize);
                 }
-                "budget_ms" => cycle.budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)),
-                "liveness_ms" => cycle.liveness_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)),
+                "budget_ms" => cycle.budget_ms = self.deadline(k, value),
+                "liveness_ms" => cycle.liveness_ms = self.deadline(k, value),
                 _ => self.unknown_key(key, "in `cycle`", CYCLE_KEYS),
             }
         }
         cycle
     }
 
-    /// A number > 0 (and ≤ `max`, or finite).
-    fn positive(&mut self, key: &str, value: &Spanned<Node>, max: Option<f64>) -> Option<f64> {
+    /// A number that `ok` accepts; messages say it `expects` and quote the
+    /// value as written (`1e300`, not its digits), at the value.
+    fn number(&mut self, key: &str, value: &Spanned<Node>, ok: impl Fn(f64) -> bool, expects: &str) -> Option<f64> {
         let Some(x) = value.value.as_f64() else {
             self.push(value.pos, format!("`{key}` expects a number > 0, got {}", value.value.describe()));
             return None;
         };
-        let (ok, expects) = match max {
-            Some(max) => (x > 0.0 && x <= max, format!("a number > 0 and ≤ {max}")),
-            None => (x > 0.0 && x.is_finite(), "a finite number > 0".to_string()),
-        };
-        if ok {
+        if ok(x) {
             Some(x)
         } else {
             self.push(value.pos, format!("`{key}` is out of range: expects {expects}, got {}", value.value.describe()));
@@ -525,17 +555,36 @@ impl Checker<'_> {
         }
     }
 
-    /// An integer in `min..=max`.
+    /// A period in ms: 10 µs to a day.
+    fn period(&mut self, key: &str, value: &Spanned<Node>) -> Option<f64> {
+        self.number(key, value, |x| (MIN_PERIOD_MS..=MAX_DEADLINE_MS).contains(&x), PERIOD_RANGE)
+    }
+
+    /// A deadline in ms: > 0, at most a day.
+    fn deadline(&mut self, key: &str, value: &Spanned<Node>) -> Option<f64> {
+        self.number(key, value, |x| x > 0.0 && x <= MAX_DEADLINE_MS, DEADLINE_RANGE)
+    }
+
+    /// An integer in `min..=max`. An integer too large for 64 bits is out of
+    /// range too, not "not an integer".
     fn integer(&mut self, key: &str, value: &Spanned<Node>, min: i64, max: i64) -> Option<i64> {
-        let Some(n) = value.value.as_i64() else {
+        let n = value.value.as_i64();
+        if n.is_none() && !value.value.is_integer_literal() {
             self.push(value.pos, format!("`{key}` expects an integer, got {}", value.value.describe()));
             return None;
-        };
-        if (min..=max).contains(&n) {
-            Some(n)
-        } else {
-            self.push(value.pos, format!("`{key}` is out of range: expects an integer from {min} to {max}, got {n}"));
-            None
+        }
+        match n.filter(|n| (min..=max).contains(n)) {
+            Some(n) => Some(n),
+            None => {
+                self.push(
+                    value.pos,
+                    format!(
+                        "`{key}` is out of range: expects an integer from {min} to {max}, got {}",
+                        value.value.describe()
+                    ),
+                );
+                None
+            }
         }
     }
 
@@ -651,16 +700,16 @@ impl Checker<'_> {
                         .map(|p| Spanned::new(p, value.pos));
                 }
                 "period_ms" => {
-                    period_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
+                    period_ms = self.period(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "timeout_ms" => {
-                    timeout_ms = self.positive(k, value, None).map(|ms| Spanned::new(ms, value.pos));
+                    timeout_ms = self.deadline(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "budget_ms" => {
-                    budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
+                    budget_ms = self.deadline(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "liveness_ms" => {
-                    liveness_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
+                    liveness_ms = self.deadline(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "params" => params = self.params(value.clone()),
                 "remap" => remap = self.remap(value.clone()),
@@ -719,7 +768,7 @@ impl Checker<'_> {
         }
     }
 
-    fn params(&mut self, node: Spanned<Node>) -> Vec<(Spanned<String>, Spanned<Value>)> {
+    fn params(&mut self, node: Spanned<Node>) -> Vec<Param> {
         let Some(entries) = self.mapping("params", node, "a mapping of parameter names to values") else {
             return Vec::new();
         };
@@ -759,7 +808,8 @@ impl Checker<'_> {
                 }
             };
             if let Some(v) = v {
-                out.push((key, Spanned::new(v, value.pos)));
+                let written = matches!(value.value, Node::Scalar { .. }).then(|| value.value.describe());
+                out.push(Param { name: key, value: Spanned::new(v, value.pos), written });
             }
         }
         out
@@ -893,8 +943,16 @@ gui: {port: 8080}
         assert_eq!(
             sonar.params,
             vec![
-                (s("noise_m".to_string(), 12, 14), s(Value::F64(0.01), 12, 23)),
-                (s("beams".to_string(), 12, 29), s(Value::F64s(vec![0.1, 0.2, 3.0].into()), 12, 36)),
+                Param {
+                    name: s("noise_m".to_string(), 12, 14),
+                    value: s(Value::F64(0.01), 12, 23),
+                    written: Some("0.01".into())
+                },
+                Param {
+                    name: s("beams".to_string(), 12, 29),
+                    value: s(Value::F64s(vec![0.1, 0.2, 3.0].into()), 12, 36),
+                    written: None
+                },
             ]
         );
         assert_eq!(sonar.remap, vec![(s("range".to_string(), 13, 13), s("sonar.range".to_string(), 13, 20))]);
@@ -909,8 +967,11 @@ gui: {port: 8080}
         let runaway = &r.skills[2];
         assert_eq!(runaway.pos, p(19, 5));
         assert_eq!(runaway.priority, Some(s(10, 21, 15)));
-        let params: Vec<_> =
-            runaway.params.iter().map(|(k, v)| (k.value.as_str(), k.pos, v.value.clone(), v.pos)).collect();
+        let params: Vec<_> = runaway
+            .params
+            .iter()
+            .map(|p| (p.name.value.as_str(), p.name.pos, p.value.value.clone(), p.value.pos))
+            .collect();
         assert_eq!(
             params,
             vec![
@@ -1101,15 +1162,75 @@ gui: {port: 8080}
         );
         assert_eq!(
             error("robot: r\ncycle: {period_ms: -5}\n"),
-            "robot.yaml:2:20: error: `period_ms` is out of range: expects a finite number > 0, got -5"
+            "robot.yaml:2:20: error: `period_ms` is out of range: expects a number from 0.01 to 86400000 (10 µs to a day), got -5"
         );
         assert_eq!(
             error(&skill("    period_ms: .inf\n")),
-            "robot.yaml:5:16: error: `period_ms` is out of range: expects a finite number > 0, got .inf"
+            "robot.yaml:5:16: error: `period_ms` is out of range: expects a number from 0.01 to 86400000 (10 µs to a day), got .inf"
         );
         assert_eq!(
             error(&skill("    period_ms: \"50\"\n")),
             "robot.yaml:5:16: error: `period_ms` expects a number > 0, got \"50\""
+        );
+    }
+
+    #[test]
+    fn numbers_out_of_range_are_quoted_as_written_at_their_place() {
+        let period = "expects a number from 0.01 to 86400000 (10 µs to a day)";
+        let deadline = "expects a number > 0 and ≤ 86400000 (a day)";
+        // Before: accepted here, then "cycle period must be > 0 s and at most
+        // a day, got 1e297 s" with no position.
+        assert_eq!(
+            error("robot: r\ncycle: {period_ms: 1e300}\n"),
+            format!("robot.yaml:2:20: error: `period_ms` is out of range: {period}, got 1e300")
+        );
+        assert_eq!(
+            error("robot: r\ncycle:\n  period_ms: 0.001\n"),
+            format!("robot.yaml:3:14: error: `period_ms` is out of range: {period}, got 0.001")
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {rate_hz: 1e-300}\n"),
+            "robot.yaml:2:18: error: `rate_hz` is out of range: the cycle must run at least once a day \
+             (rate_hz ≥ 0.0000116), got 1e-300"
+        );
+        assert_eq!(
+            error(&skill("    period_ms: 1E+300\n")),
+            format!("robot.yaml:5:16: error: `period_ms` is out of range: {period}, got 1E+300")
+        );
+        assert_eq!(
+            error(&skill("    budget_ms: 0x7fffffff\n")),
+            format!("robot.yaml:5:16: error: `budget_ms` is out of range: {deadline}, got 0x7fffffff")
+        );
+        assert_eq!(
+            error(&skill("    liveness_ms: 1e9\n")),
+            format!("robot.yaml:5:18: error: `liveness_ms` is out of range: {deadline}, got 1e9")
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {budget_ms: -0.0}\n"),
+            format!("robot.yaml:2:20: error: `budget_ms` is out of range: {deadline}, got -0.0")
+        );
+        // Before: accepted (and silently cut to a day by `situate run`).
+        assert_eq!(
+            error("robot: r\nskills:\n  - {name: x, remote: x.yaml, timeout_ms: 1e300}\n"),
+            format!("robot.yaml:3:43: error: `timeout_ms` is out of range: {deadline}, got 1e300")
+        );
+        // Integers too large for 64 bits are out of range, not "not an integer".
+        let int32 = "expects an integer from -2147483648 to 2147483647";
+        assert_eq!(
+            error(&skill("    priority: 99999999999999999999\n")),
+            format!("robot.yaml:5:15: error: `priority` is out of range: {int32}, got 99999999999999999999")
+        );
+        assert_eq!(
+            error(&skill("    priority: -0x80000001\n")),
+            "robot.yaml:5:15: error: `priority` expects an integer, got \"-0x80000001\""
+        );
+        assert_eq!(
+            error(&skill("    priority: 0x80000000\n")),
+            format!("robot.yaml:5:15: error: `priority` is out of range: {int32}, got 0x80000000")
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {threads: 0o777}\n"),
+            "robot.yaml:2:18: error: `threads` is out of range: expects an integer from 1 to 64, got 0o777"
         );
     }
 

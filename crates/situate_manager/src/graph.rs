@@ -280,10 +280,13 @@ impl Graph {
                     ),
                     Some((i, p)) => match p.check(&entry.value) {
                         Ok(v) => params[i] = v,
-                        Err(e) => ck.error(
-                            entry.value_pos.or(item_pos(s)),
-                            format!("skill `{}`: parameter `{}` {e}", s.name, entry.name),
-                        ),
+                        Err(mut e) => ck.error(entry.value_pos.or(item_pos(s)), {
+                            // Quote the value as written: `1e300`, not its 301 digits.
+                            if let Some(w) = &entry.written {
+                                e.got.clone_from(w);
+                            }
+                            format!("skill `{}`: parameter `{}` {e}", s.name, entry.name)
+                        }),
                     },
                 }
             }

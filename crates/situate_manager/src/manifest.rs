@@ -36,6 +36,15 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
             },
             "priority" => match value.value.as_i64().and_then(|p| i32::try_from(p).ok()) {
                 Some(p) => decl.priority = p,
+                None if value.value.is_integer_literal() => errors.push((
+                    value.pos,
+                    format!(
+                        "`priority` is out of range: expects an integer from {} to {}, got {}",
+                        i32::MIN,
+                        i32::MAX,
+                        value.value.describe()
+                    ),
+                )),
                 None => {
                     errors.push((value.pos, format!("`priority` expects an integer, got {}", value.value.describe())))
                 }
@@ -154,7 +163,7 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
                     }
                 })
             }
-            "default" => default = Some((value.value.to_value(), value.pos)),
+            "default" => default = Some((value.value.to_value(), value.pos, value.value.describe())),
             "min" => {
                 min = Some(
                     value.value.as_f64().ok_or((value.pos, format!("parameter `{name}`: `min` expects a number")))?,
@@ -178,8 +187,8 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
             }
         }
     }
-    let (default, pos) = match default {
-        Some((Some(v), pos)) => (v, pos),
+    let (default, pos, written) = match default {
+        Some((Some(v), pos, written)) => (v, pos, written),
         _ => return Err((node.pos, format!("parameter `{name}` needs a `default`"))),
     };
     let ty = match ty.or_else(|| scalar_type(&default)) {
@@ -189,7 +198,11 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
     let mut spec = ParamSpec::new(name, ty, default.clone()).range(min, max);
     spec.unit = unit;
     spec.doc = doc;
-    spec.default = spec.check(&default).map_err(|e| (pos, format!("parameter `{name}`: the default {e}")))?;
+    spec.default = spec.check(&default).map_err(|mut e| {
+        // As written: `1e300`, not its digits.
+        e.got = written;
+        (pos, format!("parameter `{name}`: the default {e}"))
+    })?;
     Ok(spec)
 }
 
@@ -226,5 +239,19 @@ mod tests {
         assert_eq!(e[0].1, "unknown key `ouputs` in the skill manifest — did you mean `outputs`?");
         let e = manifest("params:\n  g: {type: f64, default: 5, max: 1}\n").unwrap_err();
         assert_eq!(e[0].1, "parameter `g`: the default expects a number ≤ 1.0, got 5");
+    }
+
+    #[test]
+    fn numbers_out_of_range_are_quoted_as_written() {
+        let e = manifest("params:\n  g: {type: f64, default: 1e300, max: 1}\n").unwrap_err();
+        assert_eq!(
+            e[0],
+            (Pos { line: 2, col: 27 }, "parameter `g`: the default expects a number ≤ 1.0, got 1e300".into())
+        );
+        let e = manifest("priority: 0x80000000\n").unwrap_err();
+        assert_eq!(
+            e[0].1,
+            "`priority` is out of range: expects an integer from -2147483648 to 2147483647, got 0x80000000"
+        );
     }
 }

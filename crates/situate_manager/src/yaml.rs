@@ -155,6 +155,18 @@ impl Node {
         }
     }
 
+    /// A plain scalar written as an integer (`42`, `-7`, `0x1f`, `0o17`),
+    /// whether or not it fits in 64 bits.
+    pub fn is_integer_literal(&self) -> bool {
+        let Node::Scalar { text, plain: true } = self else { return false };
+        let digits = |s: &str, radix: u32| !s.is_empty() && s.chars().all(|c| c.is_digit(radix));
+        match (text.strip_prefix("0x"), text.strip_prefix("0o")) {
+            (Some(hex), _) => digits(hex, 16),
+            (_, Some(oct)) => digits(oct, 8),
+            _ => digits(text.strip_prefix(['-', '+']).unwrap_or(text), 10),
+        }
+    }
+
     /// The source text of any scalar (plain or quoted, whatever its type).
     pub fn as_text(&self) -> Option<&str> {
         match self {

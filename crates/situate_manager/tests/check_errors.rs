@@ -253,6 +253,21 @@ skills:
 }
 
 #[test]
+fn a_parameter_out_of_range_is_quoted_as_written() {
+    // Before: "got 1000000…" (301 digits), and 16 for `0x10`.
+    for (written, col) in [("1e300", 25), ("0x10", 25), ("-1.5E+2", 25), ("99999999999999999999", 25)] {
+        let src =
+            format!("robot: r\nskills:\n  - name: g\n    type: test.gain\n    params: {{max_speed: {written}}}\n");
+        assert_eq!(
+            error(&src),
+            format!(
+                "robot.yaml:5:{col}: error: skill `g`: parameter `max_speed` expects a number in [0.0, 2.0], got {written}"
+            )
+        );
+    }
+}
+
+#[test]
 fn parameter_out_of_range_is_reported_at_its_value() {
     let src = "\
 robot: r
