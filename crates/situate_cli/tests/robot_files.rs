@@ -113,3 +113,19 @@ fn a_period_out_of_range_is_quoted_as_written_at_its_place() {
         &["5:60: error: skill `run`: parameter `safe_distance` expects a number in [0.1, 3.0], got 1e300"],
     );
 }
+
+#[test]
+fn a_device_under_skills_is_the_first_and_only_error() {
+    // Before: first "skills `sonar` and `sonar2` both write resource
+    // `sonar.range` with priority 0; give them different priorities".
+    let (_dir, path) = robot_file(
+        "devices.yaml",
+        "robot: r\ndevices:\n  - {name: sonar, type: toy.sonar}\nskills:\n  - {name: sonar2, type: toy.sonar}\n",
+    );
+    let out = check(&path);
+    assert_errors(
+        &out,
+        &path,
+        &["5:26: error: skill `sonar2`: `toy.sonar` is a device (dskill); list it under `devices:`, not `skills:`"],
+    );
+}

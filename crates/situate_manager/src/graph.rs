@@ -185,6 +185,13 @@ impl Checker<'_> {
     fn warning(&mut self, pos: Option<Pos>, message: String) {
         self.diags.push(self.spec.diag(Severity::Warning, pos, message));
     }
+
+    /// The diagnostics of a failed build: errors in file order, then warnings.
+    fn finish(mut self) -> BuildError {
+        self.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
+        let (errors, warnings): (Vec<_>, Vec<_>) = self.diags.into_iter().partition(Diagnostic::is_error);
+        BuildError { diagnostics: errors.into_iter().chain(warnings).collect() }
+    }
 }
 
 fn item_pos(s: &SkillSpec) -> Option<Pos> {
@@ -231,6 +238,11 @@ impl Graph {
         // An entry left out (bad name, duplicate, unknown type) would make its
         // consumers' inputs look unprovided: one typo, many errors. Skip that check then.
         let mut incomplete = false;
+        // A device listed under `skills:` (or a cskill under `devices:`) is
+        // wired as the wrong kind: whatever the graph checks would say next
+        // (an equal-priority conflict with the device it duplicates, …)
+        // follows from that mistake, so it is reported alone.
+        let mut misplaced = false;
         for (si, s) in spec.skills.iter().enumerate() {
             let noun = if s.section == Some(Section::Devices) { "device" } else { "skill" };
             if !is_identifier(&s.name) {
@@ -249,22 +261,20 @@ impl Graph {
                 continue;
             };
             let decl = &skill_type.decl;
-            match (s.section, decl.kind) {
-                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => ck.error(
-                    s.type_pos,
-                    format!(
-                        "device `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`",
-                        s.name, decl.type_name
-                    ),
-                ),
-                (Some(Section::Skills), SkillKind::Device) => ck.error(
-                    s.type_pos,
-                    format!(
-                        "skill `{}`: `{}` is a dskill; list it under `devices:`, not `skills:`",
-                        s.name, decl.type_name
-                    ),
-                ),
-                _ => {}
+            let wrong_section = match (s.section, decl.kind) {
+                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => Some(format!(
+                    "device `{}`: `{}` is a computational skill (cskill); list it under `skills:`, not `devices:`",
+                    s.name, decl.type_name
+                )),
+                (Some(Section::Skills), SkillKind::Device) => Some(format!(
+                    "skill `{}`: `{}` is a device (dskill); list it under `devices:`, not `skills:`",
+                    s.name, decl.type_name
+                )),
+                _ => None,
+            };
+            if let Some(message) = wrong_section {
+                ck.error(s.type_pos.or(item_pos(s)), message);
+                misplaced = true;
             }
             let mut params: Vec<Value> = decl.params.iter().map(|p| p.default.clone()).collect();
             for entry in &s.params {
@@ -407,6 +417,10 @@ impl Graph {
                 budget,
                 liveness,
             });
+        }
+
+        if misplaced {
+            return Err(ck.finish());
         }
 
         // Leaves: every port flattened; first the outputs (so a leaf's type is
@@ -590,11 +604,10 @@ impl Graph {
             records.insert(name, ty);
         }
 
-        ck.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
-        let (errors, warnings): (Vec<_>, Vec<_>) = ck.diags.into_iter().partition(Diagnostic::is_error);
-        if !errors.is_empty() {
-            return Err(BuildError { diagnostics: errors.into_iter().chain(warnings).collect() });
-        }
+        let warnings = match ck.diags.iter().any(Diagnostic::is_error) {
+            true => return Err(ck.finish()),
+            false => ck.diags,
+        };
         Ok(Graph { robot: spec.robot.clone(), instances, leaves, leaf_index, records, warnings })
     }
 

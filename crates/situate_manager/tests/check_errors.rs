@@ -143,7 +143,7 @@ skills:
 ";
     assert_eq!(
         error(src),
-        "robot.yaml:4:11: error: skill `ranger`: `test.ranger` is a dskill; list it under `devices:`, not `skills:`"
+        "robot.yaml:4:11: error: skill `ranger`: `test.ranger` is a device (dskill); list it under `devices:`, not `skills:`"
     );
     let src = "\
 robot: r
@@ -153,7 +153,29 @@ devices:
 ";
     assert_eq!(
         error(src),
-        "robot.yaml:4:11: error: device `src`: `test.source` is a cskill; list it under `skills:`, not `devices:`"
+        "robot.yaml:4:11: error: device `src`: `test.source` is a computational skill (cskill); list it under `skills:`, not `devices:`"
+    );
+}
+
+#[test]
+fn a_device_under_skills_is_reported_before_the_conflicts_it_causes() {
+    // Before: first "skills `ranger` and `ranger2` both write resource
+    // `range` with priority 0", a consequence of the real mistake.
+    let src = "\
+robot: r
+devices:
+  - {name: ranger, type: test.ranger}
+skills:
+  - {name: ranger2, type: test.ranger}
+  - {name: servo, type: test.servo, params: {x: 1}}
+";
+    assert_eq!(
+        errors(src),
+        [
+            "robot.yaml:5:27: error: skill `ranger2`: `test.ranger` is a device (dskill); list it under `devices:`, not `skills:`",
+            "robot.yaml:6:25: error: skill `servo`: `test.servo` is a device (dskill); list it under `devices:`, not `skills:`",
+            "robot.yaml:6:46: error: skill `servo`: unknown parameter `x`",
+        ]
     );
 }
 
@@ -714,7 +736,7 @@ devices:
 const MANY_IN_FILE_ORDER: [&str; 3] = [
     "robot.yaml:8:7: error: skill `g`: unknown parameter `max_sped` — did you mean `max_speed`?",
     "robot.yaml:10:11: error: skill `t`: unknown skill type `test.sourse` — did you mean `test.source`?",
-    "robot.yaml:13:11: error: device `g2`: `test.gain` is a cskill; list it under `skills:`, not `devices:`",
+    "robot.yaml:13:11: error: device `g2`: `test.gain` is a computational skill (cskill); list it under `skills:`, not `devices:`",
 ];
 
 #[test]
