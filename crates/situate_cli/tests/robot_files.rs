@@ -129,3 +129,88 @@ fn a_device_under_skills_is_the_first_and_only_error() {
         &["5:26: error: skill `sonar2`: `toy.sonar` is a device (dskill); list it under `devices:`, not `skills:`"],
     );
 }
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repo root")
+}
+
+fn run_ok(cmd: &mut Command) {
+    let out = cmd.output().unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Builds the C runaway example as `dir/libc_runaway.so`.
+fn build_c_runaway(dir: &Path) {
+    let example = repo().join("examples/c/runaway");
+    run_ok(
+        Command::new(env!("CARGO_BIN_EXE_situate"))
+            .args(["gen", "c"])
+            .arg(example.join("runaway.yaml"))
+            .arg("-o")
+            .arg(dir),
+    );
+    run_ok(
+        Command::new("gcc")
+            .args(["-std=c11", "-O2", "-Wall", "-Werror", "-shared", "-fPIC", "-fvisibility=hidden", "-I"])
+            .arg(repo().join("include"))
+            .arg("-I")
+            .arg(dir)
+            .arg(example.join("runaway.c"))
+            .arg("-o")
+            .arg(dir.join("libc_runaway.so"))
+            .arg("-lm"),
+    );
+}
+
+#[test]
+fn paths_in_a_robot_file_are_relative_to_the_file_whatever_the_current_directory() {
+    let tmp = tempfile::tempdir().expect("a temporary directory");
+    let robots = tmp.path().join("robots");
+    std::fs::create_dir_all(robots.join("maps")).unwrap();
+    build_c_runaway(&robots);
+    std::fs::copy(repo().join("maps/small.yaml"), robots.join("maps/small.yaml")).unwrap();
+    std::fs::write(robots.join("doubler.yaml"), "inputs: {x: f64}\noutputs: {y: f64}\n").unwrap();
+    let source = "\
+robot: r
+simulator: {map: maps/small.yaml}
+libraries: [libc_runaway.so]
+devices:
+  - {name: sonar, type: toy.sonar}
+skills:
+  - {name: run, type: c.runaway}
+  - {name: doubler, remote: doubler.yaml, remap: {x: level, y: doubled}}
+  - {name: level, remote: {outputs: {level: f64}}}
+";
+    std::fs::write(robots.join("robot.yaml"), source).unwrap();
+    let ok = "ok — robot `r`, 4 skills";
+    // Before: "libc_runaway.so: not a loadable shared library: … cannot open
+    // shared object file" — a bare name went to the system's library path.
+    for (cwd, file) in [
+        (robots.clone(), PathBuf::from("robot.yaml")),
+        (tmp.path().to_path_buf(), PathBuf::from("robots/robot.yaml")),
+        (robots.join("maps"), PathBuf::from("../robot.yaml")),
+        (std::env::temp_dir(), robots.join("robot.yaml")),
+    ] {
+        let out = situate_in(&cwd, [OsStr::new("check"), file.as_os_str()]);
+        assert_no_panic(&out);
+        assert!(
+            out.status.success() && stdout(&out).contains(ok),
+            "from {}: {}\n{}",
+            cwd.display(),
+            stdout(&out),
+            stderr(&out)
+        );
+    }
+    // A missing library is looked for next to the file, and named so.
+    std::fs::remove_file(robots.join("libc_runaway.so")).unwrap();
+    let out = situate_in(tmp.path(), ["check", "robots/robot.yaml"]);
+    assert_no_panic(&out);
+    let err = stderr(&out);
+    let expected = robots.join("libc_runaway.so").display().to_string();
+    assert!(err.starts_with("robots/robot.yaml:3:13: error: ") && err.contains(&expected), "{err}");
+}

@@ -8,7 +8,7 @@
 //! manager against its registry; it reports through [`RobotFile::error`] in
 //! the same format. The format is documented in `docs/robot-files.md`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use situate_core::names::suggestion;
 use situate_core::value::Value;
@@ -209,6 +209,9 @@ impl SkillEntry {
 pub struct RobotFile {
     /// The path as given, used in messages.
     pub file: String,
+    /// The directory of the file, absolute: relative paths written in the
+    /// file start here (see [`RobotFile::resolve`]).
+    pub dir: PathBuf,
     pub robot: Spanned<String>,
     pub cycle: CycleConfig,
     /// The devices, then the skills, each in file order.
@@ -322,11 +325,13 @@ impl RobotFile {
         }
     }
 
-    /// A path written in this file, relative to the file's own directory
-    /// (absolute paths stay as they are).
-    pub fn resolve(&self, path: &str) -> std::path::PathBuf {
-        let dir = Path::new(&self.file).parent().unwrap_or(Path::new(""));
-        dir.join(path)
+    /// A path written in this file, made absolute from the file's own
+    /// directory whatever the current directory is (absolute paths stay as
+    /// they are). A bare name is a file next to the robot file, never one
+    /// searched for elsewhere (`libfoo.so` is not looked up on the system's
+    /// library path).
+    pub fn resolve(&self, path: &str) -> PathBuf {
+        self.dir.join(path)
     }
 
     /// An error at `pos` in this file, for checks made after parsing.
@@ -337,6 +342,56 @@ impl RobotFile {
     /// The entries of one section, in file order.
     pub fn section(&self, section: Section) -> impl Iterator<Item = &SkillEntry> {
         self.skills.iter().filter(move |s| s.section == section)
+    }
+}
+
+/// The absolute directory of the robot file named `file` (relative to the
+/// current directory when `file` is).
+fn base_dir(file: &str) -> PathBuf {
+    let file = Path::new(file);
+    let dir = file.parent().unwrap_or(Path::new(""));
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf())
+}
+
+/// The keys of Zenoh's configuration whose values are file paths (TLS keys
+/// and certificates, the user/password dictionary, public-key files).
+pub const ZENOH_PATH_KEYS: &[&str] = &[
+    "root_ca_certificate",
+    "listen_private_key",
+    "listen_certificate",
+    "connect_private_key",
+    "connect_certificate",
+    "dictionary_file",
+    "public_key_file",
+    "private_key_file",
+    "known_keys_file",
+];
+
+/// Makes the file paths of `link.zenoh` ([`ZENOH_PATH_KEYS`]) absolute from
+/// the robot file's directory, as every other path in the file; Zenoh would
+/// take them from the current directory. `zenoh` says whether `node` is
+/// inside `link.zenoh` already.
+fn resolve_zenoh_paths(node: &mut Node, dir: &Path, zenoh: bool) {
+    match node {
+        Node::Map(entries) => {
+            for (key, value) in entries {
+                match &mut value.value {
+                    Node::Scalar { text, .. } if zenoh && ZENOH_PATH_KEYS.contains(&key.value.as_str()) => {
+                        if !text.trim().is_empty() && Path::new(text.as_str()).is_relative() {
+                            *text = dir.join(text.as_str()).display().to_string();
+                        }
+                    }
+                    other => resolve_zenoh_paths(other, dir, zenoh || key.value == "zenoh"),
+                }
+            }
+        }
+        Node::Seq(items) if zenoh => {
+            for item in items {
+                resolve_zenoh_paths(&mut item.value, dir, zenoh);
+            }
+        }
+        _ => {}
     }
 }
 
@@ -434,8 +489,13 @@ impl Checker<'_> {
             self.push(root.pos, "missing required key `robot`");
         }
         devices.append(&mut skills);
+        let dir = base_dir(self.file);
+        if let Some(link) = &mut link {
+            resolve_zenoh_paths(&mut link.value, &dir, false);
+        }
         Some(RobotFile {
             file: self.file.to_string(),
+            dir,
             robot: robot?,
             cycle,
             skills: devices,
@@ -1437,10 +1497,55 @@ cycle:
         let r = RobotFile::parse("robots/r.yaml", src).unwrap();
         assert_eq!(r.libraries, vec![s("build/librunaway.so".to_string(), 2, 13), s("/abs/lib.so".to_string(), 2, 34)]);
         assert_eq!(r.python, vec![s("skills/runaway.py".to_string(), 4, 5)]);
-        assert_eq!(r.resolve(&r.libraries[0].value), std::path::PathBuf::from("robots/build/librunaway.so"));
-        assert_eq!(r.resolve(&r.libraries[1].value), std::path::PathBuf::from("/abs/lib.so"));
+        let cwd = std::env::current_dir().unwrap();
+        assert_eq!(r.dir, cwd.join("robots"));
+        assert_eq!(r.resolve(&r.libraries[0].value), cwd.join("robots/build/librunaway.so"));
+        assert_eq!(r.resolve(&r.python[0].value), cwd.join("robots/skills/runaway.py"));
+        assert_eq!(r.resolve(&r.libraries[1].value), PathBuf::from("/abs/lib.so"));
         let sim = r.simulator.as_ref().unwrap();
         assert_eq!(sim.value.get("seed").and_then(|n| n.value.as_i64()), Some(3));
+    }
+
+    #[test]
+    fn a_bare_name_is_a_file_next_to_the_robot_file_not_one_searched_for() {
+        // Before: `libfoo.so` stayed a bare name, which the dynamic loader
+        // looks for on the system's library path, not next to the file.
+        let r = RobotFile::parse("r.yaml", "robot: r\nlibraries: [libfoo.so]\npython: [skills.py]\n").unwrap();
+        let cwd = std::env::current_dir().unwrap();
+        assert_eq!(r.resolve(&r.libraries[0].value), cwd.join("libfoo.so"));
+        assert_eq!(r.resolve(&r.python[0].value), cwd.join("skills.py"));
+        assert!(r.resolve("x").is_absolute());
+        let r = RobotFile::parse("/etc/robots/r.yaml", "robot: r\n").unwrap();
+        assert_eq!(r.resolve("../maps/m.yaml"), PathBuf::from("/etc/robots/../maps/m.yaml"));
+    }
+
+    #[test]
+    fn zenoh_file_paths_resolve_from_the_robot_file_too() {
+        let src = "\
+robot: r
+link:
+  listen: [tls/127.0.0.1:7447]
+  zenoh:
+    transport:
+      link:
+        tls: {listen_certificate: certs/robot.crt, root_ca_certificate: /etc/ca.crt, enable_mtls: true}
+      auth:
+        usrpwd: {dictionary_file: users.txt, user: certs/not-a-path}
+";
+        let r = RobotFile::parse("/srv/robots/r.yaml", src).unwrap();
+        let link = &r.link.as_ref().unwrap().value;
+        let zenoh = &link.get("zenoh").unwrap().value;
+        let transport = &zenoh.get("transport").unwrap().value;
+        let tls = &transport.get("link").unwrap().value.get("tls").unwrap();
+        let text = |n: &Spanned<Node>, k: &str| n.value.get(k).unwrap().value.as_text().map(str::to_string);
+        assert_eq!(text(tls, "listen_certificate").as_deref(), Some("/srv/robots/certs/robot.crt"));
+        assert_eq!(text(tls, "root_ca_certificate").as_deref(), Some("/etc/ca.crt"));
+        assert_eq!(tls.value.get("listen_certificate").unwrap().pos, p(7, 35), "positions stay");
+        let usrpwd = transport.get("auth").unwrap().value.get("usrpwd").unwrap();
+        assert_eq!(text(usrpwd, "dictionary_file").as_deref(), Some("/srv/robots/users.txt"));
+        assert_eq!(text(usrpwd, "user").as_deref(), Some("certs/not-a-path"));
+        let listen = link.get("listen").unwrap().value.as_seq().unwrap()[0].value.as_text().unwrap();
+        assert_eq!(listen, "tls/127.0.0.1:7447");
     }
 
     #[test]
