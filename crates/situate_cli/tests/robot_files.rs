@@ -214,3 +214,48 @@ skills:
     let expected = robots.join("libc_runaway.so").display().to_string();
     assert!(err.starts_with("robots/robot.yaml:3:13: error: ") && err.contains(&expected), "{err}");
 }
+
+#[test]
+fn a_file_over_a_mebibyte_is_refused_by_its_size_quickly() {
+    // Before: a 50 MB file took ~3 s and 2 GB of memory to parse.
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("big.yaml");
+    let file = std::fs::File::create(&path).unwrap();
+    file.set_len(50 << 20).unwrap();
+    let started = std::time::Instant::now();
+    let out = check(&path);
+    assert!(started.elapsed() < std::time::Duration::from_secs(5), "{:?}", started.elapsed());
+    assert_errors(
+        &out,
+        &path,
+        &[" error: the file is 52428800 bytes (50 MiB); a robot file may be at most 1048576 bytes (1 MiB)"],
+    );
+    // A file that never ends (here a device) is read no further than the cap.
+    #[cfg(unix)]
+    {
+        let zero = Path::new("/dev/zero");
+        let out = check(zero);
+        assert_errors(
+            &out,
+            zero,
+            &[" error: the file is more than 1048576 bytes (1 MiB); a robot file may be at most 1048576 bytes (1 MiB)"],
+        );
+    }
+}
+
+#[test]
+fn a_map_file_over_its_cap_is_refused_by_its_size() {
+    let (dir, path) = robot_file("sim.yaml", "robot: r\nsimulator: {map: map.yaml}\n");
+    let map = dir.path().join("map.yaml");
+    std::fs::File::create(&map).unwrap().set_len(64 << 20).unwrap();
+    let out = check(&path);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.starts_with(&format!(
+            "{}: the file is 67108864 bytes (64 MiB); a map file may be at most 4194304 bytes (4 MiB)",
+            map.display()
+        )),
+        "{err}"
+    );
+}

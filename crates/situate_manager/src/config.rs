@@ -53,9 +53,18 @@ const ENTRY_KEYS: &[&str] = &[
     "remap",
 ];
 
-/// One error in a robot file.
+/// The largest robot file (and remote skill manifest file) read: 1 MiB.
+pub const MAX_ROBOT_FILE_BYTES: u64 = 1 << 20;
+/// The most entries `devices:` and `skills:` may hold together.
+pub const MAX_ENTRIES: usize = 1024;
+/// The longest name (robot, entry, type, parameter, port, signal), in
+/// characters.
+pub const MAX_NAME_CHARS: usize = 256;
+
+/// One error in a robot file: `FILE:LINE:COL: error: message`, or
+/// `FILE: error: message` for the file as a whole (line and column 0).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}:{line}:{col}: error: {message}")]
+#[error("{file}{}: error: {message}", at(*.line, *.col))]
 pub struct ConfigError {
     pub file: String,
     pub line: usize,
@@ -63,9 +72,24 @@ pub struct ConfigError {
     pub message: String,
 }
 
+/// `:LINE:COL`, or nothing for line 0.
+fn at(line: usize, col: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}:{col}")
+    }
+}
+
 impl ConfigError {
     pub fn new(file: &str, pos: Pos, message: impl Into<String>) -> ConfigError {
         ConfigError { file: file.to_string(), line: pos.line, col: pos.col, message: message.into() }
+    }
+
+    /// An error about the file as a whole (it cannot be read, it is too
+    /// large): no position.
+    pub fn whole_file(file: &str, message: impl Into<String>) -> ConfigError {
+        ConfigError { file: file.to_string(), line: 0, col: 0, message: message.into() }
     }
 
     pub fn pos(&self) -> Pos {
@@ -274,9 +298,16 @@ impl RobotFile {
     ) -> Result<situate_core::SkillDecl, Vec<ConfigError>> {
         let resolved = self.resolve(path.trim());
         let shown = resolved.display().to_string();
-        let text = std::fs::read_to_string(&resolved)
-            .map_err(|e| vec![self.error(pos, format!("skill `{skill}`: cannot read the manifest `{shown}`: {e}"))])?;
         let in_manifest = |pos: Pos, msg: String| ConfigError::new(&shown, pos, format!("skill `{skill}`: {msg}"));
+        let text = yaml::read_source(&resolved, "skill manifest", MAX_ROBOT_FILE_BYTES).map_err(|e| {
+            vec![match e {
+                yaml::ReadError::Io { source, .. } => {
+                    self.error(pos, format!("skill `{skill}`: cannot read the manifest `{shown}`: {source}"))
+                }
+                yaml::ReadError::NotUtf8 { pos, .. } => in_manifest(pos, e.to_string()),
+                e => self.error(pos, format!("skill `{skill}`: the manifest `{shown}`: {e}")),
+            }]
+        })?;
         let tree = yaml::parse(&text).map_err(|e| vec![in_manifest(e.pos, e.message)])?;
         let node = match &tree.value {
             Node::Map(entries) => Spanned::new(
@@ -299,7 +330,7 @@ impl RobotFile {
     /// Parses and shape-checks a robot file; `file` names it in messages.
     /// Returns every error found, in file order.
     pub fn parse(file: &str, source: &str) -> Result<RobotFile, Vec<ConfigError>> {
-        let mut cx = Checker { file, errors: Vec::new() };
+        let mut cx = Checker { file, errors: Vec::new(), entries: 0 };
         let parsed = match yaml::parse(source) {
             Ok(root) => cx.robot_file(root),
             Err(e) => {
@@ -316,12 +347,18 @@ impl RobotFile {
         }
     }
 
-    /// Reads and parses a robot file. A read error is one error at 1:1.
+    /// Reads and parses a robot file of at most [`MAX_ROBOT_FILE_BYTES`]
+    /// (a larger one is refused before it is read). A file that cannot be
+    /// read, or is too large, is one error without a position; invalid
+    /// UTF-8 one at its place.
     pub fn load(path: &Path) -> Result<RobotFile, Vec<ConfigError>> {
         let file = path.display().to_string();
-        match std::fs::read_to_string(path) {
+        match yaml::read_source(path, "robot file", MAX_ROBOT_FILE_BYTES) {
             Ok(source) => RobotFile::parse(&file, &source),
-            Err(e) => Err(vec![ConfigError::new(&file, Pos::START, format!("cannot read robot file: {e}"))]),
+            Err(e) => Err(vec![match e.pos() {
+                Some(pos) => ConfigError::new(&file, pos, e.to_string()),
+                None => ConfigError::whole_file(&file, e.to_string()),
+            }]),
         }
     }
 
@@ -416,6 +453,8 @@ pub fn is_robot_name(s: &str) -> bool {
 struct Checker<'a> {
     file: &'a str,
     errors: Vec<ConfigError>,
+    /// Entries of `devices` and `skills` read so far.
+    entries: usize,
 }
 
 type Entries = Vec<(Spanned<String>, Spanned<Node>)>;
@@ -526,8 +565,19 @@ impl Checker<'_> {
         out
     }
 
+    /// Whether `text`, a `what`, is longer than [`MAX_NAME_CHARS`] (then an
+    /// error at `pos`, which does not quote it).
+    fn too_long(&mut self, what: &str, text: &str, pos: Pos) -> bool {
+        let n = text.chars().count();
+        if n > MAX_NAME_CHARS {
+            self.push(pos, format!("{what} is {n} characters long; a name may have at most {MAX_NAME_CHARS}"));
+        }
+        n > MAX_NAME_CHARS
+    }
+
     fn robot_name(&mut self, value: Spanned<Node>) -> Option<Spanned<String>> {
         match value.value.as_text() {
+            Some(name) if self.too_long("the robot name", name, value.pos) => None,
             Some(name) if is_robot_name(name) => Some(Spanned::new(name.to_string(), value.pos)),
             Some(name) => {
                 self.push(value.pos, format!("robot name `{name}` may only contain letters, digits, `_` and `-`"));
@@ -677,7 +727,27 @@ impl Checker<'_> {
                 return Vec::new();
             }
         };
-        items.into_iter().enumerate().filter_map(|(i, item)| self.entry(section, i, item)).collect()
+        let mut out = Vec::new();
+        for (i, item) in items.into_iter().enumerate() {
+            if self.entries == MAX_ENTRIES {
+                self.push(
+                    item.pos,
+                    format!(
+                        "too many entries: `devices` and `skills` may hold at most {MAX_ENTRIES} together; \
+                         this is entry {} of `{}`",
+                        i + 1,
+                        section.key()
+                    ),
+                );
+                self.entries += 1;
+            }
+            if self.entries > MAX_ENTRIES {
+                break;
+            }
+            self.entries += 1;
+            out.extend(self.entry(section, i, item));
+        }
+        out
     }
 
     fn entry(&mut self, section: Section, index: usize, item: Spanned<Node>) -> Option<SkillEntry> {
@@ -737,6 +807,7 @@ impl Checker<'_> {
                 "type" => {
                     type_given = true;
                     type_name = match value.value.as_text() {
+                        Some(t) if self.too_long("the type name", t, value.pos) => None,
                         Some(t) if !t.trim().is_empty() => Some(Spanned::new(t.to_string(), value.pos)),
                         _ => {
                             self.push(
@@ -810,6 +881,7 @@ impl Checker<'_> {
 
     fn entry_name(&mut self, section: Section, value: &Spanned<Node>) -> Option<Spanned<String>> {
         match value.value.as_text() {
+            Some(name) if self.too_long(&format!("the {} name", section.noun()), name, value.pos) => None,
             Some(name) if is_identifier(name) => Some(Spanned::new(name.to_string(), value.pos)),
             Some(name) => {
                 self.push(
@@ -835,6 +907,9 @@ impl Checker<'_> {
         let mut out = Vec::new();
         for (key, value) in entries {
             let name = &key.value;
+            if self.too_long("the parameter name", name, key.pos) {
+                continue;
+            }
             let v = match &value.value {
                 Node::Scalar { .. } => value.value.to_value(),
                 Node::Seq(items) => {
@@ -881,7 +956,11 @@ impl Checker<'_> {
         };
         let mut out = Vec::new();
         for (port, target) in entries {
+            if self.too_long("the port name", &port.value, port.pos) {
+                continue;
+            }
             match target.value.as_text() {
+                Some(signal) if self.too_long("the signal name", signal, target.pos) => {}
                 Some(signal) if is_signal_name(signal) => {
                     let signal = Spanned::new(signal.to_string(), target.pos);
                     out.push((port, signal));
@@ -1424,9 +1503,89 @@ cycle:
         let errors = RobotFile::load(&missing).unwrap_err();
         assert_eq!(errors.len(), 1);
         let text = errors[0].to_string();
-        let prefix = format!("{}:1:1: error: cannot read robot file: ", missing.display());
+        // A file that does not read has no line and column.
+        let prefix = format!("{}: error: cannot read robot file: ", missing.display());
         assert!(text.starts_with(&prefix), "{text}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_file_over_the_size_cap_is_refused_by_its_size_before_it_is_read() {
+        let dir = std::env::temp_dir().join(format!("situate-config-cap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 50 MiB, sparse: refused from its size, not read (it took ~3 s and
+        // 2 GB to parse such a file).
+        let big = dir.join("big.yaml");
+        std::fs::File::create(&big).unwrap().set_len(50 << 20).unwrap();
+        let started = std::time::Instant::now();
+        let errors = RobotFile::load(&big).unwrap_err();
+        assert!(started.elapsed() < std::time::Duration::from_secs(1));
+        assert_eq!(
+            errors[0].to_string(),
+            format!(
+                "{}: error: the file is 52428800 bytes (50 MiB); a robot file may be at most 1048576 bytes (1 MiB)",
+                big.display()
+            )
+        );
+        // Exactly at the cap is fine (a comment, then a valid robot).
+        let at_cap = dir.join("at_cap.yaml");
+        let head = "robot: r\n#";
+        let text = format!("{head}{}\n", "x".repeat(MAX_ROBOT_FILE_BYTES as usize - head.len() - 1));
+        std::fs::write(&at_cap, &text).unwrap();
+        assert!(RobotFile::load(&at_cap).is_ok());
+        std::fs::write(&at_cap, text + "\n").unwrap();
+        assert!(RobotFile::load(&at_cap).unwrap_err()[0].message.starts_with("the file is 1048577 bytes (1.0 MiB);"));
+        // Invalid UTF-8 is an error at its place; UTF-16 is named.
+        let latin1 = dir.join("latin1.yaml");
+        std::fs::write(&latin1, b"robot: r\n# caf\xe9\n").unwrap();
+        assert_eq!(
+            RobotFile::load(&latin1).unwrap_err()[0].to_string(),
+            format!(
+                "{}:2:6: error: invalid UTF-8 (byte 0xE9): a robot file is UTF-8 text; save it as UTF-8",
+                latin1.display()
+            )
+        );
+        let utf16 = dir.join("utf16.yaml");
+        std::fs::write(&utf16, b"\xff\xfer\0o\0").unwrap();
+        assert!(RobotFile::load(&utf16).unwrap_err()[0].message.starts_with("the file is UTF-16 text"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn entries_and_names_are_capped() {
+        let mut src = String::from("robot: r\ndevices:\n  - {name: d, type: t}\nskills:\n");
+        for i in 0..MAX_ENTRIES + 5 {
+            src.push_str(&format!("  - {{name: s{i}, type: t}}\n"));
+        }
+        assert_eq!(
+            error(&src),
+            "robot.yaml:1028:5: error: too many entries: `devices` and `skills` may hold at most 1024 together; \
+             this is entry 1024 of `skills`"
+        );
+        let long = "x".repeat(MAX_NAME_CHARS + 1);
+        let too_long = |what: &str| format!("{what} is 257 characters long; a name may have at most 256");
+        assert_eq!(
+            error(&format!("robot: {long}\n")),
+            format!("robot.yaml:1:8: error: {}", too_long("the robot name"))
+        );
+        assert_eq!(
+            errors(&skill(&format!("    params: {{{long}: 1}}\n    remap: {{a: {long}}}\n"))),
+            [
+                format!("robot.yaml:5:14: error: {}", too_long("the parameter name")),
+                format!("robot.yaml:6:16: error: {}", too_long("the signal name")),
+            ]
+        );
+        let errors =
+            errors(&format!("robot: r\nskills:\n  - {{name: {long}, type: {long}, remap: {{p: a.{long}}}}}\n"));
+        assert_eq!(
+            errors,
+            [
+                format!("robot.yaml:3:12: error: {}", too_long("the skill name")),
+                format!("robot.yaml:3:277: error: {}", too_long("the type name")),
+                "robot.yaml:3:547: error: the signal name is 259 characters long; a name may have at most 256"
+                    .to_string(),
+            ]
+        );
     }
 
     #[test]

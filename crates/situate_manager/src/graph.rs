@@ -484,7 +484,7 @@ impl Graph {
             }
         }
 
-        let mut reported_pairs = std::collections::HashSet::new();
+        let mut reported_conflicts = std::collections::HashSet::new();
         for leaf in &leaves {
             // Writers agree on the type; every writer feeds every reader.
             if let Some(&(w0, p0)) = leaf.writers.first() {
@@ -515,26 +515,34 @@ impl Graph {
                     }
                 }
             }
-            // Equal-priority writers of one resource cannot be arbitrated; name
-            // the resource as the later writer's port does (`drive`, not `drive.v`).
-            for (k, &(a, _)) in leaf.writers.iter().enumerate() {
-                for &(b, pb) in &leaf.writers[k + 1..] {
-                    if a == b || instances[a].priority != instances[b].priority {
-                        continue;
-                    }
-                    let resource = instances[b].outputs[pb].signal.clone();
-                    if !reported_pairs.insert((a, b, resource.clone())) {
-                        continue;
-                    }
-                    let pos = specs[b].priority_pos.or(specs[a].priority_pos).or(item_pos(specs[b]));
-                    ck.error(
-                        pos,
-                        format!(
-                            "skills `{}` and `{}` both write resource `{resource}` with priority {}; give them different priorities",
-                            instances[a].name, instances[b].name, instances[a].priority
-                        ),
-                    );
+            // Equal-priority writers of one resource cannot be arbitrated: one
+            // error per resource and priority, naming every such writer (not
+            // one per pair: n writers would make n² errors). Name the resource
+            // as the last writer's port does (`drive`, not `drive.v`).
+            let mut by_priority: BTreeMap<i32, Vec<(usize, usize)>> = BTreeMap::new();
+            for &(w, p) in &leaf.writers {
+                let group = by_priority.entry(instances[w].priority).or_default();
+                // One instance's ports on a leaf are adjacent.
+                if group.last().is_none_or(|&(i, _)| i != w) {
+                    group.push((w, p));
                 }
+            }
+            for (priority, group) in by_priority {
+                let Some(&(last, last_port)) = group.last().filter(|_| group.len() > 1) else { continue };
+                let resource = instances[last].outputs[last_port].signal.clone();
+                if !reported_conflicts.insert((resource.clone(), priority)) {
+                    continue;
+                }
+                let pos = group.iter().rev().find_map(|&(i, _)| specs[i].priority_pos).or(item_pos(specs[last]));
+                let names: Vec<&str> = group.iter().map(|&(i, _)| instances[i].name.as_str()).collect();
+                let both = if names.len() == 2 { "both" } else { "all" };
+                ck.error(
+                    pos,
+                    format!(
+                        "skills {} {both} write resource `{resource}` with priority {priority}; give them different priorities",
+                        and_list(&names)
+                    ),
+                );
             }
         }
 
@@ -584,7 +592,7 @@ impl Graph {
             } else {
                 format!(
                     "data-flow loop among skills {}: each waits for another's output in the same cycle",
-                    quote_list(&names)
+                    quote_list_capped(&names)
                 )
             };
             ck.error(first, msg);
@@ -667,6 +675,27 @@ fn record_type_at(path: &str, leaves: &[Leaf]) -> SignalType {
 
 pub(crate) fn quote_list(names: &[&str]) -> String {
     names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+}
+
+/// How many names a message lists before "and N more".
+const LISTED_NAMES: usize = 10;
+
+/// `a`, `b`, … and N more: at most [`LISTED_NAMES`] names.
+fn quote_list_capped(names: &[&str]) -> String {
+    match names.len() {
+        n if n > LISTED_NAMES => format!("{} and {} more", quote_list(&names[..LISTED_NAMES]), n - LISTED_NAMES),
+        _ => quote_list(names),
+    }
+}
+
+/// `a` and `b`; `a`, `b` and `c`; `a`, …, `j` and N more.
+fn and_list(names: &[&str]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => format!("`{one}`"),
+        _ if names.len() > LISTED_NAMES => quote_list_capped(names),
+        [init @ .., last] => format!("{} and `{last}`", quote_list(init)),
+    }
 }
 
 /// The data-flow loops among cskills (Tarjan's strongly connected

@@ -637,6 +637,33 @@ skills:
 }
 
 #[test]
+fn many_equal_priority_writers_are_one_error_not_one_per_pair() {
+    // Before: one error per pair — n writers, n²/2 errors (2000 writers took
+    // 30 s and 1 GB to report).
+    let mut src = String::from("robot: r\nskills:\n");
+    for i in 0..40 {
+        src.push_str(&format!("  - {{name: c{i}, type: test.cruise}}\n"));
+    }
+    assert_eq!(
+        error(&src),
+        "robot.yaml:42:12: error: skills `c0`, `c1`, `c2`, `c3`, `c4`, `c5`, `c6`, `c7`, `c8`, `c9` and 30 more all \
+         write resource `speed` with priority 5; give them different priorities"
+    );
+    let src = "\
+robot: r
+skills:
+  - {name: a, type: test.cruise}
+  - {name: b, type: test.avoid}
+  - {name: c, type: test.cruise, priority: 5}
+  - {name: d, type: test.stop}
+";
+    assert_eq!(
+        error(src),
+        "robot.yaml:5:44: error: skills `a`, `b` and `c` all write resource `speed` with priority 5; give them different priorities"
+    );
+}
+
+#[test]
 fn a_record_resource_is_reported_once_not_once_per_field() {
     let src = "\
 robot: r
