@@ -6,9 +6,14 @@ pub fn did_you_mean<'a, I>(name: &str, candidates: I) -> Option<&'a str>
 where
     I: IntoIterator<Item = &'a str>,
 {
-    let limit = (name.chars().count() / 3).max(1);
+    let len = name.chars().count();
+    let limit = (len / 3).max(1);
     candidates
         .into_iter()
+        // Lengths further apart than the limit are further apart in edits:
+        // skip them without the quadratic distance (a name of a million
+        // characters stays cheap).
+        .filter(|c| len.abs_diff(c.chars().count()) <= limit)
         .map(|c| (edit_distance(name, c), c))
         .filter(|(d, _)| *d <= limit)
         .min_by_key(|(d, _)| *d)
@@ -61,5 +66,6 @@ mod tests {
         assert_eq!(suggestion("sonr", names), " — did you mean `sonar`?");
         assert_eq!(edit_distance("levle", "level"), 1);
         assert_eq!(did_you_mean("levle", ["level", "label"]), Some("level"));
+        assert_eq!(did_you_mean(&"x".repeat(1_000_000), names), None);
     }
 }

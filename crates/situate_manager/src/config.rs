@@ -8,7 +8,7 @@
 //! manager against its registry; it reports through [`RobotFile::error`] in
 //! the same format. The format is documented in `docs/robot-files.md`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use situate_core::names::suggestion;
 use situate_core::value::Value;
@@ -20,10 +20,20 @@ pub use crate::yaml::{Node, Pos, Spanned};
 pub const DEFAULT_RATE_HZ: f64 = 20.0;
 /// The fastest cycle rate a robot file may ask for.
 pub const MAX_RATE_HZ: f64 = 100_000.0;
-/// The longest execution budget or liveness deadline: a day, in ms.
-const MAX_DEADLINE_MS: f64 = 86_400_000.0;
-/// The longest period (cycle or skill) and the longest remote timeout: a day, in ms.
-const MAX_PERIOD_MS: f64 = 86_400_000.0;
+/// The slowest cycle rate: one cycle a day.
+pub const MIN_RATE_HZ: f64 = 1.0 / 86_400.0;
+/// The longest period, execution budget, liveness deadline or remote
+/// timeout: a day, in ms.
+pub const MAX_DEADLINE_MS: f64 = 86_400_000.0;
+/// The shortest period: that of the fastest cycle, in ms.
+pub const MIN_PERIOD_MS: f64 = 1000.0 / MAX_RATE_HZ;
+
+/// What `rate_hz` accepts, in messages.
+const RATE_RANGE: &str = "a number > 0 and ≤ 100000";
+/// What `period_ms` accepts, in messages.
+const PERIOD_RANGE: &str = "a number from 0.01 to 86400000 (10 µs to a day)";
+/// What `budget_ms`, `liveness_ms` and `timeout_ms` accept, in messages.
+const DEADLINE_RANGE: &str = "a number > 0 and ≤ 86400000 (a day)";
 /// The largest parallel executor pool.
 pub const MAX_THREADS: usize = 64;
 
@@ -43,9 +53,18 @@ const ENTRY_KEYS: &[&str] = &[
     "remap",
 ];
 
-/// One error in a robot file.
+/// The largest robot file (and remote skill manifest file) read: 1 MiB.
+pub const MAX_ROBOT_FILE_BYTES: u64 = 1 << 20;
+/// The most entries `devices:` and `skills:` may hold together.
+pub const MAX_ENTRIES: usize = 1024;
+/// The longest name (robot, entry, type, parameter, port, signal), in
+/// characters.
+pub const MAX_NAME_CHARS: usize = 256;
+
+/// One error in a robot file: `FILE:LINE:COL: error: message`, or
+/// `FILE: error: message` for the file as a whole (line and column 0).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}:{line}:{col}: error: {message}")]
+#[error("{file}{}: error: {message}", at(*.line, *.col))]
 pub struct ConfigError {
     pub file: String,
     pub line: usize,
@@ -53,9 +72,24 @@ pub struct ConfigError {
     pub message: String,
 }
 
+/// `:LINE:COL`, or nothing for line 0.
+fn at(line: usize, col: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}:{col}")
+    }
+}
+
 impl ConfigError {
     pub fn new(file: &str, pos: Pos, message: impl Into<String>) -> ConfigError {
         ConfigError { file: file.to_string(), line: pos.line, col: pos.col, message: message.into() }
+    }
+
+    /// An error about the file as a whole (it cannot be read, it is too
+    /// large): no position.
+    pub fn whole_file(file: &str, message: impl Into<String>) -> ConfigError {
+        ConfigError { file: file.to_string(), line: 0, col: 0, message: message.into() }
     }
 
     pub fn pos(&self) -> Pos {
@@ -141,6 +175,18 @@ impl Section {
     }
 }
 
+/// One parameter value of an entry's `params:`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// The parameter's name, where its key is.
+    pub name: Spanned<String>,
+    /// Its value, where the value is.
+    pub value: Spanned<Value>,
+    /// The value as the file writes it, for messages (`1e300`, not its
+    /// digits); `None` for a list.
+    pub written: Option<String>,
+}
+
 /// One entry of `devices:` or `skills:`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkillEntry {
@@ -158,8 +204,8 @@ pub struct SkillEntry {
     /// Liveness deadline of one run of a threaded body, ms (overrides
     /// `cycle.liveness_ms`).
     pub liveness_ms: Option<Spanned<f64>>,
-    /// Parameter values in file order; positions are the keys' and values'.
-    pub params: Vec<(Spanned<String>, Spanned<Value>)>,
+    /// Parameter values in file order.
+    pub params: Vec<Param>,
     /// Port name → signal name, in file order.
     pub remap: Vec<(Spanned<String>, Spanned<String>)>,
     /// A remote skill's manifest (`remote:` instead of `type:`); its type
@@ -178,7 +224,7 @@ impl SkillEntry {
 
     /// The value given for parameter `name`.
     pub fn param(&self, name: &str) -> Option<&Spanned<Value>> {
-        self.params.iter().find(|(k, _)| k.value == name).map(|(_, v)| v)
+        self.params.iter().find(|p| p.name.value == name).map(|p| &p.value)
     }
 }
 
@@ -187,6 +233,9 @@ impl SkillEntry {
 pub struct RobotFile {
     /// The path as given, used in messages.
     pub file: String,
+    /// The directory of the file, absolute: relative paths written in the
+    /// file start here (see [`RobotFile::resolve`]).
+    pub dir: PathBuf,
     pub robot: Spanned<String>,
     pub cycle: CycleConfig,
     /// The devices, then the skills, each in file order.
@@ -249,9 +298,16 @@ impl RobotFile {
     ) -> Result<situate_core::SkillDecl, Vec<ConfigError>> {
         let resolved = self.resolve(path.trim());
         let shown = resolved.display().to_string();
-        let text = std::fs::read_to_string(&resolved)
-            .map_err(|e| vec![self.error(pos, format!("skill `{skill}`: cannot read the manifest `{shown}`: {e}"))])?;
         let in_manifest = |pos: Pos, msg: String| ConfigError::new(&shown, pos, format!("skill `{skill}`: {msg}"));
+        let text = yaml::read_source(&resolved, "skill manifest", MAX_ROBOT_FILE_BYTES).map_err(|e| {
+            vec![match e {
+                yaml::ReadError::Io { source, .. } => {
+                    self.error(pos, format!("skill `{skill}`: cannot read the manifest `{shown}`: {source}"))
+                }
+                yaml::ReadError::NotUtf8 { pos, .. } => in_manifest(pos, e.to_string()),
+                e => self.error(pos, format!("skill `{skill}`: the manifest `{shown}`: {e}")),
+            }]
+        })?;
         let tree = yaml::parse(&text).map_err(|e| vec![in_manifest(e.pos, e.message)])?;
         let node = match &tree.value {
             Node::Map(entries) => Spanned::new(
@@ -274,7 +330,7 @@ impl RobotFile {
     /// Parses and shape-checks a robot file; `file` names it in messages.
     /// Returns every error found, in file order.
     pub fn parse(file: &str, source: &str) -> Result<RobotFile, Vec<ConfigError>> {
-        let mut cx = Checker { file, errors: Vec::new() };
+        let mut cx = Checker { file, errors: Vec::new(), entries: 0 };
         let parsed = match yaml::parse(source) {
             Ok(root) => cx.robot_file(root),
             Err(e) => {
@@ -291,42 +347,28 @@ impl RobotFile {
         }
     }
 
-    /// Reads and parses a robot file. A read error is one error at 1:1.
-    /// At most [`yaml::MAX_SOURCE_BYTES`] are read: a bigger file is refused
-    /// without being read whole.
+    /// Reads and parses a robot file of at most [`MAX_ROBOT_FILE_BYTES`]
+    /// (a larger one is refused before it is read). A file that cannot be
+    /// read, or is too large, is one error without a position; invalid
+    /// UTF-8 one at its place.
     pub fn load(path: &Path) -> Result<RobotFile, Vec<ConfigError>> {
         let file = path.display().to_string();
-        let fail = |pos: Pos, message: String| Err(vec![ConfigError::new(&file, pos, message)]);
-        let bytes = match read_capped(path) {
-            Ok(Ok(bytes)) => bytes,
-            Ok(Err(size)) => return fail(Pos::START, yaml::too_big(size)),
-            Err(e) => return fail(Pos::START, format!("cannot read robot file: {e}")),
-        };
-        match String::from_utf8(bytes) {
+        match yaml::read_source(path, "robot file", MAX_ROBOT_FILE_BYTES) {
             Ok(source) => RobotFile::parse(&file, &source),
-            Err(e) => {
-                let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-                // Valid up to here, so this prefix is text.
-                let text = String::from_utf8_lossy(good);
-                let line = text.matches('\n').count() + 1;
-                let col = text.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-                let byte = e.as_bytes()[good.len()];
-                fail(Pos::new(line, col), format!("the file is not UTF-8 text: byte 0x{byte:02X} here"))
-            }
+            Err(e) => Err(vec![match e.pos() {
+                Some(pos) => ConfigError::new(&file, pos, e.to_string()),
+                None => ConfigError::whole_file(&file, e.to_string()),
+            }]),
         }
     }
 
-    /// A path written in this file, relative to the file's own directory
-    /// (absolute paths stay as they are).
-    pub fn resolve(&self, path: &str) -> std::path::PathBuf {
-        // `robot.yaml` has the parent "": its directory is then ".", written out, so that a
-        // bare `libfoo.so` stays a path next to the file (a bare name would send `dlopen`
-        // to the system's library path instead).
-        let dir = match Path::new(&self.file).parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        dir.join(path)
+    /// A path written in this file, made absolute from the file's own
+    /// directory whatever the current directory is (absolute paths stay as
+    /// they are). A bare name is a file next to the robot file, never one
+    /// searched for elsewhere (`libfoo.so` is not looked up on the system's
+    /// library path).
+    pub fn resolve(&self, path: &str) -> PathBuf {
+        self.dir.join(path)
     }
 
     /// An error at `pos` in this file, for checks made after parsing.
@@ -337,6 +379,56 @@ impl RobotFile {
     /// The entries of one section, in file order.
     pub fn section(&self, section: Section) -> impl Iterator<Item = &SkillEntry> {
         self.skills.iter().filter(move |s| s.section == section)
+    }
+}
+
+/// The absolute directory of the robot file named `file` (relative to the
+/// current directory when `file` is).
+fn base_dir(file: &str) -> PathBuf {
+    let file = Path::new(file);
+    let dir = file.parent().unwrap_or(Path::new(""));
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf())
+}
+
+/// The keys of Zenoh's configuration whose values are file paths (TLS keys
+/// and certificates, the user/password dictionary, public-key files).
+pub const ZENOH_PATH_KEYS: &[&str] = &[
+    "root_ca_certificate",
+    "listen_private_key",
+    "listen_certificate",
+    "connect_private_key",
+    "connect_certificate",
+    "dictionary_file",
+    "public_key_file",
+    "private_key_file",
+    "known_keys_file",
+];
+
+/// Makes the file paths of `link.zenoh` ([`ZENOH_PATH_KEYS`]) absolute from
+/// the robot file's directory, as every other path in the file; Zenoh would
+/// take them from the current directory. `zenoh` says whether `node` is
+/// inside `link.zenoh` already.
+fn resolve_zenoh_paths(node: &mut Node, dir: &Path, zenoh: bool) {
+    match node {
+        Node::Map(entries) => {
+            for (key, value) in entries {
+                match &mut value.value {
+                    Node::Scalar { text, .. } if zenoh && ZENOH_PATH_KEYS.contains(&key.value.as_str()) => {
+                        if !text.trim().is_empty() && Path::new(text.as_str()).is_relative() {
+                            *text = dir.join(text.as_str()).display().to_string();
+                        }
+                    }
+                    other => resolve_zenoh_paths(other, dir, zenoh || key.value == "zenoh"),
+                }
+            }
+        }
+        Node::Seq(items) if zenoh => {
+            for item in items {
+                resolve_zenoh_paths(&mut item.value, dir, zenoh);
+            }
+        }
+        _ => {}
     }
 }
 
@@ -361,6 +453,8 @@ pub fn is_robot_name(s: &str) -> bool {
 struct Checker<'a> {
     file: &'a str,
     errors: Vec<ConfigError>,
+    /// Entries of `devices` and `skills` read so far.
+    entries: usize,
 }
 
 type Entries = Vec<(Spanned<String>, Spanned<Node>)>;
@@ -434,8 +528,13 @@ impl Checker<'_> {
             self.push(root.pos, "missing required key `robot`");
         }
         devices.append(&mut skills);
+        let dir = base_dir(self.file);
+        if let Some(link) = &mut link {
+            resolve_zenoh_paths(&mut link.value, &dir, false);
+        }
         Some(RobotFile {
             file: self.file.to_string(),
+            dir,
             robot: robot?,
             cycle,
             skills: devices,
@@ -466,8 +565,19 @@ impl Checker<'_> {
         out
     }
 
+    /// Whether `text`, a `what`, is longer than [`MAX_NAME_CHARS`] (then an
+    /// error at `pos`, which does not quote it).
+    fn too_long(&mut self, what: &str, text: &str, pos: Pos) -> bool {
+        let n = text.chars().count();
+        if n > MAX_NAME_CHARS {
+            self.push(pos, format!("{what} is {n} characters long; a name may have at most {MAX_NAME_CHARS}"));
+        }
+        n > MAX_NAME_CHARS
+    }
+
     fn robot_name(&mut self, value: Spanned<Node>) -> Option<Spanned<String>> {
         match value.value.as_text() {
+            Some(name) if self.too_long("the robot name", name, value.pos) => None,
             Some(name) if is_robot_name(name) => Some(Spanned::new(name.to_string(), value.pos)),
             Some(name) => {
                 self.push(value.pos, format!("robot name `{name}` may only contain letters, digits, `_` and `-`"));
@@ -499,23 +609,19 @@ impl Checker<'_> {
                     }
                     rate_key = Some(if k == "rate_hz" { "rate_hz" } else { "period_ms" });
                     if k == "rate_hz" {
-                        if let Some(hz) = self.positive(k, value, Some(MAX_RATE_HZ)) {
-                            if hz * 86_400.0 < 1.0 {
-                                // Checked here, where the value was written (the manager's
-                                // check of the period has no position and prints 1/hz).
-                                self.push(
-                                    value.pos,
-                                    format!(
-                                        "`rate_hz` is out of range: expects a period of at most a day \
-                                         (≥ 1/86400 Hz), got {}",
-                                        value.value.describe()
-                                    ),
-                                );
-                            } else {
-                                cycle.period_s = 1.0 / hz;
-                            }
+                        if value.value.as_f64().is_some_and(|x| x > 0.0 && x < MIN_RATE_HZ) {
+                            self.push(
+                                value.pos,
+                                format!(
+                                    "`rate_hz` is out of range: the cycle must run at least once a day \
+                                     (rate_hz ≥ 0.0000116), got {}",
+                                    value.value.describe()
+                                ),
+                            );
+                        } else if let Some(hz) = self.number(k, value, |x| x > 0.0 && x <= MAX_RATE_HZ, RATE_RANGE) {
+                            cycle.period_s = 1.0 / hz;
                         }
-                    } else if let Some(ms) = self.positive(k, value, Some(MAX_PERIOD_MS)) {
+                    } else if let Some(ms) = self.period(k, value) {
                         cycle.period_s = ms / 1000.0;
                     }
                 }
@@ -536,25 +642,22 @@ impl Checker<'_> {
                 "threads" => {
                     cycle.threads = self.integer(k, value, 1, MAX_THREADS as i64).map(|n| n as usize);
                 }
-                "budget_ms" => cycle.budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)),
-                "liveness_ms" => cycle.liveness_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)),
+                "budget_ms" => cycle.budget_ms = self.deadline(k, value),
+                "liveness_ms" => cycle.liveness_ms = self.deadline(k, value),
                 _ => self.unknown_key(key, "in `cycle`", CYCLE_KEYS),
             }
         }
         cycle
     }
 
-    /// A number > 0 (and ≤ `max`, or finite).
-    fn positive(&mut self, key: &str, value: &Spanned<Node>, max: Option<f64>) -> Option<f64> {
+    /// A number that `ok` accepts; messages say it `expects` and quote the
+    /// value as written (`1e300`, not its digits), at the value.
+    fn number(&mut self, key: &str, value: &Spanned<Node>, ok: impl Fn(f64) -> bool, expects: &str) -> Option<f64> {
         let Some(x) = value.value.as_f64() else {
             self.push(value.pos, format!("`{key}` expects a number > 0, got {}", value.value.describe()));
             return None;
         };
-        let (ok, expects) = match max {
-            Some(max) => (x > 0.0 && x <= max, format!("a number > 0 and ≤ {max}")),
-            None => (x > 0.0 && x.is_finite(), "a finite number > 0".to_string()),
-        };
-        if ok {
+        if ok(x) {
             Some(x)
         } else {
             self.push(value.pos, format!("`{key}` is out of range: expects {expects}, got {}", value.value.describe()));
@@ -562,23 +665,36 @@ impl Checker<'_> {
         }
     }
 
-    /// An integer in `min..=max`.
+    /// A period in ms: 10 µs to a day.
+    fn period(&mut self, key: &str, value: &Spanned<Node>) -> Option<f64> {
+        self.number(key, value, |x| (MIN_PERIOD_MS..=MAX_DEADLINE_MS).contains(&x), PERIOD_RANGE)
+    }
+
+    /// A deadline in ms: > 0, at most a day.
+    fn deadline(&mut self, key: &str, value: &Spanned<Node>) -> Option<f64> {
+        self.number(key, value, |x| x > 0.0 && x <= MAX_DEADLINE_MS, DEADLINE_RANGE)
+    }
+
+    /// An integer in `min..=max`. An integer too large for 64 bits is out of
+    /// range too, not "not an integer".
     fn integer(&mut self, key: &str, value: &Spanned<Node>, min: i64, max: i64) -> Option<i64> {
-        let Some(n) = value.value.as_i64() else {
+        let n = value.value.as_i64();
+        if n.is_none() && !value.value.is_integer_literal() {
             self.push(value.pos, format!("`{key}` expects an integer, got {}", value.value.describe()));
             return None;
-        };
-        if (min..=max).contains(&n) {
-            Some(n)
-        } else {
-            self.push(
-                value.pos,
-                format!(
-                    "`{key}` is out of range: expects an integer from {min} to {max}, got {}",
-                    value.value.describe()
-                ),
-            );
-            None
+        }
+        match n.filter(|n| (min..=max).contains(n)) {
+            Some(n) => Some(n),
+            None => {
+                self.push(
+                    value.pos,
+                    format!(
+                        "`{key}` is out of range: expects an integer from {min} to {max}, got {}",
+                        value.value.describe()
+                    ),
+                );
+                None
+            }
         }
     }
 
@@ -611,7 +727,27 @@ impl Checker<'_> {
                 return Vec::new();
             }
         };
-        items.into_iter().enumerate().filter_map(|(i, item)| self.entry(section, i, item)).collect()
+        let mut out = Vec::new();
+        for (i, item) in items.into_iter().enumerate() {
+            if self.entries == MAX_ENTRIES {
+                self.push(
+                    item.pos,
+                    format!(
+                        "too many entries: `devices` and `skills` may hold at most {MAX_ENTRIES} together; \
+                         this is entry {} of `{}`",
+                        i + 1,
+                        section.key()
+                    ),
+                );
+                self.entries += 1;
+            }
+            if self.entries > MAX_ENTRIES {
+                break;
+            }
+            self.entries += 1;
+            out.extend(self.entry(section, i, item));
+        }
+        out
     }
 
     fn entry(&mut self, section: Section, index: usize, item: Spanned<Node>) -> Option<SkillEntry> {
@@ -671,6 +807,7 @@ impl Checker<'_> {
                 "type" => {
                     type_given = true;
                     type_name = match value.value.as_text() {
+                        Some(t) if self.too_long("the type name", t, value.pos) => None,
                         Some(t) if !t.trim().is_empty() => Some(Spanned::new(t.to_string(), value.pos)),
                         _ => {
                             self.push(
@@ -694,16 +831,16 @@ impl Checker<'_> {
                         .map(|p| Spanned::new(p, value.pos));
                 }
                 "period_ms" => {
-                    period_ms = self.positive(k, value, Some(MAX_PERIOD_MS)).map(|ms| Spanned::new(ms, value.pos));
+                    period_ms = self.period(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "timeout_ms" => {
-                    timeout_ms = self.positive(k, value, Some(MAX_PERIOD_MS)).map(|ms| Spanned::new(ms, value.pos));
+                    timeout_ms = self.deadline(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "budget_ms" => {
-                    budget_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
+                    budget_ms = self.deadline(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "liveness_ms" => {
-                    liveness_ms = self.positive(k, value, Some(MAX_DEADLINE_MS)).map(|ms| Spanned::new(ms, value.pos));
+                    liveness_ms = self.deadline(k, value).map(|ms| Spanned::new(ms, value.pos));
                 }
                 "params" => params = self.params(value.clone()),
                 "remap" => remap = self.remap(value.clone()),
@@ -744,6 +881,7 @@ impl Checker<'_> {
 
     fn entry_name(&mut self, section: Section, value: &Spanned<Node>) -> Option<Spanned<String>> {
         match value.value.as_text() {
+            Some(name) if self.too_long(&format!("the {} name", section.noun()), name, value.pos) => None,
             Some(name) if is_identifier(name) => Some(Spanned::new(name.to_string(), value.pos)),
             Some(name) => {
                 self.push(
@@ -762,13 +900,16 @@ impl Checker<'_> {
         }
     }
 
-    fn params(&mut self, node: Spanned<Node>) -> Vec<(Spanned<String>, Spanned<Value>)> {
+    fn params(&mut self, node: Spanned<Node>) -> Vec<Param> {
         let Some(entries) = self.mapping("params", node, "a mapping of parameter names to values") else {
             return Vec::new();
         };
         let mut out = Vec::new();
         for (key, value) in entries {
             let name = &key.value;
+            if self.too_long("the parameter name", name, key.pos) {
+                continue;
+            }
             let v = match &value.value {
                 Node::Scalar { .. } => value.value.to_value(),
                 Node::Seq(items) => {
@@ -802,7 +943,8 @@ impl Checker<'_> {
                 }
             };
             if let Some(v) = v {
-                out.push((key, Spanned::new(v, value.pos)));
+                let written = matches!(value.value, Node::Scalar { .. }).then(|| value.value.describe());
+                out.push(Param { name: key, value: Spanned::new(v, value.pos), written });
             }
         }
         out
@@ -814,7 +956,11 @@ impl Checker<'_> {
         };
         let mut out = Vec::new();
         for (port, target) in entries {
+            if self.too_long("the port name", &port.value, port.pos) {
+                continue;
+            }
             match target.value.as_text() {
+                Some(signal) if self.too_long("the signal name", signal, target.pos) => {}
                 Some(signal) if is_signal_name(signal) => {
                     let signal = Spanned::new(signal.to_string(), target.pos);
                     out.push((port, signal));
@@ -838,20 +984,6 @@ impl Checker<'_> {
         }
         out
     }
-}
-
-/// The file's bytes, or `Err(size)` when it is over [`yaml::MAX_SOURCE_BYTES`]
-/// (reading stops there).
-fn read_capped(path: &Path) -> std::io::Result<Result<Vec<u8>, u64>> {
-    use std::io::Read;
-    let f = std::fs::File::open(path)?;
-    let size = f.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut bytes = Vec::new();
-    f.take(yaml::MAX_SOURCE_BYTES as u64 + 1).read_to_end(&mut bytes)?;
-    if bytes.len() > yaml::MAX_SOURCE_BYTES {
-        return Ok(Err(size.max(bytes.len() as u64)));
-    }
-    Ok(Ok(bytes))
 }
 
 #[cfg(test)]
@@ -950,8 +1082,16 @@ gui: {port: 8080}
         assert_eq!(
             sonar.params,
             vec![
-                (s("noise_m".to_string(), 12, 14), s(Value::F64(0.01), 12, 23)),
-                (s("beams".to_string(), 12, 29), s(Value::F64s(vec![0.1, 0.2, 3.0].into()), 12, 36)),
+                Param {
+                    name: s("noise_m".to_string(), 12, 14),
+                    value: s(Value::F64(0.01), 12, 23),
+                    written: Some("0.01".into())
+                },
+                Param {
+                    name: s("beams".to_string(), 12, 29),
+                    value: s(Value::F64s(vec![0.1, 0.2, 3.0].into()), 12, 36),
+                    written: None
+                },
             ]
         );
         assert_eq!(sonar.remap, vec![(s("range".to_string(), 13, 13), s("sonar.range".to_string(), 13, 20))]);
@@ -966,8 +1106,11 @@ gui: {port: 8080}
         let runaway = &r.skills[2];
         assert_eq!(runaway.pos, p(19, 5));
         assert_eq!(runaway.priority, Some(s(10, 21, 15)));
-        let params: Vec<_> =
-            runaway.params.iter().map(|(k, v)| (k.value.as_str(), k.pos, v.value.clone(), v.pos)).collect();
+        let params: Vec<_> = runaway
+            .params
+            .iter()
+            .map(|p| (p.name.value.as_str(), p.name.pos, p.value.value.clone(), p.value.pos))
+            .collect();
         assert_eq!(
             params,
             vec![
@@ -1029,6 +1172,38 @@ gui: {port: 8080}
         assert_eq!(
             error("robot: &name r\n"),
             "robot.yaml:1:8: error: anchors and aliases (`&name`, `*name`) are not supported in robot files"
+        );
+    }
+
+    #[test]
+    fn a_control_character_is_an_error_at_its_place_not_the_end_of_the_file() {
+        // Before, the NUL ended the file: `robot: r` alone read cleanly.
+        assert_eq!(
+            error("robot: r\n\0skills:\n  - {name: w, type: toy.wander}\n"),
+            "robot.yaml:2:1: error: control character U+0000 (NUL): a robot file is UTF-8 text (is this one UTF-16, \
+             or binary?)"
+        );
+        assert!(error("robot: r\ncycle: {rate_hz: 5\u{c}}\n")
+            .starts_with("robot.yaml:2:19: error: control character U+000C"));
+        assert!(RobotFile::parse("r.yaml", "robot: r\r\ncycle: {rate_hz: 5}\r\n").is_ok(), "CRLF is fine");
+    }
+
+    #[test]
+    fn tabs_and_fullwidth_colons_are_errors_at_their_own_place() {
+        let indent = "error: tab character in indentation; indent YAML with spaces";
+        // Accepted before: the tab after `-` silently set the mapping's column.
+        assert_eq!(error("robot: r\nskills:\n-\tname: w\n  type: toy.wander\n"), format!("robot.yaml:3:2: {indent}"));
+        // Blamed on line 4 before.
+        assert_eq!(
+            error("robot: r\nskills:\n  -\tname: w\n    type: toy.wander\n"),
+            format!("robot.yaml:3:4: {indent}")
+        );
+        // Blamed on line 1 before.
+        assert_eq!(error("robot: r\n\tskills: []\n"), format!("robot.yaml:2:1: {indent}"));
+        // Blamed on line 5 before.
+        assert_eq!(
+            error("robot: r\nskills:\n  - name: w\n    type： toy.wander\n"),
+            "robot.yaml:4:9: error: fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)"
         );
     }
 
@@ -1126,24 +1301,75 @@ gui: {port: 8080}
         );
         assert_eq!(
             error("robot: r\ncycle: {period_ms: -5}\n"),
-            "robot.yaml:2:20: error: `period_ms` is out of range: expects a number > 0 and ≤ 86400000, got -5"
-        );
-        // Quoted as written, with its position (it once printed `1e297 s` and no place).
-        assert_eq!(
-            error("robot: r\ncycle: {period_ms: 1e300}\n"),
-            "robot.yaml:2:20: error: `period_ms` is out of range: expects a number > 0 and ≤ 86400000, got 1e300"
-        );
-        assert_eq!(
-            error("robot: r\ncycle: {rate_hz: 1e-300}\n"),
-            "robot.yaml:2:18: error: `rate_hz` is out of range: expects a period of at most a day (≥ 1/86400 Hz), got 1e-300"
+            "robot.yaml:2:20: error: `period_ms` is out of range: expects a number from 0.01 to 86400000 (10 µs to a day), got -5"
         );
         assert_eq!(
             error(&skill("    period_ms: .inf\n")),
-            "robot.yaml:5:16: error: `period_ms` is out of range: expects a number > 0 and ≤ 86400000, got .inf"
+            "robot.yaml:5:16: error: `period_ms` is out of range: expects a number from 0.01 to 86400000 (10 µs to a day), got .inf"
         );
         assert_eq!(
             error(&skill("    period_ms: \"50\"\n")),
             "robot.yaml:5:16: error: `period_ms` expects a number > 0, got \"50\""
+        );
+    }
+
+    #[test]
+    fn numbers_out_of_range_are_quoted_as_written_at_their_place() {
+        let period = "expects a number from 0.01 to 86400000 (10 µs to a day)";
+        let deadline = "expects a number > 0 and ≤ 86400000 (a day)";
+        // Before: accepted here, then "cycle period must be > 0 s and at most
+        // a day, got 1e297 s" with no position.
+        assert_eq!(
+            error("robot: r\ncycle: {period_ms: 1e300}\n"),
+            format!("robot.yaml:2:20: error: `period_ms` is out of range: {period}, got 1e300")
+        );
+        assert_eq!(
+            error("robot: r\ncycle:\n  period_ms: 0.001\n"),
+            format!("robot.yaml:3:14: error: `period_ms` is out of range: {period}, got 0.001")
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {rate_hz: 1e-300}\n"),
+            "robot.yaml:2:18: error: `rate_hz` is out of range: the cycle must run at least once a day \
+             (rate_hz ≥ 0.0000116), got 1e-300"
+        );
+        assert_eq!(
+            error(&skill("    period_ms: 1E+300\n")),
+            format!("robot.yaml:5:16: error: `period_ms` is out of range: {period}, got 1E+300")
+        );
+        assert_eq!(
+            error(&skill("    budget_ms: 0x7fffffff\n")),
+            format!("robot.yaml:5:16: error: `budget_ms` is out of range: {deadline}, got 0x7fffffff")
+        );
+        assert_eq!(
+            error(&skill("    liveness_ms: 1e9\n")),
+            format!("robot.yaml:5:18: error: `liveness_ms` is out of range: {deadline}, got 1e9")
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {budget_ms: -0.0}\n"),
+            format!("robot.yaml:2:20: error: `budget_ms` is out of range: {deadline}, got -0.0")
+        );
+        // Before: accepted (and silently cut to a day by `situate run`).
+        assert_eq!(
+            error("robot: r\nskills:\n  - {name: x, remote: x.yaml, timeout_ms: 1e300}\n"),
+            format!("robot.yaml:3:43: error: `timeout_ms` is out of range: {deadline}, got 1e300")
+        );
+        // Integers too large for 64 bits are out of range, not "not an integer".
+        let int32 = "expects an integer from -2147483648 to 2147483647";
+        assert_eq!(
+            error(&skill("    priority: 99999999999999999999\n")),
+            format!("robot.yaml:5:15: error: `priority` is out of range: {int32}, got 99999999999999999999")
+        );
+        assert_eq!(
+            error(&skill("    priority: -0x80000001\n")),
+            "robot.yaml:5:15: error: `priority` expects an integer, got \"-0x80000001\""
+        );
+        assert_eq!(
+            error(&skill("    priority: 0x80000000\n")),
+            format!("robot.yaml:5:15: error: `priority` is out of range: {int32}, got 0x80000000")
+        );
+        assert_eq!(
+            error("robot: r\ncycle: {threads: 0o777}\n"),
+            "robot.yaml:2:18: error: `threads` is out of range: expects an integer from 1 to 64, got 0o777"
         );
     }
 
@@ -1277,9 +1503,89 @@ cycle:
         let errors = RobotFile::load(&missing).unwrap_err();
         assert_eq!(errors.len(), 1);
         let text = errors[0].to_string();
-        let prefix = format!("{}:1:1: error: cannot read robot file: ", missing.display());
+        // A file that does not read has no line and column.
+        let prefix = format!("{}: error: cannot read robot file: ", missing.display());
         assert!(text.starts_with(&prefix), "{text}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_file_over_the_size_cap_is_refused_by_its_size_before_it_is_read() {
+        let dir = std::env::temp_dir().join(format!("situate-config-cap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 50 MiB, sparse: refused from its size, not read (it took ~3 s and
+        // 2 GB to parse such a file).
+        let big = dir.join("big.yaml");
+        std::fs::File::create(&big).unwrap().set_len(50 << 20).unwrap();
+        let started = std::time::Instant::now();
+        let errors = RobotFile::load(&big).unwrap_err();
+        assert!(started.elapsed() < std::time::Duration::from_secs(1));
+        assert_eq!(
+            errors[0].to_string(),
+            format!(
+                "{}: error: the file is 52428800 bytes (50 MiB); a robot file may be at most 1048576 bytes (1 MiB)",
+                big.display()
+            )
+        );
+        // Exactly at the cap is fine (a comment, then a valid robot).
+        let at_cap = dir.join("at_cap.yaml");
+        let head = "robot: r\n#";
+        let text = format!("{head}{}\n", "x".repeat(MAX_ROBOT_FILE_BYTES as usize - head.len() - 1));
+        std::fs::write(&at_cap, &text).unwrap();
+        assert!(RobotFile::load(&at_cap).is_ok());
+        std::fs::write(&at_cap, text + "\n").unwrap();
+        assert!(RobotFile::load(&at_cap).unwrap_err()[0].message.starts_with("the file is 1048577 bytes (1.0 MiB);"));
+        // Invalid UTF-8 is an error at its place; UTF-16 is named.
+        let latin1 = dir.join("latin1.yaml");
+        std::fs::write(&latin1, b"robot: r\n# caf\xe9\n").unwrap();
+        assert_eq!(
+            RobotFile::load(&latin1).unwrap_err()[0].to_string(),
+            format!(
+                "{}:2:6: error: invalid UTF-8 (byte 0xE9): a robot file is UTF-8 text; save it as UTF-8",
+                latin1.display()
+            )
+        );
+        let utf16 = dir.join("utf16.yaml");
+        std::fs::write(&utf16, b"\xff\xfer\0o\0").unwrap();
+        assert!(RobotFile::load(&utf16).unwrap_err()[0].message.starts_with("the file is UTF-16 text"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn entries_and_names_are_capped() {
+        let mut src = String::from("robot: r\ndevices:\n  - {name: d, type: t}\nskills:\n");
+        for i in 0..MAX_ENTRIES + 5 {
+            src.push_str(&format!("  - {{name: s{i}, type: t}}\n"));
+        }
+        assert_eq!(
+            error(&src),
+            "robot.yaml:1028:5: error: too many entries: `devices` and `skills` may hold at most 1024 together; \
+             this is entry 1024 of `skills`"
+        );
+        let long = "x".repeat(MAX_NAME_CHARS + 1);
+        let too_long = |what: &str| format!("{what} is 257 characters long; a name may have at most 256");
+        assert_eq!(
+            error(&format!("robot: {long}\n")),
+            format!("robot.yaml:1:8: error: {}", too_long("the robot name"))
+        );
+        assert_eq!(
+            errors(&skill(&format!("    params: {{{long}: 1}}\n    remap: {{a: {long}}}\n"))),
+            [
+                format!("robot.yaml:5:14: error: {}", too_long("the parameter name")),
+                format!("robot.yaml:6:16: error: {}", too_long("the signal name")),
+            ]
+        );
+        let errors =
+            errors(&format!("robot: r\nskills:\n  - {{name: {long}, type: {long}, remap: {{p: a.{long}}}}}\n"));
+        assert_eq!(
+            errors,
+            [
+                format!("robot.yaml:3:12: error: {}", too_long("the skill name")),
+                format!("robot.yaml:3:277: error: {}", too_long("the type name")),
+                "robot.yaml:3:547: error: the signal name is 259 characters long; a name may have at most 256"
+                    .to_string(),
+            ]
+        );
     }
 
     #[test]
@@ -1290,7 +1596,7 @@ cycle:
         // Random edits of the full file: replace one character at a time
         // with YAML-significant ones, and random lines of keys and values.
         let chars: Vec<char> = FULL.chars().collect();
-        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\".~0a1".chars().collect();
+        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\".~0a1é：\0\r".chars().collect();
         let words = [
             "robot:",
             "cycle:",
@@ -1350,10 +1656,55 @@ cycle:
         let r = RobotFile::parse("robots/r.yaml", src).unwrap();
         assert_eq!(r.libraries, vec![s("build/librunaway.so".to_string(), 2, 13), s("/abs/lib.so".to_string(), 2, 34)]);
         assert_eq!(r.python, vec![s("skills/runaway.py".to_string(), 4, 5)]);
-        assert_eq!(r.resolve(&r.libraries[0].value), std::path::PathBuf::from("robots/build/librunaway.so"));
-        assert_eq!(r.resolve(&r.libraries[1].value), std::path::PathBuf::from("/abs/lib.so"));
+        let cwd = std::env::current_dir().unwrap();
+        assert_eq!(r.dir, cwd.join("robots"));
+        assert_eq!(r.resolve(&r.libraries[0].value), cwd.join("robots/build/librunaway.so"));
+        assert_eq!(r.resolve(&r.python[0].value), cwd.join("robots/skills/runaway.py"));
+        assert_eq!(r.resolve(&r.libraries[1].value), PathBuf::from("/abs/lib.so"));
         let sim = r.simulator.as_ref().unwrap();
         assert_eq!(sim.value.get("seed").and_then(|n| n.value.as_i64()), Some(3));
+    }
+
+    #[test]
+    fn a_bare_name_is_a_file_next_to_the_robot_file_not_one_searched_for() {
+        // Before: `libfoo.so` stayed a bare name, which the dynamic loader
+        // looks for on the system's library path, not next to the file.
+        let r = RobotFile::parse("r.yaml", "robot: r\nlibraries: [libfoo.so]\npython: [skills.py]\n").unwrap();
+        let cwd = std::env::current_dir().unwrap();
+        assert_eq!(r.resolve(&r.libraries[0].value), cwd.join("libfoo.so"));
+        assert_eq!(r.resolve(&r.python[0].value), cwd.join("skills.py"));
+        assert!(r.resolve("x").is_absolute());
+        let r = RobotFile::parse("/etc/robots/r.yaml", "robot: r\n").unwrap();
+        assert_eq!(r.resolve("../maps/m.yaml"), PathBuf::from("/etc/robots/../maps/m.yaml"));
+    }
+
+    #[test]
+    fn zenoh_file_paths_resolve_from_the_robot_file_too() {
+        let src = "\
+robot: r
+link:
+  listen: [tls/127.0.0.1:7447]
+  zenoh:
+    transport:
+      link:
+        tls: {listen_certificate: certs/robot.crt, root_ca_certificate: /etc/ca.crt, enable_mtls: true}
+      auth:
+        usrpwd: {dictionary_file: users.txt, user: certs/not-a-path}
+";
+        let r = RobotFile::parse("/srv/robots/r.yaml", src).unwrap();
+        let link = &r.link.as_ref().unwrap().value;
+        let zenoh = &link.get("zenoh").unwrap().value;
+        let transport = &zenoh.get("transport").unwrap().value;
+        let tls = &transport.get("link").unwrap().value.get("tls").unwrap();
+        let text = |n: &Spanned<Node>, k: &str| n.value.get(k).unwrap().value.as_text().map(str::to_string);
+        assert_eq!(text(tls, "listen_certificate").as_deref(), Some("/srv/robots/certs/robot.crt"));
+        assert_eq!(text(tls, "root_ca_certificate").as_deref(), Some("/etc/ca.crt"));
+        assert_eq!(tls.value.get("listen_certificate").unwrap().pos, p(7, 35), "positions stay");
+        let usrpwd = transport.get("auth").unwrap().value.get("usrpwd").unwrap();
+        assert_eq!(text(usrpwd, "dictionary_file").as_deref(), Some("/srv/robots/users.txt"));
+        assert_eq!(text(usrpwd, "user").as_deref(), Some("certs/not-a-path"));
+        let listen = link.get("listen").unwrap().value.as_seq().unwrap()[0].value.as_text().unwrap();
+        assert_eq!(listen, "tls/127.0.0.1:7447");
     }
 
     #[test]

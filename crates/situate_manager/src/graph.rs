@@ -185,6 +185,13 @@ impl Checker<'_> {
     fn warning(&mut self, pos: Option<Pos>, message: String) {
         self.diags.push(self.spec.diag(Severity::Warning, pos, message));
     }
+
+    /// The diagnostics of a failed build: errors in file order, then warnings.
+    fn finish(mut self) -> BuildError {
+        self.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
+        let (errors, warnings): (Vec<_>, Vec<_>) = self.diags.into_iter().partition(Diagnostic::is_error);
+        BuildError { diagnostics: errors.into_iter().chain(warnings).collect() }
+    }
 }
 
 fn item_pos(s: &SkillSpec) -> Option<Pos> {
@@ -231,8 +238,11 @@ impl Graph {
         // An entry left out (bad name, duplicate, unknown type) would make its
         // consumers' inputs look unprovided: one typo, many errors. Skip that check then.
         let mut incomplete = false;
-        // Skills listed in the wrong section (a device under `skills:`).
-        let mut misplaced: std::collections::HashSet<String> = std::collections::HashSet::new();
+        // A device listed under `skills:` (or a cskill under `devices:`) is
+        // wired as the wrong kind: whatever the graph checks would say next
+        // (an equal-priority conflict with the device it duplicates, …)
+        // follows from that mistake, so it is reported alone.
+        let mut misplaced = false;
         for (si, s) in spec.skills.iter().enumerate() {
             let noun = if s.section == Some(Section::Devices) { "device" } else { "skill" };
             if !is_identifier(&s.name) {
@@ -251,30 +261,20 @@ impl Graph {
                 continue;
             };
             let decl = &skill_type.decl;
-            match (s.section, decl.kind) {
-                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => ck.error(
-                    s.type_pos,
-                    format!(
-                        "device `{}`: `{}` is a cskill; list it under `skills:`, not `devices:`",
-                        s.name, decl.type_name
-                    ),
-                ),
-                (Some(Section::Skills), SkillKind::Device) => ck.error(
-                    s.type_pos,
-                    format!(
-                        "skill `{}`: `{}` is a dskill; list it under `devices:`, not `skills:`",
-                        s.name, decl.type_name
-                    ),
-                ),
-                _ => {}
-            }
-            if matches!(
-                (s.section, decl.kind),
-                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async)
-                    | (Some(Section::Skills), SkillKind::Device)
-            ) {
-                // The real mistake is said; what follows from it (a priority clash) is not.
-                misplaced.insert(s.name.clone());
+            let wrong_section = match (s.section, decl.kind) {
+                (Some(Section::Devices), SkillKind::Sync | SkillKind::Async) => Some(format!(
+                    "device `{}`: `{}` is a computational skill (cskill); list it under `skills:`, not `devices:`",
+                    s.name, decl.type_name
+                )),
+                (Some(Section::Skills), SkillKind::Device) => Some(format!(
+                    "skill `{}`: `{}` is a device (dskill); list it under `devices:`, not `skills:`",
+                    s.name, decl.type_name
+                )),
+                _ => None,
+            };
+            if let Some(message) = wrong_section {
+                ck.error(s.type_pos.or(item_pos(s)), message);
+                misplaced = true;
             }
             let mut params: Vec<Value> = decl.params.iter().map(|p| p.default.clone()).collect();
             for entry in &s.params {
@@ -290,10 +290,13 @@ impl Graph {
                     ),
                     Some((i, p)) => match p.check(&entry.value) {
                         Ok(v) => params[i] = v,
-                        Err(e) => ck.error(
-                            entry.value_pos.or(item_pos(s)),
-                            format!("skill `{}`: parameter `{}` {e}", s.name, entry.name),
-                        ),
+                        Err(mut e) => ck.error(entry.value_pos.or(item_pos(s)), {
+                            // Quote the value as written: `1e300`, not its 301 digits.
+                            if let Some(w) = &entry.written {
+                                e.got.clone_from(w);
+                            }
+                            format!("skill `{}`: parameter `{}` {e}", s.name, entry.name)
+                        }),
                     },
                 }
             }
@@ -416,6 +419,10 @@ impl Graph {
             });
         }
 
+        if misplaced {
+            return Err(ck.finish());
+        }
+
         // Leaves: every port flattened; first the outputs (so a leaf's type is
         // its first writer's), then the inputs.
         let mut leaves: Vec<Leaf> = Vec::new();
@@ -477,7 +484,7 @@ impl Graph {
             }
         }
 
-        let mut reported_pairs = std::collections::HashSet::new();
+        let mut reported_conflicts = std::collections::HashSet::new();
         for leaf in &leaves {
             // Writers agree on the type; every writer feeds every reader.
             if let Some(&(w0, p0)) = leaf.writers.first() {
@@ -508,47 +515,47 @@ impl Graph {
                     }
                 }
             }
-            // Equal-priority writers of one resource cannot be arbitrated; name
-            // the resource as the later writer's port does (`drive`, not `drive.v`).
-            for (k, &(a, _)) in leaf.writers.iter().enumerate() {
-                for &(b, pb) in &leaf.writers[k + 1..] {
-                    if a == b
-                        || instances[a].priority != instances[b].priority
-                        || misplaced.contains(&instances[a].name)
-                        || misplaced.contains(&instances[b].name)
-                    {
-                        continue;
-                    }
-                    let resource = instances[b].outputs[pb].signal.clone();
-                    if !reported_pairs.insert((a, b, resource.clone())) {
-                        continue;
-                    }
-                    if instances[a].kind == SkillKind::Device && instances[b].kind == SkillKind::Device {
-                        // Two devices on one signal is most often a copy without a remap.
-                        let port = &instances[b].outputs[pb].name;
-                        ck.error(
-                            item_pos(specs[b]),
-                            format!(
-                                "devices `{}` and `{}` both write signal `{resource}` with priority {}; give each its own \
-                                 signal (e.g. `remap: {{{port}: {}.{port}}}` on `{}`) or different priorities",
-                                instances[a].name,
-                                instances[b].name,
-                                instances[a].priority,
-                                instances[b].name,
-                                instances[b].name
-                            ),
-                        );
-                        continue;
-                    }
-                    let pos = specs[b].priority_pos.or(specs[a].priority_pos).or(item_pos(specs[b]));
+            // Equal-priority writers of one resource cannot be arbitrated: one
+            // error per resource and priority, naming every such writer (not
+            // one per pair: n writers would make n² errors). Name the resource
+            // as the last writer's port does (`drive`, not `drive.v`).
+            let mut by_priority: BTreeMap<i32, Vec<(usize, usize)>> = BTreeMap::new();
+            for &(w, p) in &leaf.writers {
+                let group = by_priority.entry(instances[w].priority).or_default();
+                // One instance's ports on a leaf are adjacent.
+                if group.last().is_none_or(|&(i, _)| i != w) {
+                    group.push((w, p));
+                }
+            }
+            for (priority, group) in by_priority {
+                let Some(&(last, last_port)) = group.last().filter(|_| group.len() > 1) else { continue };
+                let resource = instances[last].outputs[last_port].signal.clone();
+                if !reported_conflicts.insert((resource.clone(), priority)) {
+                    continue;
+                }
+                let pos = group.iter().rev().find_map(|&(i, _)| specs[i].priority_pos).or(item_pos(specs[last]));
+                let names: Vec<&str> = group.iter().map(|&(i, _)| instances[i].name.as_str()).collect();
+                let both = if names.len() == 2 { "both" } else { "all" };
+                if group.iter().all(|&(i, _)| instances[i].kind == SkillKind::Device) {
+                    // Two devices on one signal is most often a copy without a remap.
+                    let (name, port) = (&instances[last].name, &instances[last].outputs[last_port].name);
                     ck.error(
-                        pos,
+                        item_pos(specs[last]),
                         format!(
-                            "skills `{}` and `{}` both write resource `{resource}` with priority {}; give them different priorities",
-                            instances[a].name, instances[b].name, instances[a].priority
+                            "devices {} {both} write signal `{resource}` with priority {priority}; give each its \
+                             own signal (e.g. `remap: {{{port}: {name}.{port}}}` on `{name}`) or different priorities",
+                            and_list(&names)
                         ),
                     );
+                    continue;
                 }
+                ck.error(
+                    pos,
+                    format!(
+                        "skills {} {both} write resource `{resource}` with priority {priority}; give them different priorities",
+                        and_list(&names)
+                    ),
+                );
             }
         }
 
@@ -598,7 +605,7 @@ impl Graph {
             } else {
                 format!(
                     "data-flow loop among skills {}: each waits for another's output in the same cycle",
-                    quote_list(&names)
+                    quote_list_capped(&names)
                 )
             };
             ck.error(first, msg);
@@ -618,11 +625,10 @@ impl Graph {
             records.insert(name, ty);
         }
 
-        ck.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
-        let (errors, warnings): (Vec<_>, Vec<_>) = ck.diags.into_iter().partition(Diagnostic::is_error);
-        if !errors.is_empty() {
-            return Err(BuildError { diagnostics: errors.into_iter().chain(warnings).collect() });
-        }
+        let warnings = match ck.diags.iter().any(Diagnostic::is_error) {
+            true => return Err(ck.finish()),
+            false => ck.diags,
+        };
         Ok(Graph { robot: spec.robot.clone(), instances, leaves, leaf_index, records, warnings })
     }
 
@@ -682,6 +688,27 @@ fn record_type_at(path: &str, leaves: &[Leaf]) -> SignalType {
 
 pub(crate) fn quote_list(names: &[&str]) -> String {
     names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+}
+
+/// How many names a message lists before "and N more".
+const LISTED_NAMES: usize = 10;
+
+/// `a`, `b`, … and N more: at most [`LISTED_NAMES`] names.
+fn quote_list_capped(names: &[&str]) -> String {
+    match names.len() {
+        n if n > LISTED_NAMES => format!("{} and {} more", quote_list(&names[..LISTED_NAMES]), n - LISTED_NAMES),
+        _ => quote_list(names),
+    }
+}
+
+/// `a` and `b`; `a`, `b` and `c`; `a`, …, `j` and N more.
+fn and_list(names: &[&str]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => format!("`{one}`"),
+        _ if names.len() > LISTED_NAMES => quote_list_capped(names),
+        [init @ .., last] => format!("{} and `{last}`", quote_list(init)),
+    }
 }
 
 /// The data-flow loops among cskills (Tarjan's strongly connected

@@ -14,10 +14,15 @@
 
 use situate_core::{suggestion, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillKind, Value};
 
-use crate::config::{Node, Spanned};
+use crate::config::{Node, Spanned, MAX_NAME_CHARS};
 use crate::yaml::Pos;
 
 const MANIFEST_KEYS: &[&str] = &["doc", "priority", "inputs", "outputs", "params"];
+
+/// The most inputs, outputs or parameters a manifest may declare (each).
+pub const MAX_PORTS: usize = 256;
+/// The longest port type (`{x: f64, y: f64}`), in characters.
+pub const MAX_TYPE_CHARS: usize = 1024;
 const PARAM_KEYS: &[&str] = &["type", "default", "min", "max", "unit", "doc"];
 
 /// Reads a manifest into a declaration of `type_name` and `kind`. Errors
@@ -36,6 +41,15 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
             },
             "priority" => match value.value.as_i64().and_then(|p| i32::try_from(p).ok()) {
                 Some(p) => decl.priority = p,
+                None if value.value.is_integer_literal() => errors.push((
+                    value.pos,
+                    format!(
+                        "`priority` is out of range: expects an integer from {} to {}, got {}",
+                        i32::MIN,
+                        i32::MAX,
+                        value.value.describe()
+                    ),
+                )),
                 None => {
                     errors.push((value.pos, format!("`priority` expects an integer, got {}", value.value.describe())))
                 }
@@ -46,7 +60,15 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
                     errors.push((value.pos, format!("`{}` expects a mapping of port: type", key.value)));
                     continue;
                 };
+                if ports.len() > MAX_PORTS {
+                    errors.push((value.pos, too_many(&key.value, ports.len())));
+                    continue;
+                }
                 for (port, ty) in ports {
+                    if port.value.chars().count() > MAX_NAME_CHARS {
+                        errors.push((port.pos, format!("a port name may have at most {MAX_NAME_CHARS} characters")));
+                        continue;
+                    }
                     if !crate::graph::is_identifier(&port.value) {
                         errors.push((port.pos, format!("port name `{}` is not an identifier", port.value)));
                         continue;
@@ -62,6 +84,13 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
                         ));
                         continue;
                     };
+                    if text.chars().count() > MAX_TYPE_CHARS {
+                        errors.push((
+                            ty.pos,
+                            format!("port `{}`: a type may have at most {MAX_TYPE_CHARS} characters", port.value),
+                        ));
+                        continue;
+                    }
                     let (text, optional) = match text.trim().strip_suffix('?') {
                         Some(t) if !output => (t, true),
                         _ => (text.trim(), false),
@@ -91,7 +120,16 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
                     ));
                     continue;
                 };
+                if params.len() > MAX_PORTS {
+                    errors.push((value.pos, too_many("params", params.len())));
+                    continue;
+                }
                 for (name, spec) in params {
+                    if name.value.chars().count() > MAX_NAME_CHARS {
+                        errors
+                            .push((name.pos, format!("a parameter name may have at most {MAX_NAME_CHARS} characters")));
+                        continue;
+                    }
                     match param_spec(&name.value, spec) {
                         Ok(p) => decl.params.push(p),
                         Err(e) => errors.push(e),
@@ -112,6 +150,11 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
     } else {
         Err(errors)
     }
+}
+
+/// "`inputs` declares 300 entries; a skill may have at most 256".
+fn too_many(key: &str, n: usize) -> String {
+    format!("`{key}` declares {n} entries; a skill may have at most {MAX_PORTS}")
 }
 
 fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, String)> {
@@ -154,7 +197,7 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
                     }
                 })
             }
-            "default" => default = Some((value.value.to_value(), value.pos)),
+            "default" => default = Some((value.value.to_value(), value.pos, value.value.describe())),
             "min" => {
                 min = Some(
                     value.value.as_f64().ok_or((value.pos, format!("parameter `{name}`: `min` expects a number")))?,
@@ -178,8 +221,8 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
             }
         }
     }
-    let (default, pos) = match default {
-        Some((Some(v), pos)) => (v, pos),
+    let (default, pos, written) = match default {
+        Some((Some(v), pos, written)) => (v, pos, written),
         _ => return Err((node.pos, format!("parameter `{name}` needs a `default`"))),
     };
     let ty = match ty.or_else(|| scalar_type(&default)) {
@@ -189,7 +232,11 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
     let mut spec = ParamSpec::new(name, ty, default.clone()).range(min, max);
     spec.unit = unit;
     spec.doc = doc;
-    spec.default = spec.check(&default).map_err(|e| (pos, format!("parameter `{name}`: the default {e}")))?;
+    spec.default = spec.check(&default).map_err(|mut e| {
+        // As written: `1e300`, not its digits.
+        e.got = written;
+        (pos, format!("parameter `{name}`: the default {e}"))
+    })?;
     Ok(spec)
 }
 
@@ -226,5 +273,36 @@ mod tests {
         assert_eq!(e[0].1, "unknown key `ouputs` in the skill manifest — did you mean `outputs`?");
         let e = manifest("params:\n  g: {type: f64, default: 5, max: 1}\n").unwrap_err();
         assert_eq!(e[0].1, "parameter `g`: the default expects a number ≤ 1.0, got 5");
+    }
+
+    #[test]
+    fn ports_params_and_types_are_capped() {
+        let ports: Vec<String> = (0..=MAX_PORTS).map(|i| format!("p{i}: f64")).collect();
+        let e = manifest(&format!("inputs: {{{}}}\n", ports.join(", "))).unwrap_err();
+        assert_eq!(
+            e[0],
+            (Pos { line: 1, col: 9 }, "`inputs` declares 257 entries; a skill may have at most 256".into())
+        );
+        let e = manifest(&format!("params: {{{}}}\n", ports.join(", "))).unwrap_err();
+        assert_eq!(e[0].1, "`params` declares 257 entries; a skill may have at most 256");
+        // Deeply nested records: refused by length before the type parser
+        // recurses into them.
+        let deep = format!("{}f64{}", "{a: ".repeat(300), "}".repeat(300));
+        let e = manifest(&format!("outputs: {{y: \"{deep}\"}}\n")).unwrap_err();
+        assert_eq!(e[0], (Pos { line: 1, col: 14 }, "port `y`: a type may have at most 1024 characters".into()));
+    }
+
+    #[test]
+    fn numbers_out_of_range_are_quoted_as_written() {
+        let e = manifest("params:\n  g: {type: f64, default: 1e300, max: 1}\n").unwrap_err();
+        assert_eq!(
+            e[0],
+            (Pos { line: 2, col: 27 }, "parameter `g`: the default expects a number ≤ 1.0, got 1e300".into())
+        );
+        let e = manifest("priority: 0x80000000\n").unwrap_err();
+        assert_eq!(
+            e[0].1,
+            "`priority` is out of range: expects an integer from -2147483648 to 2147483647, got 0x80000000"
+        );
     }
 }

@@ -73,6 +73,9 @@ pub struct ParamEntry {
     pub value: Value,
     pub name_pos: Option<Pos>,
     pub value_pos: Option<Pos>,
+    /// The value as a robot file writes it (`1e300`), quoted by messages
+    /// instead of the value's own digits.
+    pub written: Option<String>,
 }
 
 /// One port remap: `port` connects to `signal` instead of its default.
@@ -139,7 +142,7 @@ impl SkillSpec {
     }
 
     pub fn param(mut self, name: &str, value: Value) -> Self {
-        self.params.push(ParamEntry { name: name.into(), value, name_pos: None, value_pos: None });
+        self.params.push(ParamEntry { name: name.into(), value, name_pos: None, value_pos: None, written: None });
         self
     }
 
@@ -256,11 +259,12 @@ impl RobotSpec {
                     params: e
                         .params
                         .iter()
-                        .map(|(k, v)| ParamEntry {
-                            name: k.value.clone(),
-                            value: v.value.clone(),
-                            name_pos: Some(k.pos),
-                            value_pos: Some(v.pos),
+                        .map(|p| ParamEntry {
+                            name: p.name.value.clone(),
+                            value: p.value.value.clone(),
+                            name_pos: Some(p.name.pos),
+                            value_pos: Some(p.value.pos),
+                            written: p.written.clone(),
                         })
                         .collect(),
                     remap: e

@@ -5,6 +5,11 @@
 //! tree of [`Node`]s, each wrapped in a [`Spanned`] that carries its 1-based
 //! [`Pos`]. It accepts the plain subset of YAML that robot files need:
 //!
+//! * text only: no control characters but tab, line feed and the carriage
+//!   return of a CRLF line end (a NUL would silently end the file);
+//! * tabs only inside quoted strings, block scalars and comments, or at the
+//!   end of a line; a fullwidth colon `：` only inside quotes and comments
+//!   (see [`check_layout`]);
 //! * one document per file (an empty file is a [`Node::Null`] document);
 //! * mapping keys are scalars, and a key may appear once per mapping;
 //! * no anchors, aliases or tags;
@@ -150,6 +155,18 @@ impl Node {
         }
     }
 
+    /// A plain scalar written as an integer (`42`, `-7`, `0x1f`, `0o17`),
+    /// whether or not it fits in 64 bits.
+    pub fn is_integer_literal(&self) -> bool {
+        let Node::Scalar { text, plain: true } = self else { return false };
+        let digits = |s: &str, radix: u32| !s.is_empty() && s.chars().all(|c| c.is_digit(radix));
+        match (text.strip_prefix("0x"), text.strip_prefix("0o")) {
+            (Some(hex), _) => digits(hex, 16),
+            (_, Some(oct)) => digits(oct, 8),
+            _ => digits(text.strip_prefix(['-', '+']).unwrap_or(text), 10),
+        }
+    }
+
     /// The source text of any scalar (plain or quoted, whatever its type).
     pub fn as_text(&self) -> Option<&str> {
         match self {
@@ -276,6 +293,79 @@ fn is_core_float(s: &str) -> bool {
     rest.is_empty()
 }
 
+/// Why a YAML source file could not be read as text.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file cannot be opened or read.
+    #[error("cannot read {what}: {source}")]
+    Io {
+        what: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is larger than its cap (`size` is `None` when only "more
+    /// than the cap" is known: the reader stopped there).
+    #[error("the file is {}; a {what} may be at most {}", size.map_or(format!("more than {}", bytes(*max)), bytes), bytes(*max))]
+    TooLarge { what: &'static str, size: Option<u64>, max: u64 },
+    /// A byte sequence that is not UTF-8, at `pos`.
+    #[error("invalid UTF-8 (byte 0x{byte:02X}): a {what} is UTF-8 text; save it as UTF-8")]
+    NotUtf8 { what: &'static str, pos: Pos, byte: u8 },
+    /// The file starts with a UTF-16 byte-order mark.
+    #[error("the file is UTF-16 text; a {what} is UTF-8 text: save it as UTF-8")]
+    Utf16 { what: &'static str },
+}
+
+impl ReadError {
+    /// Where in the file the problem is; `None` for the file as a whole.
+    pub fn pos(&self) -> Option<Pos> {
+        match self {
+            ReadError::NotUtf8 { pos, .. } => Some(*pos),
+            _ => None,
+        }
+    }
+}
+
+/// "1048576 bytes (1 MiB)".
+fn bytes(n: u64) -> String {
+    const MIB: u64 = 1 << 20;
+    match n {
+        n if n >= MIB && n % MIB == 0 => format!("{n} bytes ({} MiB)", n / MIB),
+        n if n >= MIB => format!("{n} bytes ({:.1} MiB)", n as f64 / MIB as f64),
+        n => format!("{n} bytes"),
+    }
+}
+
+/// Reads a YAML source file (a `what`: "robot file", "map file", …) of at
+/// most `max` bytes as UTF-8 text. A larger file is refused by its size
+/// before it is read, and the reader never takes more than `max + 1` bytes
+/// (a file that grows, a pipe, a device). Invalid UTF-8 is an error at its
+/// line and column.
+pub fn read_source(path: &std::path::Path, what: &'static str, max: u64) -> Result<String, ReadError> {
+    use std::io::Read;
+    let io = |source| ReadError::Io { what, source };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if meta.is_file() && meta.len() > max {
+        return Err(ReadError::TooLarge { what, size: Some(meta.len()), max });
+    }
+    let mut buf = Vec::new();
+    file.take(max.saturating_add(1)).read_to_end(&mut buf).map_err(io)?;
+    if buf.len() as u64 > max {
+        return Err(ReadError::TooLarge { what, size: None, max });
+    }
+    if buf.starts_with(&[0xff, 0xfe]) || buf.starts_with(&[0xfe, 0xff]) {
+        return Err(ReadError::Utf16 { what });
+    }
+    String::from_utf8(buf).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let valid = std::str::from_utf8(&bytes[..at]).unwrap_or_default();
+        let line = valid.matches('\n').count() + 1;
+        let col = valid.rsplit('\n').next().unwrap_or_default().chars().count() + 1;
+        ReadError::NotUtf8 { what, pos: Pos::new(line, col), byte: bytes[at] }
+    })
+}
+
 /// A YAML error: the file is not YAML, or uses YAML a robot file may not.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParseError {
@@ -325,10 +415,8 @@ impl Frame {
 pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
     // yaml-rust2 does not skip a byte-order mark; editors do not show one.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
-    if source.len() > MAX_SOURCE_BYTES {
-        return Err(ParseError::new(Pos::START, too_big(source.len() as u64)));
-    }
-    prescan(source)?;
+    check_control_characters(source)?;
+    check_layout(source)?;
     let mut parser = Parser::new_from_str(source);
     let mut stack: Vec<Frame> = Vec::new();
     let mut root: Option<Spanned<Node>> = None;
@@ -435,6 +523,286 @@ pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
     })
 }
 
+/// Refuses control characters, which editors hide and the scanner misreads
+/// (it takes a NUL for the end of the file). Tab, line feed and the carriage
+/// return of a CRLF line end are the only ones a robot file may contain.
+fn check_control_characters(source: &str) -> Result<(), ParseError> {
+    let mut at = Pos::START;
+    let mut chars = source.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\n' => {
+                at = Pos::new(at.line + 1, 1);
+                continue;
+            }
+            '\r' if chars.peek() == Some(&'\n') => {}
+            '\t' => {}
+            c if c.is_control() => return Err(ParseError::new(at, control_message(c))),
+            _ => {}
+        }
+        at.col += 1;
+    }
+    Ok(())
+}
+
+const TAB_IN_INDENTATION: &str = "tab character in indentation; indent YAML with spaces";
+
+/// Where the scanner of a line is, for [`check_layout`].
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    /// Between tokens or in a plain scalar.
+    Plain,
+    /// Inside a `'…'` scalar that goes on to the next line.
+    Single,
+    /// Inside a `"…"` scalar that goes on to the next line.
+    Double,
+    /// In the text of a `|` or `>` block scalar whose owner (the key or `-`)
+    /// is at column `owner` (0-based); `indent` is its text's indentation
+    /// once known.
+    Block { owner: usize, indent: Option<usize> },
+}
+
+/// Refuses tabs and fullwidth colons where YAML would misread them, at their
+/// own line and column. The scanner reports these late and elsewhere (a tab
+/// after `-` even shifts the nested mapping silently), so this lexes the
+/// file's lines first:
+///
+/// * a tab in a line's indentation (top level, nested mappings, continuation
+///   lines of flow collections and scalars) or right after a block `-` or
+///   `?` is "in indentation";
+/// * any other tab outside quoted strings, block scalars and comments is an
+///   error too, unless only blanks (or a comment) follow it on its line;
+/// * a fullwidth colon `：` outside quotes and comments is a typo for `:`;
+/// * so is other Unicode white space (no-break space, ideographic space) in
+///   indentation.
+///
+/// Lines whose only content is blanks or a comment may hold tabs.
+fn check_layout(source: &str) -> Result<(), ParseError> {
+    let mut mode = Layout::Plain;
+    // Depth of `[` and `{`.
+    let mut flow = 0usize;
+    for (n, raw) in source.split('\n').enumerate() {
+        let line: Vec<char> = raw.strip_suffix('\r').unwrap_or(raw).chars().collect();
+        let at = |i: usize| Pos::new(n + 1, i + 1);
+        let len = line.len();
+        let spaces = line.iter().take_while(|c| **c == ' ').count();
+        let lead = line.iter().take_while(|c| **c == ' ' || **c == '\t').count();
+        if lead == len {
+            continue; // blank
+        }
+        let first_tab = line[..lead].iter().position(|c| *c == '\t');
+        if let Layout::Block { owner, indent } = mode {
+            match indent {
+                Some(k) if spaces >= k => continue,
+                None if spaces > owner => {
+                    mode = Layout::Block { owner, indent: Some(spaces) };
+                    continue;
+                }
+                _ if line[spaces] == '\t' => return Err(ParseError::new(at(spaces), TAB_IN_INDENTATION)),
+                _ => mode = Layout::Plain,
+            }
+        }
+        if mode == Layout::Plain && line[lead] == '#' {
+            continue; // a comment line
+        }
+        if let Some(t) = first_tab {
+            return Err(ParseError::new(at(t), TAB_IN_INDENTATION));
+        }
+        if mode == Layout::Plain {
+            let c = line[lead];
+            if c.is_whitespace() {
+                return Err(ParseError::new(
+                    at(lead),
+                    format!("{} (U+{:04X}) in indentation; indent YAML with spaces", space_name(c), c as u32),
+                ));
+            }
+            if lead == 0 && c == '%' {
+                continue; // a directive
+            }
+        }
+        let blank_from = |i: usize| {
+            let j = i + line[i..].iter().take_while(|c| **c == ' ' || **c == '\t').count();
+            (j == len || line[j] == '#', j)
+        };
+        let ends_plain = |i: usize, flow: usize| {
+            let next = line.get(i + 1).copied();
+            next.is_none_or(|c| c == ' ' || c == '\t' || (flow > 0 && ",[]{}".contains(c)))
+        };
+        let mut i = lead;
+        // At the start of a node: a quote or `|`/`>` opens a scalar here.
+        let mut start = true;
+        // The indicator just passed, for messages about the blanks after it.
+        let mut after: Option<char> = None;
+        // Where the last key, value or `-` on this line began.
+        let mut owner = lead;
+        if lead == 0 && (line.starts_with(&['-'; 3]) || line.starts_with(&['.'; 3])) && ends_plain(2, 0) {
+            i = 3;
+        }
+        while i < len {
+            match mode {
+                Layout::Single => {
+                    while i < len {
+                        if line[i] == '\'' {
+                            if line.get(i + 1) == Some(&'\'') {
+                                i += 2;
+                                continue;
+                            }
+                            mode = Layout::Plain;
+                        }
+                        i += 1;
+                        if mode == Layout::Plain {
+                            break;
+                        }
+                    }
+                    (start, after) = (false, None);
+                    continue;
+                }
+                Layout::Double => {
+                    while i < len {
+                        match line[i] {
+                            '\\' => i += 2,
+                            '"' => {
+                                mode = Layout::Plain;
+                                i += 1;
+                                break;
+                            }
+                            _ => i += 1,
+                        }
+                    }
+                    (start, after) = (false, None);
+                    continue;
+                }
+                Layout::Block { .. } | Layout::Plain => {}
+            }
+            let c = line[i];
+            match c {
+                ' ' => i += 1,
+                '\t' => {
+                    let (trailing, j) = blank_from(i);
+                    if trailing {
+                        break;
+                    }
+                    let message = match after {
+                        Some('-' | '?') if flow == 0 => TAB_IN_INDENTATION.to_string(),
+                        Some(ind) => format!("tab character after `{ind}`; separate YAML with spaces"),
+                        None if line[j] == ':' => "tab character before `:`; separate YAML with spaces".to_string(),
+                        None => "tab character in an unquoted value; use spaces, or quote the value".to_string(),
+                    };
+                    return Err(ParseError::new(at(i), message));
+                }
+                '#' if i == 0 || line[i - 1] == ' ' || line[i - 1] == '\t' => break,
+                '\'' | '"' if start => {
+                    mode = if c == '\'' { Layout::Single } else { Layout::Double };
+                    if after != Some(':') {
+                        owner = i;
+                    }
+                    i += 1;
+                }
+                '|' | '>' if start && flow == 0 => {
+                    let header: String = line[i + 1..].iter().take_while(|c| !c.is_whitespace()).collect();
+                    let explicit = header.chars().find_map(|c| c.to_digit(10)).map(|d| owner + d as usize);
+                    mode = Layout::Block { owner, indent: explicit };
+                    break;
+                }
+                '[' | '{' => {
+                    flow += 1;
+                    (start, after) = (true, Some(c));
+                    i += 1;
+                }
+                ']' | '}' => {
+                    flow = flow.saturating_sub(1);
+                    (start, after) = (false, None);
+                    i += 1;
+                }
+                ',' if flow > 0 => {
+                    (start, after) = (true, Some(c));
+                    i += 1;
+                }
+                '-' | '?' if start && flow == 0 && ends_plain(i, 0) => {
+                    owner = i;
+                    (start, after) = (true, Some(c));
+                    i += 1;
+                }
+                ':' if ends_plain(i, flow) => {
+                    (start, after) = (true, Some(c));
+                    i += 1;
+                }
+                '：' => return Err(fullwidth_colon(at(i))),
+                _ => {
+                    // A plain scalar (or an anchor, tag or alias): up to the
+                    // next indicator, a comment or the end of the line.
+                    if after != Some(':') {
+                        owner = i;
+                    }
+                    (start, after) = (false, None);
+                    i += 1;
+                    while i < len {
+                        match line[i] {
+                            '：' => return Err(fullwidth_colon(at(i))),
+                            ':' if ends_plain(i, flow) => break,
+                            ',' | '[' | ']' | '{' | '}' if flow > 0 => break,
+                            ' ' | '\t' => {
+                                let (trailing, j) = blank_from(i);
+                                if trailing || !line[i..j].contains(&'\t') {
+                                    if trailing {
+                                        break;
+                                    }
+                                    i = j;
+                                    continue;
+                                }
+                                let tab = i + line[i..j].iter().position(|c| *c == '\t').unwrap_or(0);
+                                let message = if line[j] == ':' && ends_plain(j, flow) {
+                                    "tab character before `:`; separate YAML with spaces"
+                                } else {
+                                    "tab character in an unquoted value; use spaces, or quote the value"
+                                };
+                                return Err(ParseError::new(at(tab), message));
+                            }
+                            _ => i += 1,
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn fullwidth_colon(pos: Pos) -> ParseError {
+    ParseError::new(pos, "fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)")
+}
+
+/// What a Unicode space is called, for messages.
+fn space_name(c: char) -> &'static str {
+    match c {
+        '\u{a0}' => "no-break space",
+        '\u{3000}' => "ideographic (fullwidth) space",
+        _ => "a Unicode space",
+    }
+}
+
+/// "control character U+0000 (NUL): …", with a hint at the likely cause.
+fn control_message(c: char) -> String {
+    let name = match c {
+        '\0' => " (NUL)",
+        '\u{7}' => " (bell)",
+        '\u{8}' => " (backspace)",
+        '\u{b}' => " (vertical tab)",
+        '\u{c}' => " (form feed)",
+        '\r' => " (carriage return)",
+        '\u{1b}' => " (escape)",
+        '\u{7f}' => " (delete)",
+        '\u{85}' => " (next line)",
+        _ => "",
+    };
+    let hint = match c {
+        '\0' => ": a robot file is UTF-8 text (is this one UTF-16, or binary?)",
+        '\r' => " without a line feed: end lines with LF or CRLF",
+        _ => ": a robot file may contain tabs and line breaks, but no other control characters; delete it",
+    };
+    format!("control character U+{:04X}{name}{hint}", c as u32)
+}
+
 /// Where the `&` of the anchor on the node at `mark` is: the last `&` before
 /// the node's marker (a block mapping's marker sits after its first key).
 fn anchor_pos(source: &str, mark: &Marker) -> Pos {
@@ -464,128 +832,6 @@ fn tag_error(pos: Pos) -> ParseError {
     )
 }
 
-/// The largest robot file (or other YAML source) read: 1 MiB. Robot files
-/// are a few kB; a bigger file is almost surely the wrong one, and parsing
-/// it would cost seconds and much memory.
-pub const MAX_SOURCE_BYTES: usize = 1 << 20;
-
-/// The message for a source over [`MAX_SOURCE_BYTES`].
-pub fn too_big(bytes: u64) -> String {
-    format!(
-        "the file is {bytes} bytes, over the limit of {} bytes (1 MiB) for a YAML file here; is it the right file?",
-        MAX_SOURCE_BYTES
-    )
-}
-
-/// Refuses, with their own position, what yaml-rust2 would read silently
-/// wrong or report at another place:
-/// - control characters (a NUL ends its input: the rest of the file would
-///   be ignored); tabs are refused where they indent, CR only ends a line;
-/// - a tab in a line's indentation, also after a `- `, `? ` or `: `
-///   indicator (it indents the node after it); block scalars (`|`, `>`)
-///   may hold tabs in their text;
-/// - a fullwidth colon `：` where a key's `:` belongs.
-fn prescan(source: &str) -> Result<(), ParseError> {
-    // The indentation of the line that opened a block scalar, while in one.
-    let mut block: Option<usize> = None;
-    for (n, raw) in source.split('\n').enumerate() {
-        let line_no = n + 1;
-        let line = raw.strip_suffix('\r').unwrap_or(raw);
-        let chars: Vec<char> = line.chars().collect();
-        if let Some(i) = chars.iter().position(|c| c.is_control() && *c != '\t') {
-            let c = chars[i];
-            let name = match c {
-                '\0' => " (NUL)",
-                '\r' => " (a carriage return inside a line)",
-                '\u{1b}' => " (ESC)",
-                '\u{7f}' => " (DEL)",
-                _ => "",
-            };
-            return Err(ParseError::new(
-                Pos::new(line_no, i + 1),
-                format!("control character U+{:04X}{name} is not allowed in the file", c as u32),
-            ));
-        }
-        let indent = chars.iter().take_while(|c| **c == ' ').count();
-        let rest_blank = chars[indent..].iter().all(|c| *c == ' ' || *c == '\t');
-        if let Some(b) = block {
-            if rest_blank || indent > b {
-                continue;
-            }
-            block = None;
-        }
-        // The structural prefix: spaces, and indicators followed by blanks.
-        let mut i = 0;
-        loop {
-            while i < chars.len() && chars[i] == ' ' {
-                i += 1;
-            }
-            if i < chars.len() && chars[i] == '\t' {
-                let after = chars[i..].iter().find(|c| **c != ' ' && **c != '\t');
-                if after.is_none() || after == Some(&'#') {
-                    break; // a blank or comment-only line: the tab indents nothing
-                }
-                return Err(ParseError::new(
-                    Pos::new(line_no, i + 1),
-                    "tab character in indentation; indent YAML with spaces",
-                ));
-            }
-            if i + 1 < chars.len() && matches!(chars[i], '-' | '?' | ':') && matches!(chars[i + 1], ' ' | '\t') {
-                i += 1;
-                continue;
-            }
-            break;
-        }
-        let content: String = chars[i..].iter().collect();
-        if let Some(col) = fullwidth_key_colon(&content) {
-            return Err(ParseError::new(
-                Pos::new(line_no, i + col + 1),
-                "a fullwidth colon `：` (U+FF1A) where a key's `:` belongs; YAML needs the ASCII colon `:`",
-            ));
-        }
-        if opens_block_scalar(&content) {
-            block = Some(indent);
-        }
-    }
-    Ok(())
-}
-
-/// The character index of a fullwidth colon that ends a plain key (`key： value`),
-/// when the line has no ASCII key colon before it.
-fn fullwidth_key_colon(content: &str) -> Option<usize> {
-    if content.starts_with(['#', '"', '\'', '{', '[', '|', '>']) {
-        return None;
-    }
-    let chars: Vec<char> = content.chars().collect();
-    for (i, c) in chars.iter().enumerate() {
-        let next_blank = chars.get(i + 1).is_none_or(|n| *n == ' ' || *n == '\t');
-        match c {
-            ':' if next_blank => return None,
-            '#' if i > 0 && chars[i - 1] == ' ' => return None,
-            '：' if next_blank && i > 0 => return Some(i),
-            _ => {}
-        }
-    }
-    None
-}
-
-/// Whether a line's content (after its indentation and indicators) ends with
-/// a block scalar's header: `|`, `>`, with chomping and indentation indicators.
-fn opens_block_scalar(content: &str) -> bool {
-    let text = match content.find(" #") {
-        Some(i) => &content[..i],
-        None => content,
-    }
-    .trim_end();
-    let header_start = text.rfind(['|', '>']);
-    let Some(h) = header_start else { return false };
-    let header = &text[h + 1..];
-    let before = &text[..h];
-    header.chars().all(|c| matches!(c, '+' | '-' | '1'..='9'))
-        && header.len() <= 2
-        && (before.is_empty() || before.ends_with(' '))
-}
-
 /// Turns a scanner error into a `ParseError`. Tabs in indentation get their
 /// own message, at the tab itself (the scanner reports the character after).
 fn scan_error(source: &str, e: &ScanError) -> ParseError {
@@ -602,16 +848,6 @@ fn scan_error(source: &str, e: &ScanError) -> ParseError {
                     "tab character in indentation; indent YAML with spaces",
                 );
             }
-        }
-    }
-    // A tab before the error on its line (between values, after a `:`) is
-    // the likely cause: say so, at the tab.
-    if let Some(line) = source.lines().nth(pos.line.saturating_sub(1)) {
-        if let Some(i) = line.chars().take(pos.col).position(|c| c == '\t') {
-            return ParseError::new(
-                Pos::new(pos.line, i + 1),
-                format!("tab character; robot files separate YAML with spaces ({})", e.info()),
-            );
         }
     }
     ParseError::new(pos, format!("invalid YAML: {}", e.info()))
@@ -746,59 +982,148 @@ mod tests {
     }
 
     #[test]
-    fn control_characters_are_refused_where_they_are() {
-        // A NUL once ended the input silently: the rest of the file was ignored.
-        assert_eq!(err("robot: t\0\ndevices: x\n"), "1:9: control character U+0000 (NUL) is not allowed in the file");
-        assert_eq!(err("a: 1\nb: \u{1b}[31m\n"), "2:4: control character U+001B (ESC) is not allowed in the file");
-        assert!(err("a: 1\rb: 2\n").starts_with("1:5: control character U+000D (a carriage return inside a line)"));
-        assert_eq!(err("# é \u{7f}\n"), "1:5: control character U+007F (DEL) is not allowed in the file");
-        // CRLF line ends are fine.
-        assert!(parse("a: 1\r\nb: 2\r\n").is_ok());
-    }
-
-    #[test]
-    fn a_tab_anywhere_in_indentation_is_named_at_the_tab() {
-        const TAB: &str = "tab character in indentation; indent YAML with spaces";
-        for (source, at) in [
-            ("a:\n\tb: 1\n", "2:1"),
-            ("a:\n  \tb: 1\n", "2:3"),
-            ("a:\n-\tb: 1\n", "2:2"),
-            ("a:\n  - \tb: 1\n", "2:5"),
-            ("a:\n  -\t{b: 1}\n", "2:4"),
-            ("a: [\n\t1]\n", "2:1"),
-            ("a: 1\n\tb: 2\n", "2:1"),
-            ("a:\n  - b: 1\n  \t  c: 2\n", "3:3"),
-        ] {
-            assert_eq!(err(source), format!("{at}: {TAB}"), "{source:?}");
-        }
-        // Blank and comment-only lines with tabs indent nothing; a block scalar's text may hold tabs.
-        assert!(parse("a: 1\n\t\n  \t# note\nb: 2\n").is_ok());
-        assert!(parse("a: |\n  one\ttwo\n   \tthree\nb: 2\n").is_ok());
-        // A tab between values is named at the tab, not after it.
-        assert!(err("a: {b:\t1}\n").starts_with("1:7: tab character; robot files separate YAML with spaces"));
-    }
-
-    #[test]
-    fn a_fullwidth_colon_in_a_key_is_named_where_it_is() {
-        const MSG: &str = "a fullwidth colon `：` (U+FF1A) where a key's `:` belongs; YAML needs the ASCII colon `:`";
-        assert_eq!(err("robot： t\ncycle:\n  rate_hz: 5\n"), format!("1:6: {MSG}"));
-        assert_eq!(err("robot: t\ncycle：\n  rate_hz: 5\n"), format!("2:6: {MSG}"));
-        assert_eq!(err("a:\n  - name： sonar\n"), format!("2:9: {MSG}"));
-        // In a value, a comment or a quoted string it is text.
-        assert!(parse("doc: \"a： b\"\nnote: 注意： x\nc: 1 # d： e\n").is_ok());
-    }
-
-    #[test]
-    fn a_source_over_the_size_cap_is_refused_before_parsing() {
-        let big = format!("a: \"{}\"\n", "x".repeat(MAX_SOURCE_BYTES));
-        let e = err(&big);
-        assert!(e.starts_with("1:1: the file is 1048582 bytes, over the limit of 1048576 bytes"), "{e}");
-    }
-
-    #[test]
     fn tab_indentation_points_at_the_tab() {
         assert_eq!(err("a:\n\tb: 1\n"), "2:1: tab character in indentation; indent YAML with spaces");
         assert_eq!(err("a:\n  b:\n  \tc: 1\n"), "3:3: tab character in indentation; indent YAML with spaces");
+    }
+
+    #[test]
+    fn control_characters_are_refused_where_they_are() {
+        let nul = "control character U+0000 (NUL): a robot file is UTF-8 text (is this one UTF-16, or binary?)";
+        // A NUL used to end the file there: the rest was silently dropped.
+        assert_eq!(err("robot: r\n\0skills: [a]\n"), format!("2:1: {nul}"));
+        assert_eq!(err("a: 1 # note \0\n"), format!("1:13: {nul}"));
+        assert_eq!(err("a: \"x\0y\"\n"), format!("1:6: {nul}"));
+        assert_eq!(err("\0"), format!("1:1: {nul}"));
+        let other = ": a robot file may contain tabs and line breaks, but no other control characters; delete it";
+        assert_eq!(err("a: x\u{1b}[0m\n"), format!("1:5: control character U+001B (escape){other}"));
+        assert_eq!(err("a: [1]\nb: \u{7f}\n"), format!("2:4: control character U+007F (delete){other}"));
+        assert_eq!(err("a: é\u{85}\n"), format!("1:5: control character U+0085 (next line){other}"));
+        assert_eq!(err("a: \u{1}\n"), format!("1:4: control character U+0001{other}"));
+        // Columns after a multi-byte character and a tab count characters.
+        assert_eq!(err("# ：\t\u{7}\n"), format!("1:5: control character U+0007 (bell){other}"));
+        assert_eq!(
+            err("a: 1\rb: 2\n"),
+            "1:5: control character U+000D (carriage return) without a line feed: end lines with LF or CRLF"
+        );
+    }
+
+    #[test]
+    fn crlf_line_ends_are_fine_and_positions_stay_right() {
+        let root = parse("a: 1\r\nb:\r\n  c: x\r\n").unwrap();
+        let b = root.value.get("b").unwrap();
+        assert_eq!(b.pos, p(3, 3));
+        assert_eq!(b.value.get("c").unwrap(), &Spanned::new(Node::plain("x"), p(3, 6)));
+        assert_eq!(err("a: 1\r\nb: \u{0}\r\n"), format!("2:4: {}", control_message('\0')));
+    }
+
+    #[test]
+    fn a_tab_in_indentation_is_refused_wherever_it_is() {
+        let indent = "tab character in indentation; indent YAML with spaces";
+        let cases: &[(&str, Pos)] = &[
+            // Top level: the first line was accepted, a later one blamed line 1.
+            ("\trobot: r\n", p(1, 1)),
+            ("robot: r\n\tskills: []\n", p(2, 1)),
+            // Nested mappings, also after spaces and after a sibling.
+            ("a:\n\tb: 1\n", p(2, 1)),
+            ("a:\n  b: 1\n\tc: 2\n", p(3, 1)),
+            ("a:\n  - b: 1\n  \t c: 2\n", p(3, 3)),
+            ("a:\n  - b: 1\n\t    c: 2\n", p(3, 1)),
+            // After a sequence's `-`: accepted, or blamed on the next line.
+            ("s:\n-\tname: w\n  type: t\n", p(2, 2)),
+            ("s:\n  -\tname: w\n    type: t\n", p(2, 4)),
+            ("s:\n  - \tname: w\n    type: t\n", p(2, 5)),
+            ("- - \tx\n", p(1, 5)),
+            ("? \ta\n: 1\n", p(1, 3)),
+            // Continuation lines of flow collections and scalars.
+            ("s: [\n\t{a: 1}]\n", p(2, 1)),
+            ("c: {a: 5,\n\tb: 6}\n", p(2, 1)),
+            ("c: {a: 5,\n  \tb: 6}\n", p(2, 3)),
+            ("a: one\n\ttwo\n", p(2, 1)),
+            ("a: \"one\n\ttwo\"\n", p(2, 1)),
+            ("a: 'one\n \ttwo'\n", p(2, 2)),
+            // A block scalar's text may not start with one.
+            ("a: >\n\tfoo\n", p(2, 1)),
+            ("a: |\n  x\n \ty\n", p(3, 2)),
+            // After multi-byte characters, columns count characters.
+            ("é: [\n  é,\n\té]\n", p(3, 1)),
+        ];
+        for (src, pos) in cases {
+            let e = parse(src).expect_err(src);
+            assert_eq!((e.pos, e.message.as_str()), (*pos, indent), "{src:?}");
+        }
+    }
+
+    #[test]
+    fn other_tabs_outside_quotes_are_refused_with_their_place() {
+        assert_eq!(err("key:\tvalue\n"), "1:5: tab character after `:`; separate YAML with spaces");
+        assert_eq!(err("a:\n  key: \tvalue\n"), "2:8: tab character after `:`; separate YAML with spaces");
+        assert_eq!(err("a: [1,\t2]\n"), "1:7: tab character after `,`; separate YAML with spaces");
+        assert_eq!(err("a: {\tb: 1}\n"), "1:5: tab character after `{`; separate YAML with spaces");
+        assert_eq!(err("key\t: value\n"), "1:4: tab character before `:`; separate YAML with spaces");
+        assert_eq!(err("a: b\tc\n"), "1:5: tab character in an unquoted value; use spaces, or quote the value");
+        assert_eq!(err("ééé:\tx\n"), "1:5: tab character after `:`; separate YAML with spaces");
+    }
+
+    #[test]
+    fn tabs_inside_quotes_block_scalars_comments_and_at_line_ends_are_fine() {
+        let src = "# a\tcomment\n\t# an indented comment\na: \"x\ty\" # c\td\n\t\nb: 'p\tq'\t\nc: |\n  one\n  \ttwo\nd: [1, 2]\t# e\n";
+        let root = parse(src).unwrap();
+        let text = |k: &str| root.value.get(k).unwrap().value.as_text().unwrap().to_string();
+        assert_eq!((text("a"), text("b"), text("c")), ("x\ty".into(), "p\tq".into(), "one\n\ttwo\n".into()));
+        let d = root.value.get("d").unwrap();
+        assert_eq!(d.pos, p(9, 4));
+    }
+
+    #[test]
+    fn a_fullwidth_colon_is_refused_with_a_hint() {
+        let msg = "fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)";
+        // Read as a scalar key, or blamed on the next line.
+        assert_eq!(err("robot： r\n"), format!("1:6: {msg}"));
+        assert_eq!(err("a:\n  b： 1\n  c: 2\n"), format!("2:4: {msg}"));
+        assert_eq!(err("a:\n  - n: w\n    type： t\n"), format!("3:9: {msg}"));
+        assert_eq!(err("cycle：\n  rate_hz: 5\n"), format!("1:6: {msg}"));
+        assert_eq!(err("c: {rate_hz： 5, clock: wall}\n"), format!("1:12: {msg}"));
+        assert_eq!(err("c:\n  clock：wall\n"), format!("2:8: {msg}"));
+        // Quoted or in a comment it is text.
+        let root = parse("a: \"x：y\" # ：\nb: 'z：'\n").unwrap();
+        assert_eq!(root.value.get("b").unwrap().value.as_text(), Some("z："));
+        assert_eq!(
+            err("a:\n\u{3000}b: 1\n"),
+            "2:1: ideographic (fullwidth) space (U+3000) in indentation; indent YAML with spaces"
+        );
+    }
+
+    #[test]
+    fn errors_after_tabs_and_wide_characters_keep_their_line_and_column() {
+        // Tabs and fullwidth characters the file may hold do not shift what follows.
+        assert_eq!(
+            err("# ：\t：\na: \"：\t\"\t# \t\nb: [1, 2\n"),
+            "4:1: invalid YAML: while parsing a flow sequence, expected ',' or ']'"
+        );
+        assert_eq!(
+            err("a: '：\t'\nb: ：\n"),
+            "2:4: fullwidth colon `：` (U+FF1A); use ':' (or quote a value that should contain it)"
+        );
+    }
+
+    #[test]
+    fn read_source_stops_at_its_cap() {
+        // A device that never ends is refused after cap + 1 bytes, not read on.
+        #[cfg(unix)]
+        {
+            let e = read_source(std::path::Path::new("/dev/zero"), "test file", 16).unwrap_err();
+            assert_eq!(e.to_string(), "the file is more than 16 bytes; a test file may be at most 16 bytes");
+            assert_eq!(e.pos(), None);
+        }
+        let path = std::env::temp_dir().join(format!("situate-yaml-read-{}.yaml", std::process::id()));
+        std::fs::write(&path, [b"a: \xc3\xa9\nbc: ".as_slice(), &[0xff]].concat()).unwrap();
+        let e = read_source(&path, "robot file", 1 << 20).unwrap_err();
+        assert_eq!(e.pos(), Some(p(2, 5)));
+        std::fs::write(&path, "a: é\n").unwrap();
+        assert_eq!(read_source(&path, "robot file", 6).unwrap(), "a: é\n");
+        assert!(matches!(read_source(&path, "robot file", 5), Err(ReadError::TooLarge { size: Some(6), .. })));
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]
@@ -852,7 +1177,7 @@ mod tests {
         for (i, _) in src.char_indices() {
             let _ = parse(&src[..i]);
         }
-        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\"%@`.~0a1eé\\x".chars().collect();
+        let alphabet: Vec<char> = " \n\t-:?,[]{}#&*!|>'\"%@`.~0a1eé：\\x".chars().collect();
         let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
         for _ in 0..20_000 {
             seed ^= seed << 13;
@@ -866,6 +1191,25 @@ mod tests {
                 s.push(alphabet[(r >> 33) as usize % alphabet.len()]);
             }
             let _ = parse(&s);
+        }
+        // Random bytes (NUL, CR, tabs, broken UTF-8 made lossy), mostly ASCII.
+        for _ in 0..5_000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let mut r = seed;
+            let bytes: Vec<u8> = (0..seed % 48)
+                .map(|_| {
+                    r = r.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    let b = (r >> 33) as u8;
+                    if b & 0x80 == 0 || r >> 62 == 0 {
+                        b
+                    } else {
+                        b"\t\n\r :-[{"[b as usize % 8]
+                    }
+                })
+                .collect();
+            let _ = parse(&String::from_utf8_lossy(&bytes));
         }
     }
 }

@@ -143,7 +143,7 @@ skills:
 ";
     assert_eq!(
         error(src),
-        "robot.yaml:4:11: error: skill `ranger`: `test.ranger` is a dskill; list it under `devices:`, not `skills:`"
+        "robot.yaml:4:11: error: skill `ranger`: `test.ranger` is a device (dskill); list it under `devices:`, not `skills:`"
     );
     let src = "\
 robot: r
@@ -153,7 +153,29 @@ devices:
 ";
     assert_eq!(
         error(src),
-        "robot.yaml:4:11: error: device `src`: `test.source` is a cskill; list it under `skills:`, not `devices:`"
+        "robot.yaml:4:11: error: device `src`: `test.source` is a computational skill (cskill); list it under `skills:`, not `devices:`"
+    );
+}
+
+#[test]
+fn a_device_under_skills_is_reported_before_the_conflicts_it_causes() {
+    // Before: first "skills `ranger` and `ranger2` both write resource
+    // `range` with priority 0", a consequence of the real mistake.
+    let src = "\
+robot: r
+devices:
+  - {name: ranger, type: test.ranger}
+skills:
+  - {name: ranger2, type: test.ranger}
+  - {name: servo, type: test.servo, params: {x: 1}}
+";
+    assert_eq!(
+        errors(src),
+        [
+            "robot.yaml:5:27: error: skill `ranger2`: `test.ranger` is a device (dskill); list it under `devices:`, not `skills:`",
+            "robot.yaml:6:25: error: skill `servo`: `test.servo` is a device (dskill); list it under `devices:`, not `skills:`",
+            "robot.yaml:6:46: error: skill `servo`: unknown parameter `x`",
+        ]
     );
 }
 
@@ -250,6 +272,21 @@ skills:
         error(src),
         "robot.yaml:5:25: error: skill `g`: parameter `max_speed` expects a number in [0.0, 2.0], got a list of numbers"
     );
+}
+
+#[test]
+fn a_parameter_out_of_range_is_quoted_as_written() {
+    // Before: "got 1000000…" (301 digits), and 16 for `0x10`.
+    for (written, col) in [("1e300", 25), ("0x10", 25), ("-1.5E+2", 25), ("99999999999999999999", 25)] {
+        let src =
+            format!("robot: r\nskills:\n  - name: g\n    type: test.gain\n    params: {{max_speed: {written}}}\n");
+        assert_eq!(
+            error(&src),
+            format!(
+                "robot.yaml:5:{col}: error: skill `g`: parameter `max_speed` expects a number in [0.0, 2.0], got {written}"
+            )
+        );
+    }
 }
 
 #[test]
@@ -600,6 +637,33 @@ skills:
 }
 
 #[test]
+fn many_equal_priority_writers_are_one_error_not_one_per_pair() {
+    // Before: one error per pair — n writers, n²/2 errors (2000 writers took
+    // 30 s and 1 GB to report).
+    let mut src = String::from("robot: r\nskills:\n");
+    for i in 0..40 {
+        src.push_str(&format!("  - {{name: c{i}, type: test.cruise}}\n"));
+    }
+    assert_eq!(
+        error(&src),
+        "robot.yaml:42:12: error: skills `c0`, `c1`, `c2`, `c3`, `c4`, `c5`, `c6`, `c7`, `c8`, `c9` and 30 more all \
+         write resource `speed` with priority 5; give them different priorities"
+    );
+    let src = "\
+robot: r
+skills:
+  - {name: a, type: test.cruise}
+  - {name: b, type: test.avoid}
+  - {name: c, type: test.cruise, priority: 5}
+  - {name: d, type: test.stop}
+";
+    assert_eq!(
+        error(src),
+        "robot.yaml:5:44: error: skills `a`, `b` and `c` all write resource `speed` with priority 5; give them different priorities"
+    );
+}
+
+#[test]
 fn a_record_resource_is_reported_once_not_once_per_field() {
     let src = "\
 robot: r
@@ -699,7 +763,7 @@ devices:
 const MANY_IN_FILE_ORDER: [&str; 3] = [
     "robot.yaml:8:7: error: skill `g`: unknown parameter `max_sped` — did you mean `max_speed`?",
     "robot.yaml:10:11: error: skill `t`: unknown skill type `test.sourse` — did you mean `test.source`?",
-    "robot.yaml:13:11: error: device `g2`: `test.gain` is a cskill; list it under `skills:`, not `devices:`",
+    "robot.yaml:13:11: error: device `g2`: `test.gain` is a computational skill (cskill); list it under `skills:`, not `devices:`",
 ];
 
 #[test]

@@ -237,11 +237,21 @@ pub struct Map {
     pub mission: Mission,
 }
 
-/// Reads and checks a map file.
+/// The largest map file read: 4 MiB (a larger one is refused before it is
+/// read).
+pub const MAX_MAP_FILE_BYTES: u64 = 4 << 20;
+
+/// Reads and checks a map file of at most [`MAX_MAP_FILE_BYTES`].
 pub fn load_map(path: impl AsRef<Path>) -> Result<Map, MapError> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| MapError::Io { file: file.clone(), source })?;
+    let text = yaml::read_source(path, "map file", MAX_MAP_FILE_BYTES).map_err(|e| match e {
+        yaml::ReadError::Io { source, .. } => MapError::Io { file: file.clone(), source },
+        yaml::ReadError::NotUtf8 { pos, .. } => {
+            MapError::Yaml { file: file.clone(), line: pos.line, col: pos.col, message: e.to_string() }
+        }
+        e => MapError::Io { file: file.clone(), source: std::io::Error::new(std::io::ErrorKind::InvalidData, e) },
+    })?;
     Map::parse(&file, &text)
 }
 
