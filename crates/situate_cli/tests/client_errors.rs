@@ -79,7 +79,7 @@ fn sentence(out: &Output) -> String {
     assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
     assert_eq!(err.lines().count(), 1, "one line:\n{err}");
     assert!(err.starts_with("situate: "), "{err}");
-    for raw in ["Timeout", "b\"", "Err(", "Ok(", "ReplyError", "ZBytes", "{ ", "panicked"] {
+    for raw in ["Timeout", "b\"", "Err(", "Ok(", "ReplyError", "ZBytes", "{ ", "panicked", "Single("] {
         assert!(!err.contains(raw), "`{raw}` in: {err}");
     }
     err
@@ -108,4 +108,16 @@ fn a_robot_nobody_serves_is_said_in_a_sentence() {
     let robot = StuckRobot::start();
     let err = sentence(&situate(&["stats", "--robot", "nobody", "--connect", &robot.endpoint, "--timeout", "1"]));
     assert!(err.starts_with("situate: no skill manager answered `situate/nobody/req/stats` within 1 s ("), "{err}");
+}
+
+#[test]
+fn an_endpoint_where_nothing_listens_is_said_in_a_sentence() {
+    // Zenoh's own text here is `Unable to connect to any of [Single(tcp/…)]!`: not shown.
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let err = sentence(&situate(&["stats", "--connect", &endpoint, "--timeout", "1"]));
+    assert_eq!(
+        err,
+        format!("situate: no skill manager answered at {endpoint}: nothing could be reached there; is `situate run` running?")
+    );
 }

@@ -46,7 +46,9 @@ pub enum ClientError {
     Failed { key: String, detail: String },
     #[error("could not send `{key}`: {detail}")]
     Send { key: String, detail: String },
-    #[error("no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running? ({detail})")]
+    #[error(
+        "no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running?{detail}"
+    )]
     NotReachable { endpoints: String, detail: String },
     #[error("several robots answered ({0}); name one with --robot")]
     Ambiguous(String),
@@ -88,7 +90,7 @@ impl Client {
     pub fn connect_with(endpoints: &[String], extra: Option<&Json>) -> Result<Client, ClientError> {
         let session = zenoh::open(client_config(endpoints, extra)?).wait().map_err(|e| ClientError::NotReachable {
             endpoints: endpoints.join(", "),
-            detail: e.to_string().split(" at ").next().unwrap_or_default().to_string(),
+            detail: unreachable_detail(&e.to_string()),
         })?;
         Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5) })
     }
@@ -187,5 +189,17 @@ impl Client {
             .wait()
             .map_err(|e| LinkError::Open(e.to_string()))?;
         Ok((sub, rx))
+    }
+}
+
+/// What Zenoh said when nothing could be reached, as a parenthesis for the
+/// message: nothing when it only repeats that (its text then holds Rust debug
+/// output of the endpoints, `[Single(tcp/…)]`), else its first clause.
+fn unreachable_detail(zenoh: &str) -> String {
+    let first = zenoh.split(" at ").next().unwrap_or_default().trim();
+    if first.is_empty() || first.starts_with("Unable to connect to any of") {
+        String::new()
+    } else {
+        format!(" ({first})")
     }
 }
