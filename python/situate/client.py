@@ -419,7 +419,7 @@ class Robot:
     # ----- telemetry -------------------------------------------------------------
 
     async def telemetry(self, signals: Sequence[str], rate_hz: float | None = None) -> None:
-        """Chooses the signals telemetry carries and, optionally, its rate (0 < rate_hz ≤ 100)."""
+        """Chooses the signals telemetry carries and, optionally, its rate (0.01 to 100 Hz)."""
         args: dict[str, Any] = {"signals": list(signals)}
         if rate_hz is not None:
             args["rate_hz"] = rate_hz

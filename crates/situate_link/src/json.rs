@@ -183,6 +183,11 @@ pub fn param_type_name(t: ParamType) -> &'static str {
     t.name()
 }
 
+/// The slowest telemetry a client may ask for: a sample every 100 s.
+pub const MIN_TELEMETRY_HZ: f64 = 0.01;
+/// The fastest: 100 samples a second.
+pub const MAX_TELEMETRY_HZ: f64 = 100.0;
+
 // ----- requests -----------------------------------------------------------
 
 /// What a verb turns into: a manager request, or something the link itself
@@ -481,8 +486,25 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             let signals = a.strings("signals", "signal names")?;
             let rate_hz = match a.take("rate_hz") {
                 None => None,
-                Some(Arg::Json(Json::Number(n))) if n.as_f64().is_some_and(|r| r > 0.0 && r <= 100.0) => n.as_f64(),
-                Some(other) => return Err(a.wrong("rate_hz", "a number in (0, 100]", &other)),
+                Some(Arg::Json(Json::Number(n))) => match n.as_f64() {
+                    Some(r) if (MIN_TELEMETRY_HZ..=MAX_TELEMETRY_HZ).contains(&r) => Some(r),
+                    _ => {
+                        return Err(WireError {
+                            kind: "bad_param",
+                            message: format!(
+                                "`telemetry`: `rate_hz` must be a number from {MIN_TELEMETRY_HZ} to \
+                                 {MAX_TELEMETRY_HZ} (a sample at least every 100 s), got {n}"
+                            ),
+                        })
+                    }
+                },
+                Some(other) => {
+                    return Err(a.wrong(
+                        "rate_hz",
+                        &format!("a number from {MIN_TELEMETRY_HZ} to {MAX_TELEMETRY_HZ}"),
+                        &other,
+                    ))
+                }
             };
             Decoded::Telemetry { signals, rate_hz }
         }
@@ -785,8 +807,8 @@ mod tests {
             ("monitor_cancel", r#"{"monitor": 1.0}"#, "monitor", "an integer in ["),
             ("monitor_cancel", r#"{"monitor": "1"}"#, "monitor", "an integer in ["),
             ("monitor_cancel", r#"{"monitor": 18446744073709551615}"#, "monitor", "an integer in ["),
-            ("telemetry", r#"{"signals": [], "rate_hz": "5"}"#, "rate_hz", "a number in (0, 100]"),
-            ("telemetry", r#"{"signals": [], "rate_hz": 1e400}"#, "rate_hz", "a number in (0, 100]"),
+            ("telemetry", r#"{"signals": [], "rate_hz": "5"}"#, "rate_hz", "a number from 0.01 to 100"),
+            ("telemetry", r#"{"signals": [], "rate_hz": 1e400}"#, "rate_hz", "a number from 0.01 to 100"),
             ("step", r#"{"cycles": 2.0}"#, "cycles", "an integer in [1, 1000000]"),
             ("step", r#"{"cycles": "2"}"#, "cycles", "an integer in [1, 1000000]"),
             ("step", r#"{"cycles": 1e400}"#, "cycles", "an integer in [1, 1000000]"),

@@ -236,7 +236,21 @@ fn publish_telemetry(
             let t = telemetry.lock().unwrap_or_else(|p| p.into_inner());
             (t.signals.clone(), t.rate_hz)
         };
-        std::thread::sleep(Duration::from_secs_f64(1.0 / rate_hz));
+        // Rates are checked where they enter (MIN..=MAX_TELEMETRY_HZ); clamped again so that no
+        // value can make the period unrepresentable. Slept in slices: a stop is noticed within
+        // 50 ms whatever the rate (a 0.01 Hz sampler once held shutdown for 100 s).
+        let period = Duration::from_secs_f64(1.0 / rate_hz.clamp(json::MIN_TELEMETRY_HZ, json::MAX_TELEMETRY_HZ));
+        let until = std::time::Instant::now() + period;
+        loop {
+            let now = std::time::Instant::now();
+            if now >= until || stop.load(Ordering::SeqCst) {
+                break;
+            }
+            std::thread::sleep((until - now).min(Duration::from_millis(50)));
+        }
+        if stop.load(Ordering::SeqCst) {
+            break;
+        }
         // Sampled between cycles through the handle: never on the cycle's thread.
         let Ok(Reply::Stats(stats)) = handle.request_timeout(Request::QueryStats, Duration::from_secs(1)) else {
             continue;

@@ -93,11 +93,13 @@ impl LinkConfig {
                 "listen" => cfg.listen = endpoints(&mut errors),
                 "connect" => cfg.connect = endpoints(&mut errors),
                 "telemetry_hz" => match value.value.as_f64() {
-                    Some(r) if r > 0.0 && r <= 100.0 => cfg.telemetry_hz = r,
+                    Some(r) if (crate::json::MIN_TELEMETRY_HZ..=crate::json::MAX_TELEMETRY_HZ).contains(&r) => {
+                        cfg.telemetry_hz = r
+                    }
                     _ => errors.push(LinkConfigError {
                         pos: value.pos,
                         message: format!(
-                            "`link.telemetry_hz` expects a number in (0, 100], got {}",
+                            "`link.telemetry_hz` expects a number from 0.01 to 100, got {}",
                             value.value.describe()
                         ),
                     }),

@@ -413,3 +413,26 @@ fn arguments_of_the_wrong_shape_are_refused_as_the_protocol_says() {
     assert_eq!(kind, "bad_request", "{msg}");
     assert_eq!(state(&c), before, "nothing changed");
 }
+
+#[test]
+fn a_telemetry_rate_out_of_range_is_bad_param_and_a_slow_one_never_holds_shutdown() {
+    let mut r = start(ClockKind::Wall);
+    let c = client(&r);
+    // 1e-300 once panicked the telemetry thread (the link still said `ok`); 1e-9 held shutdown.
+    for rate in ["1e-300", "1e-9", "0.001", "100.5"] {
+        let args: Json = serde_json::from_str(&format!(r#"{{"signals": [], "rate_hz": {rate}}}"#)).unwrap();
+        let (kind, message) = remote_err(c.request("linkbot", "telemetry", &args).unwrap_err());
+        assert_eq!(kind, "bad_param", "{rate}: {message}");
+        assert!(message.contains("from 0.01 to 100"), "{message}");
+    }
+    // The slowest rate accepted: its worker sleeps 100 s between samples, and stopping the link
+    // must not wait for that (a minute is a hang, not a slow machine).
+    c.request("linkbot", "telemetry", &json!({"signals": ["odom"], "rate_hz": 0.01})).unwrap();
+    let link = r.link.take().unwrap();
+    let (done_tx, done_rx) = crossbeam_channel::bounded(1);
+    std::thread::spawn(move || {
+        drop(link);
+        let _ = done_tx.send(());
+    });
+    assert!(done_rx.recv_timeout(Duration::from_secs(60)).is_ok(), "the link did not stop within a minute");
+}
