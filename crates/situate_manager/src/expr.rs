@@ -205,6 +205,7 @@ impl Condition {
             resolver,
             program: Program::default(),
             ref_names: Vec::new(),
+            fixed: Vec::new(),
         };
         if p.peek().tok == Tok::End {
             return Err(p.err(0, "the condition is empty"));
@@ -787,6 +788,9 @@ struct Parser<'s, 'r> {
     resolver: &'r dyn Resolver,
     program: Program,
     ref_names: Vec<String>,
+    /// Name nodes of fixed-length arrays: their name and length, so that a
+    /// constant index beyond the end is refused where it is written.
+    fixed: Vec<(u32, String, usize)>,
 }
 
 type PResult<T> = Result<T, ExprError>;
@@ -1046,6 +1050,19 @@ impl Parser<'_, '_> {
             if !i.is_finite() || i.fract() != 0.0 {
                 return Err(self.err(idx.at, format!("the index must be a whole number, this is {i}")));
             }
+            if let Some((_, name, len)) = self.fixed.iter().find(|(n, _, _)| *n == e.node) {
+                if i >= *len as f64 {
+                    // It would never have a value: a monitor on it would silently never fire.
+                    return Err(self.err(
+                        idx.at,
+                        format!(
+                            "index {i} is out of range: `{name}` has {len} element{} (indexes 0 to {})",
+                            if *len == 1 { "" } else { "s" },
+                            len.saturating_sub(1)
+                        ),
+                    ));
+                }
+            }
         }
         let node = self.push(Node::Index(e.node, idx.node), open)?;
         Ok(Typed { node, ty: Ty::Num, at: e.at })
@@ -1118,6 +1135,9 @@ impl Parser<'_, '_> {
             }
         };
         let node = self.push(Node::Ref(slot as u32), at)?;
+        if let SignalType::Array { len: Some(len), .. } = st {
+            self.fixed.push((node, name.to_string(), len));
+        }
         Ok(Typed { node, ty, at })
     }
 
@@ -1515,6 +1535,10 @@ mod tests {
         let empty = Vals::default().with("sonar.range", Value::F32s(Vec::new().into()));
         assert_eq!(eval_with("sonar.range[0] < 1", &empty), None);
         assert_eq!(eval_with("len(sonar.range) == 0", &empty), Some(true));
+        // Compile time: a constant index past the end of a fixed-length array.
+        assert_err("counts[3] > 0", 8, &["index 3 is out of range", "`counts` has 3 elements (indexes 0 to 2)"]);
+        assert!(compile("counts[2] > 0").is_ok());
+        assert!(compile("gains[300] > 0").is_ok(), "a variable-length array is checked at run time");
         // Compile time: constant negative or fractional indexes.
         assert_err("sonar.range[-1] < 1", 13, &["negative", "-1"]);
         assert_err("sonar.range[1 - 2] < 1", 13, &["negative"]);
