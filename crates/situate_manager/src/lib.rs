@@ -27,7 +27,7 @@ pub use control::{
     SignalReading, SkillInfo, SkillTiming,
 };
 pub use graph::Graph;
-pub use manager::{Joiner, Manager};
+pub use manager::{Joiner, Manager, MAX_MONITORS};
 pub use monitor::MonitorMode;
 pub use registry::Registry;
 pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

@@ -39,6 +39,10 @@ pub use spawned::Joiner;
 const PRINT_HISTORY: usize = 64;
 const EVENT_QUEUE: usize = 4096;
 
+/// The most monitors one robot keeps at once (`monitor_add` refuses more).
+/// Every one is evaluated each cycle: a bound on their number is a bound on
+/// the cycle's cost, whatever the clients do.
+pub const MAX_MONITORS: usize = 1000;
 /// One leaf slot of the cycle's data.
 #[derive(Clone, Default)]
 struct Slot {
@@ -1121,6 +1125,13 @@ impl Manager {
         pause: bool,
         report: Vec<String>,
     ) -> Result<Reply, ControlError> {
+        if self.monitors.list.len() >= MAX_MONITORS {
+            // Every monitor is evaluated every cycle: their number bounds the cycle's cost.
+            return Err(ControlError::Invalid(format!(
+                "monitor_add: this robot has {} monitors, the most it keeps ({MAX_MONITORS}); cancel some first",
+                self.monitors.list.len()
+            )));
+        }
         let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
         let compiled = Condition::compile(condition, &resolver).map_err(|e| ControlError::BadCondition {
             column: e.column,
