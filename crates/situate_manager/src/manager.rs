@@ -315,7 +315,11 @@ impl Manager {
             worker.set_active(active, &mut self.execs[i], def.kind, &def.name, period, clock);
         }
         self.schedule_dirty = true;
+        // The next `activation_applied` says each skill's final state once: a skill turned off
+        // and on again before the cycle is listed as activated only (it was listed under both).
         let name = def.name.clone();
+        self.activated.retain(|n| *n != name);
+        self.deactivated.retain(|n| *n != name);
         if active {
             self.activated.push(name);
         } else {

@@ -123,6 +123,33 @@ fn activation_applies_exactly_at_the_next_cycle_boundary() {
 }
 
 #[test]
+fn off_and_on_again_before_a_cycle_is_reported_once_in_its_final_state() {
+    let log = log();
+    let mut reg = Registry::new();
+    reg.add(constant("src", "f64", Value::F64(0.0)));
+    reg.add(adder("add", 1.0, &log, "a"));
+    reg.add(adder("add2", 1.0, &log, "b"));
+    let spec = simulated("act")
+        .skill(skill("s", "src").remap("out", "x"))
+        .skill(skill("a", "add"))
+        .skill(skill("b", "add2").remap("y", "y2"));
+    let mut m = build(&spec, &reg);
+    let events = m.events();
+    m.step(1).unwrap();
+    let _ = events.try_iter().count();
+    // `a` off then on again, `b` on (already) then off: one event, each skill once, in its final state.
+    m.deactivate(&["a"]).unwrap();
+    m.activate(&["a"]).unwrap();
+    m.deactivate(&["b"]).unwrap();
+    m.step(1).unwrap();
+    let applied: Vec<Event> = events.try_iter().filter(|e| matches!(e, Event::ActivationApplied { .. })).collect();
+    assert_eq!(
+        applied,
+        vec![Event::ActivationApplied { activated: vec!["a".into()], deactivated: vec!["b".into()], cycle: 2 }]
+    );
+}
+
+#[test]
 fn activating_a_skill_without_providers_names_the_missing_signals() {
     let log = log();
     let mut reg = Registry::new();
