@@ -99,7 +99,8 @@ def open_session(endpoints: Sequence[str], extra: ZenohSettings | None = None) -
         where = ", ".join(endpoints)
         raise NotRunning(
             f"no skill manager answered at {where}: could not connect ({e}); "
-            "is `situate run` running and reachable there?"
+            "is `situate run` running and reachable there, and does it accept these "
+            "credentials (user and password, certificates)?"
         ) from e
 
 
@@ -136,7 +137,7 @@ def _no_answer(key: str, timeout: float, endpoints: Sequence[str]) -> NotRunning
     return NotRunning(
         f"no skill manager answered `{key}` within {timeout:g} s "
         f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
-        "is its cycle stuck, and do its access rules allow this request?)"
+        "is its cycle stuck, or did it refuse this client's credentials or access rules?)"
     )
 
 
@@ -247,7 +248,8 @@ def hello(
     if not answered:
         raise NotRunning(
             f"no skill manager answered `situate/*/req/hello` within {timeout:g} s "
-            f"(is `situate run` running and reachable at {', '.join(endpoints)}?)"
+            f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
+            "or did it refuse this client's credentials or access rules?)"
         )
     if len(answered) > 1:
         names = ", ".join(h["robot"] for h in answered)

@@ -95,8 +95,8 @@ fn stats_on_a_stuck_robot_says_so_in_a_sentence() {
         assert_eq!(
             err,
             format!(
-                "situate: no answer from robot `stuck` to `{}` within 1 s (is it running, and is its cycle stuck? \
-                 a longer --timeout may help a busy one)",
+                "situate: no answer from robot `stuck` to `{}` within 1 s (is it running, is its cycle stuck, or do its \
+                 access rules drop this request? a longer --timeout may help a busy one)",
                 verb[0]
             )
         );
@@ -118,6 +118,6 @@ fn an_endpoint_where_nothing_listens_is_said_in_a_sentence() {
     let err = sentence(&situate(&["stats", "--connect", &endpoint, "--timeout", "1"]));
     assert_eq!(
         err,
-        format!("situate: no skill manager answered at {endpoint}: nothing could be reached there; is `situate run` running?")
+        format!("situate: no skill manager answered at {endpoint}: nothing could be reached there; is `situate run` running, and does it accept these credentials (user and password, certificates)?")
     );
 }

@@ -30,14 +30,14 @@ pub enum ClientError {
     /// Nobody answered: no manager serves that key (or its access rules
     /// drop the request).
     #[error(
-        "no skill manager answered `{key}` within {} (is `situate run` running and reachable at {endpoints}, and do its access rules allow this request?)",
+        "no skill manager answered `{key}` within {} (is `situate run` running and reachable at {endpoints}, or did it refuse this client's credentials or access rules?)",
         seconds(*timeout)
     )]
     NoAnswer { key: String, timeout: Duration, endpoints: String },
     /// The request was still unanswered when the timeout ended it: the
     /// manager may be busy or stuck, or not there at all.
     #[error(
-        "no answer from robot `{robot}` to `{verb}` within {} (is it running, and is its cycle stuck? a longer --timeout may help a busy one)",
+        "no answer from robot `{robot}` to `{verb}` within {} (is it running, is its cycle stuck, or do its access rules drop this request? a longer --timeout may help a busy one)",
         seconds(*timeout)
     )]
     TimedOut { robot: String, verb: String, timeout: Duration },
@@ -47,7 +47,7 @@ pub enum ClientError {
     #[error("could not send `{key}`: {detail}")]
     Send { key: String, detail: String },
     #[error(
-        "no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running?{detail}"
+        "no skill manager answered at {endpoints}: nothing could be reached there; is `situate run` running, and does it accept these credentials (user and password, certificates)?{detail}"
     )]
     NotReachable { endpoints: String, detail: String },
     #[error("several robots answered ({0}); name one with --robot")]

@@ -266,3 +266,18 @@ fn clients_without_valid_credentials_cannot_connect() {
     assert_eq!(ok(&sequencer, "hello", &json!({}))["robot"], "aclbot");
     sequencer.close().wait().unwrap();
 }
+
+#[test]
+fn a_client_with_wrong_credentials_is_told_they_may_have_been_refused() {
+    // It was told only "no skill manager answered … is `situate run` running?".
+    let r = start();
+    let extra = json!({"transport": {"auth": {"usrpwd": {"user": "sequencer", "password": "guess"}}}});
+    let message = match situate_link::Client::connect_with(std::slice::from_ref(&r.endpoint), Some(&extra)) {
+        Err(e) => e.to_string(),
+        Ok(mut c) => {
+            c.timeout = Duration::from_secs(2);
+            c.request("aclbot", "hello", &json!({})).expect_err("refused").to_string()
+        }
+    };
+    assert!(message.contains("credentials"), "{message}");
+}
