@@ -183,6 +183,15 @@ pub fn param_type_name(t: ParamType) -> &'static str {
     t.name()
 }
 
+/// The largest request payload taken, in bytes (larger: `bad_request`, before parsing).
+pub const MAX_PAYLOAD_BYTES: usize = 64 * 1024;
+/// The longest name (skill, parameter, signal) a request may hold, in characters.
+pub const MAX_NAME_CHARS: usize = 256;
+/// The longest monitor condition, in characters.
+pub const MAX_CONDITION_CHARS: usize = 4096;
+/// The most items of a list argument (`skills`, `report`, `signals`).
+pub const MAX_LIST_ITEMS: usize = 1024;
+
 /// The slowest telemetry a client may ask for: a sample every 100 s.
 pub const MIN_TELEMETRY_HZ: f64 = 0.01;
 /// The fastest: 100 samples a second.
@@ -248,13 +257,28 @@ impl Args<'_> {
         }
     }
 
+    /// `s` if it has at most `cap` characters, else a `bad_request` naming the limit.
+    fn capped(&self, name: &str, s: String, cap: usize) -> Result<String, WireError> {
+        if s.len() <= cap || s.chars().count() <= cap {
+            Ok(s)
+        } else {
+            Err(WireError::bad_request(format!(
+                "`{}`: argument `{name}` is {} characters long, at most {cap} are taken",
+                self.verb,
+                s.chars().count()
+            )))
+        }
+    }
+
     fn has(&self, name: &str) -> bool {
         self.obj.contains_key(name) || self.huge.contains_key(name)
     }
 
     fn string(&mut self, name: &str) -> Result<String, WireError> {
+        // A condition is a small expression; every other string names something.
+        let cap = if name == "condition" { MAX_CONDITION_CHARS } else { MAX_NAME_CHARS };
         match self.take(name) {
-            Some(Arg::Json(Json::String(s))) => Ok(s),
+            Some(Arg::Json(Json::String(s))) => self.capped(name, s, cap),
             Some(other) => Err(self.wrong(name, "a string", &other)),
             None => Err(self.missing(name, "a string")),
         }
@@ -264,10 +288,17 @@ impl Args<'_> {
     fn strings(&mut self, name: &str, of: &str) -> Result<Vec<String>, WireError> {
         let what = format!("a list of strings ({of})");
         match self.take(name) {
+            Some(Arg::Json(Json::Array(items))) if items.len() > MAX_LIST_ITEMS => {
+                Err(WireError::bad_request(format!(
+                    "`{}`: argument `{name}` has {} items, at most {MAX_LIST_ITEMS} are taken",
+                    self.verb,
+                    items.len()
+                )))
+            }
             Some(Arg::Json(Json::Array(items))) => items
                 .into_iter()
                 .map(|i| match i {
-                    Json::String(s) => Ok(s),
+                    Json::String(s) => self.capped(name, s, MAX_NAME_CHARS),
                     other => Err(self.wrong(name, &what, &Arg::Json(other))),
                 })
                 .collect(),
@@ -373,6 +404,13 @@ fn untyped_value(j: &Json) -> Option<Value> {
 /// cannot hold (a number beyond a 64-bit float) is kept aside as its text, so
 /// that its refusal names the argument.
 fn payload_args<'a>(verb: &'a str, payload: &[u8]) -> Result<Args<'a>, WireError> {
+    if payload.len() > MAX_PAYLOAD_BYTES {
+        // Refused before parsing: no request, however large, may cost the robot more than this.
+        return Err(WireError::bad_request(format!(
+            "`{verb}`: the request is {} bytes, at most {MAX_PAYLOAD_BYTES} are taken",
+            payload.len()
+        )));
+    }
     let mut args = Args { verb, obj: Map::new(), huge: BTreeMap::new() };
     if payload.iter().all(u8::is_ascii_whitespace) {
         return Ok(args);
@@ -878,6 +916,29 @@ mod tests {
         assert!(e.message.starts_with("`set_param`: the payload is not JSON: "), "{}", e.message);
         let e = refused("set_param", r#"[1e400]"#);
         assert!(e.message.starts_with("`set_param`: the payload is not JSON: "), "{}", e.message);
+    }
+
+    #[test]
+    fn oversized_requests_are_refused_with_the_limit() {
+        let long = "x".repeat(MAX_NAME_CHARS + 1);
+        let e = decode_request("query", format!(r#"{{"signal": "{long}"}}"#).as_bytes()).unwrap_err();
+        assert_eq!(
+            (e.kind, e.message.as_str()),
+            ("bad_request", "`query`: argument `signal` is 257 characters long, at most 256 are taken")
+        );
+        let e = decode_request("deactivate", format!(r#"{{"skills": ["a", "{long}"]}}"#).as_bytes()).unwrap_err();
+        assert!(e.message.contains("argument `skills` is 257 characters long"), "{}", e.message);
+        let many = vec!["a"; MAX_LIST_ITEMS + 1];
+        let e = decode_request("activate", json!({"skills": many}).to_string().as_bytes()).unwrap_err();
+        assert!(e.message.contains("has 1025 items, at most 1024 are taken"), "{}", e.message);
+        let huge = format!(r#"{{"signal": "{}"}}"#, "y".repeat(MAX_PAYLOAD_BYTES));
+        let e = decode_request("query", huge.as_bytes()).unwrap_err();
+        assert!(e.message.contains("at most 65536 are taken"), "{}", e.message);
+        // A long condition is fine up to its own limit; a name of exactly the limit too.
+        let cond = format!(r#"{{"condition": "{} > 1"}}"#, "a".repeat(1000));
+        assert!(decode_request("monitor_add", cond.as_bytes()).is_ok());
+        let edge = format!(r#"{{"signal": "{}"}}"#, "x".repeat(MAX_NAME_CHARS));
+        assert!(decode_request("query", edge.as_bytes()).is_ok());
     }
 
     #[test]
