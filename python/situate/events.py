@@ -196,6 +196,8 @@ class Telemetry:
     overruns: int
     active: list[str]
     signals: dict[str, Any]
+    late_starts: int = 0
+    rate_hz: float = 0.0
 
 
 def parse_telemetry(data: dict[str, Any]) -> Telemetry:
@@ -210,4 +212,6 @@ def parse_telemetry(data: dict[str, Any]) -> Telemetry:
         overruns=int(data.get("overruns", 0)),
         active=_strings(data.get("active")),
         signals={str(k): decode_untyped(v) for k, v in signals.items()},
+        late_starts=int(data.get("late_starts", 0)),
+        rate_hz=float(data.get("rate_hz", 0.0)),
     )

@@ -301,6 +301,10 @@ class Stats:
     max_cycle_ns: int
     overruns: int
     active: list[str]
+    late_starts: int = 0
+    """Cycles that started more than half a period late, and skipped periods."""
+    rate_hz: float = 0.0
+    """The achieved cycle rate over about the last 20 cycles (0 when stopped)."""
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> Stats:
@@ -316,6 +320,8 @@ class Stats:
             max_cycle_ns=int(j.get("max_cycle_ns", 0)),
             overruns=int(j.get("overruns", 0)),
             active=_strings(j.get("active")),
+            late_starts=int(j.get("late_starts", 0)),
+            rate_hz=float(j.get("rate_hz", 0.0)),
         )
 
 

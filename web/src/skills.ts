@@ -44,6 +44,7 @@ export class ManagerPanel {
       ["mean", "cycle time (mean)"],
       ["max", "cycle time (max)"],
       ["overruns", "overruns"],
+      ["late", "late starts"],
     ] as const) {
       const dd = h("dd", { "data-testid": `stat-${key}` }, "—");
       this.fields.set(key, dd);
@@ -83,12 +84,15 @@ export class ManagerPanel {
       const us = (ns: Json | undefined) => `${(num(ns) / 1000).toFixed(1)} µs`;
       this.set("state", stats["running"] === true ? "running" : "stopped");
       this.set("cycle", String(cycle));
-      this.set("rate", `${this.rate.toFixed(1)} Hz`);
+      // The manager's own measure when it runs (over its last ~20 cycles), else the samples'.
+      const measured = num(stats["rate_hz"]);
+      this.set("rate", `${(stats["running"] === true && measured > 0 ? measured : this.rate).toFixed(1)} Hz`);
       this.set("period", `${(num(stats["period_s"]) * 1000).toFixed(1)} ms`);
       this.set("last", us(stats["last_cycle_ns"]));
       this.set("mean", us(stats["mean_cycle_ns"]));
       this.set("max", us(stats["max_cycle_ns"]));
       this.set("overruns", String(num(stats["overruns"])));
+      this.set("late", String(num(stats["late_starts"])));
     }
     for (const s of skills) {
       const name = str(s["name"]);

@@ -473,27 +473,30 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             }
             Ok(())
         }),
-        Command::Stats(remote) => {
-            client_verb(&remote, |c, robot| {
-                let s = c.request(robot, "stats", &json!({}))?;
-                if remote.json {
-                    println!("{s}");
-                } else {
-                    println!(
-                    "robot `{}`: cycle {}, {} s, {}; cycle time mean {:.1} µs, max {:.1} µs; overruns {}; active: {}",
+        Command::Stats(remote) => client_verb(&remote, |c, robot| {
+            let s = c.request(robot, "stats", &json!({}))?;
+            if remote.json {
+                println!("{s}");
+            } else {
+                println!(
+                    "robot `{}`: cycle {}, {} s, {}; cycle time mean {:.1} µs, max {:.1} µs; overruns {}; late starts {}; active: {}",
                     s["robot"].as_str().unwrap_or(""),
                     s["cycle"],
                     s["time_s"],
-                    if s["running"].as_bool() == Some(true) { "running" } else { "stopped" },
+                    if s["running"].as_bool() == Some(true) {
+                        format!("running at {:.1} Hz", s["rate_hz"].as_f64().unwrap_or(0.0))
+                    } else {
+                        "stopped".to_string()
+                    },
                     s["mean_cycle_ns"].as_f64().unwrap_or(0.0) / 1e3,
                     s["max_cycle_ns"].as_f64().unwrap_or(0.0) / 1e3,
                     s["overruns"],
+                    s["late_starts"],
                     s["active"].as_array().map(|a| a.iter().filter_map(Json::as_str).collect::<Vec<_>>().join(", ")).unwrap_or_default()
                 );
-                }
-                Ok(())
-            })
-        }
+            }
+            Ok(())
+        }),
         Command::ServeSkill { skill, name, library, python, remote } => {
             serve_skill(&skill, name, &library, &python, &remote, ext)
         }
@@ -1426,11 +1429,12 @@ fn types(registry: &Registry) {
 fn print_summary(stats: &ManagerStats, skills: &[SkillInfo]) {
     println!("robot `{}`: {} cycles, {:.3} s on its clock", stats.robot, stats.cycle, stats.time_s);
     println!(
-        "cycle time: mean {:.1} µs, max {:.1} µs; period {:.1} ms; overruns {}",
+        "cycle time: mean {:.1} µs, max {:.1} µs; period {:.1} ms; overruns {}; late starts {}",
         stats.mean_cycle_ns / 1e3,
         stats.max_cycle_ns as f64 / 1e3,
         stats.period_s * 1e3,
-        stats.overruns
+        stats.overruns,
+        stats.late_starts
     );
     println!(
         "{:<16} {:<8} {:>8} {:>10} {:>10} {:>10}  state",

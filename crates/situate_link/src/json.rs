@@ -643,6 +643,8 @@ pub fn stats_to_json(s: &ManagerStats) -> Json {
         "mean_cycle_ns": s.mean_cycle_ns,
         "max_cycle_ns": s.max_cycle_ns,
         "overruns": s.overruns,
+        "late_starts": s.late_starts,
+        "rate_hz": s.rate_hz,
         "active": s.active,
     })
 }

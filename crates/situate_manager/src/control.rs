@@ -288,6 +288,10 @@ pub struct ManagerStats {
     pub mean_cycle_ns: f64,
     pub max_cycle_ns: u64,
     pub overruns: u64,
+    /// Cycles that started late, or periods skipped (see `docs/protocol.md`).
+    pub late_starts: u64,
+    /// The achieved cycle rate while running (0 when stopped).
+    pub rate_hz: f64,
     pub active: Vec<String>,
 }
 

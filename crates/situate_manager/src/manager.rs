@@ -138,6 +138,16 @@ pub struct Manager {
     max_cycle_ns: u64,
     total_cycle_ns: u64,
     overruns: u64,
+    /// Cycles that started more than half a period after they were due, and
+    /// periods skipped because the cycle could not keep up: whatever held the
+    /// cycle back (a long body, requests, a busy machine).
+    pub(crate) late_starts: u64,
+    /// When the paced loop wanted this cycle to start (set before each cycle).
+    pub(crate) due: Option<Instant>,
+    /// The achieved rate: a moving average of the wall time between cycle
+    /// starts while running (`None` until two cycles ran back to back).
+    interval_s: Option<f64>,
+    last_start: Option<Instant>,
     monitors: Monitors,
     refs: Vec<RefTarget>,
     bus: EventBus,
@@ -243,6 +253,10 @@ impl Manager {
             max_cycle_ns: 0,
             total_cycle_ns: 0,
             overruns: 0,
+            late_starts: 0,
+            due: None,
+            interval_s: None,
+            last_start: None,
             monitors: Monitors::default(),
             refs: Vec::new(),
             bus: EventBus::default(),
@@ -432,6 +446,20 @@ impl Manager {
     /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
     fn begin_cycle(&mut self) {
         self.cycle_start = Instant::now();
+        if let Some(due) = self.due.take() {
+            if self.cycle_start.saturating_duration_since(due).as_secs_f64() > self.period_s / 2.0 {
+                self.late_starts += 1;
+            }
+        }
+        if let Some(last) = self.last_start {
+            let dt = self.cycle_start.saturating_duration_since(last).as_secs_f64();
+            // Over about the last 20 cycles.
+            self.interval_s = Some(match self.interval_s {
+                Some(avg) => avg + (dt - avg) / 20.0,
+                None => dt,
+            });
+        }
+        self.last_start = Some(self.cycle_start);
         self.cycle += 1;
         self.time_s = match self.clock {
             ClockKind::Simulated => self.cycle as f64 * self.period_s,
@@ -1112,6 +1140,11 @@ impl Manager {
             mean_cycle_ns: if self.cycle == 0 { 0.0 } else { self.total_cycle_ns as f64 / self.cycle as f64 },
             max_cycle_ns: self.max_cycle_ns,
             overruns: self.overruns,
+            late_starts: self.late_starts,
+            rate_hz: match (self.running, self.interval_s) {
+                (true, Some(dt)) if dt > 0.0 => 1.0 / dt,
+                _ => 0.0,
+            },
             active: self
                 .insts
                 .iter()
@@ -1218,6 +1251,9 @@ impl Manager {
             Request::Run => {
                 if !self.running {
                     self.running = true;
+                    // The achieved rate is measured from here: a pause is not a slow cycle.
+                    self.last_start = None;
+                    self.interval_s = None;
                     self.bus.send(Event::ManagerStarted { cycle: self.cycle });
                 }
                 Ok(Reply::Done)

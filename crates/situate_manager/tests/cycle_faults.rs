@@ -338,3 +338,27 @@ fn a_device_keeps_real_time_while_the_cycle_stalls() {
     // no fresh command stops after its hold time (toy.wheels, sim.base).
     until("device runs well after the last cycle", || times.lock().unwrap().iter().any(|&t| t > cycle_time + 0.05));
 }
+
+#[test]
+fn a_cycle_held_back_counts_its_late_starts_and_stats_show_the_achieved_rate() {
+    // Each cycle takes at least 25 ms of a 10 ms period (well under its budget): it cannot
+    // start on time. Such a run once reported `overruns 0` and nothing about the rate.
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("slow", SkillKind::Sync, &[], &[("y", "f64")]), |io, _| {
+        std::thread::sleep(Duration::from_millis(25));
+        io.outputs[0] = Some(Value::F64(1.0));
+        Ok(())
+    }));
+    let spec =
+        RobotSpec::new("late").clock(ClockKind::Wall).period_s(0.01).skill(skill("s", "slow").budget_ms(10_000.0));
+    let (mut handle, join) = build(&spec, &reg).spawn(true);
+    until("ten cycles", || handle.stats().unwrap().cycle >= 10);
+    let stats = handle.stats().unwrap();
+    assert!(stats.late_starts >= 5, "{stats:?}");
+    // A sleep is never shorter than asked: at most 40 Hz, whatever the machine.
+    assert!(stats.rate_hz > 0.0 && stats.rate_hz < 41.0, "{stats:?}");
+    handle.request(Request::Stop).unwrap();
+    assert_eq!(handle.stats().unwrap().rate_hz, 0.0, "no rate while stopped");
+    handle.request(Request::Shutdown).unwrap();
+    join.join_timeout(BOUND).ok().expect("the manager ended").unwrap();
+}

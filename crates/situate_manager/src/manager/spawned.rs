@@ -168,6 +168,8 @@ fn serve(core: &Core, generation: u64) {
     let _guard = PanicGuard(core);
     raise_thread_priority();
     let mut deadline = Instant::now();
+    // When the next cycle is due, for the manager's count of late starts.
+    let mut next_due: Option<Instant> = None;
     let mut g = core.lock();
     loop {
         let Some(m) = current(&mut g, generation) else { return };
@@ -187,9 +189,11 @@ fn serve(core: &Core, generation: u64) {
                 Err(_) => return core.finish(&mut g),
             }
             deadline = Instant::now();
+            next_due = None;
             continue;
         }
         let pacing = m.pacing();
+        m.due = next_due.take();
         g = match cycle(core, g, generation) {
             Some(g) => g,
             None => return,
@@ -199,7 +203,13 @@ fn serve(core: &Core, generation: u64) {
                 deadline += period;
                 let now = Instant::now();
                 if deadline < now {
+                    // Already due: the next cycle starts late (and the missed periods are skipped).
                     deadline = now;
+                    if let Some(m) = current(&mut g, generation) {
+                        m.late_starts += 1;
+                    }
+                } else {
+                    next_due = Some(deadline);
                 }
                 // Serve requests until the next cycle is due.
                 loop {
