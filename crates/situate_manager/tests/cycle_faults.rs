@@ -9,43 +9,13 @@
 mod common;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc;
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use common::*;
 use crossbeam_channel::Receiver;
 use situate_core::{FnSkill, Io, SkillKind, SkillType, Value};
 use situate_manager::{ClockKind, Control, Event, Registry, Request, RobotSpec};
-
-/// Generous: a loaded machine is slow, never this slow.
-const BOUND: Duration = Duration::from_secs(60);
-
-#[derive(Clone, Default)]
-struct Gate(Arc<(Mutex<bool>, Condvar)>);
-
-impl Gate {
-    fn pass(&self) {
-        let (open, cv) = &*self.0;
-        let mut o = open.lock().unwrap();
-        while !*o {
-            o = cv.wait(o).unwrap();
-        }
-    }
-    fn open(&self) {
-        *self.0 .0.lock().unwrap() = true;
-        self.0 .1.notify_all();
-    }
-}
-
-/// Runs `f` on a thread; fails if it does not finish within [`BOUND`].
-fn within_bound<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(f());
-    });
-    rx.recv_timeout(BOUND).expect("the cycle blocked")
-}
 
 /// The cause of the first `SkillFaulted` event for `skill`.
 fn fault_of(events: &Receiver<Event>, skill: &str) -> String {

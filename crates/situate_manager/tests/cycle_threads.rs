@@ -5,40 +5,9 @@
 
 mod common;
 
-use std::sync::mpsc;
-use std::sync::{Arc, Condvar, Mutex};
-use std::time::Duration;
-
 use common::*;
 use situate_core::{SkillKind, Value};
 use situate_manager::{ClockKind, Control, Event, Registry, RobotSpec};
-
-#[derive(Clone, Default)]
-struct Gate(Arc<(Mutex<bool>, Condvar)>);
-
-impl Gate {
-    fn pass(&self) {
-        let (open, cv) = &*self.0;
-        let mut o = open.lock().unwrap();
-        while !*o {
-            o = cv.wait(o).unwrap();
-        }
-    }
-    fn open(&self) {
-        *self.0 .0.lock().unwrap() = true;
-        self.0 .1.notify_all();
-    }
-}
-
-/// Runs `f` on a thread and fails if it does not finish within a generous
-/// bound (a hang is the failure this guards against, not slowness).
-fn within_watchdog<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(f());
-    });
-    rx.recv_timeout(Duration::from_secs(60)).expect("the cycle blocked on a threaded body")
-}
 
 fn wall(robot: &str) -> RobotSpec {
     RobotSpec::new(robot).clock(ClockKind::Wall).period_s(0.002)
@@ -60,7 +29,7 @@ fn a_dskill_whose_device_hangs_does_not_delay_the_cycle() {
     let spec =
         wall("hang").liveness_ms(3_600_000.0).skill(skill("d", "dev")).skill(skill("s", "src").remap("out", "cmd"));
     let mut m = build(&spec, &reg);
-    let mut m = within_watchdog(move || {
+    let mut m = within_bound(move || {
         m.run_cycles(30);
         m
     });
@@ -70,7 +39,7 @@ fn a_dskill_whose_device_hangs_does_not_delay_the_cycle() {
     assert_eq!(m.skill("s").unwrap().timing.runs, 30, "the rest of the cycle ran every time");
     gate.open();
     // Once the device answers, its readings reach the cycle.
-    let m = within_watchdog(move || {
+    let m = within_bound(move || {
         while m.query("reading").unwrap().value.is_none() {
             m.run_cycles(1);
         }
@@ -99,7 +68,7 @@ fn a_slow_async_cskill_does_not_delay_the_cycle_and_its_latest_result_is_taken()
         .skill(skill("slow", "slow"))
         .skill(skill("a", "add").remap("x", "y").remap("y", "z"));
     let mut m = build(&spec, &reg);
-    let mut m = within_watchdog(move || {
+    let mut m = within_bound(move || {
         m.run_cycles(20);
         m
     });
@@ -107,7 +76,7 @@ fn a_slow_async_cskill_does_not_delay_the_cycle_and_its_latest_result_is_taken()
     assert_eq!(m.query("y").unwrap().value, None, "no result yet");
     assert!(entries(&log).is_empty(), "its consumer waits for a first result");
     gate.open();
-    let mut m = within_watchdog(move || {
+    let mut m = within_bound(move || {
         while m.query("z").unwrap().value.is_none() {
             m.run_cycles(1);
         }
@@ -118,7 +87,7 @@ fn a_slow_async_cskill_does_not_delay_the_cycle_and_its_latest_result_is_taken()
     // From then on the consumer runs on each new result, and only then: an
     // async skill's output is fresh in the cycle it is taken in.
     let (runs, n) = (m.skill("slow").unwrap().timing.runs, entries(&log).len());
-    let mut m = within_watchdog(move || {
+    let mut m = within_bound(move || {
         while entries(&log).len() < n + 3 {
             m.run_cycles(1);
         }

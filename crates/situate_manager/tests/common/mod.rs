@@ -2,7 +2,8 @@
 //! bindings register skills), and small helpers.
 #![allow(dead_code)]
 
-use std::sync::{Arc, Mutex};
+use std::sync::{mpsc, Arc, Condvar, Mutex};
+use std::time::Duration;
 
 use situate_core::{
     FnSkill, Io, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillError, SkillKind, SkillType, Value,
@@ -98,4 +99,36 @@ pub fn build(spec: &RobotSpec, registry: &Registry) -> Manager {
 
 pub fn skill(name: &str, type_name: &str) -> SkillSpec {
     SkillSpec::new(name, type_name)
+}
+
+/// Generous: a loaded machine is slow, never this slow (a hang is the failure
+/// the bound turns into a test failure).
+pub const BOUND: Duration = Duration::from_secs(60);
+
+/// A gate a test body waits at until the test opens it.
+#[derive(Clone, Default)]
+pub struct Gate(Arc<(Mutex<bool>, Condvar)>);
+
+impl Gate {
+    /// Waits until the gate is open.
+    pub fn pass(&self) {
+        let (open, cv) = &*self.0;
+        let mut o = open.lock().unwrap();
+        while !*o {
+            o = cv.wait(o).unwrap();
+        }
+    }
+    pub fn open(&self) {
+        *self.0 .0.lock().unwrap() = true;
+        self.0 .1.notify_all();
+    }
+}
+
+/// Runs `f` on a thread; fails if it does not finish within [`BOUND`].
+pub fn within_bound<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(BOUND).expect("the cycle blocked")
 }
