@@ -3,8 +3,11 @@
 //! Tests marked `#[ignore]` describe the behaviour we want where the current
 //! one is wrong or unhelpful; each reason names the problem.
 
+mod common;
+
+use common::*;
 use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 const TOYBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/toybot.yaml");
@@ -22,35 +25,12 @@ where
         .expect("the situate binary runs")
 }
 
-fn stdout(out: &Output) -> String {
-    String::from_utf8(out.stdout.clone()).expect("stdout is UTF-8")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8(out.stderr.clone()).expect("stderr is UTF-8")
-}
-
 fn lines(text: &str) -> Vec<&str> {
     text.lines().collect()
 }
 
-/// Writes `source` as `name` in a fresh temporary directory.
-fn robot_file(name: &str, source: &str) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().expect("a temporary directory");
-    let path = dir.path().join(name);
-    std::fs::write(&path, source).expect("the robot file is written");
-    (dir, path)
-}
-
 fn shown(path: &Path) -> String {
     path.display().to_string()
-}
-
-fn assert_no_panic(out: &Output) {
-    let err = stderr(out);
-    assert!(!err.contains("panicked"), "situate panicked:\n{err}");
-    // 101 is the exit status of a Rust panic.
-    assert_ne!(out.status.code(), Some(101), "situate panicked:\n{err}");
 }
 
 /// Two errors found by the manager's checks (the file itself reads cleanly).
@@ -276,7 +256,7 @@ fn sim_robot(extra: &str) -> String {
 
 #[test]
 fn a_simulated_robot_checks_and_runs_with_the_standard_skills() {
-    let (_dir, path) = robot_file("sim.yaml", &sim_robot(""));
+    let (_dir, path) = robot_file("sim.yaml", sim_robot(""));
     let out = situate(["check".as_ref(), path.as_os_str()]);
     assert!(out.status.success(), "{}", stderr(&out));
     let out = situate(["run".as_ref(), path.as_os_str(), "--no-link".as_ref(), "--cycles".as_ref(), "50".as_ref()]);
@@ -392,7 +372,7 @@ fn a_nul_byte_an_oversized_file_and_bytes_that_are_not_utf8_are_refused_with_a_p
         stderr(&out)
     );
 
-    let (_d, big) = robot_file("big.yaml", &format!("robot: t\n# {}\n", "x".repeat(3 << 20)));
+    let (_d, big) = robot_file("big.yaml", format!("robot: t\n# {}\n", "x".repeat(3 << 20)));
     let out = situate(["check".as_ref(), big.as_os_str()]);
     assert_no_panic(&out);
     assert!(!out.status.success());

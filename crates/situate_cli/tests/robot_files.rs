@@ -2,6 +2,9 @@
 //! refused with its `FILE:LINE:COL`, nothing is silently accepted, and
 //! nothing panics.
 
+mod common;
+
+use common::*;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -26,28 +29,6 @@ fn check(path: &Path) -> Output {
     let out = situate_in(elsewhere.path(), [OsStr::new("check"), path.as_os_str()]);
     assert_no_panic(&out);
     out
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// Writes `source` as `name` in a fresh temporary directory.
-fn robot_file(name: &str, source: impl AsRef<[u8]>) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().expect("a temporary directory");
-    let path = dir.path().join(name);
-    std::fs::write(&path, source).expect("the robot file is written");
-    (dir, path)
-}
-
-fn assert_no_panic(out: &Output) {
-    let err = stderr(out);
-    assert!(!err.contains("panicked"), "situate panicked:\n{err}");
-    assert_ne!(out.status.code(), Some(101), "situate panicked:\n{err}");
 }
 
 /// The file fails the check with exactly these error lines (after the file's
@@ -127,20 +108,6 @@ fn a_device_under_skills_is_the_first_and_only_error() {
         &out,
         &path,
         &["5:26: error: skill `sonar2`: `toy.sonar` is a device (dskill); list it under `devices:`, not `skills:`"],
-    );
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repo root")
-}
-
-fn run_ok(cmd: &mut Command) {
-    let out = cmd.output().unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
     );
 }
 

@@ -7,7 +7,9 @@
 //! contained: the test makes the C body abort and checks that the manager
 //! runs on, faults only that skill, and takes it back once a new host runs.
 
-use std::net::TcpListener;
+mod common;
+
+use common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -61,20 +63,6 @@ situate_status t_scale_step(t_scale_state* s, const t_scale_inputs* in, t_scale_
 SITUATE_LIBRARY(SITUATE_SKILL(t_source), SITUATE_SKILL(t_scale))
 "#;
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repo root")
-}
-
-fn run_ok(cmd: &mut Command) {
-    let out = cmd.output().unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 /// Generates the two skills' I/O with `situate gen c` and builds the library.
 fn build_library(dir: &Path) -> PathBuf {
     for (file, text) in [("t_source.yaml", SOURCE_MANIFEST), ("t_scale.yaml", SCALE_MANIFEST)] {
@@ -104,11 +92,6 @@ impl Drop for Proc {
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
-}
-
-fn free_endpoint() -> String {
-    let port = TcpListener::bind("127.0.0.1:0").expect("a free port").local_addr().expect("its address").port();
-    format!("tcp/127.0.0.1:{port}")
 }
 
 fn host(lib: &Path, endpoint: &str) -> Proc {

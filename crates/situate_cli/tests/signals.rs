@@ -7,8 +7,10 @@
 //! bounded generously; none is a fixed sleep.
 #![cfg(unix)]
 
+mod common;
+
+use common::*;
 use std::io::{BufRead as _, BufReader, Read};
-use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
@@ -57,16 +59,6 @@ fn situate() -> Command {
     c
 }
 
-fn run_ok(cmd: &mut Command) {
-    let out = cmd.output().unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
-    assert!(
-        out.status.success(),
-        "{cmd:?} failed:\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 /// The manifest and a library of `t.hang`, built with gcc in `dir`.
 fn build_library(dir: &Path) -> PathBuf {
     std::fs::write(dir.join("t_hang.yaml"), HANG_MANIFEST).expect("manifest written");
@@ -85,11 +77,6 @@ fn build_library(dir: &Path) -> PathBuf {
             .arg(&lib),
     );
     lib
-}
-
-fn free_endpoint() -> String {
-    let port = TcpListener::bind("127.0.0.1:0").expect("a free port").local_addr().expect("its address").port();
-    format!("tcp/127.0.0.1:{port}")
 }
 
 /// A running `situate`, its stderr read line by line; killed when dropped.
