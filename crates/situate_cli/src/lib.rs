@@ -17,7 +17,12 @@ use situate::manager::{
 };
 use situate_link::{Client, ClientError, Link, LinkConfig};
 
+mod client;
+mod demo;
 mod signals;
+
+use client::{client_verb, Remote};
+use demo::{run_demo, DemoOptions};
 
 #[derive(Parser)]
 #[command(
@@ -28,25 +33,6 @@ mod signals;
 struct Cli {
     #[command(subcommand)]
     command: Command,
-}
-
-#[derive(Args, Clone)]
-struct Remote {
-    /// The robot to talk to (default: the only one answering).
-    #[arg(long, global = true)]
-    robot: Option<String>,
-    /// The manager's endpoint.
-    #[arg(long, global = true, env = "SITUATE_CONNECT", default_value = situate_link::DEFAULT_ENDPOINT)]
-    connect: Vec<String>,
-    /// Seconds to wait for an answer.
-    #[arg(long, global = true, default_value_t = 5.0)]
-    timeout: f64,
-    /// Print the protocol's JSON instead of text.
-    #[arg(long, global = true)]
-    json: bool,
-    /// A JSON5 file merged into the client's Zenoh configuration (credentials, TLS).
-    #[arg(long, global = true, env = "SITUATE_ZENOH_CONFIG")]
-    zenoh: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -145,63 +131,6 @@ enum Command {
         #[arg(long)]
         python: Vec<PathBuf>,
     },
-    /// List the skills of a running robot.
-    Skills(#[command(flatten)] Remote),
-    /// Activate skills of a running robot (from its next cycle on).
-    Activate {
-        #[arg(required = true)]
-        names: Vec<String>,
-        /// Also activate providers of inputs nobody active provides.
-        #[arg(long)]
-        with_providers: bool,
-        #[command(flatten)]
-        remote: Remote,
-    },
-    /// Deactivate skills of a running robot.
-    Deactivate {
-        #[arg(required = true)]
-        names: Vec<String>,
-        #[command(flatten)]
-        remote: Remote,
-    },
-    /// Get or set a parameter: `param get SKILL PARAM`, `param set SKILL PARAM VALUE`.
-    Param {
-        #[arg(value_parser = ["get", "set"])]
-        action: String,
-        skill: String,
-        param: String,
-        value: Option<String>,
-        #[command(flatten)]
-        remote: Remote,
-    },
-    /// The current value of a signal (`sonar.range`, or a whole record such as `odom`).
-    Query {
-        signal: String,
-        #[command(flatten)]
-        remote: Remote,
-    },
-    /// Register a monitor and print its events: `monitor "sonar.range[0] < 0.25"`.
-    Monitor {
-        condition: String,
-        /// once: the first time it holds; edge: each time it becomes true; level: every cycle it holds.
-        #[arg(long, default_value = "once", value_parser = ["once", "edge", "level"])]
-        mode: String,
-        /// Stop after this many events (default: 1 for once, else until interrupted).
-        #[arg(long)]
-        count: Option<u64>,
-        #[command(flatten)]
-        remote: Remote,
-    },
-    /// Print events as they come (one JSON object per line).
-    Events {
-        /// Stop after this many events.
-        #[arg(long)]
-        count: Option<u64>,
-        #[command(flatten)]
-        remote: Remote,
-    },
-    /// Cycle statistics of a running robot.
-    Stats(#[command(flatten)] Remote),
     /// Serve a skill out of process, as a running robot's remote skill (an asynchronous cskill
     /// over the link): a type from a C/C++ library (`--library`), a built-in type, a Python file's
     /// type (`--python`, in the Python package's `situate`), or a Python function `MODULE:FUNCTION`
@@ -222,14 +151,9 @@ enum Command {
         #[command(flatten)]
         remote: Remote,
     },
-    /// Start, stop or step a running robot's cycle: `cycle run`, `cycle stop`, `cycle step 5`.
-    Cycle {
-        #[arg(value_parser = ["run", "stop", "step"])]
-        action: String,
-        cycles: Option<u64>,
-        #[command(flatten)]
-        remote: Remote,
-    },
+
+    #[command(flatten)]
+    Client(client::ClientCommand),
 }
 
 /// Loads the skill types of one `python:` file of a robot file.
@@ -365,161 +289,10 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             types(&registry_with(&library, &python, ext)?);
             Ok(ExitCode::SUCCESS)
         }
-        Command::Skills(remote) => client_verb(&remote, |c, robot| {
-            let skills = c.request(robot, "skills", &json!({}))?;
-            if remote.json {
-                println!("{skills}");
-            } else {
-                for s in skills.as_array().into_iter().flatten() {
-                    let state = match (s["faulted"].as_str(), s["active"].as_bool()) {
-                        (Some(f), _) => format!("faulted: {f}"),
-                        (None, Some(true)) => "active".into(),
-                        _ => "inactive".into(),
-                    };
-                    println!(
-                        "{:<16} {:<18} {:<6} priority {:<4} {state}",
-                        s["name"].as_str().unwrap_or(""),
-                        s["type_name"].as_str().unwrap_or(""),
-                        s["kind"].as_str().unwrap_or(""),
-                        s["priority"]
-                    );
-                }
-            }
-            Ok(())
-        }),
-        Command::Activate { names, with_providers, remote } => client_verb(&remote, |c, robot| {
-            let r = c.request(robot, "activate", &json!({"skills": names, "with_providers": with_providers}))?;
-            print_change(&remote, &r, "activated");
-            Ok(())
-        }),
-        Command::Deactivate { names, remote } => client_verb(&remote, |c, robot| {
-            let r = c.request(robot, "deactivate", &json!({"skills": names}))?;
-            print_change(&remote, &r, "deactivated");
-            Ok(())
-        }),
-        Command::Param { action, skill, param, value, remote } => client_verb(&remote, |c, robot| {
-            if action == "set" {
-                let Some(text) = &value else {
-                    anyhow::bail!("`param set` needs a VALUE: situate param set {skill} {param} VALUE");
-                };
-                // A number, true/false, or a JSON string; anything else is taken as text.
-                let v: Json = serde_json::from_str(text).unwrap_or_else(|_| Json::String(text.clone()));
-                c.request(robot, "set_param", &json!({"skill": skill, "param": param, "value": v}))?;
-                if !remote.json {
-                    println!("{skill}.{param} = {v} (from the next cycle)");
-                }
-            } else {
-                let v = c.request(robot, "get_param", &json!({"skill": skill, "param": param}))?;
-                println!("{v}");
-            }
-            Ok(())
-        }),
-        Command::Query { signal, remote } => client_verb(&remote, |c, robot| {
-            let r = c.request(robot, "query", &json!({"signal": signal}))?;
-            if remote.json {
-                println!("{r}");
-            } else {
-                println!(
-                    "{} = {} ({}, cycle {}, by {})",
-                    r["signal"].as_str().unwrap_or(""),
-                    r["value"],
-                    r["type"].as_str().unwrap_or(""),
-                    r["cycle"],
-                    r["writer"]
-                );
-            }
-            Ok(())
-        }),
-        Command::Monitor { condition, mode, count, remote } => client_verb(&remote, |c, robot| {
-            let (_sub, events) = c.subscribe(robot, "events/monitor_fired")?;
-            let r = c.request(robot, "monitor_add", &json!({"condition": condition, "mode": mode}))?;
-            let id = r["monitor"].as_u64().unwrap_or(0);
-            eprintln!("monitor {id} registered ({mode}): {condition}");
-            let limit = count.or(if mode == "once" { Some(1) } else { None });
-            let mut seen = 0;
-            let interrupted = interrupt_flag()?;
-            while limit.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
-                if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
-                    if e["monitor"].as_u64() == Some(id) {
-                        seen += 1;
-                        if remote.json {
-                            println!("{e}");
-                        } else {
-                            println!(
-                                "cycle {} (t = {:.3} s): {} — {}",
-                                e["cycle"],
-                                e["time_s"].as_f64().unwrap_or(0.0),
-                                condition,
-                                e["values"]
-                            );
-                        }
-                    }
-                }
-            }
-            if mode != "once" || seen == 0 {
-                let _ = c.request(robot, "monitor_cancel", &json!({"monitor": id}));
-            }
-            Ok(())
-        }),
-        Command::Events { count, remote } => client_verb(&remote, |c, robot| {
-            let (_sub, events) = c.subscribe(robot, "events/**")?;
-            let interrupted = interrupt_flag()?;
-            let mut seen = 0;
-            while count.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
-                if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
-                    println!("{e}");
-                    seen += 1;
-                }
-            }
-            Ok(())
-        }),
-        Command::Stats(remote) => client_verb(&remote, |c, robot| {
-            let s = c.request(robot, "stats", &json!({}))?;
-            if remote.json {
-                println!("{s}");
-            } else {
-                println!(
-                    "robot `{}`: cycle {}, {} s, {}; cycle time mean {:.1} µs, max {:.1} µs; overruns {}; late starts {}; active: {}",
-                    s["robot"].as_str().unwrap_or(""),
-                    s["cycle"],
-                    s["time_s"],
-                    if s["running"].as_bool() == Some(true) {
-                        format!("running at {:.1} Hz", s["rate_hz"].as_f64().unwrap_or(0.0))
-                    } else {
-                        "stopped".to_string()
-                    },
-                    s["mean_cycle_ns"].as_f64().unwrap_or(0.0) / 1e3,
-                    s["max_cycle_ns"].as_f64().unwrap_or(0.0) / 1e3,
-                    s["overruns"],
-                    s["late_starts"],
-                    s["active"].as_array().map(|a| a.iter().filter_map(Json::as_str).collect::<Vec<_>>().join(", ")).unwrap_or_default()
-                );
-            }
-            Ok(())
-        }),
+        Command::Client(command) => client::run(command),
         Command::ServeSkill { skill, name, library, python, remote } => {
             serve_skill(&skill, name, &library, &python, &remote, ext)
         }
-        Command::Cycle { action, cycles, remote } => client_verb(&remote, |c, robot| {
-            match action.as_str() {
-                "step" => c.request(robot, "step", &json!({"cycles": cycles.unwrap_or(1)}))?,
-                other => c.request(robot, other, &json!({}))?,
-            };
-            Ok(())
-        }),
-    }
-}
-
-fn print_change(remote: &Remote, r: &Json, what: &str) {
-    if remote.json {
-        println!("{r}");
-        return;
-    }
-    let changed: Vec<&str> = r["changed"].as_array().into_iter().flatten().filter_map(Json::as_str).collect();
-    if changed.is_empty() {
-        println!("nothing {what} (already so)");
-    } else {
-        println!("{what} {} from cycle {}", changed.join(", "), r["at_cycle"]);
     }
 }
 
@@ -611,56 +384,6 @@ fn serve_skill(
 /// second signal ends the process at once (see [`signals`]).
 fn interrupt_flag() -> anyhow::Result<signals::Stop> {
     signals::Stop::install()
-}
-
-fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<()>) -> anyhow::Result<ExitCode> {
-    let extra = match &remote.zenoh {
-        None => None,
-        Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            Some(json5::from_str::<Json>(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
-        }
-    };
-    let mut client = match Client::connect_with(&remote.connect, extra.as_ref()) {
-        Ok(c) => c,
-        Err(e) => return Ok(client_failure(&e)),
-    };
-    // Clamped: `--timeout inf` or `nan` must not panic.
-    client.timeout = Duration::from_secs_f64(if remote.timeout.is_finite() {
-        remote.timeout.clamp(0.1, 86_400.0)
-    } else {
-        86_400.0
-    });
-    let robot = match client.resolve_robot(remote.robot.as_deref()) {
-        Ok(r) => r,
-        Err(e) => return Ok(client_failure(&e)),
-    };
-    match f(&client, &robot) {
-        Ok(()) => Ok(ExitCode::SUCCESS),
-        Err(e) => match (e.downcast_ref::<ClientError>(), e.downcast_ref::<situate_link::LinkError>()) {
-            (Some(c), _) => Ok(client_failure(c)),
-            (None, Some(l)) => {
-                eprintln!("situate: {l}");
-                Ok(ExitCode::FAILURE)
-            }
-            (None, None) => Err(e),
-        },
-    }
-}
-
-/// A client error, said as a sentence (`situate: …`): a manager's refusal
-/// with its pointer line if any, never the link's raw data.
-fn client_failure(e: &ClientError) -> ExitCode {
-    match e {
-        ClientError::Remote(r) => {
-            eprintln!("situate: {}", r.message);
-            if let Some(p) = r.detail.get("pointer").and_then(Json::as_str) {
-                eprintln!("{p}");
-            }
-        }
-        other => eprintln!("situate: {other}"),
-    }
-    ExitCode::FAILURE
 }
 
 /// The simulated building a robot file runs in (its `simulator:` section).
@@ -1187,223 +910,6 @@ fn generate(lang: &str, manifest: &Path, out: &Path) -> anyhow::Result<ExitCode>
         println!("{}", path.display());
     }
     Ok(ExitCode::SUCCESS)
-}
-
-struct DemoOptions {
-    robot: PathBuf,
-    map: Option<PathBuf>,
-    seed: u64,
-    headless: bool,
-    mode: String,
-    sequencer: PathBuf,
-    python: Option<PathBuf>,
-    speed: f64,
-    gui: String,
-    limit_s: f64,
-    json: bool,
-}
-
-/// A free TCP port on the loopback interface.
-fn free_port() -> anyhow::Result<u16> {
-    let l = std::net::TcpListener::bind("127.0.0.1:0").context("finding a free port")?;
-    Ok(l.local_addr()?.port())
-}
-
-fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
-    if !demo.sequencer.is_file() {
-        anyhow::bail!(
-            "no sequencer at `{}` (run the demo from the repository's top directory, or give --sequencer)",
-            demo.sequencer.display()
-        );
-    }
-    let port = free_port()?;
-    let endpoint = format!("tcp/127.0.0.1:{port}");
-    let opts = RunOptions {
-        clock: Some("simulated".into()),
-        listen: vec![endpoint.clone()],
-        sim: SimOverrides { map: demo.map.clone(), seed: Some(demo.seed) },
-        speed: if demo.headless { None } else { Some(demo.speed) },
-        stopped: true,
-        gui: (!demo.headless).then(|| demo.gui.clone()),
-        no_gui: demo.headless,
-        ..RunOptions::default()
-    };
-    // Ctrl-C (and SIGTERM, SIGHUP) stop the sequencer and end the demo with its outcome.
-    let stop = interrupt_flag()?;
-    let running = match start_robot(&demo.robot, &opts, ext) {
-        Ok(r) => r,
-        Err(done) => return done,
-    };
-    let Some(sim) = &running.sim else {
-        let _ = running.finish();
-        anyhow::bail!("`{}` has no `simulator:` section: the demo needs the simulated robot", demo.robot.display());
-    };
-    let mission = sim.map.mission_json().to_string();
-    let python = demo.python.clone().unwrap_or_else(|| {
-        let venv = PathBuf::from(".venv/bin/python");
-        if venv.is_file() {
-            venv
-        } else {
-            PathBuf::from("python3")
-        }
-    });
-    let started = Instant::now();
-    let mut command = std::process::Command::new(&python);
-    command
-        .arg(&demo.sequencer)
-        .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
-        .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
-        .args(if demo.json { &["--quiet"][..] } else { &[][..] });
-    let run =
-        run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
-    let wall_s = started.elapsed().as_secs_f64();
-    let (delivered_at, sim_time) = {
-        let w = sim.world.lock().map_err(|_| anyhow::anyhow!("the simulator failed"))?;
-        (w.delivered_at(), w.time_s())
-    };
-    let (stats, skills) = running.finish()?;
-    let run = run?;
-    let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
-    let cpu_ns: u64 =
-        skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.total_ns).sum();
-    let outcome = json!({
-        "seed": demo.seed,
-        "mode": demo.mode,
-        "delivered": delivered_at.is_some(),
-        "mission_time_s": delivered_at.unwrap_or(sim_time),
-        "cycles": stats.cycle,
-        "skill_runs": runs,
-        "skill_cpu_ms": cpu_ns as f64 / 1e6,
-        "wall_s": wall_s,
-        "speedup": if wall_s > 0.0 { sim_time / wall_s } else { 0.0 },
-        "sequencer_exit": run.status.code(),
-        "interrupted": run.interrupted.map(signals::name),
-        "phase": run.phase,
-    });
-    if demo.json {
-        println!("{outcome}");
-    } else {
-        let delivered = match delivered_at {
-            Some(t) => format!("message delivered at t = {t:.1} s"),
-            None => "message not delivered".to_string(),
-        };
-        match (run.interrupted, delivered_at) {
-            (Some(sig), _) => println!(
-                "demo: interrupted ({}) at t = {sim_time:.1} s{}, {delivered} (seed {})",
-                signals::name(sig),
-                run.phase.as_ref().map(|p| format!(" in phase {p}")).unwrap_or_default(),
-                demo.seed
-            ),
-            (None, Some(_)) => println!("demo: {delivered} (seed {})", demo.seed),
-            (None, None) => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
-        }
-        println!(
-            "demo: {} cycles, {runs} skill runs, {:.1} ms in skills, {wall_s:.1} s wall ({:.0}× real time)",
-            stats.cycle,
-            cpu_ns as f64 / 1e6,
-            if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
-        );
-    }
-    Ok(match (run.interrupted, delivered_at) {
-        (Some(sig), _) => ExitCode::from(signals::status(sig)),
-        (None, Some(_)) => ExitCode::SUCCESS,
-        (None, None) => ExitCode::FAILURE,
-    })
-}
-
-/// How long the sequencer has to end after it is told to stop, before it is killed.
-const SEQUENCER_BOUND: Duration = Duration::from_secs(5);
-
-/// How the demo's sequencer ended.
-struct SequencerRun {
-    status: std::process::ExitStatus,
-    /// The signal that stopped the demo, if one did.
-    interrupted: Option<i32>,
-    /// The last phase the sequencer announced (`phase N: …`), as `N (what it does)`.
-    phase: Option<String>,
-}
-
-/// Runs the sequencer to its end, its output passed through (and its
-/// phases noted). On a stop request it is told to stop (SIGTERM; a Ctrl-C at
-/// a terminal reaches it directly too) and killed if it has not ended
-/// within [`SEQUENCER_BOUND`].
-fn run_sequencer(mut command: std::process::Command, stop: &signals::Stop) -> std::io::Result<SequencerRun> {
-    let mut child = command.stdout(std::process::Stdio::piped()).spawn()?;
-    let phase = Arc::new(std::sync::Mutex::new(None));
-    let relay = child.stdout.take().map(|out| {
-        let phase = Arc::clone(&phase);
-        std::thread::spawn(move || relay_lines(out, &phase))
-    });
-    let mut interrupted = None;
-    let mut deadline = None;
-    let status = loop {
-        if let Some(status) = child.try_wait()? {
-            break status;
-        }
-        if let (None, Some(sig)) = (interrupted, stop.signal()) {
-            interrupted = Some(sig);
-            eprintln!("situate: {}: stopping the sequencer (again to exit at once)", signals::name(sig));
-            terminate(&mut child);
-            deadline = Some(Instant::now() + SEQUENCER_BOUND);
-        }
-        if deadline.is_some_and(|d| Instant::now() > d) {
-            eprintln!("situate: the sequencer did not stop within {} s: killed", SEQUENCER_BOUND.as_secs());
-            let _ = child.kill();
-            break child.wait()?;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    // A Ctrl-C at a terminal may end the sequencer before the loop above sees it.
-    let interrupted = interrupted.or_else(|| stop.signal());
-    if let Some(relay) = relay {
-        let _ = relay.join();
-    }
-    let phase = phase.lock().map(|p| p.clone()).unwrap_or_default();
-    Ok(SequencerRun { status, interrupted, phase })
-}
-
-/// Asks a child process to stop (SIGTERM).
-fn terminate(child: &mut std::process::Child) {
-    #[cfg(unix)]
-    {
-        if let Ok(pid) = libc::pid_t::try_from(child.id()) {
-            // SAFETY: kill(2) on our own child's id, which is not yet reaped.
-            unsafe { libc::kill(pid, libc::SIGTERM) };
-        }
-    }
-    #[cfg(not(unix))]
-    let _ = child.kill();
-}
-
-/// Copies the sequencer's output to ours line by line, noting its phases.
-fn relay_lines(out: impl std::io::Read, phase: &std::sync::Mutex<Option<String>>) {
-    use std::io::{BufRead as _, Write as _};
-    let mut out = std::io::BufReader::new(out);
-    let mut line = Vec::new();
-    loop {
-        line.clear();
-        match out.read_until(b'\n', &mut line) {
-            Ok(0) | Err(_) => return,
-            Ok(_) => {}
-        }
-        if let Some(p) = phase_of(&String::from_utf8_lossy(&line)) {
-            if let Ok(mut slot) = phase.lock() {
-                *slot = Some(p);
-            }
-        }
-        let mut stdout = std::io::stdout().lock();
-        let _ = stdout.write_all(&line);
-        let _ = stdout.flush();
-    }
-}
-
-/// `N (what it does)` from a narrative line `[  12.3 s] phase N: what it does`.
-fn phase_of(line: &str) -> Option<String> {
-    let at = line.find("phase ")?;
-    let rest = &line[at + "phase ".len()..];
-    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
-    let text = rest[digits..].strip_prefix(": ")?;
-    (digits > 0).then(|| format!("{} ({})", &rest[..digits], text.trim_end()))
 }
 
 fn types(registry: &Registry) {

@@ -1,0 +1,222 @@
+//! `situate demo`: the delivery demo. The robot runs in this process (as
+//! `situate run` would), the sequencer in a child process; Ctrl-C stops the
+//! sequencer and prints the outcome.
+
+use super::*;
+
+pub(crate) struct DemoOptions {
+    pub(crate) robot: PathBuf,
+    pub(crate) map: Option<PathBuf>,
+    pub(crate) seed: u64,
+    pub(crate) headless: bool,
+    pub(crate) mode: String,
+    pub(crate) sequencer: PathBuf,
+    pub(crate) python: Option<PathBuf>,
+    pub(crate) speed: f64,
+    pub(crate) gui: String,
+    pub(crate) limit_s: f64,
+    pub(crate) json: bool,
+}
+
+/// A free TCP port on the loopback interface.
+fn free_port() -> anyhow::Result<u16> {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").context("finding a free port")?;
+    Ok(l.local_addr()?.port())
+}
+
+pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
+    if !demo.sequencer.is_file() {
+        anyhow::bail!(
+            "no sequencer at `{}` (run the demo from the repository's top directory, or give --sequencer)",
+            demo.sequencer.display()
+        );
+    }
+    let port = free_port()?;
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let opts = RunOptions {
+        clock: Some("simulated".into()),
+        listen: vec![endpoint.clone()],
+        sim: SimOverrides { map: demo.map.clone(), seed: Some(demo.seed) },
+        speed: if demo.headless { None } else { Some(demo.speed) },
+        stopped: true,
+        gui: (!demo.headless).then(|| demo.gui.clone()),
+        no_gui: demo.headless,
+        ..RunOptions::default()
+    };
+    // Ctrl-C (and SIGTERM, SIGHUP) stop the sequencer and end the demo with its outcome.
+    let stop = interrupt_flag()?;
+    let running = match start_robot(&demo.robot, &opts, ext) {
+        Ok(r) => r,
+        Err(done) => return done,
+    };
+    let Some(sim) = &running.sim else {
+        let _ = running.finish();
+        anyhow::bail!("`{}` has no `simulator:` section: the demo needs the simulated robot", demo.robot.display());
+    };
+    let mission = sim.map.mission_json().to_string();
+    let python = demo.python.clone().unwrap_or_else(|| {
+        let venv = PathBuf::from(".venv/bin/python");
+        if venv.is_file() {
+            venv
+        } else {
+            PathBuf::from("python3")
+        }
+    });
+    let started = Instant::now();
+    let mut command = std::process::Command::new(&python);
+    command
+        .arg(&demo.sequencer)
+        .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
+        .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
+        .args(if demo.json { &["--quiet"][..] } else { &[][..] });
+    let run =
+        run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
+    let wall_s = started.elapsed().as_secs_f64();
+    let (delivered_at, sim_time) = {
+        let w = sim.world.lock().map_err(|_| anyhow::anyhow!("the simulator failed"))?;
+        (w.delivered_at(), w.time_s())
+    };
+    let (stats, skills) = running.finish()?;
+    let run = run?;
+    let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
+    let cpu_ns: u64 =
+        skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.total_ns).sum();
+    let outcome = json!({
+        "seed": demo.seed,
+        "mode": demo.mode,
+        "delivered": delivered_at.is_some(),
+        "mission_time_s": delivered_at.unwrap_or(sim_time),
+        "cycles": stats.cycle,
+        "skill_runs": runs,
+        "skill_cpu_ms": cpu_ns as f64 / 1e6,
+        "wall_s": wall_s,
+        "speedup": if wall_s > 0.0 { sim_time / wall_s } else { 0.0 },
+        "sequencer_exit": run.status.code(),
+        "interrupted": run.interrupted.map(signals::name),
+        "phase": run.phase,
+    });
+    if demo.json {
+        println!("{outcome}");
+    } else {
+        let delivered = match delivered_at {
+            Some(t) => format!("message delivered at t = {t:.1} s"),
+            None => "message not delivered".to_string(),
+        };
+        match (run.interrupted, delivered_at) {
+            (Some(sig), _) => println!(
+                "demo: interrupted ({}) at t = {sim_time:.1} s{}, {delivered} (seed {})",
+                signals::name(sig),
+                run.phase.as_ref().map(|p| format!(" in phase {p}")).unwrap_or_default(),
+                demo.seed
+            ),
+            (None, Some(_)) => println!("demo: {delivered} (seed {})", demo.seed),
+            (None, None) => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
+        }
+        println!(
+            "demo: {} cycles, {runs} skill runs, {:.1} ms in skills, {wall_s:.1} s wall ({:.0}× real time)",
+            stats.cycle,
+            cpu_ns as f64 / 1e6,
+            if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
+        );
+    }
+    Ok(match (run.interrupted, delivered_at) {
+        (Some(sig), _) => ExitCode::from(signals::status(sig)),
+        (None, Some(_)) => ExitCode::SUCCESS,
+        (None, None) => ExitCode::FAILURE,
+    })
+}
+
+/// How long the sequencer has to end after it is told to stop, before it is killed.
+const SEQUENCER_BOUND: Duration = Duration::from_secs(5);
+
+/// How the demo's sequencer ended.
+struct SequencerRun {
+    status: std::process::ExitStatus,
+    /// The signal that stopped the demo, if one did.
+    interrupted: Option<i32>,
+    /// The last phase the sequencer announced (`phase N: …`), as `N (what it does)`.
+    phase: Option<String>,
+}
+
+/// Runs the sequencer to its end, its output passed through (and its
+/// phases noted). On a stop request it is told to stop (SIGTERM; a Ctrl-C at
+/// a terminal reaches it directly too) and killed if it has not ended
+/// within [`SEQUENCER_BOUND`].
+fn run_sequencer(mut command: std::process::Command, stop: &signals::Stop) -> std::io::Result<SequencerRun> {
+    let mut child = command.stdout(std::process::Stdio::piped()).spawn()?;
+    let phase = Arc::new(std::sync::Mutex::new(None));
+    let relay = child.stdout.take().map(|out| {
+        let phase = Arc::clone(&phase);
+        std::thread::spawn(move || relay_lines(out, &phase))
+    });
+    let mut interrupted = None;
+    let mut deadline = None;
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
+        if let (None, Some(sig)) = (interrupted, stop.signal()) {
+            interrupted = Some(sig);
+            eprintln!("situate: {}: stopping the sequencer (again to exit at once)", signals::name(sig));
+            terminate(&mut child);
+            deadline = Some(Instant::now() + SEQUENCER_BOUND);
+        }
+        if deadline.is_some_and(|d| Instant::now() > d) {
+            eprintln!("situate: the sequencer did not stop within {} s: killed", SEQUENCER_BOUND.as_secs());
+            let _ = child.kill();
+            break child.wait()?;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    // A Ctrl-C at a terminal may end the sequencer before the loop above sees it.
+    let interrupted = interrupted.or_else(|| stop.signal());
+    if let Some(relay) = relay {
+        let _ = relay.join();
+    }
+    let phase = phase.lock().map(|p| p.clone()).unwrap_or_default();
+    Ok(SequencerRun { status, interrupted, phase })
+}
+
+/// Asks a child process to stop (SIGTERM).
+fn terminate(child: &mut std::process::Child) {
+    #[cfg(unix)]
+    {
+        if let Ok(pid) = libc::pid_t::try_from(child.id()) {
+            // SAFETY: kill(2) on our own child's id, which is not yet reaped.
+            unsafe { libc::kill(pid, libc::SIGTERM) };
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = child.kill();
+}
+
+/// Copies the sequencer's output to ours line by line, noting its phases.
+fn relay_lines(out: impl std::io::Read, phase: &std::sync::Mutex<Option<String>>) {
+    use std::io::{BufRead as _, Write as _};
+    let mut out = std::io::BufReader::new(out);
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        match out.read_until(b'\n', &mut line) {
+            Ok(0) | Err(_) => return,
+            Ok(_) => {}
+        }
+        if let Some(p) = phase_of(&String::from_utf8_lossy(&line)) {
+            if let Ok(mut slot) = phase.lock() {
+                *slot = Some(p);
+            }
+        }
+        let mut stdout = std::io::stdout().lock();
+        let _ = stdout.write_all(&line);
+        let _ = stdout.flush();
+    }
+}
+
+/// `N (what it does)` from a narrative line `[  12.3 s] phase N: what it does`.
+fn phase_of(line: &str) -> Option<String> {
+    let at = line.find("phase ")?;
+    let rest = &line[at + "phase ".len()..];
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let text = rest[digits..].strip_prefix(": ")?;
+    (digits > 0).then(|| format!("{} ({})", &rest[..digits], text.trim_end()))
+}
