@@ -1,0 +1,464 @@
+//! The manager's control API (paper 3.2.2): the requests a sequencer, the
+//! link or the GUI sends between cycles — activation, parameters, queries,
+//! monitors, run/stop/step — and the resolver that turns names in monitor
+//! conditions into the manager's signals and parameters.
+
+use super::*;
+
+impl Manager {
+    pub(super) fn find(&self, name: &str) -> Result<usize, ControlError> {
+        self.graph.instance(name).ok_or_else(|| ControlError::UnknownSkill {
+            name: name.to_string(),
+            suggestion: suggestion(name, self.graph.instances.iter().map(|d| d.name.as_str())),
+        })
+    }
+
+    pub(super) fn find_param(&self, skill: &str, param: &str) -> Result<(usize, usize), ControlError> {
+        let i = self.find(skill)?;
+        let decl = &self.graph.instances[i].skill_type.decl;
+        match decl.param(param) {
+            Some((p, _)) => Ok((i, p)),
+            None => Err(ControlError::UnknownParam {
+                skill: skill.into(),
+                param: param.into(),
+                suggestion: suggestion(param, decl.params.iter().map(|p| p.name.as_str())),
+            }),
+        }
+    }
+
+    /// Required inputs of cskill `i` that no skill in `active` writes.
+    pub(super) fn missing_inputs(&self, i: usize, active: &[bool]) -> Vec<usize> {
+        let def = &self.graph.instances[i];
+        if def.kind == SkillKind::Device {
+            return Vec::new();
+        }
+        def.inputs
+            .iter()
+            .filter(|p| !p.optional)
+            .flat_map(|p| p.leaves.iter().copied())
+            .filter(|&l| !self.graph.leaves[l].writers.iter().any(|&(w, _)| active[w]))
+            .collect()
+    }
+
+    pub(super) fn activate(&mut self, names: &[String], with_providers: bool) -> Result<Reply, ControlError> {
+        let mut wanted = Vec::new();
+        for n in names {
+            wanted.push(self.find(n)?);
+        }
+        let mut active: Vec<bool> = self.insts.iter().map(|s| s.active).collect();
+        for &i in &wanted {
+            active[i] = true;
+        }
+        let mut queue: Vec<usize> = wanted.clone();
+        while let Some(i) = queue.pop() {
+            let missing = self.missing_inputs(i, &active);
+            if missing.is_empty() {
+                continue;
+            }
+            let providers: Vec<usize> = missing
+                .iter()
+                .filter_map(|&l| {
+                    // The best writer: highest priority, then declaration order.
+                    self.graph.leaves[l].writers.iter().map(|&(w, _)| w).max_by_key(|&w| self.rank(w))
+                })
+                .collect();
+            if !with_providers || providers.len() < missing.len() {
+                let mut signals: Vec<String> = missing.iter().map(|&l| self.graph.leaves[l].path.clone()).collect();
+                signals.dedup();
+                let mut provider_names: Vec<String> =
+                    providers.iter().map(|&w| self.graph.instances[w].name.clone()).collect();
+                provider_names.sort();
+                provider_names.dedup();
+                return Err(ControlError::MissingProviders {
+                    skill: self.graph.instances[i].name.clone(),
+                    signals,
+                    providers: provider_names,
+                });
+            }
+            for w in providers {
+                if !active[w] {
+                    active[w] = true;
+                    queue.push(w);
+                }
+            }
+        }
+        let mut changed = Vec::new();
+        for (i, &on) in active.iter().enumerate() {
+            if on && !self.insts[i].active {
+                self.set_active(i, true);
+                changed.push(self.graph.instances[i].name.clone());
+            }
+        }
+        Ok(Reply::Activation { changed, at_cycle: self.cycle + 1 })
+    }
+
+    pub(super) fn deactivate(&mut self, names: &[String]) -> Result<Reply, ControlError> {
+        let mut targets = Vec::new();
+        for n in names {
+            targets.push(self.find(n)?);
+        }
+        let mut changed = Vec::new();
+        for i in targets {
+            if self.insts[i].active {
+                self.set_active(i, false);
+                changed.push(self.graph.instances[i].name.clone());
+            }
+        }
+        Ok(Reply::Activation { changed, at_cycle: self.cycle + 1 })
+    }
+
+    pub(super) fn set_param(&mut self, skill: &str, param: &str, value: &Value) -> Result<Reply, ControlError> {
+        let (i, p) = self.find_param(skill, param)?;
+        let spec = &self.graph.instances[i].skill_type.decl.params[p];
+        let value = spec.check(value).map_err(|e| ControlError::BadParam {
+            skill: skill.into(),
+            param: param.into(),
+            reason: e.to_string(),
+        })?;
+        self.insts[i].params[p] = value.clone();
+        match (self.insts[i].worker.as_ref(), self.execs[i].skill.as_mut()) {
+            (_, Some(body)) => body.set_param(p, &value),
+            (Some(worker), None) => {
+                worker.shared.lock().params.push((p, value.clone()));
+                worker.shared.notify();
+            }
+            (None, None) => {}
+        }
+        self.bus.send(Event::ParamChanged { skill: skill.into(), param: param.into(), value, cycle: self.cycle + 1 });
+        Ok(Reply::Done)
+    }
+
+    pub(super) fn query_signal(&self, path: &str) -> Result<SignalReading, ControlError> {
+        let ty = self.graph.signal_type(path).ok_or_else(|| ControlError::UnknownSignal {
+            name: path.into(),
+            suggestion: suggestion(path, self.graph.signal_names()),
+        })?;
+        let leaves = self.graph.leaves_under(path);
+        let complete = leaves.iter().all(|&l| self.slots[l].value.is_some());
+        let value = if complete {
+            assemble(&ty, &mut leaves.iter().filter_map(|&l| self.slots[l].value.as_ref()))
+        } else {
+            None
+        };
+        let cycle = leaves.iter().map(|&l| self.slots[l].stamp).min().unwrap_or(0);
+        let writer = leaves
+            .first()
+            .map(|&l| &self.slots[l])
+            .filter(|s| s.stamp > 0)
+            .map(|s| self.graph.instances[s.writer as usize].name.clone());
+        Ok(SignalReading { signal: path.into(), ty, value, cycle, writer })
+    }
+
+    pub(super) fn skill_info(&self, i: usize) -> SkillInfo {
+        let def = &self.graph.instances[i];
+        let inst = &self.insts[i];
+        let decl = &def.skill_type.decl;
+        let port = |p: &crate::graph::PortBinding, value: Option<Value>| PortInfo {
+            name: p.name.clone(),
+            signal: p.signal.clone(),
+            ty: p.ty.clone(),
+            optional: p.optional,
+            value,
+        };
+        SkillInfo {
+            name: def.name.clone(),
+            type_name: decl.type_name.clone(),
+            kind: def.kind,
+            doc: decl.doc.clone(),
+            active: inst.active,
+            faulted: inst.faulted.clone(),
+            verbose: inst.verbose,
+            priority: inst.priority,
+            params: decl.params.iter().cloned().zip(inst.params.iter().cloned()).collect(),
+            inputs: def.inputs.iter().zip(&self.execs[i].inputs).map(|(p, v)| port(p, v.clone())).collect(),
+            outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
+            timing: SkillTiming {
+                runs: inst.runs,
+                last_ns: inst.last_ns,
+                max_ns: inst.max_ns,
+                total_ns: inst.total_ns,
+            },
+            prints: inst.prints.iter().cloned().collect(),
+        }
+    }
+
+    pub(super) fn resource_winners(&self) -> Vec<ResourceWinner> {
+        self.graph
+            .leaves
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.is_resource())
+            .map(|(li, l)| {
+                let slot = &self.slots[li];
+                let mut writers: Vec<String> =
+                    l.writers.iter().map(|&(w, _)| self.graph.instances[w].name.clone()).collect();
+                writers.dedup();
+                ResourceWinner {
+                    signal: l.path.clone(),
+                    writers,
+                    winner: (slot.stamp == self.cycle && slot.stamp > 0)
+                        .then(|| self.graph.instances[slot.writer as usize].name.clone()),
+                    cycle: slot.stamp,
+                }
+            })
+            .collect()
+    }
+
+    pub(super) fn graph_info(&self) -> GraphInfo {
+        let g = &self.graph;
+        GraphInfo {
+            skills: g
+                .instances
+                .iter()
+                .enumerate()
+                .map(|(i, d)| crate::control::GraphSkill {
+                    name: d.name.clone(),
+                    kind: d.kind,
+                    active: self.insts[i].active,
+                    priority: self.insts[i].priority,
+                    inputs: d.inputs.iter().map(|p| p.signal.clone()).collect(),
+                    outputs: d.outputs.iter().map(|p| p.signal.clone()).collect(),
+                })
+                .collect(),
+            signals: g
+                .leaves
+                .iter()
+                .map(|l| crate::control::GraphSignal {
+                    signal: l.path.clone(),
+                    ty: l.ty.clone(),
+                    writers: l.writers.iter().map(|&(w, _)| g.instances[w].name.clone()).collect(),
+                    readers: l.readers.iter().map(|&(r, _)| g.instances[r].name.clone()).collect(),
+                })
+                .collect(),
+        }
+    }
+
+    pub(super) fn current_stats(&self) -> ManagerStats {
+        ManagerStats {
+            robot: self.graph.robot.clone(),
+            cycle: self.cycle,
+            time_s: self.time_s,
+            running: self.running,
+            period_s: self.period_s,
+            last_cycle_ns: self.last_cycle_ns,
+            mean_cycle_ns: if self.cycle == 0 { 0.0 } else { self.total_cycle_ns as f64 / self.cycle as f64 },
+            max_cycle_ns: self.max_cycle_ns,
+            overruns: self.overruns,
+            late_starts: self.late_starts,
+            rate_hz: match (self.running, self.interval_s) {
+                (true, Some(dt)) if dt > 0.0 => 1.0 / dt,
+                _ => 0.0,
+            },
+            active: self
+                .insts
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.active)
+                .map(|(i, _)| self.graph.instances[i].name.clone())
+                .collect(),
+        }
+    }
+
+    pub(super) fn add_monitor(
+        &mut self,
+        condition: &str,
+        mode: crate::monitor::MonitorMode,
+        pause: bool,
+        report: Vec<String>,
+    ) -> Result<Reply, ControlError> {
+        if self.monitors.list.len() >= MAX_MONITORS {
+            // Every monitor is evaluated every cycle: their number bounds the cycle's cost.
+            return Err(ControlError::Invalid(format!(
+                "monitor_add: this robot has {} monitors, the most it keeps ({MAX_MONITORS}); cancel some first",
+                self.monitors.list.len()
+            )));
+        }
+        let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
+        let compiled = Condition::compile(condition, &resolver).map_err(|e| ControlError::BadCondition {
+            column: e.column,
+            message: e.message.clone(),
+            pointer: e.pointer(condition),
+        })?;
+        let mut reported = Vec::new();
+        for name in &report {
+            let name = name.trim();
+            // A whole record is reported as its leaves, each by its own name.
+            let prefix = format!("{name}.");
+            let mut leaves: Vec<&str> = if self.graph.records.contains_key(name) {
+                self.graph.leaf_index.keys().filter(|k| k.starts_with(&prefix)).map(String::as_str).collect()
+            } else {
+                vec![name]
+            };
+            leaves.sort_unstable();
+            for leaf in leaves {
+                let (r, _) = resolver.resolve(leaf).map_err(ControlError::BadReport)?;
+                reported.push((leaf.to_string(), r));
+            }
+        }
+        // Nothing is kept from a refused request.
+        self.refs.extend(resolver.added.into_inner());
+        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode, pause, reported, report)))
+    }
+
+    /// Handles one request between two cycles.
+    pub fn request(&mut self, request: Request) -> Result<Reply, ControlError> {
+        match request {
+            Request::Activate { skills, with_providers } => self.activate(&skills, with_providers),
+            Request::Deactivate { skills } => self.deactivate(&skills),
+            Request::SetParam { skill, param, value } => self.set_param(&skill, &param, &value),
+            Request::GetParam { skill, param } => {
+                let (i, p) = self.find_param(&skill, &param)?;
+                Ok(Reply::Param(self.insts[i].params[p].clone()))
+            }
+            Request::SetPriority { skill, priority } => {
+                let i = self.find(&skill)?;
+                self.insts[i].priority = priority;
+                Ok(Reply::Done)
+            }
+            Request::SetVerbose { skill, verbose } => {
+                let i = self.find(&skill)?;
+                self.insts[i].verbose = verbose;
+                Ok(Reply::Done)
+            }
+            Request::QuerySignal { signal } => self.query_signal(&signal).map(Reply::Signal),
+            Request::QuerySkill { skill } => {
+                let i = self.find(&skill)?;
+                Ok(Reply::Skill(Box::new(self.skill_info(i))))
+            }
+            Request::QuerySkills => Ok(Reply::Skills((0..self.insts.len()).map(|i| self.skill_info(i)).collect())),
+            Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
+            Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
+            Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
+            Request::AddMonitor { condition, mode, pause, report } => self.add_monitor(&condition, mode, pause, report),
+            Request::CancelMonitor { monitor } => {
+                if self.monitors.cancel(monitor) {
+                    Ok(Reply::Done)
+                } else {
+                    Err(ControlError::UnknownMonitor(monitor))
+                }
+            }
+            Request::ListMonitors => Ok(Reply::Monitors(
+                self.monitors
+                    .list
+                    .iter()
+                    .map(|m| MonitorInfo {
+                        monitor: m.id,
+                        condition: m.condition.source().to_string(),
+                        mode: m.mode,
+                        fired: m.fired,
+                        holds: m.holds,
+                        pause: m.pause,
+                        report: m.report_asked.clone(),
+                    })
+                    .collect(),
+            )),
+            Request::Run => {
+                if !self.running {
+                    self.running = true;
+                    // The achieved rate is measured from here: a pause is not a slow cycle.
+                    self.last_start = None;
+                    self.interval_s = None;
+                    self.bus.send(Event::ManagerStarted { cycle: self.cycle });
+                }
+                Ok(Reply::Done)
+            }
+            Request::Stop => {
+                if self.running {
+                    self.running = false;
+                    self.bus.send(Event::ManagerStopped { cycle: self.cycle });
+                }
+                Ok(Reply::Done)
+            }
+            Request::Step { cycles } => {
+                self.check_step(cycles)?;
+                self.halt();
+                for _ in 0..cycles {
+                    self.cycle();
+                    if self.paused {
+                        // A pausing monitor ends a step where it fired, as it stops a run.
+                        break;
+                    }
+                }
+                Ok(Reply::Done)
+            }
+            Request::Shutdown => Ok(Reply::Done),
+        }
+    }
+
+    pub(super) fn check_step(&self, cycles: u64) -> Result<(), ControlError> {
+        if cycles > 1_000_000_000 {
+            return Err(ControlError::Invalid(format!("step: {cycles} cycles is too many at once")));
+        }
+        Ok(())
+    }
+
+    /// Stops a running cycle (before a step).
+    pub(super) fn halt(&mut self) {
+        if self.running {
+            self.running = false;
+            self.bus.send(Event::ManagerStopped { cycle: self.cycle });
+        }
+    }
+}
+
+struct ManagerResolver<'a> {
+    manager: &'a Manager,
+    added: std::cell::RefCell<Vec<RefTarget>>,
+}
+
+impl ManagerResolver<'_> {
+    fn intern(&self, target: RefTarget) -> usize {
+        let known = &self.manager.refs;
+        if let Some(i) = known.iter().position(|t| *t == target) {
+            return i;
+        }
+        let mut added = self.added.borrow_mut();
+        if let Some(i) = added.iter().position(|t| *t == target) {
+            return known.len() + i;
+        }
+        added.push(target);
+        known.len() + added.len() - 1
+    }
+}
+
+impl Resolver for ManagerResolver<'_> {
+    fn resolve(&self, path: &str) -> Result<(usize, SignalType), String> {
+        let g = &self.manager.graph;
+        if let Some(&l) = g.leaf_index.get(path) {
+            return Ok((self.intern(RefTarget::Leaf(l)), g.leaves[l].ty.clone()));
+        }
+        if let Some(ty) = g.records.get(path) {
+            // The expression language reports records as not comparable.
+            return Ok((usize::MAX, ty.clone()));
+        }
+        match path {
+            "time" => return Ok((self.intern(RefTarget::Time), SignalType::F64)),
+            "cycle" => return Ok((self.intern(RefTarget::Cycle), SignalType::I64)),
+            _ => {}
+        }
+        let first = path.split('.').next().unwrap_or(path);
+        let is_signal_prefix = g.records.contains_key(first) || g.leaf_index.contains_key(first);
+        if let Some((skill, param)) = path.split_once('.').filter(|_| !is_signal_prefix) {
+            if let Some(i) = g.instance(skill) {
+                let decl = &g.instances[i].skill_type.decl;
+                return match decl.param(param) {
+                    Some((p, spec)) => {
+                        let ty = match spec.ty {
+                            situate_core::ParamType::Bool => SignalType::Bool,
+                            situate_core::ParamType::I64 => SignalType::I64,
+                            situate_core::ParamType::F64 => SignalType::F64,
+                            situate_core::ParamType::Str => SignalType::Str,
+                        };
+                        Ok((self.intern(RefTarget::Param(i, p)), ty))
+                    }
+                    None => Err(format!(
+                        "skill `{skill}` has no parameter `{param}`{}",
+                        suggestion(param, decl.params.iter().map(|p| p.name.as_str()))
+                    )),
+                };
+            }
+        }
+        let names = g.signal_names().map(str::to_string).collect::<Vec<_>>();
+        Err(format!("unknown signal `{path}`{}", suggestion(path, names.iter().map(String::as_str))))
+    }
+}
