@@ -114,6 +114,10 @@ impl Client {
             .wait()
             .map_err(|e| ClientError::Send { key: key.clone(), detail: e.to_string() })?;
         let reply = replies.recv().map_err(|_| self.no_answer(&key))?;
+        // Hold the channel until Zenoh ends the query (at once after an answer, at the timeout
+        // at the latest): dropped earlier, Zenoh logs an error for what it still delivers, a
+        // stray line on the client's stderr.
+        while replies.recv().is_ok() {}
         let sample = reply.result().map_err(|e| match reply_error_text(e).as_str() {
             // Zenoh ends a query its timeout cut short with this error.
             "Timeout" => ClientError::TimedOut { robot: robot.into(), verb: verb.into(), timeout: self.timeout },
