@@ -1,0 +1,249 @@
+"""The delivery benchmark: how often the demo robot delivers, on buildings it was not tuned on.
+
+Runs ``situate demo --headless --json`` over sets of (building, run seed) pairs and writes
+``docs/delivery.md`` (the report: success rate per set against its target, the headless speed,
+and every failure with the command that reproduces it) and ``docs/delivery-results.json`` (the
+raw outcomes). The sets:
+
+- ``default``: ``maps/default.yaml`` with run seeds 10000, 10001, … (no test uses them);
+- ``generated``: buildings from ``situate map generate --seed G`` for G = 20000, 20001, …
+  (held out: no test or tuning uses them), one run each with run seed G;
+- ``generated-hard``: the same buildings with people walking and one dead sonar
+  (``situate map generate --people … --dead-sonar …``), when the generator offers it.
+
+Usage, from the repository's top directory::
+
+    .venv/bin/python scripts/delivery.py [--default 100] [--generated 200] [--jobs 2]
+        [--bin target/release/situate] [--no-report]
+
+A set the ``situate`` program cannot build (an option it does not know) is reported as not run,
+with the reason. Failures are rerun once without ``--json`` to show the sequencer's last lines.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_SEEDS = 10000
+GENERATED_SEEDS = 20000
+#: Targets per set: the share delivered (issue 12).
+TARGETS = {"default": 0.99, "generated": 0.95, "generated-hard": 0.90}
+#: Headless speed target, x real time.
+SPEED_TARGET = 500.0
+
+
+@dataclass
+class Case:
+    """One run: a set, a map (None: the demo's own), the generator's seed, the run's seed."""
+
+    set: str
+    seed: int
+    map: Path | None = None
+    map_seed: int | None = None
+    outcome: dict[str, Any] = field(default_factory=dict)
+    tail: list[str] = field(default_factory=list)
+
+    def demo_args(self) -> list[str]:
+        """The arguments of ``situate demo`` that reproduce this run (beside ``--headless``)."""
+        args = ["--seed", str(self.seed)]
+        if self.map is not None:
+            args += ["--map", str(self.map)]
+        return args
+
+
+def find_binary(given: str | None) -> Path:
+    """The ``situate`` program: ``given``, ``$SITUATE_BIN`` or the cargo build's."""
+    candidates = [given, os.environ.get("SITUATE_BIN")]
+    target = os.environ.get("CARGO_TARGET_DIR")
+    for base in ([Path(target)] if target else []) + [ROOT / "target"]:
+        candidates += [str(base / "release" / "situate")]
+    for c in candidates:
+        if c and Path(c).is_file():
+            return Path(c)
+    sys.exit("no release situate program: run `cargo build --release -p situate_cli` first")
+
+
+def generate(binary: Path, seed: int, out: Path, extra: list[str]) -> str | None:
+    """Writes generated building ``seed`` to ``out``; the error, if the program refused."""
+    cmd = [str(binary), "map", "generate", "--seed", str(seed), *extra, "-o", str(out)]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        return (done.stderr.strip() or done.stdout.strip() or "failed").splitlines()[0]
+    return None
+
+
+def run(binary: Path, case: Case) -> Case:
+    """Runs one headless demo; fills ``case.outcome`` (and ``tail`` for a failure)."""
+    base = [str(binary), "demo", "--headless", "--python", sys.executable, *case.demo_args()]
+    done = subprocess.run(
+        [*base, "--json"], cwd=ROOT, capture_output=True, text=True, check=False, timeout=600
+    )
+    lines = [ln for ln in done.stdout.splitlines() if ln.startswith("{")]
+    if lines:
+        case.outcome = json.loads(lines[-1])
+    else:
+        case.outcome = {"delivered": False, "error": (done.stderr.strip() or "no outcome")[-400:]}
+    if not case.outcome.get("delivered"):
+        again = subprocess.run(base, cwd=ROOT, capture_output=True, text=True, check=False)
+        narrative = [ln for ln in again.stdout.splitlines() if ln.startswith("[")]
+        case.tail = narrative[-6:]
+    return case
+
+
+def failure_class(case: Case) -> str:
+    """A short name for why a run failed: its last phase line and the failure's text."""
+    phase = next((ln for ln in reversed(case.tail) if "phase " in ln), "")
+    failed = next((ln for ln in reversed(case.tail) if "mission failed" in ln), "")
+    phase = phase.split("] ", 1)[-1][:60]
+    failed = failed.split("mission failed: ", 1)[-1][:80]
+    return f"{phase} — {failed}" if failed else (phase or case.outcome.get("error", "?")[:80])
+
+
+def report(sets: dict[str, list[Case]], skipped: dict[str, str], wall_s: float) -> str:
+    """The markdown of ``docs/delivery.md``."""
+    out = [
+        "# Delivery benchmark",
+        "",
+        "How often the demo robot delivers its message, on buildings it was not tuned on. "
+        "Regenerate with `.venv/bin/python scripts/delivery.py` (after "
+        "`cargo build --release -p situate_cli`); each run is `situate demo --headless` with "
+        "the arguments given below. Run seeds and generator seeds here are used by no test "
+        "and were not tuned on.",
+        "",
+        "| set | runs | delivered | target | met | mean mission time (delivered) "
+        "| speed x real time (min / mean) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    speeds: list[float] = []
+    for name, cases in sets.items():
+        ok = [c for c in cases if c.outcome.get("delivered")]
+        rate = len(ok) / len(cases) if cases else 0.0
+        times = [float(c.outcome["mission_time_s"]) for c in ok]
+        sp = [float(c.outcome["speedup"]) for c in cases if c.outcome.get("speedup")]
+        speeds += sp
+        target = TARGETS.get(name, 0.0)
+        out.append(
+            f"| {name} | {len(cases)} | {len(ok)} ({100 * rate:.1f} %) | ≥ {100 * target:.0f} % "
+            f"| {'yes' if rate >= target else '**no**'} "
+            f"| {statistics.fmean(times):.0f} s | "
+            + (f"{min(sp):.0f} / {statistics.fmean(sp):.0f} |" if sp else "- |")
+            if times
+            else f"| {name} | {len(cases)} | 0 | ≥ {100 * target:.0f} % | **no** | - | - |"
+        )
+    for name, why in skipped.items():
+        out.append(
+            f"| {name} | not run: {why} | | ≥ {100 * TARGETS.get(name, 0):.0f} % | **no** | | |"
+        )
+    if speeds:
+        met = "met" if min(speeds) >= SPEED_TARGET else "**not met**"
+        out += [
+            "",
+            f"Headless speed: slowest run {min(speeds):.0f}x real time "
+            f"(target ≥ {SPEED_TARGET:.0f}x: {met}).",
+        ]
+    out += ["", f"The whole benchmark took {wall_s:.0f} s of wall time.", ""]
+    failures = [c for cases in sets.values() for c in cases if not c.outcome.get("delivered")]
+    out += ["## Failures", ""]
+    if not failures:
+        out.append("None.")
+    by_class: dict[str, list[Case]] = {}
+    for c in failures:
+        by_class.setdefault(failure_class(c), []).append(c)
+    for cls, cases in sorted(by_class.items(), key=lambda kv: -len(kv[1])):
+        out += [f"### {cls} ({len(cases)})", ""]
+        for c in cases:
+            where = (
+                f"`situate map generate --seed {c.map_seed}` then "
+                if c.map_seed is not None
+                else ""
+            )
+            args = (
+                " ".join(c.demo_args()).replace(str(c.map), "MAP")
+                if c.map
+                else " ".join(c.demo_args())
+            )
+            out.append(f"- {c.set}: {where}`situate demo --headless {args}`")
+        out.append("")
+        out += ["Last lines of the first one:", "", "```", *cases[0].tail, "```", ""]
+    return "\n".join(out)
+
+
+def main() -> int:
+    """Runs the sets and writes the report; 0 when every target is met."""
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--default", type=int, default=100, help="runs on maps/default.yaml")
+    p.add_argument("--generated", type=int, default=200, help="generated buildings")
+    p.add_argument(
+        "--hard",
+        type=int,
+        default=None,
+        help="generated buildings with people (default: --generated)",
+    )
+    p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--bin", default=None)
+    p.add_argument("--no-report", action="store_true", help="print the report, write nothing")
+    a = p.parse_args()
+    binary = find_binary(a.bin)
+    started = time.monotonic()
+    sets: dict[str, list[Case]] = {
+        "default": [Case("default", DEFAULT_SEEDS + k) for k in range(a.default)]
+    }
+    skipped: dict[str, str] = {}
+    with tempfile.TemporaryDirectory(prefix="situate-delivery-") as tmp:
+        hard = a.generated if a.hard is None else a.hard
+        for name, count, extra in (
+            ("generated", a.generated, []),
+            ("generated-hard", hard, ["--people", "3", "--dead-sonar", "1"]),
+        ):
+            if count == 0:
+                continue
+            cases: list[Case] = []
+            for k in range(count):
+                seed = GENERATED_SEEDS + k
+                path = Path(tmp) / f"{name}-{seed}.yaml"
+                err = generate(binary, seed, path, extra)
+                if err is not None:
+                    skipped[name] = err
+                    cases = []
+                    break
+                cases.append(Case(name, seed, path, seed))
+            if cases:
+                sets[name] = cases
+        everything = [c for cases in sets.values() for c in cases]
+        with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+            for n, case in enumerate(pool.map(lambda c: run(binary, c), everything), 1):
+                mark = "." if case.outcome.get("delivered") else "F"
+                print(mark, end="" if n % 50 else "\n", flush=True)
+        print()
+        text = report(sets, skipped, time.monotonic() - started)
+    if a.no_report:
+        print(text)
+    else:
+        (ROOT / "docs" / "delivery.md").write_text(text + "\n")
+        raw = {
+            name: [{"seed": c.seed, "map_seed": c.map_seed, **c.outcome} for c in cases]
+            for name, cases in sets.items()
+        }
+        (ROOT / "docs" / "delivery-results.json").write_text(json.dumps(raw, indent=1) + "\n")
+        print(text.split("## Failures")[0])
+    met = all(
+        sum(1 for c in cases if c.outcome.get("delivered")) >= TARGETS.get(name, 0) * len(cases)
+        for name, cases in sets.items()
+    )
+    return 0 if met and not skipped else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
