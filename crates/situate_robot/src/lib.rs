@@ -146,6 +146,35 @@ pub struct Junction {
     pub ahead: bool,
 }
 
+/// `wall`: the wall ahead, the line through most echoes of the front half
+/// of the sonar ring.
+#[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wall {
+    pub seen: bool,
+    /// Direction from the robot to the wall, perpendicular to it, in the
+    /// robot frame, rad (0: the robot faces the wall squarely).
+    pub normal: f64,
+    /// Perpendicular distance from the robot's centre to the wall, m.
+    pub distance: f64,
+    /// Echoes on the line.
+    pub inliers: i64,
+}
+
+/// `opening`: a door opening in the wall ahead, in the robot frame.
+#[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Opening {
+    pub seen: bool,
+    /// Direction from the robot to the wall, perpendicular to it, rad.
+    pub normal: f64,
+    /// Perpendicular distance from the robot's centre to the wall, m.
+    pub wall: f64,
+    /// The opening's centre on the wall line (x ahead, y to the left), m.
+    pub x: f64,
+    pub y: f64,
+    /// Width between the jambs, m.
+    pub width: f64,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,6 +21,8 @@
 //! | `std.follow_hallway` | `sonar.range` | `drive` (every cycle) |
 //! | `std.detect_door` | `sonar.range` | `door` (every cycle) |
 //! | `std.detect_intersection` | `sonar.range` | `junction` (every cycle) |
+//! | `std.fit_wall` | `sonar.range` | `wall` (every cycle) |
+//! | `std.locate_door` | `sonar.range` | `opening` (every cycle) |
 //! | `std.track_barcode` | `barcodes` | `target` (every cycle) |
 //! | `std.identify_car` | `barcodes` | `car` (every cycle) |
 //! | `std.home` | `target` | `drive` (while `target.seen`) |
@@ -42,6 +44,7 @@
 mod actions;
 mod motion;
 mod perception;
+mod scan;
 pub mod util;
 
 use situate::manager::Registry;
@@ -49,6 +52,7 @@ use situate::manager::Registry;
 pub use actions::{PushButton, Say};
 pub use motion::{Avoid, EnterCar, FollowHallway, Home, HomePosition, LeaveCar, PassDoor, Runaway, Turn, Wander};
 pub use perception::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
+pub use scan::{fit_wall, locate_door, FitWall, LocateDoor, ScanModel};
 
 /// Adds every standard skill type to `registry`.
 pub fn register(registry: &mut Registry) {
@@ -59,6 +63,8 @@ pub fn register(registry: &mut Registry) {
         .register::<FollowHallway>()
         .register::<DetectDoor>()
         .register::<DetectIntersection>()
+        .register::<FitWall>()
+        .register::<LocateDoor>()
         .register::<TrackBarcode>()
         .register::<Home>()
         .register::<HomePosition>()

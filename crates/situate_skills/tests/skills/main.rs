@@ -6,6 +6,7 @@ mod harness;
 mod manager;
 mod motion;
 mod perception;
+mod scan;
 mod scene;
 
 use harness::{val, Harness};

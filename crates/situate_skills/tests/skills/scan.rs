@@ -1,0 +1,122 @@
+//! The wall ahead and the door in it, from one scan (`std.fit_wall`,
+//! `std.locate_door`), over a spread of geometries and sonar noise.
+
+use situate_robot::{Opening, Wall, SONARS};
+use situate_skills::{FitWall, LocateDoor};
+
+use crate::harness::{val, Harness};
+use crate::scene::{Noise, Pose, Scene};
+
+/// A wall along y = 0 with a door from x = `g0` to `g0 + w` and a room
+/// beyond it (back wall at y = 2.5), or no door when `w` is 0.
+fn door_wall(g0: f64, w: f64) -> Scene {
+    let s = Scene::new().wall(-1.0, 2.5, 1.0, 2.5);
+    if w > 0.0 {
+        s.wall(-8.0, 0.0, g0, 0.0).wall(g0 + w, 0.0, 8.0, 0.0)
+    } else {
+        s.wall(-8.0, 0.0, 8.0, 0.0)
+    }
+}
+
+/// A point of the world in the frame of `pose`.
+fn in_robot(pose: Pose, x: f64, y: f64) -> (f64, f64) {
+    let (dx, dy) = (x - pose.x, y - pose.y);
+    let (c, s) = (pose.theta.cos(), pose.theta.sin());
+    (c * dx + s * dy, -s * dx + c * dy)
+}
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
+
+/// Poses facing the wall y = 0 from below: distance, heading offset, x.
+fn poses() -> impl Iterator<Item = Pose> {
+    [0.8, 1.0, 1.3].into_iter().flat_map(|d: f64| {
+        [-25f64, 0.0, 20.0].into_iter().flat_map(move |off| {
+            [-0.4, 0.0, 0.35].into_iter().map(move |x| Pose::new(x, -d, 90f64.to_radians() + off.to_radians()))
+        })
+    })
+}
+
+#[test]
+fn fit_wall_finds_the_wall_ahead_at_any_angle_and_distance() {
+    let scene = door_wall(0.0, 0.0);
+    for (k, pose) in poses().enumerate() {
+        let mut h = Harness::new::<FitWall>();
+        let r = Noise::new(k as u64 + 1, 0.02, 0.0).apply(scene.sonar(pose));
+        let wall = h.run(&[("sonar", val::<[f32; SONARS]>(r))]).get::<Wall>("wall").expect("written every run");
+        assert!(wall.seen, "{pose:?}: no wall");
+        let normal = std::f64::consts::FRAC_PI_2 - pose.theta;
+        assert!(
+            angle_diff(wall.normal, normal) < 4f64.to_radians(),
+            "{pose:?}: normal {:.3} vs {normal:.3}",
+            wall.normal
+        );
+        assert!((wall.distance - -pose.y).abs() < 0.06, "{pose:?}: distance {:.3}", wall.distance);
+    }
+}
+
+#[test]
+fn fit_wall_sees_no_wall_in_open_space() {
+    let mut h = Harness::new::<FitWall>();
+    let wall = h.run(&[("sonar", val([4.0f32; SONARS]))]).get::<Wall>("wall").expect("written every run");
+    assert!(!wall.seen);
+}
+
+#[test]
+fn locate_door_finds_doors_of_every_width_left_right_and_ahead() {
+    let mut worst = (0.0f64, 0.0f64);
+    let mut checked = 0;
+    for (k, pose) in poses().enumerate() {
+        for (off, w) in [(-0.9, 1.0), (-0.55, 1.2), (0.0, 1.4), (0.5, 1.0), (0.9, 1.2)] {
+            // The door's centre `off` m along the wall from the point the robot faces.
+            let foot = pose.x - pose.y / pose.theta.tan();
+            let (cx, g0) = (foot + off, foot + off - w / 2.0);
+            let scene = door_wall(g0, w);
+            let mut h = Harness::new::<LocateDoor>();
+            let r = Noise::new(k as u64 + 7, 0.02, 0.0).apply(scene.sonar(pose));
+            let o = h.run(&[("sonar", val::<[f32; SONARS]>(r))]).get::<Opening>("opening").expect("written");
+            let case = format!("{pose:?}, door {w} m at {off:+} m");
+            let (tx, ty) = in_robot(pose, cx, 0.0);
+            // Found for sure when some sonar's whole cone (15°) passes the
+            // opening: when it spans 30° (two sonar spacings) within 60° of ahead.
+            let (ax, ay) = in_robot(pose, g0, 0.0);
+            let (bx, by) = in_robot(pose, g0 + w, 0.0);
+            let (a, b) = (ay.atan2(ax), by.atan2(bx));
+            if (a - b).abs() < 30f64.to_radians() || a.abs().max(b.abs()) > 60f64.to_radians() {
+                continue;
+            }
+            assert!(o.seen, "{case}: not found");
+            checked += 1;
+            let err = (o.x - tx).hypot(o.y - ty);
+            assert!(err < 0.2, "{case}: centre ({:.2}, {:.2}) vs ({tx:.2}, {ty:.2})", o.x, o.y);
+            assert!((o.width - w).abs() < 0.5, "{case}: width {:.2}", o.width);
+            worst = (worst.0.max(err), worst.1.max((o.width - w).abs()));
+        }
+    }
+    eprintln!("{checked} doors: worst centre error {:.3} m, worst width error {:.3} m", worst.0, worst.1);
+    assert!(checked >= 80, "only {checked} of 135 geometries were checked");
+}
+
+#[test]
+fn locate_door_reports_nothing_for_a_plain_wall() {
+    let scene = door_wall(0.0, 0.0);
+    for pose in poses() {
+        let mut h = Harness::new::<LocateDoor>();
+        let o = h.run(&[("sonar", val(scene.sonar(pose)))]).get::<Opening>("opening").expect("written");
+        assert!(!o.seen, "{pose:?}: a door in a plain wall at ({:.2}, {:.2})", o.x, o.y);
+    }
+}
+
+#[test]
+fn locate_door_takes_the_edge_nearer_ahead_of_a_wide_opening() {
+    // A 3 m gap starting 0.3 m to the right of the point faced: a door 1.1 m wide from its near edge.
+    let pose = Pose::new(0.0, -1.0, 90f64.to_radians());
+    let scene = Scene::new().wall(-8.0, 0.0, 0.3, 0.0).wall(3.3, 0.0, 8.0, 0.0);
+    let mut h = Harness::new::<LocateDoor>();
+    let o = h.run(&[("sonar", val(scene.sonar(pose)))]).get::<Opening>("opening").expect("written");
+    assert!(o.seen);
+    assert!((o.width - 1.1).abs() < 1e-9, "width {}", o.width);
+    assert!(o.y < -0.3 && o.y > -1.3, "centre to the right, near the edge: y {:.2}", o.y);
+}
