@@ -68,6 +68,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
         .arg(&demo.sequencer)
         .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
         .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
+        .args(["--seed", &demo.seed.to_string()])
         .args(if demo.json { &["--quiet"][..] } else { &[][..] });
     let run =
         run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));

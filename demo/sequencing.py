@@ -1,0 +1,737 @@
+"""Sequencing a situated robot over the situate link: a reusable layer under a mission.
+
+A mission (such as `deliver.py`) is a short narrative of phases; this module gives it the means:
+
+- the link, used so that a run on the simulated clock replays exactly: the sequencer acts only
+  at the cycle a monitor fired (monitors registered with ``pause``), requests that change
+  something are sent without waiting and collected by the next one that needs an answer
+  (`Sequencer.send`, `flush`), and every wait has a time-out on the robot's clock (`wait`);
+- switching skills (`use`: the active set), parameters (`set`, `restore`), reading values;
+- behaviours built of the standard skills (`std.*`, see crates/situate_skills) that any mission
+  of the mobile robot needs: turning, homing on a barcode, driving to a point of the odometry
+  frame, lining up with a barcode on a wall, passing the door ahead, searching for a barcode,
+  getting unstuck, and the interpreter of route hints (docs/maps.md).
+
+Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the door in it
+`std.locate_door`'s `opening`; the sequencer activates them and reads their outputs.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import os
+import re
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import situate
+from situate.events import MonitorFired
+
+SONARS = 24
+ROBOT_RADIUS = 0.25
+#: How far in front of a door the robot lines up before passing it, m.
+DOOR_STANDOFF = 0.9
+#: Openings wider than this are not a door; a door is taken to be DOOR_WIDTH wide, m.
+MAX_DOOR_WIDTH = 1.6
+DOOR_WIDTH = 1.1
+#: Time to get out of the lab before giving up, s.
+#: Wandering between two looks round, s.
+SEARCH_LEG_S = 20.0
+#: Homing that gets no closer for this long steps aside, s.
+HOME_PROGRESS_S = 8.0
+
+#: Records the sequencer reads after most waits: each wait's monitor asks for them (``report``),
+#: so their values as of the cycle it fired in come with its event instead of a query each.
+CARRIED = ("odom", "target")
+
+
+class PhaseFailed(Exception):
+    """A phase could not be completed (after its retries)."""
+
+
+class OutOfTime(Exception):
+    """The mission's time limit passed."""
+
+
+@dataclass
+class Pose:
+    """An odometry pose."""
+
+    x: float
+    y: float
+    theta: float
+
+
+def wrap(a: float) -> float:
+    """``a`` wrapped into (-pi, pi]."""
+    a = math.fmod(a, 2 * math.pi)
+    if a > math.pi:
+        a -= 2 * math.pi
+    elif a <= -math.pi:
+        a += 2 * math.pi
+    return a
+
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*(?:\s*\()?")
+
+
+def holds(condition: str, values: Mapping[str, Any], time_s: float, cycle: int) -> bool:
+    """Evaluates a monitor condition (the subset this sequencer writes) on reported values.
+
+    ``values`` are those of a ``monitor_fired`` event: each signal leaf or parameter the
+    condition reads, whole (arrays are indexed here). The operators are the condition
+    language's (``&& || ! == != < <= > >=``, arithmetic, ``abs``, ``min``, ``max``); a name
+    without a value makes the condition false, as on the robot.
+    """
+    env: dict[str, Any] = {}
+
+    def name(m: re.Match[str]) -> str:
+        word = m.group(0)
+        if word.endswith("("):
+            return word  # abs( min( max(
+        if word in ("true", "false"):
+            return "True" if word == "true" else "False"
+        if word in ("time", "cycle"):
+            env[f"_n{len(env)}"] = time_s if word == "time" else cycle
+        else:
+            v = values.get(word)
+            if v is None:
+                raise LookupError(word)
+            env[f"_n{len(env)}"] = [float(x) for x in v] if isinstance(v, list) else v
+        return f"_n{len(env) - 1}"
+
+    try:
+        expr = _NAME.sub(name, condition)
+    except LookupError:
+        return False
+    expr = expr.replace("&&", " and ").replace("||", " or ")
+    expr = re.sub(r"!(?!=)", " not ", expr)
+    funcs = {"abs": abs, "min": min, "max": max}
+    try:
+        return bool(eval(expr, {"__builtins__": {}, **funcs}, env))
+    except (LookupError, TypeError, ValueError):
+        return False
+
+
+def bearing_of(i: int) -> float:
+    """Bearing of sonar ``i`` in the robot frame (sonar 0 ahead, counter-clockwise)."""
+    return wrap(i * 2 * math.pi / SONARS)
+
+
+class Sequencer:
+    """Drives a robot over the link: waits, skill switching, parameters, shared behaviours.
+
+    ``normal`` holds the value of every parameter the sequencer changes in some phase, as it
+    is elsewhere (`restore`). In ``all-active`` mode (the experiment's baseline) `use` changes
+    nothing: every skill stays on and priorities alone decide. ``seed`` seeds every random
+    choice of the behaviours (the wander paths), so a run is a function of its seed.
+    """
+
+    def __init__(
+        self,
+        robot: situate.Robot,
+        *,
+        normal: Mapping[tuple[str, str], Any],
+        mode: str = "sequenced",
+        limit_s: float = 1800.0,
+        quiet: bool = False,
+        seed: int = 1,
+    ) -> None:
+        self.r = robot
+        self.normal = dict(normal)
+        self.sequenced = mode == "sequenced"
+        self.limit_s = limit_s
+        self.quiet = quiet
+        self.seed = seed
+        self.debug = bool(os.environ.get("DELIVER_DEBUG"))
+        self.active: set[str] = set()
+        self.t = 0.0
+        self.phase_no = 0
+        self.phase_text = ""
+        #: Searches so far: each wanders along a path of its own (seeded by ``seed`` and this).
+        self.searches = 0
+        self.stream: situate.Stream[Any] | None = None
+        self.params: dict[tuple[str, str], Any] = {}
+        #: Replies to requests sent but not yet awaited (see `send`).
+        self.pending: list[asyncio.Future[Any]] = []
+        #: Queries sent since the cycle last ran, by signal: their answers stand until it runs.
+        self.readings: dict[str, asyncio.Future[Any]] = {}
+        #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
+        self.carried: dict[str, dict[str, Any]] = {}
+
+    # ----- the link: waiting, switching skills, parameters ------------------------------
+
+    def send(self, verb: str, **args: Any) -> None:
+        """Sends a request now; its reply is awaited with the next one that needs an answer.
+
+        The manager handles requests in the order they are sent, so a query (or a wait) sent
+        after changes costs one round trip for them all (see `flush`).
+        """
+        if verb in ("run", "step"):
+            self.readings.clear()  # the cycle runs: every signal may change
+            self.carried.clear()
+        self.pending.append(self.r.send(verb, **args))
+
+    def prefetch(self, *signals: str) -> None:
+        """Sends a query for each of ``signals`` not asked for since the cycle last ran.
+
+        Queries only read, so asking for what the next steps will read, all at once, saves
+        round trips without changing anything on the robot.
+        """
+        for signal in signals:
+            if signal not in self.readings and signal not in self.carried:
+                self.readings[signal] = self.r.send("query", signal=signal)
+                self.pending.append(self.readings[signal])
+
+    async def flush(self) -> list[Any]:
+        """Awaits the replies to every pending request; raises the first refusal."""
+        pending, self.pending = self.pending, []
+        results = await asyncio.gather(*pending, return_exceptions=True)
+        for r in results:
+            if isinstance(r, BaseException):
+                raise r
+        return results
+
+    async def wait(self, *conditions: str, within: float | None = None) -> int:
+        """Runs the cycle until one of ``conditions`` holds; returns its index.
+
+        With ``within`` (simulated seconds), returns ``len(conditions)`` when that time passed
+        first. The cycle is paused at the cycle the condition held.
+        """
+        deadline = min(self.t + within, self.limit_s) if within is not None else self.limit_s
+        # The deadline exactly (repr: the shortest text that reads back as the same float).
+        index = await self._first([*conditions, f"time >= {deadline!r}"])
+        if index == len(conditions) and self.t >= self.limit_s:
+            raise OutOfTime(f"the mission's {self.limit_s:.0f} s are up")
+        return index
+
+    async def _first(self, conds: list[str]) -> int:
+        """Runs until one of ``conds`` holds (pausing there); returns the first that does.
+
+        One pausing monitor watches them all, ``(c0) || (c1) || …``, registered and the cycle
+        run in one round trip with the pending changes (the link's round trips are most of a
+        headless run's wall time). Which of them held is worked out from the values the
+        monitor reports for that cycle.
+        """
+        stream = self.stream
+        assert stream is not None
+        whole = " || ".join(f"({c})" for c in conds)
+        self.send("monitor_add", condition=whole, mode="once", pause=True, report=list(CARRIED))
+        self.send("run")
+        monitor = int((await self.flush())[-2]["monitor"])
+        fired: MonitorFired | None = None
+        async for event in stream:
+            if isinstance(event, MonitorFired) and event.monitor == monitor:
+                fired = event
+                break
+        if fired is None:
+            raise situate.NotRunning("the link closed while waiting")
+        self.t = fired.time_s
+        for record in CARRIED:
+            prefix = f"{record}."
+            values = {
+                k.removeprefix(prefix): v for k, v in fired.values.items() if k.startswith(prefix)
+            }
+            if values and all(v is not None for v in values.values()):  # else never written
+                self.carried[record] = values
+        for k, c in enumerate(conds):
+            if holds(c, fired.values, fired.time_s, fired.cycle):
+                return k
+        raise RuntimeError(f"none of {conds} holds for {fired.values} at {fired.time_s}")
+
+    async def use(self, *skills: str, restart: Sequence[str] = ()) -> None:
+        """Makes ``skills`` the active set (sequenced mode); ``restart`` ones start afresh.
+
+        In all-active mode every skill is already on and stays on: nothing changes.
+        """
+        if not self.sequenced:
+            return
+        want = set(skills)
+        again = [s for s in restart if s in self.active and s in want]
+        off = sorted((self.active - want) | set(again))
+        if off:
+            self.send("deactivate", skills=off)
+            self.active -= set(off)
+        if again:
+            # A skill notices a re-activation as a gap of more than one cycle.
+            self.send("step", cycles=1)
+        on = sorted(want - self.active)
+        if on:
+            self.send("activate", skills=on, with_providers=False)
+            self.active |= set(on)
+
+    async def set(self, skill: str, param: str, value: Any) -> None:
+        """Sets a skill parameter (no request when it has that value already)."""
+        if self.params.get((skill, param)) == value:
+            return
+        self.send("set_param", skill=skill, param=param, value=value)
+        self.params[(skill, param)] = value
+
+    async def restore(self, skill: str, param: str) -> None:
+        """Sets a parameter back to its value outside special phases (``normal``)."""
+        await self.set(skill, param, self.normal[(skill, param)])
+
+    async def value(self, signal: str) -> Any:
+        """The value of ``signal`` at the end of the last cycle (None if never written)."""
+        if signal in self.carried:
+            return dict(self.carried[signal])
+        self.prefetch(signal)
+        reading = self.readings[signal]
+        await self.flush()
+        return situate.Reading.from_json(await reading).value
+
+    async def odom(self) -> Pose:
+        """The odometry pose."""
+        o = await self.value("odom")
+        return Pose(float(o["x"]), float(o["y"]), float(o["theta"]))
+
+    async def sonar(self) -> list[float]:
+        """The sonar ranges, m."""
+        return [float(v) for v in await self.value("sonar.range")]
+
+    async def say(self, text: str) -> None:
+        """One progress line, stamped with the simulated time."""
+        if self.quiet:
+            return
+        extra = ""
+        if self.debug:
+            with contextlib.suppress(situate.SituateError):
+                p = await self.value("truth.pose")
+                if p is not None:
+                    extra = f"   (truth: floor {p['floor']} x {p['x']:.2f} y {p['y']:.2f})"
+        print(f"[{self.t:7.1f} s] {text}{extra}", flush=True)
+
+    async def phase(self, number: int, text: str) -> None:
+        """The progress line of phase ``number`` of the narrative."""
+        self.phase_no = number
+        self.phase_text = text
+        await self.say(f"phase {number}: {text}")
+
+    # ----- behaviours the phases share -------------------------------------------------
+
+    async def turn(self, angle: float, *, keep: Sequence[str] = ()) -> bool:
+        """Turns in place by ``angle`` (rad, left positive); False on time-out."""
+        start = await self.odom()
+        goal = start.theta + angle
+        await self.set("turn", "angle", angle)
+        await self.use("turn", *keep, restart=["turn"])
+        near = " || ".join(
+            f"abs(odom.theta - {goal + k * 2 * math.pi:.4f}) < 0.06" for k in (-1, 0, 1)
+        )
+        done = await self.wait(f"({near}) && abs(odom.w) < 0.1", within=5 + abs(angle) / 0.4)
+        return done == 0
+
+    async def home_on(
+        self,
+        barcode: int,
+        stop: float,
+        *,
+        within: float = 40,
+        avoid: bool = True,
+        runaway: bool | None = None,
+        slack: float = 0.06,
+        aim: float = 0.12,
+    ) -> bool:
+        """Homes on ``barcode`` until ``stop`` m from it (it must be in view).
+
+        Done when within ``stop + slack`` m and ``aim`` rad of straight ahead, standing still.
+        Without ``avoid``, only the barcode (and, if not near a wall, runaway) steers.
+        """
+        await self.set("track_barcode", "id", barcode)
+        await self.set("home", "stop_distance", stop)
+        keep = (["runaway"] if (avoid if runaway is None else runaway) else []) + (
+            ["avoid"] if avoid else []
+        )
+        end = self.t + within
+        detours = 0
+        while True:
+            await self.use(*keep, "track_barcode", "home")
+            t = await self.value("target")
+            closer = float(t["distance"]) - 0.25 if t and t["seen"] else 0.0
+            got = await self.wait(
+                f"target.seen && target.id == {barcode} && target.distance < {stop + slack:.3f}"
+                f" && abs(target.bearing) < {aim} && abs(odom.v) < 0.03",
+                f"!target.seen && time > {self.t + 1:.3f}",
+                f"target.seen && target.distance < {closer:.3f}",
+                within=min(HOME_PROGRESS_S, max(end - self.t, 0.1)),
+            )
+            if got == 2:
+                continue  # getting closer
+            if got == 3 and self.t < end and detours < 3:
+                # No progress: something is in the way. Step aside, then home again.
+                detours += 1
+                await self.say("    something in the way: stepping aside")
+                bearing = float(t["bearing"]) if t else 0.0
+                px, py = await self.to_frame(
+                    float(t["distance"]) * math.cos(bearing),
+                    float(t["distance"]) * math.sin(bearing),
+                )
+                await self.sidestep(bearing, keep=["track_barcode"])
+                # Face where the barcode was (odometry) before homing on.
+                o = await self.odom()
+                await self.turn(wrap(math.atan2(py - o.y, px - o.x) - o.theta), keep=["runaway"])
+                continue
+            break
+        if got and self.debug:
+            await self.say(f"      home: {got} {await self.value('target')}")
+        return got == 0
+
+    async def sidestep(self, bearing: float, *, keep: Sequence[str] = ()) -> None:
+        """Moves about a metre to the freer side of ``bearing`` (rad, robot frame)."""
+        self.prefetch("sonar.range", "odom")  # the turn reads the odometry
+        ranges = await self.sonar()
+
+        def free(b: float) -> float:
+            i = round(wrap(b) / (2 * math.pi / SONARS)) % SONARS
+            return min(ranges[(i + k) % SONARS] for k in (-1, 0, 1))
+
+        left, right = free(bearing + math.pi / 2), free(bearing - math.pi / 2)
+        side = bearing + (math.pi / 2 if left >= right else -math.pi / 2)
+        await self.set("runaway", "safe_distance", 0.15)
+        try:
+            await self.turn(wrap(side), keep=["runaway", *keep])
+            go = max(0.0, min(1.0, max(left, right) - 0.7))
+            o = await self.odom()
+            if go > 0.1:
+                await self.goto(
+                    o.x + go * math.cos(o.theta), o.y + go * math.sin(o.theta), within=10
+                )
+        finally:
+            await self.restore("runaway", "safe_distance")
+
+    async def goto(self, x: float, y: float, *, within: float = 40) -> bool:
+        """Drives to (x, y) of the odometry frame."""
+        await self.set("home_position", "x", x)
+        await self.set("home_position", "y", y)
+        await self.use("runaway", "home_position", restart=["home_position"])
+        got = await self.wait(
+            f"abs(odom.x - {x:.3f}) < 0.12 && abs(odom.y - {y:.3f}) < 0.12 && abs(odom.v) < 0.03",
+            within=within,
+        )
+        return got == 0
+
+    async def clue(
+        self, skill: str, signal: str, *, keep: Sequence[str] = ()
+    ) -> dict[str, Any] | None:
+        """A perception skill's output as the robot stands: ``signal`` of ``skill`` if ``seen``.
+
+        Only ``skill`` and ``keep`` are on (nothing drives: the base stops), for a few cycles.
+        """
+        await self.use(*keep, skill, restart=[skill])
+        self.send("step", cycles=3)
+        self.prefetch(signal, "odom")
+        value = await self.value(signal)
+        return dict(value) if value and value.get("seen") else None
+
+    async def to_frame(self, x: float, y: float) -> tuple[float, float]:
+        """A point of the robot frame in the odometry frame."""
+        o = await self.odom()
+        c, s = math.cos(o.theta), math.sin(o.theta)
+        return o.x + c * x - s * y, o.y + s * x + c * y
+
+    async def line_up(self, barcode: int, standoff: float) -> bool:
+        """From in view of ``barcode`` on a wall: to ``standoff`` m straight in front of it.
+
+        Homes to about a metre, fits the wall with the sonars, drives to the point on the
+        barcode's normal and turns to face the wall.
+        """
+        await self.set("runaway", "safe_distance", 0.15)
+        try:
+            if not await self.home_on(barcode, 1.2, avoid=False, runaway=True, slack=0.2, aim=0.2):
+                return False
+        finally:
+            await self.restore("runaway", "safe_distance")
+        wall = await self.clue("fit_wall", "wall", keep=["track_barcode"])
+        self.prefetch("target", "odom")
+        t = await self.value("target")
+        if wall is None or not t["seen"]:
+            return False
+        normal = float(wall["normal"])
+        bx = float(t["distance"]) * math.cos(float(t["bearing"]))
+        by = float(t["distance"]) * math.sin(float(t["bearing"]))
+        gx, gy = await self.to_frame(
+            bx - standoff * math.cos(normal), by - standoff * math.sin(normal)
+        )
+        heading = (await self.odom()).theta + normal
+        if not await self.goto(gx, gy, within=20):
+            return False
+        return await self.turn(wrap(heading - (await self.odom()).theta))
+
+    async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
+        """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
+
+        The opening is `std.locate_door`'s; ``hint`` (``left`` or ``right``, from the route)
+        is used only when it finds none.
+        """
+        fix = await self.clue("locate_door", "opening")
+        pose = await self.odom()
+        if fix is None or float(fix["width"]) < 0.3:
+            if hint is None:
+                await self.say("    no door opening in sight")
+                return False
+            await self.say(f"    the sonars find no opening: trying the route's hint ({hint})")
+            side = 1.0 if hint == "left" else -1.0
+            normal = 0.0
+            centre = (1.0, side * 0.75)
+        else:
+            normal, centre = float(fix["normal"]), (float(fix["x"]), float(fix["y"]))
+            side = 1.0 if math.sin(math.atan2(centre[1], centre[0]) - normal) > 0 else -1.0
+            await self.say(
+                f"    door {float(fix['width']):.1f} m wide, {'left' if side > 0 else 'right'} of "
+                + (f"barcode {barcode}" if barcode is not None else "ahead")
+            )
+        # The point DOOR_STANDOFF in front of the opening's centre, in the odometry frame.
+        ax = centre[0] - DOOR_STANDOFF * math.cos(normal)
+        ay = centre[1] - DOOR_STANDOFF * math.sin(normal)
+        c, s = math.cos(pose.theta), math.sin(pose.theta)
+        gx, gy = pose.x + c * ax - s * ay, pose.y + s * ax + c * ay
+        heading = pose.theta + normal
+        await self.set("runaway", "safe_distance", 0.12)
+        try:
+            if not await self.goto(gx, gy):
+                return False
+            here = await self.odom()
+            if not await self.turn(wrap(heading - here.theta)):
+                return False
+            start = await self.odom()
+            await self.set("pass_door", "distance", DOOR_STANDOFF + 1.1)
+            await self.use("runaway", "pass_door", restart=["pass_door"])
+            if await self.wait("door_passed", within=30):
+                return False
+            # Through? Well beyond the wall line along the heading, not stopped at the wall.
+            end = await self.odom()
+            went = (end.x - start.x) * math.cos(start.theta) + (end.y - start.y) * math.sin(
+                start.theta
+            )
+            if went < DOOR_STANDOFF + 0.3:
+                await self.say("    stopped short of the door: backing off")
+                await self.use()
+                return False
+            return True
+        finally:
+            await self.restore("runaway", "safe_distance")
+
+    # ----- the phases --------------------------------------------------------------------
+
+    async def search(self, barcode: int, budget: float) -> bool:
+        """Wanders (avoiding obstacles), looking round now and then, until ``barcode`` is seen.
+
+        Every ``SEARCH_LEG_S`` of wandering the robot turns round once in place (the reader
+        looks ahead only); when it has hardly moved meanwhile, it first drives out of the
+        corner it is stuck in, towards the freest direction.
+        """
+        await self.set("track_barcode", "id", barcode)
+        # Each search its own path, all of them fixed by the run's seed.
+        self.searches += 1
+        await self.set("wander", "seed", (self.seed * 7919 + self.searches) % (1 << 31))
+        seen = f"target.seen && target.id == {barcode}"
+        end = self.t + budget
+        look_first = True
+        while self.t < end:
+            if look_first:
+                # Look round: a full turn in place.
+                here = await self.odom()
+                await self.set("turn", "angle", 2 * math.pi)
+                await self.use("runaway", "turn", "track_barcode", restart=["turn"])
+                near = f"abs(odom.theta - {here.theta + 2 * math.pi:.4f}) < 0.1"
+                if await self.wait(seen, near, within=min(20.0, max(end - self.t, 0.1))) == 0:
+                    return True
+            look_first = True
+            before = await self.odom()
+            await self.use("runaway", "avoid", "wander", "track_barcode")
+            if await self.wait(seen, within=min(SEARCH_LEG_S, max(end - self.t, 0.1))) == 0:
+                return True
+            after = await self.odom()
+            if math.hypot(after.x - before.x, after.y - before.y) < 1.0:
+                await self.unstick(keep=["track_barcode"])
+                if (await self.value("target"))["seen"]:
+                    return True
+        return False
+
+    async def unstick(self, *, keep: Sequence[str] = ()) -> None:
+        """Turns towards the freest direction the sonars see and drives a little that way."""
+        self.prefetch("sonar.range", "odom")  # the turn reads the odometry
+        ranges = await self.sonar()
+        free = [min(ranges[(i + k) % SONARS] for k in (-1, 0, 1)) for i in range(SONARS)]
+        best = max(range(SONARS), key=lambda i: (free[i], -abs(bearing_of(i))))
+        await self.set("runaway", "safe_distance", 0.12)
+        try:
+            await self.turn(bearing_of(best), keep=["runaway", *keep])
+            o = await self.odom()
+            go = max(0.0, min(1.2, free[best] - 0.8))
+            if go > 0.1:
+                await self.goto(
+                    o.x + go * math.cos(o.theta), o.y + go * math.sin(o.theta), within=10
+                )
+        finally:
+            await self.restore("runaway", "safe_distance")
+
+    async def centre_between_walls(self) -> None:
+        """Moves sideways to midway between the walls left and right (in a car: its door)."""
+        ranges = await self.sonar()
+        left, right = ranges[SONARS // 4], ranges[3 * SONARS // 4]
+        offset = (left - right) / 2
+        if abs(offset) < 0.06 or max(left, right) > 2.0:
+            return
+        await self.say(f"    {abs(offset):.2f} m to the {'left' if offset > 0 else 'right'}")
+        side = math.pi / 2 if offset > 0 else -math.pi / 2
+        await self.set("runaway", "safe_distance", 0.1)
+        try:
+            await self.turn(side, keep=["runaway"])
+            o = await self.odom()
+            d = abs(offset)
+            await self.goto(o.x + d * math.cos(o.theta), o.y + d * math.sin(o.theta), within=10)
+            await self.turn(wrap(o.theta - side - (await self.odom()).theta), keep=["runaway"])
+        finally:
+            await self.set("runaway", "safe_distance", 0.1)  # still in the car
+
+    async def enclosed(self) -> bool:
+        """Whether walls are near all round (inside a car: all but the door's sonars)."""
+        ranges = await self.sonar()
+        return sum(1 for r in ranges if r < 1.9) >= SONARS - 6
+
+    async def look_round(self, barcode: int) -> bool:
+        """Turns round in place until ``barcode`` is in view; False if it never is."""
+        await self.set("track_barcode", "id", barcode)
+        await self.use("runaway", "track_barcode")
+        self.send("step", cycles=3)
+        self.prefetch("target", "odom")
+        if (await self.value("target"))["seen"]:
+            return True
+        here = await self.odom()
+        await self.set("turn", "angle", 2 * math.pi)
+        await self.use("runaway", "turn", "track_barcode", restart=["turn"])
+        near = f"abs(odom.theta - {here.theta + 2 * math.pi:.4f}) < 0.1"
+        return await self.wait(f"target.seen && target.id == {barcode}", near, within=15) == 0
+
+    async def escape(self, seconds: float) -> None:
+        """Gets away from where the robot is stuck, then wanders a while."""
+        await self.unstick()
+        await self.use("runaway", "avoid", "wander")
+        await self.wait(within=seconds)
+
+    async def follow(self, step: Mapping[str, Any]) -> bool:
+        """A route step ``follow: hallway, until: …`` (docs/maps.md, "Route steps").
+
+        ``until: junction`` or ``door`` waits for the ``count``-th opening (default 1) on
+        ``side`` (either when not given) since the step began, each counted once, as it passes;
+        ``until: barcode`` until that barcode is in view; ``until: wall`` until a wall stops the
+        robot; ``until: distance`` after ``distance`` m. With ``distance`` and another ``until``,
+        the first ``distance`` m are followed without looking.
+        """
+        until = str(step.get("until"))
+        side = step.get("side")
+        count = int(step.get("count", 1))
+        await self.restore("follow_hallway", "speed")
+        if step.get("distance") is not None:
+            if not await self.follow_for(float(step["distance"])):
+                return False
+            if until == "distance":
+                return True
+        if until == "barcode":
+            code = int(step["barcode"])
+            await self.set("track_barcode", "id", code)
+            await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
+            return await self.wait(f"target.seen && target.id == {code}", within=180) == 0
+        if until == "wall":
+            await self.use("runaway", "avoid", "follow_hallway")
+            return await self.wait("sonar.range[0] < 0.8 && abs(odom.v) < 0.03", within=180) == 0
+        detector, signal = (
+            ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
+        )
+        await self.use("runaway", "avoid", "follow_hallway", detector, restart=[detector])
+        sides = [side] if side in ("left", "right") else ["left", "right"]
+        seen = " || ".join(f"{signal}.{s}" for s in sides)
+        for k in range(1, count + 1):
+            if await self.wait(seen, within=180):
+                return False
+            if k < count:
+                await self.say(f"      {until} {k} of {count} passed")
+                # On past this one: counted again only once it is behind.
+                if await self.wait(f"!({seen})", within=60):
+                    return False
+        if until == "junction":
+            # On into the junction's middle before turning: the opening was seen beside.
+            o = await self.odom()
+            if not await self.goto(o.x + 0.6 * math.cos(o.theta), o.y + 0.6 * math.sin(o.theta)):
+                return False
+        return True
+
+    async def follow_for(self, metres: float) -> bool:
+        """Follows the hallway for ``metres`` (odometry, straight-line from here)."""
+        o = await self.odom()
+        await self.use("runaway", "avoid", "follow_hallway")
+        far = (
+            f"(odom.x - {o.x!r}) * (odom.x - {o.x!r}) + (odom.y - {o.y!r}) * (odom.y - {o.y!r})"
+            f" >= {metres * metres!r}"
+        )
+        return await self.wait(far, within=30 + 4 * metres) == 0
+
+    async def run_route(
+        self,
+        leg: str,
+        steps: Sequence[Mapping[str, Any]],
+        *,
+        stop_before_home: int | None = None,
+        on_home: Callable[[int], Awaitable[None]] | None = None,
+    ) -> None:
+        """Interprets the route hints ``steps`` of ``leg`` (docs/maps.md, "Route steps").
+
+        Stops before a ``home`` on ``stop_before_home``; ``on_home`` is told each barcode homed on.
+        """
+        pending_home: int | None = None
+        for n, step in enumerate(steps):
+            if step.get("home") is not None and int(step["home"]) == stop_before_home:
+                return
+            text = ", ".join(f"{k} {v}" for k, v in step.items())
+            await self.say(f"    route {leg}, step {n + 1}: {text}")
+            ok = True
+            if step.get("follow"):
+                ok = await self.follow(step)
+            if ok and step.get("home") is not None:
+                pending_home = int(step["home"])
+                if on_home is not None:
+                    await on_home(pending_home)
+                ok = False
+                for _attempt in range(3):
+                    await self.set("track_barcode", "id", pending_home)
+                    await self.use("runaway", "avoid", "track_barcode")
+                    self.send("step", cycles=3)
+                    if not (await self.value("target"))["seen"] and not await self.search(
+                        pending_home, 60
+                    ):
+                        continue
+                    if any(s.get("pass") for s in steps[n + 1 :]):
+                        ok = await self.line_up(pending_home, DOOR_STANDOFF)
+                    else:
+                        ok = await self.home_on(
+                            pending_home, self.normal[("home", "stop_distance")]
+                        )
+                    if ok:
+                        break
+                    await self.say(f"    could not home on barcode {pending_home}: again")
+            if ok and step.get("pass"):
+                hint = next(
+                    (str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None
+                )
+                for _attempt in range(3):
+                    ok = await self.pass_door(pending_home, hint)
+                    if ok or pending_home is None:
+                        break
+                    await self.say(f"    lining up with barcode {pending_home} again")
+                    await self.look_round(pending_home)
+                    await self.line_up(pending_home, DOOR_STANDOFF)
+                pending_home = None
+            elif ok and step.get("turn"):
+                if any(s.get("pass") for s in steps[n + 1 : n + 2]) and pending_home is not None:
+                    await self.say("      (the door finder of the next step faces the door)")
+                    continue
+                angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
+                    str(step["turn"])
+                ]
+                ok = await self.turn(angle)
+            if not ok:
+                raise PhaseFailed(f"route {leg}, step {n + 1} ({text}) failed")
