@@ -206,7 +206,7 @@ class Delivery(Sequencer):
         self.car = 0
         # Crowded lobby: let the robot come nearer to things.
         await self.set("runaway", "safe_distance", 0.15)
-        await self.set("follow_hallway", "speed", 0.6)
+        await self.set("follow_hallway", "speed", 0.8)
         if not await self.turn(-math.pi / 2, keep=["runaway"]):
             return False
         side = "left"  # the cars' wall, seen from the patrol heading
