@@ -202,46 +202,73 @@ class Delivery(Sequencer):
             await self.say("    no car to board: calling again")
         raise PhaseFailed("could not board a car")
 
+    async def restore_lobby_patrol(self) -> None:
+        """The parameters of the lobby patrol (a crowded lobby: nearer to things)."""
+        await self.set("runaway", "safe_distance", 0.15)
+        await self.set("follow_hallway", "speed", 0.8)
+
     async def wait_for_car(self) -> bool:
         """Patrols the lobby along the cars until a car's door opens, identifies it, enters."""
         m = self.m
         await self.phase(6, "waiting for a car: patrolling the lobby, watching for an open door")
         self.car = 0
-        # Crowded lobby: let the robot come nearer to things.
-        await self.set("runaway", "safe_distance", 0.15)
-        await self.set("follow_hallway", "speed", 0.8)
+        await self.restore_lobby_patrol()
         if not await self.turn(-math.pi / 2, keep=["runaway"]):
             return False
-        side = "left"  # the cars' wall, seen from the patrol heading
+        await self.set("identify_car", "first_id", m.car_barcode_first)
+        await self.set("identify_car", "cars", m.cars)
         deadline = self.t + 60
         while self.t < deadline:
-            await self.use("runaway", "follow_hallway", "detect_door", restart=["detect_door"])
+            # A door opening beside the robot (either wall: cars may be on any), or a car's
+            # panel barcode in view ahead through its open door.
+            await self.use(
+                "runaway",
+                "follow_hallway",
+                "detect_door",
+                "identify_car",
+                restart=["detect_door", "identify_car"],
+            )
             got = await self.wait(
-                f"door.{side}",
+                "door.left || door.right",
+                "car > 0",
                 "sonar.range[0] < 0.75 && abs(odom.v) < 0.03",
                 within=deadline - self.t,
             )
-            if got == 2:
+            if got == 3:
                 break
-            if got == 1:
+            if got == 2:
                 await self.say("    end of the lobby: turning back")
                 if not await self.turn(math.pi, keep=["runaway"]):
                     return False
-                side = "right" if side == "left" else "left"
                 continue
-            self.prefetch("door", "odom")  # the turn reads the odometry
-            bearing = float((await self.value("door"))["bearing"])
+            if got == 1:
+                code = m.car_barcode_first + int(await self.value("car")) - 1
+                await self.set("track_barcode", "id", code)
+                await self.use("runaway", "track_barcode")
+                self.send("step", cycles=1)
+                bearing = float((await self.value("target"))["bearing"])
+            else:
+                self.prefetch("door", "odom")  # the turn reads the odometry
+                bearing = float((await self.value("door"))["bearing"])
             await self.phase(6, "a car's door opened: facing it, reading which car it is")
-            if not await self.turn(bearing, keep=["runaway"]):
+            if not await self.turn(bearing, keep=["runaway", "identify_car"]):
                 continue
-            await self.set("identify_car", "first_id", m.car_barcode_first)
-            await self.set("identify_car", "cars", m.cars)
             await self.set("runaway", "safe_distance", 0.1)
             await self.set("enter_car", "distance", 4.0)
-            await self.use(
-                "runaway", "enter_car", "identify_car", restart=["enter_car", "identify_car"]
+            await self.use("runaway", "enter_car", "identify_car", restart=["enter_car"])
+            started = self.t
+            got = await self.wait(
+                "car > 0", "car_entered", f"car == 0 && time >= {started + 4!r}", within=20
             )
-            if await self.wait("car > 0", "car_entered", within=20) == 0:
+            if got == 2:
+                # An opening that shows no car's panel: some other door, or a car that was
+                # closing. On with the patrol.
+                await self.say("    no car behind that opening: patrolling on")
+                await self.restore_lobby_patrol()
+                if await self.turn(-bearing, keep=["runaway"]):
+                    continue
+                break
+            if got == 0:
                 self.car = int(await self.value("car"))
                 await self.phase(7, f"car {self.car} arrived: entering it")
                 await self.wait("car_entered", within=20)
