@@ -175,6 +175,16 @@ pub struct Opening {
     pub width: f64,
 }
 
+/// `sonar.health`: which sonars are taken to be dead (they read no echo
+/// however the robot moves, while their neighbours see things).
+#[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
+pub struct SonarHealth {
+    /// Number of dead sonars.
+    pub dead: i64,
+    /// Bit i set: sonar i is dead.
+    pub mask: i64,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

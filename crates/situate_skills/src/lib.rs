@@ -21,6 +21,7 @@
 //! | `std.follow_hallway` | `sonar.range` | `drive` (every cycle) |
 //! | `std.detect_door` | `sonar.range` | `door` (every cycle) |
 //! | `std.detect_intersection` | `sonar.range` | `junction` (every cycle) |
+//! | `std.sonar_filter` | `sonar.raw`, `odom` (optional) | `sonar.range`, `sonar.health` (every cycle) |
 //! | `std.fit_wall` | `sonar.range` | `wall` (every cycle) |
 //! | `std.locate_door` | `sonar.range` | `opening` (every cycle) |
 //! | `std.track_barcode` | `barcodes` | `target` (every cycle) |
@@ -42,6 +43,7 @@
 //! afresh.
 
 mod actions;
+mod health;
 mod motion;
 mod perception;
 mod scan;
@@ -50,6 +52,7 @@ pub mod util;
 use situate::manager::Registry;
 
 pub use actions::{PushButton, Say};
+pub use health::SonarFilter;
 pub use motion::{Avoid, EnterCar, FollowHallway, Home, HomePosition, LeaveCar, PassDoor, Runaway, Turn, Wander};
 pub use perception::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
 pub use scan::{fit_wall, locate_door, FitWall, LocateDoor, ScanModel};
@@ -64,6 +67,7 @@ pub fn register(registry: &mut Registry) {
         .register::<DetectDoor>()
         .register::<DetectIntersection>()
         .register::<FitWall>()
+        .register::<SonarFilter>()
         .register::<LocateDoor>()
         .register::<TrackBarcode>()
         .register::<Home>()

@@ -3,6 +3,7 @@
 
 mod actions;
 mod harness;
+mod health;
 mod manager;
 mod motion;
 mod perception;
