@@ -95,6 +95,8 @@ class Mission:
     cars: int
     message: str
     route: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    #: The goal floor's call button barcode (where the `button_to_office` route starts).
+    goal_button_barcode: int | None = None
 
     @staticmethod
     def from_json(text: str) -> Mission:
@@ -110,6 +112,9 @@ class Mission:
             cars=int(m.get("cars", 4)),
             message=str(m.get("message") or "Hello!"),
             route={str(k): list(v) for k, v in (m.get("route") or {}).items()},
+            goal_button_barcode=(
+                int(m["goal_button_barcode"]) if m.get("goal_button_barcode") is not None else None
+            ),
         )
 
 
@@ -350,14 +355,26 @@ class Delivery(Sequencer):
 
     async def to_office(self) -> None:
         """Phases 11 to 13: the route hints from the car to the office, then deliver."""
-        await self.phase(
-            11, f"following the corridor to the office's barcode {self.m.office_barcode}"
-        )
+        m = self.m
 
         async def homing(barcode: int) -> None:
             await self.phase(12, f"homing on barcode {barcode}, passing the door")
 
-        await self.run_route("car_to_office", self.m.route.get("car_to_office", []), on_home=homing)
+        if "button_to_office" in m.route and m.goal_button_barcode is not None:
+            # The route starts in front of this floor's call button, whichever car came up.
+            button = m.goal_button_barcode
+            await self.phase(11, f"finding this floor's call button (barcode {button})")
+            if not await self.look_round(button) and not await self.search(button, 120):
+                raise PhaseFailed(f"the call button of floor {m.goal_floor} is nowhere in sight")
+            if not await self.line_up(button, 1.0):
+                raise PhaseFailed(f"could not line up with barcode {button}")
+            await self.say(f"    following the route to the office's barcode {m.office_barcode}")
+            await self.run_route("button_to_office", m.route["button_to_office"], on_home=homing)
+        else:
+            await self.phase(
+                11, f"following the corridor to the office's barcode {m.office_barcode}"
+            )
+            await self.run_route("car_to_office", m.route.get("car_to_office", []), on_home=homing)
         await self.phase(13, "delivering the message")
         count = int(await self.value("speaker.count") or 0)
         await self.set("say", "message", self.m.message)

@@ -8,8 +8,8 @@ raw outcomes). The sets:
 - ``default``: ``maps/default.yaml`` with run seeds 10000, 10001, … (no test uses them);
 - ``generated``: buildings from ``situate map generate --seed G`` for G = 20000, 20001, …
   (held out: no test or tuning uses them), one run each with run seed G;
-- ``generated-hard``: the same buildings with people walking and one dead sonar
-  (``situate map generate --people … --dead-sonar …``), when the generator offers it.
+- ``generated-hard``: the same buildings with people walking, doors closed now and then and
+  one dead sonar (``situate demo --people 3 --door-closures --dead-sonar K``, K from the seed).
 
 Usage, from the repository's top directory::
 
@@ -52,6 +52,8 @@ class Case:
     seed: int
     map: Path | None = None
     map_seed: int | None = None
+    #: More arguments of ``situate demo`` (the simulator's people and faults).
+    extra: list[str] = field(default_factory=list)
     outcome: dict[str, Any] = field(default_factory=dict)
     tail: list[str] = field(default_factory=list)
 
@@ -60,7 +62,7 @@ class Case:
         args = ["--seed", str(self.seed)]
         if self.map is not None:
             args += ["--map", str(self.map)]
-        return args
+        return args + self.extra
 
 
 def find_binary(given: str | None) -> Path:
@@ -82,6 +84,14 @@ def generate(binary: Path, seed: int, out: Path, extra: list[str]) -> str | None
     if done.returncode != 0:
         return (done.stderr.strip() or done.stdout.strip() or "failed").splitlines()[0]
     return None
+
+
+def knows(binary: Path, command: str, option: str) -> bool:
+    """Whether ``situate COMMAND`` takes ``option`` (from its help)."""
+    done = subprocess.run(
+        [str(binary), command, "--help"], capture_output=True, text=True, check=False
+    )
+    return option in done.stdout
 
 
 def run(binary: Path, case: Case) -> Case:
@@ -203,22 +213,30 @@ def main() -> int:
     skipped: dict[str, str] = {}
     with tempfile.TemporaryDirectory(prefix="situate-delivery-") as tmp:
         hard = a.generated if a.hard is None else a.hard
-        for name, count, extra in (
-            ("generated", a.generated, []),
-            ("generated-hard", hard, ["--people", "3", "--dead-sonar", "1"]),
+        for name, count, hard_world in (
+            ("generated", a.generated, False),
+            ("generated-hard", hard, True),
         ):
             if count == 0:
+                continue
+            if hard_world and not knows(binary, "demo", "--people"):
+                skipped[name] = "this situate program's demo has no --people"
                 continue
             cases: list[Case] = []
             for k in range(count):
                 seed = GENERATED_SEEDS + k
-                path = Path(tmp) / f"{name}-{seed}.yaml"
-                err = generate(binary, seed, path, extra)
+                path = Path(tmp) / f"generated-{seed}.yaml"
+                err = None if path.exists() else generate(binary, seed, path, [])
                 if err is not None:
                     skipped[name] = err
                     cases = []
                     break
-                cases.append(Case(name, seed, path, seed))
+                extra = (
+                    ["--people", "3", "--door-closures", "--dead-sonar", str(seed % 24)]
+                    if hard_world
+                    else []
+                )
+                cases.append(Case(name, seed, path, seed, extra))
             if cases:
                 sets[name] = cases
         everything = [c for cases in sets.values() for c in cases]
