@@ -10,6 +10,7 @@
 //!   world, with the ports of the robot's signal contract (`situate_robot`).
 
 pub mod check;
+pub mod generate;
 pub mod geom;
 pub mod map;
 pub mod skills;
