@@ -668,7 +668,8 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     // The lobby above the corridor, its entry on the junction's corridor.
     let (ox, oy) = (jx + wb / 2 - bx, w + lb);
     lobby_walls(&mut fs, ox, oy, true);
-    let button = |id: i64| Bar { id, at: (ox + bx, oy + lh - rng_off(id)), facing: -90 };
+    let boff = rng.int(1, 2);
+    let button = |id: i64| Bar { id, at: (ox + bx, oy + lh - boff), facing: -90 };
     fs.lobby = Some(button(30));
     let door_gaps_s: Vec<(i64, i64)> = fs.doors.iter().map(|d| (d.a.0, d.b.0)).collect();
     let mut boxes = Vec::new();
@@ -912,12 +913,6 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     let _ = seed;
     b.transform(rng.coin(), rng.int(0, 3));
     Built { building: b, corridor_widths: widths, junctions: nj as usize, clutter: density }
-}
-
-/// 1 or 2 cm: how far a button sits off its wall (fixed per id, so every
-/// floor's button is drawn alike).
-fn rng_off(id: i64) -> i64 {
-    2 - (id % 2)
 }
 
 /// From the office's corridor to inside it.
