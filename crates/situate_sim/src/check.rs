@@ -338,7 +338,7 @@ fn outward(c: &Car) -> P2 {
 pub fn readable_from(b: &Barcode, p: P2, segs: &[Seg]) -> bool {
     let rel = b.at.minus(p);
     let d = rel.norm();
-    if d > READ_RANGE || d < 1e-9 {
+    if !(1e-9..=READ_RANGE).contains(&d) {
         return false;
     }
     if let Some(f) = b.facing {

@@ -363,6 +363,7 @@ fn clutter(rng: &mut Rng, f: &mut FloorB, runs_: &[Run], density: f64, boxes: &m
 
 /// A door with its barcode beside it, on a horizontal wall (y fixed) at
 /// [x0, x0 + w]; the barcode faces `facing` (90 or −90) and sits on that side.
+#[allow(clippy::too_many_arguments)]
 fn hdoor(rng: &mut Rng, name: &str, y: i64, x0: i64, w: i64, off: (f64, f64), id: i64, facing: i64) -> DoorB {
     let o = rng.cm(off);
     let bx = if rng.coin() { x0 - o } else { x0 + w + o };
@@ -371,6 +372,7 @@ fn hdoor(rng: &mut Rng, name: &str, y: i64, x0: i64, w: i64, off: (f64, f64), id
 }
 
 /// The same on a vertical wall (x fixed), the barcode facing 0 or 180.
+#[allow(clippy::too_many_arguments)]
 fn vdoor(rng: &mut Rng, name: &str, x: i64, y0: i64, w: i64, off: (f64, f64), id: i64, facing: i64) -> DoorB {
     let o = rng.cm(off);
     let by = if rng.coin() { y0 - o } else { y0 + w + o };
@@ -589,7 +591,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     let mut pieces: Vec<(Pt, Pt)> = Vec::new();
     let want = rng.int(2, 6);
     let names = ["desk", "table", "bench", "cabinet", "shelf", "robot parts"];
-    for k in 0..want as usize {
+    for name in names.iter().take(want as usize) {
         for _ in 0..30 {
             let (a, d) = (rng.int(40, 160), rng.int(40, 90));
             let (lo, hi) = match rng.int(0, 3) {
@@ -617,7 +619,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
                 continue;
             }
             pieces.push((lo, hi));
-            fs.obstacles.push((names[k].to_string(), lo, hi));
+            fs.obstacles.push((name.to_string(), lo, hi));
             break;
         }
     }
