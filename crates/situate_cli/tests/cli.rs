@@ -475,3 +475,71 @@ fn the_demo_without_its_sequencer_says_where_to_run_it() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("no sequencer at `demo/deliver.py`"), "{}", stderr(&out));
 }
+
+// --- situate map generate / map check --------------------------------------
+
+#[test]
+fn map_generate_then_map_check_round_trips() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    for seed in [3u64, 11, 29] {
+        let path = dir.path().join(format!("g{seed}.yaml"));
+        let out = situate(["map", "generate", "--seed", &seed.to_string(), "--cars", "2..3", "-o", &shown(&path)]);
+        assert_no_panic(&out);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let first = std::fs::read_to_string(&path).expect("the map is written");
+        // The same seed and options: the same bytes.
+        let again = situate(["map", "generate", "--seed", &seed.to_string(), "--cars", "2..3", "-o", "-"]);
+        assert_eq!(stdout(&again), first);
+        let out = situate(["map", "check", &shown(&path)]);
+        assert!(out.status.success(), "{}{}", stdout(&out), stderr(&out));
+        assert_eq!(stdout(&out).trim(), format!("{}: ok", shown(&path)));
+        let out = situate(["map", "check", "--json", &shown(&path)]);
+        let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
+        assert_eq!(j["ok"], true);
+    }
+    // Options out of range: refused, naming the option.
+    let out = situate(["map", "generate", "--seed", "1", "--cars", "7", "-o", "-"]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--cars"), "{}", stderr(&out));
+}
+
+#[test]
+fn a_failing_map_check_exits_non_zero_with_every_finding_and_its_line() {
+    let small = std::fs::read_to_string(repo().join("maps/small.yaml")).expect("small.yaml");
+    let broken = small.replacen("door: south, barcode: 202", "door: south, door_width: 0.6, barcode: 202", 1).replacen(
+        "at: [4.25, 0.02], facing_deg: 90}",
+        "at: [4.25, 0.02], facing_deg: -90}",
+        1,
+    );
+    let (_dir, path) = robot_file("broken-map.yaml", &broken);
+    let out = situate(["map", "check", &shown(&path)]);
+    assert_no_panic(&out);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    let line = |needle: &str| broken.lines().position(|l| l.contains(needle)).map(|i| i + 1).unwrap_or(0);
+    let car = format!("{}:{}: elevator, car 2: door 0.60 m wide", shown(&path), line("door_width: 0.6"));
+    let code =
+        format!("{}:{}: floor 0, door 1 (lab), barcode: barcode 10 cannot be read", shown(&path), line("name: lab"));
+    assert!(err.contains(&car), "{err}");
+    assert!(err.contains(&code), "{err}");
+    assert!(err.contains("2 findings"), "{err}");
+    let out = situate(["map", "check", "--json", &shown(&path)]);
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
+    assert_eq!(j["ok"], false);
+    assert_eq!(j["findings"].as_array().map(Vec::len), Some(2));
+    // A loader error: the file, line and element.
+    let (_dir2, path2) = robot_file("missing.yaml", small.replacen("{home: 40}", "{home: 99}", 1));
+    let out = situate(["map", "check", &shown(&path2)]);
+    assert_eq!(out.status.code(), Some(1));
+    let want = format!("{}:{}: mission, route car_to_office, step 1: no barcode 99", shown(&path2), line("{home: 40}"));
+    assert!(stderr(&out).contains(&want), "{}", stderr(&out));
+}
+
+#[test]
+fn check_on_a_map_file_says_to_use_map_check() {
+    let out = situate(["check", &shown(&repo().join("maps/small.yaml"))]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("this is a map file: use `situate map check"), "{}", stderr(&out));
+}

@@ -9,6 +9,8 @@
 //!   `sim.arm`, `sim.speaker`, `sim.altimeter`, `sim.truth`) over one shared
 //!   world, with the ports of the robot's signal contract (`situate_robot`).
 
+pub mod check;
+pub mod generate;
 pub mod geom;
 pub mod map;
 pub mod skills;

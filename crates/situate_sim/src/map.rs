@@ -66,6 +66,10 @@ pub struct Barcode {
 pub struct Door {
     pub seg: Seg,
     pub barcode: Option<Barcode>,
+    /// The door's name (may be empty).
+    pub name: String,
+    /// The line of the map file it is given on (0: not from a file).
+    pub line: usize,
 }
 
 /// A floor's elevator lobby: the call button and its barcode.
@@ -83,11 +87,15 @@ pub struct Lobby {
 pub struct Office {
     pub polygon: Vec<P2>,
     pub barcode: Barcode,
+    /// The line of the map file it is given on (0: not from a file).
+    pub line: usize,
 }
 
 /// One floor of the building.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Floor {
+    /// The line of the map file the floor starts on (0: not from a file).
+    pub line: usize,
     pub level: i64,
     pub name: String,
     pub walls: Vec<Seg>,
@@ -193,8 +201,14 @@ pub struct Elevator {
 pub struct RouteStep {
     /// `hallway` (follow the corridor).
     pub follow: Option<String>,
-    /// When to stop following: `junction`, `door`, `barcode` or `wall`.
+    /// When to stop following: `junction`, `door`, `barcode`, `wall` or
+    /// `distance`.
     pub until: Option<String>,
+    /// With `until: junction` or `door`: stop at the N-th such opening on
+    /// `side` (or either side) since the step started (default 1).
+    pub count: Option<i64>,
+    /// With `until: distance`: how far to follow the corridor, m (> 0).
+    pub distance: Option<f64>,
     /// Which side the door or junction must be on: `left` or `right`.
     pub side: Option<String>,
     /// Turn to make (after `until`, or alone): `left`, `right` or `back`.
@@ -205,6 +219,8 @@ pub struct RouteStep {
     pub home: Option<i64>,
     /// Pass the door ahead (`door`).
     pub pass: Option<String>,
+    /// The line of the map file the step is on (0: not from a file).
+    pub line: usize,
 }
 
 /// What the robot's operator would tell the sequencer.
@@ -364,21 +380,26 @@ impl Map {
                             o.insert(k.into(), json!(v));
                         }
                     }
-                    for (k, v) in [("barcode", s.barcode), ("home", s.home)] {
+                    for (k, v) in [("count", s.count), ("barcode", s.barcode), ("home", s.home)] {
                         if let Some(v) = v {
                             o.insert(k.into(), json!(v));
                         }
+                    }
+                    if let Some(d) = s.distance {
+                        o.insert("distance".into(), json!(d));
                     }
                     Json::Object(o)
                 })
                 .collect();
             route.insert(name.clone(), Json::Array(steps));
         }
+        let goal_button = self.floor(m.goal_floor).and_then(|f| f.lobby.as_ref()).map(|l| l.barcode);
         json!({
             "start": {"floor": m.start_floor, "x": m.start.0, "y": m.start.1, "theta": m.start.2},
             "goal_floor": m.goal_floor, "lab_door_barcode": m.lab_door_barcode,
             "call_button_barcode": m.call_button_barcode, "office_barcode": m.office_barcode,
             "car_barcode_first": m.car_barcode_first, "cars": self.elevator.cars.len(),
+            "goal_button_barcode": goal_button,
             "message": m.message, "route": route,
         })
     }
@@ -433,7 +454,8 @@ impl Map {
                 for id in [st.barcode, st.home].into_iter().flatten() {
                     if !seen.contains_key(&id) {
                         let el = format!("mission, route {leg}, step {}", i + 1);
-                        return Err(r.err(line("route"), &el, format!("no barcode {id} in the map")));
+                        let at = if st.line > 0 { Pos::new(st.line, 1) } else { line("route") };
+                        return Err(r.err(at, &el, format!("no barcode {id} in the map")));
                     }
                 }
             }
@@ -711,6 +733,7 @@ impl Reader<'_> {
             for (i, d) in self.seq(ds, &fl, "doors")?.iter().enumerate() {
                 let el = format!("{fl}, door {}", i + 1);
                 let g = self.fields(d, &el, &["at", "barcode", "name"])?;
+                let name = g.get("name").map(|n| self.text(n, &el, "name")).transpose()?.unwrap_or_default();
                 let seg = self.segment(self.req(&g, "at", &el)?, &el)?;
                 if seg.len() < 2.0 * radius {
                     return Err(self.err(d.pos, &el, format!("{:.2} m wide: narrower than the robot", seg.len())));
@@ -722,7 +745,7 @@ impl Reader<'_> {
                     return Err(self.err(d.pos, &el, format!("wall {k} crosses the door (a door is a gap)")));
                 }
                 let barcode = g.get("barcode").map(|b| self.barcode(b, &format!("{el}, barcode"))).transpose()?;
-                doors.push(Door { seg, barcode });
+                doors.push(Door { seg, barcode, name, line: d.pos.line });
             }
         }
         let mut barcodes = Vec::new();
@@ -748,11 +771,11 @@ impl Reader<'_> {
                 let g = self.fields(o, &el, &["rect", "polygon", "barcode"])?;
                 let polygon = self.region(&g, &el)?;
                 let barcode = self.barcode(self.req(&g, "barcode", &el)?, &format!("{el}, barcode"))?;
-                Some(Office { polygon, barcode })
+                Some(Office { polygon, barcode, line: o.pos.line })
             }
             None => None,
         };
-        Ok(Floor { level, name, walls, obstacles, doors, barcodes, lobby, office })
+        Ok(Floor { line: n.pos.line, level, name, walls, obstacles, doors, barcodes, lobby, office })
     }
 
     fn range(&self, f: &Fields<'_>, key: &str, el: &str, default: (f64, f64)) -> Result<(f64, f64), MapError> {
@@ -891,7 +914,8 @@ impl Reader<'_> {
     }
 
     fn step(&self, n: &N, el: &str) -> Result<RouteStep, MapError> {
-        let f = self.fields(n, el, &["follow", "until", "side", "turn", "barcode", "home", "pass"])?;
+        let keys = ["follow", "until", "side", "turn", "barcode", "home", "pass", "count", "distance"];
+        let f = self.fields(n, el, &keys)?;
         let word = |key: &str, allowed: &[&str]| -> Result<Option<String>, MapError> {
             let Some(v) = f.get(key) else { return Ok(None) };
             let t = self.text(v, el, key)?;
@@ -902,13 +926,35 @@ impl Reader<'_> {
         };
         let step = RouteStep {
             follow: word("follow", &["hallway"])?,
-            until: word("until", &["junction", "door", "barcode", "wall"])?,
+            until: word("until", &["junction", "door", "barcode", "wall", "distance"])?,
             side: word("side", &["left", "right"])?,
             turn: word("turn", &["left", "right", "back"])?,
             barcode: f.get("barcode").map(|b| self.int(b, el, "barcode")).transpose()?,
             home: f.get("home").map(|b| self.int(b, el, "home")).transpose()?,
             pass: word("pass", &["door"])?,
+            count: f.get("count").map(|c| self.int(c, el, "count")).transpose()?,
+            distance: f.get("distance").map(|d| self.num(d, el, "distance")).transpose()?,
+            line: n.pos.line,
         };
+        if let (Some(c), Some(node)) = (step.count, f.get("count")) {
+            if c < 1 {
+                return Err(self.err(node.pos, el, format!("count must be at least 1, got {c}")));
+            }
+            if !matches!(step.until.as_deref(), Some("junction" | "door")) {
+                return Err(self.err(node.pos, el, "`count` goes with `until: junction` or `until: door`"));
+            }
+        }
+        if let (Some(d), Some(node)) = (step.distance, f.get("distance")) {
+            if d <= 0.0 {
+                return Err(self.err(node.pos, el, format!("distance must be positive, got {d}")));
+            }
+            if step.until.as_deref() != Some("distance") {
+                return Err(self.err(node.pos, el, "`distance` goes with `until: distance`"));
+            }
+        }
+        if step.until.as_deref() == Some("distance") && step.distance.is_none() {
+            return Err(self.err(n.pos, el, "`until: distance` needs `distance: M` (metres)"));
+        }
         if step.follow.is_some() && step.until.is_none() {
             return Err(self.err(n.pos, el, "`follow` needs `until`"));
         }
