@@ -38,6 +38,8 @@ DOOR_STANDOFF = 0.9
 MAX_DOOR_WIDTH = 1.6
 DOOR_WIDTH = 1.1
 #: Time to get out of the lab before giving up, s.
+#: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
+WALL_AHEAD_M = 1.2
 #: Wandering between two looks round, s.
 SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
@@ -153,6 +155,8 @@ class Sequencer:
         self.phase_text = ""
         #: Searches so far: each wanders along a path of its own (seeded by ``seed`` and this).
         self.searches = 0
+        #: The odometry heading a route planned the robot to be following (see `run_route`).
+        self.corridor_heading: float | None = None
         self.stream: situate.Stream[Any] | None = None
         self.params: dict[tuple[str, str], Any] = {}
         #: Replies to requests sent but not yet awaited (see `send`).
@@ -301,7 +305,10 @@ class Sequencer:
             with contextlib.suppress(situate.SituateError):
                 p = await self.value("truth.pose")
                 if p is not None:
-                    extra = f"   (truth: floor {p['floor']} x {p['x']:.2f} y {p['y']:.2f})"
+                    extra = (
+                        f"   (truth: floor {p['floor']} x {p['x']:.2f} y {p['y']:.2f}"
+                        f" heading {math.degrees(p['theta']):.0f}°)"
+                    )
         print(f"[{self.t:7.1f} s] {text}{extra}", flush=True)
 
     async def phase(self, number: int, text: str) -> None:
@@ -637,8 +644,10 @@ class Sequencer:
             await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
             return await self.wait(f"target.seen && target.id == {code}", within=180) == 0
         if until == "wall":
+            # Up to the wall ahead: about the middle of the corridor it ends in (corridors are
+            # 1.8 to 2.6 m wide), before avoidance would start turning away from it.
             await self.use("runaway", "avoid", "follow_hallway")
-            return await self.wait("sonar.range[0] < 0.8 && abs(odom.v) < 0.03", within=180) == 0
+            return await self.wait(f"sonar.range[0] < {WALL_AHEAD_M}", within=180) == 0
         detector, signal = (
             ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
         )
@@ -683,6 +692,7 @@ class Sequencer:
         Stops before a ``home`` on ``stop_before_home``; ``on_home`` is told each barcode homed on.
         """
         pending_home: int | None = None
+        self.corridor_heading = (await self.odom()).theta
         for n, step in enumerate(steps):
             if step.get("home") is not None and int(step["home"]) == stop_before_home:
                 return
@@ -711,6 +721,7 @@ class Sequencer:
                             pending_home, self.normal[("home", "stop_distance")]
                         )
                     if ok:
+                        self.corridor_heading = (await self.odom()).theta
                         break
                     await self.say(f"    could not home on barcode {pending_home}: again")
             if ok and step.get("pass"):
@@ -732,6 +743,12 @@ class Sequencer:
                 angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
                     str(step["turn"])
                 ]
-                ok = await self.turn(angle)
+                # From the heading the route planned (the last turn's, or the robot's where the
+                # leg began or after homing), not from wherever following a corridor and
+                # stepping into a junction left it facing: errors do not add up turn by turn.
+                here = (await self.odom()).theta
+                goal = (here if self.corridor_heading is None else self.corridor_heading) + angle
+                ok = await self.turn(wrap(goal - here))
+                self.corridor_heading = goal
             if not ok:
                 raise PhaseFailed(f"route {leg}, step {n + 1} ({text}) failed")
