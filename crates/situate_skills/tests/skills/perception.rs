@@ -181,3 +181,43 @@ fn identify_car_maps_barcode_ids_to_car_numbers() {
     assert_eq!(car(&[], &[]), 0, "then none");
     assert_eq!(car(&[99, 104], &[1.0, 1.0]), 0, "99 and 104 are no cars");
 }
+
+/// A corridor 2.33 m wide (y −1.15..1.18) as a generated building has it:
+/// doors on the left (1.25, 1.25, 1.1 m), bins and boxes against both walls
+/// (one pair 0.4 m from a door, one box 0.6 m before the junction), and a
+/// side corridor 2.09 m wide on the left from x = 30.6.
+fn cluttered() -> Scene {
+    let mut s = Scene::new();
+    for (a, b) in [(0.0, 16.36), (17.61, 21.93), (23.18, 27.29), (28.39, 30.6), (32.69, 40.0)] {
+        s = s.wall(a, 1.18, b, 1.18);
+    }
+    s = s.wall(30.6, 1.18, 30.6, 8.0).wall(32.69, 1.18, 32.69, 8.0).wall(0.0, -1.15, 40.0, -1.15);
+    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
+        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
+    };
+    for (x0, y0, x1, y1) in [
+        (19.89, 0.75, 20.21, 1.18),
+        (20.88, 0.76, 21.28, 1.18),
+        (29.6, 0.8, 30.0, 1.18),
+        (18.3, -1.15, 18.79, -0.71),
+        (20.72, -1.15, 21.11, -0.9),
+        (23.57, -1.15, 23.93, -0.86),
+        (27.82, -1.15, 28.08, -0.89),
+    ] {
+        s = rect(s, x0, y0, x1, y1);
+    }
+    s
+}
+
+#[test]
+fn detect_intersection_takes_no_door_beside_clutter_for_a_junction_and_finds_the_junction() {
+    for (seed, y) in [(1u64, 0.0), (2, 0.0), (3, 0.25), (4, -0.25), (5, 0.1)] {
+        let mut h = Harness::new::<DetectIntersection>();
+        let trace: Vec<(f64, Junction)> =
+            sweep(&mut h, "junction", &cluttered(), y, 12.0, 33.0, &mut Noise::new(seed, 0.03, 0.02));
+        let early = trace.iter().find(|(x, j)| *x < 30.4 && (j.left || j.right));
+        assert!(early.is_none(), "seed {seed}, y {y}: a junction before the side corridor: {early:?}");
+        let (a, b) = span(&trace, |j| j.left).unwrap_or_else(|| panic!("seed {seed}, y {y}: junction missed"));
+        assert!(a > 30.4 && b < 33.0, "seed {seed}, y {y}: junction left over x {a:.2}..{b:.2}");
+    }
+}
