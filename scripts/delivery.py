@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -113,12 +114,24 @@ def run(binary: Path, case: Case) -> Case:
 
 
 def failure_class(case: Case) -> str:
-    """A short name for why a run failed: its last phase line and the failure's text."""
-    phase = next((ln for ln in reversed(case.tail) if "phase " in ln), "")
+    """A short name for why a run failed: the failure's text without its particulars."""
     failed = next((ln for ln in reversed(case.tail) if "mission failed" in ln), "")
-    phase = phase.split("] ", 1)[-1][:60]
-    failed = failed.split("mission failed: ", 1)[-1][:80]
-    return f"{phase} — {failed}" if failed else (phase or case.outcome.get("error", "?")[:80])
+    text = failed.split("mission failed: ", 1)[-1]
+    if text.startswith("route "):
+        # "route LEG, step N (follow hallway, until junction, …) failed": the leg and the kind.
+        leg = text.split(",", 1)[0]
+        inside = text[text.find("(") + 1 : text.rfind(")")]
+        keys = dict(part.strip().split(" ", 1) for part in inside.split(",") if " " in part.strip())
+        kind = (
+            f"until {keys['until']}"
+            if "until" in keys
+            else next((k for k in ("home", "pass", "turn") if k in keys), "step")
+        )
+        return f"{leg}: {kind}"
+    if text:
+        return re.sub(r"\d+", "N", text)
+    phase = next((ln for ln in reversed(case.tail) if "phase " in ln), "")
+    return phase.split("] ", 1)[-1][:60] or str(case.outcome.get("error", "?"))[:80]
 
 
 def report(sets: dict[str, list[Case]], skipped: dict[str, str], wall_s: float) -> str:

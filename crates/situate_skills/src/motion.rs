@@ -10,7 +10,10 @@ use std::f64::consts::FRAC_PI_2;
 use situate::prelude::*;
 use situate_robot::{sonar_bearing, Drive, Odom, Target, SONARS};
 
-use crate::util::{centre_range, echo_point, nearest_in, side_wall, wrap, Activation, LEFT, RIGHT, ROBOT_RADIUS};
+use crate::perception::Window;
+use crate::util::{
+    centre_range, echo_point, nearest_in, side_wall, wrap, Activation, SideWall, LEFT, RIGHT, ROBOT_RADIUS,
+};
 
 fn clamp_abs(x: f64, limit: f64) -> f64 {
     let limit = limit.abs();
@@ -192,18 +195,27 @@ impl Body for Wander {
     }
 }
 
-/// Follows a corridor: keeps centred between the two side walls, heading
-/// along them; when one wall is missing (a door, a side corridor), keeps
-/// from the other the half-width last seen since activation, or else
-/// `wall_distance`; straight on when no wall is seen.
-/// Slows to a stop when the range ahead falls to `stop_distance`. Writes
-/// `drive` every run.
+/// A side wall more oblique than this to the heading is no corridor wall, rad.
+const MAX_WALL_ANGLE: f64 = 0.5;
+
+/// Follows a corridor: keeps centred between the two side walls (those
+/// within about 30° of the heading), heading along them; when one wall is
+/// missing (a door, a side corridor), keeps from the other the half-width
+/// last seen since activation, or else `wall_distance`. A wall echo nearer
+/// than the corridor's usual width says (by more than `clutter_m`) is a bin
+/// or a box against the wall and is not steered by. Where no wall is seen
+/// (a crossing), it holds the corridor's direction by odometry (when `odom`
+/// is given), else goes straight on. Slows to a stop when the range ahead
+/// falls to `stop_distance`. Writes `drive` every run.
 #[derive(Skill, Default)]
 #[skill(name = "std.follow_hallway", priority = 25)]
 pub struct FollowHallway {
     /// Sonar ranges, m.
     #[input(signal = "sonar.range")]
     sonar: [f32; SONARS],
+    /// Odometry: holds the corridor's direction across openings.
+    #[input]
+    odom: Option<Odom>,
     /// The velocity command, written every run.
     #[output]
     drive: Drive,
@@ -222,28 +234,85 @@ pub struct FollowHallway {
     /// Largest turn rate, rad/s.
     #[param(default = 0.8, min = 0.0, max = 3.0, unit = "rad/s")]
     max_turn: f64,
+    /// A side echo this much nearer than the corridor's width says is clutter, m.
+    #[param(default = 0.2, min = 0.05, max = 2.0, unit = "m")]
+    clutter_m: f64,
     activation: Activation,
     half: Option<f64>,
+    /// Recent corridor widths (both walls seen).
+    widths: Window,
+    /// Recent distances of each wall ([left, right]).
+    sides: [Window; 2],
+    /// The corridor's direction in the odometry frame, once walls were seen.
+    axis: Option<f64>,
 }
 
 impl Body for FollowHallway {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let left = side_wall(&self.sonar, LEFT, self.max_wall, 0.15);
-        let right = side_wall(&self.sonar, RIGHT, self.max_wall, 0.15);
         if self.activation.fresh(cx.cycle()) {
             self.half = None;
+            self.widths = Window::default();
+            self.sides = [Window::default(); 2];
+            self.axis = None;
+        }
+        // Only walls roughly along the heading are the corridor's: at a junction the side
+        // sonars see the side corridor's walls, across the heading, and steering by them
+        // would turn the robot into it.
+        let along = |w: Option<SideWall>| w.filter(|w| w.angle.abs() < MAX_WALL_ANGLE);
+        let mut left = along(side_wall(&self.sonar, LEFT, self.max_wall, 0.15));
+        let mut right = along(side_wall(&self.sonar, RIGHT, self.max_wall, 0.15));
+        // Clutter: a wall nearer than the corridor's width (both seen) or than the wall's own
+        // recent distance (one seen) allows; the side that moved in most is the clutter.
+        match (left, right) {
+            (Some(l), Some(r)) => {
+                if let Some(width) = self.widths.quantile() {
+                    if l.distance + r.distance < width - self.clutter_m {
+                        let drop_l = self.sides[0].quantile().map_or(0.0, |q| q - l.distance);
+                        let drop_r = self.sides[1].quantile().map_or(0.0, |q| q - r.distance);
+                        if drop_l >= drop_r {
+                            left = None;
+                        } else {
+                            right = None;
+                        }
+                    }
+                }
+            }
+            (Some(l), None) if self.sides[0].quantile().is_some_and(|q| l.distance < q - self.clutter_m) => left = None,
+            (None, Some(r)) if self.sides[1].quantile().is_some_and(|q| r.distance < q - self.clutter_m) => {
+                right = None
+            }
+            _ => {}
+        }
+        if let Some(l) = left {
+            self.sides[0].push(l.distance);
+        }
+        if let Some(r) = right {
+            self.sides[1].push(r.distance);
         }
         // Half the corridor's width while both walls are seen, remembered past openings.
         if let (Some(l), Some(r)) = (left, right) {
-            let half = (l.distance + r.distance) / 2.0;
-            self.half = Some(self.half.map_or(half, |h| 0.9 * h + 0.1 * half));
+            let width = self.widths.push(l.distance + r.distance);
+            self.half = Some(width / 2.0);
         }
         let keep = self.half.unwrap_or(self.wall_distance);
         // Offset to the left of where the robot should be, and the walls' direction.
-        let (offset, angle) = match (left, right) {
-            (Some(l), Some(r)) => ((l.distance - r.distance) / 2.0, (l.angle + r.angle) / 2.0),
-            (Some(l), None) => (l.distance - keep, l.angle),
-            (None, Some(r)) => (keep - r.distance, r.angle),
+        let seen = match (left, right) {
+            (Some(l), Some(r)) => Some(((l.distance - r.distance) / 2.0, (l.angle + r.angle) / 2.0)),
+            (Some(l), None) => Some((l.distance - keep, l.angle)),
+            (None, Some(r)) => Some((keep - r.distance, r.angle)),
+            (None, None) => None,
+        };
+        let (offset, angle) = match (seen, self.odom) {
+            (Some((offset, angle)), odom) => {
+                if let Some(o) = odom {
+                    // The corridor's direction in the odometry frame (walls' angle is
+                    // relative to the heading), smoothed.
+                    let axis = wrap(o.theta + angle);
+                    self.axis = Some(self.axis.map_or(axis, |a| wrap(a + 0.1 * wrap(axis - a))));
+                }
+                (offset, angle)
+            }
+            (None, Some(o)) => (0.0, self.axis.map_or(0.0, |a| wrap(a - o.theta))),
             (None, None) => (0.0, 0.0),
         };
         // Heading wanted relative to the corridor, then relative to the robot.

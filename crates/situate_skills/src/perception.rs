@@ -32,10 +32,18 @@ impl Window {
         self.values[self.next] = v;
         self.next = (self.next + 1) % Self::N;
         self.len = (self.len + 1).min(Self::N);
+        self.quantile().unwrap_or(v)
+    }
+
+    /// The upper quartile of the window, once it holds a few values.
+    pub fn quantile(&self) -> Option<f64> {
+        if self.len < 5 {
+            return None;
+        }
         let mut sorted = self.values;
         let part = &mut sorted[..self.len];
         let q = part.len() * 3 / 4;
-        *part.select_nth_unstable_by(q, f64::total_cmp).1
+        Some(*part.select_nth_unstable_by(q, f64::total_cmp).1)
     }
 }
 

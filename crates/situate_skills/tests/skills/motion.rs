@@ -290,3 +290,48 @@ fn enter_car_stops_inside_and_leave_car_stops_outside() {
         Some(Drive::default())
     );
 }
+
+/// A corridor 2.41 m wide (y −1.2..1.21) along x with a + junction (side
+/// corridors 2.03 m wide, 3 m deep, at x 10..12.03), a door on the right at
+/// x 5..6.14 and bins against the walls before the junction, as in a
+/// generated building.
+fn plus_junction() -> Scene {
+    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
+        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
+    };
+    let s = Scene::new()
+        .wall(-1.0, 1.21, 10.0, 1.21)
+        .wall(12.03, 1.21, 24.0, 1.21)
+        .wall(-1.0, -1.2, 5.0, -1.2)
+        .wall(6.14, -1.2, 10.0, -1.2)
+        .wall(12.03, -1.2, 24.0, -1.2)
+        .wall(10.0, 1.21, 10.0, 4.2)
+        .wall(12.03, 1.21, 12.03, 4.2)
+        .wall(10.0, 4.2, 12.03, 4.2)
+        .wall(10.0, -1.2, 10.0, -4.2)
+        .wall(12.03, -1.2, 12.03, -4.2)
+        .wall(10.0, -4.2, 12.03, -4.2);
+    let s = rect(s, 8.6, -1.2, 9.07, -0.78);
+    rect(s, 7.3, 0.73, 7.61, 1.21)
+}
+
+#[test]
+fn follow_hallway_goes_straight_through_a_plus_junction_past_clutter() {
+    let scene = plus_junction();
+    for (seed, y0) in [(1u64, 0.0), (2, 0.2), (3, -0.2)] {
+        let mut h = Harness::new::<FollowHallway>().param("speed", val(0.4));
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut base = Base::new(Pose::new(0.0, y0, 0.0));
+        let mut worst: f64 = 0.0;
+        while base.pose.x < 16.0 {
+            let r = noise.apply(scene.sonar(base.pose));
+            let d = drive_of(&mut h, &[("sonar", val::<[f32; SONARS]>(r)), ("odom", odom(base.pose))])
+                .expect("always writes");
+            base.step(Some(d), DT);
+            worst = worst.max(base.pose.theta.abs());
+            assert!(base.pose.y.abs() < 1.0, "seed {seed}: into a side way at {:?}", base.pose);
+        }
+        eprintln!("seed {seed}: worst heading {:.1}°", worst.to_degrees());
+        assert!(worst < 25f64.to_radians(), "seed {seed}: turned {:.0}° off the corridor", worst.to_degrees());
+    }
+}
