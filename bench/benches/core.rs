@@ -486,7 +486,7 @@ fn monitors(settings: &Settings, report: &mut Report) {
     for k in 0..MONITORS {
         let condition = format!("{}[0] > 1e9", skills::chain_signal("", k));
         if let Err(e) = watched.request(Request::AddMonitor {
-            condition,
+            condition: condition.into(),
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),

@@ -49,7 +49,7 @@ import zenoh
 from . import _link
 from .errors import NotRunning, SituateError
 from .events import Event, MonitorFired, Telemetry, parse_event, parse_telemetry
-from .info import Graph, Hello, MonitorInfo, Reading, SkillInfo, Stats, Winner
+from .info import Graph, Hello, MonitorInfo, Reading, SkillInfo, Stats, Winner, monitor_target
 from .values import decode_untyped, encode
 
 __all__ = ["DEFAULT_ENDPOINT", "Connector", "Robot", "Stream", "connect"]
@@ -320,15 +320,22 @@ class Robot:
 
     async def monitor(
         self,
-        condition: str,
+        condition: str | None = None,
         mode: str = "once",
         *,
+        any: Sequence[str] | None = None,
         pause: bool = False,
         report: Sequence[str] = (),
     ) -> int:
         """Registers a monitor and returns its id; it fires :class:`~situate.MonitorFired` events.
 
-        ``mode`` is ``"once"`` (the first cycle the condition holds, then the
+        It watches ``condition``, or ``any`` of several conditions (a list of
+        1 to 64, instead of ``condition``): it then holds in a cycle where at
+        least one of them does, the mode applies to that, and each event's
+        ``held`` lists the indexes of those that held in its cycle — e.g.
+        ``monitor(any=["target.seen", "battery.low", "time > 120"])``.
+        A bad one of them is :class:`~situate.BadCondition` whose ``index``
+        says which. ``mode`` is ``"once"`` (the first cycle the condition holds, then the
         monitor is gone), ``"edge"`` (each cycle it becomes true) or
         ``"level"`` (every cycle it holds). With ``pause``, the manager also
         stops its cycle at the end of the cycle the monitor fires in, until
@@ -342,7 +349,7 @@ class Robot:
         unknown name in ``report`` is :class:`~situate.UnknownSignal`.
         Subscribe with :meth:`events` *before* registering, or use :meth:`when`.
         """
-        args: dict[str, Any] = {"condition": condition, "mode": mode}
+        args: dict[str, Any] = {**monitor_target(condition, any), "mode": mode}
         if pause:
             args["pause"] = True
         if report:
@@ -397,24 +404,27 @@ class Robot:
         """Waits until one of ``conditions`` holds: returns its index and the event.
 
         The way a sequencer waits for "done, or failed, or too late": e.g.
-        ``first("target.seen", "time > 120")``. The other monitors are
-        cancelled. ``timeout`` is in seconds of wall time (``TimeoutError``);
-        for time on the robot's clock use the ``time`` name in a condition.
+        ``first("target.seen", "time > 120")``: one ``once`` monitor on
+        ``any`` of them (up to 64), and the index is the first of those that
+        held in the cycle it fired (``event.held`` has them all).
+        ``timeout`` is in seconds of wall time (``TimeoutError``); for time
+        on the robot's clock use the ``time`` name in a condition. If the wait
+        ends another way the monitor is cancelled.
         """
         if not conditions:
             raise ValueError("first() needs at least one condition")
         async with self.events("monitor_fired") as stream:
-            ids: list[int] = []
+            if len(conditions) == 1:
+                monitor = await self.monitor(conditions[0], "once", pause=pause, report=report)
+            else:
+                monitor = await self.monitor(any=conditions, pause=pause, report=report)
             try:
-                for c in conditions:
-                    ids.append(await self.monitor(c, "once", pause=pause, report=report))
-                fired = await asyncio.wait_for(_fired_any(stream, ids), timeout)
-                return ids.index(fired.monitor), fired
-            finally:
-                # The one that fired is already gone; others may have fired too.
-                for monitor in ids:
-                    with contextlib.suppress(SituateError):
-                        await self.cancel_monitor(monitor)
+                fired = await asyncio.wait_for(_fired_any(stream, [monitor]), timeout)
+            except BaseException:
+                with contextlib.suppress(SituateError):
+                    await self.cancel_monitor(monitor)
+                raise
+            return (fired.held[0] if fired.held else 0), fired
 
     # ----- telemetry -------------------------------------------------------------
 

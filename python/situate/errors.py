@@ -141,9 +141,17 @@ class BadCondition(SituateError):
     Attributes:
         column: The 1-based column of the problem in the condition.
         pointer: The condition with a caret under that column, ready to print.
+        index: Which of a monitor's ``any`` conditions it is in (``None`` for a
+            monitor on one condition); the message then starts ``any[2]: ``.
     """
 
     KIND = "bad_condition"
+
+    @property
+    def index(self) -> int | None:
+        """Which of an ``any`` monitor's conditions is bad (``None``: the one condition)."""
+        i = self.detail.get("index")
+        return None if i is None else int(i)
 
     @property
     def column(self) -> int:

@@ -46,7 +46,15 @@ class MonitorFired:
     A ``once`` monitor fires the first time, ``edge`` each time the
     condition becomes true, ``level`` every cycle it holds.
 
-    ``values`` holds the value of each name the condition reads, at that cycle.
+    ``values`` holds the value of each name the condition reads, at that
+    cycle (every condition's, for a monitor on ``any`` of several), and of
+    the names it was asked to ``report``.
+
+    ``held`` holds the indexes, in order, of the conditions that held in
+    that cycle: for a monitor added with ``any=[...]``, which of them
+    happened (several may at once); for one on a single condition, ``(0,)``.
+    An ``any`` monitor's ``condition`` is its conditions joined as
+    ``(a) || (b)``.
     """
 
     monitor: int
@@ -54,6 +62,7 @@ class MonitorFired:
     cycle: int
     time_s: float
     values: dict[str, Any] = field(default_factory=dict)
+    held: tuple[int, ...] = (0,)
 
 
 MonitorEvent = MonitorFired
@@ -151,6 +160,8 @@ def parse_event(data: dict[str, Any]) -> Event:
                 cycle=int(data["cycle"]),
                 time_s=float(data["time_s"]),
                 values={str(k): decode_untyped(v) for k, v in values.items()},
+                # A manager older than `any` watches one condition per monitor.
+                held=tuple(int(i) for i in data.get("held", [0])),
             )
         if kind == "activation_applied":
             return ActivationApplied(

@@ -7,6 +7,7 @@ types (see :mod:`situate.values`). Members a newer manager adds are ignored.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -337,6 +338,9 @@ class MonitorInfo:
     pause: bool = False
     #: Names whose values its events carry besides the condition's, as asked.
     report: tuple[str, ...] = ()
+    #: The conditions of a monitor added with ``any=[...]``, as given (``condition``
+    #: is then their disjunction); ``None`` for a monitor on one condition.
+    any: tuple[str, ...] | None = None
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> MonitorInfo:
@@ -349,4 +353,28 @@ class MonitorInfo:
             holds=bool(j.get("holds", False)),
             pause=bool(j.get("pause", False)),
             report=tuple(str(r) for r in j.get("report", [])),
+            any=None if j.get("any") is None else tuple(str(c) for c in j["any"]),
         )
+
+
+#: The most conditions a monitor on ``any`` of several takes.
+MAX_ANY_CONDITIONS = 64
+
+
+def monitor_target(condition: str | None, any: Sequence[str] | None) -> dict[str, Any]:
+    """The ``monitor_add`` argument for one condition or ``any`` of several.
+
+    Raises:
+        ValueError: Both or neither are given, or ``any`` is empty.
+        TypeError: ``any`` is one string rather than a list of them.
+    """
+    if (condition is None) == (any is None):
+        raise ValueError("give a condition or any=[...] (several conditions), exactly one of them")
+    if condition is not None:
+        return {"condition": condition}
+    if isinstance(any, str):
+        raise TypeError(f"any= takes a list of conditions, not one string: write any=[{any!r}]")
+    conditions = list(any or ())
+    if not conditions:
+        raise ValueError("any= needs at least one condition")
+    return {"any": conditions}

@@ -26,7 +26,7 @@ from typing import Any
 from . import _native
 from .errors import BadReply, from_reply
 from .events import Event, parse_event
-from .info import MonitorInfo, Reading, SkillInfo, Stats, Winner
+from .info import MonitorInfo, Reading, SkillInfo, Stats, Winner, monitor_target
 from .values import decode_untyped, encode
 
 __all__ = ["LocalRobot", "RunResult", "run"]
@@ -144,9 +144,16 @@ class LocalRobot:
         """Cycle statistics."""
         return Stats.from_json(self.request("stats"))
 
-    def monitor(self, condition: str, mode: str = "once") -> int:
-        """Registers a monitor; its events come with :meth:`events`."""
-        return int(self.request("monitor_add", condition=condition, mode=mode)["monitor"])
+    def monitor(
+        self, condition: str | None = None, mode: str = "once", *, any: Sequence[str] | None = None
+    ) -> int:
+        """Registers a monitor on ``condition`` or ``any`` of several (events: :meth:`events`).
+
+        As :meth:`situate.Robot.monitor`: an ``any`` monitor's events say in
+        ``held`` which of its conditions held.
+        """
+        args = monitor_target(condition, any)
+        return int(self.request("monitor_add", mode=mode, **args)["monitor"])
 
     def cancel_monitor(self, monitor: int) -> None:
         """Cancels a monitor."""

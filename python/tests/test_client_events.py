@@ -129,6 +129,50 @@ def test_when_cancels_its_monitor_on_timeout_and_on_cancellation(toybot: Manager
     run(main())
 
 
+def test_an_any_monitor_says_which_of_its_conditions_held(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            async with robot.events("monitor_fired") as stream:
+                at = (await robot.stats()).cycle + 2
+                conditions = [f"cycle == {at}", "runaway.safe_distance > 5", f"cycle >= {at}"]
+                monitor = await robot.monitor(any=conditions, mode="level", report=["time"])
+                [info] = [m for m in await robot.monitors() if m.monitor == monitor]
+                assert info.any == tuple(conditions)
+                assert info.condition == " || ".join(f"({c})" for c in conditions)
+                await robot.step(3)  # false, then two cycles where it holds
+                events = await take(stream, 2)
+            fired = [e for e in events if isinstance(e, MonitorFired)]
+            # Exactly the conditions true that cycle, several at once too.
+            assert [(e.cycle, e.held) for e in fired] == [(at, (0, 2)), (at + 1, (2,))]
+            # The values of every name any condition reads, and of `report`.
+            assert set(fired[0].values) == {"cycle", "runaway.safe_distance", "time"}
+            assert fired[0].values["cycle"] == at
+            await robot.cancel_monitor(monitor)
+
+            # A bad condition is named by its index; nothing is left behind.
+            with pytest.raises(situate.BadCondition) as bad:
+                await robot.monitor(any=["cycle > 0", "sonar.rang[0] < 1"])
+            assert bad.value.index == 1
+            assert str(bad.value).startswith("any[1]: column 1: "), str(bad.value)
+            assert await robot.monitors() == []
+            with pytest.raises(situate.BadRequest, match="has 65 conditions, it takes 1 to 64"):
+                await robot.monitor(any=["cycle > 0"] * 65)
+            with pytest.raises(ValueError, match="exactly one"):
+                await robot.monitor("cycle > 0", any=["cycle > 1"])
+            with pytest.raises(TypeError, match="not one string"):
+                await robot.monitor(any="cycle > 0")
+
+            # `first` is one monitor on any of its conditions.
+            await robot.run()
+            index, event = await robot.first("time < 0", ALWAYS, timeout=30)
+            assert (index, event.held) == (1, (1,))
+            assert event.condition == f"(time < 0) || ({ALWAYS})"
+            assert await robot.monitors() == []
+
+    run(main())
+
+
 def test_activation_and_parameter_changes_are_events(toybot: Manager) -> None:
     async def main() -> None:
         async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:

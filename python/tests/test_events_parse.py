@@ -37,6 +37,17 @@ def test_every_event_kind_parses_to_its_dataclass() -> None:
     assert parse_event({"kind": "manager_stopped", "cycle": 7}) == situate.ManagerStopped(7)
 
 
+def test_a_monitor_event_says_which_conditions_held() -> None:
+    base = {"kind": "monitor_fired", "monitor": 1, "condition": "(a) || (b) || (c)"}
+    event = parse_event({**base, "cycle": 4, "time_s": 0.2, "values": {}, "held": [0, 2]})
+    assert isinstance(event, situate.MonitorFired)
+    assert event.held == (0, 2)
+    # A manager older than `any` sends no `held`: its monitors watch one condition.
+    old = parse_event({**base, "cycle": 4, "time_s": 0.2, "values": {}})
+    assert isinstance(old, situate.MonitorFired)
+    assert old.held == (0,)
+
+
 def test_new_kinds_and_members_do_not_break_a_client() -> None:
     future = {"kind": "battery_low", "percent": 9}
     assert parse_event(future) == situate.OtherEvent("battery_low", future)

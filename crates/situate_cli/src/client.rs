@@ -60,9 +60,16 @@ pub(crate) enum ClientCommand {
         #[command(flatten)]
         remote: Remote,
     },
-    /// Register a monitor and print its events: `monitor "sonar.range[0] < 0.25"`.
+    /// Register a monitor and print its events: `monitor "sonar.range[0] < 0.25"`, or on any of
+    /// several conditions, each event saying which held: `monitor --any "target.seen" --any "time > 120"`.
     Monitor {
-        condition: String,
+        /// The condition (or give `--any` instead).
+        #[arg(required_unless_present = "any", conflicts_with = "any")]
+        condition: Option<String>,
+        /// One of several conditions (repeat it, up to 64): the monitor holds when any does, and
+        /// each event lists those that held.
+        #[arg(long, value_name = "CONDITION")]
+        any: Vec<String>,
         /// once: the first time it holds; edge: each time it becomes true; level: every cycle it holds.
         #[arg(long, default_value = "once", value_parser = ["once", "edge", "level"])]
         mode: String,
@@ -159,11 +166,18 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
             }
             Ok(())
         }),
-        ClientCommand::Monitor { condition, mode, count, remote } => client_verb(&remote, |c, robot| {
+        ClientCommand::Monitor { condition, any, mode, count, remote } => client_verb(&remote, |c, robot| {
             let (_sub, events) = c.subscribe(robot, "events/monitor_fired")?;
-            let r = c.request(robot, "monitor_add", &json!({"condition": condition, "mode": mode}))?;
+            let (args, shown) = match &condition {
+                Some(condition) => (json!({"condition": condition, "mode": mode}), condition.clone()),
+                None => (
+                    json!({"any": any, "mode": mode}),
+                    any.iter().enumerate().map(|(i, c)| format!("[{i}] {c}")).collect::<Vec<_>>().join("; "),
+                ),
+            };
+            let r = c.request(robot, "monitor_add", &args)?;
             let id = r["monitor"].as_u64().unwrap_or(0);
-            eprintln!("monitor {id} registered ({mode}): {condition}");
+            eprintln!("monitor {id} registered ({mode}): {shown}");
             let limit = count.or(if mode == "once" { Some(1) } else { None });
             let mut seen = 0;
             let interrupted = interrupt_flag()?;
@@ -178,7 +192,7 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
                                 "cycle {} (t = {:.3} s): {} — {}",
                                 e["cycle"],
                                 e["time_s"].as_f64().unwrap_or(0.0),
-                                condition,
+                                held_text(condition.as_deref(), &any, &e["held"]),
                                 e["values"]
                             );
                         }
@@ -300,4 +314,62 @@ fn client_failure(e: &ClientError) -> ExitCode {
         other => eprintln!("situate: {other}"),
     }
     ExitCode::FAILURE
+}
+
+/// What held, for a person: the condition, or the `any` conditions the event
+/// lists in `held` (`[0] target.seen; [2] time > 120`).
+fn held_text(condition: Option<&str>, any: &[String], held: &serde_json::Value) -> String {
+    if let Some(condition) = condition {
+        return condition.to_string();
+    }
+    let held: Vec<String> = held
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(serde_json::Value::as_u64)
+        .map(|i| match any.get(i as usize) {
+            Some(c) => format!("[{i}] {c}"),
+            None => format!("[{i}]"),
+        })
+        .collect();
+    held.join("; ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(subcommand)]
+        command: ClientCommand,
+    }
+
+    fn monitor(args: &[&str]) -> Result<(Option<String>, Vec<String>), String> {
+        let argv = ["situate", "monitor"].iter().chain(args);
+        match Cli::try_parse_from(argv).map_err(|e| e.kind().to_string())?.command {
+            ClientCommand::Monitor { condition, any, .. } => Ok((condition, any)),
+            _ => Err("not monitor".into()),
+        }
+    }
+
+    #[test]
+    fn monitor_takes_one_condition_or_several_any() {
+        assert_eq!(monitor(&["cycle > 1"]).unwrap(), (Some("cycle > 1".into()), vec![]));
+        assert_eq!(
+            monitor(&["--any", "target.seen", "--any", "time > 120", "--mode", "edge"]).unwrap(),
+            (None, vec!["target.seen".to_string(), "time > 120".to_string()])
+        );
+        assert!(monitor(&[]).is_err(), "a condition or --any is needed");
+        assert!(monitor(&["cycle > 1", "--any", "cycle > 2"]).is_err(), "not both");
+    }
+
+    #[test]
+    fn an_any_event_shows_the_conditions_that_held() {
+        let any = ["target.seen".to_string(), "x > 1".to_string(), "time > 120".to_string()];
+        assert_eq!(held_text(None, &any, &json!([0, 2])), "[0] target.seen; [2] time > 120");
+        assert_eq!(held_text(Some("cycle > 1"), &[], &json!([0])), "cycle > 1");
+        // An index this client did not send (a newer manager?) is still shown.
+        assert_eq!(held_text(None, &any, &json!([7])), "[7]");
+    }
 }

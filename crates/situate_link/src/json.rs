@@ -9,7 +9,10 @@ use serde_json::value::RawValue;
 use serde_json::{json, Map, Value as Json};
 use situate_core::{ElemType, ParamType, SignalType, Value};
 use situate_manager::control::{GraphInfo, MonitorInfo};
-use situate_manager::{ControlError, Event, ManagerStats, MonitorMode, Reply, Request, SignalReading, SkillInfo};
+use situate_manager::{
+    ControlError, Event, ManagerStats, MonitorCondition, MonitorMode, Reply, Request, SignalReading, SkillInfo,
+    MAX_ANY_CONDITIONS,
+};
 
 /// The protocol version this crate speaks.
 pub const PROTOCOL: i64 = 1;
@@ -187,7 +190,9 @@ pub fn param_type_name(t: ParamType) -> &'static str {
 pub const MAX_PAYLOAD_BYTES: usize = 64 * 1024;
 /// The longest name (skill, parameter, signal) a request may hold, in characters.
 pub const MAX_NAME_CHARS: usize = 256;
-/// The longest monitor condition, in characters.
+/// The longest monitor condition, in characters (each of an `any`'s too;
+/// with at most [`MAX_ANY_CONDITIONS`] of them, and the whole request within
+/// [`MAX_PAYLOAD_BYTES`], an `any`'s text is bounded like a condition's).
 pub const MAX_CONDITION_CHARS: usize = 4096;
 /// The most items of a list argument (`skills`, `report`, `signals`).
 pub const MAX_LIST_ITEMS: usize = 1024;
@@ -300,6 +305,42 @@ impl Args<'_> {
                 .map(|i| match i {
                     Json::String(s) => self.capped(name, s, MAX_NAME_CHARS),
                     other => Err(self.wrong(name, &what, &Arg::Json(other))),
+                })
+                .collect(),
+            Some(Arg::Json(Json::String(s))) => {
+                let got = describe(&Json::String(s.clone()));
+                Err(WireError::bad_request(format!(
+                    "`{}`: argument `{name}`: expected {what}, got the string {got} (a list of one is written [{got}])",
+                    self.verb
+                )))
+            }
+            Some(other) => Err(self.wrong(name, &what, &other)),
+            None => Err(self.missing(name, &what)),
+        }
+    }
+
+    /// `monitor_add`'s `any`: 1 to [`MAX_ANY_CONDITIONS`] condition strings,
+    /// each at most [`MAX_CONDITION_CHARS`] long; a refusal names the item
+    /// (`any[2]`).
+    fn conditions(&mut self, name: &str) -> Result<Vec<String>, WireError> {
+        let what = format!("a list of 1 to {MAX_ANY_CONDITIONS} strings (conditions)");
+        match self.take(name) {
+            Some(Arg::Json(Json::Array(items))) if items.is_empty() || items.len() > MAX_ANY_CONDITIONS => {
+                Err(WireError::bad_request(format!(
+                    "`{}`: argument `{name}` has {} conditions, it takes 1 to {MAX_ANY_CONDITIONS}",
+                    self.verb,
+                    items.len()
+                )))
+            }
+            Some(Arg::Json(Json::Array(items))) => items
+                .into_iter()
+                .enumerate()
+                .map(|(i, item)| {
+                    let at = format!("{name}[{i}]");
+                    match item {
+                        Json::String(s) => self.capped(&at, s, MAX_CONDITION_CHARS),
+                        other => Err(self.wrong(&at, "a string (a condition)", &Arg::Json(other))),
+                    }
                 })
                 .collect(),
             Some(Arg::Json(Json::String(s))) => {
@@ -501,7 +542,21 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
         "graph" => Decoded::Manager(Request::QueryGraph),
         "stats" => Decoded::Manager(Request::QueryStats),
         "monitor_add" => {
-            let condition = a.string("condition")?;
+            let condition = match (a.has("condition"), a.has("any")) {
+                (false, false) => {
+                    return Err(a.missing(
+                        "condition",
+                        &format!("a string, or instead `any`: a list of 1 to {MAX_ANY_CONDITIONS} strings"),
+                    ))
+                }
+                (true, false) => MonitorCondition::One(a.string("condition")?),
+                (false, true) => MonitorCondition::Any(a.conditions("any")?),
+                (true, true) => {
+                    return Err(WireError::bad_request(
+                        "`monitor_add`: give either `condition` (one) or `any` (a list), not both",
+                    ))
+                }
+            };
             let mode = match a.take("mode") {
                 None => MonitorMode::Once,
                 Some(Arg::Json(Json::String(s))) => MonitorMode::parse(&s).ok_or_else(|| {
@@ -584,10 +639,16 @@ pub fn control_error(e: &ControlError) -> Json {
             err["signals"] = json!(signals);
             err["providers"] = json!(providers);
         }
-        ControlError::BadCondition { column, pointer, message } => {
+        ControlError::BadCondition { index, column, pointer, message } => {
             err["column"] = json!(column);
             err["pointer"] = json!(pointer);
-            err["message"] = json!(format!("column {column}: {message}"));
+            match index {
+                Some(i) => {
+                    err["index"] = json!(i);
+                    err["message"] = json!(format!("any[{i}]: column {column}: {message}"));
+                }
+                None => err["message"] = json!(format!("column {column}: {message}")),
+            }
         }
         _ => {}
     }
@@ -663,8 +724,8 @@ fn graph_to_json(g: &GraphInfo) -> Json {
 
 fn monitor_to_json(m: &MonitorInfo) -> Json {
     json!({
-        "monitor": m.monitor, "condition": m.condition, "mode": m.mode.name(), "fired": m.fired, "holds": m.holds,
-        "pause": m.pause, "report": m.report,
+        "monitor": m.monitor, "condition": m.condition, "any": m.any, "mode": m.mode.name(), "fired": m.fired,
+        "holds": m.holds, "pause": m.pause, "report": m.report,
     })
 }
 
@@ -692,11 +753,12 @@ pub fn reply_to_json(reply: &Reply) -> Json {
 /// An event's key suffix and JSON form.
 pub fn event_to_json(e: &Event) -> (&'static str, Json) {
     match e {
-        Event::MonitorFired { monitor, condition, cycle, time_s, values } => (
+        Event::MonitorFired { monitor, condition, cycle, time_s, values, held } => (
             "monitor_fired",
             json!({
                 "kind": "monitor_fired", "monitor": monitor, "condition": condition, "cycle": cycle, "time_s": time_s,
                 "values": values.iter().map(|(n, v)| (n.clone(), opt_value_to_json(v))).collect::<Map<_, _>>(),
+                "held": held,
             }),
         ),
         Event::ActivationApplied { activated, deactivated, cycle } => (
@@ -941,6 +1003,109 @@ mod tests {
         assert!(decode_request("monitor_add", cond.as_bytes()).is_ok());
         let edge = format!(r#"{{"signal": "{}"}}"#, "x".repeat(MAX_NAME_CHARS));
         assert!(decode_request("query", edge.as_bytes()).is_ok());
+    }
+
+    fn monitor_condition(payload: &str) -> Result<MonitorCondition, WireError> {
+        match decode_request("monitor_add", payload.as_bytes())? {
+            Decoded::Manager(Request::AddMonitor { condition, .. }) => Ok(condition),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn monitor_add_takes_one_condition_or_any_of_several() {
+        assert_eq!(
+            monitor_condition(r#"{"condition": "cycle > 3"}"#).unwrap(),
+            MonitorCondition::One("cycle > 3".into())
+        );
+        assert_eq!(
+            decode_request("monitor_add", br#"{"any": ["a.b", "cycle > 3"], "mode": "edge", "pause": true}"#).unwrap(),
+            Decoded::Manager(Request::AddMonitor {
+                condition: MonitorCondition::Any(vec!["a.b".into(), "cycle > 3".into()]),
+                mode: MonitorMode::Edge,
+                pause: true,
+                report: Vec::new(),
+            })
+        );
+        let sixty_four = json!({"any": vec!["cycle > 1"; MAX_ANY_CONDITIONS]}).to_string();
+        assert!(matches!(monitor_condition(&sixty_four).unwrap(), MonitorCondition::Any(l) if l.len() == 64));
+        for (payload, message) in [
+            (
+                r#"{"condition": "cycle > 1", "any": ["cycle > 2"]}"#,
+                "`monitor_add`: give either `condition` (one) or `any` (a list), not both",
+            ),
+            (
+                r#"{"mode": "edge"}"#,
+                "`monitor_add`: missing argument `condition` (a string, or instead `any`: a list of 1 to 64 strings)",
+            ),
+            (r#"{"any": []}"#, "`monitor_add`: argument `any` has 0 conditions, it takes 1 to 64"),
+            (r#"{"any": ["a", 3]}"#, "`monitor_add`: argument `any[1]`: expected a string (a condition), got 3"),
+            (
+                r#"{"any": "cycle > 1"}"#,
+                r#"`monitor_add`: argument `any`: expected a list of 1 to 64 strings (conditions), got the string "cycle > 1" (a list of one is written ["cycle > 1"])"#,
+            ),
+            (
+                r#"{"any": {"a": 1}}"#,
+                "`monitor_add`: argument `any`: expected a list of 1 to 64 strings (conditions), got an object",
+            ),
+            (
+                r#"{"any": null}"#,
+                "`monitor_add`: argument `any`: expected a list of 1 to 64 strings (conditions), got null",
+            ),
+        ] {
+            let e = refused("monitor_add", payload);
+            assert_eq!((e.kind, e.message.as_str()), ("bad_request", message), "{payload}");
+        }
+        // The count and each condition's length are capped like a condition's.
+        let e = refused("monitor_add", &json!({"any": vec!["cycle > 1"; MAX_ANY_CONDITIONS + 1]}).to_string());
+        assert_eq!(e.message, "`monitor_add`: argument `any` has 65 conditions, it takes 1 to 64");
+        let long = format!("{} > 1", "a".repeat(MAX_CONDITION_CHARS));
+        let e = refused("monitor_add", &json!({"any": ["cycle > 1", long]}).to_string());
+        assert_eq!(e.message, "`monitor_add`: argument `any[1]` is 4100 characters long, at most 4096 are taken");
+        // However many, the whole request stays within the payload cap.
+        let big = "a".repeat(MAX_CONDITION_CHARS - 4) + " > 1";
+        let e = refused("monitor_add", &json!({"any": vec![big; 16]}).to_string());
+        assert!(e.message.contains("at most 65536 are taken"), "{}", e.message);
+    }
+
+    #[test]
+    fn events_errors_and_the_list_say_which_condition_of_an_any() {
+        let (key, j) = event_to_json(&Event::MonitorFired {
+            monitor: 4,
+            condition: "(a) || (b)".into(),
+            cycle: 9,
+            time_s: 0.9,
+            values: vec![("a".into(), Some(Value::Bool(false))), ("b".into(), Some(Value::Bool(true)))],
+            held: vec![1],
+        });
+        assert_eq!(key, "monitor_fired");
+        assert_eq!(
+            j,
+            json!({"kind": "monitor_fired", "monitor": 4, "condition": "(a) || (b)", "cycle": 9, "time_s": 0.9,
+                   "values": {"a": false, "b": true}, "held": [1]})
+        );
+        let bad = ControlError::BadCondition { index: Some(2), column: 5, message: "m".into(), pointer: "p".into() };
+        assert_eq!(
+            control_error(&bad),
+            json!({"error": {"kind": "bad_condition", "message": "any[2]: column 5: m", "column": 5, "pointer": "p", "index": 2}})
+        );
+        let bad = ControlError::BadCondition { index: None, column: 5, message: "m".into(), pointer: "p".into() };
+        assert_eq!(
+            control_error(&bad),
+            json!({"error": {"kind": "bad_condition", "message": "column 5: m", "column": 5, "pointer": "p"}})
+        );
+        let info = MonitorInfo {
+            monitor: 1,
+            condition: "(a) || (b)".into(),
+            any: Some(vec!["a".into(), "b".into()]),
+            mode: MonitorMode::Once,
+            fired: 0,
+            holds: false,
+            pause: false,
+            report: vec![],
+        };
+        assert_eq!(monitor_to_json(&info)["any"], json!(["a", "b"]));
+        assert_eq!(monitor_to_json(&MonitorInfo { any: None, ..info })["any"], Json::Null);
     }
 
     #[test]

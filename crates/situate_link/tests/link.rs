@@ -107,6 +107,38 @@ fn requests_and_errors_travel_over_zenoh() {
 }
 
 #[test]
+fn an_any_monitor_travels_over_zenoh_and_says_which_condition_held() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    let (_sub, events) = c.subscribe("linkbot", "events/monitor_fired").unwrap();
+    // A bad condition is named by its index, with its column and pointer.
+    let err = c.request("linkbot", "monitor_add", &json!({"any": ["cycle > 0", "sonar.range[0] < "]})).unwrap_err();
+    let ClientError::Remote(e) = err else { panic!("{err}") };
+    assert_eq!(e.kind, "bad_condition");
+    assert!(e.message.starts_with("any[1]: column 18: "), "{}", e.message);
+    assert_eq!((e.detail["index"].clone(), e.detail["column"].clone()), (json!(1), json!(18)));
+    // A level monitor fires every cycle, so a subscription that reaches the
+    // manager's session late still sees it.
+    let any =
+        json!({"any": ["cycle > 0", "cycle < 0", "cycle > 1"], "mode": "level", "report": ["runaway.safe_distance"]});
+    let id = c.request("linkbot", "monitor_add", &any).unwrap()["monitor"].clone();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let event = loop {
+        let left = deadline.checked_duration_since(Instant::now()).expect("the monitor fires within 30 s");
+        let e = events.recv_timeout(left).expect("the monitor fires within 30 s");
+        if e["monitor"] == id && e["cycle"].as_u64() > Some(1) {
+            break e;
+        }
+    };
+    assert_eq!(event["held"], json!([0, 2]));
+    assert_eq!(event["condition"], "(cycle > 0) || (cycle < 0) || (cycle > 1)");
+    let names: Vec<&String> = event["values"].as_object().unwrap().keys().collect();
+    assert_eq!(names, ["cycle", "runaway.safe_distance"]);
+    let list = c.request("linkbot", "monitor_list", &json!({})).unwrap();
+    assert_eq!(list[0]["any"], json!(["cycle > 0", "cycle < 0", "cycle > 1"]));
+}
+
+#[test]
 fn events_are_published_as_they_happen() {
     let r = start(ClockKind::Wall);
     let c = client(&r);

@@ -14,7 +14,7 @@ use std::time::Duration;
 use crossbeam_channel::{Receiver, Sender};
 use situate_core::{ParamSpec, SignalType, SkillKind, Value};
 
-use crate::monitor::MonitorMode;
+use crate::monitor::{MonitorCondition, MonitorMode};
 
 /// One request to the skill manager.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,10 +57,11 @@ pub enum Request {
     QueryWinners,
     QueryGraph,
     QueryStats,
-    /// Watch `condition` (see [`crate::expr`]); with `pause`, also stop the
-    /// cycle at the end of each cycle the monitor fires in.
+    /// Watch `condition` (see [`crate::expr`]): one condition, or any of
+    /// several (a `&str` or `String` converts with `.into()`); with `pause`,
+    /// also stop the cycle at the end of each cycle the monitor fires in.
     AddMonitor {
-        condition: String,
+        condition: MonitorCondition,
         mode: MonitorMode,
         pause: bool,
         /// More names whose values the monitor's events carry besides those
@@ -116,8 +117,10 @@ pub enum ControlError {
     MissingProviders { skill: String, signals: Vec<String>, providers: Vec<String> },
     #[error("unknown signal `{name}`{suggestion}")]
     UnknownSignal { name: String, suggestion: String },
-    #[error("bad condition at column {column}: {message}\n{pointer}")]
-    BadCondition { column: usize, message: String, pointer: String },
+    /// `index`: which of an `any` monitor's conditions (`None` for a
+    /// monitor on one condition); `column` is within that condition.
+    #[error("{}bad condition at column {column}: {message}\n{pointer}", any_prefix(*index))]
+    BadCondition { index: Option<usize>, column: usize, message: String, pointer: String },
     #[error("`report`: {0}")]
     BadReport(String),
     #[error("no monitor {0}")]
@@ -126,6 +129,11 @@ pub enum ControlError {
     Invalid(String),
     #[error("the skill manager is not running (its thread has ended)")]
     Disconnected,
+}
+
+/// `any[2]: ` for an `any` monitor's condition 2, nothing for a lone condition.
+pub(crate) fn any_prefix(index: Option<usize>) -> String {
+    index.map(|i| format!("any[{i}]: ")).unwrap_or_default()
 }
 
 fn missing_text(signals: &[String], providers: &[String]) -> String {
@@ -145,10 +153,15 @@ fn missing_text(signals: &[String], providers: &[String]) -> String {
 pub enum Event {
     MonitorFired {
         monitor: u64,
+        /// The condition, or an `any` monitor's as one disjunction: `(a) || (b)`.
         condition: String,
         cycle: u64,
         time_s: f64,
+        /// Every name the conditions read (each once), then the `report` names.
         values: Vec<(String, Option<Value>)>,
+        /// The indexes, in order, of the conditions that held in `cycle`
+        /// (`[0]` for a monitor on one condition).
+        held: Vec<usize>,
     },
     ActivationApplied {
         activated: Vec<String>,
@@ -298,7 +311,10 @@ pub struct ManagerStats {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MonitorInfo {
     pub monitor: u64,
+    /// The condition, or an `any` monitor's as one disjunction: `(a) || (b)`.
     pub condition: String,
+    /// An `any` monitor's conditions, as given (`None` for one condition).
+    pub any: Option<Vec<String>>,
     pub mode: MonitorMode,
     pub fired: u64,
     pub holds: bool,
@@ -381,6 +397,20 @@ pub trait Control {
     fn add_monitor(&mut self, condition: &str, mode: MonitorMode) -> Result<u64, ControlError> {
         match self.request(Request::AddMonitor {
             condition: condition.into(),
+            mode,
+            pause: false,
+            report: Vec::new(),
+        })? {
+            Reply::MonitorAdded(id) => Ok(id),
+            other => Err(unexpected(other)),
+        }
+    }
+
+    /// A monitor that holds when any of `conditions` holds; its events'
+    /// `held` says which did.
+    fn add_monitor_any(&mut self, conditions: &[&str], mode: MonitorMode) -> Result<u64, ControlError> {
+        match self.request(Request::AddMonitor {
+            condition: MonitorCondition::Any(conditions.iter().map(|c| c.to_string()).collect()),
             mode,
             pause: false,
             report: Vec::new(),

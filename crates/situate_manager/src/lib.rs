@@ -28,6 +28,6 @@ pub use control::{
 };
 pub use graph::Graph;
 pub use manager::{Joiner, Manager, MAX_MONITORS};
-pub use monitor::MonitorMode;
+pub use monitor::{MonitorCondition, MonitorMode, MAX_ANY_CONDITIONS};
 pub use registry::Registry;
 pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

@@ -28,7 +28,7 @@ use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
 use crate::expr::{Condition, Lookup, Resolver};
 use crate::graph::{assemble, decompose, topo_order, Graph};
-use crate::monitor::Monitors;
+use crate::monitor::{MonitorCondition, Monitors, MAX_ANY_CONDITIONS};
 use crate::registry::Registry;
 use crate::runner::{BodyClock, Exec, Worker, WorkerClock, WorkerStats};
 use crate::spec::{BuildError, RobotSpec};
@@ -40,9 +40,10 @@ pub use spawned::Joiner;
 const PRINT_HISTORY: usize = 64;
 const EVENT_QUEUE: usize = 4096;
 
-/// The most monitors one robot keeps at once (`monitor_add` refuses more).
-/// Every one is evaluated each cycle: a bound on their number is a bound on
-/// the cycle's cost, whatever the clients do.
+/// The most monitors one robot keeps at once (`monitor_add` refuses more);
+/// more exactly, the most conditions its monitors watch, an `any` monitor
+/// counting as many as it has. Every one is evaluated each cycle: a bound on
+/// their number is a bound on the cycle's cost, whatever the clients do.
 pub const MAX_MONITORS: usize = 1000;
 /// One leaf slot of the cycle's data.
 #[derive(Clone, Default)]
@@ -876,20 +877,15 @@ impl Manager {
         let (cycle, time_s) = (self.cycle, self.time_s);
         self.monitors.evaluate(&env, |m| {
             pause |= m.pause;
-            let values = m
-                .condition
-                .refs()
-                .iter()
-                .zip(m.condition.ref_names())
-                .map(|(&r, name)| (name.clone(), env.value(r).cloned()))
-                .chain(m.report.iter().map(|(name, r)| (name.clone(), env.value(*r).cloned())))
-                .collect();
+            let values =
+                m.reads.iter().chain(&m.report).map(|(name, r)| (name.clone(), env.value(*r).cloned())).collect();
             fired.push(Event::MonitorFired {
                 monitor: m.id,
-                condition: m.condition.source().to_string(),
+                condition: m.source.clone(),
                 cycle,
                 time_s,
                 values,
+                held: m.held_indexes(),
             });
         });
         for e in fired {

@@ -14,7 +14,15 @@
 //! A condition whose values are missing (never written, index out of range)
 //! does not hold.
 //!
-//! A monitor's events carry the value of every name its condition reads,
+//! A monitor watches one condition, or any of several (`any`, at most
+//! [`MAX_ANY_CONDITIONS`]): it then holds in a cycle where at least one of
+//! them holds, and the modes apply to that disjunction. Each condition is
+//! compiled once; every cycle each is evaluated, and the ones that held are
+//! kept as a bit set, turned into the event's `held` indexes only when the
+//! monitor fires. The sequencer learns which of its alternatives happened
+//! without evaluating anything itself.
+//!
+//! A monitor's events carry the value of every name its conditions read,
 //! and of the names it was asked to `report` besides: what the sequencer
 //! will read next arrives with the event, as of the cycle it fired in.
 //!
@@ -61,11 +69,63 @@ impl fmt::Display for MonitorMode {
     }
 }
 
+/// The most conditions one `any` monitor watches (the bit set of those that
+/// held is one `u64`).
+pub const MAX_ANY_CONDITIONS: usize = 64;
+
+/// What a monitor watches: one condition, or any of several.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum MonitorCondition {
+    /// One condition; its events' `held` is `[0]`.
+    One(String),
+    /// Any of these (1 to [`MAX_ANY_CONDITIONS`]); its events' `held` lists
+    /// the indexes of those that held in the cycle it fired in.
+    Any(Vec<String>),
+}
+
+impl MonitorCondition {
+    /// The conditions' texts, in order (one for [`MonitorCondition::One`]).
+    pub fn texts(&self) -> &[String] {
+        match self {
+            MonitorCondition::One(c) => std::slice::from_ref(c),
+            MonitorCondition::Any(list) => list,
+        }
+    }
+}
+
+impl From<&str> for MonitorCondition {
+    fn from(condition: &str) -> Self {
+        MonitorCondition::One(condition.to_string())
+    }
+}
+
+impl From<String> for MonitorCondition {
+    fn from(condition: String) -> Self {
+        MonitorCondition::One(condition)
+    }
+}
+
+/// The disjunction's text as one condition: `(a) || (b) || (c)`.
+pub fn any_source(conditions: &[String]) -> String {
+    conditions.iter().map(|c| format!("({c})")).collect::<Vec<_>>().join(" || ")
+}
+
 pub(crate) struct Monitor {
     pub id: u64,
-    pub condition: Condition,
+    /// Compiled once, in the order given.
+    pub conditions: Vec<Condition>,
+    /// Added with `any` (else one condition).
+    pub any: bool,
+    /// The text events and the list show: the condition, or the disjunction
+    /// of an `any`'s.
+    pub source: String,
+    /// Every name the conditions read, each once, in first-use order, with
+    /// its reference id.
+    pub reads: Vec<(String, usize)>,
     pub mode: MonitorMode,
     pub holds: bool,
+    /// Bit `i`: condition `i` held at the last evaluation.
+    pub held: u64,
     pub fired: u64,
     pub pause: bool,
     /// Extra names the events carry, as written, with their reference ids.
@@ -81,18 +141,53 @@ pub(crate) struct Monitors {
 }
 
 impl Monitors {
+    /// Adds a monitor on `conditions` (1 to [`MAX_ANY_CONDITIONS`], checked
+    /// by the caller); `any` says it was asked as a list.
     pub fn add(
         &mut self,
-        condition: Condition,
+        conditions: Vec<Condition>,
+        any: bool,
         mode: MonitorMode,
         pause: bool,
         report: Vec<(String, usize)>,
         report_asked: Vec<String>,
     ) -> u64 {
+        debug_assert!((1..=MAX_ANY_CONDITIONS).contains(&conditions.len()));
         self.next_id += 1;
         let id = self.next_id;
-        self.list.push(Monitor { id, condition, mode, holds: false, fired: 0, pause, report, report_asked });
+        let source = if any {
+            any_source(&conditions.iter().map(|c| c.source().to_string()).collect::<Vec<_>>())
+        } else {
+            conditions.first().map(|c| c.source().to_string()).unwrap_or_default()
+        };
+        let mut reads: Vec<(String, usize)> = Vec::new();
+        for c in &conditions {
+            for (&r, name) in c.refs().iter().zip(c.ref_names()) {
+                if !reads.iter().any(|(n, _)| n == name) {
+                    reads.push((name.clone(), r));
+                }
+            }
+        }
+        self.list.push(Monitor {
+            id,
+            conditions,
+            any,
+            source,
+            reads,
+            mode,
+            holds: false,
+            held: 0,
+            fired: 0,
+            pause,
+            report,
+            report_asked,
+        });
         id
+    }
+
+    /// How many conditions all the monitors watch (what a cycle evaluates).
+    pub fn condition_count(&self) -> usize {
+        self.list.iter().map(|m| m.conditions.len()).sum()
     }
 
     pub fn cancel(&mut self, id: u64) -> bool {
@@ -104,7 +199,14 @@ impl Monitors {
     /// Evaluates every monitor; calls `fire` for each that fires this cycle.
     pub fn evaluate(&mut self, lookup: &dyn Lookup, mut fire: impl FnMut(&Monitor)) {
         self.list.retain_mut(|m| {
-            let holds = m.condition.eval(lookup) == Some(true);
+            let mut held = 0u64;
+            for (i, c) in m.conditions.iter().enumerate() {
+                if c.eval(lookup) == Some(true) {
+                    held |= 1 << i;
+                }
+            }
+            m.held = held;
+            let holds = held != 0;
             let fires = match m.mode {
                 MonitorMode::Once | MonitorMode::Level => holds,
                 MonitorMode::Edge => holds && !m.holds,
@@ -116,5 +218,12 @@ impl Monitors {
             }
             !(fires && m.mode == MonitorMode::Once)
         });
+    }
+}
+
+impl Monitor {
+    /// The indexes of the conditions that held at the last evaluation, in order.
+    pub fn held_indexes(&self) -> Vec<usize> {
+        (0..self.conditions.len()).filter(|&i| self.held & (1 << i) != 0).collect()
     }
 }

@@ -4,7 +4,9 @@ mod common;
 
 use common::*;
 use situate_core::{SkillKind, Value};
-use situate_manager::{Control, ControlError, Event, Manager, MonitorMode, Registry, Request};
+use situate_manager::{
+    Control, ControlError, Event, Manager, MonitorCondition, MonitorMode, Registry, Reply, Request, MAX_ANY_CONDITIONS,
+};
 
 /// A sonar whose front range follows a script, one value per cycle, and a
 /// barcode reader that sees barcode 3 from cycle 4 on.
@@ -114,8 +116,9 @@ fn a_monitor_on_a_value_not_yet_produced_does_not_hold() {
 fn bad_conditions_are_refused_with_the_column_and_change_nothing() {
     let mut m = robot(SCRIPT);
     let err = m.add_monitor("sonar.range[0] < 0.25 && barcde.id == 3", MonitorMode::Once).unwrap_err();
-    let ControlError::BadCondition { column, message, pointer } = &err else { panic!("{err:?}") };
-    assert_eq!(*column, 26);
+    let ControlError::BadCondition { index, column, message, pointer } = &err else { panic!("{err:?}") };
+    assert_eq!((*index, *column), (None, 26));
+    assert!(err.to_string().starts_with("bad condition at column 26: "), "{err}");
     assert!(message.contains("barcde") && message.contains("did you mean `barcode.id`?"), "{message}");
     assert!(pointer.ends_with("                         ^"), "{pointer:?}");
     // `sonar` is both a skill and a record signal: a typo in the field is a signal typo.
@@ -267,4 +270,151 @@ fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
     // Cancelling one makes room again.
     m.request(Request::CancelMonitor { monitor: 1 }).unwrap();
     add(&mut m).expect("room again");
+}
+
+// ----- any: one monitor on several conditions ----------------------------
+
+/// Every `monitor_fired` event so far, as (monitor, cycle, held).
+fn fired_held(events: &crossbeam_channel::Receiver<Event>) -> Vec<(u64, u64, Vec<usize>)> {
+    events
+        .try_iter()
+        .filter_map(|e| match e {
+            Event::MonitorFired { monitor, cycle, held, .. } => Some((monitor, cycle, held)),
+            _ => None,
+        })
+        .collect()
+}
+
+fn add_any(m: &mut Manager, any: &[&str], mode: MonitorMode, report: &[&str]) -> Result<u64, ControlError> {
+    match m.request(Request::AddMonitor {
+        condition: MonitorCondition::Any(any.iter().map(|c| c.to_string()).collect()),
+        mode,
+        pause: false,
+        report: report.iter().map(|r| r.to_string()).collect(),
+    })? {
+        Reply::MonitorAdded(id) => Ok(id),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn an_any_monitor_says_exactly_which_conditions_held_each_cycle() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    // Range < 0.25 at cycles 2, 3, 5; barcode seen from 4; cycle 5; never > 100.
+    let any = ["sonar.range[0] < 0.25", "barcode.visible", "cycle == 5", "sonar.range[0] > 100"];
+    let id = add_any(&mut m, &any, MonitorMode::Level, &[]).unwrap();
+    m.step(6).unwrap();
+    assert_eq!(
+        fired_held(&events),
+        vec![(id, 2, vec![0]), (id, 3, vec![0]), (id, 4, vec![1]), (id, 5, vec![0, 1, 2]), (id, 6, vec![1]),]
+    );
+    // The list shows the conditions as given, and the disjunction they make.
+    let Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list[0].any.as_deref(), Some(&any.map(String::from)[..]));
+    assert_eq!(
+        list[0].condition,
+        "(sonar.range[0] < 0.25) || (barcode.visible) || (cycle == 5) || (sonar.range[0] > 100)"
+    );
+    assert!(list[0].holds);
+    assert_eq!(list[0].fired, 5);
+}
+
+#[test]
+fn modes_apply_to_the_disjunction_and_a_lone_condition_held_is_zero() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let any = ["sonar.range[0] < 0.25", "barcode.visible"];
+    // The disjunction holds from cycle 2 on without a break: one rising edge.
+    let edge = add_any(&mut m, &any, MonitorMode::Edge, &[]).unwrap();
+    let once = add_any(&mut m, &any, MonitorMode::Once, &[]).unwrap();
+    let plain = m.add_monitor("barcode.visible", MonitorMode::Once).unwrap();
+    m.step(8).unwrap();
+    assert_eq!(fired_held(&events), vec![(edge, 2, vec![0]), (once, 2, vec![0]), (plain, 4, vec![0])]);
+    let Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list.iter().map(|i| (i.monitor, i.any.is_some())).collect::<Vec<_>>(), [(edge, true)]);
+}
+
+#[test]
+fn an_any_monitor_carries_the_values_of_every_name_its_conditions_read() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let any = ["sonar.range[0] < 0.25", "barcode.id == 3 && sonar.range[0] > 100", "runaway.safe_distance > 2"];
+    let id = add_any(&mut m, &any, MonitorMode::Once, &["cycle"]).unwrap();
+    m.step(3).unwrap();
+    let (condition, values, held) = events
+        .try_iter()
+        .find_map(|e| match e {
+            Event::MonitorFired { monitor, condition, values, held, .. } if monitor == id => {
+                Some((condition, values, held))
+            }
+            _ => None,
+        })
+        .expect("the monitor fired");
+    assert_eq!(held, [0]);
+    assert_eq!(
+        condition,
+        "(sonar.range[0] < 0.25) || (barcode.id == 3 && sonar.range[0] > 100) || (runaway.safe_distance > 2)"
+    );
+    // Each name once, in first-use order across the conditions, then `report`.
+    let names: Vec<&str> = values.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["sonar.range", "barcode.id", "runaway.safe_distance", "cycle"]);
+    assert_eq!(values[1].1, Some(Value::I64(0)));
+    assert_eq!(values[2].1, Some(Value::F64(0.5)));
+    assert_eq!(values[3].1, Some(Value::I64(2)));
+}
+
+#[test]
+fn a_bad_condition_of_an_any_is_named_by_its_index_and_column() {
+    let mut m = robot(SCRIPT);
+    let any = ["cycle > 1", "barcode.visible", "sonar.range[0] < 0.25 && barcde.id == 3"];
+    let err = add_any(&mut m, &any, MonitorMode::Once, &[]).unwrap_err();
+    let ControlError::BadCondition { index, column, message, pointer } = &err else { panic!("{err:?}") };
+    assert_eq!((*index, *column), (Some(2), 26));
+    assert!(message.contains("did you mean `barcode.id`?"), "{message}");
+    // The pointer shows that condition alone, with the caret in it.
+    assert_eq!(pointer, "sonar.range[0] < 0.25 && barcde.id == 3\n                         ^");
+    assert!(err.to_string().starts_with("any[2]: bad condition at column 26: unknown signal `barcde.id`"), "{err}");
+    let err = add_any(&mut m, &["cycle > 1", "sonar.range[0] + 1"], MonitorMode::Once, &[]).unwrap_err();
+    assert!(matches!(err, ControlError::BadCondition { index: Some(1), column: 1, .. }), "{err:?}");
+    // Nothing was added.
+    assert_eq!(m.request(Request::ListMonitors).unwrap(), Reply::Monitors(vec![]));
+}
+
+#[test]
+fn an_any_monitor_takes_one_to_64_conditions_and_each_counts_toward_the_cap() {
+    let mut m = robot(SCRIPT);
+    let many: Vec<String> = (0..=MAX_ANY_CONDITIONS).map(|i| format!("cycle == {i}")).collect();
+    let many: Vec<&str> = many.iter().map(String::as_str).collect();
+    for refused in [&many[..], &[]] {
+        match add_any(&mut m, refused, MonitorMode::Level, &[]) {
+            Err(ControlError::Invalid(message)) => {
+                assert_eq!(message, format!("monitor_add: `any` has {} conditions, it takes 1 to 64", refused.len()))
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    // 64 are fine, down to the last one holding.
+    let events = m.events();
+    let first = add_any(&mut m, &many[..MAX_ANY_CONDITIONS], MonitorMode::Once, &[]).unwrap();
+    let mut only_last = vec!["cycle < 0"; MAX_ANY_CONDITIONS - 1];
+    only_last.push("cycle == 64");
+    let last = add_any(&mut m, &only_last, MonitorMode::Once, &[]).unwrap();
+    m.step(70).unwrap();
+    assert_eq!(fired_held(&events), vec![(first, 1, vec![1]), (last, 64, vec![63])]);
+    let id = add_any(&mut m, &many[1..], MonitorMode::Level, &[]).unwrap();
+    // Every condition is evaluated every cycle: the robot's cap counts conditions.
+    for _ in 0..situate_manager::MAX_MONITORS - MAX_ANY_CONDITIONS {
+        m.add_monitor("cycle > 0", MonitorMode::Level).expect("under the cap");
+    }
+    match add_any(&mut m, &["cycle > 0", "cycle > 1"], MonitorMode::Level, &[]) {
+        Err(ControlError::Invalid(message)) => assert_eq!(
+            message,
+            "monitor_add: this robot has 937 monitors watching 1000 conditions; this one's 2 would be past \
+             the most it keeps (1000); cancel some first"
+        ),
+        other => panic!("{other:?}"),
+    }
+    m.cancel_monitor(id).unwrap();
+    add_any(&mut m, &["cycle > 0", "cycle > 1"], MonitorMode::Level, &[]).expect("room again");
 }

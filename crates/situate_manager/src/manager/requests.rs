@@ -261,24 +261,41 @@ impl Manager {
 
     pub(super) fn add_monitor(
         &mut self,
-        condition: &str,
+        condition: &MonitorCondition,
         mode: crate::monitor::MonitorMode,
         pause: bool,
         report: Vec<String>,
     ) -> Result<Reply, ControlError> {
-        if self.monitors.list.len() >= MAX_MONITORS {
-            // Every monitor is evaluated every cycle: their number bounds the cycle's cost.
+        let (texts, any) = match condition {
+            MonitorCondition::One(c) => (std::slice::from_ref(c), false),
+            MonitorCondition::Any(list) => (list.as_slice(), true),
+        };
+        if texts.is_empty() || texts.len() > MAX_ANY_CONDITIONS {
             return Err(ControlError::Invalid(format!(
-                "monitor_add: this robot has {} monitors, the most it keeps ({MAX_MONITORS}); cancel some first",
+                "monitor_add: `any` has {} conditions, it takes 1 to {MAX_ANY_CONDITIONS}",
+                texts.len()
+            )));
+        }
+        let watched = self.monitors.condition_count();
+        if watched + texts.len() > MAX_MONITORS {
+            // Every condition is evaluated every cycle: their number bounds the cycle's cost.
+            let adds = if any { format!("this one's {} would be", texts.len()) } else { "one more is".to_string() };
+            return Err(ControlError::Invalid(format!(
+                "monitor_add: this robot has {} monitors watching {watched} conditions; {adds} past \
+                 the most it keeps ({MAX_MONITORS}); cancel some first",
                 self.monitors.list.len()
             )));
         }
         let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
-        let compiled = Condition::compile(condition, &resolver).map_err(|e| ControlError::BadCondition {
-            column: e.column,
-            message: e.message.clone(),
-            pointer: e.pointer(condition),
-        })?;
+        let mut compiled = Vec::with_capacity(texts.len());
+        for (i, text) in texts.iter().enumerate() {
+            compiled.push(Condition::compile(text, &resolver).map_err(|e| ControlError::BadCondition {
+                index: any.then_some(i),
+                column: e.column,
+                message: e.message.clone(),
+                pointer: e.pointer(text),
+            })?);
+        }
         let mut reported = Vec::new();
         for name in &report {
             let name = name.trim();
@@ -297,7 +314,7 @@ impl Manager {
         }
         // Nothing is kept from a refused request.
         self.refs.extend(resolver.added.into_inner());
-        Ok(Reply::MonitorAdded(self.monitors.add(compiled, mode, pause, reported, report)))
+        Ok(Reply::MonitorAdded(self.monitors.add(compiled, any, mode, pause, reported, report)))
     }
 
     /// Handles one request between two cycles.
@@ -343,7 +360,8 @@ impl Manager {
                     .iter()
                     .map(|m| MonitorInfo {
                         monitor: m.id,
-                        condition: m.condition.source().to_string(),
+                        condition: m.source.clone(),
+                        any: m.any.then(|| m.conditions.iter().map(|c| c.source().to_string()).collect()),
                         mode: m.mode,
                         fired: m.fired,
                         holds: m.holds,
