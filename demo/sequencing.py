@@ -22,7 +22,6 @@ import asyncio
 import contextlib
 import math
 import os
-import re
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -75,47 +74,6 @@ def wrap(a: float) -> float:
     elif a <= -math.pi:
         a += 2 * math.pi
     return a
-
-
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*(?:\s*\()?")
-
-
-def holds(condition: str, values: Mapping[str, Any], time_s: float, cycle: int) -> bool:
-    """Evaluates a monitor condition (the subset this sequencer writes) on reported values.
-
-    ``values`` are those of a ``monitor_fired`` event: each signal leaf or parameter the
-    condition reads, whole (arrays are indexed here). The operators are the condition
-    language's (``&& || ! == != < <= > >=``, arithmetic, ``abs``, ``min``, ``max``); a name
-    without a value makes the condition false, as on the robot.
-    """
-    env: dict[str, Any] = {}
-
-    def name(m: re.Match[str]) -> str:
-        word = m.group(0)
-        if word.endswith("("):
-            return word  # abs( min( max(
-        if word in ("true", "false"):
-            return "True" if word == "true" else "False"
-        if word in ("time", "cycle"):
-            env[f"_n{len(env)}"] = time_s if word == "time" else cycle
-        else:
-            v = values.get(word)
-            if v is None:
-                raise LookupError(word)
-            env[f"_n{len(env)}"] = [float(x) for x in v] if isinstance(v, list) else v
-        return f"_n{len(env) - 1}"
-
-    try:
-        expr = _NAME.sub(name, condition)
-    except LookupError:
-        return False
-    expr = expr.replace("&&", " and ").replace("||", " or ")
-    expr = re.sub(r"!(?!=)", " not ", expr)
-    funcs = {"abs": abs, "min": min, "max": max}
-    try:
-        return bool(eval(expr, {"__builtins__": {}, **funcs}, env))
-    except (LookupError, TypeError, ValueError):
-        return False
 
 
 def bearing_of(i: int) -> float:
@@ -215,15 +173,13 @@ class Sequencer:
     async def _first(self, conds: list[str]) -> int:
         """Runs until one of ``conds`` holds (pausing there); returns the first that does.
 
-        One pausing monitor watches them all, ``(c0) || (c1) || …``, registered and the cycle
-        run in one round trip with the pending changes (the link's round trips are most of a
-        headless run's wall time). Which of them held is worked out from the values the
-        monitor reports for that cycle.
+        One pausing monitor watches them all (``any``), registered and the cycle run in one
+        round trip with the pending changes (the link's round trips are most of a headless
+        run's wall time); its event says which of them held in the cycle it fired (``held``).
         """
         stream = self.stream
         assert stream is not None
-        whole = " || ".join(f"({c})" for c in conds)
-        self.send("monitor_add", condition=whole, mode="once", pause=True, report=list(CARRIED))
+        self.send("monitor_add", any=list(conds), mode="once", pause=True, report=list(CARRIED))
         self.send("run")
         monitor = int((await self.flush())[-2]["monitor"])
         fired: MonitorFired | None = None
@@ -241,10 +197,9 @@ class Sequencer:
             }
             if values and all(v is not None for v in values.values()):  # else never written
                 self.carried[record] = values
-        for k, c in enumerate(conds):
-            if holds(c, fired.values, fired.time_s, fired.cycle):
-                return k
-        raise RuntimeError(f"none of {conds} holds for {fired.values} at {fired.time_s}")
+        if not fired.held:
+            raise RuntimeError(f"monitor {monitor} fired with none of {conds} holding")
+        return min(fired.held)
 
     async def use(self, *skills: str, restart: Sequence[str] = ()) -> None:
         """Makes ``skills`` the active set (sequenced mode); ``restart`` ones start afresh.
