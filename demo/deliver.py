@@ -76,6 +76,8 @@ NORMAL = {
     ("turn", "max_turn"): 1.2,
     ("detect_door", "confirm"): 2,
     ("track_barcode", "hold"): 15,
+    ("fit_wall", "bearing_deg"): 0.0,
+    ("fit_wall", "half_angle_deg"): 80.0,
 }
 
 #: Time to get out of the lab before giving up, s.

@@ -397,28 +397,48 @@ class Sequencer:
     async def line_up(self, barcode: int, standoff: float) -> bool:
         """From in view of ``barcode`` on a wall: to ``standoff`` m straight in front of it.
 
-        Homes to about a metre, fits the wall with the sonars, drives to the point on the
-        barcode's normal and turns to face the wall.
+        Homes to about 1.6 m (straight at it: no avoidance, which would slide the robot along
+        the wall), fits the wall the barcode is on (`std.fit_wall` looking towards it: a side
+        wall of a corridor as well as the wall ahead), drives to the point on the barcode's
+        normal and turns to face the wall.
         """
         await self.set("runaway", "safe_distance", 0.15)
         try:
-            if not await self.home_on(barcode, 1.2, avoid=False, runaway=True, slack=0.2, aim=0.2):
+            if not await self.home_on(barcode, 1.6, avoid=False, runaway=True, slack=0.3, aim=0.3):
                 return False
         finally:
             await self.restore("runaway", "safe_distance")
-        wall = await self.clue("fit_wall", "wall", keep=["track_barcode"])
-        self.prefetch("target", "odom")
+        self.prefetch("target")
         t = await self.value("target")
-        if wall is None or not t["seen"]:
+        if not t["seen"]:
             return False
-        normal = float(wall["normal"])
-        bx = float(t["distance"]) * math.cos(float(t["bearing"]))
-        by = float(t["distance"]) * math.sin(float(t["bearing"]))
+        bearing, distance = float(t["bearing"]), float(t["distance"])
+        bx, by = distance * math.cos(bearing), distance * math.sin(bearing)
+        # Looking towards the barcode first; a door beside it may hide most of that wall from
+        # the sonars, so then wider. The wall must be the barcode's: it lies on its line.
+        normal: float | None = None
+        try:
+            for look, half in ((bearing, 60.0), (bearing, 90.0), (0.0, 80.0)):
+                await self.set("fit_wall", "bearing_deg", math.degrees(look))
+                await self.set("fit_wall", "half_angle_deg", half)
+                wall = await self.clue("fit_wall", "wall", keep=["track_barcode"])
+                if wall is None:
+                    continue
+                n = float(wall["normal"])
+                if abs(bx * math.cos(n) + by * math.sin(n) - float(wall["distance"])) < 0.35:
+                    normal = n
+                    break
+        finally:
+            await self.restore("fit_wall", "bearing_deg")
+            await self.restore("fit_wall", "half_angle_deg")
+        if normal is None:
+            await self.say(f"    no wall through barcode {barcode} in sight")
+            return False
         gx, gy = await self.to_frame(
             bx - standoff * math.cos(normal), by - standoff * math.sin(normal)
         )
         heading = (await self.odom()).theta + normal
-        if not await self.goto(gx, gy, within=20):
+        if not await self.goto(gx, gy, within=30):
             return False
         return await self.turn(wrap(heading - (await self.odom()).theta))
 

@@ -9,11 +9,12 @@ use situate_robot::{sonar_bearing, Opening, Wall, SONARS};
 
 use crate::util::{centre_range, echo_point};
 
-/// The front sonars: those within `half_angle` of ahead, in bearing order
-/// (right to left).
-fn front(half_angle: f64) -> Vec<usize> {
-    let mut f: Vec<usize> = (0..SONARS).filter(|&i| sonar_bearing(i).abs() <= half_angle + 1e-9).collect();
-    f.sort_by(|&a, &b| sonar_bearing(a).total_cmp(&sonar_bearing(b)));
+/// The sonars within `half_angle` of `bearing`, in bearing order (right to
+/// left, relative to `bearing`).
+fn around(bearing: f64, half_angle: f64) -> Vec<usize> {
+    let off = |i: usize| crate::util::wrap(sonar_bearing(i) - bearing);
+    let mut f: Vec<usize> = (0..SONARS).filter(|&i| off(i).abs() <= half_angle + 1e-9).collect();
+    f.sort_by(|&a, &b| off(a).total_cmp(&off(b)));
     f
 }
 
@@ -22,7 +23,9 @@ fn front(half_angle: f64) -> Vec<usize> {
 pub struct ScanModel {
     /// Echoes at or beyond this are no echo, m.
     pub max_range: f64,
-    /// Sonars within this angle of ahead are used, rad.
+    /// Sonars within `half_angle` of this bearing are used (0: ahead), rad.
+    pub bearing: f64,
+    /// Sonars within this angle of `bearing` are used, rad.
     pub half_angle: f64,
     /// Half a sonar's cone, rad: a sonar reads the nearest echo within its
     /// cone, so a wall seen obliquely reads nearer than along the axis.
@@ -37,6 +40,7 @@ impl Default for ScanModel {
     fn default() -> Self {
         ScanModel {
             max_range: 3.9,
+            bearing: 0.0,
             half_angle: 80f64.to_radians(),
             half_cone: 7.5f64.to_radians(),
             tolerance: 0.1,
@@ -52,68 +56,71 @@ fn cone_factor(i: usize, normal: f64, half_cone: f64) -> f64 {
     (off - half_cone).max(0.0).cos()
 }
 
-/// The wall ahead as `(normal, distance, inliers)` in the robot frame.
+/// The wall around `m.bearing` as `(normal, distance, inliers)` in the
+/// robot frame.
 ///
-/// First the line through most echo points of the front sonars (a RANSAC
-/// over every pair of echoes: 24 sonars make it exhaustive; the nearest of
-/// equally supported lines), then refined with the sonar's cone: each
-/// sonar reads the nearest point of the wall within its cone, so the
-/// direction is the one in which the inliers' readings agree best on one
-/// distance. Lines nearer than 0.3 m or farther than 3 m, or on fewer than
-/// `min_inliers` echoes, are none.
+/// Each sonar reads the nearest point of a wall within its cone, so a wall
+/// in direction φ at distance d makes sonar i read d / cos(max(0, |bᵢ − φ| −
+/// half cone)). Every direction within 90° of `bearing` is tried (1° steps):
+/// the distance most readings agree on (within `tolerance`) gives that
+/// direction's inliers; the direction with most inliers wins (then the
+/// least spread, then the nearer wall) and is refined to 0.1°. Walls nearer
+/// than 0.3 m or farther than 3 m, or on fewer than `min_inliers` echoes,
+/// are none.
 pub fn fit_wall(range: &[f32; SONARS], m: &ScanModel) -> Option<(f64, f64, usize)> {
     let sonars: Vec<usize> =
-        front(m.half_angle).into_iter().filter(|&i| centre_range(range, i) < m.max_range).collect();
-    let pts: Vec<(f64, f64)> = sonars.iter().map(|&i| echo_point(range, i)).collect();
-    let loose = m.tolerance * 1.5;
-    let mut best: Option<(usize, f64, f64, f64)> = None; // inliers, distance, nx, ny
-    for (a, &(x1, y1)) in pts.iter().enumerate() {
-        for &(x2, y2) in &pts[a + 1..] {
-            let (dx, dy) = (x2 - x1, y2 - y1);
-            let n = dx.hypot(dy);
-            if n < 0.3 {
-                continue;
-            }
-            let (mut nx, mut ny) = (dy / n, -dx / n);
-            let mut d = x1 * nx + y1 * ny;
-            if d < 0.0 {
-                (nx, ny, d) = (-nx, -ny, -d);
-            }
-            if !(0.3..3.0).contains(&d) {
-                continue;
-            }
-            let inliers = pts.iter().filter(|p| (p.0 * nx + p.1 * ny - d).abs() < loose).count();
+        around(m.bearing, m.half_angle).into_iter().filter(|&i| centre_range(range, i) < m.max_range).collect();
+    // For direction `phi`: (inliers, spread, distance) of the best-supported distance.
+    let score = |phi: f64| -> Option<(usize, f64, f64)> {
+        let est: Vec<f64> = sonars
+            .iter()
+            .filter(|&&i| crate::util::wrap(sonar_bearing(i) - phi).abs() < std::f64::consts::FRAC_PI_2 - m.half_cone)
+            .map(|&i| centre_range(range, i) * cone_factor(i, phi, m.half_cone))
+            .collect();
+        let mut best: Option<(usize, f64, f64)> = None;
+        for &seed in &est {
+            let on: Vec<f64> = est.iter().copied().filter(|e| (e - seed).abs() < m.tolerance / 2.0).collect();
+            let d = on.iter().sum::<f64>() / on.len() as f64;
+            let spread: f64 = on.iter().map(|e| (e - d) * (e - d)).sum();
+            let cand = (on.len(), spread, d);
             let better = match best {
                 None => true,
-                Some((bi, bd, ..)) => inliers > bi || (inliers == bi && d < bd),
+                Some((n, sp, bd)) => {
+                    cand.0 > n || (cand.0 == n && (cand.1 < sp - 1e-12 || (cand.1 <= sp + 1e-12 && d < bd)))
+                }
             };
-            if better {
-                best = Some((inliers, d, nx, ny));
+            if better && (0.3..3.0).contains(&d) {
+                best = Some(cand);
+            }
+        }
+        best
+    };
+    let better = |a: &(usize, f64, f64, f64), b: &(usize, f64, f64, f64)| {
+        a.0 > b.0 || (a.0 == b.0 && (a.1 < b.1 - 1e-12 || (a.1 <= b.1 + 1e-12 && a.2 < b.2)))
+    };
+    let mut best: Option<(usize, f64, f64, f64)> = None; // inliers, spread, distance, phi
+    for step in -90..=90 {
+        let phi = m.bearing + f64::from(step).to_radians();
+        if let Some((n, sp, d)) = score(phi) {
+            let cand = (n, sp, d, phi);
+            if best.as_ref().is_none_or(|b| better(&cand, b)) {
+                best = Some(cand);
             }
         }
     }
-    let (_, d0, nx, ny) = best?;
-    let phi0 = ny.atan2(nx);
-    let on: Vec<usize> =
-        sonars.iter().zip(&pts).filter(|(_, p)| (p.0 * nx + p.1 * ny - d0).abs() < loose).map(|(&i, _)| i).collect();
-    // Refine: the direction (±8° in 0.2° steps) in which the cone-corrected
-    // readings of the inliers spread least about their mean.
-    let mut refined = (f64::INFINITY, phi0, d0);
-    for step in -40..=40 {
-        let phi = phi0 + f64::from(step) * 0.2f64.to_radians();
-        let est: Vec<f64> = on.iter().map(|&i| centre_range(range, i) * cone_factor(i, phi, m.half_cone)).collect();
-        let d = est.iter().sum::<f64>() / est.len().max(1) as f64;
-        let cost: f64 = est.iter().map(|e| (e - d) * (e - d)).sum();
-        if cost < refined.0 {
-            refined = (cost, phi, d);
+    let coarse = best?;
+    let mut fine = coarse;
+    for step in -10..=10 {
+        let phi = coarse.3 + f64::from(step) * 0.1f64.to_radians();
+        if let Some((n, sp, d)) = score(phi) {
+            let cand = (n, sp, d, phi);
+            if better(&cand, &fine) {
+                fine = cand;
+            }
         }
     }
-    let (_, phi, d) = refined;
-    let inliers = sonars
-        .iter()
-        .filter(|&&i| (centre_range(range, i) * cone_factor(i, phi, m.half_cone) - d).abs() < m.tolerance)
-        .count();
-    (inliers >= m.min_inliers && (0.3..3.0).contains(&d)).then(|| (crate::util::wrap(phi), d, inliers))
+    let (inliers, _, d, phi) = fine;
+    (inliers >= m.min_inliers).then(|| (crate::util::wrap(phi), d, inliers))
 }
 
 /// A door in the wall ahead, from one scan: `(normal, wall, (x, y), width)`.
@@ -144,7 +151,7 @@ pub fn locate_door(
     // Each front sonar: the span its cone covers on the wall line, and
     // whether it sees through (its nearest echo well beyond the line).
     let mut hits: Vec<(f64, f64, bool, f64)> = Vec::new();
-    for i in front(m.half_angle) {
+    for i in around(0.0, m.half_angle) {
         let b = sonar_bearing(i);
         let c = b.cos() * nx + b.sin() * ny;
         if c < 0.2 {
@@ -213,9 +220,13 @@ pub struct FitWall {
     /// Echoes at or beyond this are no echo, m.
     #[param(default = 3.9, min = 0.5, max = 20.0, unit = "m")]
     max_range: f64,
-    /// Sonars within this angle of ahead are used.
+    /// Sonars within this angle of `bearing_deg` are used.
     #[param(default = 80.0, min = 20.0, max = 90.0, unit = "deg")]
     half_angle_deg: f64,
+    /// Where to look for the wall, in the robot frame (0: ahead; e.g. a
+    /// barcode's bearing, for the wall it is on).
+    #[param(default = 0.0, min = -180.0, max = 180.0, unit = "deg")]
+    bearing_deg: f64,
     /// An echo this near the line is on it, m.
     #[param(default = 0.1, min = 0.01, max = 1.0, unit = "m")]
     tolerance: f64,
@@ -231,6 +242,7 @@ impl Body for FitWall {
     fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
         let model = ScanModel {
             max_range: self.max_range,
+            bearing: self.bearing_deg.to_radians(),
             half_angle: self.half_angle_deg.to_radians(),
             half_cone: self.cone_deg.to_radians() / 2.0,
             tolerance: self.tolerance,

@@ -120,3 +120,24 @@ fn locate_door_takes_the_edge_nearer_ahead_of_a_wide_opening() {
     assert!((o.width - 1.1).abs() < 1e-9, "width {}", o.width);
     assert!(o.y < -0.3 && o.y > -1.3, "centre to the right, near the edge: y {:.2}", o.y);
 }
+
+#[test]
+fn fit_wall_finds_a_side_wall_where_it_is_told_to_look() {
+    // A corridor wall 1 m to the left (y = 1), another 1.2 m to the right, an end wall 2 m
+    // ahead; a room's wall 1.1 m ahead.
+    let corridor = Scene::new().wall(-5.0, 1.0, 2.0, 1.0).wall(-5.0, -1.2, 2.0, -1.2).wall(2.0, -1.2, 2.0, 1.0);
+    let room = Scene::new().wall(1.1, -5.0, 1.1, 5.0);
+    let cases = [(&corridor, 60.0f64, 90f64, 1.0), (&corridor, -60.0, -90.0, 1.2), (&room, 0.0, 0.0, 1.1)];
+    for (k, (scene, look, normal, distance)) in cases.into_iter().enumerate() {
+        let mut h = Harness::new::<FitWall>().param("bearing_deg", val(look)).param("half_angle_deg", val(50.0));
+        let r = Noise::new(k as u64 + 1, 0.02, 0.0).apply(scene.sonar(Pose::new(0.0, 0.0, 0.0)));
+        let wall = h.run(&[("sonar", val::<[f32; SONARS]>(r))]).get::<Wall>("wall").expect("written");
+        assert!(wall.seen, "looking at {look}°: {wall:?} {r:?}");
+        assert!(
+            angle_diff(wall.normal, normal.to_radians()) < 4f64.to_radians(),
+            "looking at {look}°: normal {:.1}°",
+            wall.normal.to_degrees()
+        );
+        assert!((wall.distance - distance).abs() < 0.06, "looking at {look}°: distance {:.2}", wall.distance);
+    }
+}
