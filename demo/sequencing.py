@@ -622,7 +622,14 @@ class Sequencer:
             # Up to the wall ahead: about the middle of the corridor it ends in (corridors are
             # 1.8 to 2.6 m wide), before avoidance would start turning away from it.
             await self.use("runaway", "avoid", "follow_hallway")
-            return await self.wait(f"sonar.range[0] < {WALL_AHEAD_M}", within=180) == 0
+            # A wall across the way (the sonars either side of ahead see it too), not a jamb
+            # caught by the front sonar's cone.
+            beside = WALL_AHEAD_M / math.cos(math.radians(15)) + 0.3
+            ahead = (
+                f"sonar.range[0] < {WALL_AHEAD_M} && sonar.range[1] < {beside:.3f}"
+                f" && sonar.range[23] < {beside:.3f}"
+            )
+            return await self.wait(ahead, within=180) == 0
         detector, signal = (
             ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
         )

@@ -201,7 +201,8 @@ const MAX_WALL_ANGLE: f64 = 0.5;
 /// Follows a corridor: keeps centred between the two side walls (those
 /// within about 30° of the heading), heading along them; when one wall is
 /// missing (a door, a side corridor), keeps from the other the half-width
-/// last seen since activation, or else `wall_distance`. A wall echo nearer
+/// last seen since activation, or else (a lobby, a hall: no width seen yet)
+/// the distance it had from that wall when it came into view. A wall echo nearer
 /// than the corridor's usual width says (by more than `clutter_m`) is a bin
 /// or a box against the wall and is not steered by. Where no wall is seen
 /// (a crossing), it holds the corridor's direction by odometry (when `odom`
@@ -222,7 +223,7 @@ pub struct FollowHallway {
     /// Forward speed, m/s.
     #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
     speed: f64,
-    /// Distance kept from the robot's centre to the one wall seen when the corridor's width is unknown, m.
+    /// Distance kept from the one wall seen when nothing else tells (no longer used by the skill: kept for robot files that set it), m.
     #[param(default = 0.9, min = 0.3, max = 3.0, unit = "m")]
     wall_distance: f64,
     /// Side echoes farther than this from the centre are no wall, m.
@@ -245,6 +246,8 @@ pub struct FollowHallway {
     sides: [Window; 2],
     /// The corridor's direction in the odometry frame, once walls were seen.
     axis: Option<f64>,
+    /// The one wall's distance when it alone came into view.
+    lone: Option<f64>,
 }
 
 impl Body for FollowHallway {
@@ -254,6 +257,7 @@ impl Body for FollowHallway {
             self.widths = Window::default();
             self.sides = [Window::default(); 2];
             self.axis = None;
+            self.lone = None;
         }
         // Only walls roughly along the heading are the corridor's: at a junction the side
         // sonars see the side corridor's walls, across the heading, and steering by them
@@ -294,7 +298,16 @@ impl Body for FollowHallway {
             let width = self.widths.push(l.distance + r.distance);
             self.half = Some(width / 2.0);
         }
-        let keep = self.half.unwrap_or(self.wall_distance);
+        // With one wall only and no width seen yet (a lobby, a hall): keep the distance it
+        // had from that wall when it came into view, rather than pull to a guess.
+        let lone = match (left, right) {
+            (Some(w), None) | (None, Some(w)) => Some(*self.lone.get_or_insert(w.distance)),
+            _ => {
+                self.lone = None;
+                None
+            }
+        };
+        let keep = self.half.or(lone).unwrap_or(self.wall_distance);
         // Offset to the left of where the robot should be, and the walls' direction.
         let seen = match (left, right) {
             (Some(l), Some(r)) => Some(((l.distance - r.distance) / 2.0, (l.angle + r.angle) / 2.0)),

@@ -7,7 +7,7 @@
 use situate::prelude::*;
 use situate_robot::{sonar_bearing, Opening, Wall, SONARS};
 
-use crate::util::{centre_range, echo_point};
+use crate::util::centre_range;
 
 /// The sonars within `half_angle` of `bearing`, in bearing order (right to
 /// left, relative to `bearing`).
