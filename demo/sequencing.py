@@ -431,6 +431,16 @@ class Sequencer:
         finally:
             await self.restore("fit_wall", "bearing_deg")
             await self.restore("fit_wall", "half_angle_deg")
+        if normal is None and self.corridor_heading is not None:
+            # The sonars cannot tell (a door beside the barcode fills their view). The barcode
+            # is on a wall of the corridor being followed: a side wall (it lies off the
+            # corridor's axis) or the end wall.
+            o = await self.odom()
+            axis = self.corridor_heading - o.theta  # the corridor's direction, robot frame
+            lateral = -bx * math.sin(axis) + by * math.cos(axis)
+            side = wrap(axis + math.copysign(math.pi / 2, lateral))
+            normal = side if abs(lateral) > 0.5 else axis
+            await self.say(f"    no wall through barcode {barcode} in sight: taking the corridor's")
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")
             return False
