@@ -400,7 +400,8 @@ class Sequencer:
         Homes to about 1.6 m (straight at it: no avoidance, which would slide the robot along
         the wall), fits the wall the barcode is on (`std.fit_wall` looking towards it: a side
         wall of a corridor as well as the wall ahead), drives to the point on the barcode's
-        normal and turns to face the wall.
+        normal and turns to face the wall. Everything is placed in the odometry frame, each
+        reading with the pose it was taken at.
         """
         await self.set("runaway", "safe_distance", 0.15)
         try:
@@ -408,15 +409,20 @@ class Sequencer:
                 return False
         finally:
             await self.restore("runaway", "safe_distance")
-        self.prefetch("target")
+        # Standing still (the base may still be turning when homing ends): the barcode's place.
+        await self.use("track_barcode")
+        await self.wait("abs(odom.v) < 0.02 && abs(odom.w) < 0.02", within=3)
+        self.prefetch("target", "odom")
         t = await self.value("target")
         if not t["seen"]:
             return False
+        o = await self.odom()
         bearing, distance = float(t["bearing"]), float(t["distance"])
-        bx, by = distance * math.cos(bearing), distance * math.sin(bearing)
+        px = o.x + distance * math.cos(o.theta + bearing)
+        py = o.y + distance * math.sin(o.theta + bearing)
         # Looking towards the barcode first; a door beside it may hide most of that wall from
         # the sonars, so then wider. The wall must be the barcode's: it lies on its line.
-        normal: float | None = None
+        normal: float | None = None  # in the odometry frame
         try:
             for look, half in ((bearing, 60.0), (bearing, 90.0), (0.0, 80.0)):
                 await self.set("fit_wall", "bearing_deg", math.degrees(look))
@@ -424,8 +430,10 @@ class Sequencer:
                 wall = await self.clue("fit_wall", "wall", keep=["track_barcode"])
                 if wall is None:
                     continue
-                n = float(wall["normal"])
-                if abs(bx * math.cos(n) + by * math.sin(n) - float(wall["distance"])) < 0.35:
+                w = await self.odom()
+                n = w.theta + float(wall["normal"])
+                along = (px - w.x) * math.cos(n) + (py - w.y) * math.sin(n)
+                if abs(along - float(wall["distance"])) < 0.35:
                     normal = n
                     break
         finally:
@@ -433,24 +441,26 @@ class Sequencer:
             await self.restore("fit_wall", "half_angle_deg")
         if normal is None and self.corridor_heading is not None:
             # The sonars cannot tell (a door beside the barcode fills their view). The barcode
-            # is on a wall of the corridor being followed: a side wall (it lies off the
-            # corridor's axis) or the end wall.
-            o = await self.odom()
-            axis = self.corridor_heading - o.theta  # the corridor's direction, robot frame
-            lateral = -bx * math.sin(axis) + by * math.cos(axis)
-            side = wrap(axis + math.copysign(math.pi / 2, lateral))
-            normal = side if abs(lateral) > 0.5 else axis
+            # is on a wall of the corridor being followed: a side wall, or the end wall.
+            self.prefetch("odom", "sonar.range")
+            w = await self.odom()
+            axis = self.corridor_heading
+            lateral = -(px - w.x) * math.sin(axis) + (py - w.y) * math.cos(axis)
+            side = axis + math.copysign(math.pi / 2, lateral)
+            # A side wall: the sonar looking square to that side finds a wall about as far
+            # off as the barcode lies; else the barcode is on the end wall.
+            ranges = await self.sonar()
+            k = round(wrap(side - w.theta) / (2 * math.pi / SONARS)) % SONARS
+            beside = min(ranges[(k + j) % SONARS] for j in (-1, 0, 1))
+            normal = side if abs(beside - abs(lateral)) < 0.35 else axis
             await self.say(f"    no wall through barcode {barcode} in sight: taking the corridor's")
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")
             return False
-        gx, gy = await self.to_frame(
-            bx - standoff * math.cos(normal), by - standoff * math.sin(normal)
-        )
-        heading = (await self.odom()).theta + normal
+        gx, gy = px - standoff * math.cos(normal), py - standoff * math.sin(normal)
         if not await self.goto(gx, gy, within=30):
             return False
-        return await self.turn(wrap(heading - (await self.odom()).theta))
+        return await self.turn(wrap(normal - (await self.odom()).theta))
 
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
         """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
@@ -655,9 +665,22 @@ class Sequencer:
                 if await self.wait(f"!({seen})", within=60):
                     return False
         if until == "junction":
-            # On into the junction's middle before turning: the opening was seen beside.
+            # Into the junction's middle before turning: `junction.centre` says where it is
+            # along the way (the detector may have waited until the robot was well past its
+            # near edge).
+            self.prefetch("junction", "odom")
+            junction: dict[str, Any] = await self.value("junction") or {}
+            centre = float(junction.get("centre", 0.6))
+            # Never more than 0.6 m on (a corridor that opens into a hall has no far edge), and
+            # never back: past the centre the robot is still well inside the junction.
+            forward = max(-1.5, min(0.6, centre)) if math.isfinite(centre) else 0.6
             o = await self.odom()
-            if not await self.goto(o.x + 0.6 * math.cos(o.theta), o.y + 0.6 * math.sin(o.theta)):
+            along = o.theta if self.corridor_heading is None else self.corridor_heading
+            if self.debug:
+                await self.say(f"      junction {junction}: {forward:+.2f} m on")
+            if abs(forward) > 0.1 and not await self.goto(
+                o.x + forward * math.cos(along), o.y + forward * math.sin(along)
+            ):
                 return False
         return True
 

@@ -144,6 +144,9 @@ pub struct Junction {
     pub left: bool,
     pub right: bool,
     pub ahead: bool,
+    /// How far ahead (negative: behind) the centre of the side opening last
+    /// seen lies, along the heading, m.
+    pub centre: f64,
 }
 
 /// `wall`: the wall ahead, the line through most echoes of the front half

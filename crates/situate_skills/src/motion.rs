@@ -442,10 +442,20 @@ pub struct HomePosition {
     max_turn: f64,
     approach: Approach,
     arrived: bool,
+    activation: Activation,
+    /// The goal `arrived` is about.
+    goal: Option<(f64, f64)>,
 }
 
 impl Body for HomePosition {
-    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        // A new activation or a new goal: not there yet (a goal just beside the last one,
+        // within twice `stop_distance`, would otherwise count as reached).
+        if self.activation.fresh(cx.cycle()) || self.goal != Some((self.x, self.y)) {
+            self.arrived = false;
+            self.approach = Approach::default();
+            self.goal = Some((self.x, self.y));
+        }
         let o = self.odom;
         let (dx, dy) = (self.x - o.x, self.y - o.y);
         let to_go = dx.hypot(dy);

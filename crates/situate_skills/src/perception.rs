@@ -2,7 +2,7 @@
 //! `door`, `junction`, `target`, `car`.
 
 use situate::prelude::*;
-use situate_robot::{sonar_bearing, Barcodes, Door, Junction, Target, SONARS};
+use situate_robot::{sonar_bearing, Barcodes, Door, Junction, Odom, Target, SONARS};
 
 use crate::util::{centre_range, side_wall, Activation, Hysteresis, LEFT, RIGHT, ROBOT_RADIUS};
 
@@ -57,6 +57,8 @@ pub(crate) struct Opening {
     pub rays: usize,
     /// Bearing of the opening's centre, rad.
     pub bearing: f64,
+    /// The opening's centre along the heading (negative: behind), m.
+    pub centre: f64,
 }
 
 /// Tracks the distance to one side wall and finds openings in it.
@@ -90,6 +92,11 @@ pub(crate) struct Corridor {
 }
 
 impl Corridor {
+    /// The distance of side `k`'s wall (0 left, 1 right), once seen.
+    pub fn wall(&self, k: usize) -> Option<f64> {
+        self.sides[k].wall
+    }
+
     /// Scans both sides ([`LEFT`], [`RIGHT`]).
     pub fn scan(&mut self, range: &[f32; SONARS], max_wall: f64, depth: f64) -> [Option<Opening>; 2] {
         let out = [self.sides[0].scan(range, LEFT, max_wall, depth), self.sides[1].scan(range, RIGHT, max_wall, depth)];
@@ -182,12 +189,12 @@ impl SideOpenings {
         let far = jamb(first - 1).or(last_jambs.map(|j| j.0));
         let near = jamb(last + 1).map(|a| -a).or(last_jambs.map(|j| j.1));
         let (Some(far), Some(near)) = (far, near) else {
-            return Some(Opening { width: f64::NAN, rays: last - first + 1, bearing: f64::NAN });
+            return Some(Opening { width: f64::NAN, rays: last - first + 1, bearing: f64::NAN, centre: f64::NAN });
         };
         self.jambs = Some((far, near));
         let (width, centre) = (far - near, (far + near) / 2.0);
         let y = if side == LEFT { d } else { -d };
-        Some(Opening { width, rays: last - first + 1, bearing: y.atan2(centre) })
+        Some(Opening { width, rays: last - first + 1, bearing: y.atan2(centre), centre })
     }
 }
 
@@ -260,7 +267,12 @@ impl Body for DetectDoor {
 /// Detects an intersection: a side opening beside the robot at least
 /// `min_width` wide (the median of three scans; `junction.left`,
 /// `junction.right`), and whether the way ahead is open (`junction.ahead`:
-/// nothing within `ahead_distance` straight ahead).
+/// nothing within `ahead_distance` straight ahead). With odometry (`odom`),
+/// a side opening counts only once the robot has also travelled past enough
+/// of it while the side sonar saw through: the width the jambs give is
+/// noisy (a 1.4 m door can read 1.7 m), the distance travelled is not, so a
+/// door is never taken for a side corridor. `junction.centre` is where the
+/// centre of the side opening last seen lies along the heading.
 /// Each flag changes after `confirm` cycles agreeing (`release` to turn a
 /// side off). Writes `junction` every run.
 #[derive(Skill, Default)]
@@ -269,6 +281,9 @@ pub struct DetectIntersection {
     /// Sonar ranges, m.
     #[input(signal = "sonar.range")]
     sonar: [f32; SONARS],
+    /// Odometry: the distance travelled past an opening.
+    #[input]
+    odom: Option<Odom>,
     /// The open ways, written every run.
     #[output]
     junction: Junction,
@@ -290,10 +305,24 @@ pub struct DetectIntersection {
     /// Cycles without a side opening before its flag turns off.
     #[param(default = 3, min = 1, max = 100)]
     release: i64,
+    /// Of `min_width`, how much the travelled width may fall short, m (the
+    /// side sonar stops seeing through a little before each edge: a 1.4 m
+    /// door travels about 1.35 m, a 1.8 m side corridor about 1.58 m).
+    #[param(default = 0.25, min = 0.0, max = 5.0, unit = "m")]
+    travel_slack: f64,
     activation: Activation,
     corridor: Corridor,
     flags: [Hysteresis; 3],
+    /// Path length travelled since activation (odometry), m.
+    path: f64,
+    last_xy: Option<(f64, f64)>,
+    /// Per side: the path length at which the side sonar began to see through.
+    since: [Option<f64>; 2],
+    centre: f64,
 }
+
+/// Half a sonar's cone, rad.
+const HALF_CONE: f64 = 7.5 * std::f64::consts::PI / 180.0;
 
 impl Body for DetectIntersection {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
@@ -308,16 +337,52 @@ impl Body for DetectIntersection {
                 h.update(true, 1, 1);
             }
             self.flags[2] = h;
+            self.path = 0.0;
+            self.last_xy = None;
+            self.since = [None; 2];
+            self.centre = 0.0;
+        }
+        if let Some(o) = self.odom {
+            if let Some((x, y)) = self.last_xy {
+                self.path += (o.x - x).hypot(o.y - y);
+            }
+            self.last_xy = Some((o.x, o.y));
         }
         let mut open = [false; 2];
         let openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
         for k in 0..2 {
-            let wide = openings[k].is_some_and(|o| o.width >= self.min_width);
-            open[k] = self.flags[k].update(wide, self.confirm, self.release);
+            // The side sonar has seen through since `since`: the opening's width is at least
+            // the way travelled plus the span of its cone on the wall line.
+            let travelled = match (openings[k], self.odom) {
+                (Some(_), Some(_)) => {
+                    let start = *self.since[k].get_or_insert(self.path);
+                    let d = self.corridor.wall(k).unwrap_or(1.0);
+                    Some(self.path - start + 2.0 * d * HALF_CONE.tan())
+                }
+                _ => {
+                    self.since[k] = None;
+                    None
+                }
+            };
+            // With odometry the way travelled decides (the jambs' width only has to be
+            // roughly right); without it, the jambs' width.
+            let wide = match travelled {
+                Some(t) => {
+                    t >= self.min_width - self.travel_slack
+                        && openings[k].is_some_and(|o| !(o.width < self.min_width - 2.0 * self.travel_slack))
+                }
+                None => self.odom.is_none() && openings[k].is_some_and(|o| o.width >= self.min_width),
+            };
+            if let Some(o) = openings[k].filter(|o| o.centre.is_finite()) {
+                self.centre = o.centre;
+            }
+            // The way travelled is itself the confirmation: one cycle is enough then.
+            let confirm = if travelled.is_some() { 1 } else { self.confirm };
+            open[k] = self.flags[k].update(wide, confirm, self.release);
         }
         let ahead = self.flags[2].update(ahead_now, self.confirm, self.confirm);
-        let out = Junction { left: open[0], right: open[1], ahead };
-        if out != self.junction {
+        let out = Junction { left: open[0], right: open[1], ahead, centre: self.centre };
+        if (out.left, out.right, out.ahead) != (self.junction.left, self.junction.right, self.junction.ahead) {
             sprint!(cx, "junction: left {} right {} ahead {}", out.left, out.right, out.ahead);
         }
         self.junction = out;

@@ -178,6 +178,14 @@ fn home_position_reaches_an_odometry_goal() {
     }
     assert!((pose.x - 2.0).hypot(pose.y + 1.5) <= 0.1, "{pose:?}");
     assert_eq!(drive_of(&mut h, &[("odom", odom(pose))]), Some(Drive::default()), "stopped");
+    // A new goal 0.17 m behind (within twice the stop distance of the old one): it goes there.
+    let (gx, gy) = (pose.x - 0.17 * pose.theta.cos(), pose.y - 0.17 * pose.theta.sin());
+    h.set("x", val(gx));
+    h.set("y", val(gy));
+    for _ in 0..600 {
+        pose = pose.step(drive_of(&mut h, &[("odom", odom(pose))]).expect("always writes"), DT);
+    }
+    assert!((pose.x - gx).hypot(pose.y - gy) <= 0.1, "the goal just behind: {pose:?}");
 }
 
 /// Runs `turn` on a base with acceleration limits until it falls silent

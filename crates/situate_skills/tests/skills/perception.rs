@@ -1,6 +1,6 @@
 //! Door and intersection detection, barcode tracking, car identification.
 
-use situate_robot::{Barcodes, Door, Junction, Target, SONARS};
+use situate_robot::{Barcodes, Door, Junction, Odom, Target, SONARS};
 use situate_skills::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
 use std::sync::Arc;
 
@@ -124,7 +124,7 @@ fn detect_intersection_fires_at_a_t_and_a_plus_junction() {
         let odd = before.iter().find(|j| j.left || j.right || !j.ahead);
         assert!(odd.is_none(), "plus {plus}: a plain corridor first: {odd:?}");
         let (_, at) = trace.last().unwrap();
-        assert_eq!(*at, Junction { left: true, right: true, ahead: plus }, "plus {plus}: in the crossing");
+        assert_eq!((at.left, at.right, at.ahead), (true, true, plus), "plus {plus}: in the crossing");
         let (a, _) = span(&trace, |j| j.left && j.right).unwrap();
         assert!(a > 9.6, "plus {plus}: sides open from x {a:.2}");
     }
@@ -219,5 +219,44 @@ fn detect_intersection_takes_no_door_beside_clutter_for_a_junction_and_finds_the
         assert!(early.is_none(), "seed {seed}, y {y}: a junction before the side corridor: {early:?}");
         let (a, b) = span(&trace, |j| j.left).unwrap_or_else(|| panic!("seed {seed}, y {y}: junction missed"));
         assert!(a > 30.4 && b < 33.0, "seed {seed}, y {y}: junction left over x {a:.2}..{b:.2}");
+    }
+}
+
+/// A corridor 1.84 m wide (y −0.92..0.92) with a 1.4 m door on the left at
+/// x 5..6.4 and a side corridor `side` m wide on the left from x = 12.
+fn narrow(side: f64) -> Scene {
+    Scene::new()
+        .wall(-1.0, 0.92, 5.0, 0.92)
+        .wall(6.4, 0.92, 12.0, 0.92)
+        .wall(12.0 + side, 0.92, 20.0, 0.92)
+        .wall(12.0, 0.92, 12.0, 6.0)
+        .wall(12.0 + side, 0.92, 12.0 + side, 6.0)
+        .wall(-1.0, -0.92, 20.0, -0.92)
+}
+
+#[test]
+fn with_odometry_a_wide_door_is_never_a_junction_and_a_narrow_side_corridor_is() {
+    for (seed, y, side) in [(1u64, 0.0, 1.8), (2, 0.2, 1.9), (3, -0.2, 2.4), (4, 0.1, 1.8), (5, -0.1, 2.0)] {
+        let scene = narrow(side);
+        let mut h = Harness::new::<DetectIntersection>();
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut trace = Vec::new();
+        let mut x = 0.0;
+        while x < 18.0 {
+            let r = noise.apply(scene.sonar(Pose::new(x, y, 0.0)));
+            let odom = Odom { x, y, theta: 0.0, v: 0.4, w: 0.0 };
+            let out = h.run(&[("sonar", val::<[f32; SONARS]>(r)), ("odom", val(odom))]);
+            trace.push((x, out.get::<Junction>("junction").expect("written every run")));
+            x += 0.04;
+        }
+        let early = trace.iter().find(|(x, j)| *x < 11.5 && (j.left || j.right));
+        assert!(early.is_none(), "seed {seed}: the 1.4 m door taken for a junction: {early:?}");
+        let (x, j) = trace
+            .iter()
+            .find(|(_, j)| j.left)
+            .unwrap_or_else(|| panic!("seed {seed}: the {side} m side corridor missed"));
+        // The centre it reports is where the side corridor's centre is.
+        let truth = 12.0 + side / 2.0 - x;
+        assert!((j.centre - truth).abs() < 0.35, "seed {seed}: centre {:.2} ahead, truth {truth:.2}", j.centre);
     }
 }
