@@ -29,8 +29,11 @@ pub const SPEED: (f64, f64) = (0.3, 0.7);
 pub const PAUSE: (f64, f64) = (0.5, 2.5);
 /// How long a person waits for the robot before walking somewhere else, s.
 const WAIT_FOR_ROBOT: f64 = 3.0;
-/// The grid of candidate free points, m.
+/// The grid of candidate free points, m (coarser on floors that would need
+/// more than [`MAX_CELLS`]).
 const GRID: f64 = 0.25;
+/// The most grid cells worked out per floor.
+const MAX_CELLS: f64 = 250_000.0;
 /// Random draws when picking a start or a waypoint.
 const DRAWS: usize = 24;
 /// The nearest waypoint picked, m.
@@ -56,7 +59,7 @@ pub struct Walkable {
     /// What people never cross: walls, obstacles, shafts, and the cars'
     /// doors (always closed for people).
     pub segs: Vec<Seg>,
-    /// Free points (a 0.25 m grid) at least [`FREE_CLEARANCE`] from every
+    /// Free points (a 0.25 m grid, coarser on huge floors) at least [`FREE_CLEARANCE`] from every
     /// segment, outside every obstacle and shaft, connected to the floor's
     /// known rooms (lobby, doors, barcodes, the start, the office).
     pub free: Vec<P2>,
@@ -73,9 +76,12 @@ fn walkable_floor(map: &Map, floor: &crate::map::Floor) -> Walkable {
     let Some((lo, hi)) = bounds(&segs) else {
         return Walkable { segs, free: Vec::new() };
     };
-    let nx = (((hi.x - lo.x) / GRID).ceil() as usize).min(4000);
-    let ny = (((hi.y - lo.y) / GRID).ceil() as usize).min(4000);
-    let centre = |i: usize, j: usize| P2::new(lo.x + (i as f64 + 0.5) * GRID, lo.y + (j as f64 + 0.5) * GRID);
+    // Whatever the grid, a person's every leg is checked against the walls
+    // (`clear_way`): a coarse grid only makes the free points fewer.
+    let grid = GRID.max(((hi.x - lo.x) * (hi.y - lo.y) / MAX_CELLS).sqrt());
+    let nx = (((hi.x - lo.x) / grid).ceil() as usize).clamp(1, 4000);
+    let ny = (((hi.y - lo.y) / grid).ceil() as usize).clamp(1, 4000);
+    let centre = |i: usize, j: usize| P2::new(lo.x + (i as f64 + 0.5) * grid, lo.y + (j as f64 + 0.5) * grid);
     let open: Vec<bool> = (0..nx * ny)
         .map(|k| {
             let p = centre(k % nx, k / nx);
@@ -130,7 +136,7 @@ fn walkable_floor(map: &Map, floor: &crate::map::Floor) -> Walkable {
             }
         }
     }
-    // Flood over 4-neighbours: two open cells 0.25 m apart, each ≥ 0.5 m
+    // Flood over 4-neighbours: two open cells under 1 m apart, each ≥ 0.5 m
     // from every segment, have no segment between them.
     while let Some(k) = queue.pop() {
         let (i, j) = (k % nx, k / nx);
