@@ -1,6 +1,6 @@
 // The world view: the simulator's map (walls, obstacles, doors, barcodes, buttons, the goal office,
 // elevator cars) on the robot's floor, the robot (`truth.pose`), its sonar rays (`sonar.range`) and
-// the cars' state (`truth.cars`).
+// the cars' state (`truth.cars`), the people walking on the floor shown (`truth.people`).
 
 import { isObject, type Json, type JsonObject } from "./conn";
 import { h, num, setText } from "./dom";
@@ -76,6 +76,7 @@ export class WorldView {
     const pose = values(sig["truth.pose"]);
     const sonar = values(sig["sonar.range"]);
     const cars = values(sig["truth.cars"]);
+    const people = values(sig["truth.people"]);
     const hasPose = isObject(pose);
     const robot: { x: number; y: number; theta: number; floor: number } | null = hasPose
       ? { x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) }
@@ -146,6 +147,17 @@ export class WorldView {
         c.setLineDash([]);
       }
     });
+    // People on this floor: small circles.
+    if (isObject(people) && Array.isArray(people["x"]) && Array.isArray(people["y"]) && Array.isArray(people["floor"])) {
+      const [px, py, pf] = [people["x"], people["y"], people["floor"]];
+      c.fillStyle = "rgba(120, 60, 160, 0.7)";
+      for (let i = 0; i < px.length; i++) {
+        if (num(pf[i], NaN) !== floor) continue;
+        c.beginPath();
+        c.arc(X(num(px[i])), Y(num(py[i])), Math.max(3, 0.25 * scale), 0, 2 * Math.PI);
+        c.fill();
+      }
+    }
     // The trail, the sonar rays, the robot.
     if (this.trail.length > 1) {
       c.strokeStyle = "rgba(0,0,0,0.15)";

@@ -8,6 +8,7 @@ pub(crate) struct DemoOptions {
     pub(crate) robot: PathBuf,
     pub(crate) map: Option<PathBuf>,
     pub(crate) seed: u64,
+    pub(crate) world: WorldArgs,
     pub(crate) headless: bool,
     pub(crate) mode: String,
     pub(crate) sequencer: PathBuf,
@@ -36,7 +37,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
     let opts = RunOptions {
         clock: Some("simulated".into()),
         listen: vec![endpoint.clone()],
-        sim: SimOverrides { map: demo.map.clone(), seed: Some(demo.seed) },
+        sim: SimOverrides { map: demo.map.clone(), seed: Some(demo.seed), world: demo.world.clone() },
         speed: if demo.headless { None } else { Some(demo.speed) },
         stopped: true,
         gui: (!demo.headless).then(|| demo.gui.clone()),

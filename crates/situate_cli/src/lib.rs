@@ -64,6 +64,8 @@ enum Command {
         /// Override the simulator's seed.
         #[arg(long)]
         seed: Option<u64>,
+        #[command(flatten)]
+        world: WorldArgs,
         /// On the simulated clock, run at this many times real time (default: as fast as possible).
         #[arg(long)]
         speed: Option<f64>,
@@ -86,6 +88,8 @@ enum Command {
         /// The simulator's seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        #[command(flatten)]
+        world: WorldArgs,
         /// No GUI, and the simulated clock as fast as possible.
         #[arg(long)]
         headless: bool,
@@ -321,14 +325,14 @@ fn count_line(file: &Path, n: usize) {
 fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check { file } => check(&file, ext),
-        Command::Run { file, cycles, executor, clock, no_link, listen, map, seed, speed, gui, no_gui } => {
+        Command::Run { file, cycles, executor, clock, no_link, listen, map, seed, world, speed, gui, no_gui } => {
             let opts = RunOptions {
                 cycles,
                 executor,
                 clock,
                 no_link,
                 listen,
-                sim: SimOverrides { map, seed },
+                sim: SimOverrides { map, seed, world },
                 speed,
                 stopped: false,
                 gui,
@@ -336,8 +340,9 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             };
             run_robot(&file, &opts, ext)
         }
-        Command::Demo { robot, map, seed, headless, mode, sequencer, python, speed, gui, limit_s, json } => {
-            let demo = DemoOptions { robot, map, seed, headless, mode, sequencer, python, speed, gui, limit_s, json };
+        Command::Demo { robot, map, seed, world, headless, mode, sequencer, python, speed, gui, limit_s, json } => {
+            let demo =
+                DemoOptions { robot, map, seed, world, headless, mode, sequencer, python, speed, gui, limit_s, json };
             run_demo(&demo, ext)
         }
         Command::Gen { lang, manifest, out } => generate(&lang, &manifest, &out),
@@ -456,6 +461,31 @@ pub struct Simulation {
 struct SimOverrides {
     map: Option<PathBuf>,
     seed: Option<u64>,
+    world: WorldArgs,
+}
+
+/// Most people per floor (`simulator: {people: N}`, `--people N`).
+const MAX_PEOPLE: u64 = 100;
+
+/// What real buildings have, on the command line (`run`, `demo`): each
+/// overrides the robot file's `simulator:` key.
+#[derive(clap::Args, Default, Clone, Debug)]
+struct WorldArgs {
+    /// People walking on every floor of the simulated building (this many per floor).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(0..=MAX_PEOPLE))]
+    people: Option<u64>,
+    /// The map's doors close now and then (one at a time, 20-60 s).
+    #[arg(long)]
+    door_closures: bool,
+    /// A dead sonar (0-23): it always reads max_range. Repeatable; replaces the file's list.
+    #[arg(long = "dead-sonar", value_name = "I", value_parser = clap::value_parser!(u8).range(0..24))]
+    dead_sonars: Vec<u8>,
+}
+
+impl WorldArgs {
+    fn any(&self) -> bool {
+        self.people.is_some() || self.door_closures || !self.dead_sonars.is_empty()
+    }
 }
 
 /// Reads `simulator: {map: FILE, seed: N}` and builds the world.
@@ -467,6 +497,12 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
                 robot_file.file
             )]);
         }
+        if over.world.any() {
+            return Err(vec![format!(
+                "{}: --people, --door-closures and --dead-sonar need a robot file with a `simulator:` section",
+                robot_file.file
+            )]);
+        }
         return Ok(None);
     };
     let mut errors = Vec::new();
@@ -474,6 +510,7 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
     // Where the robot file names the map: a map's error is reported there too.
     let mut map_at = None;
     let mut seed = 1u64;
+    let mut cfg = situate_sim::WorldConfig::default();
     match node.value.as_map() {
         Some(entries) => {
             for (key, value) in entries {
@@ -489,11 +526,26 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
                         Some(n) => seed = n as u64,
                         None => errors.push(robot_file.error(value.pos, "`seed` expects a whole number ≥ 0")),
                     },
+                    "people" => match value.value.as_i64().filter(|n| (0..=MAX_PEOPLE as i64).contains(n)) {
+                        Some(n) => cfg.people = n as usize,
+                        None => errors.push(robot_file.error(
+                            value.pos,
+                            format!("`people` expects a whole number of people per floor, 0 to {MAX_PEOPLE}"),
+                        )),
+                    },
+                    "door_closures" => match value.value.as_bool() {
+                        Some(b) => cfg.door_closures = b,
+                        None => errors.push(robot_file.error(value.pos, "`door_closures` expects `true` or `false`")),
+                    },
+                    "dead_sonars" => match dead_sonars(robot_file, value) {
+                        Ok(list) => cfg.dead_sonars = list,
+                        Err(e) => errors.push(e),
+                    },
                     other => errors.push(robot_file.error(
                         key.pos,
                         format!(
                             "unknown key `{other}` in `simulator`{}",
-                            situate_core::suggestion(other, ["map", "seed"])
+                            situate_core::suggestion(other, ["map", "seed", "people", "door_closures", "dead_sonars"])
                         ),
                     )),
                 }
@@ -507,6 +559,15 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
     }
     if let Some(s) = over.seed {
         seed = s;
+    }
+    if let Some(n) = over.world.people {
+        cfg.people = n as usize;
+    }
+    if over.world.door_closures {
+        cfg.door_closures = true;
+    }
+    if !over.world.dead_sonars.is_empty() {
+        cfg.dead_sonars = over.world.dead_sonars.iter().map(|&i| usize::from(i)).collect();
     }
     if map_path.is_none() && errors.is_empty() {
         errors.push(robot_file.error(node.pos, "`simulator` needs `map:` (the building's map file)"));
@@ -525,8 +586,28 @@ fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simu
         };
         vec![format!("{e}\n{named}")]
     })?;
-    let world = Arc::new(std::sync::Mutex::new(situate_sim::World::new(map.clone(), seed)));
+    let world = Arc::new(std::sync::Mutex::new(situate_sim::World::with_config(map.clone(), seed, cfg)));
     Ok(Some(Simulation { map_path, map, world, seed }))
+}
+
+/// `dead_sonars: [i, …]`: sonar indexes 0 to 23.
+fn dead_sonars(
+    robot_file: &RobotFile,
+    value: &situate::manager::yaml::Spanned<situate::manager::yaml::Node>,
+) -> Result<Vec<usize>, situate::manager::config::ConfigError> {
+    let Some(items) = value.value.as_seq() else {
+        return Err(robot_file.error(value.pos, "`dead_sonars` expects a list of sonar indexes, e.g. [3, 17]"));
+    };
+    let mut out = Vec::new();
+    for item in items {
+        match item.value.as_i64().filter(|i| (0..24).contains(i)) {
+            Some(i) => out.push(i as usize),
+            None => {
+                return Err(robot_file.error(item.pos, "a dead sonar is a sonar index, a whole number from 0 to 23"))
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The skill types a robot file can name: the built-in libraries, the

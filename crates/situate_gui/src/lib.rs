@@ -50,7 +50,7 @@ const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 /// The largest message a browser may send.
 const MAX_MESSAGE: usize = 64 * 1024;
 /// The signals the world view draws, when they exist.
-const WORLD_SIGNALS: [&str; 3] = ["truth.pose", "sonar.range", "truth.cars"];
+const WORLD_SIGNALS: [&str; 4] = ["truth.pose", "sonar.range", "truth.cars", "truth.people"];
 
 /// Where and how the GUI serves.
 #[derive(Debug, Clone, PartialEq)]

@@ -110,6 +110,21 @@ impl Default for TruthCars {
     }
 }
 
+/// `truth.people`: the simulator's people (ground truth), one entry per
+/// person: position and floor.
+#[derive(Record, Clone, Debug, PartialEq)]
+pub struct TruthPeople {
+    pub x: Arc<[f64]>,
+    pub y: Arc<[f64]>,
+    pub floor: Arc<[i64]>,
+}
+
+impl Default for TruthPeople {
+    fn default() -> Self {
+        TruthPeople { x: Arc::from([]), y: Arc::from([]), floor: Arc::from([]) }
+    }
+}
+
 /// `truth.mission`: whether the message was delivered inside the goal office.
 #[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
 pub struct TruthMission {
@@ -211,5 +226,6 @@ mod tests {
     fn records_have_the_contract_types() {
         assert_eq!(Drive::signal_type().to_string(), "{v: f64, w: f64}");
         assert_eq!(Barcodes::signal_type().to_string(), "{ids: i64[], bearing: f64[], distance: f64[]}");
+        assert_eq!(TruthPeople::signal_type().to_string(), "{x: f64[], y: f64[], floor: i64[]}");
     }
 }

@@ -143,6 +143,22 @@ pub fn cast(origin: P2, dir: P2, segs: &[Seg]) -> Option<f64> {
     segs.iter().filter_map(|s| ray_hit(origin, dir, s)).min_by(f64::total_cmp)
 }
 
+/// Distance along the ray from `origin` in unit direction `dir` to the
+/// circle of centre `c` and radius `r`, if it hits (0 from inside the circle).
+pub fn ray_circle(origin: P2, dir: P2, c: P2, r: f64) -> Option<f64> {
+    let w = c.minus(origin);
+    let b = w.dot(dir);
+    let disc = b * b - (w.dot(w) - r * r);
+    if disc < 0.0 {
+        return None;
+    }
+    let root = disc.sqrt();
+    if b + root < 0.0 {
+        return None;
+    }
+    Some((b - root).max(0.0))
+}
+
 /// An axis-aligned box, to skip segments that cannot matter to a query
 /// before doing any exact geometry with them.
 #[derive(Debug, Clone, Copy, PartialEq)]

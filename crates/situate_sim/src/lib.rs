@@ -4,7 +4,8 @@
 //!
 //! - [`load_map`] reads a building (format: `docs/maps.md`);
 //! - [`World`] simulates it: differential drive, 24 sonars, barcode reader,
-//!   button arm, speaker, four elevator cars;
+//!   button arm, speaker, four elevator cars; optionally people walking
+//!   ([`people`]), doors closed now and then, dead sonars ([`WorldConfig`]);
 //! - [`registry`] makes the dskills (`sim.sonar`, `sim.base`, `sim.barcode`,
 //!   `sim.arm`, `sim.speaker`, `sim.altimeter`, `sim.truth`) over one shared
 //!   world, with the ports of the robot's signal contract (`situate_robot`).
@@ -13,6 +14,7 @@ pub mod check;
 pub mod generate;
 pub mod geom;
 pub mod map;
+pub mod people;
 pub mod skills;
 pub mod world;
 

@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use situate::manager::Registry;
 use situate::prelude::*;
 use situate::SkillType;
-use situate_robot::{Arm, Barcodes, Drive, Odom, Speaker, TruthCars, TruthMission, TruthPose, SONARS};
+use situate_robot::{Arm, Barcodes, Drive, Odom, Speaker, TruthCars, TruthMission, TruthPeople, TruthPose, SONARS};
 
 use crate::world::{BaseLimits, SonarSettings, World};
 
@@ -251,6 +251,9 @@ pub struct SimTruth {
     /// Whether the message was delivered in the office.
     #[output(signal = "truth.mission")]
     mission: TruthMission,
+    /// The people: positions and floors (empty without people).
+    #[output(signal = "truth.people")]
+    people: TruthPeople,
     world: Option<SharedWorld>,
 }
 
@@ -266,6 +269,14 @@ impl Body for SimTruth {
         };
         let at = w.delivered_at();
         self.mission = TruthMission { delivered: at.is_some(), delivered_at_s: at.unwrap_or(0.0) };
+        let people = w.people();
+        if people.len() != self.people.x.len() || !people.is_empty() {
+            self.people = TruthPeople {
+                x: people.iter().map(|p| p.pos.x).collect(),
+                y: people.iter().map(|p| p.pos.y).collect(),
+                floor: people.iter().map(|p| p.floor).collect(),
+            };
+        }
         Ok(())
     }
 }

@@ -9,8 +9,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 use situate_robot::{sonar_bearing, SONARS};
 
-use crate::geom::{cast, wrap, Aabb, RayFan, Seg, P2};
+use crate::geom::{cast, ray_circle, wrap, Aabb, RayFan, Seg, P2};
 use crate::map::{Barcode, Map};
+use crate::people::{self, Around, Person, Walkable, PATH_CLEARANCE, PERSON_RADIUS};
 
 /// Settings of the physics that are not a device's parameter.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,12 +24,45 @@ pub struct WorldConfig {
     pub odom_turn_noise: f64,
     /// Odometry: heading drift per metre travelled, rad/m (std dev).
     pub odom_drift: f64,
+    /// People walking on every floor (this many per floor).
+    pub people: usize,
+    /// Whether the map's doors (not the cars') close now and then.
+    pub door_closures: bool,
+    /// Sonars (indexes 0–23) that never hear an echo: they read `max_range`.
+    pub dead_sonars: Vec<usize>,
 }
 
 impl Default for WorldConfig {
     fn default() -> Self {
-        WorldConfig { dt: 0.01, odom_dist_noise: 0.02, odom_turn_noise: 0.02, odom_drift: 0.01 }
+        WorldConfig {
+            dt: 0.01,
+            odom_dist_noise: 0.02,
+            odom_turn_noise: 0.02,
+            odom_drift: 0.01,
+            people: 0,
+            door_closures: false,
+            dead_sonars: Vec::new(),
+        }
     }
+}
+
+/// Door closures: how long a door stays closed, s.
+pub const CLOSED_S: (f64, f64) = (20.0, 60.0);
+/// Door closures: the gap between two closures, s.
+pub const OPEN_GAP_S: (f64, f64) = (60.0, 180.0);
+/// A door due to close waits until the robot's rim is this far from its opening, m.
+pub const DOOR_MARGIN: f64 = 0.3;
+
+/// Where the map's doors are in their closures (with `door_closures` on).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Closure {
+    /// Every door open; the next closure is due at `next`.
+    Open { next: f64 },
+    /// Door `door` of floor `floor` (indexes into `map.floors` and its
+    /// `doors`) is due to close for `for_s`, once its doorway is clear.
+    Due { floor: usize, door: usize, for_s: f64 },
+    /// That door is closed until `until`.
+    Closed { floor: usize, door: usize, until: f64 },
 }
 
 /// Speed and acceleration limits of the base.
@@ -125,6 +159,10 @@ enum Pending {
 
 /// Streams of the per-reading random numbers, so sensors never share one.
 const SONAR_STREAM: u64 = 1;
+/// The people's stream (their own, so people change no other random number).
+const PEOPLE_STREAM: u64 = 2;
+/// The door closures' stream.
+const DOORS_STREAM: u64 = 3;
 
 /// Slack added to every distance beyond which a segment is skipped, m: far
 /// more than the rounding of the distances compared, far less than anything
@@ -157,10 +195,16 @@ pub struct World {
     arm_presses: i64,
     /// Fixed segments per floor (same order as `map.floors`).
     statics: Vec<Vec<Seg>>,
+    /// Where people may walk, per floor (empty without people).
+    walk: Arc<Vec<Walkable>>,
+    people: Vec<Person>,
+    people_rng: ChaCha8Rng,
+    closure: Option<Closure>,
+    doors_rng: ChaCha8Rng,
 }
 
 /// A uniform number in [0, 1).
-fn uniform(rng: &mut ChaCha8Rng) -> f64 {
+pub(crate) fn uniform(rng: &mut ChaCha8Rng) -> f64 {
     (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
 }
 
@@ -214,6 +258,19 @@ impl World {
         let statics = map.floors.iter().map(|f| map.static_segments(f)).collect();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(0);
+        let mut people_rng = ChaCha8Rng::seed_from_u64(seed);
+        people_rng.set_stream(PEOPLE_STREAM);
+        let mut doors_rng = ChaCha8Rng::seed_from_u64(seed);
+        doors_rng.set_stream(DOORS_STREAM);
+        let (walk, people) = if cfg.people > 0 {
+            let walk = people::walkable(&map);
+            let people = people::place(&map, &walk, cfg.people, &mut people_rng);
+            (walk, people)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let any_door = map.floors.iter().any(|f| !f.doors.is_empty());
+        let closure = (cfg.door_closures && any_door).then(|| Closure::Open { next: gap(&mut doors_rng) });
         World {
             map: Arc::new(map),
             seed,
@@ -233,7 +290,56 @@ impl World {
             arm_attempts: 0,
             arm_presses: 0,
             statics,
+            walk: Arc::new(walk),
+            people,
+            people_rng,
+            closure,
+            doors_rng,
         }
+    }
+
+    /// The physics settings.
+    pub fn config(&self) -> &WorldConfig {
+        &self.cfg
+    }
+
+    /// The people, floor by floor.
+    pub fn people(&self) -> &[Person] {
+        &self.people
+    }
+
+    /// Where people may walk on each floor (empty without people).
+    pub fn walkable(&self) -> &[Walkable] {
+        &self.walk
+    }
+
+    /// Moves person `k` (tests, scenarios): it stands at `(x, y)` on
+    /// `floor` until time `until` (s), then walks on. False: no such person.
+    pub fn place_person(&mut self, k: usize, floor: i64, x: f64, y: f64, until: f64) -> bool {
+        let Some(p) = self.people.get_mut(k) else { return false };
+        *p = Person { floor, pos: P2::new(x, y), goal: None, pause_until: until, waited: 0.0, ..*p };
+        true
+    }
+
+    /// The door closures' state (`None` when off or the map has no doors).
+    pub fn closure(&self) -> Option<Closure> {
+        self.closure
+    }
+
+    /// The map's door closed now: its floor, opening and the time it opens.
+    pub fn closed_door(&self) -> Option<(i64, Seg, f64)> {
+        match self.closure {
+            Some(Closure::Closed { floor, door, until }) => {
+                let f = self.map.floors.get(floor)?;
+                Some((f.level, f.doors.get(door)?.seg, until))
+            }
+            _ => None,
+        }
+    }
+
+    /// The closed door's opening on `level`.
+    fn closed_on(&self, level: i64) -> Option<Seg> {
+        self.closed_door().filter(|d| d.0 == level).map(|d| d.1)
     }
 
     /// The building.
@@ -351,7 +457,7 @@ impl World {
     }
 
     /// Every segment that blocks motion and sensing on `level` now: walls,
-    /// obstacles, shafts, closed (or closing) car doors.
+    /// obstacles, shafts, closed (or closing) car doors, the closed door.
     pub fn segments(&self, level: i64) -> Vec<Seg> {
         let mut segs = self.floor_index(level).map(|i| self.statics[i].clone()).unwrap_or_default();
         segs.extend(self.door_segments(level));
@@ -366,16 +472,28 @@ impl World {
         statics.iter().copied().chain(self.door_segments(level)).filter(|s| region.meets(s)).collect()
     }
 
-    /// The closed (or closing) part of each car door on `level`.
+    /// The closed (or closing) part of each car door on `level`, then the
+    /// map's closed door if it is on `level`.
     fn door_segments(&self, level: i64) -> impl Iterator<Item = Seg> + '_ {
-        self.map.elevator.cars.iter().zip(&self.cars).filter_map(move |(c, s)| {
+        let cars = self.map.elevator.cars.iter().zip(&self.cars).filter_map(move |(c, s)| {
             let closed =
                 if s.floor() == level && !matches!(s.phase, CarPhase::Travel { .. }) { 1.0 - s.door } else { 1.0 };
             (closed > 1e-6).then(|| {
                 let d = c.door();
                 Seg::new(d.a, d.at(closed))
             })
-        })
+        });
+        cars.chain(self.closed_on(level))
+    }
+
+    /// The nearest hit of a ray from the robot on the people of its floor.
+    fn ray_people(&self, origin: P2, dir: P2) -> Option<f64> {
+        let level = self.robot.floor;
+        self.people
+            .iter()
+            .filter(|p| p.floor == level)
+            .filter_map(|p| ray_circle(origin, dir, p.pos, PERSON_RADIUS))
+            .min_by(f64::total_cmp)
     }
 
     /// Barcodes present on `level` now (cars' only when the car is there).
@@ -452,8 +570,65 @@ impl World {
             }
         }
         self.step_elevator(now, dt);
+        self.step_doors(now);
+        self.step_people(now, dt);
         self.step_robot(dt);
         self.step += 1;
+    }
+
+    /// Door closures: a random door closes after a random gap, once its
+    /// doorway is clear of the robot and of people, and opens again later.
+    fn step_doors(&mut self, now: f64) {
+        let Some(state) = self.closure else { return };
+        self.closure = Some(match state {
+            Closure::Open { next } if now >= next => {
+                let total: usize = self.map.floors.iter().map(|f| f.doors.len()).sum();
+                let mut k = (self.doors_rng.next_u64() % total.max(1) as u64) as usize;
+                let for_s = CLOSED_S.0 + uniform(&mut self.doors_rng) * (CLOSED_S.1 - CLOSED_S.0);
+                let mut due = Closure::Open { next: now + gap(&mut self.doors_rng) };
+                for (fi, f) in self.map.floors.iter().enumerate() {
+                    if k < f.doors.len() {
+                        due = Closure::Due { floor: fi, door: k, for_s };
+                        break;
+                    }
+                    k -= f.doors.len();
+                }
+                due
+            }
+            Closure::Due { floor, door, for_s } => {
+                let f = &self.map.floors[floor];
+                let seg = f.doors[door].seg;
+                let robot_in =
+                    self.robot.floor == f.level && seg.dist_to(self.pos()) < self.map.robot_radius + DOOR_MARGIN;
+                let person_in =
+                    self.people.iter().any(|p| p.floor == f.level && seg.dist_to(p.pos) < PATH_CLEARANCE + 0.05);
+                if robot_in || person_in {
+                    state
+                } else {
+                    tracing::debug!(floor = f.level, door = door, for_s, "door closed");
+                    Closure::Closed { floor, door, until: now + for_s }
+                }
+            }
+            Closure::Closed { until, .. } if now >= until => Closure::Open { next: now + gap(&mut self.doors_rng) },
+            other => other,
+        });
+    }
+
+    fn step_people(&mut self, now: f64, dt: f64) {
+        if self.people.is_empty() {
+            return;
+        }
+        let robot = (self.pos(), self.map.robot_radius, self.robot.floor);
+        let closed = self.closed_door();
+        for p in self.people.iter_mut() {
+            let Some(fi) = self.map.floors.iter().position(|f| f.level == p.floor) else { continue };
+            let around = Around {
+                walk: &self.walk[fi],
+                closed: closed.filter(|d| d.0 == p.floor).map(|d| d.1),
+                robot: (robot.2 == p.floor).then_some((robot.0, robot.1)),
+            };
+            p.step(now, dt, &around, &mut self.people_rng);
+        }
     }
 
     fn step_elevator(&mut self, now: f64, dt: f64) {
@@ -558,12 +733,18 @@ impl World {
         let r = self.map.robot_radius;
         // Only segments within `r` of the move can block it (see `blocked`).
         let segs = self.segments_in(self.robot.floor, &Aabb::spanning(from, want).grown(r + CULL_SLACK));
-        let frac = if blocked(from, want, &segs, r) {
+        let level = self.robot.floor;
+        let people = &self.people;
+        let hit = |to: P2| {
+            blocked(from, to, &segs, r)
+                || people.iter().any(|p| p.floor == level && blocked_disc(from, to, p.pos, r + PERSON_RADIUS))
+        };
+        let frac = if hit(want) {
             // The largest part of the move that stays clear.
             let (mut lo, mut hi) = (0.0, 1.0);
             for _ in 0..20 {
                 let m = (lo + hi) / 2.0;
-                if blocked(from, from.plus(want.minus(from).scale(m)), &segs, r) {
+                if hit(from.plus(want.minus(from).scale(m))) {
                     hi = m;
                 } else {
                     lo = m;
@@ -605,10 +786,24 @@ impl World {
         // Each sonar's rays are within half its cone of its axis.
         let fan = RayFan::new(p, &self.segments_in(self.robot.floor, &Aabb::around(p, reach)), s.cone / 2.0);
         let mut among = Vec::new();
-        sonar_ring(self.robot.theta, s, &mut rng, |axis, rays| {
+        let mut out = sonar_ring(self.robot.theta, s, &mut rng, |axis, rays| {
             fan.select(P2::dir(axis), &mut among);
-            rays.filter_map(|dir| fan.cast_among(P2::dir(dir), &among)).fold(f64::INFINITY, f64::min)
-        })
+            rays.map(|dir| {
+                let wall = fan.cast_among(P2::dir(dir), &among).unwrap_or(f64::INFINITY);
+                if self.people.is_empty() {
+                    wall
+                } else {
+                    wall.min(self.ray_people(p, P2::dir(dir)).unwrap_or(f64::INFINITY))
+                }
+            })
+            .fold(f64::INFINITY, f64::min)
+        });
+        for &i in &self.cfg.dead_sonars {
+            if let Some(o) = out.get_mut(i) {
+                *o = s.max_range as f32;
+            }
+        }
+        out
     }
 
     /// Barcodes within `range` (m) and `fov` (rad either side of the
@@ -636,7 +831,8 @@ impl World {
                     }
                 }
                 let dir = rel.scale(1.0 / d);
-                let hidden = cast(p, dir, &segs).is_some_and(|h| h < d - 0.01);
+                let hidden = cast(p, dir, &segs).is_some_and(|h| h < d - 0.01)
+                    || self.ray_people(p, dir).is_some_and(|h| h < d - 0.01);
                 (!hidden).then_some((b.id, bearing, d))
             })
             .collect();
@@ -663,6 +859,23 @@ fn blocked(a: P2, b: P2, segs: &[Seg], r: f64) -> bool {
             s.dist_to(b) < d0
         }
     })
+}
+
+/// Whether moving the robot's disc from `a` to `b` brings it nearer than
+/// `reach` (the sum of the radii) to the disc centred at `c`. A disc already
+/// overlapping may move away.
+fn blocked_disc(a: P2, b: P2, c: P2, reach: f64) -> bool {
+    let d0 = a.dist(c);
+    if d0 >= reach {
+        Seg::new(a, b).dist_to(c) < reach
+    } else {
+        b.dist(c) < d0
+    }
+}
+
+/// A random gap between door closures, s.
+fn gap(rng: &mut ChaCha8Rng) -> f64 {
+    OPEN_GAP_S.0 + uniform(rng) * (OPEN_GAP_S.1 - OPEN_GAP_S.0)
 }
 
 #[cfg(test)]

@@ -124,6 +124,7 @@ fn the_dskills_have_the_contract_ports() {
                 ("truth.pose", "{x: f64, y: f64, theta: f64, floor: i64}"),
                 ("truth.cars", "{floor: f64[], door: f64[]}"),
                 ("truth.mission", "{delivered: bool, delivered_at_s: f64}"),
+                ("truth.people", "{x: f64[], y: f64[], floor: i64[]}"),
             ],
         ),
     ];
