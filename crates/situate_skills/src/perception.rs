@@ -318,11 +318,18 @@ pub struct DetectIntersection {
     last_xy: Option<(f64, f64)>,
     /// Per side: the path length at which the side sonar began to see through.
     since: [Option<f64>; 2],
+    /// Per side: the path length at which it last saw through.
+    seen_at: [f64; 2],
     centre: f64,
 }
 
 /// Half a sonar's cone, rad.
 const HALF_CONE: f64 = 7.5 * std::f64::consts::PI / 180.0;
+
+/// A side opening hidden for less than this much travel (someone standing
+/// in it hides about 0.7 m) is still the same opening, m. So openings in a
+/// corridor wall less than this apart read as one.
+const GAP_M: f64 = 0.8;
 
 impl Body for DetectIntersection {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
@@ -340,6 +347,7 @@ impl Body for DetectIntersection {
             self.path = 0.0;
             self.last_xy = None;
             self.since = [None; 2];
+            self.seen_at = [0.0; 2];
             self.centre = 0.0;
         }
         if let Some(o) = self.odom {
@@ -353,14 +361,19 @@ impl Body for DetectIntersection {
         for k in 0..2 {
             // The side sonar has seen through since `since`: the opening's width is at least
             // the way travelled plus the span of its cone on the wall line.
+            // Someone walking across the opening hides it for a moment: the way travelled
+            // counts on across gaps up to `GAP_M`.
             let travelled = match (openings[k], self.odom) {
                 (Some(_), Some(_)) => {
                     let start = *self.since[k].get_or_insert(self.path);
+                    self.seen_at[k] = self.path;
                     let d = self.corridor.wall(k).unwrap_or(1.0);
                     Some(self.path - start + 2.0 * d * HALF_CONE.tan())
                 }
                 _ => {
-                    self.since[k] = None;
+                    if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() {
+                        self.since[k] = None;
+                    }
                     None
                 }
             };

@@ -236,8 +236,18 @@ fn narrow(side: f64) -> Scene {
 
 #[test]
 fn with_odometry_a_wide_door_is_never_a_junction_and_a_narrow_side_corridor_is() {
-    for (seed, y, side) in [(1u64, 0.0, 1.8), (2, 0.2, 1.9), (3, -0.2, 2.4), (4, 0.1, 1.8), (5, -0.1, 2.0)] {
-        let scene = narrow(side);
+    let cases = [(1u64, 0.0, 1.8, false), (2, 0.2, 1.9, false), (3, -0.2, 2.4, false), (4, 0.1, 1.8, false)];
+    // Last: someone standing in the side corridor's mouth hides a part of it.
+    for (seed, y, side, person) in cases.into_iter().chain([(5, -0.1, 2.2, true)]) {
+        let mut scene = narrow(side);
+        if person {
+            let (x0, y0) = (12.9, 1.2);
+            scene = scene
+                .wall(x0, y0, x0 + 0.3, y0)
+                .wall(x0 + 0.3, y0, x0 + 0.3, y0 + 0.3)
+                .wall(x0, y0 + 0.3, x0 + 0.3, y0 + 0.3)
+                .wall(x0, y0, x0, y0 + 0.3);
+        }
         let mut h = Harness::new::<DetectIntersection>();
         let mut noise = Noise::new(seed, 0.03, 0.02);
         let mut trace = Vec::new();
