@@ -76,6 +76,12 @@ def wrap(a: float) -> float:
     return a
 
 
+def farther_than(o: Pose, metres: float) -> str:
+    """The condition: the robot is more than ``metres`` (straight line) from pose ``o``."""
+    dx, dy = f"(odom.x - {o.x!r})", f"(odom.y - {o.y!r})"
+    return f"{dx} * {dx} + {dy} * {dy} > {metres * metres!r}"
+
+
 def bearing_of(i: int) -> float:
     """Bearing of sonar ``i`` in the robot frame (sonar 0 ahead, counter-clockwise)."""
     return wrap(i * 2 * math.pi / SONARS)
@@ -661,8 +667,10 @@ class Sequencer:
                 return False
             if k < count:
                 await self.say(f"      {until} {k} of {count} passed")
-                # On past this one: counted again only once it is behind.
-                if await self.wait(f"!({seen})", within=60):
+                # On past this one: the next is another only once this one is behind (its
+                # flag off) and the robot a metre on (a flag flickering counts once).
+                away = farther_than(await self.odom(), 1.0)
+                if await self.wait(f"!({seen}) && {away}", within=60):
                     return False
         if until == "junction":
             # Into the junction's middle before turning: `junction.centre` says where it is
@@ -686,12 +694,8 @@ class Sequencer:
 
     async def follow_for(self, metres: float) -> bool:
         """Follows the hallway for ``metres`` (odometry, straight-line from here)."""
-        o = await self.odom()
+        far = farther_than(await self.odom(), metres)
         await self.use("runaway", "avoid", "follow_hallway")
-        far = (
-            f"(odom.x - {o.x!r}) * (odom.x - {o.x!r}) + (odom.y - {o.y!r}) * (odom.y - {o.y!r})"
-            f" >= {metres * metres!r}"
-        )
         return await self.wait(far, within=30 + 4 * metres) == 0
 
     async def run_route(
