@@ -262,6 +262,7 @@ class Delivery(Sequencer):
                 continue
             await self.set("runaway", "safe_distance", 0.1)
             await self.set("enter_car", "distance", 4.0)
+            await self.set("enter_car", "speed", 0.5)
             await self.use("runaway", "enter_car", "identify_car", restart=["enter_car"])
             started = self.t
             got = await self.wait(

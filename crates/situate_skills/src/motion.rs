@@ -204,9 +204,11 @@ const MAX_WALL_ANGLE: f64 = 0.5;
 /// last seen since activation, or else (a lobby, a hall: no width seen yet)
 /// the distance it had from that wall when it came into view. A wall echo nearer
 /// than the corridor's usual width says (by more than `clutter_m`) is a bin
-/// or a box against the wall and is not steered by. Where no wall is seen
-/// (a crossing), it holds the corridor's direction by odometry (when `odom`
-/// is given), else goes straight on. Slows to a stop when the range ahead
+/// or a box against the wall and is not steered by. With odometry (`odom`)
+/// the corridor is a direction: the one faced at activation, kept up to date
+/// from the walls and held where no wall is seen (a crossing); turned round,
+/// the robot turns back to it. Without, it goes straight on where no wall is
+/// seen. Slows to a stop when the range ahead
 /// falls to `stop_distance`. Writes `drive` every run.
 #[derive(Skill, Default)]
 #[skill(name = "std.follow_hallway", priority = 25)]
@@ -315,18 +317,29 @@ impl Body for FollowHallway {
             (None, Some(r)) => Some((keep - r.distance, r.angle)),
             (None, None) => None,
         };
-        let (offset, angle) = match (seen, self.odom) {
-            (Some((offset, angle)), odom) => {
-                if let Some(o) = odom {
-                    // The corridor's direction in the odometry frame (walls' angle is
-                    // relative to the heading), smoothed.
-                    let axis = wrap(o.theta + angle);
-                    self.axis = Some(self.axis.map_or(axis, |a| wrap(a + 0.1 * wrap(axis - a))));
+        // With odometry the corridor is a direction, not just a line: the one the robot
+        // faced when activated, kept up to date from the walls. Turned round (avoiding
+        // someone, say), the robot turns back to it instead of following the corridor back.
+        if let Some(o) = self.odom {
+            let axis = *self.axis.get_or_insert(o.theta);
+            if let Some((_, angle)) = seen {
+                let mut along = wrap(o.theta + angle);
+                if wrap(along - axis).abs() > std::f64::consts::FRAC_PI_2 {
+                    along = wrap(along + std::f64::consts::PI);
                 }
+                self.axis = Some(wrap(axis + 0.1 * wrap(along - axis)));
+            }
+        }
+        let (offset, angle) = match (seen, self.odom, self.axis) {
+            (seen, Some(o), Some(axis)) => {
+                let angle = wrap(axis - o.theta);
+                // The walls' left and right are the corridor's only while facing its way.
+                let offset =
+                    seen.map_or(0.0, |(off, _)| if angle.abs() > std::f64::consts::FRAC_PI_2 { -off } else { off });
                 (offset, angle)
             }
-            (None, Some(o)) => (0.0, self.axis.map_or(0.0, |a| wrap(a - o.theta))),
-            (None, None) => (0.0, 0.0),
+            (Some((offset, angle)), _, _) => (offset, angle),
+            (None, _, _) => (0.0, 0.0),
         };
         // Heading wanted relative to the corridor, then relative to the robot.
         let wanted = clamp_abs(1.2 * offset, 0.5);

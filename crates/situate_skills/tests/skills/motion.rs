@@ -343,3 +343,23 @@ fn follow_hallway_goes_straight_through_a_plus_junction_past_clutter() {
         assert!(worst < 25f64.to_radians(), "seed {seed}: turned {:.0}° off the corridor", worst.to_degrees());
     }
 }
+
+#[test]
+fn follow_hallway_with_odometry_turns_back_to_its_way_when_turned_round() {
+    let scene = Scene::new().wall(-20.0, 1.1, 30.0, 1.1).wall(-20.0, -1.1, 30.0, -1.1);
+    let mut h = Harness::new::<FollowHallway>().param("speed", val(0.4));
+    let mut base = Base::new(Pose::new(0.0, 0.0, 0.0));
+    for _ in 0..100 {
+        let d = drive_of(&mut h, &[("sonar", sonar(&scene, base.pose)), ("odom", odom(base.pose))]).expect("writes");
+        base.step(Some(d), DT);
+    }
+    let x_then = base.pose.x;
+    // Something turns the robot round (as avoidance might).
+    base = Base::new(Pose::new(base.pose.x, base.pose.y, std::f64::consts::PI));
+    for _ in 0..600 {
+        let d = drive_of(&mut h, &[("sonar", sonar(&scene, base.pose)), ("odom", odom(base.pose))]).expect("writes");
+        base.step(Some(d), DT);
+    }
+    assert!(base.pose.x > x_then + 2.0, "went back the way it came: {:?} (from x {x_then:.2})", base.pose);
+    assert!(base.pose.theta.cos() > 0.9, "faces its way again: {:?}", base.pose);
+}
