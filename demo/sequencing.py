@@ -696,7 +696,7 @@ class Sequencer:
         """Follows the hallway for ``metres`` (odometry, straight-line from here)."""
         far = farther_than(await self.odom(), metres)
         await self.use("runaway", "avoid", "follow_hallway")
-        return await self.wait(far, within=30 + 4 * metres) == 0
+        return await self.wait(far, within=60 + 6 * metres) == 0
 
     async def run_route(
         self,
