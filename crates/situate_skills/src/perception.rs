@@ -382,7 +382,8 @@ impl Body for DetectIntersection {
             let wide = match travelled {
                 Some(t) => {
                     t >= self.min_width - self.travel_slack
-                        && openings[k].is_some_and(|o| !(o.width < self.min_width - 2.0 * self.travel_slack))
+                        && openings[k]
+                            .is_some_and(|o| o.width.is_nan() || o.width >= self.min_width - 2.0 * self.travel_slack)
                 }
                 None => self.odom.is_none() && openings[k].is_some_and(|o| o.width >= self.min_width),
             };
