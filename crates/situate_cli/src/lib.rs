@@ -748,9 +748,16 @@ fn map_check(file: &Path, json: bool) -> anyhow::Result<ExitCode> {
 }
 
 /// Whether the text looks like a map file (top-level `floors:` or `elevator:`)
-/// rather than a robot file.
+/// rather than a robot file. Reads no more than a robot file may hold (a
+/// device such as /dev/zero never ends: the robot-file reader reports it).
 fn looks_like_map(file: &Path) -> bool {
-    let Ok(text) = std::fs::read_to_string(file) else { return false };
+    use std::io::Read as _;
+    let Ok(f) = std::fs::File::open(file) else { return false };
+    let mut bytes = Vec::new();
+    if f.take(1 << 20).read_to_end(&mut bytes).is_err() {
+        return false;
+    }
+    let text = String::from_utf8_lossy(&bytes);
     let top = |key: &str| text.lines().any(|l| l.starts_with(key));
     !top("robot:") && (top("floors:") || top("elevator:"))
 }
