@@ -145,10 +145,13 @@ class Delivery(Sequencer):
                 await self.say("    not found")
                 continue
             await self.phase(2, f"homing on the lab door's barcode {m.lab_door_barcode}")
-            # Straight at the barcode, then square in front of it (fitting the wall): avoidance
-            # near the wall would slide the robot along it, where a barcode beside the door
-            # is seen too obliquely to read.
-            if not await self.line_up(m.lab_door_barcode, self.normal[("home", "stop_distance")]):
+            # Homing with avoidance; failing that, straight at the barcode and square in front
+            # of it (fitting the wall): near the wall avoidance can slide the robot along it,
+            # where a barcode beside the door is seen too obliquely to read.
+            stop = self.normal[("home", "stop_distance")]
+            if not await self.home_on(m.lab_door_barcode, stop) and not await self.line_up(
+                m.lab_door_barcode, stop
+            ):
                 await self.say("    the barcode was lost (or the way blocked): looking again")
                 continue
             await self.phase(3, "looking for the door opening and passing the lab door")
