@@ -289,34 +289,45 @@ impl Args<'_> {
         }
     }
 
-    /// A list of strings; a single string is refused (it is not a list of one).
-    fn strings(&mut self, name: &str, of: &str) -> Result<Vec<String>, WireError> {
-        let what = format!("a list of strings ({of})");
+    /// The items of list argument `name` (described as `what`), after
+    /// `too_many` (given their count) had nothing to object; a single string
+    /// is refused (it is not a list of one).
+    fn list(
+        &mut self,
+        name: &str,
+        what: &str,
+        too_many: impl Fn(usize) -> Option<String>,
+    ) -> Result<Vec<Json>, WireError> {
         match self.take(name) {
-            Some(Arg::Json(Json::Array(items))) if items.len() > MAX_LIST_ITEMS => {
-                Err(WireError::bad_request(format!(
-                    "`{}`: argument `{name}` has {} items, at most {MAX_LIST_ITEMS} are taken",
-                    self.verb,
-                    items.len()
-                )))
-            }
-            Some(Arg::Json(Json::Array(items))) => items
-                .into_iter()
-                .map(|i| match i {
-                    Json::String(s) => self.capped(name, s, MAX_NAME_CHARS),
-                    other => Err(self.wrong(name, &what, &Arg::Json(other))),
-                })
-                .collect(),
+            Some(Arg::Json(Json::Array(items))) => match too_many(items.len()) {
+                Some(why) => Err(WireError::bad_request(format!("`{}`: argument `{name}` {why}", self.verb))),
+                None => Ok(items),
+            },
             Some(Arg::Json(Json::String(s))) => {
-                let got = describe(&Json::String(s.clone()));
+                let got = describe(&Json::String(s));
                 Err(WireError::bad_request(format!(
                     "`{}`: argument `{name}`: expected {what}, got the string {got} (a list of one is written [{got}])",
                     self.verb
                 )))
             }
-            Some(other) => Err(self.wrong(name, &what, &other)),
-            None => Err(self.missing(name, &what)),
+            Some(other) => Err(self.wrong(name, what, &other)),
+            None => Err(self.missing(name, what)),
         }
+    }
+
+    /// A list of names (each at most [`MAX_NAME_CHARS`] long).
+    fn strings(&mut self, name: &str, of: &str) -> Result<Vec<String>, WireError> {
+        let what = format!("a list of strings ({of})");
+        let items = self.list(name, &what, |n| {
+            (n > MAX_LIST_ITEMS).then(|| format!("has {n} items, at most {MAX_LIST_ITEMS} are taken"))
+        })?;
+        items
+            .into_iter()
+            .map(|i| match i {
+                Json::String(s) => self.capped(name, s, MAX_NAME_CHARS),
+                other => Err(self.wrong(name, &what, &Arg::Json(other))),
+            })
+            .collect()
     }
 
     /// `monitor_add`'s `any`: 1 to [`MAX_ANY_CONDITIONS`] condition strings,
@@ -324,35 +335,21 @@ impl Args<'_> {
     /// (`any[2]`).
     fn conditions(&mut self, name: &str) -> Result<Vec<String>, WireError> {
         let what = format!("a list of 1 to {MAX_ANY_CONDITIONS} strings (conditions)");
-        match self.take(name) {
-            Some(Arg::Json(Json::Array(items))) if items.is_empty() || items.len() > MAX_ANY_CONDITIONS => {
-                Err(WireError::bad_request(format!(
-                    "`{}`: argument `{name}` has {} conditions, it takes 1 to {MAX_ANY_CONDITIONS}",
-                    self.verb,
-                    items.len()
-                )))
-            }
-            Some(Arg::Json(Json::Array(items))) => items
-                .into_iter()
-                .enumerate()
-                .map(|(i, item)| {
-                    let at = format!("{name}[{i}]");
-                    match item {
-                        Json::String(s) => self.capped(&at, s, MAX_CONDITION_CHARS),
-                        other => Err(self.wrong(&at, "a string (a condition)", &Arg::Json(other))),
-                    }
-                })
-                .collect(),
-            Some(Arg::Json(Json::String(s))) => {
-                let got = describe(&Json::String(s.clone()));
-                Err(WireError::bad_request(format!(
-                    "`{}`: argument `{name}`: expected {what}, got the string {got} (a list of one is written [{got}])",
-                    self.verb
-                )))
-            }
-            Some(other) => Err(self.wrong(name, &what, &other)),
-            None => Err(self.missing(name, &what)),
-        }
+        let items = self.list(name, &what, |n| {
+            (n == 0 || n > MAX_ANY_CONDITIONS)
+                .then(|| format!("has {n} conditions, it takes 1 to {MAX_ANY_CONDITIONS}"))
+        })?;
+        items
+            .into_iter()
+            .enumerate()
+            .map(|(i, item)| {
+                let at = format!("{name}[{i}]");
+                match item {
+                    Json::String(s) => self.capped(&at, s, MAX_CONDITION_CHARS),
+                    other => Err(self.wrong(&at, "a string (a condition)", &Arg::Json(other))),
+                }
+            })
+            .collect()
     }
 
     fn boolean(&mut self, name: &str, default: Option<bool>) -> Result<bool, WireError> {

@@ -395,26 +395,18 @@ pub trait Control {
     }
 
     fn add_monitor(&mut self, condition: &str, mode: MonitorMode) -> Result<u64, ControlError> {
-        match self.request(Request::AddMonitor {
-            condition: condition.into(),
-            mode,
-            pause: false,
-            report: Vec::new(),
-        })? {
-            Reply::MonitorAdded(id) => Ok(id),
-            other => Err(unexpected(other)),
-        }
+        self.add_monitor_on(condition.into(), mode)
     }
 
     /// A monitor that holds when any of `conditions` holds; its events'
     /// `held` says which did.
     fn add_monitor_any(&mut self, conditions: &[&str], mode: MonitorMode) -> Result<u64, ControlError> {
-        match self.request(Request::AddMonitor {
-            condition: MonitorCondition::Any(conditions.iter().map(|c| c.to_string()).collect()),
-            mode,
-            pause: false,
-            report: Vec::new(),
-        })? {
+        self.add_monitor_on(MonitorCondition::Any(conditions.iter().map(|c| c.to_string()).collect()), mode)
+    }
+
+    /// A monitor on `condition` (one, or any of several).
+    fn add_monitor_on(&mut self, condition: MonitorCondition, mode: MonitorMode) -> Result<u64, ControlError> {
+        match self.request(Request::AddMonitor { condition, mode, pause: false, report: Vec::new() })? {
             Reply::MonitorAdded(id) => Ok(id),
             other => Err(unexpected(other)),
         }
