@@ -16,14 +16,17 @@ use situate::manager::{
     ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, Registry, RobotFile, RobotSpec, SkillInfo,
 };
 use situate_link::{Client, ClientError, Link, LinkConfig};
-use situate_sim::generate;
 
 mod client;
 mod demo;
+mod map;
 mod signals;
+mod sim;
 
 use client::{client_verb, Remote};
 use demo::{run_demo, DemoOptions};
+pub use sim::Simulation;
+use sim::{simulation, SimOverrides, WorldArgs};
 
 #[derive(Parser)]
 #[command(
@@ -159,61 +162,10 @@ enum Command {
 
     /// Building maps for the simulator (docs/maps.md): generate one, check one.
     #[command(subcommand)]
-    Map(MapCommand),
+    Map(map::MapCommand),
 
     #[command(flatten)]
     Client(client::ClientCommand),
-}
-
-#[derive(Subcommand)]
-enum MapCommand {
-    /// Generate a delivery building from a seed (the family and options: docs/maps.md). The same
-    /// seed and options give the same file, byte for byte. Each option is a range `MIN..MAX` (or
-    /// one value) the seed draws from.
-    Generate {
-        /// The seed.
-        #[arg(long)]
-        seed: u64,
-        /// Floors in all, start and goal included (2..6).
-        #[arg(long, value_parser = generate::parse_int_range, default_value = "2..6")]
-        floors: (i64, i64),
-        /// Elevator cars (1..4).
-        #[arg(long, value_parser = generate::parse_int_range, default_value = "1..4")]
-        cars: (i64, i64),
-        /// Corridor width, m (within 1.8..3.0).
-        #[arg(long, value_parser = generate::parse_range, default_value = "1.8..2.6")]
-        corridor_width: (f64, f64),
-        /// Door width (lab, rooms, office, cars), m (within 0.8..1.6).
-        #[arg(long, value_parser = generate::parse_range, default_value = "1.0..1.4")]
-        door_width: (f64, f64),
-        /// Junctions on the start floor's way to the lobby (1..3).
-        #[arg(long, value_parser = generate::parse_int_range, default_value = "1..3")]
-        junctions: (i64, i64),
-        /// Clutter boxes per metre of corridor wall, 0..1 (default: drawn in 0..0.3).
-        #[arg(long)]
-        clutter: Option<f64>,
-        /// The elevator's open_s, s (default: drawn from [8, 12] to [15, 25]).
-        #[arg(long, value_parser = generate::parse_range)]
-        open_s: Option<(f64, f64)>,
-        /// A door barcode's distance from the nearer jamb, m (within 0.05..1.0).
-        #[arg(long, value_parser = generate::parse_range, default_value = "0.1..0.6")]
-        barcode_offset: (f64, f64),
-        /// No route hints in the mission.
-        #[arg(long)]
-        no_route: bool,
-        /// The map file to write (`-`: standard output).
-        #[arg(short, long)]
-        output: PathBuf,
-    },
-    /// Check a map: the loader's errors, then the mission's feasibility for the delivery robot
-    /// (reachability, barcodes readable, cars boardable, doors, route). Every finding is reported
-    /// as FILE:LINE: ELEMENT: MESSAGE; exit status 1 when there is any.
-    Check {
-        file: PathBuf,
-        /// Print the outcome as one JSON object.
-        #[arg(long)]
-        json: bool,
-    },
 }
 
 /// Loads the skill types of one `python:` file of a robot file.
@@ -351,7 +303,7 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Client(command) => client::run(command),
-        Command::Map(command) => map_command(command),
+        Command::Map(command) => map::map_command(command),
         Command::ServeSkill { skill, name, library, python, remote } => {
             serve_skill(&skill, name, &library, &python, &remote, ext)
         }
@@ -448,168 +400,6 @@ fn interrupt_flag() -> anyhow::Result<signals::Stop> {
     signals::Stop::install()
 }
 
-/// The simulated building a robot file runs in (its `simulator:` section).
-pub struct Simulation {
-    pub map_path: PathBuf,
-    pub map: situate_sim::Map,
-    pub world: situate_sim::SharedWorld,
-    pub seed: u64,
-}
-
-/// Overrides of a robot file's `simulator:` section from the command line.
-#[derive(Default, Clone)]
-struct SimOverrides {
-    map: Option<PathBuf>,
-    seed: Option<u64>,
-    world: WorldArgs,
-}
-
-/// Most people per floor (`simulator: {people: N}`, `--people N`).
-const MAX_PEOPLE: u64 = 100;
-
-/// What real buildings have, on the command line (`run`, `demo`): each
-/// overrides the robot file's `simulator:` key.
-#[derive(clap::Args, Default, Clone, Debug)]
-struct WorldArgs {
-    /// People walking on every floor of the simulated building (this many per floor).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(0..=MAX_PEOPLE))]
-    people: Option<u64>,
-    /// The map's doors close now and then (one at a time, 20-60 s).
-    #[arg(long)]
-    door_closures: bool,
-    /// A dead sonar (0-23): it always reads max_range. Repeatable; replaces the file's list.
-    #[arg(long = "dead-sonar", value_name = "I", value_parser = clap::value_parser!(u8).range(0..24))]
-    dead_sonars: Vec<u8>,
-}
-
-impl WorldArgs {
-    fn any(&self) -> bool {
-        self.people.is_some() || self.door_closures || !self.dead_sonars.is_empty()
-    }
-}
-
-/// Reads `simulator: {map: FILE, seed: N}` and builds the world.
-fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simulation>, Vec<String>> {
-    let Some(node) = &robot_file.simulator else {
-        if over.map.is_some() || over.seed.is_some() {
-            return Err(vec![format!(
-                "{}: --map and --seed need a robot file with a `simulator:` section",
-                robot_file.file
-            )]);
-        }
-        if over.world.any() {
-            return Err(vec![format!(
-                "{}: --people, --door-closures and --dead-sonar need a robot file with a `simulator:` section",
-                robot_file.file
-            )]);
-        }
-        return Ok(None);
-    };
-    let mut errors = Vec::new();
-    let mut map_path = None;
-    // Where the robot file names the map: a map's error is reported there too.
-    let mut map_at = None;
-    let mut seed = 1u64;
-    let mut cfg = situate_sim::WorldConfig::default();
-    match node.value.as_map() {
-        Some(entries) => {
-            for (key, value) in entries {
-                match key.value.as_str() {
-                    "map" => match value.value.as_text() {
-                        Some(p) => {
-                            map_path = Some(robot_file.resolve(p));
-                            map_at = Some(value.pos);
-                        }
-                        None => errors.push(robot_file.error(value.pos, "`map` expects the path of a map file")),
-                    },
-                    "seed" => match value.value.as_i64().filter(|s| *s >= 0) {
-                        Some(n) => seed = n as u64,
-                        None => errors.push(robot_file.error(value.pos, "`seed` expects a whole number ≥ 0")),
-                    },
-                    "people" => match value.value.as_i64().filter(|n| (0..=MAX_PEOPLE as i64).contains(n)) {
-                        Some(n) => cfg.people = n as usize,
-                        None => errors.push(robot_file.error(
-                            value.pos,
-                            format!("`people` expects a whole number of people per floor, 0 to {MAX_PEOPLE}"),
-                        )),
-                    },
-                    "door_closures" => match value.value.as_bool() {
-                        Some(b) => cfg.door_closures = b,
-                        None => errors.push(robot_file.error(value.pos, "`door_closures` expects `true` or `false`")),
-                    },
-                    "dead_sonars" => match dead_sonars(robot_file, value) {
-                        Ok(list) => cfg.dead_sonars = list,
-                        Err(e) => errors.push(e),
-                    },
-                    other => errors.push(robot_file.error(
-                        key.pos,
-                        format!(
-                            "unknown key `{other}` in `simulator`{}",
-                            situate_core::suggestion(other, ["map", "seed", "people", "door_closures", "dead_sonars"])
-                        ),
-                    )),
-                }
-            }
-        }
-        None => errors.push(robot_file.error(node.pos, "`simulator` expects a mapping with `map:` and `seed:`")),
-    }
-    if let Some(m) = &over.map {
-        map_path = Some(m.clone());
-        map_at = None;
-    }
-    if let Some(s) = over.seed {
-        seed = s;
-    }
-    if let Some(n) = over.world.people {
-        cfg.people = n as usize;
-    }
-    if over.world.door_closures {
-        cfg.door_closures = true;
-    }
-    if !over.world.dead_sonars.is_empty() {
-        cfg.dead_sonars = over.world.dead_sonars.iter().map(|&i| usize::from(i)).collect();
-    }
-    if map_path.is_none() && errors.is_empty() {
-        errors.push(robot_file.error(node.pos, "`simulator` needs `map:` (the building's map file)"));
-    }
-    if !errors.is_empty() {
-        return Err(errors.into_iter().map(|e| e.to_string()).collect());
-    }
-    let map_path = map_path.unwrap_or_default();
-    let map = situate_sim::load_map(&map_path).map_err(|e| {
-        // Both places: the map's own (file:line:col), then the robot file's `map:`.
-        let named = match map_at {
-            Some(pos) => robot_file.error(pos, format!("the map `{}` named here cannot be used", map_path.display())),
-            None => {
-                robot_file.error(node.pos, format!("the map `{}` given by --map cannot be used", map_path.display()))
-            }
-        };
-        vec![format!("{e}\n{named}")]
-    })?;
-    let world = Arc::new(std::sync::Mutex::new(situate_sim::World::with_config(map.clone(), seed, cfg)));
-    Ok(Some(Simulation { map_path, map, world, seed }))
-}
-
-/// `dead_sonars: [i, …]`: sonar indexes 0 to 23.
-fn dead_sonars(
-    robot_file: &RobotFile,
-    value: &situate::manager::yaml::Spanned<situate::manager::yaml::Node>,
-) -> Result<Vec<usize>, situate::manager::config::ConfigError> {
-    let Some(items) = value.value.as_seq() else {
-        return Err(robot_file.error(value.pos, "`dead_sonars` expects a list of sonar indexes, e.g. [3, 17]"));
-    };
-    let mut out = Vec::new();
-    for item in items {
-        match item.value.as_i64().filter(|i| (0..24).contains(i)) {
-            Some(i) => out.push(i as usize),
-            None => {
-                return Err(robot_file.error(item.pos, "a dead sonar is a sonar index, a whole number from 0 to 23"))
-            }
-        }
-    }
-    Ok(out)
-}
-
 /// The skill types a robot file can name: the built-in libraries, the
 /// simulator's devices when it has a `simulator:` section, then the file's
 /// own `libraries:` and `python:` files. Errors name the file's line.
@@ -673,97 +463,8 @@ fn load_library(path: &Path) -> Result<Vec<situate_core::SkillType>, String> {
     situate_cabi::load_library(path).map_err(|e| e.to_string())
 }
 
-fn map_command(command: MapCommand) -> anyhow::Result<ExitCode> {
-    match command {
-        MapCommand::Generate {
-            seed,
-            floors,
-            cars,
-            corridor_width,
-            door_width,
-            junctions,
-            clutter,
-            open_s,
-            barcode_offset,
-            no_route,
-            output,
-        } => {
-            let opts = generate::Options {
-                floors,
-                cars,
-                corridor_width,
-                door_width,
-                junctions,
-                clutter,
-                open_s,
-                barcode_offset,
-                route: !no_route,
-            };
-            let g = match generate::generate(seed, &opts) {
-                Ok(g) => g,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return Ok(ExitCode::from(2));
-                }
-            };
-            if output.as_os_str() == "-" {
-                print!("{}", g.yaml);
-            } else {
-                std::fs::write(&output, &g.yaml).with_context(|| format!("cannot write {}", output.display()))?;
-                eprintln!("{}: building of seed {seed} written", output.display());
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        MapCommand::Check { file, json } => map_check(&file, json),
-    }
-}
-
-fn map_check(file: &Path, json: bool) -> anyhow::Result<ExitCode> {
-    let shown = file.display().to_string();
-    let findings: Vec<Json> = match situate_sim::load_map(file) {
-        Err(e) => {
-            let (element, message) = match &e {
-                situate_sim::MapError::Invalid { element, message, .. } => (element.clone(), message.clone()),
-                situate_sim::MapError::Yaml { message, .. } => ("map".to_string(), message.clone()),
-                other => ("map".to_string(), other.to_string()),
-            };
-            vec![json!({"line": e.line(), "element": element, "message": message, "text": e.to_string()})]
-        }
-        Ok(map) => situate_sim::check::lint(&map)
-            .iter()
-            .map(|f| json!({"line": f.line, "element": f.element, "message": f.message, "text": f.render(&shown)}))
-            .collect(),
-    };
-    if json {
-        println!("{}", json!({"file": shown, "ok": findings.is_empty(), "findings": findings}));
-    } else if findings.is_empty() {
-        println!("{shown}: ok");
-    } else {
-        for f in &findings {
-            eprintln!("{}", f["text"].as_str().unwrap_or_default());
-        }
-        eprintln!("{shown}: {} finding{}", findings.len(), if findings.len() == 1 { "" } else { "s" });
-    }
-    Ok(if findings.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
-}
-
-/// Whether the text looks like a map file (top-level `floors:` or `elevator:`)
-/// rather than a robot file. Reads no more than a robot file may hold (a
-/// device such as /dev/zero never ends: the robot-file reader reports it).
-fn looks_like_map(file: &Path) -> bool {
-    use std::io::Read as _;
-    let Ok(f) = std::fs::File::open(file) else { return false };
-    let mut bytes = Vec::new();
-    if f.take(1 << 20).read_to_end(&mut bytes).is_err() {
-        return false;
-    }
-    let text = String::from_utf8_lossy(&bytes);
-    let top = |key: &str| text.lines().any(|l| l.starts_with(key));
-    !top("robot:") && (top("floors:") || top("elevator:"))
-}
-
 fn check(file: &Path, ext: &Extensions) -> anyhow::Result<ExitCode> {
-    if looks_like_map(file) {
+    if map::looks_like_map(file) {
         eprintln!("{}: this is a map file: use `situate map check {}`", file.display(), file.display());
         return Ok(ExitCode::FAILURE);
     }

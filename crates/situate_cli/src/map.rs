@@ -1,0 +1,150 @@
+//! `situate map`: generating a building and checking one (docs/maps.md),
+//! and telling a map file from a robot file for `situate check`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::Subcommand;
+use serde_json::{json, Value as Json};
+use situate_sim::generate;
+
+#[derive(Subcommand)]
+pub(crate) enum MapCommand {
+    /// Generate a delivery building from a seed (the family and options: docs/maps.md). The same
+    /// seed and options give the same file, byte for byte. Each option is a range `MIN..MAX` (or
+    /// one value) the seed draws from.
+    Generate {
+        /// The seed.
+        #[arg(long)]
+        seed: u64,
+        /// Floors in all, start and goal included (2..6).
+        #[arg(long, value_parser = generate::parse_int_range, default_value = "2..6")]
+        floors: (i64, i64),
+        /// Elevator cars (1..4).
+        #[arg(long, value_parser = generate::parse_int_range, default_value = "1..4")]
+        cars: (i64, i64),
+        /// Corridor width, m (within 1.8..3.0).
+        #[arg(long, value_parser = generate::parse_range, default_value = "1.8..2.6")]
+        corridor_width: (f64, f64),
+        /// Door width (lab, rooms, office, cars), m (within 0.8..1.6).
+        #[arg(long, value_parser = generate::parse_range, default_value = "1.0..1.4")]
+        door_width: (f64, f64),
+        /// Junctions on the start floor's way to the lobby (1..3).
+        #[arg(long, value_parser = generate::parse_int_range, default_value = "1..3")]
+        junctions: (i64, i64),
+        /// Clutter boxes per metre of corridor wall, 0..1 (default: drawn in 0..0.3).
+        #[arg(long)]
+        clutter: Option<f64>,
+        /// The elevator's open_s, s (default: drawn from [8, 12] to [15, 25]).
+        #[arg(long, value_parser = generate::parse_range)]
+        open_s: Option<(f64, f64)>,
+        /// A door barcode's distance from the nearer jamb, m (within 0.05..1.0).
+        #[arg(long, value_parser = generate::parse_range, default_value = "0.1..0.6")]
+        barcode_offset: (f64, f64),
+        /// No route hints in the mission.
+        #[arg(long)]
+        no_route: bool,
+        /// The map file to write (`-`: standard output).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Check a map: the loader's errors, then the mission's feasibility for the delivery robot
+    /// (reachability, barcodes readable, cars boardable, doors, route). Every finding is reported
+    /// as FILE:LINE: ELEMENT: MESSAGE; exit status 1 when there is any.
+    Check {
+        file: PathBuf,
+        /// Print the outcome as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+pub(crate) fn map_command(command: MapCommand) -> anyhow::Result<ExitCode> {
+    match command {
+        MapCommand::Generate {
+            seed,
+            floors,
+            cars,
+            corridor_width,
+            door_width,
+            junctions,
+            clutter,
+            open_s,
+            barcode_offset,
+            no_route,
+            output,
+        } => {
+            let opts = generate::Options {
+                floors,
+                cars,
+                corridor_width,
+                door_width,
+                junctions,
+                clutter,
+                open_s,
+                barcode_offset,
+                route: !no_route,
+            };
+            let g = match generate::generate(seed, &opts) {
+                Ok(g) => g,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return Ok(ExitCode::from(2));
+                }
+            };
+            if output.as_os_str() == "-" {
+                print!("{}", g.yaml);
+            } else {
+                std::fs::write(&output, &g.yaml).with_context(|| format!("cannot write {}", output.display()))?;
+                eprintln!("{}: building of seed {seed} written", output.display());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        MapCommand::Check { file, json } => map_check(&file, json),
+    }
+}
+
+fn map_check(file: &Path, json: bool) -> anyhow::Result<ExitCode> {
+    let shown = file.display().to_string();
+    let findings: Vec<Json> = match situate_sim::load_map(file) {
+        Err(e) => {
+            let (element, message) = match &e {
+                situate_sim::MapError::Invalid { element, message, .. } => (element.clone(), message.clone()),
+                situate_sim::MapError::Yaml { message, .. } => ("map".to_string(), message.clone()),
+                other => ("map".to_string(), other.to_string()),
+            };
+            vec![json!({"line": e.line(), "element": element, "message": message, "text": e.to_string()})]
+        }
+        Ok(map) => situate_sim::check::lint(&map)
+            .iter()
+            .map(|f| json!({"line": f.line, "element": f.element, "message": f.message, "text": f.render(&shown)}))
+            .collect(),
+    };
+    if json {
+        println!("{}", json!({"file": shown, "ok": findings.is_empty(), "findings": findings}));
+    } else if findings.is_empty() {
+        println!("{shown}: ok");
+    } else {
+        for f in &findings {
+            eprintln!("{}", f["text"].as_str().unwrap_or_default());
+        }
+        eprintln!("{shown}: {} finding{}", findings.len(), if findings.len() == 1 { "" } else { "s" });
+    }
+    Ok(if findings.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+/// Whether the text looks like a map file (top-level `floors:` or `elevator:`)
+/// rather than a robot file. Reads no more than a robot file may hold (a
+/// device such as /dev/zero never ends: the robot-file reader reports it).
+pub(crate) fn looks_like_map(file: &Path) -> bool {
+    use std::io::Read as _;
+    let Ok(f) = std::fs::File::open(file) else { return false };
+    let mut bytes = Vec::new();
+    if f.take(1 << 20).read_to_end(&mut bytes).is_err() {
+        return false;
+    }
+    let text = String::from_utf8_lossy(&bytes);
+    let top = |key: &str| text.lines().any(|l| l.starts_with(key));
+    !top("robot:") && (top("floors:") || top("elevator:"))
+}
