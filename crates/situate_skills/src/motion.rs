@@ -225,9 +225,6 @@ pub struct FollowHallway {
     /// Forward speed, m/s.
     #[param(default = 0.3, min = 0.0, max = 1.0, unit = "m/s")]
     speed: f64,
-    /// Distance kept from the one wall seen when nothing else tells (no longer used by the skill: kept for robot files that set it), m.
-    #[param(default = 0.9, min = 0.3, max = 3.0, unit = "m")]
-    wall_distance: f64,
     /// Side echoes farther than this from the centre are no wall, m.
     #[param(default = 2.0, min = 0.5, max = 5.0, unit = "m")]
     max_wall: f64,
@@ -300,21 +297,20 @@ impl Body for FollowHallway {
             let width = self.widths.push(l.distance + r.distance);
             self.half = Some(width / 2.0);
         }
-        // With one wall only and no width seen yet (a lobby, a hall): keep the distance it
-        // had from that wall when it came into view, rather than pull to a guess.
+        // With one wall only: keep the half-width last seen, or with no width seen yet (a
+        // lobby, a hall) the distance it had from that wall when it came into view.
         let lone = match (left, right) {
-            (Some(w), None) | (None, Some(w)) => Some(*self.lone.get_or_insert(w.distance)),
+            (Some(w), None) | (None, Some(w)) => self.half.unwrap_or(*self.lone.get_or_insert(w.distance)),
             _ => {
                 self.lone = None;
-                None
+                0.0
             }
         };
-        let keep = self.half.or(lone).unwrap_or(self.wall_distance);
         // Offset to the left of where the robot should be, and the walls' direction.
         let seen = match (left, right) {
             (Some(l), Some(r)) => Some(((l.distance - r.distance) / 2.0, (l.angle + r.angle) / 2.0)),
-            (Some(l), None) => Some((l.distance - keep, l.angle)),
-            (None, Some(r)) => Some((keep - r.distance, r.angle)),
+            (Some(l), None) => Some((l.distance - lone, l.angle)),
+            (None, Some(r)) => Some((lone - r.distance, r.angle)),
             (None, None) => None,
         };
         // With odometry the corridor is a direction, not just a line: the one the robot

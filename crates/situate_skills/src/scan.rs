@@ -72,17 +72,23 @@ pub fn fit_wall(range: &[f32; SONARS], m: &ScanModel) -> Option<(f64, f64, usize
         around(m.bearing, m.half_angle).into_iter().filter(|&i| centre_range(range, i) < m.max_range).collect();
     // For direction `phi`: (inliers, spread, distance) of the best-supported distance.
     let score = |phi: f64| -> Option<(usize, f64, f64)> {
-        let est: Vec<f64> = sonars
-            .iter()
-            .filter(|&&i| crate::util::wrap(sonar_bearing(i) - phi).abs() < std::f64::consts::FRAC_PI_2 - m.half_cone)
-            .map(|&i| centre_range(range, i) * cone_factor(i, phi, m.half_cone))
-            .collect();
+        // At most one estimate per sonar: on the stack, no allocation per direction tried.
+        let mut buf = [0.0f64; SONARS];
+        let mut n_est = 0;
+        for &i in &sonars {
+            if crate::util::wrap(sonar_bearing(i) - phi).abs() < std::f64::consts::FRAC_PI_2 - m.half_cone {
+                buf[n_est] = centre_range(range, i) * cone_factor(i, phi, m.half_cone);
+                n_est += 1;
+            }
+        }
+        let est = &buf[..n_est];
         let mut best: Option<(usize, f64, f64)> = None;
-        for &seed in &est {
-            let on: Vec<f64> = est.iter().copied().filter(|e| (e - seed).abs() < m.tolerance / 2.0).collect();
-            let d = on.iter().sum::<f64>() / on.len() as f64;
-            let spread: f64 = on.iter().map(|e| (e - d) * (e - d)).sum();
-            let cand = (on.len(), spread, d);
+        for &seed in est {
+            let on = || est.iter().copied().filter(move |e| (e - seed).abs() < m.tolerance / 2.0);
+            let count = on().count();
+            let d = on().sum::<f64>() / count as f64;
+            let spread: f64 = on().map(|e| (e - d) * (e - d)).sum();
+            let cand = (count, spread, d);
             let better = match best {
                 None => true,
                 Some((n, sp, bd)) => {

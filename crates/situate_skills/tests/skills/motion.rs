@@ -130,7 +130,7 @@ fn follow_hallway_keeps_the_width_it_saw_past_a_long_gap() {
         base.step(Some(d), DT);
         worst = worst.max(base.pose.y.abs());
     }
-    // Kept 1.3 m from the right wall, not its `wall_distance` (0.9 m).
+    // Kept 1.3 m from the right wall: the half-width it saw, not where it was when the gap began.
     assert!(worst < 0.15, "strayed {worst:.2} m off the centre line");
 }
 
