@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import math
 import os
 from collections.abc import Awaitable, Callable, Mapping, Sequence
@@ -113,6 +114,9 @@ class Sequencer:
         self.quiet = quiet
         self.seed = seed
         self.debug = bool(os.environ.get("DELIVER_DEBUG"))
+        #: DELIVER_TRACE=FILE: the true pose every 0.25 s, one JSON line each (for debugging).
+        trace = os.environ.get("DELIVER_TRACE")
+        self.trace = open(trace, "w") if trace else None  # noqa: SIM115 (open for the run)
         self.active: set[str] = set()
         self.t = 0.0
         self.phase_no = 0
@@ -171,7 +175,14 @@ class Sequencer:
         """
         deadline = min(self.t + within, self.limit_s) if within is not None else self.limit_s
         # The deadline exactly (repr: the shortest text that reads back as the same float).
-        index = await self._first([*conditions, f"time >= {deadline!r}"])
+        watched = [*conditions, f"time >= {deadline!r}"]
+        if self.trace is not None:  # stops every 0.25 s to write where the robot truly is
+            while (index := await self._first([*watched, f"time >= {self.t + 0.25!r}"])) == len(
+                watched
+            ):
+                await self._trace()
+        else:
+            index = await self._first(watched)
         if index == len(conditions) and self.t >= self.limit_s:
             raise OutOfTime(f"the mission's {self.limit_s:.0f} s are up")
         return index
@@ -256,6 +267,14 @@ class Sequencer:
     async def sonar(self) -> list[float]:
         """The sonar ranges, m."""
         return [float(v) for v in await self.value("sonar.range")]
+
+    async def _trace(self) -> None:
+        assert self.trace is not None
+        with contextlib.suppress(situate.SituateError):
+            p = await self.value("truth.pose")
+            if p is not None:
+                self.trace.write(json.dumps({"t": self.t, **p}) + "\n")
+                self.trace.flush()
 
     async def say(self, text: str) -> None:
         """One progress line, stamped with the simulated time."""
@@ -648,14 +667,24 @@ class Sequencer:
             # Up to the wall ahead: about the middle of the corridor it ends in (corridors are
             # 1.8 to 2.6 m wide), before avoidance would start turning away from it.
             await self.use("runaway", "avoid", "follow_hallway")
-            # A wall across the way (the sonars either side of ahead see it too), not a jamb
-            # caught by the front sonar's cone.
-            beside = WALL_AHEAD_M / math.cos(math.radians(15)) + 0.3
-            ahead = (
-                f"sonar.range[0] < {WALL_AHEAD_M} && sonar.range[1] < {beside:.3f}"
-                f" && sonar.range[23] < {beside:.3f}"
-            )
-            return await self.wait(ahead, within=180) == 0
+
+            # A wall across the way: the sonars up to 30° either side of ahead see it too, so
+            # neither a jamb caught by the front sonar's cone nor clutter or a person in the
+            # corridor (which those sonars see past) is taken for it.
+            def near(k: int) -> float:  # sonar k (15° each) reads a wall WALL_AHEAD_M ahead
+                cone = math.radians(max(0.0, abs(k) * 15 - 7.5))
+                return WALL_AHEAD_M / math.cos(cone) + (0.3 if k else 0.0)
+
+            ahead = " && ".join(f"sonar.range[{k % 24}] < {near(k):.3f}" for k in (0, 1, -1, 2, -2))
+            deadline = self.t + 180
+            while await self.wait(ahead, within=deadline - self.t) == 0:
+                along = self.corridor_heading
+                if along is None or abs(wrap((await self.odom()).theta - along)) < math.radians(30):
+                    return True
+                # Facing a side wall (turned there by avoidance, round clutter): not the end.
+                if await self.wait(f"!({ahead})", within=deadline - self.t):
+                    return False
+            return False
         detector, signal = (
             ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
         )

@@ -197,6 +197,12 @@ impl Body for Wander {
 
 /// A side wall more oblique than this to the heading is no corridor wall, rad.
 const MAX_WALL_ANGLE: f64 = 0.5;
+/// A lone wall this much farther than its recent distance is not the corridor's, m.
+const LONE_WALL_JUMP_M: f64 = 0.4;
+/// Both walls' directions agree within this to correct the corridor's axis, rad.
+const AXIS_AGREE: f64 = 0.1;
+/// … and lie this near the axis, rad.
+const AXIS_FOLLOW: f64 = 0.25;
 
 /// Follows a corridor: keeps centred between the two side walls (those
 /// within about 30° of the heading), heading along them; when one wall is
@@ -249,6 +255,13 @@ pub struct FollowHallway {
     lone: Option<f64>,
 }
 
+impl FollowHallway {
+    /// A lone wall at `d` is this corridor's, its recent distance being `q`.
+    fn lone_ok(&self, d: f64, q: f64) -> bool {
+        d >= q - self.clutter_m && d <= q + LONE_WALL_JUMP_M
+    }
+}
+
 impl Body for FollowHallway {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         if self.activation.fresh(cx.cycle()) {
@@ -258,10 +271,21 @@ impl Body for FollowHallway {
             self.axis = None;
             self.lone = None;
         }
-        // Only walls roughly along the heading are the corridor's: at a junction the side
-        // sonars see the side corridor's walls, across the heading, and steering by them
-        // would turn the robot into it.
-        let along = |w: Option<SideWall>| w.filter(|w| w.angle.abs() < MAX_WALL_ANGLE);
+        // Only walls roughly along the corridor are the corridor's: at a junction the side
+        // sonars see the side corridor's walls, across it, and steering by them would turn
+        // the robot into it. Along the corridor's direction once it is known (odometry),
+        // not the robot's heading: a robot turned a little (round clutter, at a corner)
+        // would otherwise take the crossing corridor's walls for its own and turn on.
+        let (odom, axis) = (self.odom, self.axis);
+        let along = |w: Option<SideWall>| {
+            w.filter(|w| match (odom, axis) {
+                (Some(o), Some(axis)) => {
+                    let off = wrap(o.theta + w.angle - axis);
+                    off.abs() < MAX_WALL_ANGLE || (std::f64::consts::PI - off.abs()) < MAX_WALL_ANGLE
+                }
+                _ => w.angle.abs() < MAX_WALL_ANGLE,
+            })
+        };
         let mut left = along(side_wall(&self.sonar, LEFT, self.max_wall, 0.15));
         let mut right = along(side_wall(&self.sonar, RIGHT, self.max_wall, 0.15));
         // Clutter: a wall nearer than the corridor's width (both seen) or than the wall's own
@@ -280,10 +304,11 @@ impl Body for FollowHallway {
                     }
                 }
             }
-            (Some(l), None) if self.sides[0].quantile().is_some_and(|q| l.distance < q - self.clutter_m) => left = None,
-            (None, Some(r)) if self.sides[1].quantile().is_some_and(|q| r.distance < q - self.clutter_m) => {
-                right = None
-            }
+            // One wall: nearer than it was is clutter; much farther is not this corridor's wall
+            // but something beyond an opening (a bin in a junction's far corner, an alcove's
+            // wall), which steering by would turn the robot into the opening.
+            (Some(l), None) if self.sides[0].quantile().is_some_and(|q| !self.lone_ok(l.distance, q)) => left = None,
+            (None, Some(r)) if self.sides[1].quantile().is_some_and(|q| !self.lone_ok(r.distance, q)) => right = None,
             _ => {}
         }
         if let Some(l) = left {
@@ -318,7 +343,13 @@ impl Body for FollowHallway {
         // someone, say), the robot turns back to it instead of following the corridor back.
         if let Some(o) = self.odom {
             let axis = *self.axis.get_or_insert(o.theta);
-            if let Some((_, angle)) = seen {
+            // Corrected only by both walls agreeing, near it: a lone fit (a wall's end and a
+            // bin beyond it, say) tilts a little each cycle and would drag the axis after it.
+            let both = match (left, right) {
+                (Some(l), Some(r)) if (l.angle - r.angle).abs() < AXIS_AGREE => seen,
+                _ => None,
+            };
+            if let Some((_, angle)) = both.filter(|&(_, a)| wrap(o.theta + a - axis).abs() < AXIS_FOLLOW) {
                 let mut along = wrap(o.theta + angle);
                 if wrap(along - axis).abs() > std::f64::consts::FRAC_PI_2 {
                     along = wrap(along + std::f64::consts::PI);

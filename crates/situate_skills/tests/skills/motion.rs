@@ -363,3 +363,48 @@ fn follow_hallway_with_odometry_turns_back_to_its_way_when_turned_round() {
     assert!(base.pose.x > x_then + 2.0, "went back the way it came: {:?} (from x {x_then:.2})", base.pose);
     assert!(base.pose.theta.cos() > 0.9, "faces its way again: {:?}", base.pose);
 }
+
+/// A corridor 2.49 m wide along x (y 6.51..9) ending in a crossing corridor
+/// 1.82 m wide (x 12.79..14.61) with a dead end 3.3 m to the right, an alcove
+/// on its left past the corner and a bin in that corner: a T, as in
+/// generated building 20027's floor 3.
+fn t_end() -> Scene {
+    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
+        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
+    };
+    let s = Scene::new()
+        .wall(7.43, 6.51, 12.79, 6.51)
+        .wall(7.43, 9.0, 12.79, 9.0)
+        .wall(12.79, 3.2, 12.79, 6.51)
+        .wall(12.79, 9.0, 12.79, 10.97)
+        .wall(12.79, 10.97, 10.0, 10.97)
+        .wall(10.0, 10.97, 10.0, 12.82)
+        .wall(10.0, 12.82, 12.79, 12.82)
+        .wall(12.79, 12.82, 12.79, 30.0)
+        .wall(14.61, 3.2, 14.61, 30.0)
+        .wall(12.79, 3.2, 14.61, 3.2);
+    let s = rect(s, 12.8, 9.38, 13.15, 9.64);
+    rect(s, 14.18, 11.9, 14.6, 12.37)
+}
+
+#[test]
+fn follow_hallway_with_odometry_holds_its_way_into_a_t_instead_of_turning_into_a_branch() {
+    let scene = t_end();
+    for (seed, y0) in [(1u64, 0.0), (2, 0.15), (3, -0.15)] {
+        let mut h = Harness::new::<FollowHallway>().param("speed", val(0.4));
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut base = Base::new(Pose::new(8.5, 7.75 + y0, 0.0));
+        let mut worst: f64 = 0.0;
+        for _ in 0..800 {
+            let r = noise.apply(scene.sonar(base.pose));
+            let d = drive_of(&mut h, &[("sonar", val::<[f32; SONARS]>(r)), ("odom", odom(base.pose))])
+                .expect("always writes");
+            base.step(Some(d), DT);
+            worst = worst.max(base.pose.theta.abs());
+        }
+        // It comes to a stop facing the crossing corridor's far wall, in the junction, as
+        // a route's `until: wall` expects; it does not wander into either branch.
+        assert!(worst < 20f64.to_radians(), "seed {seed}: turned {:.0}° into a branch", worst.to_degrees());
+        assert!(base.pose.x > 12.9 && (base.pose.y - 7.75).abs() < 0.9, "seed {seed}: stopped at {:?}", base.pose);
+    }
+}
