@@ -303,6 +303,27 @@ fn turn(s: &str) -> Step {
     Step(vec![("turn", s.to_string())])
 }
 
+/// Until the junction on `side` whose near edge is at `edge`, from `from`
+/// (along the corridor, cm), it being the `count`-th there.
+///
+/// With room for it, the step first follows the corridor to 1.5 m before the
+/// junction without looking (`distance`), then takes the first junction: the
+/// ones before it are 1.5 m or more back, and the junction detector, started
+/// there, sees too little of them to count them. A door or clutter taken for a
+/// junction on the way cannot then be miscounted.
+fn junction_step(side: &str, from: i64, edge: i64, count: usize) -> Step {
+    let mut step = vec![("follow", "hallway".to_string()), ("until", "junction".into()), ("side", side.into())];
+    let blind = edge - 150 - from;
+    if blind >= 100 {
+        step.push(("distance", metres(blind)));
+        step.push(("count", "1".into()));
+    } else {
+        step.push(("count", count.to_string()));
+    }
+    step.push(("turn", side.into()));
+    Step(step)
+}
+
 fn flip_word(s: &str) -> String {
     match s {
         "left" => "right".into(),
@@ -324,8 +345,9 @@ struct Run {
 }
 
 /// Lays clutter boxes (0.2–0.5 m) along the runs, never leaving less than
-/// 1.2 m between a box and another across the corridor.
-fn clutter(rng: &mut Rng, f: &mut FloorB, runs_: &[Run], density: f64, boxes: &mut Vec<(Pt, Pt)>) {
+/// 1.2 m between a box and one on another wall (across the corridor, or
+/// round a corner), in any direction.
+fn clutter(rng: &mut Rng, f: &mut FloorB, runs_: &[Run], density: f64, boxes: &mut Vec<(Pt, Pt, (bool, i64))>) {
     for r in runs_ {
         let len = (r.to - r.from) as f64 / 100.0;
         let n = (density * len).round() as usize;
@@ -338,23 +360,20 @@ fn clutter(rng: &mut Rng, f: &mut FloorB, runs_: &[Run], density: f64, boxes: &m
             }
             let (n0, n1) = if r.inward > 0 { (r.fixed + 1, r.fixed + 1 + d) } else { (r.fixed - 1 - d, r.fixed - 1) };
             let (lo, hi) = if r.horizontal { ((s, n0), (s + a, n1)) } else { ((n0, s), (n1, s + a)) };
-            // The box grown by 10 cm, and by 1.2 m towards the corridor.
-            let reach = 120;
-            let (glo, ghi) = if r.horizontal {
-                if r.inward > 0 {
-                    ((lo.0 - 10, lo.1), (hi.0 + 10, hi.1 + reach))
-                } else {
-                    ((lo.0 - 10, lo.1 - reach), (hi.0 + 10, hi.1))
-                }
-            } else if r.inward > 0 {
-                ((lo.0, lo.1 - 10), (hi.0 + reach, hi.1 + 10))
-            } else {
-                ((lo.0 - reach, lo.1 - 10), (hi.0, hi.1 + 10))
+            // At least 1.2 m from every box on another wall, in any direction (boxes staggered
+            // on facing walls leave only the diagonal between them), and 10 cm from those on
+            // this wall.
+            let wall = (r.horizontal, r.fixed);
+            let too_near = |&(blo, bhi, bwall): &(Pt, Pt, (bool, i64))| {
+                let gap = |a0: i64, a1: i64, b0: i64, b1: i64| (b0 - a1).max(a0 - b1).max(0);
+                let (gx, gy) = (gap(lo.0, hi.0, blo.0, bhi.0), gap(lo.1, hi.1, blo.1, bhi.1));
+                let min = if bwall == wall { 10 } else { 120 };
+                gx * gx + gy * gy < min * min
             };
-            if boxes.iter().any(|&(blo, bhi)| blo.0 < ghi.0 && glo.0 < bhi.0 && blo.1 < ghi.1 && glo.1 < bhi.1) {
+            if boxes.iter().any(too_near) {
                 continue;
             }
-            boxes.push((lo, hi));
+            boxes.push((lo, hi, wall));
             let name = if rng.coin() { "bin" } else { "box" };
             f.obstacles.push((name.to_string(), lo, hi));
         }
@@ -698,13 +717,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     clutter(rng, &mut fs, &runs_s, density, &mut boxes);
     let lab_to_lobby = vec![
         turn("right"),
-        Step(vec![
-            ("follow", "hallway".into()),
-            ("until", "junction".into()),
-            ("side", "left".into()),
-            ("count", (north_open + 1).to_string()),
-            ("turn", "left".into()),
-        ]),
+        junction_step("left", lab_x0 + dw / 2, jx, north_open + 1),
         Step(vec![("follow", "hallway".into()), ("until", "distance".into()), ("distance", metres(w / 2 + lb + 100))]),
         Step(vec![("home", "30".into())]),
     ];
@@ -812,13 +825,8 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
             keep_clear: door_margins(&east_gaps, &door_gaps),
         });
         ue = c + wc + rng.int(200, 350);
-        button_to_office.push(Step(vec![
-            ("follow", "hallway".into()),
-            ("until", "junction".into()),
-            ("side", "right".into()),
-            ("count", (south_open + 1).to_string()),
-            ("turn", "right".into()),
-        ]));
+        // From the T's middle (x 0), where `until: wall` stopped.
+        button_to_office.push(junction_step("right", 0, c, south_open + 1));
         let d = found.unwrap_or_else(|| DoorB { name: String::new(), a: (0, 0), b: (0, 1), barcode: None });
         let bar = gf.office.map(|o| o.2);
         let full = DoorB { barcode: bar, ..d };

@@ -948,8 +948,8 @@ impl Reader<'_> {
             if d <= 0.0 {
                 return Err(self.err(node.pos, el, format!("distance must be positive, got {d}")));
             }
-            if step.until.as_deref() != Some("distance") {
-                return Err(self.err(node.pos, el, "`distance` goes with `until: distance`"));
+            if step.follow.is_none() {
+                return Err(self.err(node.pos, el, "`distance` goes with `follow: hallway`"));
             }
         }
         if step.until.as_deref() == Some("distance") && step.distance.is_none() {

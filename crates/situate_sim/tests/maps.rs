@@ -164,12 +164,12 @@ fn route_steps_count_and_distance_are_checked() {
     assert!(e.contains("`until: distance` needs `distance: M`"), "{e}");
     let (e, _) = broken("      - {home: 40}", "      - {follow: hallway, until: distance, distance: -1}");
     assert!(e.contains("distance must be positive"), "{e}");
-    let (e, _) = broken("      - {home: 40}", "      - {follow: hallway, until: wall, distance: 2}");
-    assert!(e.contains("`distance` goes with `until: distance`"), "{e}");
+    let (e, _) = broken("      - {home: 40}", "      - {turn: left, distance: 2}");
+    assert!(e.contains("`distance` goes with `follow: hallway`"), "{e}");
     // Accepted, and in the mission's JSON.
     let text = small_text().replacen(
         "    car_to_office:\n      - {home: 40}",
-        "    button_to_office:\n      - {follow: hallway, until: junction, side: left, count: 2, turn: left}\n      - {follow: hallway, until: distance, distance: 3.5}\n      - {home: 40}",
+        "    button_to_office:\n      - {follow: hallway, until: junction, side: left, count: 2, turn: left}\n      - {follow: hallway, until: junction, distance: 4, turn: left}\n      - {follow: hallway, until: distance, distance: 3.5}\n      - {home: 40}",
         1,
     );
     let m = match Map::parse("maps/x.yaml", &text) {
@@ -178,7 +178,8 @@ fn route_steps_count_and_distance_are_checked() {
     };
     let j = m.mission_json();
     assert_eq!(j["route"]["button_to_office"][0]["count"], 2);
-    assert_eq!(j["route"]["button_to_office"][1]["distance"], 3.5);
+    assert_eq!(j["route"]["button_to_office"][1]["distance"], 4.0);
+    assert_eq!(j["route"]["button_to_office"][2]["distance"], 3.5);
     assert_eq!(j["goal_button_barcode"], 31);
     assert_eq!(j["cars"], 2);
 }

@@ -320,6 +320,11 @@ pub struct DetectIntersection {
     since: [Option<f64>; 2],
     /// Per side: the path length at which it last saw through.
     seen_at: [f64; 2],
+    /// Per side: the opening being travelled was seen `depth` deep.
+    deep: [bool; 2],
+    /// Per side: the side sonar read beyond the wall line in the last scan.
+    beyond: [bool; 2],
+    /// The last opening's centre: along the path travelled (m) with odometry, else ahead.
     centre: f64,
 }
 
@@ -330,6 +335,10 @@ const HALF_CONE: f64 = 7.5 * std::f64::consts::PI / 180.0;
 /// in it hides about 0.7 m) is still the same opening, m. So openings in a
 /// corridor wall less than this apart read as one.
 const GAP_M: f64 = 0.8;
+
+/// Past an opening seen deep, an echo this far beyond the wall line still
+/// sees through it (clutter inside its mouth), m: four times the sonar noise.
+const SHALLOW_M: f64 = 0.12;
 
 impl Body for DetectIntersection {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
@@ -348,6 +357,8 @@ impl Body for DetectIntersection {
             self.last_xy = None;
             self.since = [None; 2];
             self.seen_at = [0.0; 2];
+            self.deep = [false; 2];
+            self.beyond = [false; 2];
             self.centre = 0.0;
         }
         if let Some(o) = self.odom {
@@ -363,39 +374,51 @@ impl Body for DetectIntersection {
             // the way travelled plus the span of its cone on the wall line.
             // Someone walking across the opening hides it for a moment: the way travelled
             // counts on across gaps up to `GAP_M`.
-            let travelled = match (openings[k], self.odom) {
-                (Some(_), Some(_)) => {
-                    let start = *self.since[k].get_or_insert(self.path);
-                    self.seen_at[k] = self.path;
-                    let d = self.corridor.wall(k).unwrap_or(1.0);
-                    Some(self.path - start + 2.0 * d * HALF_CONE.tan())
+            // The side sonar sees through an opening while it reads just beyond the wall line,
+            // once the opening was seen deep (`depth` beyond the line) somewhere along it: a
+            // bin standing inside a side corridor's mouth (deeper than the wall, nearer than
+            // `depth`) does not cut its width short. A door's jambs are on the line, so this
+            // widens no door.
+            let side = [LEFT, RIGHT][k];
+            // In this scan and the last: a missed echo also reads far, but one scan only.
+            let beyond = self.corridor.wall(k).is_some_and(|d| centre_range(&self.sonar, side) > d + SHALLOW_M);
+            let shallow = std::mem::replace(&mut self.beyond[k], beyond) && beyond && self.odom.is_some();
+            let travelled = if self.odom.is_some() && (openings[k].is_some() || shallow) {
+                let start = *self.since[k].get_or_insert(self.path);
+                self.seen_at[k] = self.path;
+                self.deep[k] |= openings[k].is_some();
+                let d = self.corridor.wall(k).unwrap_or(1.0);
+                Some(self.path - start + 2.0 * d * HALF_CONE.tan())
+            } else {
+                if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() {
+                    self.since[k] = None;
+                    self.deep[k] = false;
                 }
-                _ => {
-                    if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() {
-                        self.since[k] = None;
-                    }
-                    None
-                }
+                None
             };
             // With odometry the way travelled decides (the jambs' width only has to be
             // roughly right); without it, the jambs' width.
             let wide = match travelled {
                 Some(t) => {
-                    t >= self.min_width - self.travel_slack
+                    self.deep[k]
+                        && t >= self.min_width - self.travel_slack
                         && openings[k]
-                            .is_some_and(|o| o.width.is_nan() || o.width >= self.min_width - 2.0 * self.travel_slack)
+                            .is_none_or(|o| o.width.is_nan() || o.width >= self.min_width - 2.0 * self.travel_slack)
                 }
                 None => self.odom.is_none() && openings[k].is_some_and(|o| o.width >= self.min_width),
             };
             if let Some(o) = openings[k].filter(|o| o.centre.is_finite()) {
-                self.centre = o.centre;
+                // Kept along the path: passing on (someone standing in the mouth hides the
+                // opening for a while), the centre stays where it was seen.
+                self.centre = o.centre + if self.odom.is_some() { self.path } else { 0.0 };
             }
             // The way travelled is itself the confirmation: one cycle is enough then.
             let confirm = if travelled.is_some() { 1 } else { self.confirm };
             open[k] = self.flags[k].update(wide, confirm, self.release);
         }
         let ahead = self.flags[2].update(ahead_now, self.confirm, self.confirm);
-        let out = Junction { left: open[0], right: open[1], ahead, centre: self.centre };
+        let centre = self.centre - if self.odom.is_some() { self.path } else { 0.0 };
+        let out = Junction { left: open[0], right: open[1], ahead, centre };
         if (out.left, out.right, out.ahead) != (self.junction.left, self.junction.right, self.junction.ahead) {
             sprint!(cx, "junction: left {} right {} ahead {}", out.left, out.right, out.ahead);
         }

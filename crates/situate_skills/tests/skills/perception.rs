@@ -270,3 +270,42 @@ fn with_odometry_a_wide_door_is_never_a_junction_and_a_narrow_side_corridor_is()
         assert!((j.centre - truth).abs() < 0.35, "seed {seed}: centre {:.2} ahead, truth {truth:.2}", j.centre);
     }
 }
+
+/// A corridor 2.15 m wide (y −1.08..1.07) with a side corridor 1.81 m wide on
+/// the left at x 7.87..9.68, a bin just inside its mouth at its near corner,
+/// a box on the corridor's wall just past it and a bin on the right wall
+/// across it: generated building 20023's way to its lobby (floor 0).
+fn bin_in_the_mouth() -> Scene {
+    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
+        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
+    };
+    let s = Scene::new()
+        .wall(-1.0, 1.07, 7.87, 1.07)
+        .wall(9.68, 1.07, 14.0, 1.07)
+        .wall(7.87, 1.07, 7.87, 7.26)
+        .wall(9.68, 1.07, 9.68, 7.26)
+        .wall(-1.0, -1.08, 14.0, -1.08);
+    let s = rect(s, 7.88, 1.23, 8.25, 1.63);
+    let s = rect(s, 10.08, 0.77, 10.48, 1.06);
+    rect(s, 8.93, -1.07, 9.16, -0.58)
+}
+
+#[test]
+fn with_odometry_a_side_corridor_with_a_bin_in_its_mouth_is_a_junction() {
+    for (seed, y) in [(1u64, 0.0), (2, 0.1), (3, -0.1), (4, 0.2)] {
+        let scene = bin_in_the_mouth();
+        let mut h = Harness::new::<DetectIntersection>();
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut trace = Vec::new();
+        let mut x = 0.0;
+        while x < 13.0 {
+            let r = noise.apply(scene.sonar(Pose::new(x, y, 0.0)));
+            let odom = Odom { x, y, theta: 0.0, v: 0.4, w: 0.0 };
+            let out = h.run(&[("sonar", val::<[f32; SONARS]>(r)), ("odom", val(odom))]);
+            trace.push((x, out.get::<Junction>("junction").expect("written every run")));
+            x += 0.04;
+        }
+        let (a, b) = span(&trace, |j| j.left).unwrap_or_else(|| panic!("seed {seed}, y {y}: the junction missed"));
+        assert!(a > 7.5 && b < 11.0, "seed {seed}, y {y}: junction left over x {a:.2}..{b:.2}");
+    }
+}
