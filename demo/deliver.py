@@ -149,11 +149,28 @@ class Delivery(Sequencer):
             # of it (fitting the wall): near the wall avoidance can slide the robot along it,
             # where a barcode beside the door is seen too obliquely to read.
             stop = self.normal[("home", "stop_distance")]
-            if not await self.home_on(m.lab_door_barcode, stop) and not await self.line_up(
-                m.lab_door_barcode, stop
-            ):
-                await self.say("    the barcode was lost (or the way blocked): looking again")
-                continue
+            self.prefetch("target", "odom")
+            seen_from = await self.odom()
+            t = await self.value("target")
+            heading = seen_from.theta + float(t["bearing"])
+            code = (
+                seen_from.x + float(t["distance"]) * math.cos(heading),
+                seen_from.y + float(t["distance"]) * math.sin(heading),
+            )
+            if not await self.home_on(m.lab_door_barcode, stop):
+                # Lost near the wall, seen too obliquely to read: back to where it was seen
+                # from, facing it, and square in front of it from there.
+                await self.say("    the barcode was lost: back to where it was seen from")
+                await self.set("runaway", "safe_distance", 0.15)
+                if await self.goto(seen_from.x, seen_from.y, within=30):
+                    o = await self.odom()
+                    await self.turn(
+                        wrap(math.atan2(code[1] - o.y, code[0] - o.x) - o.theta), keep=["runaway"]
+                    )
+                await self.restore("runaway", "safe_distance")
+                if not await self.line_up(m.lab_door_barcode, stop):
+                    await self.say("    the barcode was lost (or the way blocked): looking again")
+                    continue
             await self.phase(3, "looking for the door opening and passing the lab door")
             if await self.pass_door(m.lab_door_barcode, None):
                 return

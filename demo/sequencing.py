@@ -271,9 +271,11 @@ class Sequencer:
     async def _trace(self) -> None:
         assert self.trace is not None
         with contextlib.suppress(situate.SituateError):
+            self.prefetch("truth.pose", "truth.cars")
             p = await self.value("truth.pose")
             if p is not None:
-                self.trace.write(json.dumps({"t": self.t, **p}) + "\n")
+                cars = await self.value("truth.cars")
+                self.trace.write(json.dumps({"t": self.t, **p, "cars": cars}) + "\n")
                 self.trace.flush()
 
     async def say(self, text: str) -> None:
@@ -472,12 +474,19 @@ class Sequencer:
             axis = self.corridor_heading
             lateral = -(px - w.x) * math.sin(axis) + (py - w.y) * math.cos(axis)
             side = axis + math.copysign(math.pi / 2, lateral)
-            # A side wall: the sonar looking square to that side finds a wall about as far
-            # off as the barcode lies; else the barcode is on the end wall.
+            # The end wall only if the sonars looking along the corridor find a wall about as
+            # far ahead as the barcode lies, and those square to its side do not (they may look
+            # through the door beside it): barcodes beside doors are mostly on side walls.
             ranges = await self.sonar()
-            k = round(wrap(side - w.theta) / (2 * math.pi / SONARS)) % SONARS
-            beside = min(ranges[(k + j) % SONARS] for j in (-1, 0, 1))
-            normal = side if abs(beside - abs(lateral)) < 0.35 else axis
+
+            def reading(direction: float) -> float:
+                k = round(wrap(direction - w.theta) / (2 * math.pi / SONARS)) % SONARS
+                return min(ranges[(k + j) % SONARS] for j in (-1, 0, 1))
+
+            ahead = (px - w.x) * math.cos(axis) + (py - w.y) * math.sin(axis)
+            on_side = abs(reading(side) - abs(lateral)) < 0.35
+            on_end = abs(reading(axis) - ahead) < 0.35
+            normal = axis if on_end and not on_side else side
             await self.say(f"    no wall through barcode {barcode} in sight: taking the corridor's")
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")

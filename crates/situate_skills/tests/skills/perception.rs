@@ -309,3 +309,30 @@ fn with_odometry_a_side_corridor_with_a_bin_in_its_mouth_is_a_junction() {
         assert!(a > 7.5 && b < 11.0, "seed {seed}, y {y}: junction left over x {a:.2}..{b:.2}");
     }
 }
+
+/// A lobby wall (y = 0) with a car's open door 1.11 m wide at x 3.6..4.71
+/// (the car 1.94 m deep behind it), the robot patrolling 0.45 m from the wall
+/// at 0.8 m/s (8 cm a cycle): as generated building 20025's lobby.
+#[test]
+fn detect_door_sees_a_car_door_passing_close_by_at_patrol_speed() {
+    let scene = Scene::new()
+        .wall(-2.0, 0.0, 3.6, 0.0)
+        .wall(4.71, 0.0, 10.0, 0.0)
+        .wall(3.6, 0.0, 3.6, -1.94)
+        .wall(4.71, 0.0, 4.71, -1.94)
+        .wall(3.6, -1.94, 4.71, -1.94)
+        .wall(-2.0, 4.0, 10.0, 4.0);
+    for seed in 1..=4u64 {
+        let mut h = Harness::new::<DetectDoor>();
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut trace = Vec::new();
+        let mut x = 0.0;
+        while x < 8.0 {
+            let r = noise.apply(scene.sonar(Pose::new(x, 0.45, 0.0)));
+            trace.push((x, h.run(&[("sonar", val::<[f32; SONARS]>(r))]).get::<Door>("door").expect("written")));
+            x += 0.08;
+        }
+        let (a, b) = span(&trace, |d| d.right).unwrap_or_else(|| panic!("seed {seed}: the car's door missed"));
+        assert!(a > 3.2 && b < 5.2, "seed {seed}: door reported over x {a:.2}..{b:.2}");
+    }
+}
