@@ -82,6 +82,9 @@ NORMAL = {
 
 #: Time to get out of the lab before giving up, s.
 LAB_BUDGET_S = 900.0
+#: From where the button was pushed (0.45 m from it), back this far to patrol the lobby: about
+#: the middle of a car door on a wall next to the button's (docs/maps.md, "Lobby"), m.
+PATROL_BACK_M = 0.85
 
 
 @dataclass
@@ -240,7 +243,18 @@ class Delivery(Sequencer):
         await self.phase(6, "waiting for a car: patrolling the lobby, watching for an open door")
         self.car = 0
         await self.restore_lobby_patrol()
-        if not await self.turn(-math.pi / 2, keep=["runaway"]):
+        b = self.button_pose
+        if b is not None:
+            # The patrol line: PATROL_OFF_M from the button's wall, along it. A car on an end
+            # wall (next to the button's wall) is then straight ahead at each end, its panel in
+            # view through its open door the whole way towards it; a car on the button's wall
+            # passes beside, its door seen by the side sonars.
+            c, s = math.cos(b.theta), math.sin(b.theta)
+            await self.goto(b.x - PATROL_BACK_M * c, b.y - PATROL_BACK_M * s, within=30)
+            along = wrap(b.theta - math.pi / 2 - (await self.odom()).theta)
+        else:
+            along = -math.pi / 2
+        if not await self.turn(along, keep=["runaway"]):
             return False
         await self.set("identify_car", "first_id", m.car_barcode_first)
         await self.set("identify_car", "cars", m.cars)
