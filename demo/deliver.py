@@ -188,6 +188,7 @@ class Delivery(Sequencer):
             "lab_to_lobby",
             self.m.route.get("lab_to_lobby", []),
             stop_before_home=self.m.call_button_barcode,
+            heading=self.passed_heading,  # the leg begins facing out of the lab door
         )
 
     async def call_and_board(self) -> None:

@@ -125,6 +125,8 @@ class Sequencer:
         self.searches = 0
         #: The odometry heading a route planned the robot to be following (see `run_route`).
         self.corridor_heading: float | None = None
+        #: The odometry heading the last door was passed at (out through it).
+        self.passed_heading: float | None = None
         self.stream: situate.Stream[Any] | None = None
         self.params: dict[tuple[str, str], Any] = {}
         #: Replies to requests sent but not yet awaited (see `send`).
@@ -546,6 +548,7 @@ class Sequencer:
                 await self.say("    stopped short of the door: backing off")
                 await self.use()
                 return False
+            self.passed_heading = start.theta
             return True
         finally:
             await self.restore("runaway", "safe_distance")
@@ -743,13 +746,17 @@ class Sequencer:
         *,
         stop_before_home: int | None = None,
         on_home: Callable[[int], Awaitable[None]] | None = None,
+        heading: float | None = None,
     ) -> None:
         """Interprets the route hints ``steps`` of ``leg`` (docs/maps.md, "Route steps").
 
         Stops before a ``home`` on ``stop_before_home``; ``on_home`` is told each barcode homed on.
+        ``heading`` is the way the leg begins facing, in the odometry frame (default: the robot's).
         """
         pending_home: int | None = None
-        self.corridor_heading = (await self.odom()).theta
+        # The way the leg begins facing: ``heading`` (odometry) when the caller knows it (out
+        # through the door just passed, however the robot ended up turned), else the robot's.
+        self.corridor_heading = (await self.odom()).theta if heading is None else heading
         for n, step in enumerate(steps):
             if step.get("home") is not None and int(step["home"]) == stop_before_home:
                 return

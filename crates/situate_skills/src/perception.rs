@@ -326,6 +326,8 @@ pub struct DetectIntersection {
     beyond: [bool; 2],
     /// The last opening's centre: along the path travelled (m) with odometry, else ahead.
     centre: f64,
+    /// The corridor's way in the odometry frame (the heading at activation, tracked).
+    axis: Option<f64>,
 }
 
 /// Half a sonar's cone, rad.
@@ -339,6 +341,12 @@ const GAP_M: f64 = 0.8;
 /// Past an opening seen deep, an echo this far beyond the wall line still
 /// sees through it (clutter inside its mouth), m: four times the sonar noise.
 const SHALLOW_M: f64 = 0.12;
+
+/// Turned farther than this off the corridor's way, the side sonars' view is ignored, rad.
+const MAX_TURNED: f64 = 0.3;
+
+/// Within this of the way, the heading slowly corrects it (odometry drift), rad.
+const AXIS_TRACK: f64 = 0.15;
 
 impl Body for DetectIntersection {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
@@ -360,6 +368,7 @@ impl Body for DetectIntersection {
             self.deep = [false; 2];
             self.beyond = [false; 2];
             self.centre = 0.0;
+            self.axis = None;
         }
         if let Some(o) = self.odom {
             if let Some((x, y)) = self.last_xy {
@@ -367,8 +376,22 @@ impl Body for DetectIntersection {
             }
             self.last_xy = Some((o.x, o.y));
         }
+        // Turned off the corridor's way (avoiding clutter or someone), the side sonars look
+        // along the walls, not across them, and read far: nothing seen then counts. The way is
+        // the heading at activation, following the robot's slow drift along the corridor.
+        let turned = self.odom.is_some_and(|o| {
+            let axis = *self.axis.get_or_insert(o.theta);
+            let off = crate::util::wrap(o.theta - axis);
+            if off.abs() < AXIS_TRACK {
+                self.axis = Some(crate::util::wrap(axis + 0.05 * off));
+            }
+            off.abs() > MAX_TURNED
+        });
         let mut open = [false; 2];
-        let openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
+        let mut openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
+        if turned {
+            openings = [None, None];
+        }
         for k in 0..2 {
             // The side sonar has seen through since `since`: the opening's width is at least
             // the way travelled plus the span of its cone on the wall line.
@@ -382,7 +405,7 @@ impl Body for DetectIntersection {
             let side = [LEFT, RIGHT][k];
             // In this scan and the last: a missed echo also reads far, but one scan only.
             let beyond = self.corridor.wall(k).is_some_and(|d| centre_range(&self.sonar, side) > d + SHALLOW_M);
-            let shallow = std::mem::replace(&mut self.beyond[k], beyond) && beyond && self.odom.is_some();
+            let shallow = std::mem::replace(&mut self.beyond[k], beyond) && beyond && self.odom.is_some() && !turned;
             let travelled = if self.odom.is_some() && (openings[k].is_some() || shallow) {
                 let start = *self.since[k].get_or_insert(self.path);
                 self.seen_at[k] = self.path;

@@ -336,3 +336,24 @@ fn detect_door_sees_a_car_door_passing_close_by_at_patrol_speed() {
         assert!(a > 3.2 && b < 5.2, "seed {seed}: door reported over x {a:.2}..{b:.2}");
     }
 }
+
+/// Turned 46° off a 1.8 m corridor for 1.5 m (avoiding a box), the side
+/// sonar looks along the wall and reads far: that is no junction.
+#[test]
+fn with_odometry_a_robot_turned_off_its_way_sees_no_junction() {
+    let scene = Scene::new().wall(-1.0, 0.9, 20.0, 0.9).wall(-1.0, -0.9, 20.0, -0.9);
+    for seed in 1..=4u64 {
+        let mut h = Harness::new::<DetectIntersection>();
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut x = 0.0;
+        while x < 12.0 {
+            let (y, theta) = if (5.0..6.5).contains(&x) { (-0.3 + 0.3 * (x - 5.0), 0.8) } else { (0.0, 0.0) };
+            let r = noise.apply(scene.sonar(Pose::new(x, y, theta)));
+            let odom = Odom { x, y, theta, v: 0.4, w: 0.0 };
+            let j: Junction =
+                h.run(&[("sonar", val::<[f32; SONARS]>(r)), ("odom", val(odom))]).get("junction").expect("written");
+            assert!(!j.left && !j.right, "seed {seed}: a junction at x {x:.2}: {j:?}");
+            x += 0.04;
+        }
+    }
+}
