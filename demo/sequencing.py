@@ -309,8 +309,10 @@ class Sequencer:
         goal = start.theta + angle
         await self.set("turn", "angle", angle)
         await self.use("turn", *keep, restart=["turn"])
+        # Loosely: `start` may be a cycle older than the skill's own start (the robot still
+        # turning from what it did before); the turn rate under 0.1 rad/s says it is done.
         near = " || ".join(
-            f"abs(odom.theta - {goal + k * 2 * math.pi:.4f}) < 0.06" for k in (-1, 0, 1)
+            f"abs(odom.theta - {goal + k * 2 * math.pi:.4f}) < 0.15" for k in (-1, 0, 1)
         )
         done = await self.wait(f"({near}) && abs(odom.w) < 0.1", within=5 + abs(angle) / 0.4)
         return done == 0
