@@ -40,6 +40,12 @@ DOOR_WIDTH = 1.1
 #: Time to get out of the lab before giving up, s.
 #: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
 WALL_AHEAD_M = 1.2
+#: A junction a route's `distance` leads to lies within this of where looking began, m.
+PROBE_LOOK_M = 6.0
+#: Where it is probed for, along the corridor from there, m.
+PROBE_AT_M = (2.4, 2.9, 1.9, 3.4)
+#: The way into it is open when the front sonars read beyond this, m.
+PROBE_OPEN_M = 2.2
 #: Wandering between two looks round, s.
 SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
@@ -705,7 +711,19 @@ class Sequencer:
         await self.use("runaway", "avoid", "follow_hallway", detector, restart=[detector])
         sides = [side] if side in ("left", "right") else ["left", "right"]
         seen = " || ".join(f"{signal}.{s}" for s in sides)
+        # A junction expected just ahead (`distance` brought the robot to about 1.5 m before
+        # it: docs/maps.md) that the detector misses is probed for where it should be.
+        probe = until == "junction" and step.get("distance") is not None and count == 1
+        look_from = await self.odom()
         for k in range(1, count + 1):
+            if probe:
+                beyond = farther_than(look_from, PROBE_LOOK_M)
+                got = await self.wait(seen, beyond, "sonar.range[0] < 0.7", within=120)
+                if got == 0:
+                    break
+                if got == 3 or len(sides) != 1:
+                    return False
+                return await self.probe_junction(look_from, sides[0])
             if await self.wait(seen, within=180):
                 return False
             if k < count:
@@ -734,6 +752,31 @@ class Sequencer:
             ):
                 return False
         return True
+
+    async def probe_junction(self, look_from: Pose, side: str) -> bool:
+        """The junction on ``side`` the detector missed, probed where a route says it is.
+
+        It lies 1.5 m or more ahead of ``look_from`` (docs/maps.md, route hints with
+        `distance`), 1.8 to 2.6 m wide: at points along the corridor the robot turns to that side
+        and takes the first where the way is open (the three front sonars read beyond
+        `PROBE_OPEN_M`), standing in it facing the corridor's way, as the detector would
+        have left it.
+        """
+        axis = look_from.theta if self.corridor_heading is None else self.corridor_heading
+        turn = math.pi / 2 if side == "left" else -math.pi / 2
+        await self.say(f"      no junction seen: probing for it on the {side}")
+        for along in PROBE_AT_M:
+            x = look_from.x + along * math.cos(axis)
+            y = look_from.y + along * math.sin(axis)
+            if not await self.goto(x, y, within=30):
+                continue
+            if not await self.turn(wrap(axis + turn - (await self.odom()).theta)):
+                continue
+            ranges = await self.sonar()
+            if min(ranges[0], ranges[1], ranges[-1]) > PROBE_OPEN_M:
+                await self.turn(wrap(axis - (await self.odom()).theta))
+                return True
+        return False
 
     async def follow_for(self, metres: float) -> bool:
         """Follows the hallway for ``metres`` (odometry, straight-line from here)."""
