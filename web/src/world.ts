@@ -205,13 +205,14 @@ export class WorldView {
     // Draw at the page's pixel size (sharp, labels at their size at any width).
     const dpr = this.pixelRatio();
     const cssW = this.canvas.clientWidth > 0 ? this.canvas.clientWidth : 640;
+    const [bx0, by0, bx1, by1] = this.bounds();
+    // As tall as the building's shape asks, within reason (a wide building leaves no empty band).
     const W = Math.max(100, Math.round(cssW * dpr));
-    const H = Math.round(W * 0.75);
+    const H = Math.round(W * Math.min(0.85, Math.max(0.5, (by1 - by0) / (bx1 - bx0))));
     if (this.canvas.width !== W) this.canvas.width = W;
     if (this.canvas.height !== H) this.canvas.height = H;
     const c = this.canvas.getContext("2d");
     if (!c) return;
-    const [bx0, by0, bx1, by1] = this.bounds();
     const scale = Math.min(W / (bx1 - bx0), H / (by1 - by0)) * this.zoom;
     let [cx, cy]: Pt = this.center ?? [(bx0 + bx1) / 2, (by0 + by1) / 2];
     if (this.follow.checked && robot && this.zoom > 1) [cx, cy] = [robot.x, robot.y];
@@ -222,8 +223,9 @@ export class WorldView {
     const labelFont = `${LABEL_PX * dpr}px sans-serif`;
     const halo = cssVar("--canvas-halo", "rgba(255,255,255,0.85)");
     // Labels are drawn last, on top, each moved down until it overlaps no other (cars side by side).
-    const queued: { text: string; x: number; y: number; color: string }[] = [];
-    const label = (text: string, x: number, y: number, color: string) => queued.push({ text, x, y, color });
+    // Minor labels (barcodes, buttons) give way: drawn only where they overlap nothing.
+    const queued: { text: string; x: number; y: number; color: string; minor: boolean }[] = [];
+    const label = (text: string, x: number, y: number, color: string, minor = false) => queued.push({ text, x, y, color, minor });
     const drawLabels = () => {
       c.font = labelFont;
       c.lineWidth = 3 * dpr;
@@ -231,11 +233,12 @@ export class WorldView {
       c.lineJoin = "round";
       const line = (LABEL_PX + 3) * dpr;
       const placed: [number, number, number, number][] = [];
-      for (const q of queued) {
+      for (const q of [...queued.filter((x) => !x.minor), ...queued.filter((x) => x.minor)]) {
         const w = c.measureText(q.text).width;
         let y = q.y;
         const hits = (yy: number) => placed.some(([x0, y0, x1, y1]) => q.x < x1 && q.x + w > x0 && yy - line < y1 && yy > y0);
-        for (let tries = 0; tries < 8 && hits(y); tries++) y += line;
+        if (q.minor && hits(y)) continue;
+        for (let tries = 0; tries < 3 && hits(y); tries++) y += line;
         placed.push([q.x, y - line, q.x + w, y]);
         c.strokeText(q.text, q.x, y);
         c.fillStyle = q.color;
@@ -264,14 +267,14 @@ export class WorldView {
       for (const b of Array.isArray(f["barcodes"]) ? f["barcodes"].filter(isObject) : []) {
         c.fillStyle = "#36f";
         c.fillRect(X(num(b["x"])) - 3 * dpr, Y(num(b["y"])) - 3 * dpr, 6 * dpr, 6 * dpr);
-        label(String(num(b["id"])), X(num(b["x"])) + 5 * dpr, Y(num(b["y"])) - 5 * dpr, "#36f");
+        label(String(num(b["id"])), X(num(b["x"])) + 5 * dpr, Y(num(b["y"])) - 5 * dpr, "#36f", true);
       }
       for (const b of Array.isArray(f["buttons"]) ? f["buttons"].filter(isObject) : []) {
         c.fillStyle = "#c0c";
         c.beginPath();
         c.arc(X(num(b["x"])), Y(num(b["y"])), 4 * dpr, 0, 2 * Math.PI);
         c.fill();
-        if (typeof b["label"] === "string") label(b["label"], X(num(b["x"])) + 6 * dpr, Y(num(b["y"])) + 14 * dpr, "#c0c");
+        if (typeof b["label"] === "string") label(b["label"], X(num(b["x"])) + 6 * dpr, Y(num(b["y"])) + 14 * dpr, "#c0c", true);
       }
     }
     // Elevator cars: drawn on every floor; solid when the car is at this floor.
@@ -295,10 +298,12 @@ export class WorldView {
       }
       const lx = X(Math.min(x0, x1)) + 3 * dpr;
       const ly = Y(Math.max(y0, y1)) + (LABEL_PX + 2) * dpr;
-      label(`car ${num(car["id"])}${Number.isFinite(at) ? ` · floor ${at.toFixed(1)}` : ""}`, lx, ly, labelColor);
+      // Short lines (the cars stand side by side): "car 1", its floor, its door.
+      label(`car ${num(car["id"])}`, lx, ly, labelColor);
+      if (Number.isFinite(at)) label(`fl ${Number.isInteger(at) ? at : at.toFixed(1)}`, lx, ly + (LABEL_PX + 3) * dpr, labelColor);
       if (door && Number.isFinite(open)) {
-        const state = open > 0.98 ? "door open" : open < 0.02 ? "door closed" : `door ${Math.round(open * 100)} % open`;
-        label(state, lx, ly + (LABEL_PX + 3) * dpr, open > 0.5 ? "#2a8a2a" : "#d44");
+        const state = open > 0.98 ? "open" : open < 0.02 ? "closed" : `${Math.round(open * 100)} %`;
+        label(state, lx, ly + 2 * (LABEL_PX + 3) * dpr, open > 0.5 ? "#2a8a2a" : "#d44");
       }
     });
     // People on this floor: small circles.
