@@ -26,6 +26,8 @@ export interface Handlers {
   hello(msg: JsonObject): void;
   telemetry(msg: JsonObject): void;
   event(event: JsonObject): void;
+  /** How the program's run ended (`{ok, summary}`), when it says. */
+  outcome(outcome: JsonObject): void;
   status(connected: boolean, text: string): void;
 }
 
@@ -95,6 +97,9 @@ export class Connection {
         if (isObject(e)) this.handlers.event(e);
         break;
       }
+      case "outcome":
+        this.handlers.outcome(msg);
+        break;
       case "reply": {
         const id = msg["id"];
         if (typeof id !== "number") return;

@@ -82,3 +82,31 @@ export function str(v: Json | undefined, fallback = ""): string {
 export function errorText(e: unknown): string {
   return e instanceof Error ? e.message : String(e);
 }
+
+// ----- the link's state: controls that need it, values that go stale without it ---------------
+
+let linkUp = false;
+
+/** Marks a control that sends requests: disabled while the robot is not connected. */
+export function linkControl<T extends HTMLButtonElement | HTMLInputElement | HTMLSelectElement>(el: T): T {
+  el.dataset["link"] = "";
+  el.disabled = !linkUp;
+  return el;
+}
+
+/** Enables or disables every control that needs the robot. */
+export function setLinkUp(up: boolean): void {
+  linkUp = up;
+  for (const el of document.querySelectorAll<HTMLButtonElement | HTMLInputElement | HTMLSelectElement>("[data-link]")) el.disabled = !up;
+}
+
+/** A panel title's note, filled while the panel's values are stale ("last seen at cycle N, t s ago"). */
+export function staleNote(): HTMLElement {
+  return h("span", { class: "stale-note", "data-testid": "stale-note" });
+}
+
+/** A CSS custom property of the page (the colour scheme's), for canvas drawing. */
+export function cssVar(name: string, fallback: string): string {
+  const v = getComputedStyle(document.documentElement).getPropertyValue(name).trim();
+  return v === "" ? fallback : v;
+}

@@ -42,12 +42,12 @@ export class GraphView {
   private shape = "";
   private leafNames: string[] = [];
 
-  constructor() {
+  constructor(stale: HTMLElement) {
     this.svgBox = h("div", { class: "graph", "data-testid": "graph" });
     this.el = h(
       "section",
-      { class: "panel", id: "graph" },
-      h("h2", {}, "Graph"),
+      { class: "panel live", id: "graph" },
+      h("h2", {}, "Graph", stale),
       h("p", { class: "dim" }, "skills (boxes, green: active) → signals (ovals; double: a resource, ★ its winner this cycle)"),
       this.svgBox,
     );

@@ -1,83 +1,21 @@
 // The situate debugging GUI: one WebSocket to the server, panels fed by its telemetry and events.
+//
+// Time is part of every value shown: while the robot is not connected the header says so, every
+// live panel says when its values were last seen and the controls that need the robot are
+// disabled; a hello with another run id (the robot restarted) clears the old run's plots, trails
+// and monitors and separates its events.
 
 import "./style.css";
-import { Connection, isObject, RefusedError, type Json, type JsonObject } from "./conn";
-import { errorText, h, num, setText, show, str } from "./dom";
+import { Connection, isObject, type Json } from "./conn";
+import { errorText, h, num, setLinkUp, setText, staleNote, str } from "./dom";
 import { GraphView } from "./graph";
+import { EventLog, Monitors } from "./monitors";
 import { Plots } from "./plots";
 import { ManagerPanel, SkillPanels } from "./skills";
 import { WorldView } from "./world";
 
-const EVENT_LINES = 300;
-
-class Monitors {
-  readonly el: HTMLElement;
-  private readonly list: HTMLElement;
-  private readonly error: HTMLElement;
-
-  constructor(private readonly conn: Connection) {
-    const cond = h("input", { type: "text", class: "wide", placeholder: "condition, e.g. sonar.range[0] < 0.3", "data-testid": "monitor-condition" });
-    const mode = h("select", { "data-testid": "monitor-mode" }, h("option", { value: "once" }, "once"), h("option", { value: "edge" }, "edge"), h("option", { value: "level" }, "level"));
-    const add = h("button", { "data-testid": "monitor-add" }, "Add monitor");
-    add.addEventListener("click", async () => {
-      try {
-        await this.conn.request("monitor_add", { condition: cond.value, mode: mode.value });
-        setText(this.error, "");
-        cond.value = "";
-        await this.refresh();
-      } catch (e) {
-        setText(this.error, e instanceof RefusedError && e.pointer ? `${e.message}\n${e.pointer}` : errorText(e));
-      }
-    });
-    this.error = h("pre", { class: "error", "data-testid": "monitor-error" });
-    this.list = h("table", { class: "monitors", "data-testid": "monitors" });
-    this.el = h("section", { class: "panel", id: "monitors" }, h("h2", {}, "Monitors"), h("div", { class: "row" }, cond, mode, add), this.error, this.list);
-  }
-
-  async refresh(): Promise<void> {
-    let list: Json;
-    try {
-      list = await this.conn.request("monitor_list");
-    } catch {
-      return;
-    }
-    const rows = (Array.isArray(list) ? list : []).filter(isObject).map((m) => {
-      const cancel = h("button", {}, "Cancel");
-      cancel.addEventListener("click", async () => {
-        try {
-          await this.conn.request("monitor_cancel", { monitor: num(m["monitor"]) });
-          await this.refresh();
-        } catch (e) {
-          setText(this.error, errorText(e));
-        }
-      });
-      return h("tr", {}, h("td", {}, String(num(m["monitor"]))), h("td", { class: "mono" }, str(m["condition"])), h("td", {}, str(m["mode"])), h("td", {}, `fired ${num(m["fired"])}`), h("td", {}, m["holds"] === true ? "holds" : ""), h("td", {}, cancel));
-    });
-    this.list.replaceChildren(h("tr", {}, h("th", {}, "id"), h("th", {}, "condition"), h("th", {}, "mode"), h("th", {}, ""), h("th", {}, ""), h("th", {}, "")), ...rows);
-  }
-}
-
-class EventLog {
-  readonly el: HTMLElement;
-  private readonly list: HTMLElement;
-  private readonly prints: HTMLInputElement;
-
-  constructor() {
-    this.prints = h("input", { type: "checkbox", checked: true });
-    this.list = h("div", { class: "log events", "data-testid": "event-log" });
-    this.el = h("section", { class: "panel", id: "events" }, h("h2", {}, "Events"), h("label", {}, this.prints, " show prints"), this.list);
-  }
-
-  add(e: JsonObject): void {
-    const kind = str(e["kind"]);
-    if (kind === "print" && !this.prints.checked) return;
-    const rest: JsonObject = { ...e };
-    delete rest["kind"];
-    delete rest["cycle"];
-    const line = h("div", { class: `logline ev-${kind}`, "data-kind": kind }, h("span", { class: "dim" }, `cycle ${num(e["cycle"])} `), h("strong", {}, kind), ` ${show(rest, 300)}`);
-    this.list.prepend(line);
-    while (this.list.childElementCount > EVENT_LINES) this.list.lastElementChild?.remove();
-  }
+function clock(unixS: number): string {
+  return new Date(unixS * 1000).toLocaleTimeString();
 }
 
 function start(): void {
@@ -85,11 +23,67 @@ function start(): void {
   if (!root) return;
   const status = h("span", { class: "status", "data-testid": "status" }, "connecting…");
   const robot = h("span", { class: "robot", "data-testid": "robot" }, "");
+  const runInfo = h("span", { class: "run", "data-testid": "run-info" }, "");
+  const staleBanner = h("div", { class: "banner bad", "data-testid": "stale-banner" });
+  const outcome = h("div", { class: "banner", hidden: true, "data-testid": "outcome" });
   const proto = location.protocol === "https:" ? "wss:" : "ws:";
   let graphAsked = false;
+  let runId: string | null = null;
+  /** The last telemetry: its cycle, and when it came (performance.now(), ms). */
+  let lastSeen: { cycle: number; at: number } | null = null;
+  let staleTimer: number | null = null;
+
+  const showStale = () => {
+    const text = lastSeen ? `last seen at cycle ${lastSeen.cycle}, ${Math.round((performance.now() - lastSeen.at) / 1000)} s ago` : "never seen";
+    for (const note of document.querySelectorAll(".stale-note")) setText(note, text);
+    setText(staleBanner, `Not connected to the robot: the values below are not live (${text}). Reconnecting…`);
+  };
+  const setStale = (stale: boolean) => {
+    document.body.classList.toggle("stale", stale);
+    if (stale) {
+      showStale();
+      staleTimer ??= window.setInterval(showStale, 1000);
+    } else {
+      if (staleTimer !== null) window.clearInterval(staleTimer);
+      staleTimer = null;
+      for (const note of document.querySelectorAll(".stale-note")) setText(note, "");
+      setText(staleBanner, "");
+    }
+  };
+  const showOutcome = (o: Json | undefined) => {
+    if (isObject(o) && typeof o["summary"] === "string") {
+      const ok = o["ok"] === true;
+      setText(outcome, `Mission outcome — ${o["summary"]}`);
+      outcome.classList.toggle("ok", ok);
+      outcome.classList.toggle("bad", !ok);
+      outcome.dataset["ok"] = String(ok);
+      outcome.hidden = false;
+    } else {
+      outcome.hidden = true;
+      setText(outcome, "");
+    }
+  };
+
   // The panels are created after the connection object (they send through it).
   const conn: Connection = new Connection(`${proto}//${location.host}/ws`, {
     hello: (msg) => {
+      const run = msg["run"];
+      const id = isObject(run) ? str(run["id"]) : "";
+      const started = isObject(run) ? num(run["started_unix_s"]) : 0;
+      if (runId !== null && id !== runId) {
+        // The robot restarted: nothing of the old run may pass for this one.
+        plots.clear();
+        world.clear();
+        monitors.clear();
+        panels.clear();
+        manager.reset();
+        events.newRun(`── new run ${id}, started ${clock(started)}; the events below are of the previous run (${runId}) ──`);
+        lastSeen = null;
+      }
+      runId = id;
+      document.body.dataset["run"] = id;
+      setText(runInfo, `run ${id} · started ${clock(started)}`);
+      showOutcome(msg["outcome"]);
       world.setMap(msg["world"]);
       void (async () => {
         try {
@@ -104,38 +98,50 @@ function start(): void {
       })();
     },
     telemetry: (msg) => {
+      if (typeof msg["run"] === "string" && runId !== null && msg["run"] !== runId) return;
       const wall = num(msg["wall_s"], Date.now() / 1000);
       const stats = msg["stats"];
       const skills = (Array.isArray(msg["skills"]) ? msg["skills"] : []).filter(isObject);
-      if (isObject(stats)) setText(robot, `robot ${str(stats["robot"])}`);
+      if (isObject(stats)) {
+        setText(robot, `robot ${str(stats["robot"])}`);
+        lastSeen = { cycle: num(stats["cycle"]), at: performance.now() };
+      }
+      setStale(false);
       manager.update(stats, skills, wall);
-      panels.update(skills, isObject(stats) ? num(stats["cycle"]) : 0);
+      panels.update(skills, isObject(stats) ? num(stats["cycle"]) : 0, msg["activity"], msg["winners"]);
       if (graphAsked) graph.update(skills, msg["winners"]);
       plots.update(wall, msg["signals"]);
-      world.update(msg["signals"]);
+      world.update(msg["signals"], wall);
       document.body.dataset["samples"] = String(Number(document.body.dataset["samples"] ?? "0") + 1);
     },
     event: (e) => {
       events.add(e);
       panels.event(e);
-      const kind = e["kind"];
-      if (kind === "monitor_fired") void monitors.refresh();
+      monitors.event(e);
     },
+    outcome: (o) => showOutcome(o),
     status: (connected, text) => {
       setText(status, text);
       status.classList.toggle("bad", !connected);
+      setLinkUp(connected);
+      if (!connected) {
+        manager.disconnected();
+        setStale(true);
+      }
     },
   });
-  const manager = new ManagerPanel(conn);
-  const panels = new SkillPanels(conn);
-  const graph = new GraphView();
-  const plots = new Plots(conn);
-  const world = new WorldView();
-  const monitors = new Monitors(conn);
+  const manager = new ManagerPanel(conn, staleNote());
+  const panels = new SkillPanels(conn, staleNote());
+  const graph = new GraphView(staleNote());
+  const plots = new Plots(conn, staleNote());
+  const world = new WorldView(staleNote());
+  const monitors = new Monitors(conn, staleNote());
   const events = new EventLog();
   conn.onOpen = () => void plots.watch().catch(() => undefined);
   root.append(
-    h("header", {}, h("h1", {}, "situate"), robot, status),
+    h("header", {}, h("h1", {}, "situate"), robot, runInfo, status),
+    staleBanner,
+    outcome,
     h("main", {}, h("div", { class: "col" }, manager.el, panels.el, monitors.el), h("div", { class: "col" }, world.el, plots.el, graph.el, events.el)),
   );
 }

@@ -2,7 +2,7 @@
 // (`sonar.range[3]`); every numeric leaf of the chosen value gets a line, over a time window.
 
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
-import { errorText, h, numericLeaves, pick, setText } from "./dom";
+import { cssVar, errorText, h, linkControl, numericLeaves, pick, setText } from "./dom";
 
 const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
 const MAX_SERIES = 24;
@@ -20,6 +20,9 @@ class Plot {
   private readonly legend: HTMLElement;
   private readonly series = new Map<string, Series>();
   private received = 0;
+  /** When this run's first point came (wall s). */
+  private since: number | null = null;
+  private last = 0;
   windowS = 30;
 
   constructor(
@@ -37,14 +40,29 @@ class Plot {
     for (const w of [10, 30, 60, 300]) win.append(h("option", { value: w, selected: w === this.windowS }, `${w} s`));
     win.addEventListener("change", () => {
       this.windowS = Number(win.value);
-      this.draw(Date.now() / 1000);
+      this.draw(this.last || Date.now() / 1000);
     });
     this.el = h("div", { class: "plot", "data-testid": "plot", "data-expr": expr }, h("div", { class: "row" }, h("strong", {}, expr), win, remove), this.canvas, this.legend);
+  }
+
+  /** A new run: the old run's points go. */
+  clear(): void {
+    this.series.clear();
+    this.received = 0;
+    this.since = null;
+    this.canvas.dataset["points"] = "0";
+    this.canvas.dataset["since"] = "";
+    this.draw(this.last || Date.now() / 1000);
   }
 
   add(wall: number, value: Json | undefined): void {
     const v = pick(value, this.path);
     if (v === undefined) return;
+    this.last = wall;
+    if (this.since === null) {
+      this.since = wall;
+      this.canvas.dataset["since"] = String(wall);
+    }
     for (const [leaf, x] of numericLeaves(v).slice(0, MAX_SERIES)) {
       if (!Number.isFinite(x)) continue;
       const name = this.expr + leaf;
@@ -70,7 +88,7 @@ class Plot {
     const W = this.canvas.width;
     const H = this.canvas.height;
     const pad = { l: 50, r: 8, t: 8, b: 18 };
-    c.fillStyle = "#fff";
+    c.fillStyle = cssVar("--canvas-bg", "#fff");
     c.fillRect(0, 0, W, H);
     const t0 = now - this.windowS;
     let lo = Infinity;
@@ -92,10 +110,10 @@ class Plot {
     }
     const X = (t: number) => pad.l + ((t - t0) / this.windowS) * (W - pad.l - pad.r);
     const Y = (y: number) => H - pad.b - ((y - lo) / (hi - lo)) * (H - pad.t - pad.b);
-    c.strokeStyle = "#ccc";
+    c.strokeStyle = cssVar("--canvas-grid", "#ccc");
     c.lineWidth = 1;
     c.strokeRect(pad.l, pad.t, W - pad.l - pad.r, H - pad.t - pad.b);
-    c.fillStyle = "#333";
+    c.fillStyle = cssVar("--canvas-fg", "#333");
     c.font = "11px sans-serif";
     c.fillText(hi.toPrecision(4), 2, pad.t + 10);
     c.fillText(lo.toPrecision(4), 2, H - pad.b);
@@ -131,17 +149,20 @@ export class Plots {
   private readonly error: HTMLElement;
   private known: string[] = [];
 
-  constructor(private readonly conn: Connection) {
+  constructor(
+    private readonly conn: Connection,
+    stale: HTMLElement,
+  ) {
     this.options = h("datalist", { id: "signal-names" });
     this.input = h("input", { type: "text", list: "signal-names", placeholder: "signal, e.g. odom.x or sonar.range[3]", "data-testid": "plot-signal", class: "wide" });
-    const add = h("button", { "data-testid": "plot-add" }, "Add plot");
+    const add = linkControl(h("button", { "data-testid": "plot-add" }, "Add plot"));
     add.addEventListener("click", () => void this.add(this.input.value.trim()));
     this.input.addEventListener("keydown", (e) => {
       if (e.key === "Enter") void this.add(this.input.value.trim());
     });
     this.error = h("div", { class: "error", "data-testid": "plot-error" });
     this.list = h("div", { class: "plots" });
-    this.el = h("section", { class: "panel", id: "plots" }, h("h2", {}, "Plots"), h("div", { class: "row" }, this.input, this.options, add), this.error, this.list);
+    this.el = h("section", { class: "panel live", id: "plots" }, h("h2", {}, "Plots", stale), h("div", { class: "row" }, this.input, this.options, add), this.error, this.list);
   }
 
   setSignals(names: string[]): void {
@@ -196,6 +217,11 @@ export class Plots {
   async watch(): Promise<void> {
     const signals = [...new Set(this.plots.map((p) => p.base))];
     await this.conn.request("watch", { signals });
+  }
+
+  /** A new run: every plot starts again empty. */
+  clear(): void {
+    for (const p of this.plots) p.clear();
   }
 
   update(wall: number, signals: Json | undefined): void {

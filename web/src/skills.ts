@@ -1,7 +1,7 @@
 // The manager panel (paper: the skill manager window) and one panel per skill (the skill window).
 
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
-import { errorText, h, num, setText, show, str } from "./dom";
+import { errorText, h, linkControl, num, setText, show, str } from "./dom";
 
 const LOG_LINES = 200;
 
@@ -19,11 +19,14 @@ export class ManagerPanel {
   private last: { cycle: number; wall: number } | null = null;
   private rate = 0;
 
-  constructor(private readonly conn: Connection) {
+  constructor(
+    private readonly conn: Connection,
+    stale: HTMLElement,
+  ) {
     const stepCount = h("input", { type: "number", min: 1, max: 1000000, value: 1, step: 1, "data-testid": "step-count", class: "short" });
-    const run = h("button", { "data-testid": "run" }, "Run");
-    const stop = h("button", { "data-testid": "stop" }, "Stop");
-    const step = h("button", { "data-testid": "step" }, "Step");
+    const run = linkControl(h("button", { "data-testid": "run" }, "Run"));
+    const stop = linkControl(h("button", { "data-testid": "stop" }, "Stop"));
+    const step = linkControl(h("button", { "data-testid": "step" }, "Step"));
     run.addEventListener("click", () => void this.act("run", {}));
     stop.addEventListener("click", () => void this.act("stop", {}));
     step.addEventListener("click", () => {
@@ -54,8 +57,8 @@ export class ManagerPanel {
     this.error = h("div", { class: "error", "data-testid": "manager-error" });
     this.el = h(
       "section",
-      { class: "panel", id: "manager" },
-      h("h2", {}, "Skill manager"),
+      { class: "panel live", id: "manager" },
+      h("h2", {}, "Skill manager", stale),
       h("div", { class: "row" }, run, stop, step, stepCount, "cycles"),
       grid,
       h("h3", {}, "Activation"),
@@ -71,6 +74,23 @@ export class ManagerPanel {
     } catch (e) {
       setText(this.error, errorText(e));
     }
+  }
+
+  /** The robot is gone: say so instead of its last state and rate. */
+  disconnected(): void {
+    this.set("state", "unknown (disconnected)");
+    this.set("rate", "—");
+    if (this.last) this.set("cycle", `${this.last.cycle} (last seen)`);
+    this.rate = 0;
+    this.last = null;
+  }
+
+  /** A new run: nothing of the old one carries over (the rate least of all). */
+  reset(): void {
+    this.rate = 0;
+    this.last = null;
+    this.switchMap.clear();
+    this.switches.replaceChildren();
   }
 
   update(stats: Json | undefined, skills: JsonObject[], wall: number): void {
@@ -98,7 +118,7 @@ export class ManagerPanel {
       const name = str(s["name"]);
       let box = this.switchMap.get(name);
       if (!box) {
-        const input = h("input", { type: "checkbox", "data-testid": `switch-${name}` });
+        const input = linkControl(h("input", { type: "checkbox", "data-testid": `switch-${name}` }));
         input.addEventListener("change", () => {
           const verb = input.checked ? "activate" : "deactivate";
           void this.act(verb, { skills: [name] });
@@ -138,7 +158,7 @@ class ParamEditor {
     const max = spec["max"];
     const id = `param-${skill}-${name}`;
     if (this.type === "bool") {
-      this.input = h("input", { type: "checkbox", "data-testid": id });
+      this.input = linkControl(h("input", { type: "checkbox", "data-testid": id }));
     } else if (this.type === "i64" || this.type === "f64") {
       this.input = h("input", {
         type: "number",
@@ -152,7 +172,7 @@ class ParamEditor {
       this.input = h("input", { type: "text", "data-testid": id });
     }
     this.setValue(spec["value"]);
-    const set = h("button", { "data-testid": `${id}-set` }, "Set");
+    const set = linkControl(h("button", { "data-testid": `${id}-set` }, "Set"));
     set.addEventListener("click", () => void this.submit());
     this.input.addEventListener("keydown", (e) => {
       if (e.key === "Enter") void this.submit();
@@ -227,7 +247,8 @@ class ParamEditor {
   }
 }
 
-function portTable(ports: Json | undefined, testid: string): HTMLElement {
+/** A skill's ports with their values; `inactive` replaces the values' liveness ("inactive since cycle N"). */
+function portTable(ports: Json | undefined, testid: string, inactive: string | null = null): HTMLElement {
   const t = h("table", { class: "ports", "data-testid": testid });
   t.append(h("tr", {}, h("th", {}, "port"), h("th", {}, "signal"), h("th", {}, "type"), h("th", {}, "value")));
   if (Array.isArray(ports)) {
@@ -240,7 +261,14 @@ function portTable(ports: Json | undefined, testid: string): HTMLElement {
           h("td", {}, str(p["name"])),
           h("td", { class: "mono" }, str(p["signal"])),
           h("td", { class: "dim" }, str(p["type"])),
-          h("td", { class: "mono value", "data-value": JSON.stringify(p["value"] ?? null) }, show(p["value"])),
+          inactive === null
+            ? h("td", { class: "mono value", "data-value": JSON.stringify(p["value"] ?? null) }, show(p["value"]))
+            : h(
+                "td",
+                { class: "mono value inactive-value", "data-value": JSON.stringify(p["value"] ?? null), "data-inactive": "" },
+                inactive,
+                h("span", { class: "dim" }, ` (last written: ${show(p["value"], 120)})`),
+              ),
         ),
       );
     }
@@ -253,6 +281,7 @@ class SkillPanel {
   private readonly name: string;
   private readonly head: HTMLElement;
   private readonly state: HTMLElement;
+  private readonly since: HTMLElement;
   private readonly activate: HTMLButtonElement;
   private readonly priority: HTMLInputElement;
   private readonly priorityError: HTMLElement;
@@ -281,15 +310,16 @@ class SkillPanel {
     this.name = str(info["name"]);
     const n = this.name;
     this.state = h("span", { class: "state", "data-testid": `state-${n}` });
-    this.head = h("summary", {}, h("strong", {}, n), ` ${str(info["type_name"])} · ${str(info["kind"])} `, this.state);
-    this.activate = h("button", { "data-testid": `activate-${n}` }, "Activate");
+    this.since = h("span", { class: "since", "data-testid": `since-${n}` });
+    this.head = h("summary", {}, h("strong", {}, n), ` ${str(info["type_name"])} · ${str(info["kind"])} `, this.state, " ", this.since);
+    this.activate = linkControl(h("button", { "data-testid": `activate-${n}` }, "Activate"));
     this.activate.addEventListener("click", () => void this.toggle());
     this.error = h("div", { class: "error", "data-testid": `skill-error-${n}` });
     // The priority decides contention over a resource; the manager applies a change from the next cycle.
     this.priority = h("input", { type: "number", step: "1", class: "short", "data-testid": `priority-${n}` });
     this.priority.value = String(num(info["priority"]));
     this.priorityError = h("span", { class: "error", "data-testid": `priority-${n}-error` });
-    const setPriority = h("button", { "data-testid": `priority-${n}-set` }, "Set");
+    const setPriority = linkControl(h("button", { "data-testid": `priority-${n}-set` }, "Set"));
     setPriority.addEventListener("click", () => void this.submitPriority());
     this.priority.addEventListener("keydown", (e) => {
       if (e.key === "Enter") void this.submitPriority();
@@ -310,6 +340,7 @@ class SkillPanel {
     const [so, sol] = toggle("show output", `show-output-${n}`);
     const [lp, lpl] = toggle("log parameters", `log-params-${n}`);
     const [vb, vbl] = toggle("verbose", `verbose-${n}`);
+    linkControl(vb);
     this.showData = sd;
     this.showInput = si;
     this.showOutput = so;
@@ -385,12 +416,15 @@ class SkillPanel {
     }
   }
 
-  update(info: JsonObject, cycle = 0): void {
+  /** `inactiveSince`: for an inactive skill, "inactive since cycle N" (its outputs are not live). */
+  update(info: JsonObject, cycle = 0, inactiveSince: string | null = null): void {
     this.lastCycle = cycle;
     this.active = info["active"] === true;
     const fault = info["faulted"];
     const state = typeof fault === "string" ? `faulted: ${fault}` : this.active ? "active" : "inactive";
     setText(this.state, state);
+    const inactive = this.active ? null : (inactiveSince ?? "inactive");
+    setText(this.since, inactive === null ? "" : inactive.replace(/^inactive /, ""));
     this.el.classList.toggle("active", this.active);
     this.el.classList.toggle("faulted", typeof fault === "string");
     setText(this.activate, this.active ? "Deactivate" : "Activate");
@@ -420,7 +454,7 @@ class SkillPanel {
       setText(this.dataBox, JSON.stringify(data, null, 2));
     }
     if (this.showInput.checked) this.inputBox.replaceChildren(portTable(info["inputs"], `input-table-${this.name}`));
-    if (this.showOutput.checked) this.outputBox.replaceChildren(portTable(info["outputs"], `output-table-${this.name}`));
+    if (this.showOutput.checked) this.outputBox.replaceChildren(portTable(info["outputs"], `output-table-${this.name}`, inactive));
     if (info["verbose"] === true && !this.verbose.checked && document.activeElement !== this.verbose) {
       this.verbose.checked = true;
       this.prints.hidden = false;
@@ -439,27 +473,96 @@ class SkillPanel {
   }
 }
 
+/** Since when a skill is inactive, from the server's `activity` (the cycle of its last change). */
+function inactiveSince(activity: Json | undefined, name: string): string {
+  if (!isObject(activity)) return "inactive";
+  const changed = activity["changed"];
+  const at = isObject(changed) ? changed[name] : undefined;
+  if (typeof at === "number") return `inactive since cycle ${at}`;
+  // No change seen since the GUI started watching: inactive at least since then.
+  const from = num(activity["observed_from"]);
+  return from === 0 ? "inactive since cycle 0" : `inactive since cycle ≤ ${from}`;
+}
+
 export class SkillPanels {
   readonly el: HTMLElement;
   private readonly panels = new Map<string, SkillPanel>();
   private readonly list: HTMLElement;
+  private readonly resources: HTMLTableElement;
+  private resourcesKey = "";
 
-  constructor(private readonly conn: Connection) {
+  constructor(
+    private readonly conn: Connection,
+    stale: HTMLElement,
+  ) {
     this.list = h("div", {});
-    this.el = h("section", { class: "panel", id: "skills" }, h("h2", {}, "Skills"), this.list);
+    this.resources = h("table", { class: "resources", "data-testid": "resources" });
+    this.el = h(
+      "section",
+      { class: "panel live", id: "skills" },
+      h("h2", {}, "Skills", stale),
+      h("h3", {}, "Resources: who wins now"),
+      this.resources,
+      this.list,
+    );
   }
 
-  update(skills: JsonObject[], cycle: number): void {
+  /** A new run: its skills may differ; panels are built again from its telemetry. */
+  clear(): void {
+    this.panels.clear();
+    this.list.replaceChildren();
+    this.resources.replaceChildren();
+    this.resourcesKey = "";
+  }
+
+  update(skills: JsonObject[], cycle: number, activity?: Json, winners?: Json): void {
     for (const s of skills) {
       const name = str(s["name"]);
+      const since = s["active"] === true ? null : inactiveSince(activity, name);
       const p = this.panels.get(name);
-      if (p) p.update(s, cycle);
+      if (p) p.update(s, cycle, since);
       else {
         const panel = new SkillPanel(this.conn, s);
         this.panels.set(name, panel);
         this.list.append(panel.el);
+        panel.update(s, cycle, since);
       }
     }
+    this.showResources(winners);
+  }
+
+  /** Every resource (a signal leaf with several writers), its writers and who wins it now. */
+  private showResources(winners: Json | undefined): void {
+    const rows = (Array.isArray(winners) ? winners : []).filter(isObject).map((w) => ({
+      signal: str(w["signal"]),
+      writers: (Array.isArray(w["writers"]) ? w["writers"] : []).filter((x): x is string => typeof x === "string"),
+      winner: typeof w["winner"] === "string" ? w["winner"] : null,
+      cycle: num(w["cycle"]),
+    }));
+    const key = JSON.stringify(rows);
+    if (key === this.resourcesKey) return;
+    this.resourcesKey = key;
+    if (rows.length === 0) {
+      this.resources.replaceChildren(h("tr", {}, h("td", { class: "dim" }, "no resource: no signal has several writers")));
+      return;
+    }
+    this.resources.replaceChildren(
+      h("tr", {}, h("th", {}, "resource"), h("th", {}, "writers"), h("th", {}, "winner now")),
+      ...rows.map((r) =>
+        h(
+          "tr",
+          { "data-resource": r.signal },
+          h("td", { class: "mono" }, r.signal),
+          h("td", {}, r.writers.join(", ")),
+          h(
+            "td",
+            { class: "winner", "data-winner": r.winner ?? "" },
+            r.winner === null ? h("span", { class: "dim" }, "nobody wrote it") : h("strong", {}, r.winner),
+            r.winner === null ? "" : h("span", { class: "dim" }, ` (cycle ${r.cycle})`),
+          ),
+        ),
+      ),
+    );
   }
 
   event(e: JsonObject): void {

@@ -1,11 +1,18 @@
 // The world view: the simulator's map (walls, obstacles, doors, barcodes, buttons, the goal office,
 // elevator cars) on the robot's floor, the robot (`truth.pose`), its sonar rays (`sonar.range`) and
 // the cars' state (`truth.cars`), the people walking on the floor shown (`truth.people`).
+// Zoom with the wheel, pan by dragging, "Reset view" to fit the map again; the view follows the
+// robot (its floor, and its position when zoomed in) until the user pans. The canvas is drawn at
+// the page's own pixel size, so labels keep their size whatever the window's width.
 
 import { isObject, type Json, type JsonObject } from "./conn";
-import { h, num, setText } from "./dom";
+import { cssVar, h, num, setText } from "./dom";
 
 type Pt = [number, number];
+
+/** Label size in CSS pixels: readable at the default view. */
+const LABEL_PX = 13;
+const TRAIL_POINTS = 2000;
 
 function pts(j: Json | undefined): Pt[] {
   if (!Array.isArray(j)) return [];
@@ -21,30 +28,129 @@ function values(reading: Json | undefined): Json | undefined {
   return isObject(reading) ? reading["value"] : undefined;
 }
 
+interface Robot {
+  x: number;
+  y: number;
+  theta: number;
+  floor: number;
+}
+
 export class WorldView {
   readonly el: HTMLElement;
   private readonly canvas: HTMLCanvasElement;
   private readonly floorSel: HTMLSelectElement;
+  private readonly follow: HTMLInputElement;
   private readonly info: HTMLElement;
   private map: JsonObject | null = null;
   private draws = 0;
-  private trail: Pt[] = [];
+  /** The robot's trail on each floor (metres), and when this run's first point came (wall s). */
+  private trails = new Map<number, Pt[]>();
+  private trailSince: number | null = null;
+  private signals: Json | undefined = undefined;
+  private robot: Robot | null = null;
+  /** The view: zoom over the fitted map, and the world point at the canvas's centre (null: the map's centre). */
+  private zoom = 1;
+  private center: Pt | null = null;
+  private drag: { x: number; y: number } | null = null;
+  private view = { W: 0, H: 0, scale: 1, cx: 0, cy: 0 };
 
-  constructor() {
-    this.canvas = h("canvas", { width: 640, height: 480, "data-testid": "world-canvas" });
+  constructor(stale: HTMLElement) {
+    this.canvas = h("canvas", { width: 640, height: 480, class: "world", "data-testid": "world-canvas" });
     this.floorSel = h("select", { "data-testid": "world-floor" }, h("option", { value: "auto" }, "the robot's floor"));
+    this.floorSel.addEventListener("change", () => this.draw());
+    this.follow = h("input", { type: "checkbox", checked: true, "data-testid": "world-follow" });
+    this.follow.addEventListener("change", () => {
+      if (this.follow.checked) this.center = null;
+      this.draw();
+    });
+    const reset = h("button", { "data-testid": "world-reset", title: "fit the whole floor, follow the robot" }, "Reset view");
+    reset.addEventListener("click", () => this.resetView());
     this.info = h("span", { class: "mono", "data-testid": "world-info" }, "no truth.pose signal yet");
-    this.el = h("section", { class: "panel", id: "world" }, h("h2", {}, "World"), h("div", { class: "row" }, "floor ", this.floorSel, " ", this.info), this.canvas);
+    this.el = h(
+      "section",
+      { class: "panel live", id: "world" },
+      h("h2", {}, "World", stale),
+      h("div", { class: "row" }, "floor ", this.floorSel, h("label", {}, this.follow, " follow the robot"), reset),
+      h("div", { class: "row" }, this.info),
+      this.canvas,
+      h("div", { class: "dim" }, "wheel: zoom · drag: pan"),
+    );
+    this.canvas.addEventListener("wheel", (e) => this.onWheel(e), { passive: false });
+    this.canvas.addEventListener("pointerdown", (e) => {
+      this.drag = { x: e.clientX, y: e.clientY };
+      this.canvas.setPointerCapture(e.pointerId);
+      this.canvas.classList.add("dragging");
+    });
+    this.canvas.addEventListener("pointermove", (e) => {
+      if (!this.drag) return;
+      const dx = e.clientX - this.drag.x;
+      const dy = e.clientY - this.drag.y;
+      if (dx === 0 && dy === 0) return;
+      this.drag = { x: e.clientX, y: e.clientY };
+      const k = this.pixelRatio() / this.view.scale;
+      // Panning takes the view away from the robot: stop following (Reset view follows again).
+      this.follow.checked = false;
+      this.center = [this.view.cx - dx * k, this.view.cy + dy * k];
+      this.draw();
+    });
+    const endDrag = () => {
+      this.drag = null;
+      this.canvas.classList.remove("dragging");
+    };
+    this.canvas.addEventListener("pointerup", endDrag);
+    this.canvas.addEventListener("pointercancel", endDrag);
   }
 
   setMap(world: Json | undefined): void {
     this.map = isObject(world) ? world : null;
     const floors = this.map && Array.isArray(this.map["floors"]) ? this.map["floors"].filter(isObject) : [];
+    const chosen = this.floorSel.value;
     this.floorSel.replaceChildren(h("option", { value: "auto" }, "the robot's floor"), ...floors.map((f) => h("option", { value: String(num(f["level"])) }, `floor ${num(f["level"])}`)));
+    if ([...this.floorSel.options].some((o) => o.value === chosen)) this.floorSel.value = chosen;
   }
 
-  /** Bounds of the map (all floors), or a 10 m square around the origin without one. */
-  private bounds(extra: Pt | null): [number, number, number, number] {
+  /** A new run: the old run's trails go. */
+  clear(): void {
+    this.trails.clear();
+    this.trailSince = null;
+    this.robot = null;
+    this.signals = undefined;
+    this.draw();
+  }
+
+  resetView(): void {
+    this.zoom = 1;
+    this.center = null;
+    this.follow.checked = true;
+    this.floorSel.value = "auto";
+    this.draw();
+  }
+
+  private pixelRatio(): number {
+    return window.devicePixelRatio || 1;
+  }
+
+  private onWheel(e: WheelEvent): void {
+    e.preventDefault();
+    const factor = Math.exp(-e.deltaY * 0.0015);
+    const zoom = Math.min(50, Math.max(0.5, this.zoom * factor));
+    const { W, H, scale, cx, cy } = this.view;
+    if (!this.follow.checked || !this.robot) {
+      // Zoom about the point under the cursor.
+      const r = this.canvas.getBoundingClientRect();
+      const px = (e.clientX - r.left) * (W / Math.max(1, r.width));
+      const py = (e.clientY - r.top) * (H / Math.max(1, r.height));
+      const wx = cx + (px - W / 2) / scale;
+      const wy = cy - (py - H / 2) / scale;
+      const s2 = (scale / this.zoom) * zoom;
+      this.center = [wx - (px - W / 2) / s2, wy + (py - H / 2) / s2];
+    }
+    this.zoom = zoom;
+    this.draw();
+  }
+
+  /** Bounds of the map (all floors), or a 10 m square around the origin and the trail without one. */
+  private bounds(): [number, number, number, number] {
     let [x0, y0, x1, y1] = [Infinity, Infinity, -Infinity, -Infinity];
     const grow = (x: number, y: number) => {
       if (!Number.isFinite(x) || !Number.isFinite(y)) return;
@@ -64,37 +170,85 @@ export class WorldView {
     if (!Number.isFinite(x0)) {
       grow(-5, -5);
       grow(5, 5);
-      for (const p of this.trail) grow(p[0], p[1]);
+      for (const t of this.trails.values()) for (const p of t) grow(p[0], p[1]);
     }
-    if (extra) grow(extra[0], extra[1]);
+    if (this.robot) grow(this.robot.x, this.robot.y);
     const m = 0.5;
     return [x0 - m, y0 - m, x1 + m, y1 + m];
   }
 
-  update(signals: Json | undefined): void {
+  update(signals: Json | undefined, wall: number): void {
     const sig = isObject(signals) ? signals : {};
     const pose = values(sig["truth.pose"]);
+    this.robot = isObject(pose) ? { x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) } : null;
+    this.signals = signals;
+    if (this.robot) {
+      const trail = this.trails.get(this.robot.floor) ?? [];
+      const last = trail[trail.length - 1];
+      if (!last || Math.hypot(last[0] - this.robot.x, last[1] - this.robot.y) >= 0.01) {
+        trail.push([this.robot.x, this.robot.y]);
+        if (trail.length > TRAIL_POINTS) trail.shift();
+      }
+      this.trails.set(this.robot.floor, trail);
+      this.trailSince ??= wall;
+    }
+    this.draw();
+  }
+
+  private draw(): void {
+    const sig = isObject(this.signals) ? this.signals : {};
     const sonar = values(sig["sonar.range"]);
     const cars = values(sig["truth.cars"]);
     const people = values(sig["truth.people"]);
-    const hasPose = isObject(pose);
-    const robot: { x: number; y: number; theta: number; floor: number } | null = hasPose
-      ? { x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) }
-      : null;
-    if (robot) {
-      this.trail.push([robot.x, robot.y]);
-      if (this.trail.length > 600) this.trail.shift();
-    }
+    const robot = this.robot;
     const floor = this.floorSel.value === "auto" ? (robot?.floor ?? 0) : Number(this.floorSel.value);
+    // Draw at the page's pixel size (sharp, labels at their size at any width).
+    const dpr = this.pixelRatio();
+    const cssW = this.canvas.clientWidth > 0 ? this.canvas.clientWidth : 640;
+    const [bx0, by0, bx1, by1] = this.bounds();
+    // As tall as the building's shape asks, within reason (a wide building leaves no empty band).
+    const W = Math.max(100, Math.round(cssW * dpr));
+    const H = Math.round(W * Math.min(0.85, Math.max(0.5, (by1 - by0) / (bx1 - bx0))));
+    if (this.canvas.width !== W) this.canvas.width = W;
+    if (this.canvas.height !== H) this.canvas.height = H;
     const c = this.canvas.getContext("2d");
     if (!c) return;
-    const W = this.canvas.width;
-    const H = this.canvas.height;
-    const [bx0, by0, bx1, by1] = this.bounds(robot ? [robot.x, robot.y] : null);
-    const scale = Math.min(W / (bx1 - bx0), H / (by1 - by0));
-    const X = (x: number) => (x - bx0) * scale;
-    const Y = (y: number) => H - (y - by0) * scale;
-    c.fillStyle = "#fafafa";
+    const scale = Math.min(W / (bx1 - bx0), H / (by1 - by0)) * this.zoom;
+    let [cx, cy]: Pt = this.center ?? [(bx0 + bx1) / 2, (by0 + by1) / 2];
+    if (this.follow.checked && robot && this.zoom > 1) [cx, cy] = [robot.x, robot.y];
+    this.view = { W, H, scale, cx, cy };
+    const X = (x: number) => W / 2 + (x - cx) * scale;
+    const Y = (y: number) => H / 2 - (y - cy) * scale;
+    const labels: { text: string; px: number }[] = [];
+    const labelFont = `${LABEL_PX * dpr}px sans-serif`;
+    const halo = cssVar("--canvas-halo", "rgba(255,255,255,0.85)");
+    // Labels are drawn last, on top, each moved down until it overlaps no other (cars side by side).
+    // Minor labels (barcodes, buttons) give way: drawn only where they overlap nothing.
+    const queued: { text: string; x: number; y: number; color: string; minor: boolean }[] = [];
+    const label = (text: string, x: number, y: number, color: string, minor = false) => queued.push({ text, x, y, color, minor });
+    const drawLabels = () => {
+      c.font = labelFont;
+      c.lineWidth = 3 * dpr;
+      c.strokeStyle = halo;
+      c.lineJoin = "round";
+      const line = (LABEL_PX + 3) * dpr;
+      const placed: [number, number, number, number][] = [];
+      for (const q of [...queued.filter((x) => !x.minor), ...queued.filter((x) => x.minor)]) {
+        const w = c.measureText(q.text).width;
+        let y = q.y;
+        const hits = (yy: number) => placed.some(([x0, y0, x1, y1]) => q.x < x1 && q.x + w > x0 && yy - line < y1 && yy > y0);
+        if (q.minor && hits(y)) continue;
+        for (let tries = 0; tries < 3 && hits(y); tries++) y += line;
+        placed.push([q.x, y - line, q.x + w, y]);
+        c.strokeText(q.text, q.x, y);
+        c.fillStyle = q.color;
+        c.fillText(q.text, q.x, y);
+        labels.push({ text: q.text, px: LABEL_PX });
+      }
+    };
+    const fg = cssVar("--canvas-fg", "#222");
+    const labelColor = cssVar("--canvas-label", "#123");
+    c.fillStyle = cssVar("--canvas-bg", "#fafafa");
     c.fillRect(0, 0, W, H);
     const floors = this.map && Array.isArray(this.map["floors"]) ? this.map["floors"].filter(isObject) : [];
     const f = floors.find((x) => num(x["level"]) === floor);
@@ -102,26 +256,25 @@ export class WorldView {
       const office = pts(f["office"]);
       if (office.length > 2) this.poly(c, office, X, Y, "rgba(255, 215, 0, 0.25)", null);
       for (const o of Array.isArray(f["obstacles"]) ? f["obstacles"] : []) this.poly(c, pts(o), X, Y, "#bbb", "#888");
-      c.lineWidth = 3;
-      c.strokeStyle = "#222";
+      c.lineWidth = 3 * dpr;
+      c.strokeStyle = fg;
       for (const s of segs(f["walls"])) this.line(c, s, X, Y);
-      c.lineWidth = 3;
+      c.lineWidth = 3 * dpr;
       c.strokeStyle = "#3a7";
       c.setLineDash([6, 4]);
       for (const s of segs(f["doors"])) this.line(c, s, X, Y);
       c.setLineDash([]);
-      c.font = "10px sans-serif";
       for (const b of Array.isArray(f["barcodes"]) ? f["barcodes"].filter(isObject) : []) {
-        c.fillStyle = "#00f";
-        c.fillRect(X(num(b["x"])) - 3, Y(num(b["y"])) - 3, 6, 6);
-        c.fillText(String(num(b["id"])), X(num(b["x"])) + 4, Y(num(b["y"])) - 4);
+        c.fillStyle = "#36f";
+        c.fillRect(X(num(b["x"])) - 3 * dpr, Y(num(b["y"])) - 3 * dpr, 6 * dpr, 6 * dpr);
+        label(String(num(b["id"])), X(num(b["x"])) + 5 * dpr, Y(num(b["y"])) - 5 * dpr, "#36f", true);
       }
       for (const b of Array.isArray(f["buttons"]) ? f["buttons"].filter(isObject) : []) {
         c.fillStyle = "#c0c";
         c.beginPath();
-        c.arc(X(num(b["x"])), Y(num(b["y"])), 4, 0, 2 * Math.PI);
+        c.arc(X(num(b["x"])), Y(num(b["y"])), 4 * dpr, 0, 2 * Math.PI);
         c.fill();
-        c.fillText(typeof b["label"] === "string" ? b["label"] : "", X(num(b["x"])) + 5, Y(num(b["y"])) + 10);
+        if (typeof b["label"] === "string") label(b["label"], X(num(b["x"])) + 6 * dpr, Y(num(b["y"])) + 14 * dpr, "#c0c", true);
       }
     }
     // Elevator cars: drawn on every floor; solid when the car is at this floor.
@@ -134,17 +287,23 @@ export class WorldView {
       const [x0, y0, x1, y1] = [num(car["x0"]), num(car["y0"]), num(car["x1"]), num(car["y1"])];
       c.fillStyle = here ? "rgba(70, 130, 180, 0.35)" : "rgba(70, 130, 180, 0.08)";
       c.fillRect(X(Math.min(x0, x1)), Y(Math.max(y0, y1)), Math.abs(x1 - x0) * scale, Math.abs(y1 - y0) * scale);
-      c.fillStyle = "#246";
-      c.font = "11px sans-serif";
-      c.fillText(`car ${num(car["id"])}${Number.isFinite(at) ? ` @ ${at.toFixed(2)}` : ""}`, X(Math.min(x0, x1)) + 2, Y(Math.max(y0, y1)) + 12);
       const door = segs([car["door"] ?? null])[0];
+      const open = num(carDoor[i], NaN);
       if (door) {
-        const open = num(carDoor[i], 0);
-        c.strokeStyle = open > 0.5 ? "#3a7" : "#a33";
-        c.lineWidth = 4;
-        c.setLineDash(open > 0.02 ? [4, 4] : []);
+        c.strokeStyle = open > 0.5 ? "#3a7" : "#d44";
+        c.lineWidth = 4 * dpr;
+        c.setLineDash(open > 0.02 ? [4 * dpr, 4 * dpr] : []);
         this.line(c, door, X, Y);
         c.setLineDash([]);
+      }
+      const lx = X(Math.min(x0, x1)) + 3 * dpr;
+      const ly = Y(Math.max(y0, y1)) + (LABEL_PX + 2) * dpr;
+      // Short lines (the cars stand side by side): "car 1", its floor, its door.
+      label(`car ${num(car["id"])}`, lx, ly, labelColor);
+      if (Number.isFinite(at)) label(`fl ${Number.isInteger(at) ? at : at.toFixed(1)}`, lx, ly + (LABEL_PX + 3) * dpr, labelColor);
+      if (door && Number.isFinite(open)) {
+        const state = open > 0.98 ? "open" : open < 0.02 ? "closed" : `${Math.round(open * 100)} %`;
+        label(state, lx, ly + 2 * (LABEL_PX + 3) * dpr, open > 0.5 ? "#2a8a2a" : "#d44");
       }
     });
     // People on this floor: small circles.
@@ -154,23 +313,36 @@ export class WorldView {
       for (let i = 0; i < px.length; i++) {
         if (num(pf[i], NaN) !== floor) continue;
         c.beginPath();
-        c.arc(X(num(px[i])), Y(num(py[i])), Math.max(3, 0.25 * scale), 0, 2 * Math.PI);
+        c.arc(X(num(px[i])), Y(num(py[i])), Math.max(3 * dpr, 0.25 * scale), 0, 2 * Math.PI);
         c.fill();
       }
     }
     // The trail, the sonar rays, the robot.
-    if (this.trail.length > 1) {
-      c.strokeStyle = "rgba(0,0,0,0.15)";
-      c.lineWidth = 1;
+    const trail = this.trails.get(floor) ?? [];
+    if (trail.length > 1) {
+      c.strokeStyle = "rgba(128, 128, 128, 0.6)";
+      c.lineWidth = 1.5 * dpr;
       c.beginPath();
-      this.trail.forEach(([x, y], i) => (i ? c.lineTo(X(x), Y(y)) : c.moveTo(X(x), Y(y))));
+      trail.forEach(([x, y], i) => (i ? c.lineTo(X(x), Y(y)) : c.moveTo(X(x), Y(y))));
       c.stroke();
     }
-    if (robot) {
+    drawLabels();
+    const counts: Record<string, number> = {};
+    for (const [f, t] of this.trails) counts[String(f)] = t.length;
+    Object.assign(this.canvas.dataset, {
+      labels: JSON.stringify(labels),
+      trail: JSON.stringify(counts),
+      trailSince: this.trailSince === null ? "" : String(this.trailSince),
+      floor: String(floor),
+      zoom: this.zoom.toFixed(3),
+      centerX: cx.toFixed(3),
+      centerY: cy.toFixed(3),
+    });
+    if (robot && robot.floor === floor) {
       const radius = this.map ? num(this.map["robot_radius"], 0.25) : 0.25;
       if (Array.isArray(sonar)) {
         c.strokeStyle = "rgba(255, 120, 0, 0.6)";
-        c.lineWidth = 1;
+        c.lineWidth = dpr;
         sonar.forEach((r, i) => {
           let range = num(r, Infinity);
           if (!Number.isFinite(range)) range = 10;
@@ -185,11 +357,11 @@ export class WorldView {
       const py = Y(robot.y);
       c.fillStyle = "#d00";
       c.beginPath();
-      const pr = Math.max(4, radius * scale);
+      const pr = Math.max(4 * dpr, radius * scale);
       c.arc(px, py, pr, 0, 2 * Math.PI);
       c.fill();
       c.strokeStyle = "#fff";
-      c.lineWidth = 2;
+      c.lineWidth = 2 * dpr;
       c.beginPath();
       c.moveTo(px, py);
       c.lineTo(X(robot.x + radius * Math.cos(robot.theta)), Y(robot.y + radius * Math.sin(robot.theta)));
@@ -199,6 +371,8 @@ export class WorldView {
       this.canvas.dataset["robotPy"] = py.toFixed(1);
       this.canvas.dataset["robotPr"] = pr.toFixed(1);
       this.canvas.dataset["draws"] = String(this.draws);
+    }
+    if (robot) {
       setText(this.info, `robot at (${robot.x.toFixed(2)}, ${robot.y.toFixed(2)}) m, θ ${((((robot.theta * 180) / Math.PI) % 360) + 360) % 360 | 0}°, floor ${robot.floor}; showing floor ${floor}`);
     }
   }

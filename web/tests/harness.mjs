@@ -43,13 +43,14 @@ export function freePort() {
   });
 }
 
-/** Starts the testbed; resolves when it prints READY. */
-export async function startTestbed(extraArgs = []) {
+/** Starts the testbed; resolves when it prints READY. `guiPort`: serve the GUI there (a restart). */
+export async function startTestbed(extraArgs = [], { guiPort: wantedGuiPort } = {}) {
   for (const [what, p] of [["testbed", testbedBin], ["situate CLI", situateBin], ["chromium", chromiumPath]]) {
     if (!existsSync(p)) throw new Error(`${what} not found at ${p} (run scripts/gui.sh test, or set its env variable)`);
   }
-  const guiPort = await freePort();
-  const linkPort = await freePort();
+  const guiPort = wantedGuiPort ?? (await freePort());
+  let linkPort = await freePort();
+  while (linkPort === guiPort) linkPort = await freePort();
   const args = ["--gui-port", String(guiPort), "--link-port", String(linkPort), "--stdin", ...extraArgs];
   const child = spawn(testbedBin, args, { stdio: ["pipe", "pipe", "pipe"], env: { ...process.env, RUST_LOG: process.env.RUST_LOG || "warn,zenoh=error" } });
   let out = "";
@@ -82,6 +83,14 @@ export async function stopTestbed(tb) {
   const timer = setTimeout(() => tb.child.kill("SIGKILL"), 10_000);
   await exited;
   clearTimeout(timer);
+}
+
+/** Kills the testbed at once (SIGKILL: the robot dies, it does not shut down). */
+export async function killTestbed(tb) {
+  if (!tb || tb.child.exitCode !== null || tb.child.signalCode !== null) return;
+  const exited = new Promise((resolve) => tb.child.once("exit", resolve));
+  tb.child.kill("SIGKILL");
+  await exited;
 }
 
 /** A fresh headless chromium (its own profile directory). */
@@ -120,6 +129,18 @@ export function cli(linkPort, ...args) {
           reject(new Error(`situate ${args.join(" ")} printed no JSON: ${stdout}\n${stderr}`));
         }
       },
+    );
+  });
+}
+
+/** Runs a `situate` client verb that answers nothing (`cycle stop`, `param set`); resolves on success. */
+export function cliDo(linkPort, ...args) {
+  return new Promise((resolve, reject) => {
+    execFile(
+      situateBin,
+      [...args, "--connect", `tcp/127.0.0.1:${linkPort}`, "--timeout", "10"],
+      { timeout: 30_000, env: { ...process.env, RUST_LOG: "error" } },
+      (error, stdout, stderr) => (error ? reject(new Error(`situate ${args.join(" ")} failed: ${error.message}\n${stderr}`)) : resolve(stdout)),
     );
   });
 }

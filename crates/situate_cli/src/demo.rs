@@ -1,6 +1,9 @@
 //! `situate demo`: the delivery demo. The robot runs in this process (as
 //! `situate run` would), the sequencer in a child process; Ctrl-C stops the
-//! sequencer and prints the outcome.
+//! sequencer and prints the outcome. With the GUI, the robot (cycle stopped)
+//! and the GUI stay up after the mission with its outcome on the page, until
+//! Ctrl-C (or at once with `--exit-when-done`); headless, the demo ends with
+//! the mission.
 
 use super::*;
 
@@ -17,6 +20,7 @@ pub(crate) struct DemoOptions {
     pub(crate) gui: String,
     pub(crate) limit_s: f64,
     pub(crate) json: bool,
+    pub(crate) exit_when_done: bool,
 }
 
 /// A free TCP port on the loopback interface.
@@ -74,11 +78,26 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
     let run =
         run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
     let wall_s = started.elapsed().as_secs_f64();
+    // With the GUI, the page keeps showing the robot where the mission left it, with the outcome,
+    // until Ctrl-C: the cycle is stopped so what it shows is the end of the mission.
+    let stay = match (&running.gui, &run) {
+        (Some(_), Ok(r)) => r.interrupted.is_none() && !demo.exit_when_done,
+        _ => false,
+    };
+    if stay {
+        let _ = running.handle.request_timeout(situate::manager::Request::Stop, Duration::from_secs(2));
+    }
     let (delivered_at, sim_time) = {
         let w = sim.world.lock().map_err(|_| anyhow::anyhow!("the simulator failed"))?;
         (w.delivered_at(), w.time_s())
     };
-    let (stats, skills) = running.finish()?;
+    let mut running = Some(running);
+    let (stats, skills) = if stay {
+        let mut handle = running.as_ref().map(|r| r.handle.clone()).context("the robot")?;
+        (handle.stats()?, handle.skills()?)
+    } else {
+        running.take().context("the robot")?.finish()?
+    };
     let run = run?;
     let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
     let cpu_ns: u64 =
@@ -121,11 +140,44 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
             if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
         );
     }
-    Ok(match (run.interrupted, delivered_at) {
+    let code = match (run.interrupted, delivered_at) {
         (Some(sig), _) => ExitCode::from(signals::status(sig)),
         (None, Some(_)) => ExitCode::SUCCESS,
         (None, None) => ExitCode::FAILURE,
-    })
+    };
+    if let Some(running) = running {
+        if let Some(gui) = &running.gui {
+            gui.set_outcome(outcome_for_page(delivered_at, sim_time, &run));
+            eprintln!(
+                "situate: the mission is over; the GUI stays on {} until Ctrl-C (--exit-when-done: exit at once)",
+                gui.url()
+            );
+        }
+        while stop.signal().is_none() {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        eprintln!("situate: {}: closing the GUI", stop.signal().map(signals::name).unwrap_or("stop"));
+        running.finish()?;
+    }
+    // A Ctrl-C after the mission only closes the GUI: the status is the mission's.
+    Ok(code)
+}
+
+/// The mission's outcome as the page shows it: delivered, or not and why.
+fn outcome_for_page(delivered_at: Option<f64>, sim_time: f64, run: &SequencerRun) -> situate_gui::Outcome {
+    if let Some(t) = delivered_at {
+        return situate_gui::Outcome { ok: true, summary: format!("delivered: message delivered at t = {t:.1} s") };
+    }
+    let mut why = match (&run.failure, run.status.code()) {
+        (Some(reason), _) => reason.clone(),
+        (None, Some(0)) => "the sequencer ended without delivering".to_string(),
+        (None, Some(c)) => format!("the sequencer exited with status {c}"),
+        (None, None) => "the sequencer was killed".to_string(),
+    };
+    if let Some(p) = &run.phase {
+        why.push_str(&format!(" (in phase {p})"));
+    }
+    situate_gui::Outcome { ok: false, summary: format!("failed at t = {sim_time:.1} s: {why}") }
 }
 
 /// How long the sequencer has to end after it is told to stop, before it is killed.
@@ -138,6 +190,8 @@ struct SequencerRun {
     interrupted: Option<i32>,
     /// The last phase the sequencer announced (`phase N: …`), as `N (what it does)`.
     phase: Option<String>,
+    /// Why the mission failed, as the sequencer said it (`mission failed: …`).
+    failure: Option<String>,
 }
 
 /// Runs the sequencer to its end, its output passed through (and its
@@ -146,10 +200,10 @@ struct SequencerRun {
 /// within [`SEQUENCER_BOUND`].
 fn run_sequencer(mut command: std::process::Command, stop: &signals::Stop) -> std::io::Result<SequencerRun> {
     let mut child = command.stdout(std::process::Stdio::piped()).spawn()?;
-    let phase = Arc::new(std::sync::Mutex::new(None));
+    let noted = Arc::new(std::sync::Mutex::new(Noted::default()));
     let relay = child.stdout.take().map(|out| {
-        let phase = Arc::clone(&phase);
-        std::thread::spawn(move || relay_lines(out, &phase))
+        let noted = Arc::clone(&noted);
+        std::thread::spawn(move || relay_lines(out, &noted))
     });
     let mut interrupted = None;
     let mut deadline = None;
@@ -175,8 +229,8 @@ fn run_sequencer(mut command: std::process::Command, stop: &signals::Stop) -> st
     if let Some(relay) = relay {
         let _ = relay.join();
     }
-    let phase = phase.lock().map(|p| p.clone()).unwrap_or_default();
-    Ok(SequencerRun { status, interrupted, phase })
+    let Noted { phase, failure } = noted.lock().map(|n| n.clone()).unwrap_or_default();
+    Ok(SequencerRun { status, interrupted, phase, failure })
 }
 
 /// Asks a child process to stop (SIGTERM).
@@ -192,8 +246,15 @@ fn terminate(child: &mut std::process::Child) {
     let _ = child.kill();
 }
 
-/// Copies the sequencer's output to ours line by line, noting its phases.
-fn relay_lines(out: impl std::io::Read, phase: &std::sync::Mutex<Option<String>>) {
+/// What the sequencer's narrative said: its last phase, and why it failed.
+#[derive(Clone, Default)]
+struct Noted {
+    phase: Option<String>,
+    failure: Option<String>,
+}
+
+/// Copies the sequencer's output to ours line by line, noting its phases and failure.
+fn relay_lines(out: impl std::io::Read, noted: &std::sync::Mutex<Noted>) {
     use std::io::{BufRead as _, Write as _};
     let mut out = std::io::BufReader::new(out);
     let mut line = Vec::new();
@@ -203,9 +264,13 @@ fn relay_lines(out: impl std::io::Read, phase: &std::sync::Mutex<Option<String>>
             Ok(0) | Err(_) => return,
             Ok(_) => {}
         }
-        if let Some(p) = phase_of(&String::from_utf8_lossy(&line)) {
-            if let Ok(mut slot) = phase.lock() {
-                *slot = Some(p);
+        let text = String::from_utf8_lossy(&line);
+        if let Ok(mut n) = noted.lock() {
+            if let Some(p) = phase_of(&text) {
+                n.phase = Some(p);
+            }
+            if let Some(at) = text.find("mission failed: ") {
+                n.failure = Some(text[at + "mission failed: ".len()..].trim_end().to_string());
             }
         }
         let mut stdout = std::io::stdout().lock();

@@ -118,6 +118,10 @@ enum Command {
         /// Print the outcome as one JSON line.
         #[arg(long)]
         json: bool,
+        /// With the GUI: exit when the mission ends (by default the GUI stays up, showing the
+        /// outcome, until Ctrl-C). Headless, the demo always exits when the mission ends.
+        #[arg(long)]
+        exit_when_done: bool,
     },
     /// Generate a skill's typed I/O (structs or classes and the glue) from its YAML manifest.
     Gen {
@@ -292,9 +296,36 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             };
             run_robot(&file, &opts, ext)
         }
-        Command::Demo { robot, map, seed, world, headless, mode, sequencer, python, speed, gui, limit_s, json } => {
-            let demo =
-                DemoOptions { robot, map, seed, world, headless, mode, sequencer, python, speed, gui, limit_s, json };
+        Command::Demo {
+            robot,
+            map,
+            seed,
+            world,
+            headless,
+            mode,
+            sequencer,
+            python,
+            speed,
+            gui,
+            limit_s,
+            json,
+            exit_when_done,
+        } => {
+            let demo = DemoOptions {
+                robot,
+                map,
+                seed,
+                world,
+                headless,
+                mode,
+                sequencer,
+                python,
+                speed,
+                gui,
+                limit_s,
+                json,
+                exit_when_done,
+            };
             run_demo(&demo, ext)
         }
         Command::Gen { lang, manifest, out } => generate(&lang, &manifest, &out),

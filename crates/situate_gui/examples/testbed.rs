@@ -37,6 +37,9 @@ pub struct Circle {
     /// Print a line every this many runs.
     #[param(default = 5, min = 1, max = 1000000)]
     print_every: i64,
+    /// The floor the circle is on (a test moves the robot to another floor with it).
+    #[param(default = 0, min = 0, max = 10)]
+    floor: i64,
     runs: i64,
 }
 
@@ -47,7 +50,7 @@ impl Body for Circle {
             x: self.radius * a.cos(),
             y: self.radius * a.sin(),
             theta: a + std::f64::consts::FRAC_PI_2,
-            floor: 0,
+            floor: self.floor,
         };
         self.runs += 1;
         if self.runs % self.print_every == 0 {

@@ -20,7 +20,16 @@
 //! {"signals": ["odom", "sonar.range"]}}` (the signals this tab plots).
 //! Server → browser: `{"type": "hello", …}` once, `{"type": "reply", "id": 7, "ok": …}` or
 //! `{"type": "reply", "id": 7, "error": {"kind", "message"}}`, `{"type": "telemetry", …}` at the
-//! sampling rate and `{"type": "event", "event": {…}}` as they happen.
+//! sampling rate, `{"type": "event", "event": {…}}` as they happen and `{"type": "outcome", …}`
+//! when the program says how its run ended ([`GuiServer::set_outcome`]).
+//!
+//! ## Time
+//! A page must never show the past as the present. The hello names the run (`run: {id,
+//! started_unix_s}`, new for every server), so a page that reconnects to a restarted robot on the
+//! same port knows its plots, trails and events belong to the old run. Each telemetry sample carries
+//! `activity`: per skill, the cycle of the last activation change the server saw
+//! (`activation_applied`, `skill_faulted`), and `observed_from`, the cycle the server started
+//! watching at, so an inactive skill's outputs can be shown as "inactive since cycle N".
 
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::net::SocketAddr;
@@ -98,7 +107,28 @@ pub struct GuiServer {
     shared: Arc<Shared>,
 }
 
+/// How a program's run ended, shown on every page (e.g. the demo's mission: delivered or not).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// Whether the run did what it was for.
+    pub ok: bool,
+    /// One line for a person: `message delivered at t = 212.4 s`, or why not.
+    pub summary: String,
+}
+
 impl GuiServer {
+    /// Tells every page (those open now and those opened later) how the run ended.
+    pub fn set_outcome(&self, outcome: Outcome) {
+        let body = json!({"type": "outcome", "ok": outcome.ok, "summary": outcome.summary});
+        *self.shared.outcome.lock().unwrap_or_else(|p| p.into_inner()) = Some(body.clone());
+        let _ = self.shared.events.send(body.to_string().into());
+    }
+
+    /// This server's run id (in the hello): new for every server, so a page tells runs apart.
+    pub fn run_id(&self) -> &str {
+        &self.shared.run.id
+    }
+
     /// The address actually bound (with the port picked when 0 was asked).
     pub fn local_addr(&self) -> SocketAddr {
         self.addr
@@ -138,9 +168,62 @@ impl Drop for GuiServer {
     }
 }
 
+/// One run of a server: pages compare ids to tell a restarted robot from a reconnection.
+struct RunInfo {
+    id: String,
+    started_unix_s: f64,
+}
+
+impl RunInfo {
+    fn new() -> Self {
+        use std::hash::{BuildHasher, Hasher};
+        let started = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+        // RandomState is seeded afresh per process and per instance: two servers, even started in
+        // the same nanosecond, get different ids.
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write_u128(started.as_nanos());
+        h.write_u32(std::process::id());
+        RunInfo { id: format!("{:012x}", h.finish() & 0xffff_ffff_ffff), started_unix_s: started.as_secs_f64() }
+    }
+}
+
+/// When each skill's activation last changed, as far as this server has seen.
+#[derive(Default)]
+struct Activity {
+    /// The manager's cycle when the server started watching its events.
+    observed_from: u64,
+    /// Per skill, the cycle of its last activation change (activation_applied, skill_faulted).
+    changed: HashMap<String, u64>,
+}
+
+impl Activity {
+    fn note(&mut self, event: &situate_manager::Event) {
+        use situate_manager::Event;
+        match event {
+            Event::ActivationApplied { activated, deactivated, cycle } => {
+                for s in activated.iter().chain(deactivated) {
+                    self.changed.insert(s.clone(), *cycle);
+                }
+            }
+            Event::SkillFaulted { skill, cycle, .. } => {
+                self.changed.insert(skill.clone(), *cycle);
+            }
+            _ => {}
+        }
+    }
+
+    fn to_json(&self) -> Json {
+        json!({"observed_from": self.observed_from, "changed": self.changed})
+    }
+}
+
 /// What every connection shares.
 struct Shared {
     handle: Handle,
+    run: RunInfo,
+    activity: Mutex<Activity>,
+    /// The run's outcome once the program has set it (sent in every later hello too).
+    outcome: Mutex<Option<Json>>,
     world: Option<Json>,
     sample_hz: f64,
     clients: AtomicUsize,
@@ -177,8 +260,17 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
     let (shutdown_tx, shutdown_rx) = watch::channel(false);
     let (wake_tx, wake_rx) = crossbeam_channel::unbounded();
     let stop = Arc::new(AtomicBool::new(false));
+    // Events are subscribed to before the cycle is read: no change falls between the two.
+    let events = handle.events();
+    let observed_from = match ask(&handle, Request::QueryStats) {
+        Ok(Reply::Stats(s)) => s.cycle,
+        _ => 0,
+    };
     let shared = Arc::new(Shared {
         handle: handle.clone(),
+        run: RunInfo::new(),
+        activity: Mutex::new(Activity { observed_from, changed: HashMap::new() }),
+        outcome: Mutex::new(None),
         world: config.world,
         sample_hz: config.sample_hz,
         clients: AtomicUsize::new(0),
@@ -193,8 +285,7 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
     let spawn = |name: &str, f: Box<dyn FnOnce() + Send>| {
         std::thread::Builder::new().name(name.into()).spawn(f).map_err(GuiError::Start)
     };
-    // Events: subscribed now, forwarded to every tab as they come.
-    let events = handle.events();
+    // Events: subscribed above, forwarded to every tab as they come.
     let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
     threads.push(spawn("situate-gui-events", Box::new(move || forward_events(&s, &events, &st)))?);
     let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
@@ -229,6 +320,7 @@ fn forward_events(shared: &Shared, events: &Receiver<situate_manager::Event>, st
     while !stop.load(Ordering::SeqCst) {
         match events.recv_timeout(Duration::from_millis(100)) {
             Ok(e) => {
+                shared.activity.lock().unwrap_or_else(|p| p.into_inner()).note(&e);
                 if shared.clients.load(Ordering::SeqCst) == 0 {
                     continue;
                 }
@@ -307,7 +399,9 @@ fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
         }
     }
     let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default().as_secs_f64();
-    json!({"type": "telemetry", "wall_s": now, "stats": stats, "skills": skills, "winners": winners, "signals": signals})
+    let activity = shared.activity.lock().unwrap_or_else(|p| p.into_inner()).to_json();
+    json!({"type": "telemetry", "wall_s": now, "run": shared.run.id, "stats": stats, "skills": skills,
+        "winners": winners, "signals": signals, "activity": activity})
 }
 
 // ----- HTTP -----------------------------------------------------------------------------------
@@ -374,6 +468,21 @@ async fn ws_upgrade(State(shared): State<Arc<Shared>>, headers: HeaderMap, ws: W
     ws.max_message_size(MAX_MESSAGE).on_upgrade(move |socket| session(shared, socket))
 }
 
+/// The first message of every connection: the run, the world's map, the verbs, and the run's
+/// outcome when it is known already.
+fn hello_message(shared: &Shared, client: u64) -> Json {
+    json!({
+        "type": "hello",
+        "client": client,
+        "protocol": wire::PROTOCOL,
+        "run": {"id": shared.run.id, "started_unix_s": shared.run.started_unix_s},
+        "sample_hz": shared.sample_hz,
+        "world": shared.world,
+        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(["watch"].iter()).collect::<Vec<_>>(),
+        "outcome": shared.outcome.lock().unwrap_or_else(|p| p.into_inner()).clone(),
+    })
+}
+
 /// Counts a connected tab for as long as it lives.
 struct ClientGuard {
     shared: Arc<Shared>,
@@ -396,14 +505,7 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
     let _guard = ClientGuard { shared: Arc::clone(&shared), id };
     let _ = shared.wake.send(());
     tracing::debug!(client = id, "GUI tab connected");
-    let hello = json!({
-        "type": "hello",
-        "client": id,
-        "protocol": wire::PROTOCOL,
-        "sample_hz": shared.sample_hz,
-        "world": shared.world,
-        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(["watch"].iter()).collect::<Vec<_>>(),
-    });
+    let hello = hello_message(&shared, id);
     if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
         return;
     }
@@ -575,6 +677,9 @@ mod tests {
         let (wake, _) = crossbeam_channel::unbounded();
         Shared {
             handle,
+            run: RunInfo::new(),
+            activity: Mutex::new(Activity::default()),
+            outcome: Mutex::new(None),
             world: None,
             sample_hz: 10.0,
             clients: AtomicUsize::new(0),
@@ -688,6 +793,68 @@ mod tests {
         assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
         let ok = http(addr, &upgrade(&format!("Origin: http://{addr}\r\n")));
         assert!(ok.starts_with("HTTP/1.1 101"), "{ok}");
+        gui.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn every_server_is_a_new_run_named_in_the_hello_with_its_outcome() {
+        let (mut handle, join) = robot();
+        let first = serve(handle.clone(), GuiConfig::default()).expect("serve");
+        let second = serve(handle.clone(), GuiConfig::default()).expect("serve");
+        let hello = hello_message(&first.shared, 1);
+        assert_eq!(hello["type"], "hello");
+        assert_eq!(hello["run"]["id"], first.run_id(), "{hello}");
+        let started = hello["run"]["started_unix_s"].as_f64().unwrap_or(0.0);
+        assert!(started > 1.6e9, "a wall-clock start time: {hello}");
+        assert_ne!(first.run_id(), second.run_id(), "a restarted server is a new run");
+        assert_eq!(hello["outcome"], Json::Null, "no outcome yet");
+        let mut listener = first.shared.events.subscribe();
+        first.set_outcome(Outcome { ok: false, summary: "not delivered: gave up at t = 1800 s".into() });
+        let hello = hello_message(&first.shared, 2);
+        assert_eq!(hello["outcome"]["ok"], false, "{hello}");
+        assert_eq!(hello["outcome"]["summary"], "not delivered: gave up at t = 1800 s");
+        let sent: Json = serde_json::from_str(listener.try_recv().expect("the outcome is sent to open pages").as_str())
+            .expect("JSON");
+        assert_eq!(sent["type"], "outcome");
+        assert_eq!(sent["summary"], "not delivered: gave up at t = 1800 s");
+        first.stop();
+        second.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_sample_says_since_which_cycle_a_skill_is_inactive() {
+        let (mut handle, join) = robot();
+        let events = handle.events();
+        let gui = serve(handle.clone(), GuiConfig::default()).expect("serve");
+        let sample = take_sample(&gui.shared, &mut HashSet::new());
+        assert!(sample["activity"]["observed_from"].is_u64(), "{sample}");
+        assert_eq!(sample["activity"]["changed"], json!({}), "no change seen yet: {sample}");
+        assert_eq!(sample["run"], gui.run_id());
+        handle.request(Request::Deactivate { skills: vec!["runaway".into()] }).expect("deactivate");
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let applied_at = loop {
+            match events.recv_timeout(Duration::from_secs(1)) {
+                Ok(situate_manager::Event::ActivationApplied { deactivated, cycle, .. })
+                    if deactivated.contains(&"runaway".to_string()) =>
+                {
+                    break cycle
+                }
+                _ => assert!(Instant::now() < deadline, "no activation_applied for runaway within a minute"),
+            }
+        };
+        let sample = loop {
+            let sample = take_sample(&gui.shared, &mut HashSet::new());
+            if sample["activity"]["changed"]["runaway"].is_u64() {
+                break sample;
+            }
+            assert!(Instant::now() < deadline, "the change never reached the sample: {sample}");
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        assert_eq!(sample["activity"]["changed"]["runaway"], applied_at, "{sample}");
         gui.stop();
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();
