@@ -784,7 +784,8 @@ class Sequencer:
         """Follows the hallway for ``metres`` (odometry, straight-line from here)."""
         far = farther_than(await self.odom(), metres)
         await self.use("runaway", "avoid", "follow_hallway")
-        return await self.wait(far, within=60 + 6 * metres) == 0
+        # 0.3 m/s, with time to wait for people in the way and to go round them.
+        return await self.wait(far, within=60 + 10 * metres) == 0
 
     async def run_route(
         self,
