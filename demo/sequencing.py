@@ -775,7 +775,12 @@ class Sequencer:
             if not await self.turn(wrap(axis + turn - (await self.odom()).theta)):
                 continue
             ranges = await self.sonar()
-            if min(ranges[0], ranges[1], ranges[-1]) > PROBE_OPEN_M:
+            if self.debug:
+                await self.say(
+                    f"        at {along} m: ahead {[round(r, 2) for r in ranges[-2:] + ranges[:3]]}"
+                )
+            # The sonars at ±15° see the side corridor's walls from about 2 m on.
+            if ranges[0] > PROBE_OPEN_M and min(ranges[1], ranges[-1]) > PROBE_OPEN_M - 0.6:
                 await self.turn(wrap(axis - (await self.odom()).theta))
                 return True
         return False
