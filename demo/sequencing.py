@@ -718,10 +718,11 @@ class Sequencer:
         for k in range(1, count + 1):
             if probe:
                 beyond = farther_than(look_from, PROBE_LOOK_M)
-                got = await self.wait(seen, beyond, "sonar.range[0] < 0.7", within=120)
-                if got == 0:
+                # Unseen by PROBE_LOOK_M on, or the way ahead blocked for good (a dead end
+                # just past it): probe for it.
+                if await self.wait(seen, beyond, within=120) == 0:
                     break
-                if got == 3 or len(sides) != 1:
+                if len(sides) != 1:
                     return False
                 return await self.probe_junction(look_from, sides[0])
             if await self.wait(seen, within=180):
@@ -779,8 +780,11 @@ class Sequencer:
                 await self.say(
                     f"        at {along} m: ahead {[round(r, 2) for r in ranges[-2:] + ranges[:3]]}"
                 )
-            # The sonars at ±15° see the side corridor's walls from about 2 m on.
-            if ranges[0] > PROBE_OPEN_M and min(ranges[1], ranges[-1]) > PROBE_OPEN_M - 0.6:
+            # The sonars at ±15° see the side corridor's walls from about 2 m on, and one of
+            # them its corner when the robot stands near an edge (odometry is off by some
+            # tenths after a long corridor): one of them open, the other not blocked at once.
+            pair = sorted((ranges[1], ranges[-1]))
+            if ranges[0] > PROBE_OPEN_M and pair[1] > PROBE_OPEN_M - 0.6 and pair[0] > 0.7:
                 await self.turn(wrap(axis - (await self.odom()).theta))
                 return True
         return False
