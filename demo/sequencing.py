@@ -40,6 +40,10 @@ DOOR_WIDTH = 1.1
 #: Time to get out of the lab before giving up, s.
 #: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
 WALL_AHEAD_M = 1.2
+#: How long to wait in front of a door that shows no opening (closed doors open again), s.
+DOOR_WAIT_S = 75.0
+#: Through a door: this far beyond the wall's line, m.
+BEYOND_WALL_M = 0.4
 #: A junction a route's `distance` leads to lies within this of where looking began, m.
 PROBE_LOOK_M = 6.0
 #: Where it is probed for, along the corridor from there, m.
@@ -131,6 +135,8 @@ class Sequencer:
         self.searches = 0
         #: The odometry heading a route planned the robot to be following (see `run_route`).
         self.corridor_heading: float | None = None
+        #: The barcode last lined up with and its wall's normal (odometry frame): x, y, rad.
+        self.wall_fix: tuple[float, float, float] | None = None
         #: The odometry heading the last door was passed at (out through it).
         self.passed_heading: float | None = None
         self.stream: situate.Stream[Any] | None = None
@@ -501,10 +507,28 @@ class Sequencer:
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")
             return False
+        self.wall_fix = (px, py, normal)
         gx, gy = px - standoff * math.cos(normal), py - standoff * math.sin(normal)
         if not await self.goto(gx, gy, within=30):
             return False
         return await self.turn(wrap(normal - (await self.odom()).theta))
+
+    async def beyond_wall(self) -> bool:
+        """Whether the robot stands beyond the wall of the barcode last lined up with.
+
+        A door passed on the route's hint alone (the sonars found no opening: someone in
+        it, or it was closed) may have left the robot short of it, or beside it; the wall's
+        line (`line_up`'s fix, odometry frame) says. True when there is no fix.
+        """
+        if self.wall_fix is None:
+            return True
+        px, py, normal = self.wall_fix
+        o = await self.odom()
+        beyond = (o.x - px) * math.cos(normal) + (o.y - py) * math.sin(normal)
+        if beyond < BEYOND_WALL_M:
+            await self.say(f"    not through the wall ({beyond:+.1f} m): again")
+            return False
+        return True
 
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
         """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
@@ -513,6 +537,12 @@ class Sequencer:
         is used only when it finds none.
         """
         fix = await self.clue("locate_door", "opening")
+        if fix is None or float(fix["width"]) < 0.3:
+            # A door closed for a while, or someone standing in it: wait for the opening.
+            await self.say("    no opening in sight (a closed door, someone in it?): waiting")
+            await self.use("locate_door", restart=["locate_door"])
+            if await self.wait("opening.seen && opening.width > 0.6", within=DOOR_WAIT_S) == 0:
+                fix = await self.clue("locate_door", "opening")
         pose = await self.odom()
         if fix is None or float(fix["width"]) < 0.3:
             if hint is None:
@@ -850,7 +880,7 @@ class Sequencer:
                     (str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None
                 )
                 for _attempt in range(3):
-                    ok = await self.pass_door(pending_home, hint)
+                    ok = await self.pass_door(pending_home, hint) and await self.beyond_wall()
                     if ok or pending_home is None:
                         break
                     await self.say(f"    lining up with barcode {pending_home} again")
