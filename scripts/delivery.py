@@ -6,8 +6,10 @@ and every failure with the command that reproduces it) and ``docs/delivery-resul
 raw outcomes). The sets:
 
 - ``default``: ``maps/default.yaml`` with run seeds 10000, 10001, … (no test uses them);
-- ``generated``: buildings from ``situate map generate --seed G`` for G = 20000, 20001, …
-  (held out: no test or tuning uses them), one run each with run seed G;
+- ``generated``: buildings from ``situate map generate --seed G`` for G = 30000, 30001, …
+  (held out: no test or tuning uses them), one run each with run seed G. (20000 to 20199 were
+  the set until the skills were debugged on its failures; those failures are now tests in
+  ``python/tests/test_demo.py``, and the set moved to seeds nothing was looked at on.)
 - ``generated-hard``: the same buildings with people walking, doors closed now and then and
   one dead sonar (``situate demo --people 3 --door-closures --dead-sonar K``, K from the seed).
 
@@ -38,7 +40,7 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_SEEDS = 10000
-GENERATED_SEEDS = 20000
+GENERATED_SEEDS = 30000
 #: Targets per set: the share delivered (issue 12).
 TARGETS = {"default": 0.99, "generated": 0.95, "generated-hard": 0.90}
 #: Headless speed target, x real time.

@@ -14,6 +14,7 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -50,12 +51,14 @@ def demo(
     first: str | None = None,
     last: str | None = None,
     limit_s: float = 1800,
+    extra: Sequence[str] = (),
 ) -> dict[str, Any]:
     assert BIN is not None
     cmd = [str(BIN), "demo", "--headless", "--json", "--seed", str(seed)]
     cmd += ["--python", sys.executable, "--limit-s", str(limit_s)]
     if map_file:
-        cmd += ["--map", str(ROOT / map_file)]
+        cmd += ["--map", str(ROOT / map_file)]  # an absolute path stays as it is
+    cmd += list(extra)
     env = dict(os.environ)
     env.pop("DELIVER_DEBUG", None)
     env["DELIVER_FROM"] = first or ""
@@ -111,6 +114,41 @@ def test_fourth_floor_corridor_to_the_office() -> None:
 def test_another_building() -> None:
     # maps/scenarios/annex.yaml: other layout, two cars, goal floor 2, other route hints.
     out = demo(1, map_file="maps/scenarios/annex.yaml")
+    assert out["delivered"], out
+    assert out["sequencer_exit"] == 0, out
+
+
+#: Generated buildings (generator seed, extra `situate demo` arguments) whose deliveries failed
+#: until the skills or the sequencer were mended; each names the failure it reproduced.
+GENERATED_REGRESSIONS = [
+    (20001, []),  # `until: wall` took a box in the corridor's mouth for the corridor's end
+    (20027, []),  # follow_hallway turned into a T's branch after a bin in its corner
+    (20023, []),  # a bin inside a side corridor's mouth hid the junction (clutter 0.86 m apart)
+    (20034, []),  # lining up with the office's barcode drove through the office door
+    (20014, []),  # homing lost the lab door's barcode near the wall, again and again
+    (20025, []),  # a car on the lobby's end wall was never seen open by the patrol
+    (20000, []),  # the route began facing along the corridor, not out of the lab door
+    (20106, []),  # the route's first turn timed out (the turn's start read a cycle early)
+    (20170, []),  # a junction the detector missed: followed to the corridor's end
+    (20001, ["--people", "3", "--door-closures", "--dead-sonar", "9"]),  # blocked junction middle
+]
+
+
+@needs_bin
+@pytest.mark.parametrize(("seed", "extra"), GENERATED_REGRESSIONS)
+def test_generated_buildings_that_failed_now_deliver(
+    seed: int, extra: list[str], tmp_path: Path
+) -> None:
+    assert BIN is not None
+    building = tmp_path / f"g{seed}.yaml"
+    made = subprocess.run(
+        [str(BIN), "map", "generate", "--seed", str(seed), "-o", str(building)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert made.returncode == 0, made.stderr
+    out = demo(seed, map_file=str(building), extra=extra)
     assert out["delivered"], out
     assert out["sequencer_exit"] == 0, out
 
