@@ -22,19 +22,24 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, Sender, TrySendError};
-use situate_core::{suggestion, SignalType, SkillKind, Value};
+use situate_core::{SignalType, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
-use crate::expr::{Condition, Lookup, Resolver};
+use crate::expr::Lookup;
 use crate::graph::{assemble, decompose, topo_order, Graph};
-use crate::monitor::{MonitorCondition, Monitors, MAX_ANY_CONDITIONS};
+use crate::monitor::Monitors;
 use crate::registry::Registry;
 use crate::runner::{BodyClock, Exec, Worker, WorkerClock, WorkerStats};
 use crate::spec::{BuildError, RobotSpec};
 
+mod front;
 mod requests;
 mod spawned;
+pub(crate) use front::prepare_boxed as prepare;
+use front::PreparedMonitor;
+/// A prepared monitor, boxed for the request queue.
+pub(crate) type PreparedMonitorBox = Box<PreparedMonitor>;
 pub use spawned::Joiner;
 
 const PRINT_HISTORY: usize = 64;
@@ -45,6 +50,10 @@ const EVENT_QUEUE: usize = 4096;
 /// counting as many as it has. Every one is evaluated each cycle: a bound on
 /// their number is a bound on the cycle's cost, whatever the clients do.
 pub const MAX_MONITORS: usize = 1000;
+/// The most conditions the monitors of one client watch (its `client` name
+/// on `monitor_add`; those added without one share one allowance), so that
+/// one sequencer that forgets to cancel cannot take the whole robot's.
+pub const MAX_MONITORS_PER_CLIENT: usize = 250;
 /// One leaf slot of the cycle's data.
 #[derive(Clone, Default)]
 struct Slot {
@@ -109,8 +118,8 @@ impl EventBus {
 }
 
 /// What a monitor condition can name: a leaf signal or a parameter.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum RefTarget {
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum RefTarget {
     Leaf(usize),
     Param(usize, usize),
     /// `time`: seconds on the manager's clock.
@@ -121,7 +130,8 @@ enum RefTarget {
 
 /// The skill manager.
 pub struct Manager {
-    graph: Graph,
+    /// Never changes once built; shared with handles (see `front`).
+    graph: Arc<Graph>,
     clock: ClockKind,
     period_s: f64,
     pool: Option<Arc<rayon::ThreadPool>>,
@@ -146,6 +156,13 @@ pub struct Manager {
     pub(crate) late_starts: u64,
     /// When the paced loop wanted this cycle to start (set before each cycle).
     pub(crate) due: Option<Instant>,
+    /// How long requests served on the cycle's thread ran past the time the
+    /// next cycle was due, in all (what link work held the cycle back).
+    pub(crate) request_hold_ns: u64,
+    /// The time lost to cycles that started so late that periods were
+    /// skipped (the schedule restarts from then), whatever held them back:
+    /// about `lost_ns / period` cycles short of the nominal rate.
+    pub(crate) lost_ns: u64,
     /// The achieved rate: a moving average of the wall time between cycle
     /// starts while running (`None` until two cycles ran back to back).
     interval_s: Option<f64>,
@@ -180,7 +197,7 @@ pub struct Manager {
 impl Manager {
     /// Wires the robot, runs every static check and creates the skills.
     pub fn build(spec: &RobotSpec, registry: &Registry) -> Result<Manager, BuildError> {
-        let graph = Graph::build(spec, registry)?;
+        let graph = Arc::new(Graph::build(spec, registry)?);
         let mut execs = Vec::with_capacity(graph.instances.len());
         let mut insts = Vec::with_capacity(graph.instances.len());
         let lockstep = spec.clock == ClockKind::Simulated;
@@ -257,6 +274,8 @@ impl Manager {
             overruns: 0,
             late_starts: 0,
             due: None,
+            request_hold_ns: 0,
+            lost_ns: 0,
             interval_s: None,
             last_start: None,
             monitors: Monitors::default(),

@@ -132,6 +132,8 @@ pub(crate) struct Monitor {
     pub report: Vec<(String, usize)>,
     /// The names `report` asked for, as written (records not expanded).
     pub report_asked: Vec<String>,
+    /// The client that added it, if it said.
+    pub client: Option<String>,
 }
 
 #[derive(Default)]
@@ -143,6 +145,7 @@ pub(crate) struct Monitors {
 impl Monitors {
     /// Adds a monitor on `conditions` (1 to [`MAX_ANY_CONDITIONS`], checked
     /// by the caller); `any` says it was asked as a list.
+    #[allow(clippy::too_many_arguments)]
     pub fn add(
         &mut self,
         conditions: Vec<Condition>,
@@ -151,6 +154,7 @@ impl Monitors {
         pause: bool,
         report: Vec<(String, usize)>,
         report_asked: Vec<String>,
+        client: Option<String>,
     ) -> u64 {
         debug_assert!((1..=MAX_ANY_CONDITIONS).contains(&conditions.len()));
         self.next_id += 1;
@@ -181,8 +185,17 @@ impl Monitors {
             pause,
             report,
             report_asked,
+            client,
         });
         id
+    }
+
+    /// The monitors of `client` and the conditions they watch.
+    pub fn count_of(&self, client: Option<&str>) -> (usize, usize) {
+        self.list
+            .iter()
+            .filter(|m| m.client.as_deref() == client)
+            .fold((0, 0), |(n, c), m| (n + 1, c + m.conditions.len()))
     }
 
     /// How many conditions all the monitors watch (what a cycle evaluates).

@@ -163,6 +163,7 @@ fn a_pausing_monitor_stops_the_cycle_at_the_cycle_it_fires_in() {
             mode: MonitorMode::Edge,
             pause: true,
             report: Vec::new(),
+            client: None,
         })
         .unwrap();
     let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
@@ -195,6 +196,7 @@ fn a_pausing_monitor_also_ends_a_step_where_it_fires() {
             mode: MonitorMode::Edge,
             pause: true,
             report: Vec::new(),
+            client: None,
         })
         .unwrap();
     let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
@@ -217,6 +219,7 @@ fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
             mode: MonitorMode::Once,
             pause: false,
             report: report.iter().map(|s| s.to_string()).collect(),
+            client: None,
         })
     };
     // A whole record is reported as its leaves; parameters, time and cycle too.
@@ -250,18 +253,20 @@ fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
 fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
     // 60,000 monitors once took a cycle from 45 µs to 75 ms.
     let mut m = robot(SCRIPT);
-    let add = |m: &mut Manager| {
+    // Five clients, each under its own cap, fill the robot's.
+    let add = |m: &mut Manager, k: usize| {
         m.request(Request::AddMonitor {
             condition: "sonar.range[0] < 0.25".into(),
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),
+            client: Some(format!("c{}", k % 5)),
         })
     };
-    for _ in 0..situate_manager::MAX_MONITORS {
-        add(&mut m).expect("under the cap");
+    for k in 0..situate_manager::MAX_MONITORS {
+        add(&mut m, k).expect("under the cap");
     }
-    match add(&mut m) {
+    match add(&mut m, 5) {
         Err(ControlError::Invalid(message)) => {
             assert!(message.contains("the most it keeps (1000); cancel some first"), "{message}")
         }
@@ -269,7 +274,58 @@ fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
     }
     // Cancelling one makes room again.
     m.request(Request::CancelMonitor { monitor: 1 }).unwrap();
-    add(&mut m).expect("room again");
+    add(&mut m, 0).expect("room again");
+}
+
+#[test]
+fn one_client_keeps_a_bounded_share_of_the_robots_monitors_and_is_told_so() {
+    let mut m = robot(SCRIPT);
+    let add = |m: &mut Manager, client: Option<&str>, any: usize| {
+        let conditions = vec!["sonar.range[0] < 0.25".to_string(); any];
+        m.request(Request::AddMonitor {
+            condition: MonitorCondition::Any(conditions),
+            mode: MonitorMode::Level,
+            pause: false,
+            report: Vec::new(),
+            client: client.map(str::to_string),
+        })
+    };
+    let cap = situate_manager::MAX_MONITORS_PER_CLIENT;
+    for _ in 0..cap / 50 {
+        add(&mut m, Some("leaky"), 50).expect("under the client's cap");
+    }
+    match add(&mut m, Some("leaky"), 1) {
+        Err(ControlError::Invalid(message)) => assert_eq!(
+            message,
+            format!(
+                "monitor_add: client `leaky` has {} monitors watching {cap} conditions; this one's 1 would be past \
+                 the most one client keeps ({cap}); cancel some first",
+                cap / 50
+            )
+        ),
+        other => panic!("{other:?}"),
+    }
+    // Another client, and those that give no name, still have theirs.
+    add(&mut m, Some("other"), 64).expect("another client");
+    for _ in 0..cap {
+        add(&mut m, None, 1).expect("the nameless share one allowance");
+    }
+    match add(&mut m, None, 2) {
+        Err(ControlError::Invalid(message)) => assert!(
+            message.starts_with(&format!(
+                "monitor_add: the clients that give no `client` have {cap} monitors watching {cap} conditions; this \
+                 one's 2 would be past the most one client keeps ({cap})"
+            )),
+            "{message}"
+        ),
+        other => panic!("{other:?}"),
+    }
+    let situate_manager::Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list.iter().filter(|i| i.client.as_deref() == Some("leaky")).count(), cap / 50);
+    // Cancelling one of its own makes room for that client again.
+    let leaky = list.iter().find(|i| i.client.as_deref() == Some("leaky")).unwrap().monitor;
+    m.request(Request::CancelMonitor { monitor: leaky }).unwrap();
+    add(&mut m, Some("leaky"), 50).expect("room again");
 }
 
 // ----- any: one monitor on several conditions ----------------------------
@@ -291,6 +347,7 @@ fn add_any(m: &mut Manager, any: &[&str], mode: MonitorMode, report: &[&str]) ->
         mode,
         pause: false,
         report: report.iter().map(|r| r.to_string()).collect(),
+        client: None,
     })? {
         Reply::MonitorAdded(id) => Ok(id),
         other => panic!("{other:?}"),
@@ -404,8 +461,16 @@ fn an_any_monitor_takes_one_to_64_conditions_and_each_counts_toward_the_cap() {
     assert_eq!(fired_held(&events), vec![(first, 1, vec![1]), (last, 64, vec![63])]);
     let id = add_any(&mut m, &many[1..], MonitorMode::Level, &[]).unwrap();
     // Every condition is evaluated every cycle: the robot's cap counts conditions.
-    for _ in 0..situate_manager::MAX_MONITORS - MAX_ANY_CONDITIONS {
-        m.add_monitor("cycle > 0", MonitorMode::Level).expect("under the cap");
+    for k in 0..situate_manager::MAX_MONITORS - MAX_ANY_CONDITIONS {
+        // Spread over clients, each under its own cap.
+        m.request(Request::AddMonitor {
+            condition: "cycle > 0".into(),
+            mode: MonitorMode::Level,
+            pause: false,
+            report: Vec::new(),
+            client: Some(format!("c{}", k % 5)),
+        })
+        .expect("under the cap");
     }
     match add_any(&mut m, &["cycle > 0", "cycle > 1"], MonitorMode::Level, &[]) {
         Err(ControlError::Invalid(message)) => assert_eq!(
