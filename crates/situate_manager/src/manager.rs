@@ -47,7 +47,7 @@ const EVENT_QUEUE: usize = 4096;
 
 /// The most monitors one robot keeps at once (`monitor_add` refuses more);
 /// more exactly, the most conditions its monitors watch, an `any` monitor
-/// counting as many as it has. Every one is evaluated each cycle: a bound on
+/// counting as many as it has. Every one may be evaluated each cycle: a bound on
 /// their number is a bound on the cycle's cost, whatever the clients do.
 pub const MAX_MONITORS: usize = 1000;
 /// The most conditions the monitors of one client watch (its `client` name
@@ -84,6 +84,9 @@ struct Inst {
     /// Its body was left behind (it ran past its deadline and may never
     /// return): a fresh one is made when it is activated again.
     abandoned: bool,
+    /// The cycle from which its parameters last changed (monitors reading
+    /// one are evaluated again then).
+    params_from: u64,
 }
 
 #[derive(Default)]
@@ -233,6 +236,7 @@ impl Manager {
                 worker,
                 lockstep_readings: vec![None; def.outputs.len()],
                 abandoned: false,
+                params_from: 0,
             });
         }
         let started = Instant::now();
@@ -308,6 +312,12 @@ impl Manager {
 
     pub fn cycle_count(&self) -> u64 {
         self.cycle
+    }
+
+    /// How many monitor conditions have been evaluated so far: one is
+    /// evaluated only in a cycle where a name it reads changed.
+    pub fn monitor_evaluations(&self) -> u64 {
+        self.monitors.evaluations
     }
 
     pub fn time_s(&self) -> f64 {
@@ -894,7 +904,12 @@ impl Manager {
         let clock = [Value::F64(self.time_s), Value::I64(self.cycle as i64)];
         let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts, clock: &clock };
         let (cycle, time_s) = (self.cycle, self.time_s);
-        self.monitors.evaluate(&env, |m| {
+        let changed = |r: usize| match self.refs.get(r) {
+            Some(RefTarget::Leaf(l)) => self.slots.get(*l).is_some_and(|s| s.stamp == cycle),
+            Some(RefTarget::Param(i, _)) => self.insts.get(*i).is_some_and(|s| s.params_from >= cycle),
+            Some(RefTarget::Time | RefTarget::Cycle) | None => true,
+        };
+        self.monitors.evaluate(&env, &changed, |m| {
             pause |= m.pause;
             let values =
                 m.reads.iter().chain(&m.report).map(|(name, r)| (name.clone(), env.value(*r).cloned())).collect();

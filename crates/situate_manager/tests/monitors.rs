@@ -483,3 +483,83 @@ fn an_any_monitor_takes_one_to_64_conditions_and_each_counts_toward_the_cap() {
     m.cancel_monitor(id).unwrap();
     add_any(&mut m, &["cycle > 0", "cycle > 1"], MonitorMode::Level, &[]).expect("room again");
 }
+
+// ----- evaluated only when something read changed ------------------------
+
+/// A door whose `open` is written only in cycles 3 (true) and 7 (false), a
+/// sonar written every cycle, and a skill with a parameter.
+fn door_robot() -> Manager {
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("door", SkillKind::Sync, &[], &[("door", "{open: bool}")]), |io, _| {
+        match io.cx.cycle() {
+            3 => io.outputs[0] = Some(situate_core::record_value(vec![("open", Value::Bool(true))])),
+            7 => io.outputs[0] = Some(situate_core::record_value(vec![("open", Value::Bool(false))])),
+            _ => {}
+        }
+        Ok(())
+    }));
+    reg.add(fn_type(decl("sonar", SkillKind::Sync, &[], &[("sonar", "{range: f32[]}")]), |io, _| {
+        let range: std::sync::Arc<[f32]> = vec![1.0, 5.0].into();
+        io.outputs[0] = Some(situate_core::record_value(vec![("range", Value::F32s(range))]));
+        Ok(())
+    }));
+    reg.add(fn_type(with_param(decl("runaway", SkillKind::Sync, &[], &[]), "safe_distance", 0.5, 0.1, 3.0), |_, _| {
+        Ok(())
+    }));
+    let spec = simulated("door")
+        .skill(skill("door", "door"))
+        .skill(skill("sonar", "sonar"))
+        .skill(skill("runaway", "runaway"));
+    build(&spec, &reg)
+}
+
+#[test]
+fn a_condition_is_evaluated_only_in_cycles_where_a_name_it_reads_changed() {
+    let mut m = door_robot();
+    let events = m.events();
+    let level = m.add_monitor("door.open", MonitorMode::Level).unwrap();
+    let param = m.add_monitor("runaway.safe_distance > 1", MonitorMode::Edge).unwrap();
+    let start = m.monitor_evaluations();
+    m.step(10).unwrap();
+    // `door.open`: at its first evaluation (cycle 1), then when written (3 and 7); the parameter
+    // only at its first. Ten cycles of the old way were twenty evaluations.
+    assert_eq!(m.monitor_evaluations() - start, 3 + 1);
+    // A level monitor still fires in every cycle it holds, evaluated or not.
+    assert_eq!(fired(&events), vec![(level, 3), (level, 4), (level, 5), (level, 6)]);
+
+    // A parameter set is a change: evaluated once more, and the edge fires at once.
+    let start = m.monitor_evaluations();
+    m.set_param("runaway", "safe_distance", Value::F64(2.0)).unwrap();
+    m.step(3).unwrap();
+    assert_eq!(m.monitor_evaluations() - start, 1);
+    assert_eq!(fired(&events), vec![(param, 11)]);
+    m.cancel_monitor(level).unwrap();
+    m.cancel_monitor(param).unwrap();
+
+    // A signal written every cycle, `time` and `cycle` change every cycle.
+    let each = [
+        m.add_monitor("sonar.range[0] > 100", MonitorMode::Level).unwrap(),
+        m.add_monitor("time > 1000", MonitorMode::Level).unwrap(),
+        m.add_monitor("cycle < 0", MonitorMode::Level).unwrap(),
+    ];
+    let start = m.monitor_evaluations();
+    m.step(5).unwrap();
+    assert_eq!(m.monitor_evaluations() - start, 3 * 5);
+    for id in each {
+        m.cancel_monitor(id).unwrap();
+    }
+}
+
+#[test]
+fn an_any_monitor_keeps_what_its_unchanged_conditions_held_and_fires_the_moment_one_holds() {
+    let mut m = door_robot();
+    let events = m.events();
+    let id = m.add_monitor_any(&["door.open", "cycle == 5", "runaway.safe_distance > 1"], MonitorMode::Level).unwrap();
+    m.step(8).unwrap();
+    // `door.open` held from cycle 3 (written) to 6, not evaluated in 4..6; `cycle == 5` in 5.
+    assert_eq!(fired_held(&events), vec![(id, 3, vec![0]), (id, 4, vec![0]), (id, 5, vec![0, 1]), (id, 6, vec![0])]);
+    // An edge on a condition that holds from its first evaluation fires then, as ever.
+    let edge = m.add_monitor("door.open == false", MonitorMode::Edge).unwrap();
+    m.step(1).unwrap();
+    assert_eq!(fired_held(&events), vec![(edge, 9, vec![0])]);
+}

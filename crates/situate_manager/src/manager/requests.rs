@@ -104,6 +104,7 @@ impl Manager {
             reason: e.to_string(),
         })?;
         self.insts[i].params[p] = value.clone();
+        self.insts[i].params_from = self.cycle + 1;
         match (self.insts[i].worker.as_ref(), self.execs[i].skill.as_mut()) {
             (_, Some(body)) => body.set_param(p, &value),
             (Some(worker), None) => {
@@ -261,7 +262,7 @@ impl Manager {
         let adding = conditions.len();
         let watched = self.monitors.condition_count();
         if watched + adding > MAX_MONITORS {
-            // Every condition is evaluated every cycle: their number bounds the cycle's cost.
+            // Every condition may be evaluated every cycle: their number bounds the cycle's cost.
             let adds = if any { format!("this one's {adding} would be") } else { "one more is".to_string() };
             return Err(ControlError::Invalid(format!(
                 "monitor_add: this robot has {} monitors watching {watched} conditions; {adds} past \
