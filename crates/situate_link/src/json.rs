@@ -705,6 +705,7 @@ pub fn stats_to_json(s: &ManagerStats) -> Json {
         "late_starts": s.late_starts,
         "request_hold_ns": s.request_hold_ns,
         "lost_ns": s.lost_ns,
+        "worker_failures": s.worker_failures,
         "rate_hz": s.rate_hz,
         "active": s.active,
     })
@@ -777,6 +778,9 @@ pub fn event_to_json(e: &Event) -> (&'static str, Json) {
         }
         Event::ManagerStarted { cycle } => ("manager_started", json!({"kind": "manager_started", "cycle": cycle})),
         Event::ManagerStopped { cycle } => ("manager_stopped", json!({"kind": "manager_stopped", "cycle": cycle})),
+        Event::WorkerFailed { thread, cause, action } => {
+            ("worker_failed", json!({"kind": "worker_failed", "thread": thread, "cause": cause, "action": action}))
+        }
     }
 }
 

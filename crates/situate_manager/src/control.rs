@@ -194,6 +194,13 @@ pub enum Event {
     ManagerStopped {
         cycle: u64,
     },
+    /// A worker thread (the link's, a telemetry sampler, …) panicked; what
+    /// was done about it: `restarted`, or that the robot is stopped.
+    WorkerFailed {
+        thread: String,
+        cause: String,
+        action: String,
+    },
 }
 
 /// A signal's current value.
@@ -313,6 +320,8 @@ pub struct ManagerStats {
     /// whatever the cause (a long body, a busy machine, requests): the
     /// achieved count falls short of the nominal by about `lost_ns / period`.
     pub lost_ns: u64,
+    /// Worker threads that panicked (each reported as `worker_failed`).
+    pub worker_failures: u64,
     /// The achieved cycle rate while running (0 when stopped).
     pub rate_hz: f64,
     pub active: Vec<String>,
@@ -464,6 +473,13 @@ impl Handle {
     /// A new stream of events, from now on.
     pub fn events(&self) -> Receiver<Event> {
         self.bus.subscribe()
+    }
+
+    /// Sends `event` to every subscriber, as the manager would (a worker
+    /// thread's failure, see [`crate::supervise`]); a `WorkerFailed` is
+    /// counted in the stats.
+    pub fn report(&self, event: Event) {
+        self.bus.report(event);
     }
 
     /// Like [`Control::request`], giving up after `timeout`.

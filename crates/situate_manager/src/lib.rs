@@ -19,6 +19,7 @@ pub mod monitor;
 pub mod registry;
 mod runner;
 pub mod spec;
+pub mod supervise;
 pub mod yaml;
 
 pub use config::{ClockKind, ExecutorKind, RobotFile};

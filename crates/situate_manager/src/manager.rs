@@ -99,6 +99,8 @@ struct Schedule {
 #[derive(Clone, Default)]
 pub struct EventBus {
     subscribers: Arc<Mutex<Vec<Sender<Event>>>>,
+    /// Worker threads that panicked (see [`crate::supervise`]).
+    worker_failures: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl EventBus {
@@ -113,6 +115,13 @@ impl EventBus {
         // A subscriber that stopped reading loses events rather than holding
         // up the cycle; one that went away is dropped.
         subs.retain(|tx| !matches!(tx.try_send(event.clone()), Err(TrySendError::Disconnected(_))));
+    }
+
+    pub(crate) fn report(&self, event: Event) {
+        if matches!(event, Event::WorkerFailed { .. }) {
+            self.worker_failures.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        self.send(event);
     }
 
     fn has_subscribers(&self) -> bool {
@@ -829,6 +838,10 @@ impl Manager {
             self.record_prints(i, prints);
         }
         if let Some(cause) = fault {
+            if self.insts[i].worker.as_ref().is_some_and(|w| w.shared.lock().dead) {
+                // Its thread is gone: activating it again makes a fresh body and thread.
+                self.insts[i].abandoned = true;
+            }
             self.fault(i, cause);
             return;
         }

@@ -106,7 +106,17 @@ impl Manager {
         self.insts[i].params[p] = value.clone();
         self.insts[i].params_from = self.cycle + 1;
         match (self.insts[i].worker.as_ref(), self.execs[i].skill.as_mut()) {
-            (_, Some(body)) => body.set_param(p, &value),
+            (_, Some(body)) => {
+                // The skill's own code, on the cycle's thread: a panic faults the skill.
+                let set = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body.set_param(p, &value)));
+                if let Err(panic) = set {
+                    let cause =
+                        format!("panicked in set_param (`{param}`): {}", crate::supervise::panic_message(&*panic));
+                    // Its state is unknown: activating it again makes a fresh body.
+                    self.insts[i].abandoned = true;
+                    self.fault(i, cause);
+                }
+            }
             (Some(worker), None) => {
                 worker.shared.lock().params.push((p, value.clone()));
                 worker.shared.notify();
@@ -233,6 +243,7 @@ impl Manager {
             late_starts: self.late_starts,
             request_hold_ns: self.request_hold_ns,
             lost_ns: self.lost_ns,
+            worker_failures: self.bus.worker_failures.load(std::sync::atomic::Ordering::Relaxed),
             rate_hz: match (self.running, self.interval_s) {
                 (true, Some(dt)) if dt > 0.0 => 1.0 / dt,
                 _ => 0.0,

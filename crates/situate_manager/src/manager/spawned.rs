@@ -109,6 +109,15 @@ struct PanicGuard<'a>(&'a Core);
 impl Drop for PanicGuard<'_> {
     fn drop(&mut self) {
         if thread::panicking() {
+            // A bug in the manager itself (bodies' panics are caught): never silent.
+            tracing::error!(robot = %self.0.robot, "the skill manager's cycle thread panicked: the robot is stopped");
+            if let Some(m) = self.0.manager.lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+                m.bus.report(crate::control::Event::WorkerFailed {
+                    thread: thread::current().name().unwrap_or("cycle").to_string(),
+                    cause: "panicked (see the log)".into(),
+                    action: "not restarted: the robot is stopped (its manager has ended)".into(),
+                });
+            }
             self.0.stop.store(true, Ordering::Release);
             drop(self.0.done.lock().unwrap_or_else(|p| p.into_inner()).take());
         }
