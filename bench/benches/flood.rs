@@ -88,7 +88,10 @@ fn main() {
     };
 
     println!("flood: a 50 Hz robot, idle vs 4 clients of worst-case requests ({rounds} rounds of {seconds} s windows)");
-    println!("{:>6} {:>7} {:>10} {:>10} {:>8} {:>12} {:>9}", "round", "subject", "rate Hz", "held ms", "late", "requests/s", "busy");
+    println!(
+        "{:>6} {:>7} {:>10} {:>10} {:>8} {:>12} {:>9}",
+        "round", "subject", "rate Hz", "held ms", "late", "requests/s", "busy"
+    );
     let mut ratios = Vec::new();
     for round in 1..=rounds {
         // Alternating order, so slow drift hits both alike.
