@@ -353,7 +353,8 @@ class Robot:
         unknown name in ``report`` is :class:`~situate.UnknownSignal`.
         Subscribe with :meth:`events` *before* registering, or use :meth:`when`.
         """
-        args: dict[str, Any] = {**monitor_target(condition, any), "mode": mode, "client": self.client_id}
+        args: dict[str, Any] = {**monitor_target(condition, any), "mode": mode}
+        args["client"] = self.client_id
         if pause:
             args["pause"] = True
         if report:

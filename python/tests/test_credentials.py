@@ -87,7 +87,8 @@ def credbot(tmp_path: Path) -> Iterator[str]:
         deadline = time.monotonic() + STARTUP_S
         while True:
             if process.poll() is not None:
-                pytest.fail(f"`situate run` exited with {process.returncode}:\n{process.communicate()[1]}")
+                err = process.communicate()[1]
+                pytest.fail(f"`situate run` exited with {process.returncode}:\n{err}")
             try:
                 session = _link.open_session([endpoint], extra=SEQUENCER)
             except SituateError:
@@ -132,7 +133,10 @@ def test_a_client_with_wrong_credentials_is_told_the_robot_may_have_refused_them
 ) -> None:
     # It was told only "no skill manager answered … is `situate run` running?".
     async def main() -> None:
-        async with situate.connect("credbot", endpoint=credbot, timeout=2.0, zenoh_config=credentials):
+        connecting = situate.connect(
+            "credbot", endpoint=credbot, timeout=2.0, zenoh_config=credentials
+        )
+        async with connecting:
             pytest.fail("connected with wrong credentials")
 
     with pytest.raises(situate.NotRunning, match="credentials"):
@@ -142,7 +146,8 @@ def test_a_client_with_wrong_credentials_is_told_the_robot_may_have_refused_them
 def test_a_request_the_access_rules_refuse_says_they_may_have(credbot: str) -> None:
     async def main() -> None:
         viewer = usrpwd("viewer", "view-secret")
-        async with situate.connect("credbot", endpoint=credbot, timeout=2.0, zenoh_config=viewer) as robot:
+        connecting = situate.connect("credbot", endpoint=credbot, timeout=2.0, zenoh_config=viewer)
+        async with connecting as robot:
             await robot.stats()  # allowed
             with pytest.raises(situate.NotRunning, match="credentials or access rules"):
                 await robot.activate(["wander"])
