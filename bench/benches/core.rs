@@ -490,6 +490,7 @@ fn monitors(settings: &Settings, report: &mut Report) {
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),
+            client: None,
         }) {
             panic!("monitor refused: {e}");
         }

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Link benchmarks (bench/link/README.md): runs bench/link/linkbench.py with the workspace's
+# Link benchmarks (bench/link/README.md): the flood benchmark (bench/benches/flood.rs: the cycle
+# rate under worst-case requests from 4 clients vs idle), then bench/link/linkbench.py with the workspace's
 # .venv python, after setting up a separate venv with dora-rs-cli for the comparison
 # (default /tmp/dora-venv; never the workspace's .venv). Arguments go to linkbench.py, e.g.
 #   bench/link/run.sh                 # both benchmarks, 300 samples each
@@ -32,6 +33,12 @@ if [[ $want_dora == 1 && ! -x "$DORA_VENV/bin/dora" ]]; then
         echo "warning: could not install dora-rs-cli into $DORA_VENV; the hop is reported without dora-rs" >&2
     fi
 fi
+
+# The cycle rate under a flood of worst-case requests from 4 clients, beside the idle rate.
+flood_args=()
+for a in "$@"; do [[ "$a" == "--quick" ]] && flood_args+=(--quick); done
+(cd "$ROOT" && timeout --signal=TERM --kill-after=30 600 \
+    "${CARGO:-cargo}" bench -q -p situate_bench --locked --bench flood -- "${flood_args[@]}")
 
 export DORA_VENV
 exec timeout --signal=TERM --kill-after=30 "$LINKBENCH_TIMEOUT" \

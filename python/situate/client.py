@@ -40,6 +40,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import os
+import secrets
 from collections.abc import Callable, Generator, Mapping, Sequence
 from types import TracebackType
 from typing import Any, Generic, TypeVar
@@ -162,6 +164,8 @@ class Robot:
         self._session = session
         self._endpoints = list(endpoints)
         self._streams: set[Stream[Any]] = set()
+        #: Who this connection is to the robot, for its per-client cap on monitors.
+        self.client_id: str = f"py-{os.getpid()}-{secrets.token_hex(4)}"
         #: What the manager said in ``hello``: protocol, robot name, version.
         self.hello: Hello = hello
         #: The robot's name (its robot file's ``robot:``).
@@ -350,6 +354,7 @@ class Robot:
         Subscribe with :meth:`events` *before* registering, or use :meth:`when`.
         """
         args: dict[str, Any] = {**monitor_target(condition, any), "mode": mode}
+        args["client"] = self.client_id
         if pause:
             args["pause"] = True
         if report:

@@ -341,6 +341,8 @@ class MonitorInfo:
     #: The conditions of a monitor added with ``any=[...]``, as given (``condition``
     #: is then their disjunction); ``None`` for a monitor on one condition.
     any: tuple[str, ...] | None = None
+    #: The ``client`` that added it (a :class:`~situate.Robot` sends its ``client_id``), if it said.
+    client: str | None = None
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> MonitorInfo:
@@ -354,6 +356,7 @@ class MonitorInfo:
             pause=bool(j.get("pause", False)),
             report=tuple(str(r) for r in j.get("report", [])),
             any=None if j.get("any") is None else tuple(str(c) for c in j["any"]),
+            client=None if j.get("client") is None else str(j["client"]),
         )
 
 

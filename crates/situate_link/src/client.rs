@@ -79,6 +79,9 @@ pub struct Client {
     session: Session,
     endpoints: Vec<String>,
     pub timeout: Duration,
+    /// Who this connection is to a robot: sent as `monitor_add`'s `client`
+    /// (unless the arguments name one) for the per-client cap on monitors.
+    pub client_id: String,
 }
 
 impl Client {
@@ -92,7 +95,8 @@ impl Client {
             endpoints: endpoints.join(", "),
             detail: unreachable_detail(&e.to_string()),
         })?;
-        Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5) })
+        let client_id = format!("rs-{}-{}", std::process::id(), session.zid());
+        Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5), client_id })
     }
 
     pub fn session(&self) -> &Session {
@@ -106,6 +110,12 @@ impl Client {
     /// Sends one request; returns the `ok` result or the error reply.
     pub fn request(&self, robot: &str, verb: &str, args: &Json) -> Result<Json, ClientError> {
         let key = format!("situate/{robot}/req/{verb}");
+        let mut args = std::borrow::Cow::Borrowed(args);
+        if verb == "monitor_add" && args.get("client").is_none() {
+            if let Some(obj) = args.to_mut().as_object_mut() {
+                obj.insert("client".into(), Json::String(self.client_id.clone()));
+            }
+        }
         let replies = self
             .session
             .get(&key)

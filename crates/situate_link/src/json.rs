@@ -566,7 +566,8 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             };
             let pause = a.boolean("pause", Some(false))?;
             let report = if a.has("report") { a.strings("report", "signal or parameter names")? } else { Vec::new() };
-            Decoded::Manager(Request::AddMonitor { condition, mode, pause, report })
+            let client = if a.has("client") { Some(a.string("client")?) } else { None };
+            Decoded::Manager(Request::AddMonitor { condition, mode, pause, report, client })
         }
         "monitor_cancel" => {
             Decoded::Manager(Request::CancelMonitor { monitor: a.integer("monitor", 0, i64::MAX)? as u64 })
@@ -702,6 +703,9 @@ pub fn stats_to_json(s: &ManagerStats) -> Json {
         "max_cycle_ns": s.max_cycle_ns,
         "overruns": s.overruns,
         "late_starts": s.late_starts,
+        "request_hold_ns": s.request_hold_ns,
+        "lost_ns": s.lost_ns,
+        "worker_failures": s.worker_failures,
         "rate_hz": s.rate_hz,
         "active": s.active,
     })
@@ -722,7 +726,7 @@ fn graph_to_json(g: &GraphInfo) -> Json {
 fn monitor_to_json(m: &MonitorInfo) -> Json {
     json!({
         "monitor": m.monitor, "condition": m.condition, "any": m.any, "mode": m.mode.name(), "fired": m.fired,
-        "holds": m.holds, "pause": m.pause, "report": m.report,
+        "holds": m.holds, "pause": m.pause, "report": m.report, "client": m.client,
     })
 }
 
@@ -774,6 +778,9 @@ pub fn event_to_json(e: &Event) -> (&'static str, Json) {
         }
         Event::ManagerStarted { cycle } => ("manager_started", json!({"kind": "manager_started", "cycle": cycle})),
         Event::ManagerStopped { cycle } => ("manager_stopped", json!({"kind": "manager_stopped", "cycle": cycle})),
+        Event::WorkerFailed { thread, cause, action } => {
+            ("worker_failed", json!({"kind": "worker_failed", "thread": thread, "cause": cause, "action": action}))
+        }
     }
 }
 
@@ -1022,6 +1029,7 @@ mod tests {
                 mode: MonitorMode::Edge,
                 pause: true,
                 report: Vec::new(),
+                client: None,
             })
         );
         let sixty_four = json!({"any": vec!["cycle > 1"; MAX_ANY_CONDITIONS]}).to_string();
@@ -1100,6 +1108,7 @@ mod tests {
             holds: false,
             pause: false,
             report: vec![],
+            client: None,
         };
         assert_eq!(monitor_to_json(&info)["any"], json!(["a", "b"]));
         assert_eq!(monitor_to_json(&MonitorInfo { any: None, ..info })["any"], Json::Null);

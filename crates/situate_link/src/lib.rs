@@ -3,6 +3,7 @@
 //! `docs/protocol.md`; this crate is its reference implementation.
 
 pub mod client;
+pub mod flood;
 pub mod json;
 pub mod remote;
 pub mod server;

@@ -1,6 +1,9 @@
 //! The manager's side of the link: queryables for requests, publishers for
 //! events and telemetry.
 //!
+//! Every thread of the link runs under [`situate_manager::supervise`]: one
+//! that panics is reported (`worker_failed`) and restarted.
+//!
 //! Zenoh delivers queries on its own threads; they are handed to one bridge
 //! thread that decodes them, asks the manager through its [`Handle`] and
 //! replies. A malformed request is answered by the bridge without the
@@ -37,12 +40,37 @@ struct Telemetry {
     rate_hz: f64,
 }
 
+/// The link's threads, by name. Each runs under
+/// [`situate_manager::supervise`]: a panic is reported (`worker_failed`)
+/// and the thread restarted, or the robot stopped if it keeps panicking.
+pub const THREADS: [&str; 3] = [REQ_THREAD, EVENTS_THREAD, TELEMETRY_THREAD];
+const REQ_THREAD: &str = "situate-link-req";
+const EVENTS_THREAD: &str = "situate-link-events";
+const TELEMETRY_THREAD: &str = "situate-link-telemetry";
+
+/// Panics the tests ask for, by thread name (see [`Link::inject_panic`]).
+#[derive(Default)]
+struct Injected(Mutex<Vec<String>>);
+
+impl Injected {
+    /// Panics if a panic was asked of `thread`.
+    fn check(&self, thread: &str) {
+        let mut asked = self.0.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(k) = asked.iter().position(|t| t == thread) {
+            asked.remove(k);
+            drop(asked);
+            panic!("a panic injected by a test");
+        }
+    }
+}
+
 /// A running link. Dropping it closes the session and ends its threads.
 pub struct Link {
     session: Session,
     stop: Arc<AtomicBool>,
     threads: Vec<JoinHandle<()>>,
     robot: String,
+    injected: Arc<Injected>,
 }
 
 impl Link {
@@ -77,24 +105,38 @@ impl Link {
             .wait()
             .map_err(|e| LinkError::Open(e.to_string()))?;
 
+        let injected = Arc::new(Injected::default());
         let mut threads = Vec::new();
         {
             let (handle, telemetry, robot) = (handle.clone(), Arc::clone(&telemetry), robot.to_string());
-            let prefix = prefix.clone();
-            threads.push(spawn("situate-link-req", move || bridge(rx, handle, telemetry, &robot, &prefix))?);
+            let (prefix, injected, reporter) = (prefix.clone(), Arc::clone(&injected), handle.clone());
+            threads.push(spawn(REQ_THREAD, reporter, move || {
+                bridge(&rx, &handle, &telemetry, &robot, &prefix, &injected)
+            })?);
         }
         {
             let (session, events, stop, robot) =
                 (session.clone(), handle.events(), Arc::clone(&stop), robot.to_string());
-            threads.push(spawn("situate-link-events", move || publish_events(&session, events, &stop, &robot))?);
+            let injected = Arc::clone(&injected);
+            threads.push(spawn(EVENTS_THREAD, handle.clone(), move || {
+                publish_events(&session, &events, &stop, &robot, &injected)
+            })?);
         }
         {
             let (session, stop, robot) = (session.clone(), Arc::clone(&stop), robot.to_string());
-            threads.push(spawn("situate-link-telemetry", move || {
-                publish_telemetry(&session, handle, telemetry, &stop, &robot)
+            let (injected, sampler) = (Arc::clone(&injected), handle.clone());
+            threads.push(spawn(TELEMETRY_THREAD, handle, move || {
+                publish_telemetry(&session, &sampler, &telemetry, &stop, &robot, &injected)
             })?);
         }
-        Ok(Link { session, stop, threads, robot: robot.to_string() })
+        Ok(Link { session, stop, threads, robot: robot.to_string(), injected })
+    }
+
+    /// Makes link thread `thread` (one of [`THREADS`]) panic once, at its
+    /// next turn: for tests of the supervision.
+    #[doc(hidden)]
+    pub fn inject_panic(&self, thread: &str) {
+        self.injected.0.lock().unwrap_or_else(|p| p.into_inner()).push(thread.to_string());
     }
 
     pub fn session(&self) -> &Session {
@@ -116,8 +158,8 @@ impl Drop for Link {
     }
 }
 
-fn spawn(name: &str, f: impl FnOnce() + Send + 'static) -> Result<JoinHandle<()>, LinkError> {
-    std::thread::Builder::new().name(name.into()).spawn(f).map_err(|e| LinkError::Open(e.to_string()))
+fn spawn(name: &str, handle: Handle, f: impl FnMut() + Send + 'static) -> Result<JoinHandle<()>, LinkError> {
+    situate_manager::supervise::supervise(name, handle, f).map_err(|e| LinkError::Open(e.to_string()))
 }
 
 /// Replies on a concrete key: a query may come with wildcards
@@ -149,14 +191,22 @@ enum Answer {
     Manager(Pending),
 }
 
-fn bridge(rx: Receiver<Query>, handle: Handle, telemetry: Arc<Mutex<Telemetry>>, robot: &str, prefix: &str) {
+fn bridge(
+    rx: &Receiver<Query>,
+    handle: &Handle,
+    telemetry: &Mutex<Telemetry>,
+    robot: &str,
+    prefix: &str,
+    injected: &Injected,
+) {
     let mut burst: Vec<InFlight> = Vec::with_capacity(BURST);
     while let Ok(first) = rx.recv() {
+        injected.check(REQ_THREAD);
         // Everything already waiting goes to the manager before any reply is
         // awaited; the order of the requests is kept.
         let mut next = Some(first);
         while let Some(query) = next {
-            let answer = answer(&query, &handle, &telemetry, robot);
+            let answer = answer(&query, handle, telemetry, robot);
             burst.push(InFlight { reply_key: reply_key(&query, prefix), query, answer });
             next = if burst.len() < BURST { rx.try_recv().ok() } else { None };
         }
@@ -208,8 +258,15 @@ fn answer(query: &Query, handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &
     })
 }
 
-fn publish_events(session: &Session, events: Receiver<situate_manager::Event>, stop: &AtomicBool, robot: &str) {
+fn publish_events(
+    session: &Session,
+    events: &Receiver<situate_manager::Event>,
+    stop: &AtomicBool,
+    robot: &str,
+    injected: &Injected,
+) {
     while !stop.load(Ordering::SeqCst) {
+        injected.check(EVENTS_THREAD);
         match events.recv_timeout(Duration::from_millis(100)) {
             Ok(event) => {
                 let (kind, body) = json::event_to_json(&event);
@@ -225,13 +282,15 @@ fn publish_events(session: &Session, events: Receiver<situate_manager::Event>, s
 
 fn publish_telemetry(
     session: &Session,
-    handle: Handle,
-    telemetry: Arc<Mutex<Telemetry>>,
+    handle: &Handle,
+    telemetry: &Mutex<Telemetry>,
     stop: &AtomicBool,
     robot: &str,
+    injected: &Injected,
 ) {
     let key = format!("situate/{robot}/telemetry");
     while !stop.load(Ordering::SeqCst) {
+        injected.check(TELEMETRY_THREAD);
         let (signals, rate_hz) = {
             let t = telemetry.lock().unwrap_or_else(|p| p.into_inner());
             (t.signals.clone(), t.rate_hz)

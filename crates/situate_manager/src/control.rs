@@ -68,6 +68,9 @@ pub enum Request {
         /// the condition reads: signal leaves, whole records (as their
         /// leaves), `skill.param`, `time`, `cycle`.
         report: Vec<String>,
+        /// Who asks, for the per-client cap ([`crate::MAX_MONITORS_PER_CLIENT`]);
+        /// `None` for those that do not say (they share one allowance).
+        client: Option<String>,
     },
     CancelMonitor {
         monitor: u64,
@@ -191,6 +194,13 @@ pub enum Event {
     ManagerStopped {
         cycle: u64,
     },
+    /// A worker thread (the link's, a telemetry sampler, …) panicked; what
+    /// was done about it: `restarted`, or that the robot is stopped.
+    WorkerFailed {
+        thread: String,
+        cause: String,
+        action: String,
+    },
 }
 
 /// A signal's current value.
@@ -303,6 +313,15 @@ pub struct ManagerStats {
     pub overruns: u64,
     /// Cycles that started late, or periods skipped (see `docs/protocol.md`).
     pub late_starts: u64,
+    /// How long requests served between cycles ran past the time the next
+    /// cycle was due, in all: what link work held the cycle back.
+    pub request_hold_ns: u64,
+    /// Time lost to cycles that started so late that periods were skipped,
+    /// whatever the cause (a long body, a busy machine, requests): the
+    /// achieved count falls short of the nominal by about `lost_ns / period`.
+    pub lost_ns: u64,
+    /// Worker threads that panicked (each reported as `worker_failed`).
+    pub worker_failures: u64,
     /// The achieved cycle rate while running (0 when stopped).
     pub rate_hz: f64,
     pub active: Vec<String>,
@@ -320,6 +339,8 @@ pub struct MonitorInfo {
     pub holds: bool,
     pub pause: bool,
     pub report: Vec<String>,
+    /// The `client` that added it, if it said.
+    pub client: Option<String>,
 }
 
 /// Anything that answers requests: the manager itself, or a handle to it.
@@ -406,7 +427,7 @@ pub trait Control {
 
     /// A monitor on `condition` (one, or any of several).
     fn add_monitor_on(&mut self, condition: MonitorCondition, mode: MonitorMode) -> Result<u64, ControlError> {
-        match self.request(Request::AddMonitor { condition, mode, pause: false, report: Vec::new() })? {
+        match self.request(Request::AddMonitor { condition, mode, pause: false, report: Vec::new(), client: None })? {
             Reply::MonitorAdded(id) => Ok(id),
             other => Err(unexpected(other)),
         }
@@ -425,20 +446,40 @@ fn unexpected(reply: Reply) -> ControlError {
     ControlError::Invalid(format!("unexpected reply {reply:?}"))
 }
 
-pub(crate) type Envelope = (Request, Sender<Result<Reply, ControlError>>);
+/// A request on its way to a spawned manager, with what was done for it on
+/// the sender's thread, and where its reply goes.
+pub(crate) struct Envelope {
+    pub request: Request,
+    /// An `AddMonitor`'s conditions, compiled by the sender.
+    pub monitor: Option<crate::manager::PreparedMonitorBox>,
+    pub reply: Sender<Result<Reply, ControlError>>,
+}
 
 /// A cloneable, thread-safe handle to a manager running on its own thread
 /// (see [`Manager::spawn`](crate::Manager::spawn)).
+///
+/// A request's work that needs only the robot's wiring — looking up names,
+/// the "did you mean" of an unknown one, checking a parameter's value,
+/// compiling a monitor's conditions — is done on the thread that sends it,
+/// never on the cycle's: a refused request never reaches the manager.
 #[derive(Clone)]
 pub struct Handle {
     pub(crate) tx: Sender<Envelope>,
     pub(crate) bus: crate::manager::EventBus,
+    pub(crate) graph: std::sync::Arc<crate::graph::Graph>,
 }
 
 impl Handle {
     /// A new stream of events, from now on.
     pub fn events(&self) -> Receiver<Event> {
         self.bus.subscribe()
+    }
+
+    /// Sends `event` to every subscriber, as the manager would (a worker
+    /// thread's failure, see [`crate::supervise`]); a `WorkerFailed` is
+    /// counted in the stats.
+    pub fn report(&self, event: Event) {
+        self.bus.report(event);
     }
 
     /// Like [`Control::request`], giving up after `timeout`.
@@ -449,10 +490,19 @@ impl Handle {
     /// Sends `request` without waiting for its reply, which comes through the
     /// returned [`Pending`]. The manager handles requests in the order they
     /// were submitted, so several can be submitted before waiting for any:
-    /// the manager's thread then wakes once for all of them.
-    pub fn submit(&self, request: Request) -> Result<Pending, ControlError> {
+    /// the manager's thread then wakes once for all of them. A request the
+    /// wiring alone refuses (an unknown name, a bad condition) is answered at
+    /// once, here.
+    pub fn submit(&self, mut request: Request) -> Result<Pending, ControlError> {
         let (tx, rx) = crossbeam_channel::bounded(1);
-        self.tx.send((request, tx)).map_err(|_| ControlError::Disconnected)?;
+        match crate::manager::prepare(&self.graph, &mut request) {
+            Ok(monitor) => {
+                self.tx.send(Envelope { request, monitor, reply: tx }).map_err(|_| ControlError::Disconnected)?
+            }
+            Err(e) => {
+                let _ = tx.send(Err(e));
+            }
+        }
         Ok(Pending { rx })
     }
 }
@@ -472,9 +522,8 @@ impl Pending {
 
 impl Control for Handle {
     fn request(&mut self, request: Request) -> Result<Reply, ControlError> {
-        let (tx, rx) = crossbeam_channel::bounded(1);
-        self.tx.send((request, tx)).map_err(|_| ControlError::Disconnected)?;
-        rx.recv().map_err(|_| ControlError::Disconnected)?
+        let pending = self.submit(request)?;
+        pending.rx.recv().map_err(|_| ControlError::Disconnected)?
     }
 }
 

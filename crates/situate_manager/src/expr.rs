@@ -231,6 +231,14 @@ impl Condition {
         &self.program.refs
     }
 
+    /// Maps every reference id through `map` (a condition compiled with
+    /// local ids, made the evaluator's own).
+    pub(crate) fn remap_refs(&mut self, map: impl Fn(usize) -> usize) {
+        for r in &mut self.program.refs {
+            *r = map(*r);
+        }
+    }
+
     /// The dotted names, same order as refs().
     pub fn ref_names(&self) -> &[String] {
         &self.ref_names

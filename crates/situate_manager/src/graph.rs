@@ -108,6 +108,9 @@ pub struct Graph {
     /// from their leaves.
     pub records: BTreeMap<String, SignalType>,
     pub warnings: Vec<Diagnostic>,
+    /// Instance names to their index (requests name skills, up to a list of
+    /// 1024 at a time: no scan of every instance per name).
+    instance_index: HashMap<String, usize>,
 }
 
 pub(crate) fn is_identifier(s: &str) -> bool {
@@ -629,7 +632,8 @@ impl Graph {
             true => return Err(ck.finish()),
             false => ck.diags,
         };
-        Ok(Graph { robot: spec.robot.clone(), instances, leaves, leaf_index, records, warnings })
+        let instance_index = instances.iter().enumerate().map(|(i, d)| (d.name.clone(), i)).collect();
+        Ok(Graph { robot: spec.robot.clone(), instances, leaves, leaf_index, records, warnings, instance_index })
     }
 
     /// The type at a signal path: a leaf's, or a record's assembled from its leaves.
@@ -653,7 +657,7 @@ impl Graph {
     }
 
     pub fn instance(&self, name: &str) -> Option<usize> {
-        self.instances.iter().position(|i| i.name == name)
+        self.instance_index.get(name).copied()
     }
 
     /// All signal names, leaves and records, for suggestions.

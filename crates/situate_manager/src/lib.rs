@@ -19,6 +19,7 @@ pub mod monitor;
 pub mod registry;
 mod runner;
 pub mod spec;
+pub mod supervise;
 pub mod yaml;
 
 pub use config::{ClockKind, ExecutorKind, RobotFile};
@@ -27,7 +28,7 @@ pub use control::{
     SignalReading, SkillInfo, SkillTiming,
 };
 pub use graph::Graph;
-pub use manager::{Joiner, Manager, MAX_MONITORS};
+pub use manager::{Joiner, Manager, MAX_MONITORS, MAX_MONITORS_PER_CLIENT};
 pub use monitor::{MonitorCondition, MonitorMode, MAX_ANY_CONDITIONS};
 pub use registry::Registry;
 pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

@@ -22,19 +22,24 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, Sender, TrySendError};
-use situate_core::{suggestion, SignalType, SkillKind, Value};
+use situate_core::{SignalType, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
-use crate::expr::{Condition, Lookup, Resolver};
+use crate::expr::Lookup;
 use crate::graph::{assemble, decompose, topo_order, Graph};
-use crate::monitor::{MonitorCondition, Monitors, MAX_ANY_CONDITIONS};
+use crate::monitor::Monitors;
 use crate::registry::Registry;
 use crate::runner::{BodyClock, Exec, Worker, WorkerClock, WorkerStats};
 use crate::spec::{BuildError, RobotSpec};
 
+mod front;
 mod requests;
 mod spawned;
+pub(crate) use front::prepare_boxed as prepare;
+use front::PreparedMonitor;
+/// A prepared monitor, boxed for the request queue.
+pub(crate) type PreparedMonitorBox = Box<PreparedMonitor>;
 pub use spawned::Joiner;
 
 const PRINT_HISTORY: usize = 64;
@@ -42,9 +47,13 @@ const EVENT_QUEUE: usize = 4096;
 
 /// The most monitors one robot keeps at once (`monitor_add` refuses more);
 /// more exactly, the most conditions its monitors watch, an `any` monitor
-/// counting as many as it has. Every one is evaluated each cycle: a bound on
+/// counting as many as it has. Every one may be evaluated each cycle: a bound on
 /// their number is a bound on the cycle's cost, whatever the clients do.
 pub const MAX_MONITORS: usize = 1000;
+/// The most conditions the monitors of one client watch (its `client` name
+/// on `monitor_add`; those added without one share one allowance), so that
+/// one sequencer that forgets to cancel cannot take the whole robot's.
+pub const MAX_MONITORS_PER_CLIENT: usize = 250;
 /// One leaf slot of the cycle's data.
 #[derive(Clone, Default)]
 struct Slot {
@@ -75,6 +84,9 @@ struct Inst {
     /// Its body was left behind (it ran past its deadline and may never
     /// return): a fresh one is made when it is activated again.
     abandoned: bool,
+    /// The cycle from which its parameters last changed (monitors reading
+    /// one are evaluated again then).
+    params_from: u64,
 }
 
 #[derive(Default)]
@@ -87,6 +99,8 @@ struct Schedule {
 #[derive(Clone, Default)]
 pub struct EventBus {
     subscribers: Arc<Mutex<Vec<Sender<Event>>>>,
+    /// Worker threads that panicked (see [`crate::supervise`]).
+    worker_failures: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl EventBus {
@@ -103,14 +117,21 @@ impl EventBus {
         subs.retain(|tx| !matches!(tx.try_send(event.clone()), Err(TrySendError::Disconnected(_))));
     }
 
+    pub(crate) fn report(&self, event: Event) {
+        if matches!(event, Event::WorkerFailed { .. }) {
+            self.worker_failures.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        self.send(event);
+    }
+
     fn has_subscribers(&self) -> bool {
         !self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).is_empty()
     }
 }
 
 /// What a monitor condition can name: a leaf signal or a parameter.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum RefTarget {
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum RefTarget {
     Leaf(usize),
     Param(usize, usize),
     /// `time`: seconds on the manager's clock.
@@ -121,7 +142,8 @@ enum RefTarget {
 
 /// The skill manager.
 pub struct Manager {
-    graph: Graph,
+    /// Never changes once built; shared with handles (see `front`).
+    graph: Arc<Graph>,
     clock: ClockKind,
     period_s: f64,
     pool: Option<Arc<rayon::ThreadPool>>,
@@ -146,6 +168,13 @@ pub struct Manager {
     pub(crate) late_starts: u64,
     /// When the paced loop wanted this cycle to start (set before each cycle).
     pub(crate) due: Option<Instant>,
+    /// How long requests served on the cycle's thread ran past the time the
+    /// next cycle was due, in all (what link work held the cycle back).
+    pub(crate) request_hold_ns: u64,
+    /// The time lost to cycles that started so late that periods were
+    /// skipped (the schedule restarts from then), whatever held them back:
+    /// about `lost_ns / period` cycles short of the nominal rate.
+    pub(crate) lost_ns: u64,
     /// The achieved rate: a moving average of the wall time between cycle
     /// starts while running (`None` until two cycles ran back to back).
     interval_s: Option<f64>,
@@ -180,7 +209,7 @@ pub struct Manager {
 impl Manager {
     /// Wires the robot, runs every static check and creates the skills.
     pub fn build(spec: &RobotSpec, registry: &Registry) -> Result<Manager, BuildError> {
-        let graph = Graph::build(spec, registry)?;
+        let graph = Arc::new(Graph::build(spec, registry)?);
         let mut execs = Vec::with_capacity(graph.instances.len());
         let mut insts = Vec::with_capacity(graph.instances.len());
         let lockstep = spec.clock == ClockKind::Simulated;
@@ -216,6 +245,7 @@ impl Manager {
                 worker,
                 lockstep_readings: vec![None; def.outputs.len()],
                 abandoned: false,
+                params_from: 0,
             });
         }
         let started = Instant::now();
@@ -257,6 +287,8 @@ impl Manager {
             overruns: 0,
             late_starts: 0,
             due: None,
+            request_hold_ns: 0,
+            lost_ns: 0,
             interval_s: None,
             last_start: None,
             monitors: Monitors::default(),
@@ -289,6 +321,12 @@ impl Manager {
 
     pub fn cycle_count(&self) -> u64 {
         self.cycle
+    }
+
+    /// How many monitor conditions have been evaluated so far: one is
+    /// evaluated only in a cycle where a name it reads changed.
+    pub fn monitor_evaluations(&self) -> u64 {
+        self.monitors.evaluations
     }
 
     pub fn time_s(&self) -> f64 {
@@ -800,6 +838,10 @@ impl Manager {
             self.record_prints(i, prints);
         }
         if let Some(cause) = fault {
+            if self.insts[i].worker.as_ref().is_some_and(|w| w.shared.lock().dead) {
+                // Its thread is gone: activating it again makes a fresh body and thread.
+                self.insts[i].abandoned = true;
+            }
             self.fault(i, cause);
             return;
         }
@@ -875,7 +917,12 @@ impl Manager {
         let clock = [Value::F64(self.time_s), Value::I64(self.cycle as i64)];
         let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts, clock: &clock };
         let (cycle, time_s) = (self.cycle, self.time_s);
-        self.monitors.evaluate(&env, |m| {
+        let changed = |r: usize| match self.refs.get(r) {
+            Some(RefTarget::Leaf(l)) => self.slots.get(*l).is_some_and(|s| s.stamp == cycle),
+            Some(RefTarget::Param(i, _)) => self.insts.get(*i).is_some_and(|s| s.params_from >= cycle),
+            Some(RefTarget::Time | RefTarget::Cycle) | None => true,
+        };
+        self.monitors.evaluate(&env, &changed, |m| {
             pause |= m.pause;
             let values =
                 m.reads.iter().chain(&m.report).map(|(name, r)| (name.clone(), env.value(*r).cloned())).collect();

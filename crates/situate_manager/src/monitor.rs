@@ -17,7 +17,8 @@
 //! A monitor watches one condition, or any of several (`any`, at most
 //! [`MAX_ANY_CONDITIONS`]): it then holds in a cycle where at least one of
 //! them holds, and the modes apply to that disjunction. Each condition is
-//! compiled once; every cycle each is evaluated, and the ones that held are
+//! compiled once; each is evaluated at the end of a cycle in which a name it
+//! reads changed (see [`Monitors::evaluate`]), and the ones that held are
 //! kept as a bit set, turned into the event's `held` indexes only when the
 //! monitor fires. The sequencer learns which of its alternatives happened
 //! without evaluating anything itself.
@@ -126,23 +127,30 @@ pub(crate) struct Monitor {
     pub holds: bool,
     /// Bit `i`: condition `i` held at the last evaluation.
     pub held: u64,
+    /// Not evaluated yet: the first evaluation runs every condition.
+    pub new: bool,
     pub fired: u64,
     pub pause: bool,
     /// Extra names the events carry, as written, with their reference ids.
     pub report: Vec<(String, usize)>,
     /// The names `report` asked for, as written (records not expanded).
     pub report_asked: Vec<String>,
+    /// The client that added it, if it said.
+    pub client: Option<String>,
 }
 
 #[derive(Default)]
 pub(crate) struct Monitors {
     pub list: Vec<Monitor>,
     next_id: u64,
+    /// Conditions evaluated so far (see [`Monitors::evaluate`]).
+    pub evaluations: u64,
 }
 
 impl Monitors {
     /// Adds a monitor on `conditions` (1 to [`MAX_ANY_CONDITIONS`], checked
     /// by the caller); `any` says it was asked as a list.
+    #[allow(clippy::too_many_arguments)]
     pub fn add(
         &mut self,
         conditions: Vec<Condition>,
@@ -151,6 +159,7 @@ impl Monitors {
         pause: bool,
         report: Vec<(String, usize)>,
         report_asked: Vec<String>,
+        client: Option<String>,
     ) -> u64 {
         debug_assert!((1..=MAX_ANY_CONDITIONS).contains(&conditions.len()));
         self.next_id += 1;
@@ -177,12 +186,22 @@ impl Monitors {
             mode,
             holds: false,
             held: 0,
+            new: true,
             fired: 0,
             pause,
             report,
             report_asked,
+            client,
         });
         id
+    }
+
+    /// The monitors of `client` and the conditions they watch.
+    pub fn count_of(&self, client: Option<&str>) -> (usize, usize) {
+        self.list
+            .iter()
+            .filter(|m| m.client.as_deref() == client)
+            .fold((0, 0), |(n, c), m| (n + 1, c + m.conditions.len()))
     }
 
     /// How many conditions all the monitors watch (what a cycle evaluates).
@@ -197,14 +216,32 @@ impl Monitors {
     }
 
     /// Evaluates every monitor; calls `fire` for each that fires this cycle.
-    pub fn evaluate(&mut self, lookup: &dyn Lookup, mut fire: impl FnMut(&Monitor)) {
+    ///
+    /// A condition is evaluated only when something it reads may have
+    /// changed since its last evaluation — `changed(ref)` says so for each
+    /// name it reads (a signal written this cycle, a parameter set, `time`
+    /// and `cycle` always) — and at a monitor's first evaluation; otherwise
+    /// it holds as it last did (conditions are pure functions of what they
+    /// read). The modes then apply as ever: a `level` monitor whose inputs
+    /// are unchanged and which held fires again without any evaluation. So a
+    /// cycle costs a check of each condition's names, and evaluations only
+    /// for what changed.
+    pub fn evaluate(&mut self, lookup: &dyn Lookup, changed: &dyn Fn(usize) -> bool, mut fire: impl FnMut(&Monitor)) {
+        let evaluations = &mut self.evaluations;
         self.list.retain_mut(|m| {
-            let mut held = 0u64;
+            let mut held = m.held;
             for (i, c) in m.conditions.iter().enumerate() {
+                if !m.new && !c.refs().iter().any(|&r| changed(r)) {
+                    continue;
+                }
+                *evaluations += 1;
                 if c.eval(lookup) == Some(true) {
                     held |= 1 << i;
+                } else {
+                    held &= !(1 << i);
                 }
             }
+            m.new = false;
             m.held = held;
             let holds = held != 0;
             let fires = match m.mode {

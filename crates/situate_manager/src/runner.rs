@@ -139,15 +139,7 @@ pub(crate) fn run_body(
     }
 }
 
-fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
-    if let Some(s) = panic.downcast_ref::<&str>() {
-        (*s).to_string()
-    } else if let Some(s) = panic.downcast_ref::<String>() {
-        s.clone()
-    } else {
-        "a panic without a message".to_string()
-    }
-}
+use crate::supervise::panic_message;
 
 /// Timing of a threaded body, kept by its worker.
 #[derive(Debug, Clone, Copy, Default)]
@@ -180,6 +172,8 @@ pub(crate) struct Mailbox {
     pub fault: Option<String>,
     pub prints: Vec<String>,
     pub stats: WorkerStats,
+    /// The worker thread ended by a panic (see `worker`).
+    pub dead: bool,
 }
 
 impl Mailbox {
@@ -264,7 +258,7 @@ impl Worker {
                 let shared = Arc::clone(&self.shared);
                 let spawned = thread::Builder::new()
                     .name(format!("skill-{name}"))
-                    .spawn(move || worker_loop(skill, shared, kind, period, clock));
+                    .spawn(move || worker(skill, shared, kind, period, clock));
                 match spawned {
                     Ok(_) => self.started = true,
                     Err(e) => {
@@ -280,6 +274,22 @@ impl Worker {
     pub fn stop(&self) {
         self.shared.lock().stop = true;
         self.shared.notify();
+    }
+}
+
+/// A worker thread: the loop, and a report if it ends by a panic outside
+/// the body (a skill's `set_param`): the skill is faulted with the cause and
+/// its thread is gone, so activating it again makes a fresh body and thread.
+fn worker(skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, period: Duration, clock: WorkerClock) {
+    let mailbox = Arc::clone(&shared);
+    if let Err(panic) = catch_unwind(AssertUnwindSafe(|| worker_loop(skill, shared, kind, period, clock))) {
+        let cause = format!("its thread ended: panicked: {}", panic_message(&*panic));
+        tracing::error!(%cause, "a skill's worker thread panicked");
+        let mut mb = mailbox.lock();
+        mb.busy_since = None;
+        mb.fault = Some(cause);
+        mb.active = false;
+        mb.dead = true;
     }
 }
 

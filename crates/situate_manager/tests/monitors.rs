@@ -163,6 +163,7 @@ fn a_pausing_monitor_stops_the_cycle_at_the_cycle_it_fires_in() {
             mode: MonitorMode::Edge,
             pause: true,
             report: Vec::new(),
+            client: None,
         })
         .unwrap();
     let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
@@ -195,6 +196,7 @@ fn a_pausing_monitor_also_ends_a_step_where_it_fires() {
             mode: MonitorMode::Edge,
             pause: true,
             report: Vec::new(),
+            client: None,
         })
         .unwrap();
     let situate_manager::Reply::MonitorAdded(id) = reply else { panic!("{reply:?}") };
@@ -217,6 +219,7 @@ fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
             mode: MonitorMode::Once,
             pause: false,
             report: report.iter().map(|s| s.to_string()).collect(),
+            client: None,
         })
     };
     // A whole record is reported as its leaves; parameters, time and cycle too.
@@ -250,18 +253,20 @@ fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
 fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
     // 60,000 monitors once took a cycle from 45 µs to 75 ms.
     let mut m = robot(SCRIPT);
-    let add = |m: &mut Manager| {
+    // Five clients, each under its own cap, fill the robot's.
+    let add = |m: &mut Manager, k: usize| {
         m.request(Request::AddMonitor {
             condition: "sonar.range[0] < 0.25".into(),
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),
+            client: Some(format!("c{}", k % 5)),
         })
     };
-    for _ in 0..situate_manager::MAX_MONITORS {
-        add(&mut m).expect("under the cap");
+    for k in 0..situate_manager::MAX_MONITORS {
+        add(&mut m, k).expect("under the cap");
     }
-    match add(&mut m) {
+    match add(&mut m, 5) {
         Err(ControlError::Invalid(message)) => {
             assert!(message.contains("the most it keeps (1000); cancel some first"), "{message}")
         }
@@ -269,7 +274,58 @@ fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
     }
     // Cancelling one makes room again.
     m.request(Request::CancelMonitor { monitor: 1 }).unwrap();
-    add(&mut m).expect("room again");
+    add(&mut m, 0).expect("room again");
+}
+
+#[test]
+fn one_client_keeps_a_bounded_share_of_the_robots_monitors_and_is_told_so() {
+    let mut m = robot(SCRIPT);
+    let add = |m: &mut Manager, client: Option<&str>, any: usize| {
+        let conditions = vec!["sonar.range[0] < 0.25".to_string(); any];
+        m.request(Request::AddMonitor {
+            condition: MonitorCondition::Any(conditions),
+            mode: MonitorMode::Level,
+            pause: false,
+            report: Vec::new(),
+            client: client.map(str::to_string),
+        })
+    };
+    let cap = situate_manager::MAX_MONITORS_PER_CLIENT;
+    for _ in 0..cap / 50 {
+        add(&mut m, Some("leaky"), 50).expect("under the client's cap");
+    }
+    match add(&mut m, Some("leaky"), 1) {
+        Err(ControlError::Invalid(message)) => assert_eq!(
+            message,
+            format!(
+                "monitor_add: client `leaky` has {} monitors watching {cap} conditions; this one's 1 would be past \
+                 the most one client keeps ({cap}); cancel some first",
+                cap / 50
+            )
+        ),
+        other => panic!("{other:?}"),
+    }
+    // Another client, and those that give no name, still have theirs.
+    add(&mut m, Some("other"), 64).expect("another client");
+    for _ in 0..cap {
+        add(&mut m, None, 1).expect("the nameless share one allowance");
+    }
+    match add(&mut m, None, 2) {
+        Err(ControlError::Invalid(message)) => assert!(
+            message.starts_with(&format!(
+                "monitor_add: the clients that give no `client` have {cap} monitors watching {cap} conditions; this \
+                 one's 2 would be past the most one client keeps ({cap})"
+            )),
+            "{message}"
+        ),
+        other => panic!("{other:?}"),
+    }
+    let situate_manager::Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list.iter().filter(|i| i.client.as_deref() == Some("leaky")).count(), cap / 50);
+    // Cancelling one of its own makes room for that client again.
+    let leaky = list.iter().find(|i| i.client.as_deref() == Some("leaky")).unwrap().monitor;
+    m.request(Request::CancelMonitor { monitor: leaky }).unwrap();
+    add(&mut m, Some("leaky"), 50).expect("room again");
 }
 
 // ----- any: one monitor on several conditions ----------------------------
@@ -291,6 +347,7 @@ fn add_any(m: &mut Manager, any: &[&str], mode: MonitorMode, report: &[&str]) ->
         mode,
         pause: false,
         report: report.iter().map(|r| r.to_string()).collect(),
+        client: None,
     })? {
         Reply::MonitorAdded(id) => Ok(id),
         other => panic!("{other:?}"),
@@ -404,8 +461,16 @@ fn an_any_monitor_takes_one_to_64_conditions_and_each_counts_toward_the_cap() {
     assert_eq!(fired_held(&events), vec![(first, 1, vec![1]), (last, 64, vec![63])]);
     let id = add_any(&mut m, &many[1..], MonitorMode::Level, &[]).unwrap();
     // Every condition is evaluated every cycle: the robot's cap counts conditions.
-    for _ in 0..situate_manager::MAX_MONITORS - MAX_ANY_CONDITIONS {
-        m.add_monitor("cycle > 0", MonitorMode::Level).expect("under the cap");
+    for k in 0..situate_manager::MAX_MONITORS - MAX_ANY_CONDITIONS {
+        // Spread over clients, each under its own cap.
+        m.request(Request::AddMonitor {
+            condition: "cycle > 0".into(),
+            mode: MonitorMode::Level,
+            pause: false,
+            report: Vec::new(),
+            client: Some(format!("c{}", k % 5)),
+        })
+        .expect("under the cap");
     }
     match add_any(&mut m, &["cycle > 0", "cycle > 1"], MonitorMode::Level, &[]) {
         Err(ControlError::Invalid(message)) => assert_eq!(
@@ -417,4 +482,84 @@ fn an_any_monitor_takes_one_to_64_conditions_and_each_counts_toward_the_cap() {
     }
     m.cancel_monitor(id).unwrap();
     add_any(&mut m, &["cycle > 0", "cycle > 1"], MonitorMode::Level, &[]).expect("room again");
+}
+
+// ----- evaluated only when something read changed ------------------------
+
+/// A door whose `open` is written only in cycles 3 (true) and 7 (false), a
+/// sonar written every cycle, and a skill with a parameter.
+fn door_robot() -> Manager {
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("door", SkillKind::Sync, &[], &[("door", "{open: bool}")]), |io, _| {
+        match io.cx.cycle() {
+            3 => io.outputs[0] = Some(situate_core::record_value(vec![("open", Value::Bool(true))])),
+            7 => io.outputs[0] = Some(situate_core::record_value(vec![("open", Value::Bool(false))])),
+            _ => {}
+        }
+        Ok(())
+    }));
+    reg.add(fn_type(decl("sonar", SkillKind::Sync, &[], &[("sonar", "{range: f32[]}")]), |io, _| {
+        let range: std::sync::Arc<[f32]> = vec![1.0, 5.0].into();
+        io.outputs[0] = Some(situate_core::record_value(vec![("range", Value::F32s(range))]));
+        Ok(())
+    }));
+    reg.add(fn_type(with_param(decl("runaway", SkillKind::Sync, &[], &[]), "safe_distance", 0.5, 0.1, 3.0), |_, _| {
+        Ok(())
+    }));
+    let spec = simulated("door")
+        .skill(skill("door", "door"))
+        .skill(skill("sonar", "sonar"))
+        .skill(skill("runaway", "runaway"));
+    build(&spec, &reg)
+}
+
+#[test]
+fn a_condition_is_evaluated_only_in_cycles_where_a_name_it_reads_changed() {
+    let mut m = door_robot();
+    let events = m.events();
+    let level = m.add_monitor("door.open", MonitorMode::Level).unwrap();
+    let param = m.add_monitor("runaway.safe_distance > 1", MonitorMode::Edge).unwrap();
+    let start = m.monitor_evaluations();
+    m.step(10).unwrap();
+    // `door.open`: at its first evaluation (cycle 1), then when written (3 and 7); the parameter
+    // only at its first. Ten cycles of the old way were twenty evaluations.
+    assert_eq!(m.monitor_evaluations() - start, 3 + 1);
+    // A level monitor still fires in every cycle it holds, evaluated or not.
+    assert_eq!(fired(&events), vec![(level, 3), (level, 4), (level, 5), (level, 6)]);
+
+    // A parameter set is a change: evaluated once more, and the edge fires at once.
+    let start = m.monitor_evaluations();
+    m.set_param("runaway", "safe_distance", Value::F64(2.0)).unwrap();
+    m.step(3).unwrap();
+    assert_eq!(m.monitor_evaluations() - start, 1);
+    assert_eq!(fired(&events), vec![(param, 11)]);
+    m.cancel_monitor(level).unwrap();
+    m.cancel_monitor(param).unwrap();
+
+    // A signal written every cycle, `time` and `cycle` change every cycle.
+    let each = [
+        m.add_monitor("sonar.range[0] > 100", MonitorMode::Level).unwrap(),
+        m.add_monitor("time > 1000", MonitorMode::Level).unwrap(),
+        m.add_monitor("cycle < 0", MonitorMode::Level).unwrap(),
+    ];
+    let start = m.monitor_evaluations();
+    m.step(5).unwrap();
+    assert_eq!(m.monitor_evaluations() - start, 3 * 5);
+    for id in each {
+        m.cancel_monitor(id).unwrap();
+    }
+}
+
+#[test]
+fn an_any_monitor_keeps_what_its_unchanged_conditions_held_and_fires_the_moment_one_holds() {
+    let mut m = door_robot();
+    let events = m.events();
+    let id = m.add_monitor_any(&["door.open", "cycle == 5", "runaway.safe_distance > 1"], MonitorMode::Level).unwrap();
+    m.step(8).unwrap();
+    // `door.open` held from cycle 3 (written) to 6, not evaluated in 4..6; `cycle == 5` in 5.
+    assert_eq!(fired_held(&events), vec![(id, 3, vec![0]), (id, 4, vec![0]), (id, 5, vec![0, 1]), (id, 6, vec![0])]);
+    // An edge on a condition that holds from its first evaluation fires then, as ever.
+    let edge = m.add_monitor("door.open == false", MonitorMode::Edge).unwrap();
+    m.step(1).unwrap();
+    assert_eq!(fired_held(&events), vec![(edge, 9, vec![0])]);
 }

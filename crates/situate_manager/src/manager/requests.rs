@@ -7,23 +7,11 @@ use super::*;
 
 impl Manager {
     pub(super) fn find(&self, name: &str) -> Result<usize, ControlError> {
-        self.graph.instance(name).ok_or_else(|| ControlError::UnknownSkill {
-            name: name.to_string(),
-            suggestion: suggestion(name, self.graph.instances.iter().map(|d| d.name.as_str())),
-        })
+        front::find(&self.graph, name)
     }
 
     pub(super) fn find_param(&self, skill: &str, param: &str) -> Result<(usize, usize), ControlError> {
-        let i = self.find(skill)?;
-        let decl = &self.graph.instances[i].skill_type.decl;
-        match decl.param(param) {
-            Some((p, _)) => Ok((i, p)),
-            None => Err(ControlError::UnknownParam {
-                skill: skill.into(),
-                param: param.into(),
-                suggestion: suggestion(param, decl.params.iter().map(|p| p.name.as_str())),
-            }),
-        }
+        front::find_param(&self.graph, skill, param)
     }
 
     /// Required inputs of cskill `i` that no skill in `active` writes.
@@ -116,8 +104,19 @@ impl Manager {
             reason: e.to_string(),
         })?;
         self.insts[i].params[p] = value.clone();
+        self.insts[i].params_from = self.cycle + 1;
         match (self.insts[i].worker.as_ref(), self.execs[i].skill.as_mut()) {
-            (_, Some(body)) => body.set_param(p, &value),
+            (_, Some(body)) => {
+                // The skill's own code, on the cycle's thread: a panic faults the skill.
+                let set = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body.set_param(p, &value)));
+                if let Err(panic) = set {
+                    let cause =
+                        format!("panicked in set_param (`{param}`): {}", crate::supervise::panic_message(&*panic));
+                    // Its state is unknown: activating it again makes a fresh body.
+                    self.insts[i].abandoned = true;
+                    self.fault(i, cause);
+                }
+            }
             (Some(worker), None) => {
                 worker.shared.lock().params.push((p, value.clone()));
                 worker.shared.notify();
@@ -129,10 +128,7 @@ impl Manager {
     }
 
     pub(super) fn query_signal(&self, path: &str) -> Result<SignalReading, ControlError> {
-        let ty = self.graph.signal_type(path).ok_or_else(|| ControlError::UnknownSignal {
-            name: path.into(),
-            suggestion: suggestion(path, self.graph.signal_names()),
-        })?;
+        let ty = self.graph.signal_type(path).ok_or_else(|| front::unknown_signal(&self.graph, path))?;
         let leaves = self.graph.leaves_under(path);
         let complete = leaves.iter().all(|&l| self.slots[l].value.is_some());
         let value = if complete {
@@ -245,6 +241,9 @@ impl Manager {
             max_cycle_ns: self.max_cycle_ns,
             overruns: self.overruns,
             late_starts: self.late_starts,
+            request_hold_ns: self.request_hold_ns,
+            lost_ns: self.lost_ns,
+            worker_failures: self.bus.worker_failures.load(std::sync::atomic::Ordering::Relaxed),
             rate_hz: match (self.running, self.interval_s) {
                 (true, Some(dt)) if dt > 0.0 => 1.0 / dt,
                 _ => 0.0,
@@ -259,62 +258,73 @@ impl Manager {
         }
     }
 
-    pub(super) fn add_monitor(
+    /// Installs a monitor compiled by [`front::prepare_monitor`] (on the
+    /// caller's thread when it came through a handle), within the caps: the
+    /// robot's and the client's.
+    pub(super) fn install_monitor(
         &mut self,
-        condition: &MonitorCondition,
+        prepared: PreparedMonitor,
         mode: crate::monitor::MonitorMode,
         pause: bool,
-        report: Vec<String>,
+        report_asked: Vec<String>,
+        client: Option<String>,
     ) -> Result<Reply, ControlError> {
-        let (texts, any) = match condition {
-            MonitorCondition::One(c) => (std::slice::from_ref(c), false),
-            MonitorCondition::Any(list) => (list.as_slice(), true),
-        };
-        if texts.is_empty() || texts.len() > MAX_ANY_CONDITIONS {
-            return Err(ControlError::Invalid(format!(
-                "monitor_add: `any` has {} conditions, it takes 1 to {MAX_ANY_CONDITIONS}",
-                texts.len()
-            )));
-        }
+        let PreparedMonitor { mut conditions, any, targets, reported } = prepared;
+        let adding = conditions.len();
         let watched = self.monitors.condition_count();
-        if watched + texts.len() > MAX_MONITORS {
-            // Every condition is evaluated every cycle: their number bounds the cycle's cost.
-            let adds = if any { format!("this one's {} would be", texts.len()) } else { "one more is".to_string() };
+        if watched + adding > MAX_MONITORS {
+            // Every condition may be evaluated every cycle: their number bounds the cycle's cost.
+            let adds = if any { format!("this one's {adding} would be") } else { "one more is".to_string() };
             return Err(ControlError::Invalid(format!(
                 "monitor_add: this robot has {} monitors watching {watched} conditions; {adds} past \
                  the most it keeps ({MAX_MONITORS}); cancel some first",
                 self.monitors.list.len()
             )));
         }
-        let resolver = ManagerResolver { manager: self, added: std::cell::RefCell::new(Vec::new()) };
-        let mut compiled = Vec::with_capacity(texts.len());
-        for (i, text) in texts.iter().enumerate() {
-            compiled.push(Condition::compile(text, &resolver).map_err(|e| ControlError::BadCondition {
-                index: any.then_some(i),
-                column: e.column,
-                message: e.message.clone(),
-                pointer: e.pointer(text),
-            })?);
-        }
-        let mut reported = Vec::new();
-        for name in &report {
-            let name = name.trim();
-            // A whole record is reported as its leaves, each by its own name.
-            let prefix = format!("{name}.");
-            let mut leaves: Vec<&str> = if self.graph.records.contains_key(name) {
-                self.graph.leaf_index.keys().filter(|k| k.starts_with(&prefix)).map(String::as_str).collect()
-            } else {
-                vec![name]
+        let (mine, mine_watched) = self.monitors.count_of(client.as_deref());
+        if mine_watched + adding > MAX_MONITORS_PER_CLIENT {
+            let who = match &client {
+                Some(c) => format!("client `{c}` has"),
+                None => "the clients that give no `client` have".to_string(),
             };
-            leaves.sort_unstable();
-            for leaf in leaves {
-                let (r, _) = resolver.resolve(leaf).map_err(ControlError::BadReport)?;
-                reported.push((leaf.to_string(), r));
-            }
+            let adds = if any { format!("this one's {adding} would be") } else { "one more is".to_string() };
+            return Err(ControlError::Invalid(format!(
+                "monitor_add: {who} {mine} monitors watching {mine_watched} conditions; {adds} past \
+                 the most one client keeps ({MAX_MONITORS_PER_CLIENT}); cancel some first"
+            )));
         }
-        // Nothing is kept from a refused request.
-        self.refs.extend(resolver.added.into_inner());
-        Ok(Reply::MonitorAdded(self.monitors.add(compiled, any, mode, pause, reported, report)))
+        // The compiled references become the manager's own.
+        let ids: Vec<usize> = targets.into_iter().map(|t| self.intern(t)).collect();
+        let global = |r: usize| ids.get(r).copied().unwrap_or(r);
+        for c in &mut conditions {
+            c.remap_refs(global);
+        }
+        let reported = reported.into_iter().map(|(name, r)| (name, global(r))).collect();
+        Ok(Reply::MonitorAdded(self.monitors.add(conditions, any, mode, pause, reported, report_asked, client)))
+    }
+
+    /// The manager's id for a name a condition reads.
+    fn intern(&mut self, target: RefTarget) -> usize {
+        if let Some(i) = self.refs.iter().position(|t| *t == target) {
+            return i;
+        }
+        self.refs.push(target);
+        self.refs.len() - 1
+    }
+
+    /// Handles a request some of whose work was done on the sender's thread
+    /// (see `front`): an `AddMonitor` comes with its conditions compiled.
+    pub(crate) fn request_prepared(
+        &mut self,
+        request: Request,
+        monitor: Option<PreparedMonitorBox>,
+    ) -> Result<Reply, ControlError> {
+        match (request, monitor) {
+            (Request::AddMonitor { mode, pause, report, client, .. }, Some(prepared)) => {
+                self.install_monitor(*prepared, mode, pause, report, client)
+            }
+            (request, _) => self.request(request),
+        }
     }
 
     /// Handles one request between two cycles.
@@ -346,7 +356,10 @@ impl Manager {
             Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
             Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
             Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
-            Request::AddMonitor { condition, mode, pause, report } => self.add_monitor(&condition, mode, pause, report),
+            Request::AddMonitor { condition, mode, pause, report, client } => {
+                let prepared = front::prepare_monitor(&self.graph, &condition, &report)?;
+                self.install_monitor(prepared, mode, pause, report, client)
+            }
             Request::CancelMonitor { monitor } => {
                 if self.monitors.cancel(monitor) {
                     Ok(Reply::Done)
@@ -367,6 +380,7 @@ impl Manager {
                         holds: m.holds,
                         pause: m.pause,
                         report: m.report_asked.clone(),
+                        client: m.client.clone(),
                     })
                     .collect(),
             )),
@@ -404,10 +418,7 @@ impl Manager {
     }
 
     pub(super) fn check_step(&self, cycles: u64) -> Result<(), ControlError> {
-        if cycles > 1_000_000_000 {
-            return Err(ControlError::Invalid(format!("step: {cycles} cycles is too many at once")));
-        }
-        Ok(())
+        front::check_step(cycles)
     }
 
     /// Stops a running cycle (before a step).
@@ -416,67 +427,5 @@ impl Manager {
             self.running = false;
             self.bus.send(Event::ManagerStopped { cycle: self.cycle });
         }
-    }
-}
-
-struct ManagerResolver<'a> {
-    manager: &'a Manager,
-    added: std::cell::RefCell<Vec<RefTarget>>,
-}
-
-impl ManagerResolver<'_> {
-    fn intern(&self, target: RefTarget) -> usize {
-        let known = &self.manager.refs;
-        if let Some(i) = known.iter().position(|t| *t == target) {
-            return i;
-        }
-        let mut added = self.added.borrow_mut();
-        if let Some(i) = added.iter().position(|t| *t == target) {
-            return known.len() + i;
-        }
-        added.push(target);
-        known.len() + added.len() - 1
-    }
-}
-
-impl Resolver for ManagerResolver<'_> {
-    fn resolve(&self, path: &str) -> Result<(usize, SignalType), String> {
-        let g = &self.manager.graph;
-        if let Some(&l) = g.leaf_index.get(path) {
-            return Ok((self.intern(RefTarget::Leaf(l)), g.leaves[l].ty.clone()));
-        }
-        if let Some(ty) = g.records.get(path) {
-            // The expression language reports records as not comparable.
-            return Ok((usize::MAX, ty.clone()));
-        }
-        match path {
-            "time" => return Ok((self.intern(RefTarget::Time), SignalType::F64)),
-            "cycle" => return Ok((self.intern(RefTarget::Cycle), SignalType::I64)),
-            _ => {}
-        }
-        let first = path.split('.').next().unwrap_or(path);
-        let is_signal_prefix = g.records.contains_key(first) || g.leaf_index.contains_key(first);
-        if let Some((skill, param)) = path.split_once('.').filter(|_| !is_signal_prefix) {
-            if let Some(i) = g.instance(skill) {
-                let decl = &g.instances[i].skill_type.decl;
-                return match decl.param(param) {
-                    Some((p, spec)) => {
-                        let ty = match spec.ty {
-                            situate_core::ParamType::Bool => SignalType::Bool,
-                            situate_core::ParamType::I64 => SignalType::I64,
-                            situate_core::ParamType::F64 => SignalType::F64,
-                            situate_core::ParamType::Str => SignalType::Str,
-                        };
-                        Ok((self.intern(RefTarget::Param(i, p)), ty))
-                    }
-                    None => Err(format!(
-                        "skill `{skill}` has no parameter `{param}`{}",
-                        suggestion(param, decl.params.iter().map(|p| p.name.as_str()))
-                    )),
-                };
-            }
-        }
-        let names = g.signal_names().map(str::to_string).collect::<Vec<_>>();
-        Err(format!("unknown signal `{path}`{}", suggestion(path, names.iter().map(String::as_str))))
     }
 }

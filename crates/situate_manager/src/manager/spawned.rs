@@ -109,6 +109,15 @@ struct PanicGuard<'a>(&'a Core);
 impl Drop for PanicGuard<'_> {
     fn drop(&mut self) {
         if thread::panicking() {
+            // A bug in the manager itself (bodies' panics are caught): never silent.
+            tracing::error!(robot = %self.0.robot, "the skill manager's cycle thread panicked: the robot is stopped");
+            if let Some(m) = self.0.manager.lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+                m.bus.report(crate::control::Event::WorkerFailed {
+                    thread: thread::current().name().unwrap_or("cycle").to_string(),
+                    cause: "panicked (see the log)".into(),
+                    action: "not restarted: the robot is stopped (its manager has ended)".into(),
+                });
+            }
             self.0.stop.store(true, Ordering::Release);
             drop(self.0.done.lock().unwrap_or_else(|p| p.into_inner()).take());
         }
@@ -122,7 +131,7 @@ impl Manager {
     pub fn spawn(mut self, running: bool) -> (Handle, Joiner) {
         let (tx, rx) = crossbeam_channel::unbounded::<Envelope>();
         let (done_tx, done_rx) = crossbeam_channel::bounded(1);
-        let handle = Handle { tx, bus: self.bus.clone() };
+        let handle = Handle { tx, bus: self.bus.clone(), graph: Arc::clone(&self.graph) };
         if running {
             let _ = self.request(Request::Run);
         }
@@ -163,13 +172,37 @@ fn start_cycle_thread(core: &Arc<Core>, generation: u64) {
     }
 }
 
+/// What serving one request has taken lately: a maximum that decays by a
+/// sixteenth per request. Between two cycles, a request is started only
+/// while the time left before the next one is due is longer than this.
+struct RequestCost(Duration);
+
+impl RequestCost {
+    fn note(&mut self, took: Duration, cap: Duration) {
+        self.0 = (self.0 - self.0 / 16).max(took).min(cap);
+    }
+}
+
+/// At most this many requests are served between two cycles of a clock
+/// that is not paced (the simulated clock as fast as possible).
+const UNPACED_BURST: usize = 64;
+
 /// The cycle thread: cycles paced by the clock, requests between cycles.
+///
+/// Requests are served in the time left before the next cycle is due, and a
+/// request is only started when that time is longer than what requests took
+/// lately: the cycle does not wait for link work. At least one is served
+/// after each cycle, so that requests (a `stop`) get through even when the
+/// cycle cannot keep up; the time a request still runs past the due time is
+/// counted (`request_hold_ns`), as is the time lost when a cycle started so
+/// late that periods were skipped (`lost_ns`).
 fn serve(core: &Core, generation: u64) {
     let _guard = PanicGuard(core);
     raise_thread_priority();
     let mut deadline = Instant::now();
     // When the next cycle is due, for the manager's count of late starts.
     let mut next_due: Option<Instant> = None;
+    let mut cost = RequestCost(Duration::from_micros(50));
     let mut g = core.lock();
     loop {
         let Some(m) = current(&mut g, generation) else { return };
@@ -201,44 +234,70 @@ fn serve(core: &Core, generation: u64) {
         match pacing {
             Some(period) => {
                 deadline += period;
-                let now = Instant::now();
-                if deadline < now {
-                    // Already due: the next cycle starts late (and the missed periods are skipped).
-                    deadline = now;
-                    if let Some(m) = current(&mut g, generation) {
-                        m.late_starts += 1;
+                // Already due: the cycle (or what held it back) ran past the next start.
+                let skipped = deadline < Instant::now();
+                let mut served = 0usize;
+                loop {
+                    let left = deadline.saturating_duration_since(Instant::now());
+                    if served > 0 && left <= cost.0 {
+                        break;
                     }
+                    drop(g);
+                    let received = if left.is_zero() {
+                        core.requests.try_recv().map_err(|e| match e {
+                            TryRecvError::Empty => RecvTimeoutError::Timeout,
+                            TryRecvError::Disconnected => RecvTimeoutError::Disconnected,
+                        })
+                    } else {
+                        core.requests.recv_deadline(deadline)
+                    };
+                    g = core.lock();
+                    let envelope = match received {
+                        Ok(envelope) => envelope,
+                        Err(RecvTimeoutError::Timeout) => break,
+                        Err(RecvTimeoutError::Disconnected) => return core.finish(&mut g),
+                    };
+                    let stepping = matches!(envelope.request, Request::Step { .. });
+                    let start = Instant::now();
+                    match serve_one(core, g, generation, envelope) {
+                        Served::Go(back) => g = back,
+                        Served::End => return,
+                    }
+                    let end = Instant::now();
+                    served += 1;
+                    if !stepping {
+                        cost.note(end - start, period / 4);
+                    }
+                    let Some(m) = current(&mut g, generation) else { return };
+                    if !m.running {
+                        break;
+                    }
+                    if end > deadline {
+                        m.request_hold_ns += end.duration_since(start.max(deadline)).as_nanos() as u64;
+                    }
+                }
+                let now = Instant::now();
+                if let (true, Some(m)) = (skipped, current(&mut g, generation)) {
+                    // The next cycle starts late, and the missed periods are skipped.
+                    m.late_starts += 1;
+                    m.lost_ns += now.saturating_duration_since(deadline).as_nanos() as u64;
+                    deadline = now;
                 } else {
                     next_due = Some(deadline);
                 }
-                // Serve requests until the next cycle is due.
-                loop {
-                    drop(g);
-                    let received = core.requests.recv_deadline(deadline);
-                    g = core.lock();
-                    match received {
+            }
+            None => {
+                for _ in 0..UNPACED_BURST {
+                    match core.requests.try_recv() {
                         Ok(envelope) => match serve_one(core, g, generation, envelope) {
                             Served::Go(back) => g = back,
                             Served::End => return,
                         },
-                        Err(RecvTimeoutError::Timeout) => break,
-                        Err(RecvTimeoutError::Disconnected) => return core.finish(&mut g),
-                    }
-                    if !current(&mut g, generation).is_some_and(|m| m.running) {
-                        break;
+                        Err(TryRecvError::Empty) => break,
+                        Err(TryRecvError::Disconnected) => return core.finish(&mut g),
                     }
                 }
             }
-            None => loop {
-                match core.requests.try_recv() {
-                    Ok(envelope) => match serve_one(core, g, generation, envelope) {
-                        Served::Go(back) => g = back,
-                        Served::End => return,
-                    },
-                    Err(TryRecvError::Empty) => break,
-                    Err(TryRecvError::Disconnected) => return core.finish(&mut g),
-                }
-            },
         }
     }
 }
@@ -251,7 +310,8 @@ enum Served<'a> {
 
 /// Answers one request. `Step` runs its cycles here, so a body that gets
 /// stuck in one is left behind like in a running cycle.
-fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, (request, reply): Envelope) -> Served<'a> {
+fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: Envelope) -> Served<'a> {
+    let Envelope { request, monitor, reply } = envelope;
     let Some(m) = current(&mut g, generation) else {
         // Not the cycle any more: the request goes back to the queue's
         // new owner only if we could; answer that the manager moved on.
@@ -289,7 +349,7 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, (request, re
             Served::Go(g)
         }
         request => {
-            let _ = reply.send(m.request(request));
+            let _ = reply.send(m.request_prepared(request, monitor));
             Served::Go(g)
         }
     }
