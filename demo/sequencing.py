@@ -743,27 +743,24 @@ class Sequencer:
         seen = " || ".join(f"{signal}.{s}" for s in sides)
         # A junction expected just ahead (`distance` brought the robot to about 1.5 m before
         # it: docs/maps.md) that the detector misses is probed for where it should be.
-        probe = until == "junction" and step.get("distance") is not None and count == 1
-        look_from = await self.odom()
-        for k in range(1, count + 1):
-            if probe:
-                beyond = farther_than(look_from, PROBE_LOOK_M)
-                # Unseen by PROBE_LOOK_M on, or the way ahead blocked for good (a dead end
-                # just past it): probe for it.
-                if await self.wait(seen, beyond, within=120) == 0:
-                    break
-                if len(sides) != 1:
+        if until == "junction" and step.get("distance") is not None and count == 1:
+            look_from = await self.odom()
+            # Unseen by PROBE_LOOK_M on, or the way ahead blocked for good (a dead end just
+            # past it): probe for it.
+            beyond = farther_than(look_from, PROBE_LOOK_M)
+            if await self.wait(seen, beyond, within=120) != 0:
+                return len(sides) == 1 and await self.probe_junction(look_from, sides[0])
+        else:
+            for k in range(1, count + 1):
+                if await self.wait(seen, within=180):
                     return False
-                return await self.probe_junction(look_from, sides[0])
-            if await self.wait(seen, within=180):
-                return False
-            if k < count:
-                await self.say(f"      {until} {k} of {count} passed")
-                # On past this one: the next is another only once this one is behind (its
-                # flag off) and the robot a metre on (a flag flickering counts once).
-                away = farther_than(await self.odom(), 1.0)
-                if await self.wait(f"!({seen}) && {away}", within=60):
-                    return False
+                if k < count:
+                    await self.say(f"      {until} {k} of {count} passed")
+                    # On past this one: the next is another only once this one is behind
+                    # (its flag off) and the robot a metre on (a flag flickering counts once).
+                    away = farther_than(await self.odom(), 1.0)
+                    if await self.wait(f"!({seen}) && {away}", within=60):
+                        return False
         if until == "junction":
             # Into the junction's middle before turning: `junction.centre` says where it is
             # along the way (the detector may have waited until the robot was well past its

@@ -7,19 +7,47 @@
 
 use super::*;
 
+#[derive(clap::Args)]
 pub(crate) struct DemoOptions {
+    /// The demo's robot file.
+    #[arg(long, default_value = "demo/robot.yaml")]
     pub(crate) robot: PathBuf,
+    /// Another building (a map file; see docs/maps.md).
+    #[arg(long)]
     pub(crate) map: Option<PathBuf>,
+    /// The simulator's seed.
+    #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
+    #[command(flatten)]
     pub(crate) world: WorldArgs,
+    /// No GUI, and the simulated clock as fast as possible.
+    #[arg(long)]
     pub(crate) headless: bool,
+    /// `sequenced`: the sequencer switches skills on and off (the paper's way);
+    /// `all-active`: every skill always on, priority arbitration only.
+    #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active"])]
     pub(crate) mode: String,
+    /// The sequencer program.
+    #[arg(long, default_value = "demo/deliver.py")]
     pub(crate) sequencer: PathBuf,
+    /// The Python interpreter for the sequencer (default: .venv/bin/python, else python3).
+    #[arg(long, env = "SITUATE_PYTHON")]
     pub(crate) python: Option<PathBuf>,
+    /// With the GUI: simulated time runs this many times faster than real time.
+    #[arg(long, default_value_t = 4.0)]
     pub(crate) speed: f64,
+    /// The GUI's address (not with --headless).
+    #[arg(long, default_value = "127.0.0.1:8080")]
     pub(crate) gui: String,
+    /// Give up after this much simulated time, s.
+    #[arg(long, default_value_t = 1800.0)]
     pub(crate) limit_s: f64,
+    /// Print the outcome as one JSON line.
+    #[arg(long)]
     pub(crate) json: bool,
+    /// With the GUI: exit when the mission ends (by default the GUI stays up, showing the
+    /// outcome, until Ctrl-C). Headless, the demo always exits when the mission ends.
+    #[arg(long)]
     pub(crate) exit_when_done: bool,
 }
 

@@ -81,48 +81,7 @@ enum Command {
     },
     /// The delivery demo: the simulated robot, the skill manager and the Python sequencer of
     /// demo/deliver.py (and the GUI unless --headless). Prints one line per phase and the outcome.
-    Demo {
-        /// The demo's robot file.
-        #[arg(long, default_value = "demo/robot.yaml")]
-        robot: PathBuf,
-        /// Another building (a map file; see docs/maps.md).
-        #[arg(long)]
-        map: Option<PathBuf>,
-        /// The simulator's seed.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        #[command(flatten)]
-        world: WorldArgs,
-        /// No GUI, and the simulated clock as fast as possible.
-        #[arg(long)]
-        headless: bool,
-        /// `sequenced`: the sequencer switches skills on and off (the paper's way);
-        /// `all-active`: every skill always on, priority arbitration only.
-        #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active"])]
-        mode: String,
-        /// The sequencer program.
-        #[arg(long, default_value = "demo/deliver.py")]
-        sequencer: PathBuf,
-        /// The Python interpreter for the sequencer (default: .venv/bin/python, else python3).
-        #[arg(long, env = "SITUATE_PYTHON")]
-        python: Option<PathBuf>,
-        /// With the GUI: simulated time runs this many times faster than real time.
-        #[arg(long, default_value_t = 4.0)]
-        speed: f64,
-        /// The GUI's address (not with --headless).
-        #[arg(long, default_value = "127.0.0.1:8080")]
-        gui: String,
-        /// Give up after this much simulated time, s.
-        #[arg(long, default_value_t = 1800.0)]
-        limit_s: f64,
-        /// Print the outcome as one JSON line.
-        #[arg(long)]
-        json: bool,
-        /// With the GUI: exit when the mission ends (by default the GUI stays up, showing the
-        /// outcome, until Ctrl-C). Headless, the demo always exits when the mission ends.
-        #[arg(long)]
-        exit_when_done: bool,
-    },
+    Demo(DemoOptions),
     /// Generate a skill's typed I/O (structs or classes and the glue) from its YAML manifest.
     Gen {
         /// `c`, `cpp` or `python`.
@@ -296,38 +255,7 @@ fn run(cli: Cli, ext: &Extensions) -> anyhow::Result<ExitCode> {
             };
             run_robot(&file, &opts, ext)
         }
-        Command::Demo {
-            robot,
-            map,
-            seed,
-            world,
-            headless,
-            mode,
-            sequencer,
-            python,
-            speed,
-            gui,
-            limit_s,
-            json,
-            exit_when_done,
-        } => {
-            let demo = DemoOptions {
-                robot,
-                map,
-                seed,
-                world,
-                headless,
-                mode,
-                sequencer,
-                python,
-                speed,
-                gui,
-                limit_s,
-                json,
-                exit_when_done,
-            };
-            run_demo(&demo, ext)
-        }
+        Command::Demo(demo) => run_demo(&demo, ext),
         Command::Gen { lang, manifest, out } => generate(&lang, &manifest, &out),
         Command::Types { library, python } => {
             types(&registry_with(&library, &python, ext)?);

@@ -15,39 +15,15 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{free_port, Running};
+use common::Running;
 use serde_json::{json, Value as Json};
-use situate::manager::{ClockKind, Manager, RobotFile, RobotSpec};
 use situate_link::flood::{Flood, Target};
-use situate_link::{Client, Link, LinkConfig};
+use situate_link::Client;
 
 const RATE_HZ: f64 = 50.0;
 
-const ROBOT: &str = "\
-robot: floodbot
-cycle: {rate_hz: 50}
-devices:
-  - name: sonar
-    type: toy.sonar
-  - name: wheels
-    type: toy.wheels
-skills:
-  - name: runaway
-    type: toy.runaway
-  - name: wander
-    type: toy.wander
-";
-
 fn start() -> Running {
-    let file = RobotFile::parse("floodbot.yaml", ROBOT).unwrap();
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
-    let session = Link::open(&config).unwrap();
-    let spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
-    let manager = Manager::build(&spec, &situate_toys::registry()).unwrap();
-    let (handle, join) = manager.spawn(true);
-    let link = Link::serve("floodbot", handle.clone(), session, &config).unwrap();
-    Running { handle, link: Some(link), join: Some(join), endpoint }
+    common::toy_robot("floodbot")
 }
 
 fn stats(c: &Client) -> Json {

@@ -6,36 +6,12 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{free_port, Running};
+use common::Running;
 use serde_json::{json, Value as Json};
-use situate::manager::{ClockKind, Manager, RobotFile, RobotSpec};
-use situate_link::{Client, Link, LinkConfig};
-
-const ROBOT: &str = "\
-robot: supbot
-cycle: {rate_hz: 50}
-devices:
-  - name: sonar
-    type: toy.sonar
-  - name: wheels
-    type: toy.wheels
-skills:
-  - name: runaway
-    type: toy.runaway
-  - name: wander
-    type: toy.wander
-";
+use situate_link::Client;
 
 fn start() -> Running {
-    let file = RobotFile::parse("supbot.yaml", ROBOT).unwrap();
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
-    let session = Link::open(&config).unwrap();
-    let spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
-    let manager = Manager::build(&spec, &situate_toys::registry()).unwrap();
-    let (handle, join) = manager.spawn(true);
-    let link = Link::serve("supbot", handle.clone(), session, &config).unwrap();
-    Running { handle, link: Some(link), join: Some(join), endpoint }
+    common::toy_robot("supbot")
 }
 
 const LIMIT: Duration = Duration::from_secs(60);

@@ -379,14 +379,15 @@ impl Body for DetectIntersection {
         // Turned off the corridor's way (avoiding clutter or someone), the side sonars look
         // along the walls, not across them, and read far: nothing seen then counts. The way is
         // the heading at activation, following the robot's slow drift along the corridor.
-        let turned = self.odom.is_some_and(|o| {
+        let mut turned = false;
+        if let Some(o) = self.odom {
             let axis = *self.axis.get_or_insert(o.theta);
             let off = crate::util::wrap(o.theta - axis);
             if off.abs() < AXIS_TRACK {
                 self.axis = Some(crate::util::wrap(axis + 0.05 * off));
             }
-            off.abs() > MAX_TURNED
-        });
+            turned = off.abs() > MAX_TURNED;
+        }
         let mut open = [false; 2];
         let mut openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
         if turned {

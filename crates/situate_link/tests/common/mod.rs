@@ -3,8 +3,8 @@
 
 use std::time::Duration;
 
-use situate::manager::{Handle, Request};
-use situate_link::Link;
+use situate::manager::{ClockKind, Handle, Manager, Request, RobotFile, RobotSpec};
+use situate_link::{Link, LinkConfig};
 
 /// A TCP port nobody listens on right now.
 pub fn free_port() -> u16 {
@@ -27,4 +27,23 @@ impl Drop for Running {
             let _ = j.join();
         }
     }
+}
+
+/// The toy robot `name` at 50 Hz (sonar and wheels, runaway and wander), on the wall clock,
+/// served on a free port.
+pub fn toy_robot(name: &str) -> Running {
+    let text = format!(
+        "robot: {name}\ncycle: {{rate_hz: 50}}\ndevices:\n  - {{name: sonar, type: toy.sonar}}\n  \
+         - {{name: wheels, type: toy.wheels}}\nskills:\n  - {{name: runaway, type: toy.runaway}}\n  \
+         - {{name: wander, type: toy.wander}}\n"
+    );
+    let file = RobotFile::parse(&format!("{name}.yaml"), &text).unwrap();
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+    let session = Link::open(&config).unwrap();
+    let spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
+    let manager = Manager::build(&spec, &situate_toys::registry()).unwrap();
+    let (handle, join) = manager.spawn(true);
+    let link = Link::serve(name, handle.clone(), session, &config).unwrap();
+    Running { handle, link: Some(link), join: Some(join), endpoint }
 }
