@@ -27,6 +27,9 @@ pub const START_AWAY: f64 = 3.0;
 pub const SPEED: (f64, f64) = (0.3, 0.7);
 /// Pauses at waypoints, s.
 pub const PAUSE: (f64, f64) = (0.5, 2.5);
+/// A person walks past the robot with at least this between their rims
+/// (it stops only for a robot that would come nearer), m.
+pub const PASS_GAP: f64 = 0.15;
 /// How long a person waits for the robot before walking somewhere else, s.
 const WAIT_FOR_ROBOT: f64 = 3.0;
 /// The grid of candidate free points, m (coarser on floors that would need
@@ -229,8 +232,10 @@ impl Person {
             let u = to.scale(1.0 / d);
             if let Some((rp, rr)) = around.robot {
                 let rel = rp.minus(self.pos);
-                // Only a step towards the robot's half-plane brings them closer.
-                if rel.norm() - PERSON_RADIUS - rr < STOP_GAP && rel.dot(u) > 0.0 {
+                // Only a step towards the robot's half-plane brings them closer, and only a
+                // way that passes it by less than `PASS_GAP` runs into it.
+                let into = Seg::new(self.pos, goal).dist_to(rp) < PERSON_RADIUS + rr + PASS_GAP;
+                if rel.norm() - PERSON_RADIUS - rr < STOP_GAP && rel.dot(u) > 0.0 && into {
                     self.waited += dt;
                     if self.waited >= WAIT_FOR_ROBOT {
                         self.waited = 0.0;
@@ -257,15 +262,21 @@ impl Person {
     }
 
     /// A random free point at least [`MIN_LEG`] away that is reachable in a
-    /// straight line, if one of a few draws is.
+    /// straight line passing the robot by [`PASS_GAP`] or more, if one of a
+    /// few draws is (someone the robot keeps in a dead end walks out past it
+    /// where there is room, as people do).
     fn pick(&self, around: &Around<'_>, rng: &mut ChaCha8Rng) -> Option<P2> {
         let free = &around.walk.free;
         if free.is_empty() {
             return None;
         }
+        let past_robot = |p: P2| {
+            around.robot.is_none_or(|(rp, rr)| Seg::new(self.pos, p).dist_to(rp) >= PERSON_RADIUS + rr + PASS_GAP)
+        };
         (0..DRAWS).find_map(|_| {
             let p = free[(rng.next_u64() % free.len() as u64) as usize];
-            (p.dist(self.pos) >= MIN_LEG && clear_way(self.pos, p, &around.walk.segs, around.closed)).then_some(p)
+            (p.dist(self.pos) >= MIN_LEG && clear_way(self.pos, p, &around.walk.segs, around.closed) && past_robot(p))
+                .then_some(p)
         })
     }
 }

@@ -189,6 +189,29 @@ fn a_walking_person_waits_for_the_robot_in_its_way() {
 }
 
 #[test]
+fn someone_the_robot_keeps_in_a_dead_end_walks_out_past_it() {
+    // The default basement's junction stub (x 14..16, y 3..6) ends at y = 3. The robot
+    // stands in it 0.3 m left of its middle, facing the dead end; someone is behind it
+    // there. A person who only waited and drew waypoints through the robot stayed there
+    // for good (seen in a generated building, the robot waiting for them in turn).
+    let mut w = World::with_config(map("default.yaml"), 3, with(1, false, vec![]));
+    w.place_robot(-1, 14.7, 4.6, -PI / 2.0);
+    assert!(w.place_person(0, -1, 15.25, 3.6, 0.0));
+    let mut out = None;
+    for i in 1..=30_000 {
+        let t = i as f64 * 0.01;
+        w.advance_to(t);
+        check_people(&w);
+        if w.people()[0].pos.y > 5.6 {
+            out = Some(t);
+            break;
+        }
+    }
+    let out = out.unwrap_or_else(|| panic!("still kept in after 300 s at {:?}", w.people()[0].pos));
+    eprintln!("out past the robot after {out:.1} s");
+}
+
+#[test]
 fn a_dead_sonar_reads_max_range_and_the_others_are_unchanged() {
     let m = map("default.yaml");
     let mut live = World::new(m.clone(), 5);
