@@ -55,7 +55,7 @@ pub use actions::{PushButton, Say};
 pub use health::SonarFilter;
 pub use motion::{Avoid, EnterCar, FollowHallway, Home, HomePosition, LeaveCar, PassDoor, Runaway, Turn, Wander};
 pub use perception::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
-pub use scan::{fit_wall, locate_door, FitWall, LocateDoor, ScanModel};
+pub use scan::{door_in_wall, fit_wall, locate_door, FitWall, LocateDoor, ScanModel};
 
 /// Adds every standard skill type to `registry`.
 pub fn register(registry: &mut Registry) {

@@ -131,13 +131,7 @@ pub fn fit_wall(range: &[f32; SONARS], m: &ScanModel) -> Option<(f64, f64, usize
 
 /// A door in the wall ahead, from one scan: `(normal, wall, (x, y), width)`.
 ///
-/// The wall is [`fit_wall`]'s line. Each front sonar whose axis meets that
-/// line is placed along it; those reading more than `see_through` beyond the
-/// line see through an opening, whose jambs lie halfway between them and
-/// their neighbours that hit the wall. The opening is the run of seeing
-/// sonars nearest the foot of the normal (the robot faces the door or a
-/// barcode beside it). A run wider than `max_width` is no door's: its edge
-/// nearer the foot is trusted, and the door taken to be `door_width` wide.
+/// The wall is [`fit_wall`]'s line; see [`door_in_wall`] for the opening.
 pub fn locate_door(
     range: &[f32; SONARS],
     m: &ScanModel,
@@ -146,6 +140,32 @@ pub fn locate_door(
     door_width: f64,
 ) -> Option<(f64, f64, (f64, f64), f64)> {
     let (normal, d, _) = fit_wall(range, m)?;
+    door_in_wall(range, m, normal, d, see_through, max_width, door_width)
+}
+
+/// The door in a known wall (direction `normal`, `d` m away, robot frame),
+/// from one scan: `(normal, wall, (x, y), width)`.
+///
+/// Each front sonar whose axis meets the wall line is placed along it; those
+/// reading more than `see_through` beyond the line see through an opening,
+/// whose jambs lie halfway between them and their neighbours that hit the
+/// wall. The opening is the run of seeing sonars nearest the foot of the
+/// normal (the robot faces the door or a barcode beside it). A run wider
+/// than `max_width` is no door's: its edge nearer the foot is trusted, and
+/// the door taken to be `door_width` wide.
+///
+/// A sequencer that has placed the wall already (from a barcode on it, say)
+/// passes it in: beside a door the scan's own best line may be the room's
+/// beyond, or someone standing in the corridor.
+pub fn door_in_wall(
+    range: &[f32; SONARS],
+    m: &ScanModel,
+    normal: f64,
+    d: f64,
+    see_through: f64,
+    max_width: f64,
+    door_width: f64,
+) -> Option<(f64, f64, (f64, f64), f64)> {
     let (nx, ny) = (normal.cos(), normal.sin());
     let (tx, ty) = (-ny, nx); // along the wall, to the left of the normal
                               // Where a ray at bearing `b` meets the wall line, along it; None if it
@@ -294,6 +314,13 @@ pub struct LocateDoor {
     /// Width of each sonar's cone (as the sonar device's `cone_deg`).
     #[param(default = 15.0, min = 0.0, max = 60.0, unit = "deg")]
     cone_deg: f64,
+    /// The wall's distance when the sequencer knows it (0: fit the wall
+    /// from the scan), m.
+    #[param(default = 0.0, min = 0.0, max = 3.0, unit = "m")]
+    wall_distance: f64,
+    /// The known wall's direction in the robot frame (with `wall_distance`).
+    #[param(default = 0.0, min = -90.0, max = 90.0, unit = "deg")]
+    wall_normal_deg: f64,
 }
 
 impl Body for LocateDoor {
@@ -303,7 +330,21 @@ impl Body for LocateDoor {
             half_cone: self.cone_deg.to_radians() / 2.0,
             ..ScanModel::default()
         };
-        self.opening = match locate_door(&self.sonar, &model, self.see_through, self.max_width, self.door_width) {
+        let found = if self.wall_distance > 0.0 {
+            let normal = self.wall_normal_deg.to_radians();
+            door_in_wall(
+                &self.sonar,
+                &model,
+                normal,
+                self.wall_distance,
+                self.see_through,
+                self.max_width,
+                self.door_width,
+            )
+        } else {
+            locate_door(&self.sonar, &model, self.see_through, self.max_width, self.door_width)
+        };
+        self.opening = match found {
             Some((normal, wall, (x, y), width)) => Opening { seen: true, normal, wall, x, y, width },
             None => Opening { seen: false, ..self.opening },
         };
