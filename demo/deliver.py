@@ -78,6 +78,8 @@ NORMAL = {
     ("track_barcode", "hold"): 15,
     ("fit_wall", "bearing_deg"): 0.0,
     ("fit_wall", "half_angle_deg"): 80.0,
+    ("locate_door", "wall_distance"): 0.0,
+    ("locate_door", "wall_normal_deg"): 0.0,
 }
 
 #: Time to get out of the lab before giving up, s.

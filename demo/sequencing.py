@@ -285,11 +285,13 @@ class Sequencer:
     async def _trace(self) -> None:
         assert self.trace is not None
         with contextlib.suppress(situate.SituateError):
-            self.prefetch("truth.pose", "truth.cars")
+            self.prefetch("truth.pose", "truth.cars", "truth.people")
             p = await self.value("truth.pose")
             if p is not None:
                 cars = await self.value("truth.cars")
-                self.trace.write(json.dumps({"t": self.t, **p, "cars": cars}) + "\n")
+                people = await self.value("truth.people")
+                line = {"t": self.t, **p, "cars": cars, "people": people}
+                self.trace.write(json.dumps(line) + "\n")
                 self.trace.flush()
 
     async def say(self, text: str) -> None:
@@ -476,7 +478,13 @@ class Sequencer:
                 w = await self.odom()
                 n = w.theta + float(wall["normal"])
                 along = (px - w.x) * math.cos(n) + (py - w.y) * math.sin(n)
-                if abs(along - float(wall["distance"])) < 0.35:
+                # Along the corridor the route followed or across it (docs/maps.md): a line
+                # fitted through a door's jamb, the room beyond and someone standing by is not.
+                square = self.corridor_heading is None or any(
+                    abs(wrap(n - self.corridor_heading - k * math.pi / 2)) < math.radians(25)
+                    for k in range(4)
+                )
+                if abs(along - float(wall["distance"])) < 0.35 and square:
                     normal = n
                     break
         finally:
@@ -485,24 +493,26 @@ class Sequencer:
         if normal is None and self.corridor_heading is not None:
             # The sonars cannot tell (a door beside the barcode fills their view). The barcode
             # is on a wall of the corridor being followed: a side wall, or the end wall.
-            self.prefetch("odom", "sonar.range")
+            self.prefetch("odom")
             w = await self.odom()
             axis = self.corridor_heading
             lateral = -(px - w.x) * math.sin(axis) + (py - w.y) * math.cos(axis)
             side = axis + math.copysign(math.pi / 2, lateral)
-            # The end wall only if the sonars looking along the corridor find a wall about as
-            # far ahead as the barcode lies, and those square to its side do not (they may look
-            # through the door beside it): barcodes beside doors are mostly on side walls.
-            ranges = await self.sonar()
-
-            def reading(direction: float) -> float:
-                k = round(wrap(direction - w.theta) / (2 * math.pi / SONARS)) % SONARS
-                return min(ranges[(k + j) % SONARS] for j in (-1, 0, 1))
-
+            # The end wall only if a wall lies across the corridor about as far ahead as the
+            # barcode, and none along its side as far as the barcode lies to that side (the
+            # sonars may look through the door beside it): barcodes beside doors are mostly
+            # on side walls. Walls fitted, not single echoes: someone standing in the
+            # corridor is no wall.
             ahead = (px - w.x) * math.cos(axis) + (py - w.y) * math.sin(axis)
-            on_side = abs(reading(side) - abs(lateral)) < 0.35
-            on_end = abs(reading(axis) - ahead) < 0.35
+            end = await self.wall_towards(axis)
+            on_end = end is not None and abs(wrap(end[0] - axis)) < math.radians(20)
+            on_end = on_end and end is not None and abs(end[1] - ahead) < 0.35
+            by = await self.wall_towards(side)
+            on_side = by is not None and abs(wrap(by[0] - side)) < math.radians(20)
+            on_side = on_side and by is not None and abs(by[1] - abs(lateral)) < 0.35
             normal = axis if on_end and not on_side else side
+            if self.debug:
+                await self.say(f"      end wall {end} ({ahead:.2f} on), side {by} ({lateral:.2f})")
             await self.say(f"    no wall through barcode {barcode} in sight: taking the corridor's")
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")
@@ -512,6 +522,23 @@ class Sequencer:
         if not await self.goto(gx, gy, within=30):
             return False
         return await self.turn(wrap(normal - (await self.odom()).theta))
+
+    async def wall_towards(self, direction: float) -> tuple[float, float] | None:
+        """`std.fit_wall`'s wall within 50° of ``direction`` (odometry frame), as the robot stands.
+
+        Its normal in the odometry frame and its distance; None if none.
+        """
+        o = await self.odom()
+        await self.set("fit_wall", "bearing_deg", math.degrees(wrap(direction - o.theta)))
+        await self.set("fit_wall", "half_angle_deg", 50.0)
+        try:
+            wall = await self.clue("fit_wall", "wall")
+        finally:
+            await self.restore("fit_wall", "bearing_deg")
+            await self.restore("fit_wall", "half_angle_deg")
+        if wall is None:
+            return None
+        return wrap(o.theta + float(wall["normal"])), float(wall["distance"])
 
     async def beyond_wall(self) -> bool:
         """Whether the robot stands beyond the wall of the barcode last lined up with.
@@ -530,19 +557,44 @@ class Sequencer:
             return False
         return True
 
+    async def opening(self) -> dict[str, Any] | None:
+        """`std.locate_door`'s opening as the robot stands, in the wall `line_up` placed.
+
+        Beside a door the scan's own best line may run through clutter or someone standing
+        by (and the door found on it into a jamb); the barcode's wall, placed from where it
+        was read, does not. Without such a wall in front, the skill fits one.
+        """
+        known: tuple[float, float] | None = None
+        if self.wall_fix is not None:
+            px, py, normal = self.wall_fix
+            o = await self.odom()
+            distance = (px - o.x) * math.cos(normal) + (py - o.y) * math.sin(normal)
+            bearing = wrap(normal - o.theta)
+            if 0.3 < distance < 3.0 and abs(bearing) < math.radians(80):
+                known = (distance, math.degrees(bearing))
+        if known is not None:
+            await self.set("locate_door", "wall_distance", known[0])
+            await self.set("locate_door", "wall_normal_deg", known[1])
+        try:
+            return await self.clue("locate_door", "opening")
+        finally:
+            if known is not None:
+                await self.restore("locate_door", "wall_distance")
+                await self.restore("locate_door", "wall_normal_deg")
+
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
         """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
 
         The opening is `std.locate_door`'s; ``hint`` (``left`` or ``right``, from the route)
         is used only when it finds none.
         """
-        fix = await self.clue("locate_door", "opening")
+        fix = await self.opening()
         if fix is None or float(fix["width"]) < 0.3:
             # A door closed for a while, or someone standing in it: wait for the opening.
             await self.say("    no opening in sight (a closed door, someone in it?): waiting")
             await self.use("locate_door", restart=["locate_door"])
             if await self.wait("opening.seen && opening.width > 0.6", within=DOOR_WAIT_S) == 0:
-                fix = await self.clue("locate_door", "opening")
+                fix = await self.opening()
         pose = await self.odom()
         if fix is None or float(fix["width"]) < 0.3:
             if hint is None:
@@ -553,6 +605,9 @@ class Sequencer:
             normal = 0.0
             centre = (1.0, side * 0.75)
         else:
+            if self.debug:
+                ranges = [round(r, 2) for r in await self.sonar()]
+                await self.say(f"      opening {fix}, wall {self.wall_fix}, pose {pose} {ranges}")
             normal, centre = float(fix["normal"]), (float(fix["x"]), float(fix["y"]))
             side = 1.0 if math.sin(math.atan2(centre[1], centre[0]) - normal) > 0 else -1.0
             await self.say(
