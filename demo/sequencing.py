@@ -37,11 +37,12 @@ DOOR_STANDOFF = 0.9
 #: Openings wider than this are not a door; a door is taken to be DOOR_WIDTH wide, m.
 MAX_DOOR_WIDTH = 1.6
 DOOR_WIDTH = 1.1
-#: Time to get out of the lab before giving up, s.
 #: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
 WALL_AHEAD_M = 1.2
 #: How long to wait in front of a door that shows no opening (closed doors open again), s.
 DOOR_WAIT_S = 75.0
+#: How long a wall across the way must stay put while the robot stands (people move on), s.
+WALL_STAYS_S = 6.0
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
 #: A junction a route's `distance` leads to lies within this of where looking began, m.
@@ -540,6 +541,29 @@ class Sequencer:
             return None
         return wrap(o.theta + float(wall["normal"])), float(wall["distance"])
 
+    async def wall_stays(self) -> bool:
+        """Whether the wall `std.fit_wall` sees ahead stays put while the robot stands.
+
+        Two people side by side in a corridor can pass for a wall across it; people do not
+        stand still for long (docs/maps.md: a pause of at most 2.5 s, at most 3 s waiting for
+        the robot), walls do. Someone walking by may hide part of a wall for a while, so the
+        wall must be seen at one distance in most looks, not in every one.
+        """
+        await self.use("runaway", "fit_wall")
+        await self.wait("abs(odom.v) < 0.02 && abs(odom.w) < 0.05", within=3)
+        looks = round(WALL_STAYS_S / 0.5)
+        seen: list[float] = []
+        for _ in range(looks):
+            self.send("step", cycles=5)
+            wall = await self.value("wall")
+            square = abs(float(wall["normal"])) < math.radians(25)
+            if wall["seen"] and int(wall["inliers"]) >= 5 and square:
+                seen.append(float(wall["distance"]))
+        if not seen:
+            return False
+        middle = sorted(seen)[len(seen) // 2]
+        return sum(abs(d - middle) < 0.08 for d in seen) >= 0.6 * looks
+
     async def beyond_wall(self) -> bool:
         """Whether the robot stands beyond the wall of the barcode last lined up with.
 
@@ -771,25 +795,34 @@ class Sequencer:
         if until == "wall":
             # Up to the wall ahead: about the middle of the corridor it ends in (corridors are
             # 1.8 to 2.6 m wide), before avoidance would start turning away from it.
-            await self.use("runaway", "avoid", "follow_hallway")
-
-            # A wall across the way: the sonars up to 30° either side of ahead see it too, so
-            # neither a jamb caught by the front sonar's cone nor clutter or a person in the
-            # corridor (which those sonars see past) is taken for it.
-            def near(k: int) -> float:  # sonar k (15° each) reads a wall WALL_AHEAD_M ahead
-                cone = math.radians(max(0.0, abs(k) * 15 - 7.5))
-                return WALL_AHEAD_M / math.cos(cone) + (0.3 if k else 0.0)
-
-            ahead = " && ".join(f"sonar.range[{k % 24}] < {near(k):.3f}" for k in (0, 1, -1, 2, -2))
-            deadline = self.t + 180
-            while await self.wait(ahead, within=deadline - self.t) == 0:
-                along = self.corridor_heading
-                if along is None or abs(wrap((await self.odom()).theta - along)) < math.radians(30):
-                    return True
-                # Facing a side wall (turned there by avoidance, round clutter): not the end.
-                if await self.wait(f"!({ahead})", within=deadline - self.t):
-                    return False
-            return False
+            # A wall across the way: a line fitted to at least 5 of the 7 sonars within 45° of
+            # ahead, square to the way. Neither a jamb caught by the front sonar's cone nor
+            # clutter or someone in the corridor (a person fills two or three sonars' view,
+            # and a narrow corridor's side walls lie along the way) is taken for it.
+            await self.set("fit_wall", "bearing_deg", 0.0)
+            await self.set("fit_wall", "half_angle_deg", 45.0)
+            await self.use("runaway", "avoid", "follow_hallway", "fit_wall", restart=["fit_wall"])
+            try:
+                ahead = (
+                    f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
+                    f" && wall.distance < {WALL_AHEAD_M}"
+                )
+                deadline = self.t + 180
+                while await self.wait(ahead, within=deadline - self.t) == 0:
+                    along = self.corridor_heading
+                    facing = (await self.odom()).theta
+                    if along is None or abs(wrap(facing - along)) < math.radians(30):
+                        if await self.wall_stays():
+                            return True
+                        await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
+                        continue
+                    # Facing a side wall (turned there by avoidance, round clutter): not the end.
+                    if await self.wait(f"!({ahead})", within=deadline - self.t):
+                        return False
+                return False
+            finally:
+                await self.restore("fit_wall", "bearing_deg")
+                await self.restore("fit_wall", "half_angle_deg")
         detector, signal = (
             ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
         )
