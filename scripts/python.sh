@@ -15,6 +15,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 PYTHON=${PYTHON:-python3}
 VENV=.venv
 TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==1.10.2" "numpy>=1.22")
+TOOLS+=("rosbags>=0.10,<1") # python/tests/test_ros2.py decodes the ROS 2 bridge's CDR with it
 TARGET=${CARGO_TARGET_DIR:-target}
 PROFILE=${SITUATE_PY_PROFILE:-release}
 say() { printf '\033[1mpython.sh:\033[0m %s\n' "$*"; }

@@ -30,6 +30,10 @@
 //! `activity`: per skill, the cycle of the last activation change the server saw
 //! (`activation_applied`, `skill_faulted`), and `observed_from`, the cycle the server started
 //! watching at, so an inactive skill's outputs can be shown as "inactive since cycle N".
+//!
+//! ## Metrics
+//! `GET /metrics` answers in Prometheus' text format: cycle time, overruns, per-skill time and
+//! faults ([`metrics`]).
 
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::net::SocketAddr;
@@ -49,6 +53,8 @@ use serde_json::{json, Value as Json};
 use situate_link::json as wire;
 use situate_manager::{ControlError, Handle, Reply, Request};
 use tokio::sync::{broadcast, watch};
+
+pub mod metrics;
 
 mod assets {
     include!(concat!(env!("OUT_DIR"), "/assets.rs"));
@@ -194,6 +200,8 @@ struct Activity {
     observed_from: u64,
     /// Per skill, the cycle of its last activation change (activation_applied, skill_faulted).
     changed: HashMap<String, u64>,
+    /// Per skill, the `skill_faulted` events seen (for `/metrics`).
+    faults: HashMap<String, u64>,
 }
 
 impl Activity {
@@ -207,6 +215,7 @@ impl Activity {
             }
             Event::SkillFaulted { skill, cycle, .. } => {
                 self.changed.insert(skill.clone(), *cycle);
+                *self.faults.entry(skill.clone()).or_default() += 1;
             }
             _ => {}
         }
@@ -269,7 +278,7 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
     let shared = Arc::new(Shared {
         handle: handle.clone(),
         run: RunInfo::new(),
-        activity: Mutex::new(Activity { observed_from, changed: HashMap::new() }),
+        activity: Mutex::new(Activity { observed_from, ..Activity::default() }),
         outcome: Mutex::new(None),
         world: config.world,
         sample_hz: config.sample_hz,
@@ -293,6 +302,7 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
     let app = Router::new()
         .route("/ws", get(ws_upgrade))
         .route("/api/world", get(world))
+        .route("/metrics", get(metrics_page))
         .fallback(static_file)
         .with_state(Arc::clone(&shared));
     let mut shutdown_wait = shutdown_rx;
@@ -405,6 +415,30 @@ fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
 }
 
 // ----- HTTP -----------------------------------------------------------------------------------
+
+/// `GET /metrics`: asks the manager off the server's thread (a scrape may wait for a cycle).
+async fn metrics_page(State(shared): State<Arc<Shared>>) -> Response {
+    match tokio::task::spawn_blocking(move || scrape(&shared)).await {
+        Ok(Ok(text)) => ([(header::CONTENT_TYPE, metrics::CONTENT_TYPE)], text).into_response(),
+        Ok(Err(e)) => {
+            (StatusCode::SERVICE_UNAVAILABLE, format!("the skill manager did not answer: {e}\n")).into_response()
+        }
+        Err(_) => (StatusCode::INTERNAL_SERVER_ERROR, "the scrape failed\n").into_response(),
+    }
+}
+
+fn scrape(shared: &Shared) -> Result<String, ControlError> {
+    let stats = match ask(&shared.handle, Request::QueryStats)? {
+        Reply::Stats(s) => s,
+        other => return Err(ControlError::Invalid(format!("unexpected reply {other:?}"))),
+    };
+    let skills = match ask(&shared.handle, Request::QuerySkills)? {
+        Reply::Skills(s) => s,
+        other => return Err(ControlError::Invalid(format!("unexpected reply {other:?}"))),
+    };
+    let faults = shared.activity.lock().unwrap_or_else(|p| p.into_inner()).faults.clone();
+    Ok(metrics::render(&stats, &skills, &faults))
+}
 
 async fn world(State(shared): State<Arc<Shared>>) -> Response {
     axum::Json(shared.world.clone().unwrap_or(Json::Null)).into_response()
@@ -855,6 +889,43 @@ mod tests {
             std::thread::sleep(Duration::from_millis(10));
         };
         assert_eq!(sample["activity"]["changed"]["runaway"], applied_at, "{sample}");
+        gui.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn metrics_count_cycles_skill_time_and_faults_in_prometheus_text_format() {
+        let (mut handle, join) = robot();
+        let gui = serve(handle.clone(), GuiConfig::default()).expect("serve");
+        let scrape = |addr| {
+            let page = http(addr, "GET /metrics HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+            assert!(page.starts_with("HTTP/1.1 200"), "{page}");
+            assert!(page.to_ascii_lowercase().contains("content-type: text/plain; version=0.0.4"), "{page}");
+            let body = page.split_once("\r\n\r\n").map(|(_, b)| b.to_string()).unwrap_or_default();
+            metrics::tests::parse(&body)
+        };
+        let before = scrape(gui.local_addr());
+        let cycles_before = before["situate_cycles_total{robot=\"guitest\"}"];
+        handle.step(5).expect("step");
+        let after = scrape(gui.local_addr());
+        assert!(after["situate_cycles_total{robot=\"guitest\"}"] >= cycles_before + 5.0, "{after:?}");
+        for skill in ["sonar", "wheels", "runaway", "wander"] {
+            let active = after[&format!("situate_skill_active{{robot=\"guitest\",skill=\"{skill}\"}}")];
+            assert_eq!(active, if skill == "wander" { 0.0 } else { 1.0 }, "{skill}");
+        }
+        assert!(after["situate_skill_runs_total{robot=\"guitest\",skill=\"runaway\"}"] >= 1.0, "{after:?}");
+        assert!(after.contains_key("situate_cycle_overruns_total{robot=\"guitest\"}"));
+        assert_eq!(after["situate_skill_faults_total{robot=\"guitest\",skill=\"runaway\"}"], 0.0);
+        // A fault as the events thread records it.
+        gui.shared.activity.lock().expect("lock").note(&situate_manager::Event::SkillFaulted {
+            skill: "runaway".into(),
+            cause: "panicked: test".into(),
+            cycle: 9,
+        });
+        let faulted = scrape(gui.local_addr());
+        assert_eq!(faulted["situate_skill_faults_total{robot=\"guitest\",skill=\"runaway\"}"], 1.0);
+        assert_eq!(faulted["situate_skill_faults_total{robot=\"guitest\",skill=\"wander\"}"], 0.0);
         gui.stop();
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();

@@ -1,0 +1,361 @@
+//! ROS 2 can see the robot: an optional bridge that publishes chosen signals of a running skill
+//! manager as ROS 2 topics over Zenoh, the way `rmw_zenoh` (ROS 2's Zenoh middleware) does, so
+//! `ros2 topic list` shows them and `ros2 topic echo` prints them with no DDS and no extra process.
+//!
+//! The bridge samples the signals through the manager's [`Handle`] between cycles, like the
+//! GUI's sampler (never on the cycle's thread), at [`Ros2Config::rate_hz`]; a signal is published
+//! when it was written since the last sample (so `drive` goes quiet when no skill commands the
+//! base, as ROS 2 subscribers expect of `cmd_vel`). Each is converted to its ROS 2 message
+//! ([`msgs`]), encoded as CDR by the `cdr` crate and put on the key expression rmw_zenoh uses,
+//! with rmw_zenoh's attachment; the node and each publisher hold rmw_zenoh's liveliness tokens
+//! ([`rmw`]). The bridge shares the link's Zenoh session, so a ROS 2 node that reaches the
+//! link's endpoint (or the Zenoh router the link connects to) sees the topics.
+//!
+//! ```no_run
+//! # fn demo(handle: situate_manager::Handle, session: zenoh::Session, section: &situate_manager::yaml::Spanned<situate_manager::yaml::Node>) -> Result<(), Box<dyn std::error::Error>> {
+//! let config = situate_ros2::Ros2Config::from_node(section)?;
+//! let bridge = situate_ros2::Bridge::start("toybot", handle, session, &config)?;
+//! // ... the robot runs ...
+//! bridge.stop();
+//! # Ok(()) }
+//! ```
+//!
+//! Only publishing is done: services (activation, parameters) are not offered — see
+//! `docs/ros2.md`.
+
+pub mod config;
+pub mod msgs;
+pub mod rmw;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use situate_core::{ElemType, SignalType, Value};
+use situate_manager::{ControlError, Handle, Reply, Request};
+use zenoh::Wait;
+
+pub use config::{Ros2Config, Ros2ConfigError, TopicConfig};
+pub use msgs::MsgType;
+
+/// How long one sample may wait for the manager.
+const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// Why the bridge could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum Ros2Error {
+    /// The configuration is invalid.
+    #[error(transparent)]
+    Config(#[from] Ros2ConfigError),
+    /// A topic's signal does not exist.
+    #[error("`ros2`: topic `{topic}`: {source}")]
+    Signal {
+        topic: String,
+        #[source]
+        source: ControlError,
+    },
+    /// A topic's signal has a type its message cannot be made from.
+    #[error("`ros2`: topic `{topic}`: signal `{signal}` is {found}, but {msg} is made from {expects}")]
+    Type { topic: String, signal: String, found: String, msg: &'static str, expects: &'static str },
+    /// Zenoh refused a declaration (a publisher or a liveliness token).
+    #[error("`ros2`: could not declare {what} on Zenoh: {message}")]
+    Zenoh { what: String, message: String },
+    /// The bridge's thread could not start.
+    #[error("`ros2`: could not start the bridge's thread: {0}")]
+    Thread(#[source] std::io::Error),
+}
+
+/// One signal published as a topic.
+struct Topic {
+    config: TopicConfig,
+    fq_name: String,
+    publisher: zenoh::pubsub::Publisher<'static>,
+    /// Held while the publisher lives: what `ros2 topic list` sees.
+    _token: zenoh::liveliness::LivelinessToken,
+    gid: [u8; 16],
+    sequence: i64,
+    last_cycle: Option<u64>,
+    warned: bool,
+}
+
+/// A running bridge. Dropping it stops it, like [`Bridge::stop`]; its liveliness tokens are
+/// withdrawn, so ROS 2 tools see the node leave.
+pub struct Bridge {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    topics: Vec<(String, String)>,
+    node_token: String,
+}
+
+impl Bridge {
+    /// Checks every topic's signal against its message type (through `handle`), declares the
+    /// node's and the publishers' liveliness tokens and the publishers on `session`, then samples
+    /// and publishes on its own thread until stopped. `robot` names the node when the
+    /// configuration does not.
+    pub fn start(
+        robot: &str,
+        handle: Handle,
+        session: zenoh::Session,
+        config: &Ros2Config,
+    ) -> Result<Bridge, Ros2Error> {
+        config.check().map_err(|message| Ros2ConfigError { pos: None, message })?;
+        let node = rmw::NodeName {
+            domain_id: config.domain_id,
+            namespace: config.namespace.clone(),
+            name: config.node_name(robot),
+        };
+        let zid = session.zid().to_string();
+        let node_id = 0u64;
+        let node_token = node.node_token(&zid, node_id);
+        let declare_token = |key: &str| {
+            session
+                .liveliness()
+                .declare_token(key.to_string())
+                .wait()
+                .map_err(|e| Ros2Error::Zenoh { what: format!("the liveliness token `{key}`"), message: e.to_string() })
+        };
+        let node_liveliness = declare_token(&node_token)?;
+        let mut topics = Vec::new();
+        for (i, t) in config.topics.iter().enumerate() {
+            let fq_name = node.resolve(&t.topic);
+            check_signal(&handle, t, &fq_name)?;
+            let key = node.topic_key(&fq_name, t.msg_type);
+            let publisher = session
+                .declare_publisher(key.clone())
+                .wait()
+                .map_err(|e| Ros2Error::Zenoh { what: format!("a publisher on `{key}`"), message: e.to_string() })?;
+            let token_key = node.publisher_token(&zid, node_id, i as u64 + 1, &fq_name, t.msg_type);
+            let token = declare_token(&token_key)?;
+            tracing::info!(topic = %fq_name, signal = %t.signal, %key, "ROS 2 topic published");
+            topics.push(Topic {
+                config: t.clone(),
+                fq_name,
+                publisher,
+                _token: token,
+                gid: rmw::gid(&token_key),
+                sequence: 0,
+                last_cycle: None,
+                warned: false,
+            });
+        }
+        let names = topics.iter().map(|t| (t.fq_name.clone(), t.publisher.key_expr().to_string())).collect();
+        let stop = Arc::new(AtomicBool::new(false));
+        let period = Duration::from_secs_f64(1.0 / config.rate_hz);
+        let st = Arc::clone(&stop);
+        let thread = std::thread::Builder::new()
+            .name("situate-ros2".into())
+            .spawn(move || {
+                let _node = node_liveliness;
+                sample_loop(&handle, &mut topics, period, &st);
+            })
+            .map_err(Ros2Error::Thread)?;
+        Ok(Bridge { stop, thread: Some(thread), topics: names, node_token })
+    }
+
+    /// Each topic's fully qualified name and the Zenoh key its messages are put on.
+    pub fn topics(&self) -> &[(String, String)] {
+        &self.topics
+    }
+
+    /// The node's liveliness token.
+    pub fn node_token(&self) -> &str {
+        &self.node_token
+    }
+
+    /// Stops publishing and withdraws the node and its publishers.
+    pub fn stop(mut self) {
+        self.stop_inner();
+    }
+
+    fn stop_inner(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            if t.join().is_err() {
+                tracing::warn!("the ROS 2 bridge's thread panicked");
+            }
+        }
+    }
+}
+
+impl Drop for Bridge {
+    fn drop(&mut self) {
+        self.stop_inner();
+    }
+}
+
+/// Refuses a signal that is unknown or of a type its message is not made from.
+fn check_signal(handle: &Handle, t: &TopicConfig, fq_name: &str) -> Result<(), Ros2Error> {
+    let reply = handle
+        .request_timeout(Request::QuerySignal { signal: t.signal.clone() }, REQUEST_TIMEOUT)
+        .map_err(|source| Ros2Error::Signal { topic: fq_name.to_string(), source })?;
+    let Reply::Signal(reading) = reply else {
+        return Err(Ros2Error::Signal {
+            topic: fq_name.to_string(),
+            source: ControlError::Invalid(format!("unexpected reply to a signal query: {reply:?}")),
+        });
+    };
+    let f64_field = |r: &situate_core::RecordType, name: &str| matches!(r.field(name), Some((_, SignalType::F64)));
+    let fits = match (t.msg_type, &reading.ty) {
+        (MsgType::Twist, SignalType::Record(r)) => f64_field(r, "v") && f64_field(r, "w"),
+        (MsgType::Odometry, SignalType::Record(r)) => f64_field(r, "x") && f64_field(r, "y") && f64_field(r, "theta"),
+        (MsgType::LaserScan, SignalType::Array { elem: ElemType::F32 | ElemType::F64, .. }) => true,
+        (MsgType::Float64, SignalType::F64) | (MsgType::Int64, SignalType::I64) | (MsgType::Bool, SignalType::Bool) => {
+            true
+        }
+        _ => false,
+    };
+    if fits {
+        Ok(())
+    } else {
+        Err(Ros2Error::Type {
+            topic: fq_name.to_string(),
+            signal: t.signal.clone(),
+            found: reading.ty.to_string(),
+            msg: t.msg_type.ros_name(),
+            expects: t.msg_type.expects(),
+        })
+    }
+}
+
+fn sample_loop(handle: &Handle, topics: &mut [Topic], period: Duration, stop: &AtomicBool) {
+    let mut next = Instant::now();
+    while !stop.load(Ordering::SeqCst) {
+        for topic in topics.iter_mut() {
+            publish_if_new(handle, topic);
+        }
+        next += period;
+        let now = Instant::now();
+        if next < now {
+            next = now + period;
+        }
+        // Sleep in short steps so a stop is seen promptly.
+        while !stop.load(Ordering::SeqCst) {
+            let now = Instant::now();
+            if now >= next {
+                break;
+            }
+            std::thread::sleep((next - now).min(Duration::from_millis(50)));
+        }
+    }
+}
+
+fn publish_if_new(handle: &Handle, topic: &mut Topic) {
+    let reading =
+        match handle.request_timeout(Request::QuerySignal { signal: topic.config.signal.clone() }, REQUEST_TIMEOUT) {
+            Ok(Reply::Signal(r)) => r,
+            Ok(_) => return,
+            Err(e) => {
+                if !topic.warned {
+                    tracing::warn!(topic = %topic.fq_name, error = %e, "ROS 2 bridge: cannot read the signal");
+                    topic.warned = true;
+                }
+                return;
+            }
+        };
+    let Some(value) = reading.value else { return };
+    if topic.last_cycle == Some(reading.cycle) {
+        return;
+    }
+    topic.last_cycle = Some(reading.cycle);
+    let payload = match to_payload(&topic.config, &value) {
+        Some(Ok(p)) => p,
+        Some(Err(e)) => {
+            tracing::warn!(topic = %topic.fq_name, error = %e, "ROS 2 bridge: cannot encode");
+            return;
+        }
+        None => {
+            if !topic.warned {
+                tracing::warn!(topic = %topic.fq_name, "ROS 2 bridge: the signal's value does not fit the message");
+                topic.warned = true;
+            }
+            return;
+        }
+    };
+    topic.sequence += 1;
+    let now_ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
+        .unwrap_or(0);
+    let attachment = rmw::attachment(topic.sequence, now_ns, &topic.gid);
+    if let Err(e) = topic.publisher.put(payload).attachment(attachment).wait() {
+        tracing::warn!(topic = %topic.fq_name, error = %e, "ROS 2 bridge: put failed");
+    }
+    tracing::trace!(topic = %topic.fq_name, cycle = reading.cycle, "published");
+}
+
+fn field(value: &Value, name: &str) -> Option<f64> {
+    match value {
+        Value::Record(r) => match r.get(name)? {
+            Value::F64(f) => Some(*f),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The message for a signal's value, CDR-encoded; `None` when the value does not fit.
+pub fn to_payload(t: &TopicConfig, value: &Value) -> Option<Result<Vec<u8>, cdr::Error>> {
+    use msgs::*;
+    let stamp = Time::now();
+    Some(match t.msg_type {
+        MsgType::Twist => encode(&Twist {
+            linear: Vector3 { x: field(value, "v")?, ..Vector3::default() },
+            angular: Vector3 { z: field(value, "w")?, ..Vector3::default() },
+        }),
+        MsgType::Odometry => {
+            let theta = field(value, "theta")?;
+            encode(&Odometry {
+                header: Header { stamp, frame_id: t.frame_id.clone().unwrap_or_else(|| "odom".into()) },
+                child_frame_id: t.child_frame_id.clone().unwrap_or_else(|| "base_link".into()),
+                pose: PoseWithCovariance {
+                    pose: Pose {
+                        position: Point { x: field(value, "x")?, y: field(value, "y")?, z: 0.0 },
+                        orientation: Quaternion::from_yaw(theta),
+                    },
+                    covariance: Covariance::default(),
+                },
+                twist: TwistWithCovariance {
+                    twist: Twist {
+                        linear: Vector3 { x: field(value, "v").unwrap_or(0.0), ..Vector3::default() },
+                        angular: Vector3 { z: field(value, "w").unwrap_or(0.0), ..Vector3::default() },
+                    },
+                    covariance: Covariance::default(),
+                },
+            })
+        }
+        MsgType::LaserScan => {
+            let ranges: Vec<f32> = match value {
+                Value::F32s(a) => a.to_vec(),
+                Value::F64s(a) => a.iter().map(|&r| r as f32).collect(),
+                _ => return None,
+            };
+            let n = ranges.len().max(1);
+            let increment = std::f32::consts::TAU / n as f32;
+            encode(&LaserScan {
+                header: Header { stamp, frame_id: t.frame_id.clone().unwrap_or_else(|| "base_link".into()) },
+                angle_min: 0.0,
+                angle_max: increment * (n - 1) as f32,
+                angle_increment: increment,
+                time_increment: 0.0,
+                scan_time: 0.0,
+                range_min: t.range_min.unwrap_or(0.0),
+                range_max: t.range_max.unwrap_or(4.0),
+                ranges,
+                intensities: Vec::new(),
+            })
+        }
+        MsgType::Float64 => match value {
+            Value::F64(f) => encode(&Float64 { data: *f }),
+            _ => return None,
+        },
+        MsgType::Int64 => match value {
+            Value::I64(i) => encode(&Int64 { data: *i }),
+            _ => return None,
+        },
+        MsgType::Bool => match value {
+            Value::Bool(b) => encode(&Bool { data: *b }),
+            _ => return None,
+        },
+    })
+}

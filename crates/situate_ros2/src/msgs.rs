@@ -1,0 +1,317 @@
+//! The ROS 2 messages the bridge publishes, as serde types that the `cdr` crate encodes in the
+//! byte layout ROS 2 uses on the wire (XCDR1, little endian, behind the 4-byte encapsulation
+//! header `00 01 00 00`), and the names and type hashes rmw_zenoh puts in key expressions.
+//!
+//! Field order and types follow the `.msg` definitions of ROS 2 Jazzy (and later: the hashes
+//! below are the same in Kilted and Rolling); the Python tests decode every message with the
+//! `rosbags` package's own definitions, and its `hash_rihs01` gives the same hashes.
+
+use serde::de::{SeqAccess, Visitor};
+use serde::ser::SerializeTuple;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// A message type the bridge can publish.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
+pub enum MsgType {
+    /// `geometry_msgs/msg/Twist` from a record `{v: f64, w: f64}` (m/s, rad/s).
+    #[serde(rename = "geometry_msgs/msg/Twist")]
+    Twist,
+    /// `nav_msgs/msg/Odometry` from a record `{x, y, theta}` (and `v`, `w` when it has them).
+    #[serde(rename = "nav_msgs/msg/Odometry")]
+    Odometry,
+    /// `sensor_msgs/msg/LaserScan` from a ring of ranges (`f32[]`/`f64[]`, index i at bearing
+    /// i·2π/n, counter-clockwise from ahead).
+    #[serde(rename = "sensor_msgs/msg/LaserScan")]
+    LaserScan,
+    /// `std_msgs/msg/Float64` from an `f64`.
+    #[serde(rename = "std_msgs/msg/Float64")]
+    Float64,
+    /// `std_msgs/msg/Int64` from an `i64`.
+    #[serde(rename = "std_msgs/msg/Int64")]
+    Int64,
+    /// `std_msgs/msg/Bool` from a `bool`.
+    #[serde(rename = "std_msgs/msg/Bool")]
+    Bool,
+}
+
+impl MsgType {
+    /// Every type, for messages that list them.
+    pub const ALL: [MsgType; 6] =
+        [MsgType::Twist, MsgType::Odometry, MsgType::LaserScan, MsgType::Float64, MsgType::Int64, MsgType::Bool];
+
+    /// The ROS 2 name: `geometry_msgs/msg/Twist`.
+    pub fn ros_name(self) -> &'static str {
+        match self {
+            MsgType::Twist => "geometry_msgs/msg/Twist",
+            MsgType::Odometry => "nav_msgs/msg/Odometry",
+            MsgType::LaserScan => "sensor_msgs/msg/LaserScan",
+            MsgType::Float64 => "std_msgs/msg/Float64",
+            MsgType::Int64 => "std_msgs/msg/Int64",
+            MsgType::Bool => "std_msgs/msg/Bool",
+        }
+    }
+
+    /// The name as rmw_zenoh writes it in key expressions (the DDS-mangled name):
+    /// `geometry_msgs::msg::dds_::Twist_`.
+    pub fn dds_name(self) -> String {
+        let name = self.ros_name();
+        let mut parts = name.split('/');
+        let (package, _, ty) = (parts.next().unwrap_or(""), parts.next(), parts.next().unwrap_or(""));
+        format!("{package}::msg::dds_::{ty}_")
+    }
+
+    /// The type's RIHS01 hash (REP 2011), as ROS 2 Jazzy and later compute it.
+    pub fn type_hash(self) -> &'static str {
+        match self {
+            MsgType::Twist => "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a",
+            MsgType::Odometry => "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0",
+            MsgType::LaserScan => "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828",
+            MsgType::Float64 => "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a",
+            MsgType::Int64 => "RIHS01_8cd1048c2f186b6bd9a92472dc1ce51723c0833a221e2b7aecfff111774f4b49",
+            MsgType::Bool => "RIHS01_feb91e995ff9ebd09c0cb3d2aed18b11077585839fb5db80193b62d74528f6c9",
+        }
+    }
+
+    /// What signal type it is made from, for error messages.
+    pub fn expects(self) -> &'static str {
+        match self {
+            MsgType::Twist => "a record with f64 fields `v` and `w`",
+            MsgType::Odometry => "a record with f64 fields `x`, `y`, `theta` (and optionally `v`, `w`)",
+            MsgType::LaserScan => "an array of f32 or f64 (a ring of ranges)",
+            MsgType::Float64 => "an f64",
+            MsgType::Int64 => "an i64",
+            MsgType::Bool => "a bool",
+        }
+    }
+}
+
+/// `builtin_interfaces/msg/Time`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Time {
+    pub sec: i32,
+    pub nanosec: u32,
+}
+
+impl Time {
+    /// The wall clock now, as ROS 2 stamps messages.
+    pub fn now() -> Time {
+        let d = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+        Time { sec: i32::try_from(d.as_secs()).unwrap_or(i32::MAX), nanosec: d.subsec_nanos() }
+    }
+}
+
+/// `std_msgs/msg/Header`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Header {
+    pub stamp: Time,
+    pub frame_id: String,
+}
+
+/// `geometry_msgs/msg/Vector3`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Vector3 {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+}
+
+/// `geometry_msgs/msg/Twist`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Twist {
+    pub linear: Vector3,
+    pub angular: Vector3,
+}
+
+/// `geometry_msgs/msg/Point`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Point {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+}
+
+/// `geometry_msgs/msg/Quaternion`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Quaternion {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+    pub w: f64,
+}
+
+impl Quaternion {
+    /// The rotation by `theta` radians about z.
+    pub fn from_yaw(theta: f64) -> Quaternion {
+        let half = theta / 2.0;
+        Quaternion { x: 0.0, y: 0.0, z: half.sin(), w: half.cos() }
+    }
+}
+
+impl Default for Quaternion {
+    fn default() -> Self {
+        Quaternion::from_yaw(0.0)
+    }
+}
+
+/// `geometry_msgs/msg/Pose`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Pose {
+    pub position: Point,
+    pub orientation: Quaternion,
+}
+
+/// A 6×6 row-major covariance (`float64[36]`): a fixed-size array, so no length on the wire.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Covariance(pub [f64; 36]);
+
+impl Default for Covariance {
+    fn default() -> Self {
+        Covariance([0.0; 36])
+    }
+}
+
+impl Serialize for Covariance {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut t = serializer.serialize_tuple(36)?;
+        for v in &self.0 {
+            t.serialize_element(v)?;
+        }
+        t.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Covariance {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Covariance;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("36 f64")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Covariance, A::Error> {
+                let mut out = [0.0; 36];
+                for (i, slot) in out.iter_mut().enumerate() {
+                    *slot = seq.next_element()?.ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                Ok(Covariance(out))
+            }
+        }
+        deserializer.deserialize_tuple(36, V)
+    }
+}
+
+/// `geometry_msgs/msg/PoseWithCovariance`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct PoseWithCovariance {
+    pub pose: Pose,
+    pub covariance: Covariance,
+}
+
+/// `geometry_msgs/msg/TwistWithCovariance`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct TwistWithCovariance {
+    pub twist: Twist,
+    pub covariance: Covariance,
+}
+
+/// `nav_msgs/msg/Odometry`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Odometry {
+    pub header: Header,
+    pub child_frame_id: String,
+    pub pose: PoseWithCovariance,
+    pub twist: TwistWithCovariance,
+}
+
+/// `sensor_msgs/msg/LaserScan`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct LaserScan {
+    pub header: Header,
+    pub angle_min: f32,
+    pub angle_max: f32,
+    pub angle_increment: f32,
+    pub time_increment: f32,
+    pub scan_time: f32,
+    pub range_min: f32,
+    pub range_max: f32,
+    pub ranges: Vec<f32>,
+    pub intensities: Vec<f32>,
+}
+
+/// `std_msgs/msg/Float64`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Float64 {
+    pub data: f64,
+}
+
+/// `std_msgs/msg/Int64`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Int64 {
+    pub data: i64,
+}
+
+/// `std_msgs/msg/Bool`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Bool {
+    pub data: bool,
+}
+
+/// Encodes a message as a ROS 2 payload: the CDR little-endian encapsulation header, then the
+/// message.
+pub fn encode<T: Serialize>(msg: &T) -> Result<Vec<u8>, cdr::Error> {
+    cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite)
+}
+
+/// Decodes a ROS 2 payload (any CDR encapsulation).
+pub fn decode<'de, T: Deserialize<'de>>(payload: &[u8]) -> Result<T, cdr::Error> {
+    cdr::deserialize(payload)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_hashes_follow_rmw_zenoh() {
+        assert_eq!(MsgType::Twist.dds_name(), "geometry_msgs::msg::dds_::Twist_");
+        assert_eq!(MsgType::Odometry.dds_name(), "nav_msgs::msg::dds_::Odometry_");
+        for t in MsgType::ALL {
+            let h = t.type_hash();
+            assert!(h.starts_with("RIHS01_") && h.len() == 7 + 64, "{t:?}: {h}");
+            assert!(h[7..].chars().all(|c| c.is_ascii_hexdigit() && !c.is_ascii_uppercase()), "{h}");
+        }
+    }
+
+    #[test]
+    fn a_twist_is_the_header_then_six_doubles() {
+        let t = Twist {
+            linear: Vector3 { x: 0.5, ..Vector3::default() },
+            angular: Vector3 { z: -1.0, ..Vector3::default() },
+        };
+        let bytes = encode(&t).expect("encodes");
+        assert_eq!(&bytes[..4], &[0, 1, 0, 0], "CDR little endian");
+        assert_eq!(bytes.len(), 4 + 6 * 8);
+        assert_eq!(&bytes[4..12], &0.5f64.to_le_bytes());
+        assert_eq!(&bytes[44..52], &(-1.0f64).to_le_bytes());
+        assert_eq!(decode::<Twist>(&bytes).expect("decodes"), t);
+    }
+
+    #[test]
+    fn strings_carry_their_terminator_and_doubles_are_aligned() {
+        // Header: sec, nanosec, then "odom" as length 5 + "odom\0"; the child frame's length
+        // follows at offset 20 of the body; the pose's first double is aligned to 8.
+        let o = Odometry {
+            header: Header { stamp: Time { sec: 1, nanosec: 2 }, frame_id: "odom".into() },
+            child_frame_id: "base_link".into(),
+            ..Odometry::default()
+        };
+        let bytes = encode(&o).expect("encodes");
+        let body = &bytes[4..];
+        assert_eq!(&body[8..12], &5u32.to_le_bytes());
+        assert_eq!(&body[12..17], b"odom\0");
+        assert_eq!(&body[20..24], &10u32.to_le_bytes());
+        assert_eq!(&body[24..34], b"base_link\0");
+        assert_eq!(body.len(), 40 + (7 + 36 + 6 + 36) * 8, "pose from offset 40, no gaps after");
+        assert_eq!(decode::<Odometry>(&bytes).expect("decodes"), o);
+    }
+}
