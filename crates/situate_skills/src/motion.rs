@@ -253,6 +253,9 @@ pub struct FollowHallway {
     axis: Option<f64>,
     /// The one wall's distance when it alone came into view.
     lone: Option<f64>,
+    /// A point of the line followed (odometry frame): where the robot was when it last saw a
+    /// wall, or was activated. Held where no wall is seen (a lobby, a crossing).
+    line: Option<(f64, f64)>,
 }
 
 impl FollowHallway {
@@ -270,6 +273,7 @@ impl Body for FollowHallway {
             self.sides = [Window::default(); 2];
             self.axis = None;
             self.lone = None;
+            self.line = None;
         }
         // Only walls roughly along the corridor are the corridor's: at a junction the side
         // sonars see the side corridor's walls, across it, and steering by them would turn
@@ -357,12 +361,30 @@ impl Body for FollowHallway {
                 self.axis = Some(wrap(axis + 0.1 * wrap(along - axis)));
             }
         }
+        // Where no wall is seen, back to the line the robot was on: pushed aside in a lobby
+        // (going round someone), it would otherwise go on parallel to its way, and miss the
+        // corridor it was heading for or clip its jamb.
+        if let Some(o) = self.odom {
+            if seen.is_some() || self.line.is_none() {
+                self.line = Some((o.x, o.y));
+            }
+        }
         let (offset, angle) = match (seen, self.odom, self.axis) {
             (seen, Some(o), Some(axis)) => {
                 let angle = wrap(axis - o.theta);
                 // The walls' left and right are the corridor's only while facing its way.
-                let offset =
-                    seen.map_or(0.0, |(off, _)| if angle.abs() > std::f64::consts::FRAC_PI_2 { -off } else { off });
+                let offset = match (seen, self.line) {
+                    (Some((off, _)), _) => {
+                        if angle.abs() > std::f64::consts::FRAC_PI_2 {
+                            -off
+                        } else {
+                            off
+                        }
+                    }
+                    // Left of the line (along the axis) by `c`: the way is to the right.
+                    (None, Some((lx, ly))) => (o.x - lx) * axis.sin() - (o.y - ly) * axis.cos(),
+                    (None, None) => 0.0,
+                };
                 (offset, angle)
             }
             (Some((offset, angle)), _, _) => (offset, angle),

@@ -364,6 +364,44 @@ fn follow_hallway_with_odometry_turns_back_to_its_way_when_turned_round() {
     assert!(base.pose.theta.cos() > 0.9, "faces its way again: {:?}", base.pose);
 }
 
+#[test]
+fn follow_hallway_with_odometry_returns_to_its_line_across_a_lobby() {
+    // A lobby (x 0..7, y -4..4) with its entry straight ahead (y -0.9..0.9), the corridor
+    // beyond ending at x 14. Walking out of it, the robot is pushed aside and turned (going
+    // round someone, as avoidance does): it comes back to the line it was on before the
+    // entry, not parallel to it beside the jamb (generated building 20004, goal floor).
+    let scene = Scene::new()
+        .wall(0.0, -4.0, 7.0, -4.0)
+        .wall(0.0, 4.0, 7.0, 4.0)
+        .wall(0.0, -4.0, 0.0, 4.0)
+        .wall(7.0, -4.0, 7.0, -0.9)
+        .wall(7.0, 0.9, 7.0, 4.0)
+        .wall(7.0, -0.9, 14.0, -0.9)
+        .wall(7.0, 0.9, 14.0, 0.9)
+        .wall(14.0, -0.9, 14.0, 0.9);
+    for (seed, push, turn) in [(1u64, -0.45, -60f64), (2, 0.4, 50.0), (3, -0.3, 0.0)] {
+        let mut h = Harness::new::<FollowHallway>().param("speed", val(0.4));
+        let mut noise = Noise::new(seed, 0.03, 0.02);
+        let mut base = Base::new(Pose::new(1.0, 0.0, 0.0));
+        let mut at_entry = None;
+        for i in 0..1200 {
+            if i == 40 {
+                base = Base::new(Pose::new(base.pose.x, base.pose.y + push, turn.to_radians()));
+            }
+            let r = noise.apply(scene.sonar(base.pose));
+            let d = drive_of(&mut h, &[("sonar", val::<[f32; SONARS]>(r)), ("odom", odom(base.pose))])
+                .expect("always writes");
+            base.step(Some(d), DT);
+            if at_entry.is_none() && base.pose.x > 6.5 {
+                at_entry = Some(base.pose);
+            }
+        }
+        let at_entry = at_entry.unwrap_or_else(|| panic!("seed {seed}: never reached the entry: {:?}", base.pose));
+        assert!(at_entry.y.abs() < 0.15, "seed {seed}: at the entry {:.2} m off its line", at_entry.y);
+        assert!(base.pose.x > 12.0 && base.pose.y.abs() < 0.3, "seed {seed}: stopped at {:?}", base.pose);
+    }
+}
+
 /// A corridor 2.49 m wide along x (y 6.51..9) ending in a crossing corridor
 /// 1.82 m wide (x 12.79..14.61) with a dead end 3.3 m to the right, an alcove
 /// on its left past the corner and a bin in that corner: a T, as in
