@@ -43,6 +43,8 @@ WALL_AHEAD_M = 1.2
 DOOR_WAIT_S = 75.0
 #: How long a wall across the way must stay put while the robot stands (people move on), s.
 WALL_STAYS_S = 6.0
+#: Following for a distance: the time in which some way must be made, s.
+FOLLOW_SLICE_S = 20.0
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
 #: A junction a route's `distance` leads to lies within this of where looking began, m.
@@ -905,11 +907,40 @@ class Sequencer:
         return False
 
     async def follow_for(self, metres: float) -> bool:
-        """Follows the hallway for ``metres`` (odometry, straight-line from here)."""
-        far = farther_than(await self.odom(), metres)
-        await self.use("runaway", "avoid", "follow_hallway")
+        """Follows the hallway for ``metres`` along the way (odometry).
+
+        The way is the route's heading, not any straight line from here: pushed out of a
+        corridor's mouth into the crossing corridor (going round someone), the robot would go
+        on along the wrong one, pressing towards its way. Making less than 0.5 m of way in
+        ``FOLLOW_SLICE_S``, it goes back to where the step began, faces the way and starts
+        again (twice at most).
+        """
+        start = await self.odom()
+        heading = start.theta if self.corridor_heading is None else self.corridor_heading
+        c, s = math.cos(heading), math.sin(heading)
+        made_expr = f"(odom.x - {start.x!r}) * {c!r} + (odom.y - {start.y!r}) * {s!r}"
         # 0.3 m/s, with time to wait for people in the way and to go round them.
-        return await self.wait(far, within=60 + 10 * metres) == 0
+        deadline = self.t + 60 + 10 * metres
+        await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
+        best, restarts = 0.0, 0
+        while self.t < deadline:
+            within = min(FOLLOW_SLICE_S, deadline - self.t)
+            if await self.wait(f"{made_expr} > {metres!r}", within=within) == 0:
+                return True
+            o = await self.odom()
+            made = (o.x - start.x) * c + (o.y - start.y) * s
+            if made > best + 0.5:
+                best = made
+                continue
+            if restarts == 2:
+                return False
+            restarts += 1
+            await self.say(f"    {made:.1f} of {metres:.1f} m made, no more: from the start again")
+            await self.goto(start.x, start.y, within=40)
+            await self.turn(wrap(heading - (await self.odom()).theta))
+            await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
+            best = 0.0
+        return False
 
     async def run_route(
         self,
