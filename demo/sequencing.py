@@ -548,23 +548,32 @@ class Sequencer:
 
         Two people side by side in a corridor can pass for a wall across it; people do not
         stand still for long (docs/maps.md: a pause of at most 2.5 s, at most 3 s waiting for
-        the robot), walls do. Someone walking by may hide part of a wall for a while, so the
-        wall must be seen at one distance in most looks, not in every one.
+        the robot), walls do. Someone walking by hides part of a wall for a while, so it must
+        be seen at one distance in most looks of ``WALL_STAYS_S``, not in every one; where
+        people keep passing (a busy crossing), it looks again, three times at most. Seen in
+        few looks, it was people, gone.
         """
         await self.use("runaway", "fit_wall")
         await self.wait("abs(odom.v) < 0.02 && abs(odom.w) < 0.05", within=3)
         looks = round(WALL_STAYS_S / 0.5)
-        seen: list[float] = []
-        for _ in range(looks):
-            self.send("step", cycles=5)
-            wall = await self.value("wall")
-            square = abs(float(wall["normal"])) < math.radians(25)
-            if wall["seen"] and int(wall["inliers"]) >= 5 and square:
-                seen.append(float(wall["distance"]))
-        if not seen:
-            return False
-        middle = sorted(seen)[len(seen) // 2]
-        return sum(abs(d - middle) < 0.08 for d in seen) >= 0.6 * looks
+        for _window in range(3):
+            seen: list[float] = []
+            for _ in range(looks):
+                self.send("step", cycles=5)
+                wall = await self.value("wall")
+                square = abs(float(wall["normal"])) < math.radians(25)
+                near = float(wall["distance"]) < WALL_AHEAD_M + 0.1
+                if wall["seen"] and int(wall["inliers"]) >= 5 and square and near:
+                    seen.append(float(wall["distance"]))
+            middle = sorted(seen)[len(seen) // 2] if seen else 0.0
+            steady = sum(abs(d - middle) < 0.08 for d in seen)
+            if self.debug:
+                await self.say(f"      wall looks: {steady} of {looks} steady, {len(seen)} seen")
+            if steady >= 0.6 * looks:
+                return True
+            if steady <= 0.2 * looks:
+                return False
+        return False
 
     async def beyond_wall(self) -> bool:
         """Whether the robot stands beyond the wall of the barcode last lined up with.
