@@ -38,6 +38,7 @@ from sequencing import (
     PhaseFailed,
     Pose,
     Sequencer,
+    bearing_of,
     wrap,
 )
 
@@ -373,7 +374,13 @@ class Delivery(Sequencer):
         about = wrap(math.pi + (float(wall["normal"]) if wall is not None else 0.0))
         if not await self.turn(about, keep=["runaway"]):
             raise PhaseFailed("could not turn round in the car")
-        if await self.wait(f"floor == {m.goal_floor} && sonar.range[0] > 2.2", within=90):
+        # The door open ahead: the front sonar looks out through it. A dead one reads what
+        # the sonar filter fills in from its neighbours, which see the jambs: then the live
+        # sonar nearest ahead is turned to the door.
+        look = await self.live_sonar_ahead()
+        if look != 0 and not await self.turn(-bearing_of(look), keep=["runaway"]):
+            raise PhaseFailed("could not turn round in the car")
+        if await self.wait(f"floor == {m.goal_floor} && sonar.range[{look}] > 2.2", within=90):
             raise PhaseFailed(f"the car never opened on floor {m.goal_floor}")
         await self.phase(10, f"floor {m.goal_floor}: leaving the car")
         await self.set("leave_car", "distance", 3.0)

@@ -755,6 +755,13 @@ class Sequencer:
         finally:
             await self.set("runaway", "safe_distance", 0.1)  # still in the car
 
+    async def live_sonar_ahead(self) -> int:
+        """The sonar nearest ahead that `std.sonar_filter` does not take to be dead."""
+        health = await self.value("sonar.health")
+        mask = int(health["mask"]) if health else 0
+        live = [k for k in range(SONARS) if not mask >> k & 1]
+        return min(live, key=lambda k: abs(bearing_of(k))) if live else 0
+
     async def enclosed(self) -> bool:
         """Whether walls are near all round (inside a car: all but the door's sonars)."""
         ranges = await self.sonar()
