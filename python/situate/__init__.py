@@ -128,8 +128,13 @@ def version() -> str:
     return _native.version()
 
 
+#: The package's version (that of the ``situate`` program built into it).
+__version__: str = version()
+
+
 __all__ = [
     "DEFAULT_ENDPOINT",
+    "__version__",
     "ActivationApplied",
     "AmbiguousRobot",
     "BadCondition",
