@@ -7,14 +7,15 @@
 #   scripts/python.sh test     ... then ruff, mypy (strict) and pytest
 #
 # Environment: PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
-# SITUATE_PY_PROFILE=release|debug (default release; debug reuses `cargo test`'s build).
+# SITUATE_PY_PROFILE=release|debug (default release; debug reuses `cargo test`'s build),
+# SITUATE_ZENOH_VERSION (the Python zenoh installed for the tests, default 1.10.2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 
 PYTHON=${PYTHON:-python3}
 VENV=.venv
-TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==1.10.2" "numpy>=1.22")
+TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==${SITUATE_ZENOH_VERSION:-1.10.2}" "numpy>=1.22")
 TARGET=${CARGO_TARGET_DIR:-target}
 PROFILE=${SITUATE_PY_PROFILE:-release}
 say() { if [[ -t 1 ]]; then printf '\033[1mpython.sh:\033[0m %s\n' "$*"; else printf 'python.sh: %s\n' "$*"; fi; }

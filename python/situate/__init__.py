@@ -134,7 +134,6 @@ __version__: str = version()
 
 __all__ = [
     "DEFAULT_ENDPOINT",
-    "__version__",
     "ActivationApplied",
     "AmbiguousRobot",
     "BadCondition",
@@ -186,6 +185,7 @@ __all__ = [
     "UnknownSkill",
     "UnknownVerb",
     "Winner",
+    "__version__",
     "connect",
     "param",
     "port",
