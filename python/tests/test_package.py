@@ -85,3 +85,28 @@ def test_a_bad_robot_file_is_exit_3(tmp_path: Path) -> None:
     result = situate("check", str(bad))
     assert result.returncode == 3
     assert f"{bad}:3:" in result.stderr
+
+
+def test_the_sbom_names_local_crates_by_relative_paths(tmp_path: Path) -> None:
+    import importlib.util
+    import zipfile
+
+    script = Path(__file__).resolve().parents[2] / "scripts" / "sbom_relative.py"
+    spec = importlib.util.spec_from_file_location("sbom_relative", script)
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    wheel = tmp_path / "x-0.1-py3-none-any.whl"
+    sbom = '{"bom-ref": "path+file:///build/here/crates/x#0.1.0", "src": "file:///build/here"}'
+    with zipfile.ZipFile(wheel, "w") as z:
+        z.writestr("x/__init__.py", "")
+        z.writestr("x-0.1.dist-info/sboms/x.cyclonedx.json", sbom)
+        z.writestr("x-0.1.dist-info/RECORD", "")
+    assert module.rewrite(wheel, "/build/here/") == 1
+    with zipfile.ZipFile(wheel) as z:
+        text = z.read("x-0.1.dist-info/sboms/x.cyclonedx.json").decode()
+        record = z.read("x-0.1.dist-info/RECORD").decode()
+    assert "/build/here" not in text
+    assert "path+file:crates/x#0.1.0" in text
+    assert "x-0.1.dist-info/sboms/x.cyclonedx.json,sha256=" in record
