@@ -197,4 +197,4 @@ def test_the_native_program_releases_the_gil_and_returns_its_exit_code() -> None
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith("robot `toybot`: ")  # the program's own summary
-    assert result.stdout.splitlines()[-1] == "result: toybot 0 1"
+    assert result.stdout.splitlines()[-1] == "result: toybot 0 3"  # 3: a bad file
