@@ -7,18 +7,19 @@
 #   scripts/python.sh test     ... then ruff, mypy (strict) and pytest
 #
 # Environment: PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
-# SITUATE_PY_PROFILE=release|debug (default release; debug reuses `cargo test`'s build).
+# SITUATE_PY_PROFILE=release|debug (default release; debug reuses `cargo test`'s build),
+# SITUATE_ZENOH_VERSION (the Python zenoh installed for the tests, default 1.10.2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 
 PYTHON=${PYTHON:-python3}
 VENV=.venv
-TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==1.10.2" "numpy>=1.22")
+TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==${SITUATE_ZENOH_VERSION:-1.10.2}" "numpy>=1.22")
 TOOLS+=("rosbags>=0.10,<1") # python/tests/test_ros2.py decodes the ROS 2 bridge's CDR with it
 TARGET=${CARGO_TARGET_DIR:-target}
 PROFILE=${SITUATE_PY_PROFILE:-release}
-say() { printf '\033[1mpython.sh:\033[0m %s\n' "$*"; }
+say() { if [[ -t 1 ]]; then printf '\033[1mpython.sh:\033[0m %s\n' "$*"; else printf 'python.sh: %s\n' "$*"; fi; }
 
 # 1. The virtualenv and the tools (re-installed only when the list above changes).
 if [[ ! -x $VENV/bin/python ]]; then
@@ -32,7 +33,9 @@ if [[ ! -f $stamp || "$(cat "$stamp")" != "${TOOLS[*]}" ]]; then
     printf '%s' "${TOOLS[*]}" >"$stamp"
 fi
 
-# 2. The wheel (abi3: one wheel for CPython 3.9+), installed like any user's.
+# 2. The wheel (abi3: one wheel for CPython 3.9+), installed like any user's. Its package data
+#    (the demo, the maps and the examples, for `situate demo` anywhere) is copied in first.
+scripts/package-data.sh
 wheels=$TARGET/situate-wheels
 rm -rf "$wheels"
 profile_flag=(--release)

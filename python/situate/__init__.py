@@ -128,6 +128,10 @@ def version() -> str:
     return _native.version()
 
 
+#: The package's version (that of the ``situate`` program built into it).
+__version__: str = version()
+
+
 __all__ = [
     "DEFAULT_ENDPOINT",
     "ActivationApplied",
@@ -181,6 +185,7 @@ __all__ = [
     "UnknownSkill",
     "UnknownVerb",
     "Winner",
+    "__version__",
     "connect",
     "param",
     "port",

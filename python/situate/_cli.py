@@ -20,12 +20,13 @@ import signal
 import sys
 import threading
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from types import FrameType
 from typing import Any, Union
 
 _Handler = Union[Callable[[int, Union[FrameType, None]], Any], int, None]
 
-__all__ = ["main", "serve_skill_main"]
+__all__ = ["data_dir", "main", "serve_skill_main"]
 
 
 def main(argv: Sequence[str] | None = None) -> None:
@@ -40,7 +41,24 @@ def main(argv: Sequence[str] | None = None) -> None:
     # run (they are chained) and raise KeyboardInterrupt once the program has returned.
     with contextlib.suppress(ValueError):  # not the main thread: leave them
         signal.signal(signal.SIGINT, signal.SIG_DFL)
-    sys.exit(_native.main(["situate", *args[1:]]))
+    data = data_dir()
+    sys.exit(
+        _native.main(
+            ["situate", *args[1:]],
+            interpreter=sys.executable or None,
+            data_dir=str(data) if data is not None else None,
+        )
+    )
+
+
+def data_dir() -> Path | None:
+    """The package data: ``demo/``, ``maps/`` and ``examples/`` as the wheel ships them.
+
+    ``None`` when the package runs from a checkout without them (``situate demo`` then uses the
+    checkout's ``demo/``).
+    """
+    path = Path(__file__).resolve().parent / "_data"
+    return path if (path / "demo" / "robot.yaml").is_file() else None
 
 
 def _names_python_function(argv: Sequence[str]) -> bool:

@@ -2,10 +2,12 @@
 
 from typing import Any
 
-def main(argv: list[str]) -> int:
+def main(argv: list[str], interpreter: str | None = None, data_dir: str | None = None) -> int:
     """Runs the `situate` program with `argv` (first item: the program name); returns its exit code.
 
-    The GIL is released while it runs; robot files may list `python:` skill files.
+    The GIL is released while it runs; robot files may list `python:` skill files. `interpreter`
+    runs the demo's sequencer (`sys.executable`); `data_dir` holds the shipped `demo/`, `maps/`
+    and `examples/`.
     """
 
 def version() -> str:

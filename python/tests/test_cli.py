@@ -49,7 +49,7 @@ def test_activate_and_deactivate(toybot: Manager) -> None:
     on = situate("activate", "wander", "--with-providers", *toybot.connect_args)
     assert on.stdout.startswith("activated wander from cycle"), on.stderr
     bad = situate("activate", "wandr", *toybot.connect_args)
-    assert bad.returncode == 1
+    assert bad.returncode == 5  # refused
     assert "did you mean `wander`?" in bad.stderr
 
 
@@ -60,10 +60,10 @@ def test_param_get_and_set(toybot: Manager) -> None:
     get = situate("param", "get", "runaway", "safe_distance", *toybot.connect_args)
     assert get.stdout.strip() == "0.3"
     bad = situate("param", "set", "runaway", "safe_distance", "far", *toybot.connect_args)
-    assert bad.returncode == 1
+    assert bad.returncode == 5
     assert "far" in bad.stderr
     unknown = situate("param", "get", "runaway", "safe_distanc", *toybot.connect_args)
-    assert unknown.returncode == 1
+    assert unknown.returncode == 5
     assert "did you mean `safe_distance`" in unknown.stderr
 
 
@@ -75,7 +75,7 @@ def test_query(toybot: Manager) -> None:
     reading = json.loads(situate("query", "odom", "--json", *toybot.connect_args).stdout)
     assert set(reading["value"]) == {"x", "y", "theta"}
     bad = situate("query", "sonar.rnge", *toybot.connect_args)
-    assert bad.returncode == 1
+    assert bad.returncode == 5
     assert "did you mean `sonar.range`" in bad.stderr
 
 
@@ -85,7 +85,7 @@ def test_monitor_prints_its_event(toybot: Manager) -> None:
     assert "registered (once)" in result.stderr
     assert "sonar.range[0] < 100" in result.stdout
     bad = situate("monitor", "sonar.range[0] <", *toybot.connect_args)
-    assert bad.returncode == 1
+    assert bad.returncode == 5
     assert "^" in bad.stderr  # the pointer under the problem
 
 
@@ -137,7 +137,7 @@ def test_stats_and_cycle(toybot: Manager) -> None:
     assert situate("cycle", "run", *toybot.connect_args).returncode == 0
     assert json.loads(situate("stats", "--json", *toybot.connect_args).stdout)["running"]
     bad = situate("cycle", "step", "0", *toybot.connect_args)
-    assert bad.returncode == 1
+    assert bad.returncode == 5
     assert "cycles" in bad.stderr
 
 
@@ -197,4 +197,4 @@ def test_the_native_program_releases_the_gil_and_returns_its_exit_code() -> None
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith("robot `toybot`: ")  # the program's own summary
-    assert result.stdout.splitlines()[-1] == "result: toybot 0 1"
+    assert result.stdout.splitlines()[-1] == "result: toybot 0 3"  # 3: a bad file

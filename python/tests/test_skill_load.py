@@ -84,7 +84,7 @@ def test_load_errors_name_the_file_and_line(
     assert expected in message
     # The program says the same, at the same place.
     result = situate("check", str(path))
-    assert result.returncode == 1
+    assert result.returncode == 3  # a bad file
     assert expected in result.stderr
     assert "robot.yaml:3:" in result.stderr
 
@@ -94,7 +94,7 @@ def test_an_import_error_shows_the_users_frames_first_without_the_loaders(files:
     files("skills.py", "import situate\nimport helper_mod\n\nhelper_mod.fail()\n")
     path = files("robot.yaml", robot("skills.py"))
     result = situate("check", str(path))
-    assert result.returncode == 1
+    assert result.returncode == 3
     err = result.stderr
     assert "skills.py:4: ValueError while importing: boom" in err
     frames = [line.strip() for line in err.splitlines() if line.strip().startswith('File "')]
@@ -124,7 +124,7 @@ def test_a_wrong_type_name_in_the_robot_file_suggests_the_python_one(files: Writ
     files("skills.py", GOOD)
     path = files("robot.yaml", robot("skills.py").replace("type: ok.skill", "type: ok.skil"))
     result = situate("check", str(path))
-    assert result.returncode == 1
+    assert result.returncode == 3
     assert "ok.skill" in result.stderr
 
 

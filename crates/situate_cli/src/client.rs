@@ -1,8 +1,22 @@
 //! The client verbs of `situate`: drive a running robot over the link
 //! (`skills`, `activate`, `param`, `query`, `monitor`, `events`, `stats`,
-//! `cycle`). Every failure is one sentence on stderr and exit status 1.
+//! `cycle`) and look into it (`signals`, `graph`, `winners`, `monitors`,
+//! `param dump|load`); `signals` and `graph` also read a robot file
+//! statically. Every failure is one sentence (`situate: …`) with its exit
+//! code: 4 when no robot answered, 5 when the robot refused the request.
 
-use super::*;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use clap::{Args, Subcommand};
+use serde_json::{json, Value as Json};
+use situate_link::{Client, ClientError};
+
+use crate::args::Compose;
+use crate::output::{problem, Exit, Out, Problem};
+use crate::signals;
+use crate::Extensions;
 
 #[derive(Args, Clone)]
 pub(crate) struct Remote {
@@ -15,9 +29,6 @@ pub(crate) struct Remote {
     /// Seconds to wait for an answer.
     #[arg(long, global = true, default_value_t = 5.0)]
     pub(crate) timeout: f64,
-    /// Print the protocol's JSON instead of text.
-    #[arg(long, global = true)]
-    pub(crate) json: bool,
     /// A JSON5 file merged into the client's Zenoh configuration (credentials, TLS).
     #[arg(long, global = true, env = "SITUATE_ZENOH_CONFIG")]
     pub(crate) zenoh: Option<PathBuf>,
@@ -44,16 +55,39 @@ pub(crate) enum ClientCommand {
         #[command(flatten)]
         remote: Remote,
     },
-    /// Get or set a parameter: `param get SKILL PARAM`, `param set SKILL PARAM VALUE`.
+    /// A running robot's parameters: `param get SKILL PARAM`, `param set SKILL PARAM VALUE`,
+    /// `param dump` (every value, as a file `param load` reads), `param load FILE`.
     Param {
-        #[arg(value_parser = ["get", "set"])]
-        action: String,
-        skill: String,
-        param: String,
-        value: Option<String>,
+        #[command(subcommand)]
+        action: ParamAction,
+    },
+    /// The signals, with their types, writers and readers: of a robot file, statically
+    /// (`signals robot.yaml`), or of a running robot.
+    Signals {
+        /// A robot file to read instead of asking a running robot.
+        file: Option<PathBuf>,
+        #[command(flatten)]
+        compose: Compose,
         #[command(flatten)]
         remote: Remote,
     },
+    /// The data-flow graph (skills and the signals between them): of a robot file, statically,
+    /// or of a running robot; `--dot` for Graphviz (`situate graph robot.yaml --dot | dot -Tsvg`).
+    Graph {
+        /// A robot file to read instead of asking a running robot.
+        file: Option<PathBuf>,
+        /// Graphviz's dot language instead of text.
+        #[arg(long, conflicts_with = "json")]
+        dot: bool,
+        #[command(flatten)]
+        compose: Compose,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Which skill won each resource (a signal several skills write) in the last cycle.
+    Winners(#[command(flatten)] Remote),
+    /// The monitors registered on a running robot.
+    Monitors(#[command(flatten)] Remote),
     /// The current value of a signal (`sonar.range`, or a whole record such as `odom`).
     Query {
         signal: String,
@@ -99,71 +133,88 @@ pub(crate) enum ClientCommand {
     },
 }
 
-pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
+/// `situate param …`.
+#[derive(Subcommand)]
+pub(crate) enum ParamAction {
+    /// One parameter's value.
+    Get {
+        skill: String,
+        param: String,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Set one parameter (from the next cycle): the value is JSON (a number, true/false, a list,
+    /// a quoted string), anything else is taken as text.
+    Set {
+        skill: String,
+        param: String,
+        value: String,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Every parameter's value, as one JSON object `{skill: {param: value}}` (what `param load` reads).
+    Dump {
+        /// Only these skills (repeatable).
+        #[arg(long)]
+        skill: Vec<String>,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Set the parameters of a file `{skill: {param: value}}` (JSON or JSON5, as `param dump` writes).
+    Load {
+        file: PathBuf,
+        #[command(flatten)]
+        remote: Remote,
+    },
+}
+
+pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow::Result<()> {
     match command {
         ClientCommand::Skills(remote) => client_verb(&remote, |c, robot| {
             let skills = c.request(robot, "skills", &json!({}))?;
-            if remote.json {
-                println!("{skills}");
-            } else {
+            out.result(&skills, || {
+                let mut lines = Vec::new();
                 for s in skills.as_array().into_iter().flatten() {
                     let state = match (s["faulted"].as_str(), s["active"].as_bool()) {
                         (Some(f), _) => format!("faulted: {f}"),
                         (None, Some(true)) => "active".into(),
                         _ => "inactive".into(),
                     };
-                    println!(
+                    lines.push(format!(
                         "{:<16} {:<18} {:<6} priority {:<4} {state}",
                         s["name"].as_str().unwrap_or(""),
                         s["type_name"].as_str().unwrap_or(""),
                         s["kind"].as_str().unwrap_or(""),
                         s["priority"]
-                    );
+                    ));
                 }
-            }
+                lines.join("\n")
+            });
             Ok(())
         }),
         ClientCommand::Activate { names, with_providers, remote } => client_verb(&remote, |c, robot| {
             let r = c.request(robot, "activate", &json!({"skills": names, "with_providers": with_providers}))?;
-            print_change(&remote, &r, "activated");
+            out.result(&r, || change_text(&r, "activated"));
             Ok(())
         }),
         ClientCommand::Deactivate { names, remote } => client_verb(&remote, |c, robot| {
             let r = c.request(robot, "deactivate", &json!({"skills": names}))?;
-            print_change(&remote, &r, "deactivated");
+            out.result(&r, || change_text(&r, "deactivated"));
             Ok(())
         }),
-        ClientCommand::Param { action, skill, param, value, remote } => client_verb(&remote, |c, robot| {
-            if action == "set" {
-                let Some(text) = &value else {
-                    anyhow::bail!("`param set` needs a VALUE: situate param set {skill} {param} VALUE");
-                };
-                // A number, true/false, or a JSON string; anything else is taken as text.
-                let v: Json = serde_json::from_str(text).unwrap_or_else(|_| Json::String(text.clone()));
-                c.request(robot, "set_param", &json!({"skill": skill, "param": param, "value": v}))?;
-                if !remote.json {
-                    println!("{skill}.{param} = {v} (from the next cycle)");
-                }
-            } else {
-                let v = c.request(robot, "get_param", &json!({"skill": skill, "param": param}))?;
-                println!("{v}");
-            }
-            Ok(())
-        }),
+        ClientCommand::Param { action } => param(action, out),
         ClientCommand::Query { signal, remote } => client_verb(&remote, |c, robot| {
             let r = c.request(robot, "query", &json!({"signal": signal}))?;
-            if remote.json {
-                println!("{r}");
-            } else {
-                println!(
+            out.result(&r, || {
+                format!(
                     "{} = {} ({}, cycle {}, by {})",
                     r["signal"].as_str().unwrap_or(""),
                     r["value"],
                     r["type"].as_str().unwrap_or(""),
                     r["cycle"],
                     r["writer"]
-                );
-            }
+                )
+            });
             Ok(())
         }),
         ClientCommand::Monitor { condition, any, mode, count, remote } => client_verb(&remote, |c, robot| {
@@ -177,25 +228,25 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
             };
             let r = c.request(robot, "monitor_add", &args)?;
             let id = r["monitor"].as_u64().unwrap_or(0);
-            eprintln!("monitor {id} registered ({mode}): {shown}");
+            if !out.quiet {
+                eprintln!("monitor {id} registered ({mode}): {shown}");
+            }
             let limit = count.or(if mode == "once" { Some(1) } else { None });
             let mut seen = 0;
-            let interrupted = interrupt_flag()?;
+            let interrupted = signals::Stop::install()?;
             while limit.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
                     if e["monitor"].as_u64() == Some(id) {
                         seen += 1;
-                        if remote.json {
-                            println!("{e}");
-                        } else {
-                            println!(
+                        out.result(&e, || {
+                            format!(
                                 "cycle {} (t = {:.3} s): {} — {}",
                                 e["cycle"],
                                 e["time_s"].as_f64().unwrap_or(0.0),
                                 held_text(condition.as_deref(), &any, &e["held"]),
                                 e["values"]
-                            );
-                        }
+                            )
+                        });
                     }
                 }
             }
@@ -206,7 +257,7 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
         }),
         ClientCommand::Events { count, remote } => client_verb(&remote, |c, robot| {
             let (_sub, events) = c.subscribe(robot, "events/**")?;
-            let interrupted = interrupt_flag()?;
+            let interrupted = signals::Stop::install()?;
             let mut seen = 0;
             while count.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
@@ -218,10 +269,8 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
         }),
         ClientCommand::Stats(remote) => client_verb(&remote, |c, robot| {
             let s = c.request(robot, "stats", &json!({}))?;
-            if remote.json {
-                println!("{s}");
-            } else {
-                println!(
+            out.result(&s, || {
+                format!(
                     "robot `{}`: cycle {}, {} s, {}; cycle time mean {:.1} µs, max {:.1} µs; overruns {}; late starts {}; active: {}",
                     s["robot"].as_str().unwrap_or(""),
                     s["cycle"],
@@ -236,8 +285,8 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
                     s["overruns"],
                     s["late_starts"],
                     s["active"].as_array().map(|a| a.iter().filter_map(Json::as_str).collect::<Vec<_>>().join(", ")).unwrap_or_default()
-                );
-            }
+                )
+            });
             Ok(())
         }),
         ClientCommand::Cycle { action, cycles, remote } => client_verb(&remote, |c, robot| {
@@ -245,75 +294,352 @@ pub(crate) fn run(command: ClientCommand) -> anyhow::Result<ExitCode> {
                 "step" => c.request(robot, "step", &json!({"cycles": cycles.unwrap_or(1)}))?,
                 other => c.request(robot, other, &json!({}))?,
             };
+            out.result(&json!({"cycle": action}), String::new);
+            Ok(())
+        }),
+        ClientCommand::Signals { file, compose, remote } => {
+            let graph = graph_json(file.as_deref(), &compose, &remote, ext)?;
+            let signals = graph["signals"].clone();
+            out.result(&signals, || signals_text(&signals));
+            Ok(())
+        }
+        ClientCommand::Graph { file, dot, compose, remote } => {
+            let graph = graph_json(file.as_deref(), &compose, &remote, ext)?;
+            if dot {
+                print!("{}", graph_dot(&graph));
+            } else {
+                out.result(&graph, || graph_text(&graph));
+            }
+            Ok(())
+        }
+        ClientCommand::Winners(remote) => client_verb(&remote, |c, robot| {
+            let w = c.request(robot, "winners", &json!({}))?;
+            out.result(&w, || {
+                let mut lines = Vec::new();
+                for r in w.as_array().into_iter().flatten() {
+                    let writers: Vec<&str> =
+                        r["writers"].as_array().into_iter().flatten().filter_map(Json::as_str).collect();
+                    lines.push(format!(
+                        "{:<20} won by {:<16} (writers: {}; cycle {})",
+                        r["signal"].as_str().unwrap_or(""),
+                        r["winner"].as_str().unwrap_or("nobody"),
+                        writers.join(", "),
+                        r["cycle"]
+                    ));
+                }
+                if lines.is_empty() {
+                    "no resources (no signal has several writers)".to_string()
+                } else {
+                    lines.join("\n")
+                }
+            });
+            Ok(())
+        }),
+        ClientCommand::Monitors(remote) => client_verb(&remote, |c, robot| {
+            let list = c.request(robot, "monitor_list", &json!({}))?;
+            out.result(&list, || {
+                let lines: Vec<String> = list
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .map(|m| {
+                        format!(
+                            "monitor {} ({}{}): {}; fired {}, holds {}{}",
+                            m["monitor"],
+                            m["mode"].as_str().unwrap_or(""),
+                            if m["pause"].as_bool() == Some(true) { ", pause" } else { "" },
+                            m["condition"].as_str().unwrap_or(""),
+                            m["fired"],
+                            m["holds"],
+                            m["client"].as_str().map(|c| format!("; client {c}")).unwrap_or_default()
+                        )
+                    })
+                    .collect();
+                if lines.is_empty() {
+                    "no monitors".to_string()
+                } else {
+                    lines.join("\n")
+                }
+            });
             Ok(())
         }),
     }
 }
 
-fn print_change(remote: &Remote, r: &Json, what: &str) {
-    if remote.json {
-        println!("{r}");
-        return;
-    }
-    let changed: Vec<&str> = r["changed"].as_array().into_iter().flatten().filter_map(Json::as_str).collect();
-    if changed.is_empty() {
-        println!("nothing {what} (already so)");
-    } else {
-        println!("{what} {} from cycle {}", changed.join(", "), r["at_cycle"]);
+/// `situate param …`.
+fn param(action: ParamAction, out: Out) -> anyhow::Result<()> {
+    match action {
+        ParamAction::Get { skill, param, remote } => client_verb(&remote, |c, robot| {
+            let v = c.request(robot, "get_param", &json!({"skill": skill, "param": param}))?;
+            out.result(&v, || v.to_string());
+            Ok(())
+        }),
+        ParamAction::Set { skill, param, value, remote } => client_verb(&remote, |c, robot| {
+            // A number, true/false, or a JSON string; anything else is taken as text.
+            let v: Json = serde_json::from_str(&value).unwrap_or_else(|_| Json::String(value.clone()));
+            c.request(robot, "set_param", &json!({"skill": skill, "param": param, "value": v}))?;
+            out.result(&json!({"skill": skill, "param": param, "value": v}), || {
+                format!("{skill}.{param} = {v} (from the next cycle)")
+            });
+            Ok(())
+        }),
+        ParamAction::Dump { skill, remote } => client_verb(&remote, |c, robot| {
+            let skills = c.request(robot, "skills", &json!({}))?;
+            let mut dump = serde_json::Map::new();
+            for s in skills.as_array().into_iter().flatten() {
+                let name = s["name"].as_str().unwrap_or_default();
+                if !skill.is_empty() && !skill.iter().any(|k| k == name) {
+                    continue;
+                }
+                let params: serde_json::Map<String, Json> = s["params"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .map(|p| (p["name"].as_str().unwrap_or_default().to_string(), p["value"].clone()))
+                    .collect();
+                if !params.is_empty() {
+                    dump.insert(name.to_string(), Json::Object(params));
+                }
+            }
+            for k in &skill {
+                if !dump.contains_key(k) && !skills.as_array().into_iter().flatten().any(|s| s["name"] == **k) {
+                    return Err(problem(Exit::Refused, format!("no skill `{k}` on robot `{robot}`")));
+                }
+            }
+            let dump = Json::Object(dump);
+            // The text form is the file `param load` reads, pretty-printed.
+            out.result(&dump, || serde_json::to_string_pretty(&dump).unwrap_or_default());
+            Ok(())
+        }),
+        ParamAction::Load { file, remote } => {
+            let values = read_param_file(&file)?;
+            client_verb(&remote, |c, robot| {
+                let mut set = Vec::new();
+                for (skill, params) in &values {
+                    for (param, value) in params {
+                        c.request(robot, "set_param", &json!({"skill": skill, "param": param, "value": value}))?;
+                        set.push(format!("{skill}.{param}"));
+                    }
+                }
+                out.result(&json!({"set": set}), || format!("set {} parameters (from the next cycle)", set.len()));
+                Ok(())
+            })
+        }
     }
 }
 
-pub(crate) fn client_verb(
-    remote: &Remote,
-    f: impl FnOnce(&Client, &str) -> anyhow::Result<()>,
-) -> anyhow::Result<ExitCode> {
+/// One skill's parameter values, from a parameter file.
+type SkillParams = (String, Vec<(String, Json)>);
+
+/// A parameter file `{skill: {param: value}}`, checked whole before anything is set.
+fn read_param_file(file: &Path) -> anyhow::Result<Vec<SkillParams>> {
+    let shown = file.display();
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| Problem::file_problem(format!("{shown}: cannot read the parameter file: {e}")))?;
+    let root: Json =
+        json5::from_str(&text).map_err(|e| Problem::file_problem(format!("{shown}: not JSON or JSON5: {e}")))?;
+    let Json::Object(skills) = root else {
+        return Err(Problem::file_problem(format!(
+            "{shown}: expected an object {{skill: {{param: value}}}} (what `situate param dump` writes)"
+        ))
+        .into());
+    };
+    let mut out = Vec::new();
+    for (skill, params) in skills {
+        let Json::Object(params) = params else {
+            return Err(Problem::file_problem(format!(
+                "{shown}: `{skill}`: expected an object of parameter values {{param: value}}"
+            ))
+            .into());
+        };
+        out.push((skill, params.into_iter().collect()));
+    }
+    Ok(out)
+}
+
+/// The protocol's `graph` object: of a robot file, built here without
+/// running anything, or asked of the running robot.
+fn graph_json(file: Option<&Path>, compose: &Compose, remote: &Remote, ext: &Extensions) -> anyhow::Result<Json> {
+    let Some(file) = file else {
+        if !compose.set.is_empty() {
+            return Err(problem(Exit::Usage, "--set changes a robot file: give the file"));
+        }
+        let mut graph = Json::Null;
+        client_verb(remote, |c, robot| {
+            graph = c.request(robot, "graph", &json!({}))?;
+            Ok(())
+        })?;
+        return Ok(graph);
+    };
+    let (_loaded, g) = crate::robot::static_graph(file, compose, ext)?;
+    let info = situate::manager::control::GraphInfo {
+        skills: g
+            .instances
+            .iter()
+            .map(|d| situate::manager::control::GraphSkill {
+                name: d.name.clone(),
+                kind: d.kind,
+                active: d.active,
+                priority: d.priority,
+                inputs: d.inputs.iter().map(|p| p.signal.clone()).collect(),
+                outputs: d.outputs.iter().map(|p| p.signal.clone()).collect(),
+            })
+            .collect(),
+        signals: g
+            .leaves
+            .iter()
+            .map(|l| situate::manager::control::GraphSignal {
+                signal: l.path.clone(),
+                ty: l.ty.clone(),
+                writers: l.writers.iter().map(|&(w, _)| g.instances[w].name.clone()).collect(),
+                readers: l.readers.iter().map(|&(r, _)| g.instances[r].name.clone()).collect(),
+            })
+            .collect(),
+    };
+    Ok(situate_link::json::reply_to_json(&situate::manager::Reply::Graph(info)))
+}
+
+fn names(list: &Json) -> String {
+    let names: Vec<&str> = list.as_array().into_iter().flatten().filter_map(Json::as_str).collect();
+    if names.is_empty() {
+        "-".to_string()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// `sonar.range  f32[24]  written by sonar  read by runaway, wander`.
+fn signals_text(signals: &Json) -> String {
+    let rows: Vec<&Json> = signals.as_array().into_iter().flatten().collect();
+    let width = rows.iter().filter_map(|s| s["signal"].as_str()).map(str::len).max().unwrap_or(0);
+    let type_width = rows.iter().filter_map(|s| s["type"].as_str()).map(str::len).max().unwrap_or(0);
+    rows.iter()
+        .map(|s| {
+            format!(
+                "{:<width$}  {:<type_width$}  written by {}; read by {}",
+                s["signal"].as_str().unwrap_or(""),
+                s["type"].as_str().unwrap_or(""),
+                names(&s["writers"]),
+                names(&s["readers"])
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The skills with their inputs and outputs, then the signals.
+fn graph_text(graph: &Json) -> String {
+    let mut lines = Vec::new();
+    for s in graph["skills"].as_array().into_iter().flatten() {
+        lines.push(format!(
+            "{} ({}, priority {}, {}): in {} -> out {}",
+            s["name"].as_str().unwrap_or(""),
+            s["kind"].as_str().unwrap_or(""),
+            s["priority"],
+            if s["active"].as_bool() == Some(true) { "active" } else { "inactive" },
+            names(&s["inputs"]),
+            names(&s["outputs"])
+        ));
+    }
+    lines.push(String::new());
+    lines.push(signals_text(&graph["signals"]));
+    lines.join("\n")
+}
+
+/// Graphviz: skills as boxes (inactive ones dashed), signals as ellipses,
+/// an edge from each writer to its signal and from the signal to each reader.
+fn graph_dot(graph: &Json) -> String {
+    use std::fmt::Write as _;
+    let quote = |s: &str| format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""));
+    let mut dot = String::from("digraph situate {\n  rankdir=LR;\n  node [fontname=\"Helvetica\"];\n");
+    for s in graph["skills"].as_array().into_iter().flatten() {
+        let name = s["name"].as_str().unwrap_or("");
+        let style = if s["active"].as_bool() == Some(true) { "solid" } else { "dashed" };
+        let _ = writeln!(
+            dot,
+            "  {} [shape=box, style={style}, label={}];",
+            quote(&format!("skill:{name}")),
+            quote(&format!("{name}\\n{}", s["kind"].as_str().unwrap_or("")))
+        );
+    }
+    for s in graph["signals"].as_array().into_iter().flatten() {
+        let signal = s["signal"].as_str().unwrap_or("");
+        let resource = s["writers"].as_array().is_some_and(|w| w.len() > 1);
+        let _ = writeln!(
+            dot,
+            "  {} [shape=ellipse{}, label={}];",
+            quote(&format!("signal:{signal}")),
+            if resource { ", peripheries=2" } else { "" },
+            quote(&format!("{signal}\\n{}", s["type"].as_str().unwrap_or("")))
+        );
+        for w in s["writers"].as_array().into_iter().flatten().filter_map(Json::as_str) {
+            let _ = writeln!(dot, "  {} -> {};", quote(&format!("skill:{w}")), quote(&format!("signal:{signal}")));
+        }
+        for r in s["readers"].as_array().into_iter().flatten().filter_map(Json::as_str) {
+            let _ = writeln!(dot, "  {} -> {};", quote(&format!("signal:{signal}")), quote(&format!("skill:{r}")));
+        }
+    }
+    dot.push_str("}\n");
+    dot
+}
+
+fn change_text(r: &Json, what: &str) -> String {
+    let changed: Vec<&str> = r["changed"].as_array().into_iter().flatten().filter_map(Json::as_str).collect();
+    if changed.is_empty() {
+        format!("nothing {what} (already so)")
+    } else {
+        format!("{what} {} from cycle {}", changed.join(", "), r["at_cycle"])
+    }
+}
+
+/// Connects, finds the robot and runs `f`; a client error becomes a
+/// [`Problem`] of its kind (no robot answering, or the request refused).
+pub(crate) fn client_verb(remote: &Remote, f: impl FnOnce(&Client, &str) -> anyhow::Result<()>) -> anyhow::Result<()> {
     let extra = match &remote.zenoh {
         None => None,
         Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            Some(json5::from_str::<Json>(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| Problem::file_problem(format!("{}: cannot read: {e}", path.display())))?;
+            Some(
+                json5::from_str::<Json>(&text)
+                    .map_err(|e| Problem::file_problem(format!("{}: {e}", path.display())))?,
+            )
         }
     };
-    let mut client = match Client::connect_with(&remote.connect, extra.as_ref()) {
-        Ok(c) => c,
-        Err(e) => return Ok(client_failure(&e)),
-    };
+    let mut client = Client::connect_with(&remote.connect, extra.as_ref()).map_err(|e| client_problem(&e))?;
     // Clamped: `--timeout inf` or `nan` must not panic.
     client.timeout = Duration::from_secs_f64(if remote.timeout.is_finite() {
         remote.timeout.clamp(0.1, 86_400.0)
     } else {
         86_400.0
     });
-    let robot = match client.resolve_robot(remote.robot.as_deref()) {
-        Ok(r) => r,
-        Err(e) => return Ok(client_failure(&e)),
-    };
-    match f(&client, &robot) {
-        Ok(()) => Ok(ExitCode::SUCCESS),
-        Err(e) => match (e.downcast_ref::<ClientError>(), e.downcast_ref::<situate_link::LinkError>()) {
-            (Some(c), _) => Ok(client_failure(c)),
-            (None, Some(l)) => {
-                eprintln!("situate: {l}");
-                Ok(ExitCode::FAILURE)
-            }
-            (None, None) => Err(e),
-        },
-    }
+    let robot = client.resolve_robot(remote.robot.as_deref()).map_err(|e| client_problem(&e))?;
+    f(&client, &robot).map_err(|e| {
+        if let Some(c) = e.downcast_ref::<ClientError>() {
+            return client_problem(c);
+        }
+        if let Some(l) = e.downcast_ref::<situate_link::LinkError>() {
+            return Problem::new(Exit::Failure, l.to_string()).said_by_situate().into();
+        }
+        e
+    })
 }
 
 /// A client error, said as a sentence (`situate: …`): a manager's refusal
 /// with its pointer line if any, never the link's raw data.
-fn client_failure(e: &ClientError) -> ExitCode {
-    match e {
-        ClientError::Remote(r) => {
-            eprintln!("situate: {}", r.message);
-            if let Some(p) = r.detail.get("pointer").and_then(Json::as_str) {
-                eprintln!("{p}");
-            }
-        }
-        other => eprintln!("situate: {other}"),
-    }
-    ExitCode::FAILURE
+fn client_problem(e: &ClientError) -> anyhow::Error {
+    let p = match e {
+        ClientError::Remote(r) => Problem {
+            after: r.detail.get("pointer").and_then(Json::as_str).map(str::to_string).into_iter().collect(),
+            ..Problem::new(Exit::Refused, r.message.clone()).said_by_situate().with_detail(json!({"remote": r.detail}))
+        },
+        ClientError::NoAnswer { .. }
+        | ClientError::TimedOut { .. }
+        | ClientError::NotReachable { .. }
+        | ClientError::Ambiguous(_) => Problem::new(Exit::NoRobot, e.to_string()).said_by_situate(),
+        other => Problem::new(Exit::Failure, other.to_string()).said_by_situate(),
+    };
+    p.into()
 }
 
 /// What held, for a person: the condition, or the `any` conditions the event
@@ -347,7 +673,7 @@ mod tests {
 
     fn monitor(args: &[&str]) -> Result<(Option<String>, Vec<String>), String> {
         let argv = ["situate", "monitor"].iter().chain(args);
-        match Cli::try_parse_from(argv).map_err(|e| e.kind().to_string())?.command {
+        match <Cli as clap::Parser>::try_parse_from(argv).map_err(|e| e.kind().to_string())?.command {
             ClientCommand::Monitor { condition, any, .. } => Ok((condition, any)),
             _ => Err("not monitor".into()),
         }

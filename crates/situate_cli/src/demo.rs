@@ -5,13 +5,26 @@
 //! Ctrl-C (or at once with `--exit-when-done`); headless, the demo ends with
 //! the mission.
 
-use super::*;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use serde_json::json;
+
+use situate::manager::Control as _;
+
+use crate::output::{problem, Exit, Out};
+use crate::robot::{start_robot, RunOptions};
+use crate::signals;
+use crate::sim::{SimOverrides, WorldArgs};
+use crate::Extensions;
 
 #[derive(clap::Args)]
 pub(crate) struct DemoOptions {
-    /// The demo's robot file.
-    #[arg(long, default_value = "demo/robot.yaml")]
-    pub(crate) robot: PathBuf,
+    /// The demo's robot file (default: demo/robot.yaml of the checkout or of the installed package).
+    #[arg(long)]
+    pub(crate) robot: Option<PathBuf>,
     /// Another building (a map file; see docs/maps.md).
     #[arg(long)]
     pub(crate) map: Option<PathBuf>,
@@ -27,10 +40,11 @@ pub(crate) struct DemoOptions {
     /// `all-active`: every skill always on, priority arbitration only.
     #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active"])]
     pub(crate) mode: String,
-    /// The sequencer program.
-    #[arg(long, default_value = "demo/deliver.py")]
-    pub(crate) sequencer: PathBuf,
-    /// The Python interpreter for the sequencer (default: .venv/bin/python, else python3).
+    /// The sequencer program (default: demo/deliver.py next to the robot file).
+    #[arg(long)]
+    pub(crate) sequencer: Option<PathBuf>,
+    /// The Python interpreter for the sequencer (default: the one the Python package's `situate`
+    /// runs in; for the Rust binary .venv/bin/python, else python3).
     #[arg(long, env = "SITUATE_PYTHON")]
     pub(crate) python: Option<PathBuf>,
     /// With the GUI: simulated time runs this many times faster than real time.
@@ -42,9 +56,6 @@ pub(crate) struct DemoOptions {
     /// Give up after this much simulated time, s.
     #[arg(long, default_value_t = 1800.0)]
     pub(crate) limit_s: f64,
-    /// Print the outcome as one JSON line.
-    #[arg(long)]
-    pub(crate) json: bool,
     /// With the GUI: exit when the mission ends (by default the GUI stays up, showing the
     /// outcome, until Ctrl-C). Headless, the demo always exits when the mission ends.
     #[arg(long)]
@@ -57,13 +68,60 @@ fn free_port() -> anyhow::Result<u16> {
     Ok(l.local_addr()?.port())
 }
 
-pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<ExitCode> {
-    if !demo.sequencer.is_file() {
-        anyhow::bail!(
-            "no sequencer at `{}` (run the demo from the repository's top directory, or give --sequencer)",
-            demo.sequencer.display()
-        );
+/// Where the demo's files may be: `demo/` in the current directory (a
+/// checkout), then the host's package data (the wheel ships `demo/`,
+/// `maps/` and `examples/`).
+fn demo_dirs(ext: &Extensions) -> Vec<PathBuf> {
+    let mut dirs = vec![PathBuf::from(".")];
+    dirs.extend(ext.data_dir.clone());
+    dirs
+}
+
+/// The robot file and the sequencer: as given, else found by [`demo_dirs`].
+fn demo_files(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<(PathBuf, PathBuf)> {
+    let robot = match &demo.robot {
+        Some(r) => r.clone(),
+        None => {
+            let dirs = demo_dirs(ext);
+            let found = dirs.iter().map(|d| d.join("demo/robot.yaml")).find(|p| p.is_file());
+            found.ok_or_else(|| {
+                let looked: Vec<String> = dirs.iter().map(|d| d.join("demo").display().to_string()).collect();
+                problem(
+                    Exit::Usage,
+                    format!(
+                        "no demo found (looked in {}): run it from the repository's top directory, install the                          Python package (which ships it), or give --robot and --sequencer",
+                        looked.join(", ")
+                    ),
+                )
+            })?
+        }
+    };
+    let sequencer = match &demo.sequencer {
+        Some(s) => s.clone(),
+        None => robot.parent().unwrap_or(Path::new(".")).join("deliver.py"),
+    };
+    if !sequencer.is_file() {
+        return Err(problem(Exit::Usage, format!("no sequencer at `{}` (give --sequencer)", sequencer.display())));
     }
+    Ok((robot, sequencer))
+}
+
+/// The sequencer's interpreter: `--python` (or `$SITUATE_PYTHON`), else the
+/// host's (the Python package's own), else `.venv/bin/python` of a checkout,
+/// else `python3` from PATH.
+fn interpreter(demo: &DemoOptions, ext: &Extensions) -> PathBuf {
+    demo.python.clone().or_else(|| ext.interpreter.clone()).unwrap_or_else(|| {
+        let venv = PathBuf::from(".venv/bin/python");
+        if venv.is_file() {
+            venv
+        } else {
+            PathBuf::from("python3")
+        }
+    })
+}
+
+pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
+    let (robot_file, sequencer) = demo_files(demo, ext)?;
     let port = free_port()?;
     let endpoint = format!("tcp/127.0.0.1:{port}");
     let opts = RunOptions {
@@ -77,32 +135,25 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
         ..RunOptions::default()
     };
     // Ctrl-C (and SIGTERM, SIGHUP) stop the sequencer and end the demo with its outcome.
-    let stop = interrupt_flag()?;
-    let running = match start_robot(&demo.robot, &opts, ext) {
-        Ok(r) => r,
-        Err(done) => return done,
-    };
+    let stop = signals::Stop::install()?;
+    let running = start_robot(&robot_file, &opts, ext, out)?;
     let Some(sim) = &running.sim else {
         let _ = running.finish();
-        anyhow::bail!("`{}` has no `simulator:` section: the demo needs the simulated robot", demo.robot.display());
+        return Err(problem(
+            Exit::BadFile,
+            format!("`{}` has no `simulator:` section: the demo needs the simulated robot", robot_file.display()),
+        ));
     };
     let mission = sim.map.mission_json().to_string();
-    let python = demo.python.clone().unwrap_or_else(|| {
-        let venv = PathBuf::from(".venv/bin/python");
-        if venv.is_file() {
-            venv
-        } else {
-            PathBuf::from("python3")
-        }
-    });
+    let python = interpreter(demo, ext);
     let started = Instant::now();
     let mut command = std::process::Command::new(&python);
     command
-        .arg(&demo.sequencer)
+        .arg(&sequencer)
         .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
         .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
         .args(["--seed", &demo.seed.to_string()])
-        .args(if demo.json { &["--quiet"][..] } else { &[][..] });
+        .args(if out.json { &["--quiet"][..] } else { &[][..] });
     let run =
         run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
     let wall_s = started.elapsed().as_secs_f64();
@@ -144,7 +195,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
         "interrupted": run.interrupted.map(signals::name),
         "phase": run.phase,
     });
-    if demo.json {
+    if out.json {
         println!("{outcome}");
     } else {
         let delivered = match delivered_at {
@@ -169,22 +220,22 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<E
         );
     }
     let code = match (run.interrupted, delivered_at) {
-        (Some(sig), _) => ExitCode::from(signals::status(sig)),
-        (None, Some(_)) => ExitCode::SUCCESS,
-        (None, None) => ExitCode::FAILURE,
+        (Some(sig), _) => signals::status(sig),
+        (None, Some(_)) => Exit::Ok.code(),
+        (None, None) => Exit::Failure.code(),
     };
     if let Some(running) = running {
         if let Some(gui) = &running.gui {
             gui.set_outcome(outcome_for_page(delivered_at, sim_time, &run));
-            eprintln!(
-                "situate: the mission is over; the GUI stays on {} until Ctrl-C (--exit-when-done: exit at once)",
+            out.note(format_args!(
+                "the mission is over; the GUI stays on {} until Ctrl-C (--exit-when-done: exit at once)",
                 gui.url()
-            );
+            ));
         }
         while stop.signal().is_none() {
             std::thread::sleep(Duration::from_millis(50));
         }
-        eprintln!("situate: {}: closing the GUI", stop.signal().map(signals::name).unwrap_or("stop"));
+        out.note(format_args!("{}: closing the GUI", stop.signal().map(signals::name).unwrap_or("stop")));
         running.finish()?;
     }
     // A Ctrl-C after the mission only closes the GUI: the status is the mission's.

@@ -2,12 +2,13 @@
 //! and telling a map file from a robot file for `situate check`.
 
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
 
 use anyhow::Context as _;
 use clap::Subcommand;
 use serde_json::{json, Value as Json};
 use situate_sim::generate;
+
+use crate::output::{problem, Exit, Out};
 
 #[derive(Subcommand)]
 pub(crate) enum MapCommand {
@@ -52,15 +53,10 @@ pub(crate) enum MapCommand {
     /// Check a map: the loader's errors, then the mission's feasibility for the delivery robot
     /// (reachability, barcodes readable, cars boardable, doors, route). Every finding is reported
     /// as FILE:LINE: ELEMENT: MESSAGE; exit status 1 when there is any.
-    Check {
-        file: PathBuf,
-        /// Print the outcome as one JSON object.
-        #[arg(long)]
-        json: bool,
-    },
+    Check { file: PathBuf },
 }
 
-pub(crate) fn map_command(command: MapCommand) -> anyhow::Result<ExitCode> {
+pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
     match command {
         MapCommand::Generate {
             seed,
@@ -86,26 +82,24 @@ pub(crate) fn map_command(command: MapCommand) -> anyhow::Result<ExitCode> {
                 barcode_offset,
                 route: !no_route,
             };
-            let g = match generate::generate(seed, &opts) {
-                Ok(g) => g,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return Ok(ExitCode::from(2));
-                }
-            };
+            let g = generate::generate(seed, &opts).map_err(|e| problem(Exit::Usage, e.to_string()))?;
             if output.as_os_str() == "-" {
                 print!("{}", g.yaml);
             } else {
                 std::fs::write(&output, &g.yaml).with_context(|| format!("cannot write {}", output.display()))?;
-                eprintln!("{}: building of seed {seed} written", output.display());
+                if out.json {
+                    println!("{}", json!({"file": output.display().to_string(), "seed": seed}));
+                } else {
+                    eprintln!("{}: building of seed {seed} written", output.display());
+                }
             }
-            Ok(ExitCode::SUCCESS)
+            Ok(Exit::Ok.code())
         }
-        MapCommand::Check { file, json } => map_check(&file, json),
+        MapCommand::Check { file } => map_check(&file, out.json),
     }
 }
 
-fn map_check(file: &Path, json: bool) -> anyhow::Result<ExitCode> {
+fn map_check(file: &Path, json: bool) -> anyhow::Result<u8> {
     let shown = file.display().to_string();
     let findings: Vec<Json> = match situate_sim::load_map(file) {
         Err(e) => {
@@ -131,7 +125,7 @@ fn map_check(file: &Path, json: bool) -> anyhow::Result<ExitCode> {
         }
         eprintln!("{shown}: {} finding{}", findings.len(), if findings.len() == 1 { "" } else { "s" });
     }
-    Ok(if findings.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+    Ok(if findings.is_empty() { Exit::Ok.code() } else { Exit::Failure.code() })
 }
 
 /// Whether the text looks like a map file (top-level `floors:` or `elevator:`)

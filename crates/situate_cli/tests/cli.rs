@@ -74,7 +74,7 @@ fn check_reports_every_error_with_its_position_and_a_count() {
     let (_dir, path) = robot_file("broken.yaml", BROKEN);
     let out = situate([OsStr::new("check"), path.as_os_str()]);
     assert_no_panic(&out);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(3), "3: a bad file");
     assert_eq!(stdout(&out), "");
     let p = shown(&path);
     assert_eq!(
@@ -94,7 +94,7 @@ fn check_reports_every_error_of_a_file_that_does_not_read() {
     let (_dir, path) = robot_file("unreadable.yaml", UNREADABLE);
     let out = situate([OsStr::new("check"), path.as_os_str()]);
     assert_no_panic(&out);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(3), "3: a bad file");
     assert_eq!(stdout(&out), "");
     let p = shown(&path);
     let err = stderr(&out);
@@ -137,7 +137,7 @@ fn check_of_a_missing_file_names_it_without_panicking() {
     let path = dir.path().join("no-such-robot.yaml");
     let out = situate([OsStr::new("check"), path.as_os_str()]);
     assert_no_panic(&out);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(3), "3: a bad file");
     assert_eq!(stdout(&out), "");
     let err = stderr(&out);
     let first = lines(&err).first().copied().unwrap_or_default().to_string();
@@ -195,7 +195,7 @@ fn run_reports_a_yaml_syntax_error_with_its_position() {
         OsStr::new("--no-link"),
     ]);
     assert_no_panic(&out);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(3), "3: a bad file");
     assert_eq!(stdout(&out), "");
     assert_eq!(
         lines(&stderr(&out)),
@@ -217,7 +217,7 @@ fn run_refuses_a_robot_that_does_not_check() {
         OsStr::new("--no-link"),
     ]);
     assert_no_panic(&out);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(3), "3: a bad file");
     assert_eq!(stdout(&out), "", "no summary for a robot that did not build");
     let p = shown(&path);
     let err = stderr(&out);
@@ -464,7 +464,7 @@ fn a_gui_address_that_is_not_one_is_refused_before_anything_runs() {
 }
 
 #[test]
-fn the_demo_without_its_sequencer_says_where_to_run_it() {
+fn the_demo_without_its_files_says_where_it_looked() {
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_situate"))
         .args(["demo", "--headless"])
@@ -472,8 +472,8 @@ fn the_demo_without_its_sequencer_says_where_to_run_it() {
         .output()
         .unwrap();
     assert_no_panic(&out);
-    assert!(!out.status.success());
-    assert!(stderr(&out).contains("no sequencer at `demo/deliver.py`"), "{}", stderr(&out));
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("no demo found (looked in ./demo)"), "{}", stderr(&out));
 }
 
 // --- situate map generate / map check --------------------------------------

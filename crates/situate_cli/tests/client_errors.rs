@@ -75,7 +75,7 @@ fn situate(args: &[&str]) -> Output {
 /// The one error line of a failed client verb, checked to be a sentence.
 fn sentence(out: &Output) -> String {
     let err = String::from_utf8_lossy(&out.stderr).trim().to_string();
-    assert_eq!(out.status.code(), Some(1), "stderr:\n{err}");
+    assert_eq!(out.status.code(), Some(4), "4: no robot answered; stderr:\n{err}");
     assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
     assert_eq!(err.lines().count(), 1, "one line:\n{err}");
     assert!(err.starts_with("situate: "), "{err}");

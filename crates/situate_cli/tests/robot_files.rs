@@ -36,7 +36,7 @@ fn check(path: &Path) -> Output {
 fn assert_errors(out: &Output, path: &Path, want: &[&str]) {
     let shown = path.display().to_string();
     let err = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "stdout: {}\nstderr: {err}", stdout(out));
+    assert_eq!(out.status.code(), Some(3), "3: a bad file; stdout: {}\nstderr: {err}", stdout(out));
     let mut expected: Vec<String> = want.iter().map(|w| format!("{shown}:{w}")).collect();
     expected.push(format!("{shown}: {} error{}", want.len(), if want.len() == 1 { "" } else { "s" }));
     assert_eq!(err.lines().collect::<Vec<_>>(), expected);
@@ -216,7 +216,7 @@ fn a_map_file_over_its_cap_is_refused_by_its_size() {
     let map = dir.path().join("map.yaml");
     std::fs::File::create(&map).unwrap().set_len(64 << 20).unwrap();
     let out = check(&path);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(3));
     let err = stderr(&out);
     assert!(
         err.starts_with(&format!(

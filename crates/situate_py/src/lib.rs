@@ -20,14 +20,22 @@ pub mod robot;
 pub mod skill;
 
 /// Runs the `situate` program with `argv` (the first item is the program
-/// name, as in `sys.argv`) and returns its exit code.
+/// name, as in `sys.argv`) and returns its exit code. `interpreter` is the
+/// Python that runs the demo's sequencer (`sys.executable`); `data_dir` holds
+/// the package's `demo/`, `maps/` and `examples/`.
 #[pyfunction]
-fn main(py: Python<'_>, argv: Vec<String>) -> i32 {
+#[pyo3(signature = (argv, interpreter=None, data_dir=None))]
+fn main(
+    py: Python<'_>,
+    argv: Vec<String>,
+    interpreter: Option<std::path::PathBuf>,
+    data_dir: Option<std::path::PathBuf>,
+) -> i32 {
     // Other extensions (added by the program later) keep their defaults.
     #[allow(clippy::needless_update)]
-    let ext = situate_cli::Extensions { python: Some(loader::python_loader()), ..Default::default() };
-    let code = py.detach(move || situate_cli::main_with(argv, ext));
-    exit_code_to_int(code)
+    let ext =
+        situate_cli::Extensions { python: Some(loader::python_loader()), interpreter, data_dir, ..Default::default() };
+    i32::from(py.detach(move || situate_cli::main_with(argv, ext)))
 }
 
 /// The version of the `situate` program built into this module.
@@ -42,17 +50,6 @@ fn version() -> &'static str {
 fn load_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Vec<String>> {
     let types = py.detach(|| loader::load_file(&path)).map_err(pyo3::exceptions::PyValueError::new_err)?;
     Ok(types.iter().map(|t| skill::describe(&t.decl)).collect())
-}
-
-/// `ExitCode` is opaque; its `Debug` form is the only portable window on
-/// the number (`ExitCode(unix_exit_status(1))`), so read the digits from it.
-fn exit_code_to_int(code: std::process::ExitCode) -> i32 {
-    if code == std::process::ExitCode::SUCCESS {
-        return 0;
-    }
-    let text = format!("{code:?}");
-    let digits: String = text.chars().filter(char::is_ascii_digit).collect();
-    digits.parse().unwrap_or(1)
 }
 
 #[pymodule]
@@ -76,17 +73,4 @@ fn convert_check<'py>(value: &Bound<'py, PyAny>, ty: &str) -> PyResult<Bound<'py
     let st = situate_core::SignalType::parse(ty).map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     let v = convert::from_py(value, &st).map_err(|m| pyo3::exceptions::PyTypeError::new_err(m.to_string()))?;
     convert::to_py(value.py(), &v)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::process::ExitCode;
-
-    #[test]
-    fn exit_codes_keep_their_number() {
-        assert_eq!(exit_code_to_int(ExitCode::SUCCESS), 0);
-        assert_eq!(exit_code_to_int(ExitCode::FAILURE), 1);
-        assert_eq!(exit_code_to_int(ExitCode::from(2)), 2);
-    }
 }

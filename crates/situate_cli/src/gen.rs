@@ -1,0 +1,70 @@
+//! What the program knows of skill types: `situate types` lists them, and
+//! `situate gen` writes a manifest's typed I/O for C, C++ or Python.
+
+use std::path::Path;
+
+use anyhow::Context as _;
+use serde_json::{json, Value as Json};
+use situate::manager::Registry;
+
+use crate::output::{problem, Exit, Out, Problem};
+
+/// `situate gen LANG MANIFEST -o DIR`: the files written, one per line (a JSON list under `--json`).
+pub(crate) fn generate(lang: &str, manifest: &Path, out_dir: &Path, out: Out) -> anyhow::Result<()> {
+    let lang =
+        situate_cabi::Lang::parse(lang).ok_or_else(|| problem(Exit::Usage, format!("unknown language `{lang}`")))?;
+    let files = situate_cabi::generate(lang, manifest).map_err(|e| Problem::file_problem(e.to_string()))?;
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating `{}`", out_dir.display()))?;
+    let mut written = Vec::new();
+    for f in files {
+        let path = out_dir.join(&f.path);
+        std::fs::write(&path, f.contents).with_context(|| format!("writing `{}`", path.display()))?;
+        written.push(path.display().to_string());
+    }
+    out.result(&json!(written), || written.join("\n"));
+    Ok(())
+}
+
+/// One skill type's declaration as JSON (`situate types --json`).
+pub(crate) fn decl_json(d: &situate_core::SkillDecl) -> Json {
+    json!({
+        "name": d.type_name,
+        "kind": d.kind.to_string(),
+        "priority": d.priority,
+        "doc": d.doc,
+        "inputs": d.inputs.iter().map(|p| json!({"name": p.name, "type": p.ty.to_string(), "optional": p.optional})).collect::<Vec<_>>(),
+        "outputs": d.outputs.iter().map(|p| json!({"name": p.name, "type": p.ty.to_string()})).collect::<Vec<_>>(),
+        "params": d.params.iter().map(|p| json!({
+            "name": p.name,
+            "type": p.ty.name(),
+            "default": situate_link::json::value_to_json(&p.default),
+            "expects": p.expectation().to_string(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// `situate types`.
+pub(crate) fn types(registry: &Registry, out: Out) {
+    let decls: Vec<&situate_core::SkillDecl> =
+        registry.names().filter_map(|n| registry.get(n)).map(|t| &*t.decl).collect();
+    out.result(&Json::Array(decls.iter().map(|d| decl_json(d)).collect()), || {
+        use std::fmt::Write as _;
+        let mut text = String::new();
+        for d in &decls {
+            let _ = writeln!(text, "{} ({}, priority {})", d.type_name, d.kind, d.priority);
+            for line in d.doc.lines() {
+                let _ = writeln!(text, "    {line}");
+            }
+            for p in &d.inputs {
+                let _ = writeln!(text, "    in  {}: {}{}", p.name, p.ty, if p.optional { " (optional)" } else { "" });
+            }
+            for p in &d.outputs {
+                let _ = writeln!(text, "    out {}: {}", p.name, p.ty);
+            }
+            for p in &d.params {
+                let _ = writeln!(text, "    param {}: {} = {} ({})", p.name, p.ty.name(), p.default, p.expectation());
+            }
+        }
+        text.trim_end().to_string()
+    });
+}

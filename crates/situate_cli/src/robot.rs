@@ -1,0 +1,777 @@
+//! Robot files: loading one (with what composes it at launch: `${ENV}`
+//! substitution and `--set`), checking it, starting it, running it until it
+//! is told to stop, and serving one skill type out of process.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use serde_json::{json, Value as Json};
+use situate::manager::yaml::Spanned;
+use situate::manager::{
+    ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, Registry, RobotFile, RobotSpec, SkillInfo,
+};
+use situate_link::{Link, LinkConfig};
+
+use crate::args::{Compose, RunArgs};
+use crate::client::{client_verb, Remote};
+use crate::map;
+use crate::output::{problem, Exit, Out, Problem};
+use crate::signals;
+use crate::sim::{simulation, SimOverrides, Simulation};
+use crate::Extensions;
+
+/// A robot file read and lifted into what the manager builds from.
+pub(crate) struct Loaded {
+    pub(crate) file: RobotFile,
+    pub(crate) spec: RobotSpec,
+    pub(crate) link: LinkConfig,
+    pub(crate) remote: Vec<(String, situate_core::SkillDecl)>,
+}
+
+/// Reads a robot file (its `${NAME}`s replaced from the environment),
+/// applies `--set`, and checks its `link:` and remote skills. Every problem
+/// is a [`Problem`] of kind [`Exit::BadFile`] (or [`Exit::Usage`] for a bad `--set`).
+pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
+    let shown = path.display().to_string();
+    let source =
+        situate::manager::yaml::read_source(path, "robot file", situate::manager::config::MAX_ROBOT_FILE_BYTES)
+            .map_err(|e| {
+                let at = match e.pos() {
+                    Some(pos) => situate::manager::config::ConfigError::new(&shown, pos, e.to_string()),
+                    None => situate::manager::config::ConfigError::whole_file(&shown, e.to_string()),
+                };
+                bad_file(path, &[at])
+            })?;
+    let source = substitute_env(&source, |name| std::env::var(name).ok())
+        .map_err(|(line, col, message)| bad_file(path, &[format!("{shown}:{line}:{col}: error: {message}")]))?;
+    let mut robot_file = RobotFile::parse(&shown, &source).map_err(|errors| bad_file(path, &errors))?;
+    apply_sets(&mut robot_file, &compose.set)?;
+    let link = match &robot_file.link {
+        None => LinkConfig::default(),
+        Some(node) => match LinkConfig::from_node(node) {
+            // What `run` gives Zenoh is checked here too, so `check` and `run` agree.
+            Ok(l) => match l.zenoh_config() {
+                Ok(_) => l,
+                Err(e) => {
+                    let at = node
+                        .value
+                        .as_map()
+                        .and_then(|m| m.iter().find(|(k, _)| k.value == "zenoh").map(|(_, v)| v.pos))
+                        .unwrap_or(node.pos);
+                    let e = crate::output::clean(&e.to_string());
+                    return Err(bad_file(
+                        path,
+                        &[robot_file.error(at, format!("`link`: Zenoh refuses this configuration: {e}"))],
+                    ));
+                }
+            },
+            Err(errors) => {
+                let lines: Vec<_> = errors.iter().map(|e| robot_file.error(e.pos, e.message.clone())).collect();
+                return Err(bad_file(path, &lines));
+            }
+        },
+    };
+    let remote = robot_file.remote_decls().map_err(|errors| bad_file(path, &errors))?;
+    Ok(Loaded { spec: RobotSpec::from_file(&robot_file), link, remote, file: robot_file })
+}
+
+/// A file's problems, each on its line, then the count.
+pub(crate) fn bad_file(path: &Path, errors: &[impl std::fmt::Display]) -> anyhow::Error {
+    Problem::bad_file(path, errors.iter().map(ToString::to_string).collect()).into()
+}
+
+/// Replaces `${NAME}` with the environment's value of NAME, and
+/// `${NAME:-default}` with the default when NAME is unset or empty; `$${`
+/// stays a literal `${`. Comment lines (`#` first) are left alone. An unset
+/// NAME without a default is an error at its line and column (1-based).
+pub(crate) fn substitute_env(
+    source: &str,
+    lookup: impl Fn(&str) -> Option<String>,
+) -> Result<String, (usize, usize, String)> {
+    if !source.contains("${") {
+        return Ok(source.to_string());
+    }
+    let mut out = String::with_capacity(source.len());
+    for (n, line) in source.split_inclusive('\n').enumerate() {
+        if line.trim_start().starts_with('#') {
+            out.push_str(line);
+            continue;
+        }
+        let mut rest = line;
+        while let Some(at) = rest.find("${") {
+            if rest[..at].ends_with('$') {
+                out.push_str(&rest[..at - 1]);
+                out.push_str("${");
+                rest = &rest[at + 2..];
+                continue;
+            }
+            out.push_str(&rest[..at]);
+            let col = line.len() - rest.len() + at + 1;
+            let Some(end) = rest[at..].find('}') else {
+                return Err((n + 1, col, "`${` without its closing `}` (write `$${` for a literal `${`)".into()));
+            };
+            let inner = &rest[at + 2..at + end];
+            let (name, default) = match inner.split_once(":-") {
+                Some((name, default)) => (name, Some(default)),
+                None => (inner, None),
+            };
+            let valid = !name.is_empty()
+                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                && !name.starts_with(|c: char| c.is_ascii_digit());
+            if !valid {
+                return Err((n + 1, col, format!("`${{{inner}}}`: `{name}` is not an environment variable's name")));
+            }
+            match (lookup(name).filter(|v| !v.is_empty()), default) {
+                (Some(value), _) => out.push_str(&value),
+                (None, Some(default)) => out.push_str(default),
+                (None, None) => {
+                    return Err((
+                        n + 1,
+                        col,
+                        format!("`${{{name}}}`: the environment variable `{name}` is not set (give a default: `${{{name}:-value}}`)"),
+                    ))
+                }
+            }
+            rest = &rest[at + end + 1..];
+        }
+        out.push_str(rest);
+    }
+    Ok(out)
+}
+
+/// `--set SKILL.PARAM=VALUE`: the value (YAML: a scalar or a list of
+/// numbers) replaces the file's, or is added; the manager then checks it
+/// against the parameter's declaration like a value written in the file.
+fn apply_sets(robot_file: &mut RobotFile, sets: &[String]) -> anyhow::Result<()> {
+    for set in sets {
+        let usage = |why: String| problem(Exit::Usage, format!("--set {set}: {why}"));
+        let Some((target, text)) = set.split_once('=') else {
+            return Err(usage("expected SKILL.PARAM=VALUE, e.g. runaway.safe_distance=0.3".into()));
+        };
+        let Some((skill, param)) = target.trim().split_once('.') else {
+            return Err(usage(format!("`{target}` is not SKILL.PARAM")));
+        };
+        let node = situate::manager::yaml::parse(text).map_err(|e| usage(format!("the value: {}", e.message)))?;
+        let value = node
+            .value
+            .to_value()
+            .or_else(|| node.value.to_f64s())
+            .ok_or_else(|| usage("the value is not a scalar or a list of numbers".into()))?;
+        let names: Vec<String> = robot_file.skills.iter().map(|e| e.name.value.clone()).collect();
+        let Some(entry) = robot_file.skills.iter_mut().find(|e| e.name.value == skill) else {
+            return Err(usage(format!(
+                "no skill or device `{skill}` in {}{}",
+                robot_file.file,
+                situate_core::suggestion(skill, names.iter().map(String::as_str))
+            )));
+        };
+        let written = Some(text.trim().to_string());
+        match entry.params.iter_mut().find(|p| p.name.value == param) {
+            Some(p) => {
+                p.value = Spanned::new(value, p.value.pos);
+                p.written = written;
+            }
+            None => entry.params.push(situate::manager::config::Param {
+                name: Spanned::new(param.to_string(), entry.pos),
+                value: Spanned::new(value, entry.pos),
+                written,
+            }),
+        }
+    }
+    Ok(())
+}
+
+/// The built-in skill types and those of `--library` and `--python` files.
+pub(crate) fn registry_with(libraries: &[PathBuf], python: &[PathBuf], ext: &Extensions) -> anyhow::Result<Registry> {
+    let mut registry = builtin_registry();
+    for path in libraries {
+        for t in load_library(path).map_err(|e| problem(Exit::BadFile, format!("--library {}: {e}", path.display())))? {
+            registry.add(t);
+        }
+    }
+    for path in python {
+        let loader = ext.python.as_ref().ok_or_else(|| {
+            problem(
+                Exit::Usage,
+                format!(
+                    "--python {}: Python skills run in the Python package's `situate` (`make python`, then \
+                     `.venv/bin/situate`); this binary has no Python inside",
+                    path.display()
+                ),
+            )
+        })?;
+        for t in loader(path).map_err(|e| problem(Exit::BadFile, format!("--python {}: {e}", path.display())))? {
+            registry.add(t);
+        }
+    }
+    Ok(registry)
+}
+
+/// The skill types a robot file can name: the built-in libraries, the
+/// simulator's devices when it has a `simulator:` section, then the file's
+/// own `libraries:` and `python:` files. Errors name the file's line.
+pub(crate) fn registry_for(
+    robot_file: &RobotFile,
+    ext: &Extensions,
+    over: &SimOverrides,
+) -> Result<(Registry, Option<Simulation>), Vec<String>> {
+    let mut registry = builtin_registry();
+    let sim = simulation(robot_file, over)?;
+    if let Some(sim) = &sim {
+        situate_sim::register(&mut registry, sim.world.clone());
+    }
+    let mut errors = Vec::new();
+    for lib in &robot_file.libraries {
+        let path = robot_file.resolve(&lib.value);
+        match load_library(&path) {
+            Ok(types) => {
+                for t in types {
+                    registry.add(t);
+                }
+            }
+            Err(e) => errors.push(robot_file.error(lib.pos, e).to_string()),
+        }
+    }
+    for py in &robot_file.python {
+        let path = robot_file.resolve(&py.value);
+        let result = match &ext.python {
+            Some(loader) => loader(&path),
+            None => Err(format!(
+                "`{}`: Python skills run in the Python package's `situate` (install the wheel: `make python`, \
+                 then `.venv/bin/situate`); this binary has no Python inside",
+                py.value
+            )),
+        };
+        match result {
+            Ok(types) => {
+                for t in types {
+                    registry.add(t);
+                }
+            }
+            Err(e) => errors.push(robot_file.error(py.pos, e).to_string()),
+        }
+    }
+    if errors.is_empty() {
+        Ok((registry, sim))
+    } else {
+        Err(errors)
+    }
+}
+
+/// The skill types every robot file can name: the toys and the standard
+/// skill library (`std.*`).
+fn builtin_registry() -> Registry {
+    let mut registry = situate_toys::registry();
+    situate_skills::register(&mut registry);
+    registry
+}
+
+fn load_library(path: &Path) -> Result<Vec<situate_core::SkillType>, String> {
+    situate_cabi::load_library(path).map_err(|e| e.to_string())
+}
+
+/// A robot file's graph, built without starting anything (`check`,
+/// `signals FILE`, `graph FILE`): the same checks `run` makes.
+pub(crate) fn static_graph(
+    file: &Path,
+    compose: &Compose,
+    ext: &Extensions,
+) -> anyhow::Result<(Loaded, situate::manager::Graph)> {
+    if map::looks_like_map(file) {
+        return Err(Problem::file_problem(format!(
+            "{}: this is a map file: use `situate map check {}`",
+            file.display(),
+            file.display()
+        ))
+        .into());
+    }
+    let loaded = load(file, compose)?;
+    let (mut registry, _sim) =
+        registry_for(&loaded.file, ext, &SimOverrides::default()).map_err(|errors| bad_file(file, &errors))?;
+    // Every section `run` reads is checked by the code `run` uses.
+    gui_address(&loaded.file, &RunOptions::default()).map_err(|e| bad_file(file, &[e]))?;
+    for (_, decl) in &loaded.remote {
+        // Checking needs the declaration only; nothing is created.
+        registry.add(situate_core::SkillType::new(decl.clone(), || Err("not created by `check`".into())));
+    }
+    match situate::manager::Graph::build(&loaded.spec, &registry) {
+        Ok(graph) => Ok((loaded, graph)),
+        Err(e) => Err(build_failure(file, &e)),
+    }
+}
+
+/// The manager's diagnostics (errors and warnings), then the count of errors.
+fn build_failure(file: &Path, e: &situate::manager::BuildError) -> anyhow::Error {
+    let n = e.diagnostics.iter().filter(|d| d.is_error()).count();
+    let mut p = Problem::bad_file(file, e.diagnostics.iter().map(ToString::to_string).collect());
+    p.message = format!("{}: {n} error{}", file.display(), if n == 1 { "" } else { "s" });
+    p.into()
+}
+
+/// `situate check`.
+pub(crate) fn check(file: &Path, compose: &Compose, ext: &Extensions, out: Out) -> anyhow::Result<()> {
+    let (_loaded, graph) = static_graph(file, compose, ext)?;
+    let warnings: Vec<String> = graph.warnings.iter().map(ToString::to_string).collect();
+    if !out.json {
+        for w in &warnings {
+            out.warn(w);
+        }
+    }
+    let n = graph.instances.len();
+    let result = json!({
+        "file": file.display().to_string(),
+        "ok": true,
+        "robot": graph.robot,
+        "skills": n,
+        "signal_leaves": graph.leaves.len(),
+        "warnings": warnings,
+    });
+    out.result(&result, || {
+        format!(
+            "{}: ok — robot `{}`, {n} skill{}, {} signal leaves",
+            file.display(),
+            graph.robot,
+            if n == 1 { "" } else { "s" },
+            graph.leaves.len()
+        )
+    });
+    Ok(())
+}
+
+/// How to run a robot file: the command line's overrides.
+#[derive(Default, Clone)]
+pub(crate) struct RunOptions {
+    pub(crate) cycles: Option<u64>,
+    pub(crate) executor: Option<String>,
+    pub(crate) clock: Option<String>,
+    pub(crate) no_link: bool,
+    pub(crate) listen: Vec<String>,
+    pub(crate) sim: SimOverrides,
+    /// Pacing of the simulated clock (× real time).
+    pub(crate) speed: Option<f64>,
+    /// Start with the cycle stopped (a sequencer starts it).
+    pub(crate) stopped: bool,
+    /// Serve the GUI here (overrides the file's `gui:` section).
+    pub(crate) gui: Option<String>,
+    /// No GUI even if the file asks for one.
+    pub(crate) no_gui: bool,
+    /// `--set`.
+    pub(crate) compose: Compose,
+}
+
+/// A robot running on its own threads, serving the link.
+pub(crate) struct Running {
+    pub(crate) handle: situate::manager::Handle,
+    pub(crate) join: situate::manager::Joiner,
+    pub(crate) events: crossbeam_channel::Receiver<Event>,
+    pub(crate) served: Option<Link>,
+    pub(crate) gui: Option<situate_gui::GuiServer>,
+    pub(crate) sim: Option<Simulation>,
+    pub(crate) robot: String,
+}
+
+impl Running {
+    /// Stops everything and returns the final statistics, within
+    /// [`signals::stop_bound`]: a cycle stuck in a skill's body (or a part
+    /// that does not stop) is left behind, and the error says which.
+    pub(crate) fn finish(self) -> Result<(ManagerStats, Vec<SkillInfo>), Stuck> {
+        let Running { mut handle, join, served, gui, .. } = self;
+        let stage = Arc::new(std::sync::atomic::AtomicU8::new(Stage::Stats as u8));
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        let at = Arc::clone(&stage);
+        // The teardown runs on a thread of its own, so that this one can give up on it.
+        let teardown = move || {
+            let stats = handle.stats();
+            let skills = handle.skills();
+            at.store(Stage::Gui as u8, Ordering::SeqCst);
+            if let Some(gui) = gui {
+                gui.stop();
+            }
+            at.store(Stage::Link as u8, Ordering::SeqCst);
+            drop(served);
+            at.store(Stage::Cycle as u8, Ordering::SeqCst);
+            let _ = handle.request(situate::manager::Request::Shutdown);
+            let _ = join.join();
+            let _ = tx.send((stats, skills));
+        };
+        if let Err(e) = std::thread::Builder::new().name("situate-teardown".into()).spawn(teardown) {
+            return Err(Stuck { stage: Stage::Spawn, detail: e.to_string() });
+        }
+        match rx.recv_timeout(signals::stop_bound()) {
+            Ok((Ok(stats), Ok(skills))) => Ok((stats, skills)),
+            Ok((Err(e), _) | (_, Err(e))) => Err(Stuck { stage: Stage::Stats, detail: e.to_string() }),
+            Err(_) => {
+                let stage = match stage.load(Ordering::SeqCst) {
+                    s if s == Stage::Gui as u8 => Stage::Gui,
+                    s if s == Stage::Link as u8 => Stage::Link,
+                    s if s == Stage::Cycle as u8 => Stage::Cycle,
+                    _ => Stage::Stats,
+                };
+                Err(Stuck { stage, detail: String::new() })
+            }
+        }
+    }
+}
+
+/// Where [`Running::finish`] was when it gave up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Stage {
+    Spawn,
+    Stats,
+    Gui,
+    Link,
+    Cycle,
+}
+
+/// A stop that did not complete: what did not stop.
+#[derive(Debug)]
+pub(crate) struct Stuck {
+    stage: Stage,
+    detail: String,
+}
+
+impl std::fmt::Display for Stuck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let bound = signals::bound_text();
+        match self.stage {
+            Stage::Spawn => write!(f, "could not stop the robot: {}", self.detail),
+            Stage::Stats if !self.detail.is_empty() => {
+                write!(f, "the manager did not give its final statistics: {}", self.detail)
+            }
+            Stage::Stats | Stage::Cycle => write!(
+                f,
+                "the cycle did not stop within {bound} of the shutdown request (it is stuck, most likely \
+                 in a skill's body that does not return); exiting without it"
+            ),
+            Stage::Gui => write!(f, "the GUI did not stop within {bound}; exiting without it"),
+            Stage::Link => write!(f, "the link did not close within {bound}; exiting without it"),
+        }
+    }
+}
+
+impl std::error::Error for Stuck {}
+
+/// Loads, checks and starts a robot file.
+pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out: Out) -> anyhow::Result<Running> {
+    let Loaded { mut spec, mut link, remote, file: robot_file } = load(file, &opts.compose)?;
+    let (mut registry, sim) = registry_for(&robot_file, ext, &opts.sim).map_err(|errors| bad_file(file, &errors))?;
+    if opts.no_link && !remote.is_empty() {
+        let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();
+        return Err(problem(
+            Exit::Usage,
+            format!("remote skills ({}) need the link; drop --no-link", names.join(", ")),
+        ));
+    }
+    let gui_listen = gui_address(&robot_file, opts).map_err(|e| {
+        let kind = if opts.gui.is_some() { Exit::Usage } else { Exit::BadFile };
+        Problem { prefix: "", ..Problem::new(kind, e) }
+    })?;
+    if let Some(e) = &opts.executor {
+        spec.executor = if e == "parallel" { ExecutorKind::Parallel } else { ExecutorKind::Serial };
+    }
+    if let Some(c) = &opts.clock {
+        spec.clock = if c == "simulated" { ClockKind::Simulated } else { ClockKind::Wall };
+    }
+    if !opts.listen.is_empty() {
+        link.listen = opts.listen.clone();
+    }
+    let session = if opts.no_link {
+        None
+    } else {
+        let opened = Link::open(&link).map_err(|e| {
+            problem(
+                Exit::Failure,
+                format!(
+                    "opening the link on {} (is another robot using it? try --listen or --no-link): {}",
+                    link.listen.join(", "),
+                    crate::output::clean(&format!("{e:#}"))
+                ),
+            )
+        })?;
+        Some(opened)
+    };
+    if let Some(session) = &session {
+        for (name, decl) in remote {
+            let timeout = robot_file
+                .skills
+                .iter()
+                .find(|e| e.name.value == name)
+                .and_then(|e| e.timeout_ms.as_ref())
+                .map(|t| Duration::from_secs_f64(t.value.min(86_400_000.0) / 1e3));
+            registry.add(situate_link::RemoteSkill::skill_type_with_timeout(
+                session,
+                &robot_file.robot.value,
+                &name,
+                decl,
+                timeout,
+            ));
+        }
+    }
+    let mut manager = Manager::build(&spec, &registry).map_err(|e| build_failure(file, &e))?;
+    for w in &manager.graph().warnings {
+        out.warn(w);
+    }
+    manager.stop_after(opts.cycles);
+    manager.set_speed(opts.speed);
+    let events = manager.events();
+    let (handle, join) = manager.spawn(!opts.stopped);
+    let mut running = Running { handle, join, events, served: None, gui: None, sim, robot: spec.robot.clone() };
+    if let Some(session) = session {
+        match Link::serve(&spec.robot, running.handle.clone(), session, &link).context("serving the link") {
+            Ok(l) => {
+                out.note(format_args!(
+                    "robot `{}` serving situate/{}/** on {}",
+                    spec.robot,
+                    spec.robot,
+                    link.listen.join(", ")
+                ));
+                running.served = Some(l);
+            }
+            Err(e) => {
+                let _ = running.finish();
+                return Err(e);
+            }
+        }
+    }
+    if let Some(listen) = gui_listen {
+        let world = running.sim.as_ref().map(|s| s.map.world_json());
+        let config = situate_gui::GuiConfig { listen, world, ..situate_gui::GuiConfig::default() };
+        match situate_gui::serve(running.handle.clone(), config) {
+            Ok(g) => {
+                out.note(format_args!("GUI on {}", g.url()));
+                running.gui = Some(g);
+            }
+            Err(e) => {
+                let _ = running.finish();
+                return Err(anyhow::anyhow!("starting the GUI on {listen}: {e}"));
+            }
+        }
+    }
+    Ok(running)
+}
+
+/// Where to serve the GUI: `--gui ADDR`, else the file's `gui: {listen: ADDR}`
+/// (or `gui: {port: N}` on 127.0.0.1), else nowhere.
+pub(crate) fn gui_address(robot_file: &RobotFile, opts: &RunOptions) -> Result<Option<std::net::SocketAddr>, String> {
+    if opts.no_gui {
+        return Ok(None);
+    }
+    let parse = |text: &str| -> Result<std::net::SocketAddr, String> {
+        text.parse().or_else(|_| {
+            text.parse::<u16>()
+                .map(|port| std::net::SocketAddr::from(([127, 0, 0, 1], port)))
+                .map_err(|_| format!("`{text}` is not an address like 127.0.0.1:8080 or a port number"))
+        })
+    };
+    if let Some(text) = &opts.gui {
+        return parse(text).map(Some).map_err(|e| format!("--gui: {e}"));
+    }
+    let Some(node) = &robot_file.gui else { return Ok(None) };
+    let Some(entries) = node.value.as_map() else {
+        return Err(robot_file
+            .error(node.pos, "`gui` expects a mapping such as `{listen: 127.0.0.1:8080}`")
+            .to_string());
+    };
+    let mut addr = None;
+    for (key, value) in entries {
+        let text = value.value.as_text().map(str::to_string).or_else(|| value.value.as_i64().map(|n| n.to_string()));
+        match (key.value.as_str(), text) {
+            ("listen" | "port", Some(t)) => match parse(&t) {
+                Ok(a) => addr = Some(a),
+                Err(e) => return Err(robot_file.error(value.pos, format!("`gui.{}`: {e}", key.value)).to_string()),
+            },
+            ("listen" | "port", None) => {
+                return Err(robot_file.error(value.pos, format!("`gui.{}` expects an address", key.value)).to_string())
+            }
+            (other, _) => {
+                return Err(robot_file
+                    .error(
+                        key.pos,
+                        format!(
+                            "unknown key `{other}` in `gui`{}",
+                            situate_core::suggestion(other, ["listen", "port"])
+                        ),
+                    )
+                    .to_string())
+            }
+        }
+    }
+    Ok(addr)
+}
+
+/// `situate run`.
+pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Result<()> {
+    let RunArgs { file, cycles, executor, clock, no_link, listen, map, seed, world, speed, gui, no_gui, compose } =
+        args;
+    let opts = RunOptions {
+        cycles,
+        executor,
+        clock,
+        no_link,
+        listen,
+        sim: SimOverrides { map, seed, world },
+        speed,
+        stopped: false,
+        gui,
+        no_gui,
+        compose,
+    };
+    // Before starting: a signal during the start stops the robot once started.
+    let interrupted = signals::Stop::install()?;
+    let running = start_robot(&file, &opts, ext, out)?;
+    let started = Instant::now();
+    loop {
+        if let Some(sig) = interrupted.signal() {
+            out.note(format_args!("{}: stopping (again to exit at once)", signals::name(sig)));
+            break;
+        }
+        match running.events.recv_timeout(Duration::from_millis(100)) {
+            Ok(Event::SkillFaulted { skill, cause, cycle }) if !out.quiet => {
+                eprintln!("cycle {cycle}: skill `{skill}` faulted: {cause}")
+            }
+            Ok(Event::ManagerStopped { cycle }) if cycles.is_some_and(|n| cycle >= n) => break,
+            _ => {}
+        }
+        if cycles.is_some() && started.elapsed() > Duration::from_secs(1) {
+            // A stop requested over the link also ends a bounded run. Bounded:
+            // a stuck cycle must not keep this loop from seeing a signal.
+            let asked =
+                running.handle.request_timeout(situate::manager::Request::QueryStats, Duration::from_millis(200));
+            if let Ok(situate::manager::Reply::Stats(s)) = asked {
+                if cycles.is_some_and(|n| s.cycle >= n) && !s.running {
+                    break;
+                }
+            }
+        }
+    }
+    match running.finish() {
+        Ok((stats, skills)) => {
+            out.result(&summary_json(&stats, &skills), || summary_text(&stats, &skills));
+            Ok(())
+        }
+        Err(stuck) => Err(Problem {
+            lines: vec![format!("situate: {stuck}")],
+            ..Problem::new(Exit::Failure, "no summary: the manager did not answer").said_by_situate()
+        }
+        .into()),
+    }
+}
+
+/// `situate serve-skill`: one instance of a skill type, served out of
+/// process until Ctrl-C (docs/protocol.md, "Remote skills").
+pub(crate) fn serve_skill(
+    skill: &str,
+    name: Option<String>,
+    libraries: &[PathBuf],
+    python: &[PathBuf],
+    remote: &Remote,
+    ext: &Extensions,
+    out: Out,
+) -> anyhow::Result<()> {
+    if skill.contains(':') {
+        return Err(problem(
+            Exit::Usage,
+            format!(
+                "`{skill}` names a Python function (MODULE:FUNCTION): serve it with the `situate` that the Python \
+                 package installs (scripts/python.sh, then .venv/bin/situate serve-skill {skill} --robot ROBOT)"
+            ),
+        ));
+    }
+    let registry = registry_with(libraries, python, ext)?;
+    let Some(ty) = registry.get(skill) else {
+        let known: Vec<&str> = registry.names().collect();
+        return Err(problem(
+            Exit::Usage,
+            format!(
+                "no skill type `{skill}`{}; give the library that defines it with --library (known here: {})",
+                situate_core::suggestion(skill, known.iter().copied()),
+                known.join(", ")
+            ),
+        ));
+    };
+    let name = name.unwrap_or_else(|| skill.rsplit('.').next().unwrap_or(skill).to_string());
+    client_verb(remote, |client, robot| {
+        let stop = signals::Stop::install()?;
+        // The body runs on this thread: one that never returns is left behind.
+        let stuck = format!(
+            "`{name}`'s body did not return within {} of the stop request; exiting without it",
+            signals::bound_text()
+        );
+        let watchdog = stop.watchdog(move || stuck);
+        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, stop.flag(), || {
+            out.note(format_args!(
+                "serving `{name}` (type `{skill}`) of robot `{robot}` on situate/{robot}/remote/{name}/inputs; \
+                 Ctrl-C stops"
+            ));
+        });
+        drop(watchdog);
+        let s = stats.map_err(|e| problem(Exit::Failure, e.to_string()))?;
+        let stopped_by = stop.signal().map(signals::name);
+        let result = json!({
+            "skill": name, "type": skill, "robot": robot, "signal": stopped_by,
+            "received": s.received, "computed": s.computed, "dropped": s.dropped, "errors": s.errors,
+        });
+        if out.json {
+            println!("{result}");
+        } else {
+            out.note(format_args!(
+                "stopped{}; {} inputs received, {} runs, {} dropped as stale, {} errors",
+                stopped_by.map(|s| format!(" ({s})")).unwrap_or_default(),
+                s.received,
+                s.computed,
+                s.dropped,
+                s.errors
+            ));
+        }
+        Ok(())
+    })
+}
+
+/// The summary under `--json`: the protocol's `stats` and `skills` replies (docs/protocol.md).
+fn summary_json(stats: &ManagerStats, skills: &[SkillInfo]) -> Json {
+    json!({
+        "stats": situate_link::json::stats_to_json(stats),
+        "skills": skills.iter().map(situate_link::json::skill_to_json).collect::<Vec<_>>(),
+    })
+}
+
+fn summary_text(stats: &ManagerStats, skills: &[SkillInfo]) -> String {
+    use std::fmt::Write as _;
+    let mut text = String::new();
+    let _ = writeln!(text, "robot `{}`: {} cycles, {:.3} s on its clock", stats.robot, stats.cycle, stats.time_s);
+    let _ = writeln!(
+        text,
+        "cycle time: mean {:.1} µs, max {:.1} µs; period {:.1} ms; overruns {}; late starts {}",
+        stats.mean_cycle_ns / 1e3,
+        stats.max_cycle_ns as f64 / 1e3,
+        stats.period_s * 1e3,
+        stats.overruns,
+        stats.late_starts
+    );
+    let _ = writeln!(
+        text,
+        "{:<16} {:<8} {:>8} {:>10} {:>10} {:>10}  state",
+        "skill", "kind", "runs", "mean µs", "max µs", "total ms"
+    );
+    for s in skills {
+        let state = match (&s.faulted, s.active) {
+            (Some(cause), _) => format!("faulted: {cause}"),
+            (None, true) => "active".to_string(),
+            (None, false) => "inactive".to_string(),
+        };
+        let _ = writeln!(
+            text,
+            "{:<16} {:<8} {:>8} {:>10.2} {:>10.2} {:>10.3}  {state}",
+            s.name,
+            s.kind.name(),
+            s.timing.runs,
+            s.timing.mean_ns() / 1e3,
+            s.timing.max_ns as f64 / 1e3,
+            s.timing.total_ns as f64 / 1e6
+        );
+    }
+    text.trim_end().to_string()
+}

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The Python package's data: copies demo/, maps/ and examples/ (the files git tracks, or all of
+# them outside a git checkout) into python/situate/_data/, where the wheel and the sdist pick them
+# up and `situate demo` finds them once installed. The originals stay where they are; the copy is
+# not tracked (.gitignore) and is made again on every build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+DEST=python/situate/_data
+DIRS=(demo maps examples)
+rm -rf "$DEST"
+mkdir -p "$DEST"
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+    git ls-files -z -- "${DIRS[@]}" | while IFS= read -r -d '' f; do
+        [[ -f $f ]] || continue # deleted in the work tree
+        mkdir -p "$DEST/$(dirname "$f")"
+        cp -p "$f" "$DEST/$f"
+    done
+else
+    cp -rp "${DIRS[@]}" "$DEST/"
+fi
+# A marker, so the data is never mistaken for the sources.
+printf '%s\n' "Copied from the repository's ${DIRS[*]} by scripts/package-data.sh; edit the originals." \
+    >"$DEST/README.txt"
