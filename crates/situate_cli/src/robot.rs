@@ -28,6 +28,8 @@ pub(crate) struct Loaded {
     pub(crate) file: RobotFile,
     pub(crate) spec: RobotSpec,
     pub(crate) link: LinkConfig,
+    /// The `ros2:` bridge's configuration, when the file has one.
+    pub(crate) ros2: Option<situate_ros2::Ros2Config>,
     pub(crate) remote: Vec<(String, situate_core::SkillDecl)>,
 }
 
@@ -74,8 +76,18 @@ pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
             }
         },
     };
+    let ros2 = match &robot_file.ros2 {
+        None => None,
+        Some(node) => match situate_ros2::Ros2Config::from_node(node) {
+            Ok(c) => Some(c),
+            Err(e) => {
+                let at = e.pos.unwrap_or(node.pos);
+                return Err(bad_file(path, &[robot_file.error(at, format!("`ros2`: {}", e.message))]));
+            }
+        },
+    };
     let remote = robot_file.remote_decls().map_err(|errors| bad_file(path, &errors))?;
-    Ok(Loaded { spec: RobotSpec::from_file(&robot_file), link, remote, file: robot_file })
+    Ok(Loaded { spec: RobotSpec::from_file(&robot_file), link, ros2, remote, file: robot_file })
 }
 
 /// A file's problems, each on its line, then the count.
@@ -368,6 +380,8 @@ pub(crate) struct Running {
     pub(crate) join: situate::manager::Joiner,
     pub(crate) events: crossbeam_channel::Receiver<Event>,
     pub(crate) served: Option<Link>,
+    /// The ROS 2 bridge (its tokens withdrawn before the link's session closes).
+    pub(crate) ros2: Option<situate_ros2::Bridge>,
     pub(crate) gui: Option<situate_gui::GuiServer>,
     pub(crate) sim: Option<Simulation>,
     pub(crate) robot: String,
@@ -378,7 +392,7 @@ impl Running {
     /// [`signals::stop_bound`]: a cycle stuck in a skill's body (or a part
     /// that does not stop) is left behind, and the error says which.
     pub(crate) fn finish(self) -> Result<(ManagerStats, Vec<SkillInfo>), Stuck> {
-        let Running { mut handle, join, served, gui, .. } = self;
+        let Running { mut handle, join, served, ros2, gui, .. } = self;
         let stage = Arc::new(std::sync::atomic::AtomicU8::new(Stage::Stats as u8));
         let (tx, rx) = crossbeam_channel::bounded(1);
         let at = Arc::clone(&stage);
@@ -391,6 +405,7 @@ impl Running {
                 gui.stop();
             }
             at.store(Stage::Link as u8, Ordering::SeqCst);
+            drop(ros2);
             drop(served);
             at.store(Stage::Cycle as u8, Ordering::SeqCst);
             let _ = handle.request(situate::manager::Request::Shutdown);
@@ -456,7 +471,7 @@ impl std::error::Error for Stuck {}
 
 /// Loads, checks and starts a robot file.
 pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out: Out) -> anyhow::Result<Running> {
-    let Loaded { mut spec, mut link, remote, file: robot_file } = load(file, &opts.compose)?;
+    let Loaded { mut spec, mut link, ros2, remote, file: robot_file } = load(file, &opts.compose)?;
     let (mut registry, sim) = registry_for(&robot_file, ext, &opts.sim).map_err(|errors| bad_file(file, &errors))?;
     if opts.no_link && !remote.is_empty() {
         let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();
@@ -518,7 +533,8 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     manager.set_speed(opts.speed);
     let events = manager.events();
     let (handle, join) = manager.spawn(!opts.stopped);
-    let mut running = Running { handle, join, events, served: None, gui: None, sim, robot: spec.robot.clone() };
+    let mut running =
+        Running { handle, join, events, served: None, ros2: None, gui: None, sim, robot: spec.robot.clone() };
     if let Some(session) = session {
         match Link::serve(&spec.robot, running.handle.clone(), session, &link).context("serving the link") {
             Ok(l) => {
@@ -535,6 +551,20 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
                 return Err(e);
             }
         }
+    }
+    if let (Some(config), Some(served)) = (&ros2, &running.served) {
+        match situate_ros2::Bridge::start(&spec.robot, running.handle.clone(), served.session().clone(), config) {
+            Ok(bridge) => {
+                out.note(format_args!("ROS 2 node on domain {} ({} topics)", config.domain_id, bridge.topics().len()));
+                running.ros2 = Some(bridge);
+            }
+            Err(e) => {
+                let _ = running.finish();
+                return Err(anyhow::anyhow!("starting the ROS 2 bridge: {e}"));
+            }
+        }
+    } else if ros2.is_some() {
+        out.warn(format_args!("`ros2:` needs the link: no ROS 2 bridge with --no-link"));
     }
     if let Some(listen) = gui_listen {
         let world = running.sim.as_ref().map(|s| s.map.world_json());

@@ -209,6 +209,47 @@ pub(crate) fn robot() -> Json {
                     "listen": {"type": "string", "description": "The GUI's address, e.g. 127.0.0.1:8080."},
                     "port": {"type": "integer", "minimum": 0, "maximum": 65535, "description": "A port on 127.0.0.1."}
                 }
+            },
+            "ros2": ros2()
+        }
+    })
+}
+
+/// The robot file's `ros2:` section (`situate_ros2::Ros2Config`; docs/ros2.md).
+fn ros2() -> Json {
+    json!({
+        "type": "object",
+        "description": "Publish signals as ROS 2 topics over the link's Zenoh session (docs/ros2.md).",
+        "additionalProperties": false,
+        "required": ["topics"],
+        "properties": {
+            "domain_id": {"type": "integer", "minimum": 0, "maximum": 232},
+            "namespace": {"type": "string", "description": "Empty (the root) or absolute, e.g. /robot1."},
+            "node": {"type": "string", "description": "The node's name (default: the robot's)."},
+            "rate_hz": {"type": "number", "exclusiveMinimum": 0, "maximum": 100},
+            "topics": {
+                "type": "array",
+                "items": {
+                    "type": "object",
+                    "additionalProperties": false,
+                    "required": ["signal", "topic", "type"],
+                    "properties": {
+                        "signal": {"type": "string"},
+                        "topic": {"type": "string"},
+                        "type": {"enum": [
+                            "geometry_msgs/msg/Twist",
+                            "nav_msgs/msg/Odometry",
+                            "sensor_msgs/msg/LaserScan",
+                            "std_msgs/msg/Float64",
+                            "std_msgs/msg/Int64",
+                            "std_msgs/msg/Bool"
+                        ]},
+                        "frame_id": {"type": "string"},
+                        "child_frame_id": {"type": "string"},
+                        "range_min": {"type": "number"},
+                        "range_max": {"type": "number"}
+                    }
+                }
             }
         }
     })
@@ -299,7 +340,8 @@ mod tests {
         let s = robot();
         let mut top = keys(&s);
         top.sort_unstable();
-        let mut want = vec!["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui"];
+        let mut want =
+            vec!["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui", "ros2"];
         want.sort_unstable();
         assert_eq!(top, want);
         let mut entry = keys(&s["properties"]["skills"]["items"]);

@@ -37,7 +37,8 @@ const DEADLINE_RANGE: &str = "a number > 0 and ≤ 86400000 (a day)";
 /// The largest parallel executor pool.
 pub const MAX_THREADS: usize = 64;
 
-const TOP_KEYS: &[&str] = &["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui"];
+const TOP_KEYS: &[&str] =
+    &["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui", "ros2"];
 const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads", "budget_ms", "liveness_ms"];
 const ENTRY_KEYS: &[&str] = &[
     "name",
@@ -244,6 +245,8 @@ pub struct RobotFile {
     pub link: Option<Spanned<Node>>,
     /// The raw `gui:` section, if any.
     pub gui: Option<Spanned<Node>>,
+    /// The raw `ros2:` section, if any (read by `situate_ros2::Ros2Config::from_node`).
+    pub ros2: Option<Spanned<Node>>,
     /// `libraries:`: shared libraries of C/C++ skill types, as written (see
     /// [`RobotFile::resolve`]).
     pub libraries: Vec<Spanned<String>>,
@@ -504,6 +507,7 @@ impl Checker<'_> {
         let mut skills = Vec::new();
         let mut link = None;
         let mut gui = None;
+        let mut ros2 = None;
         let mut libraries = Vec::new();
         let mut python = Vec::new();
         let mut simulator = None;
@@ -518,6 +522,7 @@ impl Checker<'_> {
                 "skills" => skills = self.section(Section::Skills, value),
                 "link" => link = Some(value),
                 "gui" => gui = Some(value),
+                "ros2" => ros2 = Some(value),
                 "libraries" => libraries = self.paths("libraries", "shared libraries of C/C++ skills", value),
                 "python" => python = self.paths("python", "Python files of `@situate.skill` types", value),
                 "simulator" => simulator = Some(value),
@@ -540,6 +545,7 @@ impl Checker<'_> {
             skills: devices,
             link,
             gui,
+            ros2,
             libraries,
             python,
             simulator,
