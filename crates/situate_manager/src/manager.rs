@@ -21,29 +21,42 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crossbeam_channel::{Receiver, Sender, TrySendError};
+use crossbeam_channel::Receiver;
+use situate_core::value::recycle;
 use situate_core::{SignalType, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
 use crate::expr::Lookup;
-use crate::graph::{assemble, decompose, topo_order, Graph};
+use crate::graph::{assemble, decompose, Graph};
 use crate::monitor::Monitors;
 use crate::registry::Registry;
-use crate::runner::{BodyClock, Exec, Worker, WorkerClock, WorkerStats};
+use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp, Worker, WorkerClock, WorkerStats};
 use crate::spec::{BuildError, RobotSpec};
 
 mod front;
+mod plan;
 mod requests;
 mod spawned;
 pub(crate) use front::prepare_boxed as prepare;
 use front::PreparedMonitor;
 /// A prepared monitor, boxed for the request queue.
 pub(crate) type PreparedMonitorBox = Box<PreparedMonitor>;
+pub use crate::control::EventBus;
+use plan::{OutPort, Plan, Step, StepKind};
 pub use spawned::Joiner;
 
+/// The cycle times every body exactly once in this many cycles (and the
+/// bodies with a short deadline always); in the others it reads only the
+/// coarse clock, enough to see a run past its deadline.
+pub const TIMING_SAMPLE: u64 = 32;
+
+/// A level's expected work (from its skills' last timed runs) from which
+/// the parallel executor hands it to the pool; below, the cycle's thread
+/// runs it alone (waking a thread costs some µs, more after an idle spell).
+pub const PARALLEL_WORTH_NS: u64 = 40_000;
+
 const PRINT_HISTORY: usize = 64;
-const EVENT_QUEUE: usize = 4096;
 
 /// The most monitors one robot keeps at once (`monitor_add` refuses more);
 /// more exactly, the most conditions its monitors watch, an `any` monitor
@@ -72,10 +85,7 @@ struct Inst {
     verbose: bool,
     priority: i32,
     params: Vec<Value>,
-    runs: u64,
-    last_ns: u64,
-    max_ns: u64,
-    total_ns: u64,
+    timing: SkillTiming,
     prints: VecDeque<(u64, String)>,
     last_outputs: Vec<Option<Value>>,
     worker: Option<Worker>,
@@ -87,46 +97,6 @@ struct Inst {
     /// The cycle from which its parameters last changed (monitors reading
     /// one are evaluated again then).
     params_from: u64,
-}
-
-#[derive(Default)]
-struct Schedule {
-    devices: Vec<usize>,
-    levels: Vec<Vec<usize>>,
-}
-
-/// The event subscribers, shared with handles.
-#[derive(Clone, Default)]
-pub struct EventBus {
-    subscribers: Arc<Mutex<Vec<Sender<Event>>>>,
-    /// Worker threads that panicked (see [`crate::supervise`]).
-    worker_failures: Arc<std::sync::atomic::AtomicU64>,
-}
-
-impl EventBus {
-    pub fn subscribe(&self) -> Receiver<Event> {
-        let (tx, rx) = crossbeam_channel::bounded(EVENT_QUEUE);
-        self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).push(tx);
-        rx
-    }
-
-    fn send(&self, event: Event) {
-        let mut subs = self.subscribers.lock().unwrap_or_else(|p| p.into_inner());
-        // A subscriber that stopped reading loses events rather than holding
-        // up the cycle; one that went away is dropped.
-        subs.retain(|tx| !matches!(tx.try_send(event.clone()), Err(TrySendError::Disconnected(_))));
-    }
-
-    pub(crate) fn report(&self, event: Event) {
-        if matches!(event, Event::WorkerFailed { .. }) {
-            self.worker_failures.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        }
-        self.send(event);
-    }
-
-    fn has_subscribers(&self) -> bool {
-        !self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).is_empty()
-    }
 }
 
 /// What a monitor condition can name: a leaf signal or a parameter.
@@ -150,7 +120,8 @@ pub struct Manager {
     slots: Vec<Slot>,
     insts: Vec<Inst>,
     execs: Vec<Exec>,
-    schedule: Schedule,
+    /// The compiled schedule of the active skills.
+    schedule: Plan,
     schedule_dirty: bool,
     cycle: u64,
     time_s: f64,
@@ -192,7 +163,9 @@ pub struct Manager {
     /// A pausing monitor fired in the last cycle: a running cycle stops, a
     /// step ends early.
     paused: bool,
-    /// The ready skills of a level (kept to reuse its allocation).
+    /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
+    sampled: bool,
+    /// The ready steps of a level (kept to reuse its allocation).
     ready: Vec<usize>,
     /// The lockstep dskills whose device exchange runs this cycle.
     exchanging: Vec<usize>,
@@ -236,10 +209,7 @@ impl Manager {
                 verbose: false,
                 priority: def.priority,
                 params: def.params.clone(),
-                runs: 0,
-                last_ns: 0,
-                max_ns: 0,
-                total_ns: 0,
+                timing: SkillTiming::default(),
                 prints: VecDeque::new(),
                 last_outputs: vec![None; def.outputs.len()],
                 worker,
@@ -249,7 +219,7 @@ impl Manager {
             });
         }
         let started = Instant::now();
-        let clocks: Arc<[BodyClock]> = graph.instances.iter().map(|_| BodyClock::new(started)).collect();
+        let clocks: Arc<[BodyClock]> = graph.instances.iter().map(|_| BodyClock::new()).collect();
         let pool = match spec.executor {
             ExecutorKind::Serial => None,
             ExecutorKind::Parallel => {
@@ -274,7 +244,7 @@ impl Manager {
             pool,
             insts,
             execs,
-            schedule: Schedule::default(),
+            schedule: Plan::default(),
             schedule_dirty: true,
             cycle: 0,
             time_s: 0.0,
@@ -299,6 +269,7 @@ impl Manager {
             stop_at: None,
             speed: None,
             paused: false,
+            sampled: true,
             ready: Vec::new(),
             exchanging: Vec::new(),
             parts: Vec::new(),
@@ -426,53 +397,28 @@ impl Manager {
 
     fn compile_schedule(&mut self) {
         let insts = &self.insts;
-        let graph = &self.graph;
-        let order = topo_order(&graph.instances, &graph.leaves, |i| insts[i].active);
-        let mut level = vec![0usize; graph.instances.len()];
-        let mut levels: Vec<Vec<usize>> = Vec::new();
-        for &i in &order {
-            let mut l = 0;
-            for port in &graph.instances[i].inputs {
-                for &leaf in &port.leaves {
-                    for &(w, _) in &graph.leaves[leaf].writers {
-                        if w != i && insts[w].active && graph.instances[w].kind != SkillKind::Device {
-                            l = l.max(level[w] + 1);
-                        }
-                    }
-                }
-            }
-            level[i] = l;
-            if levels.len() <= l {
-                levels.resize_with(l + 1, Vec::new);
-            }
-            levels[l].push(i);
-        }
-        for l in &mut levels {
-            l.sort_unstable();
-        }
-        let devices = (0..graph.instances.len())
-            .filter(|&i| insts[i].active && graph.instances[i].kind == SkillKind::Device)
-            .collect();
-        self.schedule = Schedule { devices, levels };
+        self.schedule =
+            Plan::compile(&self.graph, |i| insts[i].active, |i| insts[i].priority, |i| insts[i].worker.is_some());
         self.schedule_dirty = false;
     }
 
     /// Runs one cycle.
     pub fn cycle(&mut self) {
         self.begin_cycle();
-        let mut level = 0;
-        while self.prepare_level(level) {
-            let ready = std::mem::take(&mut self.ready);
-            self.run_ready(&ready);
-            for &i in &ready {
-                self.finish(i);
+        let plan = std::mem::take(&mut self.schedule);
+        let mut ready = std::mem::take(&mut self.ready);
+        for level in 0..plan.levels.len() {
+            self.prepare_steps(&plan, level, &mut ready);
+            self.run_ready(&plan, &ready);
+            for &k in &ready {
+                self.finish_step(&plan, k);
             }
-            self.ready = ready;
-            level += 1;
         }
+        self.ready = ready;
+        self.schedule = plan;
         self.prepare_exchanges();
         let exchanging = std::mem::take(&mut self.exchanging);
-        let mut t = Instant::now();
+        let mut t = Stamp::now(true);
         for &d in &exchanging {
             t = self.execs[d].run(self.cycle, self.time_s, t, &self.clocks[d]);
         }
@@ -501,6 +447,7 @@ impl Manager {
         }
         self.last_start = Some(self.cycle_start);
         self.cycle += 1;
+        self.sampled = self.cycle % TIMING_SAMPLE == 1;
         self.time_s = match self.clock {
             ClockKind::Simulated => self.cycle as f64 * self.period_s,
             ClockKind::Wall => self.started.elapsed().as_secs_f64(),
@@ -516,59 +463,64 @@ impl Manager {
         if self.schedule_dirty {
             self.compile_schedule();
         }
-        let schedule = std::mem::take(&mut self.schedule);
-        for &d in &schedule.devices {
+        let devices = std::mem::take(&mut self.schedule.devices);
+        for &d in &devices {
             self.take_readings(d);
         }
-        self.schedule = schedule;
+        self.schedule.devices = devices;
     }
 
     /// Step 3 for level `level`: exchanges with threaded async cskills, and
-    /// the skills ready to run in the cycle in `self.ready`. False when
+    /// the steps ready to run in the cycle in `self.ready`. False when
     /// there is no such level.
     fn prepare_level(&mut self, level: usize) -> bool {
-        let schedule = std::mem::take(&mut self.schedule);
-        let Some(skills) = schedule.levels.get(level) else {
-            self.schedule = schedule;
+        if level >= self.schedule.levels.len() {
             return false;
-        };
+        }
+        let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
+        self.prepare_steps(&plan, level, &mut ready);
+        self.ready = ready;
+        self.schedule = plan;
+        true
+    }
+
+    /// Gathers the inputs of level `level`'s steps; those ready to run go to `ready`.
+    fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>) {
         ready.clear();
-        for &i in skills {
-            let kind = self.graph.instances[i].kind;
-            match (kind, self.insts[i].worker.is_some()) {
-                (SkillKind::Async, true) => self.exchange_async(i),
-                (SkillKind::Async, false) => {
-                    if self.gather(i, false) {
-                        ready.push(i);
+        let Some(steps) = plan.level(level) else { return };
+        for k in steps {
+            let step = &plan.steps[k];
+            match step.kind {
+                StepKind::AsyncThreaded => self.exchange_async(step.inst),
+                StepKind::AsyncInCycle => {
+                    if self.gather_step(plan, step, false) {
+                        ready.push(k);
                     }
                 }
-                _ => {
-                    if self.gather(i, true) {
-                        ready.push(i);
+                StepKind::Sync => {
+                    if self.gather_step(plan, step, true) {
+                        ready.push(k);
                     }
                 }
             }
         }
-        self.ready = ready;
-        self.schedule = schedule;
-        true
     }
 
     /// Step 4: hand every active dskill the commands written this cycle;
     /// the lockstep ones whose device exchange runs in the cycle go to
     /// `self.exchanging`.
     fn prepare_exchanges(&mut self) {
-        let schedule = std::mem::take(&mut self.schedule);
+        let devices = std::mem::take(&mut self.schedule.devices);
         let mut exchanging = std::mem::take(&mut self.exchanging);
         exchanging.clear();
-        for &d in &schedule.devices {
+        for &d in &devices {
             if self.hand_commands(d) {
                 exchanging.push(d);
             }
         }
         self.exchanging = exchanging;
-        self.schedule = schedule;
+        self.schedule.devices = devices;
     }
 
     /// Steps 5 and 6: monitors, then the cycle's statistics.
@@ -581,6 +533,32 @@ impl Manager {
         if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
             self.overruns += 1;
         }
+    }
+
+    /// Collects a step's inputs into its buffers: plain ports straight from
+    /// their slot, the others through the graph. `fresh`: every required
+    /// input must have been written this cycle (sync cskills); otherwise the
+    /// latest values do (async cskills). Returns whether the skill is ready.
+    fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
+        let i = step.inst;
+        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        if ports.iter().any(|p| !p.plain) {
+            return self.gather(i, fresh);
+        }
+        let exec = &mut self.execs[i];
+        let cycle = self.cycle;
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            let slot = &self.slots[port.leaf];
+            let present = slot.value.is_some() && (!fresh || slot.stamp == cycle);
+            if !present && !port.optional {
+                return false;
+            }
+            let new = if present { slot.value.clone() } else { None };
+            if let Some(old) = std::mem::replace(input, new) {
+                recycle(old);
+            }
+        }
+        true
     }
 
     /// Collects instance `i`'s inputs into its buffers. `fresh`: every
@@ -611,10 +589,10 @@ impl Manager {
         true
     }
 
-    /// Splits a level's ready skills into batches that may run at the same
-    /// time: skills sharing a claim never do.
-    fn batches(&self, ready: &[usize]) -> Vec<Vec<usize>> {
-        let mut rest: Vec<usize> = ready.to_vec();
+    /// Splits a level's ready steps into batches of instances that may run
+    /// at the same time: skills sharing a claim never do.
+    fn batches(&self, plan: &Plan, ready: &[usize]) -> Vec<Vec<usize>> {
+        let mut rest: Vec<usize> = ready.iter().map(|&k| plan.steps[k].inst).collect();
         let mut batches = Vec::new();
         while !rest.is_empty() {
             let mut batch = Vec::new();
@@ -633,30 +611,53 @@ impl Manager {
         batches
     }
 
-    fn run_ready(&mut self, ready: &[usize]) {
+    /// Whether the ready steps of a level are worth handing to the pool:
+    /// more than one, and together (by their last timed runs) well above
+    /// what a hand-off costs.
+    fn worth_parallel(&self, plan: &Plan, ready: &[usize]) -> bool {
+        if self.pool.is_none() || ready.len() < 2 {
+            return false;
+        }
+        let mut total = 0u64;
+        let mut longest = 0u64;
+        for &k in ready {
+            let t = &self.insts[plan.steps[k].inst].timing;
+            // Never timed yet: try it in parallel once to learn.
+            let ns = if t.timed_runs == 0 { PARALLEL_WORTH_NS } else { t.last_ns };
+            total += ns;
+            longest = longest.max(ns);
+        }
+        // What the other threads could take off the cycle's thread.
+        total - longest >= PARALLEL_WORTH_NS / 2 && total >= PARALLEL_WORTH_NS
+    }
+
+    fn run_ready(&mut self, plan: &Plan, ready: &[usize]) {
         let (cycle, time_s) = (self.cycle, self.time_s);
-        match (&self.pool, ready.len()) {
-            (Some(_), n) if n > 1 => {
-                for batch in self.batches(ready) {
-                    let Some(pool) = &self.pool else { return };
-                    let clocks = &self.clocks;
-                    let jobs: Vec<Mutex<(&mut Exec, &BodyClock)>> = pick_mut(&mut self.execs, &batch)
-                        .into_iter()
-                        .zip(&batch)
-                        .map(|(exec, &i)| Mutex::new((exec, &clocks[i])))
-                        .collect();
-                    run_parallel(pool, &jobs, |job| {
-                        let mut job = job.lock().unwrap_or_else(|p| p.into_inner());
-                        let (exec, clock) = &mut *job;
-                        exec.run(cycle, time_s, Instant::now(), clock);
-                    });
-                }
+        if self.worth_parallel(plan, ready) {
+            for batch in self.batches(plan, ready) {
+                let Some(pool) = &self.pool else { return };
+                let clocks = &self.clocks;
+                let jobs: Vec<Mutex<(&mut Exec, &BodyClock)>> = pick_mut(&mut self.execs, &batch)
+                    .into_iter()
+                    .zip(&batch)
+                    .map(|(exec, &i)| Mutex::new((exec, &clocks[i])))
+                    .collect();
+                run_parallel(pool, &jobs, |job| {
+                    let mut job = job.lock().unwrap_or_else(|p| p.into_inner());
+                    let (exec, clock) = &mut *job;
+                    exec.run(cycle, time_s, Stamp::now(true), clock);
+                });
             }
-            _ => {
-                let mut t = Instant::now();
-                for &i in ready {
-                    t = self.execs[i].run(cycle, time_s, t, &self.clocks[i]);
+        } else {
+            let sampled = self.sampled;
+            let mut t = Stamp::now(sampled);
+            for &k in ready {
+                let step = &plan.steps[k];
+                let precise = sampled || step.precise;
+                if precise != matches!(t, Stamp::Precise(_)) {
+                    t = Stamp::now(precise);
                 }
+                t = self.execs[step.inst].run(cycle, time_s, t, &self.clocks[step.inst]);
             }
         }
     }
@@ -664,22 +665,28 @@ impl Manager {
     /// Records a run's timing and prints; the cause of its fault if it failed
     /// or ran over its deadline (its outputs are then dropped).
     fn account(&mut self, i: usize) -> Result<(), String> {
+        let deadline = self.graph.instances[i].in_cycle_deadline();
+        self.account_by(i, deadline.as_nanos().min(u64::MAX as u128) as u64)
+    }
+
+    fn account_by(&mut self, i: usize, deadline_ns: u64) -> Result<(), String> {
         let exec = &mut self.execs[i];
         let elapsed = exec.elapsed_ns;
+        let timed = exec.timed;
         let result = std::mem::replace(&mut exec.result, Ok(()));
         let inst = &mut self.insts[i];
-        inst.runs += 1;
-        inst.last_ns = elapsed;
-        inst.max_ns = inst.max_ns.max(elapsed);
-        inst.total_ns += elapsed;
+        inst.timing.record(timed.then_some(elapsed));
         if exec.cx.has_prints() {
             let prints = exec.cx.take_prints();
             self.record_prints(i, prints);
         }
-        let def = &self.graph.instances[i];
-        let deadline = def.in_cycle_deadline();
-        let outcome = result.and_then(|()| {
-            if elapsed > deadline.as_nanos() as u64 {
+        // On the coarse clock a run is late only when it certainly is: its
+        // reading can exceed the exact time by up to one tick.
+        let late = if timed { elapsed > deadline_ns } else { elapsed > deadline_ns.saturating_add(coarse_tick_ns()) };
+        let outcome = match result {
+            Err(e) => Err(e),
+            Ok(()) if late => {
+                let def = &self.graph.instances[i];
                 let (what, key) = if def.kind.is_threaded() {
                     ("liveness deadline", "liveness_ms")
                 } else {
@@ -688,30 +695,66 @@ impl Manager {
                 Err(format!(
                     "its body ran for {}, over its {what} of {} (`{key}`); what it produced is dropped",
                     fmt_duration(Duration::from_nanos(elapsed)),
-                    fmt_duration(deadline)
+                    fmt_duration(Duration::from_nanos(deadline_ns))
                 ))
-            } else {
-                Ok(())
             }
-        });
+            Ok(()) => Ok(()),
+        };
         if outcome.is_err() {
             self.execs[i].outputs.fill(None);
         }
         outcome
     }
 
-    /// Commits a run's outputs, or marks the skill faulted.
-    fn finish(&mut self, i: usize) {
-        if let Err(cause) = self.account(i) {
+    /// Commits a step's outputs, or marks the skill faulted.
+    fn finish_step(&mut self, plan: &Plan, k: usize) {
+        let step = &plan.steps[k];
+        let i = step.inst;
+        if let Err(cause) = self.account_by(i, step.deadline_ns) {
             self.fault(i, cause);
             return;
         }
         let mut outputs = std::mem::take(&mut self.execs[i].outputs);
-        let outcome = self.commit(i, &mut outputs);
+        let outcome = if step.plain_outs {
+            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize], &mut outputs)
+        } else {
+            self.commit(i, &mut outputs)
+        };
         self.execs[i].outputs = outputs;
         if let Err(cause) = outcome {
             self.fault(i, cause);
         }
+    }
+
+    /// Commits a run's outputs (for the spawned manager: step `k` of the
+    /// current plan).
+    fn finish(&mut self, k: usize) {
+        let plan = std::mem::take(&mut self.schedule);
+        self.finish_step(&plan, k);
+        self.schedule = plan;
+    }
+
+    /// [`Manager::commit`] for a step whose outputs are all plain ports.
+    fn commit_plain(&mut self, step: &Step, ports: &[OutPort], outputs: &mut [Option<Value>]) -> Result<(), String> {
+        let i = step.inst;
+        for (p, (port, value)) in ports.iter().zip(outputs.iter()).enumerate() {
+            if let Some(value) = value {
+                if !port.check.admits(value) {
+                    let def = &self.graph.instances[i].outputs[p];
+                    return Err(wrong_output(&def.name, &def.ty, value));
+                }
+            }
+        }
+        let cycle = self.cycle;
+        let last = &mut self.insts[i].last_outputs;
+        for ((port, out), last) in ports.iter().zip(outputs.iter_mut()).zip(last.iter_mut()) {
+            let Some(value) = out.take() else { continue };
+            write_leaf(&mut self.slots[port.leaf], value.clone(), cycle, step.rank, i);
+            if let Some(old) = last.replace(value) {
+                recycle(old);
+            }
+        }
+        Ok(())
     }
 
     /// Writes instance `i`'s produced outputs to their leaves: all of them,
@@ -746,7 +789,9 @@ impl Manager {
                     write_leaf(&mut self.slots[leaf], part, cycle, rank, i);
                 }
             }
-            self.insts[i].last_outputs[p] = Some(value);
+            if let Some(old) = self.insts[i].last_outputs[p].replace(value) {
+                recycle(old);
+            }
         }
         Ok(())
     }
@@ -828,11 +873,7 @@ impl Manager {
     ) {
         let (busy_since, stats) = busy;
         if let Some(stats) = stats {
-            let inst = &mut self.insts[i];
-            inst.runs = stats.runs;
-            inst.last_ns = stats.last_ns;
-            inst.max_ns = stats.max_ns;
-            inst.total_ns = stats.total_ns;
+            self.insts[i].timing = stats;
         }
         if !prints.is_empty() {
             self.record_prints(i, prints);
@@ -1024,9 +1065,12 @@ impl Control for Manager {
     }
 }
 
+#[inline]
 fn write_leaf(slot: &mut Slot, value: Value, cycle: u64, rank: (i32, u32), writer: usize) {
     if slot.stamp != cycle || rank > slot.rank {
-        slot.value = Some(value);
+        if let Some(old) = slot.value.replace(value) {
+            recycle(old);
+        }
         slot.stamp = cycle;
         slot.rank = rank;
         slot.writer = writer as u32;

@@ -168,12 +168,7 @@ impl Manager {
             params: decl.params.iter().cloned().zip(inst.params.iter().cloned()).collect(),
             inputs: def.inputs.iter().zip(&self.execs[i].inputs).map(|(p, v)| port(p, v.clone())).collect(),
             outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
-            timing: SkillTiming {
-                runs: inst.runs,
-                last_ns: inst.last_ns,
-                max_ns: inst.max_ns,
-                total_ns: inst.total_ns,
-            },
+            timing: inst.timing,
             prints: inst.prints.iter().cloned().collect(),
         }
     }
@@ -340,6 +335,8 @@ impl Manager {
             Request::SetPriority { skill, priority } => {
                 let i = self.find(&skill)?;
                 self.insts[i].priority = priority;
+                // The plan holds each step's rank.
+                self.schedule_dirty = true;
                 Ok(Reply::Done)
             }
             Request::SetVerbose { skill, verbose } => {
