@@ -408,8 +408,10 @@ impl Manager {
         let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
         for level in 0..plan.levels.len() {
-            self.prepare_steps(&plan, level, &mut ready);
-            self.run_ready(&plan, &ready);
+            // A level that may go parallel gathers copies of its inputs.
+            let lend = self.pool.is_none() || !plan.parallel_level(level);
+            self.prepare_steps(&plan, level, &mut ready, lend);
+            self.run_ready(&plan, &ready, lend);
             for &k in &ready {
                 self.finish_step(&plan, k);
             }
@@ -420,7 +422,7 @@ impl Manager {
         let exchanging = std::mem::take(&mut self.exchanging);
         let mut t = Stamp::now(true);
         for &d in &exchanging {
-            t = self.execs[d].run(self.cycle, self.time_s, t, &self.clocks[d]);
+            t = self.execs[d].run(self.cycle, self.time_s, t, None);
         }
         for &d in &exchanging {
             self.finish_exchange(d);
@@ -479,14 +481,15 @@ impl Manager {
         }
         let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
-        self.prepare_steps(&plan, level, &mut ready);
+        self.prepare_steps(&plan, level, &mut ready, false);
         self.ready = ready;
         self.schedule = plan;
         true
     }
 
     /// Gathers the inputs of level `level`'s steps; those ready to run go to `ready`.
-    fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>) {
+    /// `lend`: the level runs serially on this thread (see [`Manager::run_lent`]).
+    fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>, lend: bool) {
         ready.clear();
         let Some(steps) = plan.level(level) else { return };
         for k in steps {
@@ -494,12 +497,12 @@ impl Manager {
             match step.kind {
                 StepKind::AsyncThreaded => self.exchange_async(step.inst),
                 StepKind::AsyncInCycle => {
-                    if self.gather_step(plan, step, false) {
+                    if self.gather_step(plan, step, false, lend) {
                         ready.push(k);
                     }
                 }
                 StepKind::Sync => {
-                    if self.gather_step(plan, step, true) {
+                    if self.gather_step(plan, step, true, lend) {
                         ready.push(k);
                     }
                 }
@@ -539,11 +542,20 @@ impl Manager {
     /// their slot, the others through the graph. `fresh`: every required
     /// input must have been written this cycle (sync cskills); otherwise the
     /// latest values do (async cskills). Returns whether the skill is ready.
-    fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
+    /// `lend`: only check readiness; the inputs are lent to the body when
+    /// it runs ([`Manager::run_lent`]).
+    fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool, lend: bool) -> bool {
         let i = step.inst;
         let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
-        if ports.iter().any(|p| !p.plain) {
+        if !step.plain_ins {
             return self.gather(i, fresh);
+        }
+        if lend {
+            let cycle = self.cycle;
+            return ports.iter().all(|port| {
+                let slot = &self.slots[port.leaf];
+                port.optional || (slot.value.is_some() && (!fresh || slot.stamp == cycle))
+            });
         }
         let exec = &mut self.execs[i];
         let cycle = self.cycle;
@@ -631,21 +643,17 @@ impl Manager {
         total - longest >= PARALLEL_WORTH_NS / 2 && total >= PARALLEL_WORTH_NS
     }
 
-    fn run_ready(&mut self, plan: &Plan, ready: &[usize]) {
+    /// `lent`: the inputs of plain steps are lent when they run.
+    fn run_ready(&mut self, plan: &Plan, ready: &[usize], lent: bool) {
         let (cycle, time_s) = (self.cycle, self.time_s);
-        if self.worth_parallel(plan, ready) {
+        if !lent && self.worth_parallel(plan, ready) {
             for batch in self.batches(plan, ready) {
                 let Some(pool) = &self.pool else { return };
-                let clocks = &self.clocks;
-                let jobs: Vec<Mutex<(&mut Exec, &BodyClock)>> = pick_mut(&mut self.execs, &batch)
-                    .into_iter()
-                    .zip(&batch)
-                    .map(|(exec, &i)| Mutex::new((exec, &clocks[i])))
-                    .collect();
+                let jobs: Vec<Mutex<&mut Exec>> =
+                    pick_mut(&mut self.execs, &batch).into_iter().map(Mutex::new).collect();
                 run_parallel(pool, &jobs, |job| {
-                    let mut job = job.lock().unwrap_or_else(|p| p.into_inner());
-                    let (exec, clock) = &mut *job;
-                    exec.run(cycle, time_s, Stamp::now(true), clock);
+                    let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
+                    exec.run(cycle, time_s, Stamp::now(true), None);
                 });
             }
         } else {
@@ -657,9 +665,38 @@ impl Manager {
                 if precise != matches!(t, Stamp::Precise(_)) {
                     t = Stamp::now(precise);
                 }
-                t = self.execs[step.inst].run(cycle, time_s, t, &self.clocks[step.inst]);
+                if lent && step.plain_ins {
+                    t = self.run_lent(plan, step, t);
+                } else {
+                    t = self.execs[step.inst].run(cycle, time_s, t, None);
+                }
             }
         }
+    }
+
+    /// Runs a step whose inputs are all plain ports on the slots' own
+    /// values: each present input is moved from its slot into the body's
+    /// buffer and back after the run (no reference counting; nothing else
+    /// reads a slot while a serial level runs). The readiness was checked
+    /// by [`Manager::gather_step`] and the slots have not changed since.
+    fn run_lent(&mut self, plan: &Plan, step: &Step, t: Stamp) -> Stamp {
+        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        let exec = &mut self.execs[step.inst];
+        let fresh = step.kind == StepKind::Sync;
+        let cycle = self.cycle;
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            let slot = &mut self.slots[port.leaf];
+            if slot.value.is_some() && (!fresh || slot.stamp == cycle) {
+                *input = slot.value.take();
+            }
+        }
+        let end = exec.run(cycle, self.time_s, t, None);
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            if let Some(v) = input.take() {
+                self.slots[port.leaf].value = Some(v);
+            }
+        }
+        end
     }
 
     /// Records a run's timing and prints; the cause of its fault if it failed

@@ -70,18 +70,21 @@ impl Exec {
     /// and is enough to see a run past a long deadline (see [`coarse_ns`]).
     ///
     /// While the body runs, `clock` holds when it started (see
-    /// [`BodyClock`]), so a watchdog can see a body that does not return.
+    /// [`BodyClock`]), so a watchdog can see a body that does not return
+    /// (`None` where no watchdog looks: a manager not spawned).
     ///
     /// Outputs are `None` on entry: the manager takes every produced output
     /// when it commits, and clears them when a body fails.
-    pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: &BodyClock) -> Stamp {
+    pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
         self.cx.set(cycle, time_s);
-        let mark = clock.enter(start.coarse());
+        let mark = clock.map(|c| c.enter(start.coarse()));
         self.result = match &mut self.skill {
             Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
             None => Err("the body is not here (it runs on its own thread)".into()),
         };
-        clock.leave(mark);
+        if let (Some(clock), Some(mark)) = (clock, mark) {
+            clock.leave(mark);
+        }
         let end = start.again();
         self.elapsed_ns = end.since(start);
         self.timed = matches!(start, Stamp::Precise(_));

@@ -57,6 +57,8 @@ pub(crate) struct Step {
     pub outs: (u32, u32),
     /// Every output is a plain port (one leaf, checked inline).
     pub plain_outs: bool,
+    /// Every input is a plain port (one leaf, not a record).
+    pub plain_ins: bool,
 }
 
 /// An input port: `leaf` is its slot when `plain` (one leaf, not a
@@ -190,11 +192,18 @@ impl Plan {
                     ins: (ins0, plan.ins.len() as u32),
                     outs: (outs0, plan.outs.len() as u32),
                     plain_outs: plan.outs[outs0 as usize..].iter().all(|o| o.check != Check::Record),
+                    plain_ins: plan.ins[ins0 as usize..].iter().all(|p| p.plain),
                 });
             }
             plan.levels.push((first, plan.steps.len() as u32));
         }
         plan
+    }
+
+    /// Whether level `l` has more than one step (only such a level can run
+    /// in parallel).
+    pub fn parallel_level(&self, l: usize) -> bool {
+        self.levels.get(l).is_some_and(|&(a, b)| b - a > 1)
     }
 
     /// The steps of level `l`.

@@ -166,7 +166,12 @@ impl Manager {
             verbose: inst.verbose,
             priority: inst.priority,
             params: decl.params.iter().cloned().zip(inst.params.iter().cloned()).collect(),
-            inputs: def.inputs.iter().zip(&self.execs[i].inputs).map(|(p, v)| port(p, v.clone())).collect(),
+            inputs: def
+                .inputs
+                .iter()
+                .zip(&self.execs[i].inputs)
+                .map(|(p, v)| port(p, v.clone().or_else(|| self.lent_input(i, p))))
+                .collect(),
             outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
             timing: inst.timing,
             prints: inst.prints.iter().cloned().collect(),
@@ -424,5 +429,16 @@ impl Manager {
             self.running = false;
             self.bus.send(Event::ManagerStopped { cycle: self.cycle });
         }
+    }
+}
+
+impl Manager {
+    /// What a plain input read in the last cycle when the serial executor
+    /// lent it the slot's value (its buffer then holds nothing after the run).
+    fn lent_input(&self, i: usize, port: &crate::graph::PortBinding) -> Option<Value> {
+        let [leaf] = port.leaves[..] else { return None };
+        let slot = &self.slots[leaf];
+        let fresh = slot.stamp == self.cycle || self.graph.instances[i].kind == situate_core::SkillKind::Async;
+        (self.insts[i].active && fresh).then(|| slot.value.clone()).flatten()
     }
 }

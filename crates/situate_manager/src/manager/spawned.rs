@@ -405,7 +405,7 @@ fn run_serial<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, skills: &[(
         let precise = precise || m.sampled;
         let mut exec = std::mem::take(&mut m.execs[i]);
         drop(g);
-        exec.run(cycle, time_s, Stamp::now(precise), &core.clocks[i]);
+        exec.run(cycle, time_s, Stamp::now(precise), Some(&core.clocks[i]));
         g = core.lock();
         // Left behind: the body's late result is dropped with it.
         current(&mut g, generation)?.execs[i] = exec;
@@ -428,7 +428,7 @@ fn run_batches<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, ready: &[u
         drop(g);
         run_parallel(pool, &jobs, |(i, job)| {
             let mut exec = std::mem::take(&mut *job.lock().unwrap_or_else(|p| p.into_inner()));
-            exec.run(cycle, time_s, Stamp::now(true), &core.clocks[*i]);
+            exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[*i]));
             let mut g = core.lock();
             if let Some(m) = current(&mut g, generation) {
                 m.execs[*i] = exec;
