@@ -263,22 +263,38 @@ macro_rules! fixed_array_signal {
     };
 }
 
-/// Spare array buffers of this thread, reused by the next array made.
-struct Spares(std::cell::RefCell<Vec<Value>>);
+/// Spare array buffers of this thread, reused by the next array made: a
+/// few cells, so that taking and giving back cost a few loads and stores.
+struct Spares([std::cell::Cell<Option<Value>>; SPARES]);
 
 /// At most this many spare buffers per thread.
-const SPARES: usize = 16;
+const SPARES: usize = 4;
 
 impl Spares {
+    #[inline]
     fn take_where(&self, want: impl Fn(&Value) -> bool) -> Option<Value> {
-        let mut spares = self.0.try_borrow_mut().ok()?;
-        let k = spares.iter().rposition(want)?;
-        Some(spares.swap_remove(k))
+        for cell in &self.0 {
+            match cell.take() {
+                Some(v) if want(&v) => return Some(v),
+                other => cell.set(other),
+            }
+        }
+        None
+    }
+
+    #[inline]
+    fn give(&self, value: Value) {
+        for cell in &self.0 {
+            match cell.take() {
+                None => return cell.set(Some(value)),
+                other => cell.set(other),
+            }
+        }
     }
 }
 
 thread_local! {
-    static SPARE: Spares = const { Spares(std::cell::RefCell::new(Vec::new())) };
+    static SPARE: Spares = const { Spares([const { std::cell::Cell::new(None) }; SPARES]) };
 }
 
 /// Hands back a value that is no longer needed. When it is an array that
@@ -287,6 +303,7 @@ thread_local! {
 /// ([`SignalValue::into_value`] of `[f32; N]`, `[f64; N]`, `[i64; N]`), so a
 /// cycle that replaces one array by another allocates nothing. Anything
 /// else is dropped as usual.
+#[inline]
 pub fn recycle(value: Value) {
     let unique = match &value {
         Value::F32s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
@@ -295,16 +312,7 @@ pub fn recycle(value: Value) {
         _ => false,
     };
     if unique {
-        let _ = SPARE.try_with(|s| {
-            if let Ok(mut spares) = s.0.try_borrow_mut() {
-                if spares.capacity() == 0 {
-                    spares.reserve_exact(SPARES);
-                }
-                if spares.len() < SPARES {
-                    spares.push(value);
-                }
-            }
-        });
+        let _ = SPARE.try_with(|s| s.give(value));
     }
 }
 

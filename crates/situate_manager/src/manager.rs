@@ -782,13 +782,23 @@ impl Manager {
                 }
             }
         }
+        // A plain output's last value is its slot's while this skill holds
+        // it, so a winning value is moved, not shared: `last_outputs` keeps
+        // it only when it lost the slot (see `save_displaced`).
         let cycle = self.cycle;
-        let last = &mut self.insts[i].last_outputs;
-        for ((port, out), last) in ports.iter().zip(outputs.iter_mut()).zip(last.iter_mut()) {
+        for (p, (port, out)) in ports.iter().zip(outputs.iter_mut()).enumerate() {
             let Some(value) = out.take() else { continue };
-            write_leaf(&mut self.slots[port.leaf], value.clone(), cycle, step.rank, i);
-            if let Some(old) = last.replace(value) {
-                recycle(old);
+            let last = &mut self.insts[i].last_outputs[p];
+            match write_leaf(&mut self.slots[port.leaf], value, cycle, step.rank, i) {
+                Ok(displaced) => {
+                    if let Some(old) = last.take() {
+                        recycle(old);
+                    }
+                    if let Some((w, old)) = displaced {
+                        self.save_displaced(port.leaf, w, old);
+                    }
+                }
+                Err(lost) => *last = Some(lost),
             }
         }
         Ok(())
@@ -797,8 +807,9 @@ impl Manager {
     /// Writes instance `i`'s produced outputs to their leaves: all of them,
     /// or (when one is not of its port's type) none (update-record is atomic).
     fn commit(&mut self, i: usize, outputs: &mut [Option<Value>]) -> Result<(), String> {
-        let def = &self.graph.instances[i];
-        let parts = &mut self.parts;
+        let graph = Arc::clone(&self.graph);
+        let def = &graph.instances[i];
+        let mut parts = std::mem::take(&mut self.parts);
         parts.clear();
         // First check every output (records are taken apart into their leaves).
         for (port, value) in def.outputs.iter().zip(outputs.iter()) {
@@ -806,31 +817,62 @@ impl Manager {
             let ok = if let ([_], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
                 value.conforms(&port.ty)
             } else {
-                decompose(&port.ty, value, parts)
+                decompose(&port.ty, value, &mut parts)
             };
             if !ok {
                 parts.clear();
+                self.parts = parts;
                 return Err(wrong_output(&port.name, &port.ty, value));
             }
         }
         // Then write them.
         let rank = self.rank(i);
         let cycle = self.cycle;
-        let mut parts = self.parts.drain(..);
+        let mut leaf_values = parts.drain(..);
         for (p, port) in def.outputs.iter().enumerate() {
             let Some(value) = outputs[p].take() else { continue };
             if let ([leaf], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
-                write_leaf(&mut self.slots[*leaf], value.clone(), cycle, rank, i);
+                if let Ok(Some((w, old))) = write_leaf(&mut self.slots[*leaf], value.clone(), cycle, rank, i) {
+                    self.save_displaced(*leaf, w, old);
+                }
             } else {
-                for (&leaf, part) in port.leaves.iter().zip(parts.by_ref()) {
-                    write_leaf(&mut self.slots[leaf], part, cycle, rank, i);
+                for (&leaf, part) in port.leaves.iter().zip(&mut leaf_values) {
+                    if let Ok(Some((w, old))) = write_leaf(&mut self.slots[leaf], part, cycle, rank, i) {
+                        self.save_displaced(leaf, w, old);
+                    }
                 }
             }
             if let Some(old) = self.insts[i].last_outputs[p].replace(value) {
                 recycle(old);
             }
         }
+        drop(leaf_values);
+        self.parts = parts;
         Ok(())
+    }
+
+    /// Another skill took over `leaf` from writer `w`: the value `w` last
+    /// produced there is kept as its last output (a plain port's last output
+    /// is otherwise read from its slot).
+    fn save_displaced(&mut self, leaf: usize, w: usize, old: Value) {
+        let Some(&(_, p)) = self.graph.leaves[leaf].writers.iter().find(|&&(x, _)| x == w) else { return };
+        let port = &self.graph.instances[w].outputs[p];
+        if port.leaves.len() == 1 && !matches!(port.ty, SignalType::Record(_)) {
+            if let Some(last) = self.insts[w].last_outputs.get_mut(p) {
+                last.get_or_insert(old);
+            }
+        }
+    }
+
+    /// What instance `i` last produced on output `p`.
+    pub(crate) fn last_output(&self, i: usize, p: usize) -> Option<Value> {
+        if let Some(v) = &self.insts[i].last_outputs[p] {
+            return Some(v.clone());
+        }
+        let port = &self.graph.instances[i].outputs[p];
+        let [leaf] = port.leaves[..] else { return None };
+        let slot = &self.slots[leaf];
+        (slot.writer as usize == i && slot.stamp > 0).then(|| slot.value.clone()).flatten()
     }
 
     fn fault(&mut self, i: usize, cause: String) {
@@ -1102,15 +1144,33 @@ impl Control for Manager {
     }
 }
 
+/// Arbitration: writes `value` to `slot` unless a higher-ranked writer
+/// wrote it this cycle (then `Err` hands the value back). `Ok` holds the
+/// value it displaced when another writer had written it.
 #[inline]
-fn write_leaf(slot: &mut Slot, value: Value, cycle: u64, rank: (i32, u32), writer: usize) {
+fn write_leaf(
+    slot: &mut Slot,
+    value: Value,
+    cycle: u64,
+    rank: (i32, u32),
+    writer: usize,
+) -> Result<Option<(usize, Value)>, Value> {
     if slot.stamp != cycle || rank > slot.rank {
-        if let Some(old) = slot.value.replace(value) {
-            recycle(old);
-        }
+        let old = slot.value.replace(value);
+        let displaced = match old {
+            Some(old) if slot.writer as usize != writer && slot.stamp > 0 => Some((slot.writer as usize, old)),
+            Some(old) => {
+                recycle(old);
+                None
+            }
+            None => None,
+        };
         slot.stamp = cycle;
         slot.rank = rank;
         slot.writer = writer as u32;
+        Ok(displaced)
+    } else {
+        Err(value)
     }
 }
 

@@ -57,7 +57,8 @@ pub(crate) struct Step {
     pub outs: (u32, u32),
     /// Every output is a plain port (one leaf, checked inline).
     pub plain_outs: bool,
-    /// Every input is a plain port (one leaf, not a record).
+    /// Every input is a plain port (one leaf, not a record), each on a
+    /// slot of its own.
     pub plain_ins: bool,
 }
 
@@ -192,7 +193,12 @@ impl Plan {
                     ins: (ins0, plan.ins.len() as u32),
                     outs: (outs0, plan.outs.len() as u32),
                     plain_outs: plan.outs[outs0 as usize..].iter().all(|o| o.check != Check::Record),
-                    plain_ins: plan.ins[ins0 as usize..].iter().all(|p| p.plain),
+                    plain_ins: {
+                        // Lent inputs must come from distinct slots.
+                        let ins = &plan.ins[ins0 as usize..];
+                        ins.iter().all(|p| p.plain)
+                            && ins.iter().enumerate().all(|(a, p)| ins[..a].iter().all(|q| q.leaf != p.leaf))
+                    },
                 });
             }
             plan.levels.push((first, plan.steps.len() as u32));

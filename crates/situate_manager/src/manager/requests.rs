@@ -172,7 +172,7 @@ impl Manager {
                 .zip(&self.execs[i].inputs)
                 .map(|(p, v)| port(p, v.clone().or_else(|| self.lent_input(i, p))))
                 .collect(),
-            outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
+            outputs: def.outputs.iter().enumerate().map(|(k, p)| port(p, self.last_output(i, k))).collect(),
             timing: inst.timing,
             prints: inst.prints.iter().cloned().collect(),
         }
