@@ -1196,23 +1196,83 @@ fn raise_thread_priority() {
     }
 }
 
-/// Runs one parallel batch: the pool's threads and the calling thread each
-/// take the next job until none is left, so the cycle's thread works
-/// instead of waiting for the pool to wake up.
+/// Runs one parallel batch: the calling thread (the cycle's) and up to
+/// `threads − 1` of the pool's take the next job until none is left.
+///
+/// The cycle's thread never waits for a helper that has not started: a
+/// helper woken late (after an idle spell the pool's threads sleep, and a
+/// halted vCPU takes long to wake) finds the batch closed and leaves without
+/// touching it. The cycle's thread only waits for the helpers already in a
+/// job, so the batch never takes longer than running it alone plus the end
+/// of one job; it is never slower than serial by more than a hand-off.
 pub(crate) fn run_parallel<J: Sync>(pool: &rayon::ThreadPool, jobs: &[J], run: impl Fn(&J) + Sync) {
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let drain = || loop {
-        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    /// Set in `state` once the batch is closed; `state >> 1` counts the
+    /// helpers inside it.
+    const CLOSED: usize = 1;
+    struct Batch {
+        next: AtomicUsize,
+        state: AtomicUsize,
+    }
+    /// Leaves the batch (also when a job unwinds).
+    struct Inside<'a>(&'a Batch);
+    impl Drop for Inside<'_> {
+        fn drop(&mut self) {
+            self.0.state.fetch_sub(2, Ordering::AcqRel);
+        }
+    }
+    /// Closes the batch and waits for the helpers inside (also when the
+    /// cycle's thread unwinds): they borrow `jobs` and `run`.
+    struct Close<'a>(&'a Batch);
+    impl Drop for Close<'_> {
+        fn drop(&mut self) {
+            self.0.state.fetch_or(CLOSED, Ordering::AcqRel);
+            let mut spins = 0u32;
+            while self.0.state.load(Ordering::Acquire) >> 1 != 0 {
+                if spins < 1000 {
+                    std::hint::spin_loop();
+                    spins += 1;
+                } else {
+                    std::thread::yield_now();
+                }
+            }
+        }
+    }
+
+    let batch = Arc::new(Batch { next: AtomicUsize::new(0), state: AtomicUsize::new(0) });
+    let drain = |b: &Batch| loop {
+        let k = b.next.fetch_add(1, Ordering::Relaxed);
         let Some(job) = jobs.get(k) else { break };
         run(job);
     };
+    let work: &(dyn Fn(&Batch) + Sync) = &drain;
+    // SAFETY: the lifetime is erased only so the pool's threads can hold the
+    // reference. A helper dereferences it only after entering the batch
+    // (a CAS on `state` that fails once `CLOSED` is set), and this function
+    // does not return (nor unwind) before `Close` has set `CLOSED` and seen
+    // every helper that entered leave: no use outlives `jobs` and `run`.
+    let work: &'static (dyn Fn(&Batch) + Sync) = unsafe { std::mem::transmute(work) };
     let helpers = pool.current_num_threads().min(jobs.len().saturating_sub(1));
-    pool.in_place_scope(|scope| {
-        for _ in 0..helpers {
-            scope.spawn(|_| drain());
-        }
-        drain();
-    });
+    let close = Close(&batch);
+    for _ in 0..helpers {
+        let b = Arc::clone(&batch);
+        pool.spawn(move || {
+            let mut s = b.state.load(Ordering::Acquire);
+            loop {
+                if s & CLOSED != 0 {
+                    return;
+                }
+                match b.state.compare_exchange_weak(s, s + 2, Ordering::AcqRel, Ordering::Acquire) {
+                    Ok(_) => break,
+                    Err(now) => s = now,
+                }
+            }
+            let _inside = Inside(&b);
+            work(&b);
+        });
+    }
+    drain(&batch);
+    drop(close);
 }
 
 /// A duration for people: `2.1 s`, `250 ms`, `40 µs`.
