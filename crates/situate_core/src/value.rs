@@ -248,10 +248,72 @@ macro_rules! fixed_array_signal {
                 }
             }
             fn into_value(self) -> Value {
+                // A buffer the manager gave back (see [`recycle`]) saves an
+                // allocation per produced array in a steady cycle.
+                let spare = SPARE.with(|s| s.take_where(|v| matches!(v, Value::$variant(a) if a.len() == N)));
+                if let Some(Value::$variant(mut a)) = spare {
+                    if let Some(buf) = Arc::get_mut(&mut a) {
+                        buf.copy_from_slice(&self);
+                        return Value::$variant(a);
+                    }
+                }
                 Value::$variant(Arc::from(&self[..]))
             }
         }
     };
+}
+
+/// Spare array buffers of this thread, reused by the next array made: a
+/// few cells, so that taking and giving back cost a few loads and stores.
+struct Spares([std::cell::Cell<Option<Value>>; SPARES]);
+
+/// At most this many spare buffers per thread.
+const SPARES: usize = 4;
+
+impl Spares {
+    #[inline]
+    fn take_where(&self, want: impl Fn(&Value) -> bool) -> Option<Value> {
+        for cell in &self.0 {
+            match cell.take() {
+                Some(v) if want(&v) => return Some(v),
+                other => cell.set(other),
+            }
+        }
+        None
+    }
+
+    #[inline]
+    fn give(&self, value: Value) {
+        for cell in &self.0 {
+            match cell.take() {
+                None => return cell.set(Some(value)),
+                other => cell.set(other),
+            }
+        }
+    }
+}
+
+thread_local! {
+    static SPARE: Spares = const { Spares([const { std::cell::Cell::new(None) }; SPARES]) };
+}
+
+/// Hands back a value that is no longer needed. When it is an array that
+/// nobody else holds, its buffer is kept (a few per thread) and reused by
+/// the next fixed-size array of that length made on this thread
+/// ([`SignalValue::into_value`] of `[f32; N]`, `[f64; N]`, `[i64; N]`), so a
+/// cycle that replaces one array by another allocates nothing. Anything
+/// else is dropped as usual.
+#[inline]
+pub fn recycle(value: Value) {
+    let unique = match &value {
+        Value::F32s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
+        Value::F64s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
+        Value::I64s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
+        _ => false,
+    };
+    if unique {
+        let _ = SPARE.try_with(|s| s.give(value));
+    }
 }
 
 fixed_array_signal!(f32, F32s, ElemType::F32);

@@ -9,9 +9,11 @@
 //! priorities) take effect from the next cycle on; queries see the state at
 //! the end of the last cycle. A refused request changes nothing.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use crossbeam_channel::{Receiver, Sender};
+use crossbeam_channel::{Receiver, Sender, TrySendError};
 use situate_core::{ParamSpec, SignalType, SkillKind, Value};
 
 use crate::monitor::{MonitorCondition, MonitorMode};
@@ -226,13 +228,20 @@ pub struct PortInfo {
     pub value: Option<Value>,
 }
 
-/// Per-skill timing of its body.
+/// Per-skill timing of its body: how often it ran, and how long its timed
+/// runs took. The cycle times a sample of the runs of in-cycle bodies (one
+/// cycle in [`TIMING_SAMPLE`](crate::manager::TIMING_SAMPLE), and every
+/// run of a body with a short deadline); threaded bodies are timed at each run.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SkillTiming {
     pub runs: u64,
     pub last_ns: u64,
     pub max_ns: u64,
+    /// The time of all runs: an untimed run counts as long as the last
+    /// timed one, so `total_ns / runs` is the mean.
     pub total_ns: u64,
+    /// How many runs were timed (`runs` when every run is).
+    pub timed_runs: u64,
 }
 
 impl SkillTiming {
@@ -241,6 +250,20 @@ impl SkillTiming {
             0.0
         } else {
             self.total_ns as f64 / self.runs as f64
+        }
+    }
+
+    /// Counts one run, with its time if it was timed.
+    pub fn record(&mut self, elapsed_ns: Option<u64>) {
+        self.runs += 1;
+        match elapsed_ns {
+            Some(ns) => {
+                self.timed_runs += 1;
+                self.last_ns = ns;
+                self.max_ns = self.max_ns.max(ns);
+                self.total_ns += ns;
+            }
+            None => self.total_ns += self.last_ns,
         }
     }
 }
@@ -465,7 +488,7 @@ pub(crate) struct Envelope {
 #[derive(Clone)]
 pub struct Handle {
     pub(crate) tx: Sender<Envelope>,
-    pub(crate) bus: crate::manager::EventBus,
+    pub(crate) bus: EventBus,
     pub(crate) graph: std::sync::Arc<crate::graph::Graph>,
 }
 
@@ -554,5 +577,42 @@ mod tests {
         assert_eq!(cycles, [3, 5]);
         handle.request_timeout(Request::Shutdown, limit).unwrap();
         join.join().unwrap();
+    }
+}
+
+/// How many events wait for a subscriber that is slow to read them.
+const EVENT_QUEUE: usize = 4096;
+
+/// The event subscribers, shared with handles.
+#[derive(Clone, Default)]
+pub struct EventBus {
+    subscribers: Arc<Mutex<Vec<Sender<Event>>>>,
+    /// Worker threads that panicked (see [`crate::supervise`]).
+    pub(crate) worker_failures: Arc<AtomicU64>,
+}
+
+impl EventBus {
+    pub fn subscribe(&self) -> Receiver<Event> {
+        let (tx, rx) = crossbeam_channel::bounded(EVENT_QUEUE);
+        self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).push(tx);
+        rx
+    }
+
+    pub(crate) fn send(&self, event: Event) {
+        let mut subs = self.subscribers.lock().unwrap_or_else(|p| p.into_inner());
+        // A subscriber that stopped reading loses events rather than holding
+        // up the cycle; one that went away is dropped.
+        subs.retain(|tx| !matches!(tx.try_send(event.clone()), Err(TrySendError::Disconnected(_))));
+    }
+
+    pub(crate) fn report(&self, event: Event) {
+        if matches!(event, Event::WorkerFailed { .. }) {
+            self.worker_failures.fetch_add(1, Ordering::Relaxed);
+        }
+        self.send(event);
+    }
+
+    pub(crate) fn has_subscribers(&self) -> bool {
+        !self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).is_empty()
     }
 }

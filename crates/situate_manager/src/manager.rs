@@ -21,29 +21,42 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crossbeam_channel::{Receiver, Sender, TrySendError};
+use crossbeam_channel::Receiver;
+use situate_core::value::recycle;
 use situate_core::{SignalType, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
 use crate::expr::Lookup;
-use crate::graph::{assemble, decompose, topo_order, Graph};
+use crate::graph::{assemble, decompose, Graph};
 use crate::monitor::Monitors;
 use crate::registry::Registry;
-use crate::runner::{BodyClock, Exec, Worker, WorkerClock, WorkerStats};
+use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp, Worker, WorkerClock, WorkerStats};
 use crate::spec::{BuildError, RobotSpec};
 
 mod front;
+mod plan;
 mod requests;
 mod spawned;
 pub(crate) use front::prepare_boxed as prepare;
 use front::PreparedMonitor;
 /// A prepared monitor, boxed for the request queue.
 pub(crate) type PreparedMonitorBox = Box<PreparedMonitor>;
+pub use crate::control::EventBus;
+use plan::{OutPort, Plan, Step, StepKind};
 pub use spawned::Joiner;
 
+/// The cycle times every body exactly once in this many cycles (and the
+/// bodies with a short deadline always); in the others it reads only the
+/// coarse clock, enough to see a run past its deadline.
+pub const TIMING_SAMPLE: u64 = 32;
+
+/// A level's expected work (from its skills' last timed runs) from which
+/// the parallel executor hands it to the pool; below, the cycle's thread
+/// runs it alone (waking a thread costs some µs, more after an idle spell).
+pub const PARALLEL_WORTH_NS: u64 = 40_000;
+
 const PRINT_HISTORY: usize = 64;
-const EVENT_QUEUE: usize = 4096;
 
 /// The most monitors one robot keeps at once (`monitor_add` refuses more);
 /// more exactly, the most conditions its monitors watch, an `any` monitor
@@ -72,10 +85,7 @@ struct Inst {
     verbose: bool,
     priority: i32,
     params: Vec<Value>,
-    runs: u64,
-    last_ns: u64,
-    max_ns: u64,
-    total_ns: u64,
+    timing: SkillTiming,
     prints: VecDeque<(u64, String)>,
     last_outputs: Vec<Option<Value>>,
     worker: Option<Worker>,
@@ -87,46 +97,6 @@ struct Inst {
     /// The cycle from which its parameters last changed (monitors reading
     /// one are evaluated again then).
     params_from: u64,
-}
-
-#[derive(Default)]
-struct Schedule {
-    devices: Vec<usize>,
-    levels: Vec<Vec<usize>>,
-}
-
-/// The event subscribers, shared with handles.
-#[derive(Clone, Default)]
-pub struct EventBus {
-    subscribers: Arc<Mutex<Vec<Sender<Event>>>>,
-    /// Worker threads that panicked (see [`crate::supervise`]).
-    worker_failures: Arc<std::sync::atomic::AtomicU64>,
-}
-
-impl EventBus {
-    pub fn subscribe(&self) -> Receiver<Event> {
-        let (tx, rx) = crossbeam_channel::bounded(EVENT_QUEUE);
-        self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).push(tx);
-        rx
-    }
-
-    fn send(&self, event: Event) {
-        let mut subs = self.subscribers.lock().unwrap_or_else(|p| p.into_inner());
-        // A subscriber that stopped reading loses events rather than holding
-        // up the cycle; one that went away is dropped.
-        subs.retain(|tx| !matches!(tx.try_send(event.clone()), Err(TrySendError::Disconnected(_))));
-    }
-
-    pub(crate) fn report(&self, event: Event) {
-        if matches!(event, Event::WorkerFailed { .. }) {
-            self.worker_failures.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        }
-        self.send(event);
-    }
-
-    fn has_subscribers(&self) -> bool {
-        !self.subscribers.lock().unwrap_or_else(|p| p.into_inner()).is_empty()
-    }
 }
 
 /// What a monitor condition can name: a leaf signal or a parameter.
@@ -150,7 +120,8 @@ pub struct Manager {
     slots: Vec<Slot>,
     insts: Vec<Inst>,
     execs: Vec<Exec>,
-    schedule: Schedule,
+    /// The compiled schedule of the active skills.
+    schedule: Plan,
     schedule_dirty: bool,
     cycle: u64,
     time_s: f64,
@@ -192,7 +163,9 @@ pub struct Manager {
     /// A pausing monitor fired in the last cycle: a running cycle stops, a
     /// step ends early.
     paused: bool,
-    /// The ready skills of a level (kept to reuse its allocation).
+    /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
+    sampled: bool,
+    /// The ready steps of a level (kept to reuse its allocation).
     ready: Vec<usize>,
     /// The lockstep dskills whose device exchange runs this cycle.
     exchanging: Vec<usize>,
@@ -236,10 +209,7 @@ impl Manager {
                 verbose: false,
                 priority: def.priority,
                 params: def.params.clone(),
-                runs: 0,
-                last_ns: 0,
-                max_ns: 0,
-                total_ns: 0,
+                timing: SkillTiming::default(),
                 prints: VecDeque::new(),
                 last_outputs: vec![None; def.outputs.len()],
                 worker,
@@ -249,7 +219,7 @@ impl Manager {
             });
         }
         let started = Instant::now();
-        let clocks: Arc<[BodyClock]> = graph.instances.iter().map(|_| BodyClock::new(started)).collect();
+        let clocks: Arc<[BodyClock]> = graph.instances.iter().map(|_| BodyClock::new()).collect();
         let pool = match spec.executor {
             ExecutorKind::Serial => None,
             ExecutorKind::Parallel => {
@@ -274,7 +244,7 @@ impl Manager {
             pool,
             insts,
             execs,
-            schedule: Schedule::default(),
+            schedule: Plan::default(),
             schedule_dirty: true,
             cycle: 0,
             time_s: 0.0,
@@ -299,6 +269,7 @@ impl Manager {
             stop_at: None,
             speed: None,
             paused: false,
+            sampled: true,
             ready: Vec::new(),
             exchanging: Vec::new(),
             parts: Vec::new(),
@@ -426,55 +397,32 @@ impl Manager {
 
     fn compile_schedule(&mut self) {
         let insts = &self.insts;
-        let graph = &self.graph;
-        let order = topo_order(&graph.instances, &graph.leaves, |i| insts[i].active);
-        let mut level = vec![0usize; graph.instances.len()];
-        let mut levels: Vec<Vec<usize>> = Vec::new();
-        for &i in &order {
-            let mut l = 0;
-            for port in &graph.instances[i].inputs {
-                for &leaf in &port.leaves {
-                    for &(w, _) in &graph.leaves[leaf].writers {
-                        if w != i && insts[w].active && graph.instances[w].kind != SkillKind::Device {
-                            l = l.max(level[w] + 1);
-                        }
-                    }
-                }
-            }
-            level[i] = l;
-            if levels.len() <= l {
-                levels.resize_with(l + 1, Vec::new);
-            }
-            levels[l].push(i);
-        }
-        for l in &mut levels {
-            l.sort_unstable();
-        }
-        let devices = (0..graph.instances.len())
-            .filter(|&i| insts[i].active && graph.instances[i].kind == SkillKind::Device)
-            .collect();
-        self.schedule = Schedule { devices, levels };
+        self.schedule =
+            Plan::compile(&self.graph, |i| insts[i].active, |i| insts[i].priority, |i| insts[i].worker.is_some());
         self.schedule_dirty = false;
     }
 
     /// Runs one cycle.
     pub fn cycle(&mut self) {
         self.begin_cycle();
-        let mut level = 0;
-        while self.prepare_level(level) {
-            let ready = std::mem::take(&mut self.ready);
-            self.run_ready(&ready);
-            for &i in &ready {
-                self.finish(i);
+        let plan = std::mem::take(&mut self.schedule);
+        let mut ready = std::mem::take(&mut self.ready);
+        for level in 0..plan.levels.len() {
+            // A level that may go parallel gathers copies of its inputs.
+            let lend = self.pool.is_none() || !plan.parallel_level(level);
+            self.prepare_steps(&plan, level, &mut ready, lend);
+            self.run_ready(&plan, &ready, lend);
+            for &k in &ready {
+                self.finish_step(&plan, k);
             }
-            self.ready = ready;
-            level += 1;
         }
+        self.ready = ready;
+        self.schedule = plan;
         self.prepare_exchanges();
         let exchanging = std::mem::take(&mut self.exchanging);
-        let mut t = Instant::now();
+        let mut t = Stamp::now(true);
         for &d in &exchanging {
-            t = self.execs[d].run(self.cycle, self.time_s, t, &self.clocks[d]);
+            t = self.execs[d].run(self.cycle, self.time_s, t, None);
         }
         for &d in &exchanging {
             self.finish_exchange(d);
@@ -501,6 +449,7 @@ impl Manager {
         }
         self.last_start = Some(self.cycle_start);
         self.cycle += 1;
+        self.sampled = self.cycle % TIMING_SAMPLE == 1;
         self.time_s = match self.clock {
             ClockKind::Simulated => self.cycle as f64 * self.period_s,
             ClockKind::Wall => self.started.elapsed().as_secs_f64(),
@@ -516,59 +465,65 @@ impl Manager {
         if self.schedule_dirty {
             self.compile_schedule();
         }
-        let schedule = std::mem::take(&mut self.schedule);
-        for &d in &schedule.devices {
+        let devices = std::mem::take(&mut self.schedule.devices);
+        for &d in &devices {
             self.take_readings(d);
         }
-        self.schedule = schedule;
+        self.schedule.devices = devices;
     }
 
     /// Step 3 for level `level`: exchanges with threaded async cskills, and
-    /// the skills ready to run in the cycle in `self.ready`. False when
+    /// the steps ready to run in the cycle in `self.ready`. False when
     /// there is no such level.
     fn prepare_level(&mut self, level: usize) -> bool {
-        let schedule = std::mem::take(&mut self.schedule);
-        let Some(skills) = schedule.levels.get(level) else {
-            self.schedule = schedule;
+        if level >= self.schedule.levels.len() {
             return false;
-        };
+        }
+        let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
+        self.prepare_steps(&plan, level, &mut ready, false);
+        self.ready = ready;
+        self.schedule = plan;
+        true
+    }
+
+    /// Gathers the inputs of level `level`'s steps; those ready to run go to `ready`.
+    /// `lend`: the level runs serially on this thread (see [`Manager::run_lent`]).
+    fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>, lend: bool) {
         ready.clear();
-        for &i in skills {
-            let kind = self.graph.instances[i].kind;
-            match (kind, self.insts[i].worker.is_some()) {
-                (SkillKind::Async, true) => self.exchange_async(i),
-                (SkillKind::Async, false) => {
-                    if self.gather(i, false) {
-                        ready.push(i);
+        let Some(steps) = plan.level(level) else { return };
+        for k in steps {
+            let step = &plan.steps[k];
+            match step.kind {
+                StepKind::AsyncThreaded => self.exchange_async(step.inst),
+                StepKind::AsyncInCycle => {
+                    if self.gather_step(plan, step, false, lend) {
+                        ready.push(k);
                     }
                 }
-                _ => {
-                    if self.gather(i, true) {
-                        ready.push(i);
+                StepKind::Sync => {
+                    if self.gather_step(plan, step, true, lend) {
+                        ready.push(k);
                     }
                 }
             }
         }
-        self.ready = ready;
-        self.schedule = schedule;
-        true
     }
 
     /// Step 4: hand every active dskill the commands written this cycle;
     /// the lockstep ones whose device exchange runs in the cycle go to
     /// `self.exchanging`.
     fn prepare_exchanges(&mut self) {
-        let schedule = std::mem::take(&mut self.schedule);
+        let devices = std::mem::take(&mut self.schedule.devices);
         let mut exchanging = std::mem::take(&mut self.exchanging);
         exchanging.clear();
-        for &d in &schedule.devices {
+        for &d in &devices {
             if self.hand_commands(d) {
                 exchanging.push(d);
             }
         }
         self.exchanging = exchanging;
-        self.schedule = schedule;
+        self.schedule.devices = devices;
     }
 
     /// Steps 5 and 6: monitors, then the cycle's statistics.
@@ -581,6 +536,41 @@ impl Manager {
         if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
             self.overruns += 1;
         }
+    }
+
+    /// Collects a step's inputs into its buffers: plain ports straight from
+    /// their slot, the others through the graph. `fresh`: every required
+    /// input must have been written this cycle (sync cskills); otherwise the
+    /// latest values do (async cskills). Returns whether the skill is ready.
+    /// `lend`: only check readiness; the inputs are lent to the body when
+    /// it runs ([`Manager::run_lent`]).
+    fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool, lend: bool) -> bool {
+        let i = step.inst;
+        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        if !step.plain_ins {
+            return self.gather(i, fresh);
+        }
+        if lend {
+            let cycle = self.cycle;
+            return ports.iter().all(|port| {
+                let slot = &self.slots[port.leaf];
+                port.optional || (slot.value.is_some() && (!fresh || slot.stamp == cycle))
+            });
+        }
+        let exec = &mut self.execs[i];
+        let cycle = self.cycle;
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            let slot = &self.slots[port.leaf];
+            let present = slot.value.is_some() && (!fresh || slot.stamp == cycle);
+            if !present && !port.optional {
+                return false;
+            }
+            let new = if present { slot.value.clone() } else { None };
+            if let Some(old) = std::mem::replace(input, new) {
+                recycle(old);
+            }
+        }
+        true
     }
 
     /// Collects instance `i`'s inputs into its buffers. `fresh`: every
@@ -611,10 +601,10 @@ impl Manager {
         true
     }
 
-    /// Splits a level's ready skills into batches that may run at the same
-    /// time: skills sharing a claim never do.
-    fn batches(&self, ready: &[usize]) -> Vec<Vec<usize>> {
-        let mut rest: Vec<usize> = ready.to_vec();
+    /// Splits a level's ready steps into batches of instances that may run
+    /// at the same time: skills sharing a claim never do.
+    fn batches(&self, plan: &Plan, ready: &[usize]) -> Vec<Vec<usize>> {
+        let mut rest: Vec<usize> = ready.iter().map(|&k| plan.steps[k].inst).collect();
         let mut batches = Vec::new();
         while !rest.is_empty() {
             let mut batch = Vec::new();
@@ -633,53 +623,107 @@ impl Manager {
         batches
     }
 
-    fn run_ready(&mut self, ready: &[usize]) {
+    /// Whether the ready steps of a level are worth handing to the pool:
+    /// more than one, and together (by their last timed runs) well above
+    /// what a hand-off costs.
+    fn worth_parallel(&self, plan: &Plan, ready: &[usize]) -> bool {
+        if self.pool.is_none() || ready.len() < 2 {
+            return false;
+        }
+        let mut total = 0u64;
+        let mut longest = 0u64;
+        for &k in ready {
+            let t = &self.insts[plan.steps[k].inst].timing;
+            // Never timed yet: try it in parallel once to learn.
+            let ns = if t.timed_runs == 0 { PARALLEL_WORTH_NS } else { t.last_ns };
+            total += ns;
+            longest = longest.max(ns);
+        }
+        // What the other threads could take off the cycle's thread.
+        total - longest >= PARALLEL_WORTH_NS / 2 && total >= PARALLEL_WORTH_NS
+    }
+
+    /// `lent`: the inputs of plain steps are lent when they run.
+    fn run_ready(&mut self, plan: &Plan, ready: &[usize], lent: bool) {
         let (cycle, time_s) = (self.cycle, self.time_s);
-        match (&self.pool, ready.len()) {
-            (Some(_), n) if n > 1 => {
-                for batch in self.batches(ready) {
-                    let Some(pool) = &self.pool else { return };
-                    let clocks = &self.clocks;
-                    let jobs: Vec<Mutex<(&mut Exec, &BodyClock)>> = pick_mut(&mut self.execs, &batch)
-                        .into_iter()
-                        .zip(&batch)
-                        .map(|(exec, &i)| Mutex::new((exec, &clocks[i])))
-                        .collect();
-                    run_parallel(pool, &jobs, |job| {
-                        let mut job = job.lock().unwrap_or_else(|p| p.into_inner());
-                        let (exec, clock) = &mut *job;
-                        exec.run(cycle, time_s, Instant::now(), clock);
-                    });
-                }
+        if !lent && self.worth_parallel(plan, ready) {
+            for batch in self.batches(plan, ready) {
+                let Some(pool) = &self.pool else { return };
+                let jobs: Vec<Mutex<&mut Exec>> =
+                    pick_mut(&mut self.execs, &batch).into_iter().map(Mutex::new).collect();
+                run_parallel(pool, &jobs, |job| {
+                    let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
+                    exec.run(cycle, time_s, Stamp::now(true), None);
+                });
             }
-            _ => {
-                let mut t = Instant::now();
-                for &i in ready {
-                    t = self.execs[i].run(cycle, time_s, t, &self.clocks[i]);
+        } else {
+            let sampled = self.sampled;
+            let mut t = Stamp::now(sampled);
+            for &k in ready {
+                let step = &plan.steps[k];
+                let precise = sampled || step.precise;
+                if precise != matches!(t, Stamp::Precise(_)) {
+                    t = Stamp::now(precise);
+                }
+                if lent && step.plain_ins {
+                    t = self.run_lent(plan, step, t);
+                } else {
+                    t = self.execs[step.inst].run(cycle, time_s, t, None);
                 }
             }
         }
     }
 
+    /// Runs a step whose inputs are all plain ports on the slots' own
+    /// values: each present input is moved from its slot into the body's
+    /// buffer and back after the run (no reference counting; nothing else
+    /// reads a slot while a serial level runs). The readiness was checked
+    /// by [`Manager::gather_step`] and the slots have not changed since.
+    fn run_lent(&mut self, plan: &Plan, step: &Step, t: Stamp) -> Stamp {
+        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        let exec = &mut self.execs[step.inst];
+        let fresh = step.kind == StepKind::Sync;
+        let cycle = self.cycle;
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            let slot = &mut self.slots[port.leaf];
+            if slot.value.is_some() && (!fresh || slot.stamp == cycle) {
+                *input = slot.value.take();
+            }
+        }
+        let end = exec.run(cycle, self.time_s, t, None);
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            if let Some(v) = input.take() {
+                self.slots[port.leaf].value = Some(v);
+            }
+        }
+        end
+    }
+
     /// Records a run's timing and prints; the cause of its fault if it failed
     /// or ran over its deadline (its outputs are then dropped).
     fn account(&mut self, i: usize) -> Result<(), String> {
+        let deadline = self.graph.instances[i].in_cycle_deadline();
+        self.account_by(i, deadline.as_nanos().min(u64::MAX as u128) as u64)
+    }
+
+    fn account_by(&mut self, i: usize, deadline_ns: u64) -> Result<(), String> {
         let exec = &mut self.execs[i];
         let elapsed = exec.elapsed_ns;
+        let timed = exec.timed;
         let result = std::mem::replace(&mut exec.result, Ok(()));
         let inst = &mut self.insts[i];
-        inst.runs += 1;
-        inst.last_ns = elapsed;
-        inst.max_ns = inst.max_ns.max(elapsed);
-        inst.total_ns += elapsed;
+        inst.timing.record(timed.then_some(elapsed));
         if exec.cx.has_prints() {
             let prints = exec.cx.take_prints();
             self.record_prints(i, prints);
         }
-        let def = &self.graph.instances[i];
-        let deadline = def.in_cycle_deadline();
-        let outcome = result.and_then(|()| {
-            if elapsed > deadline.as_nanos() as u64 {
+        // On the coarse clock a run is late only when it certainly is: its
+        // reading can exceed the exact time by up to one tick.
+        let late = if timed { elapsed > deadline_ns } else { elapsed > deadline_ns.saturating_add(coarse_tick_ns()) };
+        let outcome = match result {
+            Err(e) => Err(e),
+            Ok(()) if late => {
+                let def = &self.graph.instances[i];
                 let (what, key) = if def.kind.is_threaded() {
                     ("liveness deadline", "liveness_ms")
                 } else {
@@ -688,37 +732,84 @@ impl Manager {
                 Err(format!(
                     "its body ran for {}, over its {what} of {} (`{key}`); what it produced is dropped",
                     fmt_duration(Duration::from_nanos(elapsed)),
-                    fmt_duration(deadline)
+                    fmt_duration(Duration::from_nanos(deadline_ns))
                 ))
-            } else {
-                Ok(())
             }
-        });
+            Ok(()) => Ok(()),
+        };
         if outcome.is_err() {
             self.execs[i].outputs.fill(None);
         }
         outcome
     }
 
-    /// Commits a run's outputs, or marks the skill faulted.
-    fn finish(&mut self, i: usize) {
-        if let Err(cause) = self.account(i) {
+    /// Commits a step's outputs, or marks the skill faulted.
+    fn finish_step(&mut self, plan: &Plan, k: usize) {
+        let step = &plan.steps[k];
+        let i = step.inst;
+        if let Err(cause) = self.account_by(i, step.deadline_ns) {
             self.fault(i, cause);
             return;
         }
         let mut outputs = std::mem::take(&mut self.execs[i].outputs);
-        let outcome = self.commit(i, &mut outputs);
+        let outcome = if step.plain_outs {
+            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize], &mut outputs)
+        } else {
+            self.commit(i, &mut outputs)
+        };
         self.execs[i].outputs = outputs;
         if let Err(cause) = outcome {
             self.fault(i, cause);
         }
     }
 
+    /// Commits a run's outputs (for the spawned manager: step `k` of the
+    /// current plan).
+    fn finish(&mut self, k: usize) {
+        let plan = std::mem::take(&mut self.schedule);
+        self.finish_step(&plan, k);
+        self.schedule = plan;
+    }
+
+    /// [`Manager::commit`] for a step whose outputs are all plain ports.
+    fn commit_plain(&mut self, step: &Step, ports: &[OutPort], outputs: &mut [Option<Value>]) -> Result<(), String> {
+        let i = step.inst;
+        for (p, (port, value)) in ports.iter().zip(outputs.iter()).enumerate() {
+            if let Some(value) = value {
+                if !port.check.admits(value) {
+                    let def = &self.graph.instances[i].outputs[p];
+                    return Err(wrong_output(&def.name, &def.ty, value));
+                }
+            }
+        }
+        // A plain output's last value is its slot's while this skill holds
+        // it, so a winning value is moved, not shared: `last_outputs` keeps
+        // it only when it lost the slot (see `save_displaced`).
+        let cycle = self.cycle;
+        for (p, (port, out)) in ports.iter().zip(outputs.iter_mut()).enumerate() {
+            let Some(value) = out.take() else { continue };
+            let last = &mut self.insts[i].last_outputs[p];
+            match write_leaf(&mut self.slots[port.leaf], value, cycle, step.rank, i) {
+                Ok(displaced) => {
+                    if let Some(old) = last.take() {
+                        recycle(old);
+                    }
+                    if let Some((w, old)) = displaced {
+                        self.save_displaced(port.leaf, w, old);
+                    }
+                }
+                Err(lost) => *last = Some(lost),
+            }
+        }
+        Ok(())
+    }
+
     /// Writes instance `i`'s produced outputs to their leaves: all of them,
     /// or (when one is not of its port's type) none (update-record is atomic).
     fn commit(&mut self, i: usize, outputs: &mut [Option<Value>]) -> Result<(), String> {
-        let def = &self.graph.instances[i];
-        let parts = &mut self.parts;
+        let graph = Arc::clone(&self.graph);
+        let def = &graph.instances[i];
+        let mut parts = std::mem::take(&mut self.parts);
         parts.clear();
         // First check every output (records are taken apart into their leaves).
         for (port, value) in def.outputs.iter().zip(outputs.iter()) {
@@ -726,29 +817,62 @@ impl Manager {
             let ok = if let ([_], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
                 value.conforms(&port.ty)
             } else {
-                decompose(&port.ty, value, parts)
+                decompose(&port.ty, value, &mut parts)
             };
             if !ok {
                 parts.clear();
+                self.parts = parts;
                 return Err(wrong_output(&port.name, &port.ty, value));
             }
         }
         // Then write them.
         let rank = self.rank(i);
         let cycle = self.cycle;
-        let mut parts = self.parts.drain(..);
+        let mut leaf_values = parts.drain(..);
         for (p, port) in def.outputs.iter().enumerate() {
             let Some(value) = outputs[p].take() else { continue };
             if let ([leaf], false) = (&port.leaves[..], matches!(port.ty, SignalType::Record(_))) {
-                write_leaf(&mut self.slots[*leaf], value.clone(), cycle, rank, i);
+                if let Ok(Some((w, old))) = write_leaf(&mut self.slots[*leaf], value.clone(), cycle, rank, i) {
+                    self.save_displaced(*leaf, w, old);
+                }
             } else {
-                for (&leaf, part) in port.leaves.iter().zip(parts.by_ref()) {
-                    write_leaf(&mut self.slots[leaf], part, cycle, rank, i);
+                for (&leaf, part) in port.leaves.iter().zip(&mut leaf_values) {
+                    if let Ok(Some((w, old))) = write_leaf(&mut self.slots[leaf], part, cycle, rank, i) {
+                        self.save_displaced(leaf, w, old);
+                    }
                 }
             }
-            self.insts[i].last_outputs[p] = Some(value);
+            if let Some(old) = self.insts[i].last_outputs[p].replace(value) {
+                recycle(old);
+            }
         }
+        drop(leaf_values);
+        self.parts = parts;
         Ok(())
+    }
+
+    /// Another skill took over `leaf` from writer `w`: the value `w` last
+    /// produced there is kept as its last output (a plain port's last output
+    /// is otherwise read from its slot).
+    fn save_displaced(&mut self, leaf: usize, w: usize, old: Value) {
+        let Some(&(_, p)) = self.graph.leaves[leaf].writers.iter().find(|&&(x, _)| x == w) else { return };
+        let port = &self.graph.instances[w].outputs[p];
+        if port.leaves.len() == 1 && !matches!(port.ty, SignalType::Record(_)) {
+            if let Some(last) = self.insts[w].last_outputs.get_mut(p) {
+                last.get_or_insert(old);
+            }
+        }
+    }
+
+    /// What instance `i` last produced on output `p`.
+    pub(crate) fn last_output(&self, i: usize, p: usize) -> Option<Value> {
+        if let Some(v) = &self.insts[i].last_outputs[p] {
+            return Some(v.clone());
+        }
+        let port = &self.graph.instances[i].outputs[p];
+        let [leaf] = port.leaves[..] else { return None };
+        let slot = &self.slots[leaf];
+        (slot.writer as usize == i && slot.stamp > 0).then(|| slot.value.clone()).flatten()
     }
 
     fn fault(&mut self, i: usize, cause: String) {
@@ -828,11 +952,7 @@ impl Manager {
     ) {
         let (busy_since, stats) = busy;
         if let Some(stats) = stats {
-            let inst = &mut self.insts[i];
-            inst.runs = stats.runs;
-            inst.last_ns = stats.last_ns;
-            inst.max_ns = stats.max_ns;
-            inst.total_ns = stats.total_ns;
+            self.insts[i].timing = stats;
         }
         if !prints.is_empty() {
             self.record_prints(i, prints);
@@ -1024,12 +1144,33 @@ impl Control for Manager {
     }
 }
 
-fn write_leaf(slot: &mut Slot, value: Value, cycle: u64, rank: (i32, u32), writer: usize) {
+/// Arbitration: writes `value` to `slot` unless a higher-ranked writer
+/// wrote it this cycle (then `Err` hands the value back). `Ok` holds the
+/// value it displaced when another writer had written it.
+#[inline]
+fn write_leaf(
+    slot: &mut Slot,
+    value: Value,
+    cycle: u64,
+    rank: (i32, u32),
+    writer: usize,
+) -> Result<Option<(usize, Value)>, Value> {
     if slot.stamp != cycle || rank > slot.rank {
-        slot.value = Some(value);
+        let old = slot.value.replace(value);
+        let displaced = match old {
+            Some(old) if slot.writer as usize != writer && slot.stamp > 0 => Some((slot.writer as usize, old)),
+            Some(old) => {
+                recycle(old);
+                None
+            }
+            None => None,
+        };
         slot.stamp = cycle;
         slot.rank = rank;
         slot.writer = writer as u32;
+        Ok(displaced)
+    } else {
+        Err(value)
     }
 }
 
@@ -1055,23 +1196,83 @@ fn raise_thread_priority() {
     }
 }
 
-/// Runs one parallel batch: the pool's threads and the calling thread each
-/// take the next job until none is left, so the cycle's thread works
-/// instead of waiting for the pool to wake up.
+/// Runs one parallel batch: the calling thread (the cycle's) and up to
+/// `threads − 1` of the pool's take the next job until none is left.
+///
+/// The cycle's thread never waits for a helper that has not started: a
+/// helper woken late (after an idle spell the pool's threads sleep, and a
+/// halted vCPU takes long to wake) finds the batch closed and leaves without
+/// touching it. The cycle's thread only waits for the helpers already in a
+/// job, so the batch never takes longer than running it alone plus the end
+/// of one job; it is never slower than serial by more than a hand-off.
 pub(crate) fn run_parallel<J: Sync>(pool: &rayon::ThreadPool, jobs: &[J], run: impl Fn(&J) + Sync) {
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let drain = || loop {
-        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    /// Set in `state` once the batch is closed; `state >> 1` counts the
+    /// helpers inside it.
+    const CLOSED: usize = 1;
+    struct Batch {
+        next: AtomicUsize,
+        state: AtomicUsize,
+    }
+    /// Leaves the batch (also when a job unwinds).
+    struct Inside<'a>(&'a Batch);
+    impl Drop for Inside<'_> {
+        fn drop(&mut self) {
+            self.0.state.fetch_sub(2, Ordering::AcqRel);
+        }
+    }
+    /// Closes the batch and waits for the helpers inside (also when the
+    /// cycle's thread unwinds): they borrow `jobs` and `run`.
+    struct Close<'a>(&'a Batch);
+    impl Drop for Close<'_> {
+        fn drop(&mut self) {
+            self.0.state.fetch_or(CLOSED, Ordering::AcqRel);
+            let mut spins = 0u32;
+            while self.0.state.load(Ordering::Acquire) >> 1 != 0 {
+                if spins < 1000 {
+                    std::hint::spin_loop();
+                    spins += 1;
+                } else {
+                    std::thread::yield_now();
+                }
+            }
+        }
+    }
+
+    let batch = Arc::new(Batch { next: AtomicUsize::new(0), state: AtomicUsize::new(0) });
+    let drain = |b: &Batch| loop {
+        let k = b.next.fetch_add(1, Ordering::Relaxed);
         let Some(job) = jobs.get(k) else { break };
         run(job);
     };
+    let work: &(dyn Fn(&Batch) + Sync) = &drain;
+    // SAFETY: the lifetime is erased only so the pool's threads can hold the
+    // reference. A helper dereferences it only after entering the batch
+    // (a CAS on `state` that fails once `CLOSED` is set), and this function
+    // does not return (nor unwind) before `Close` has set `CLOSED` and seen
+    // every helper that entered leave: no use outlives `jobs` and `run`.
+    let work: &'static (dyn Fn(&Batch) + Sync) = unsafe { std::mem::transmute(work) };
     let helpers = pool.current_num_threads().min(jobs.len().saturating_sub(1));
-    pool.in_place_scope(|scope| {
-        for _ in 0..helpers {
-            scope.spawn(|_| drain());
-        }
-        drain();
-    });
+    let close = Close(&batch);
+    for _ in 0..helpers {
+        let b = Arc::clone(&batch);
+        pool.spawn(move || {
+            let mut s = b.state.load(Ordering::Acquire);
+            loop {
+                if s & CLOSED != 0 {
+                    return;
+                }
+                match b.state.compare_exchange_weak(s, s + 2, Ordering::AcqRel, Ordering::Acquire) {
+                    Ok(_) => break,
+                    Err(now) => s = now,
+                }
+            }
+            let _inside = Inside(&b);
+            work(&b);
+        });
+    }
+    drain(&batch);
+    drop(close);
 }
 
 /// A duration for people: `2.1 s`, `250 ms`, `40 µs`.

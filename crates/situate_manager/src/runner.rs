@@ -29,7 +29,9 @@ pub(crate) struct Exec {
     pub outputs: Vec<Option<Value>>,
     pub cx: Context,
     pub result: Result<(), String>,
+    /// How long the last run took, exactly when `timed`, else on the coarse clock.
     pub elapsed_ns: u64,
+    pub timed: bool,
 }
 
 impl Default for Exec {
@@ -41,6 +43,7 @@ impl Default for Exec {
             cx: Context::default(),
             result: Ok(()),
             elapsed_ns: 0,
+            timed: false,
         }
     }
 }
@@ -54,51 +57,137 @@ impl Exec {
             cx: Context::default(),
             result: Ok(()),
             elapsed_ns: 0,
+            timed: false,
         }
     }
 
     /// Runs the body once on the gathered inputs, catching panics, and times
-    /// it from `start`; returns the time it ended, so a caller running bodies
-    /// back to back reads the clock once per body.
+    /// it from `start` on the same clock; returns the time it ended, so a
+    /// caller running bodies back to back reads the clock once per body.
+    ///
+    /// A [`Stamp::Precise`] start times the body exactly (a sampled cycle,
+    /// a short deadline); a [`Stamp::Coarse`] one costs a few nanoseconds
+    /// and is enough to see a run past a long deadline (see [`coarse_ns`]).
     ///
     /// While the body runs, `clock` holds when it started (see
-    /// [`BodyClock`]), so a watchdog can see a body that does not return.
+    /// [`BodyClock`]), so a watchdog can see a body that does not return
+    /// (`None` where no watchdog looks: a manager not spawned).
     ///
     /// Outputs are `None` on entry: the manager takes every produced output
     /// when it commits, and clears them when a body fails.
-    pub fn run(&mut self, cycle: u64, time_s: f64, start: Instant, clock: &BodyClock) -> Instant {
+    pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
         self.cx.set(cycle, time_s);
-        let mark = clock.enter(start);
+        let mark = clock.map(|c| c.enter(start.coarse()));
         self.result = match &mut self.skill {
             Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
             None => Err("the body is not here (it runs on its own thread)".into()),
         };
-        clock.leave(mark);
-        let end = Instant::now();
-        self.elapsed_ns = end.duration_since(start).as_nanos() as u64;
+        if let (Some(clock), Some(mark)) = (clock, mark) {
+            clock.leave(mark);
+        }
+        let end = start.again();
+        self.elapsed_ns = end.since(start);
+        self.timed = matches!(start, Stamp::Precise(_));
         end
     }
 }
 
+/// A time read from one of two clocks: exact, or the kernel's coarse
+/// monotonic clock (the time of its last tick: about 3 ns to read instead
+/// of 25–30, to within [`coarse_tick_ns`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Stamp {
+    Precise(Instant),
+    /// [`coarse_ns`].
+    Coarse(u64),
+}
+
+impl Stamp {
+    pub fn now(precise: bool) -> Stamp {
+        if precise {
+            Stamp::Precise(Instant::now())
+        } else {
+            Stamp::Coarse(coarse_ns())
+        }
+    }
+
+    /// Now, on the same clock.
+    pub fn again(self) -> Stamp {
+        Stamp::now(matches!(self, Stamp::Precise(_)))
+    }
+
+    /// Nanoseconds from `earlier` to `self` (same clock; 0 if not).
+    pub fn since(self, earlier: Stamp) -> u64 {
+        match (self, earlier) {
+            (Stamp::Precise(a), Stamp::Precise(b)) => a.saturating_duration_since(b).as_nanos() as u64,
+            (Stamp::Coarse(a), Stamp::Coarse(b)) => a.saturating_sub(b),
+            _ => 0,
+        }
+    }
+
+    /// This time on the coarse clock's scale (for the watchdog's marks).
+    fn coarse(self) -> u64 {
+        match self {
+            Stamp::Coarse(ns) => ns,
+            Stamp::Precise(_) => coarse_ns(),
+        }
+    }
+}
+
+/// The coarse monotonic clock in nanoseconds: `CLOCK_MONOTONIC_COARSE` on
+/// Linux (the same clock as [`Instant`], as of its last tick), elsewhere
+/// [`Instant`] since a process-wide epoch.
+pub(crate) fn coarse_ns() -> u64 {
+    #[cfg(target_os = "linux")]
+    {
+        let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+        // SAFETY: `ts` is a valid, writable timespec; the call only writes it.
+        if unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC_COARSE, &mut ts) } == 0 {
+            return ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64;
+        }
+    }
+    static EPOCH: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    EPOCH.get_or_init(Instant::now).elapsed().as_nanos() as u64
+}
+
+/// The resolution of [`coarse_ns`]: a coarse reading lags the exact time by
+/// less than this (a few ms on Linux; 0 where it is exact).
+pub(crate) fn coarse_tick_ns() -> u64 {
+    static TICK: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *TICK.get_or_init(|| {
+        #[cfg(target_os = "linux")]
+        {
+            let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+            // SAFETY: `ts` is a valid, writable timespec; the call only writes it.
+            if unsafe { libc::clock_getres(libc::CLOCK_MONOTONIC_COARSE, &mut ts) } == 0 {
+                return ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64;
+            }
+            // Unknown: assume a slow tick (100 Hz).
+            10_000_000
+        }
+        #[cfg(not(target_os = "linux"))]
+        0
+    })
+}
+
 /// When the body of one instance started running, for the watchdog.
 ///
-/// Holds nanoseconds since the manager's epoch plus one while a body runs,
-/// and 0 when none does. The cycle's thread writes it around every in-cycle
-/// body (two relaxed stores); the watchdog only reads it, and clears it
-/// when it leaves a stuck body behind. A body's own `leave` clears only its
-/// own mark, so a late return never clears the mark of a fresh body.
+/// Holds the [`coarse_ns`] time it started plus one while a body runs, and 0
+/// when none does. The cycle's thread writes it around every in-cycle body
+/// (two relaxed stores); the watchdog only reads it, and clears it when it
+/// leaves a stuck body behind. A body's own `leave` clears only its own
+/// mark, so a late return never clears the mark of a fresh body.
 pub(crate) struct BodyClock {
-    epoch: Instant,
     since: AtomicU64,
 }
 
 impl BodyClock {
-    pub fn new(epoch: Instant) -> Self {
-        BodyClock { epoch, since: AtomicU64::new(0) }
+    pub fn new() -> Self {
+        BodyClock { since: AtomicU64::new(0) }
     }
 
-    fn enter(&self, start: Instant) -> u64 {
-        let mark = start.saturating_duration_since(self.epoch).as_nanos() as u64 + 1;
+    fn enter(&self, start_coarse_ns: u64) -> u64 {
+        let mark = start_coarse_ns + 1;
         self.since.store(mark, Ordering::Relaxed);
         mark
     }
@@ -112,10 +201,10 @@ impl BodyClock {
         self.since.load(Ordering::Relaxed)
     }
 
-    /// How long the body with `mark` has been running, at `now`.
-    pub fn running_for(&self, mark: u64, now: Instant) -> Duration {
-        let now_ns = now.saturating_duration_since(self.epoch).as_nanos() as u64 + 1;
-        Duration::from_nanos(now_ns.saturating_sub(mark))
+    /// How long the body with `mark` has been running, to within
+    /// [`coarse_tick_ns`] either way.
+    pub fn running_for(&self, mark: u64) -> Duration {
+        Duration::from_nanos((coarse_ns() + 1).saturating_sub(mark))
     }
 
     /// The watchdog left the body with `mark` behind: it no longer counts.
@@ -141,14 +230,8 @@ pub(crate) fn run_body(
 
 use crate::supervise::panic_message;
 
-/// Timing of a threaded body, kept by its worker.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct WorkerStats {
-    pub runs: u64,
-    pub last_ns: u64,
-    pub total_ns: u64,
-    pub max_ns: u64,
-}
+/// Timing of a threaded body, kept by its worker (every run is timed).
+pub(crate) type WorkerStats = crate::control::SkillTiming;
 
 /// What the cycle and a worker exchange.
 #[derive(Default)]
@@ -357,10 +440,7 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
                 // down: what it produced late belongs to no cycle.
                 return;
             }
-            mb.stats.runs += 1;
-            mb.stats.last_ns = elapsed;
-            mb.stats.total_ns += elapsed;
-            mb.stats.max_ns = mb.stats.max_ns.max(elapsed);
+            mb.stats.record(Some(elapsed));
             mb.prints.extend(cx.take_prints());
             match result {
                 Ok(()) => {

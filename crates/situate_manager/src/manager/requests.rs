@@ -166,14 +166,14 @@ impl Manager {
             verbose: inst.verbose,
             priority: inst.priority,
             params: decl.params.iter().cloned().zip(inst.params.iter().cloned()).collect(),
-            inputs: def.inputs.iter().zip(&self.execs[i].inputs).map(|(p, v)| port(p, v.clone())).collect(),
-            outputs: def.outputs.iter().zip(&inst.last_outputs).map(|(p, v)| port(p, v.clone())).collect(),
-            timing: SkillTiming {
-                runs: inst.runs,
-                last_ns: inst.last_ns,
-                max_ns: inst.max_ns,
-                total_ns: inst.total_ns,
-            },
+            inputs: def
+                .inputs
+                .iter()
+                .zip(&self.execs[i].inputs)
+                .map(|(p, v)| port(p, v.clone().or_else(|| self.lent_input(i, p))))
+                .collect(),
+            outputs: def.outputs.iter().enumerate().map(|(k, p)| port(p, self.last_output(i, k))).collect(),
+            timing: inst.timing,
             prints: inst.prints.iter().cloned().collect(),
         }
     }
@@ -340,6 +340,8 @@ impl Manager {
             Request::SetPriority { skill, priority } => {
                 let i = self.find(&skill)?;
                 self.insts[i].priority = priority;
+                // The plan holds each step's rank.
+                self.schedule_dirty = true;
                 Ok(Reply::Done)
             }
             Request::SetVerbose { skill, verbose } => {
@@ -427,5 +429,16 @@ impl Manager {
             self.running = false;
             self.bus.send(Event::ManagerStopped { cycle: self.cycle });
         }
+    }
+}
+
+impl Manager {
+    /// What a plain input read in the last cycle when the serial executor
+    /// lent it the slot's value (its buffer then holds nothing after the run).
+    fn lent_input(&self, i: usize, port: &crate::graph::PortBinding) -> Option<Value> {
+        let [leaf] = port.leaves[..] else { return None };
+        let slot = &self.slots[leaf];
+        let fresh = slot.stamp == self.cycle || self.graph.instances[i].kind == situate_core::SkillKind::Async;
+        (self.insts[i].active && fresh).then(|| slot.value.clone()).flatten()
     }
 }

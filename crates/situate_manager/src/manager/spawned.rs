@@ -25,7 +25,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 
 use super::{raise_thread_priority, run_parallel, Manager};
 use crate::control::{ControlError, Envelope, Handle, Reply, Request};
-use crate::runner::{BodyClock, Exec};
+use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
 
 type Guard<'a> = MutexGuard<'a, Option<Manager>>;
 
@@ -366,11 +366,18 @@ fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<
             break;
         }
         let ready = std::mem::take(&mut m.ready);
-        let parallel = core.pool.is_some() && ready.len() > 1;
-        g = if parallel { run_batches(core, g, generation, &ready)? } else { run_serial(core, g, generation, &ready)? };
+        let plan = std::mem::take(&mut m.schedule);
+        let parallel = m.worth_parallel(&plan, &ready);
+        let skills: Vec<(usize, bool)> = ready.iter().map(|&k| (plan.steps[k].inst, plan.steps[k].precise)).collect();
+        m.schedule = plan;
+        g = if parallel {
+            run_batches(core, g, generation, &ready)?
+        } else {
+            run_serial(core, g, generation, &skills)?
+        };
         let m = current(&mut g, generation)?;
-        for &i in &ready {
-            m.finish(i);
+        for &k in &ready {
+            m.finish(k);
         }
         m.ready = ready;
         level += 1;
@@ -378,7 +385,8 @@ fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<
     let m = current(&mut g, generation)?;
     m.prepare_exchanges();
     let exchanging = std::mem::take(&mut m.exchanging);
-    g = run_serial(core, g, generation, &exchanging)?;
+    let devices: Vec<(usize, bool)> = exchanging.iter().map(|&d| (d, true)).collect();
+    g = run_serial(core, g, generation, &devices)?;
     let m = current(&mut g, generation)?;
     for &d in &exchanging {
         m.finish_exchange(d);
@@ -388,14 +396,16 @@ fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<
     Some(g)
 }
 
-/// Runs bodies one after the other, each with the lock let go.
-fn run_serial<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, skills: &[usize]) -> Option<Guard<'a>> {
-    for &i in skills {
+/// Runs bodies one after the other, each with the lock let go; `skills`:
+/// (instance, timed exactly even when the cycle is not sampled).
+fn run_serial<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, skills: &[(usize, bool)]) -> Option<Guard<'a>> {
+    for &(i, precise) in skills {
         let m = current(&mut g, generation)?;
         let (cycle, time_s) = (m.cycle, m.time_s);
+        let precise = precise || m.sampled;
         let mut exec = std::mem::take(&mut m.execs[i]);
         drop(g);
-        exec.run(cycle, time_s, Instant::now(), &core.clocks[i]);
+        exec.run(cycle, time_s, Stamp::now(precise), Some(&core.clocks[i]));
         g = core.lock();
         // Left behind: the body's late result is dropped with it.
         current(&mut g, generation)?.execs[i] = exec;
@@ -408,7 +418,8 @@ fn run_serial<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, skills: &[u
 /// other.
 fn run_batches<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, ready: &[usize]) -> Option<Guard<'a>> {
     let pool = core.pool.as_ref()?;
-    let batches = current(&mut g, generation)?.batches(ready);
+    let m = current(&mut g, generation)?;
+    let batches = m.batches(&m.schedule, ready);
     for batch in batches {
         let m = current(&mut g, generation)?;
         let (cycle, time_s) = (m.cycle, m.time_s);
@@ -417,7 +428,7 @@ fn run_batches<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, ready: &[u
         drop(g);
         run_parallel(pool, &jobs, |(i, job)| {
             let mut exec = std::mem::take(&mut *job.lock().unwrap_or_else(|p| p.into_inner()));
-            exec.run(cycle, time_s, Instant::now(), &core.clocks[*i]);
+            exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[*i]));
             let mut g = core.lock();
             if let Some(m) = current(&mut g, generation) {
                 m.execs[*i] = exec;
@@ -440,11 +451,13 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
         if core.stop.load(Ordering::Acquire) {
             return;
         }
-        let now = Instant::now();
         stale.clear();
+        // Marks are on the coarse clock: a body is stuck only when it
+        // certainly ran past its deadline.
+        let slack = Duration::from_nanos(coarse_tick_ns());
         for (i, clock) in core.clocks.iter().enumerate() {
             let mark = clock.mark();
-            if mark != 0 && clock.running_for(mark, now) > deadlines[i] {
+            if mark != 0 && clock.running_for(mark) > deadlines[i] + slack {
                 stale.push((i, mark));
             }
         }
@@ -458,7 +471,7 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
             // Still in that same run: its thread is stuck in the body.
             let clock = &core.clocks[i];
             if clock.mark() == mark {
-                let ran = clock.running_for(mark, Instant::now());
+                let ran = clock.running_for(mark);
                 clock.forget(mark);
                 m.abandon(i, ran);
                 left = true;

@@ -1,0 +1,226 @@
+//! A steady cycle allocates nothing: counted by a global allocator (a count
+//! of this thread's allocations, not a time, so it cannot flake), for
+//! derived skills (`#[derive(Skill)]` with `[f32; 24]` and `f64` ports),
+//! hand-written Rust skills (`FnSkill`, the path bindings use) and C skills
+//! through the C ABI.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use situate::manager::{ClockKind, ExecutorKind, Manager, Registry, RobotSpec, SkillSpec};
+use situate::manager::{Reply, Request};
+use situate::prelude::*;
+use situate::{FnSkill, Io, PortSpec, SignalType, SkillDecl, SkillType};
+use situate_bench::skills::{self, Flavor};
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+// SAFETY: every call is passed on to the system allocator unchanged; the
+// count is a thread-local `Cell` without a destructor, which never allocates.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
+        // SAFETY: the caller's contract is the system allocator's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: as above.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
+        // SAFETY: as above.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
+
+/// Allocations on this thread during `cycles` cycles, after a warm-up
+/// (the first cycles compile the plan and size the buffers; timing is
+/// sampled every few cycles, so the warm-up and the count span many samples).
+fn allocations_per_steady_cycles(m: &mut Manager, cycles: u64) -> u64 {
+    for _ in 0..200 {
+        m.cycle();
+    }
+    let before = allocations();
+    // The build allocated: the counter counts.
+    assert!(before > 0);
+    for _ in 0..cycles {
+        m.cycle();
+    }
+    allocations() - before
+}
+
+#[derive(Skill, Default)]
+#[skill(name = "alloc.scale")]
+struct Scale {
+    #[input]
+    x: f64,
+    #[output]
+    y: f64,
+}
+
+impl Body for Scale {
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.y = 2.0 * self.x;
+        Ok(())
+    }
+}
+
+/// A hand-written skill: `y = x + 1` over the raw ports.
+fn plus_one() -> SkillType {
+    let mut decl = SkillDecl::new("alloc.plus_one", SkillKind::Sync);
+    decl.inputs.push(PortSpec::new("x", SignalType::F64));
+    decl.outputs.push(PortSpec::new("y", SignalType::F64));
+    let d = decl.clone();
+    SkillType::new(decl, move || {
+        Ok(Box::new(FnSkill::new(&d, |io: &mut Io<'_>, _: &[Value]| {
+            let x = io.inputs[0].as_ref().and_then(Value::as_f64).ok_or("no x")?;
+            io.outputs[0] = Some(Value::F64(x + 1.0));
+            Ok(())
+        })) as _)
+    })
+}
+
+/// Whether `signal` holds a value.
+fn written(m: &mut Manager, signal: &str) -> bool {
+    matches!(m.request(Request::QuerySignal { signal: signal.into() }), Ok(Reply::Signal(r)) if r.value.is_some())
+}
+
+fn robot() -> RobotSpec {
+    RobotSpec::new("allocations").clock(ClockKind::Simulated).period_s(0.01).executor(ExecutorKind::Serial, None)
+}
+
+#[test]
+fn a_steady_cycle_of_derived_array_skills_allocates_nothing() {
+    let mut spec = robot();
+    spec.skills.extend(skills::chain("c", 50, Flavor::Derive, true));
+    let mut m = skills::build(&spec);
+    skills::check_chain(&mut m, "c", 50);
+    assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0);
+}
+
+#[test]
+fn a_steady_cycle_of_derived_and_hand_written_scalar_skills_allocates_nothing() {
+    let mut registry = skills::registry();
+    registry.register::<Scale>().register::<Source>();
+    registry.add(plus_one());
+    let mut spec = robot();
+    spec.skills.extend(skills::chain("c", 3, Flavor::Derive, true));
+    spec.skills.push(SkillSpec::new("src", "alloc.source").remap("y", "s0"));
+    for j in 0..20 {
+        let ty = if j % 2 == 0 { "alloc.plus_one" } else { "alloc.scale" };
+        spec.skills
+            .push(SkillSpec::new(&format!("k{j}"), ty).remap("x", &format!("s{j}")).remap("y", &format!("s{}", j + 1)));
+    }
+    let mut m = match Manager::build(&spec, &registry) {
+        Ok(m) => m,
+        Err(e) => panic!("build failed:\n{e}"),
+    };
+    m.cycle();
+    assert!(written(&mut m, "s20"), "the scalar chain did not run");
+    assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0);
+}
+
+#[derive(Skill, Default)]
+#[skill(name = "alloc.source")]
+struct Source {
+    #[output]
+    y: f64,
+}
+
+impl Body for Source {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.y = cx.cycle() as f64;
+        Ok(())
+    }
+}
+
+const MANIFEST: &str = "name: c.plus_one\ninputs: {x: f64}\noutputs: {y: f64}\n";
+
+const C_SOURCE: &str = r#"#include "c_plus_one.h"
+struct c_plus_one_state { char unused; };
+situate_status c_plus_one_step(c_plus_one_state* s, const c_plus_one_inputs* in, c_plus_one_outputs* out,
+                               const c_plus_one_params* p, situate_context* cx) {
+    (void)s; (void)p; (void)cx;
+    out->y = in->x + 1.0;
+    out->has_y = true;
+    return SITUATE_OK;
+}
+SITUATE_LIBRARY(SITUATE_SKILL(c_plus_one))
+"#;
+
+/// Generates the header and compiles the C skill; `None` when there is no C
+/// compiler on this machine.
+fn compile_c(dir: &Path) -> Option<PathBuf> {
+    let manifest = dir.join("c_plus_one.yaml");
+    std::fs::write(&manifest, MANIFEST).expect("write the manifest");
+    for f in situate_cabi::generate(situate_cabi::Lang::C, &manifest).expect("generate the header") {
+        std::fs::write(dir.join(&f.path), f.contents).expect("write the header");
+    }
+    let src = dir.join("c_plus_one.c");
+    std::fs::write(&src, C_SOURCE).expect("write the source");
+    let lib = dir.join("libc_plus_one.so");
+    let include = Path::new(env!("CARGO_MANIFEST_DIR")).join("../include");
+    let out = Command::new("gcc")
+        .args(["-std=c11", "-O2", "-shared", "-fPIC", "-fvisibility=hidden", "-I"])
+        .arg(include)
+        .arg("-I")
+        .arg(dir)
+        .arg(&src)
+        .arg("-o")
+        .arg(&lib)
+        .output();
+    match out {
+        Err(e) => {
+            eprintln!("no C compiler ({e}): the C skill is not counted");
+            None
+        }
+        Ok(out) => {
+            assert!(out.status.success(), "compiling {}: {}", src.display(), String::from_utf8_lossy(&out.stderr));
+            Some(lib)
+        }
+    }
+}
+
+#[test]
+fn a_steady_cycle_of_c_skills_allocates_nothing() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("allocations");
+    std::fs::create_dir_all(&dir).expect("a scratch directory");
+    let Some(lib) = compile_c(&dir) else { return };
+    let mut registry = Registry::new();
+    registry.register::<Source>();
+    for t in situate_cabi::load_library(&lib).expect("load the C library") {
+        registry.add(t);
+    }
+    let mut spec = robot();
+    spec.skills.push(SkillSpec::new("src", "alloc.source").remap("y", "s0"));
+    for j in 0..20 {
+        spec.skills.push(
+            SkillSpec::new(&format!("c{j}"), "c.plus_one")
+                .remap("x", &format!("s{j}"))
+                .remap("y", &format!("s{}", j + 1)),
+        );
+    }
+    let mut m = match Manager::build(&spec, &registry) {
+        Ok(m) => m,
+        Err(e) => panic!("build failed:\n{e}"),
+    };
+    m.cycle();
+    assert!(written(&mut m, "s20"), "the C chain did not run");
+    assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0);
+}
