@@ -118,6 +118,8 @@ def test_another_building() -> None:
     assert out["sequencer_exit"] == 0, out
 
 
+HARD = ["--people", "3", "--door-closures", "--dead-sonar"]
+
 #: Generated buildings (generator seed, extra `situate demo` arguments) whose deliveries failed
 #: until the skills or the sequencer were mended; each names the failure it reproduced.
 GENERATED_REGRESSIONS = [
@@ -130,7 +132,10 @@ GENERATED_REGRESSIONS = [
     (20000, []),  # the route began facing along the corridor, not out of the lab door
     (20106, []),  # the route's first turn timed out (the turn's start read a cycle early)
     (20170, []),  # a junction the detector missed: followed to the corridor's end
-    (20001, ["--people", "3", "--door-closures", "--dead-sonar", "9"]),  # blocked junction middle
+    # The hard set: people, doors closing, a dead sonar (HARD + its index).
+    (20010, [*HARD, "10"]),  # the robot kept someone in a dead end, both waiting for good
+    (20011, [*HARD, "11"]),  # the office door found in a line 36° off its wall, into the jamb
+    (20088, [*HARD, "0"]),  # the car's open door unseen with the front sonar dead
 ]
 
 
