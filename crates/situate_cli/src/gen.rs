@@ -1,26 +1,32 @@
 //! What the program knows of skill types: `situate types` lists them, and
-//! `situate gen` writes a manifest's typed I/O for C, C++ or Python.
+//! `situate gen` writes a manifest's typed I/O for C or C++.
 
 use std::path::Path;
 
-use anyhow::Context as _;
 use serde_json::{json, Value as Json};
 use situate::manager::Registry;
 
 use crate::output::{problem, Exit, Out, Problem};
 
 /// `situate gen LANG MANIFEST -o DIR`: the files written, one per line (a JSON list under `--json`).
+/// A file whose contents are unchanged is left alone (build systems do not rebuild); a manifest's
+/// problems are said as `FILE:LINE:COL: error: …`.
 pub(crate) fn generate(lang: &str, manifest: &Path, out_dir: &Path, out: Out) -> anyhow::Result<()> {
     let lang =
-        situate_cabi::Lang::parse(lang).ok_or_else(|| problem(Exit::Usage, format!("unknown language `{lang}`")))?;
-    let files = situate_cabi::generate(lang, manifest).map_err(|e| Problem::file_problem(e.to_string()))?;
-    std::fs::create_dir_all(out_dir).with_context(|| format!("creating `{}`", out_dir.display()))?;
-    let mut written = Vec::new();
-    for f in files {
-        let path = out_dir.join(&f.path);
-        std::fs::write(&path, f.contents).with_context(|| format!("writing `{}`", path.display()))?;
-        written.push(path.display().to_string());
-    }
+        situate_cabi::Lang::parse(lang).ok_or_else(|| problem(Exit::Usage, situate_cabi::Lang::unknown(lang)))?;
+    let files = situate_cabi::generate(lang, manifest).map_err(|e| match e {
+        situate_cabi::GenError::Manifest { source, .. } => Problem::bad_file(
+            manifest,
+            source
+                .problems
+                .iter()
+                .map(|p| format!("{}:{}:{}: error: {}", manifest.display(), p.line, p.col, p.message))
+                .collect(),
+        ),
+        other => Problem::file_problem(other.to_string()),
+    })?;
+    let written = situate_cabi::write_generated(&files, out_dir).map_err(|e| problem(Exit::Failure, e.to_string()))?;
+    let written: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
     out.result(&json!(written), || written.join("\n"));
     Ok(())
 }
