@@ -65,6 +65,11 @@ pub(crate) enum Command {
         #[arg(short, long, default_value = ".")]
         out: PathBuf,
     },
+    /// Print the directory of the CMake package for C/C++ skills (`situateConfig.cmake`; the
+    /// headers `situate.h`, `situate.hpp` are in its `../include`):
+    /// `cmake -Dsituate_DIR="$(situate cmake-dir)"`.
+    #[command(name = "cmake-dir", long_flag = "cmake-dir")]
+    CmakeDir,
     /// List the skill types this program knows, with their declarations (and those of the
     /// libraries and Python files given).
     Types {

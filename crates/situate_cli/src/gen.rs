@@ -1,12 +1,14 @@
-//! What the program knows of skill types: `situate types` lists them, and
-//! `situate gen` writes a manifest's typed I/O for C or C++.
+//! What the program knows of skill types: `situate types` lists them,
+//! `situate gen` writes a manifest's typed I/O for C or C++, and `situate
+//! cmake-dir` says where the CMake package for C/C++ skills is.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value as Json};
 use situate::manager::Registry;
 
 use crate::output::{problem, Exit, Out, Problem};
+use crate::Extensions;
 
 /// `situate gen LANG MANIFEST -o DIR`: the files written, one per line (a JSON list under `--json`).
 /// A file whose contents are unchanged is left alone (build systems do not rebuild); a manifest's
@@ -28,6 +30,43 @@ pub(crate) fn generate(lang: &str, manifest: &Path, out_dir: &Path, out: Out) ->
     let written = situate_cabi::write_generated(&files, out_dir).map_err(|e| problem(Exit::Failure, e.to_string()))?;
     let written: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
     out.result(&json!(written), || written.join("\n"));
+    Ok(())
+}
+
+/// The CMake package's directory (`situateConfig.cmake`; the headers are in its `../include`):
+/// the host's package data (the wheel ships `cmake/` and `include/`), else the checkout this
+/// program was built from, if it is still there.
+pub(crate) fn cmake_dir(ext: &Extensions) -> Option<PathBuf> {
+    let checkout = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cmake");
+    ext.data_dir
+        .iter()
+        .map(|d| d.join("cmake"))
+        .chain(std::iter::once(checkout))
+        .find(|d| d.join("situateConfig.cmake").is_file() && d.join("../include/situate.h").is_file())
+        .map(|d| d.canonicalize().unwrap_or(d))
+}
+
+/// `situate cmake-dir` (or `situate --cmake-dir`): where `find_package(situate)` finds the
+/// package, for `cmake -Dsituate_DIR="$(situate cmake-dir)"`. Under `--json`:
+/// `{"cmake_dir", "include_dir", "config", "abi_version"}`.
+pub(crate) fn print_cmake_dir(ext: &Extensions, out: Out) -> anyhow::Result<()> {
+    let dir = cmake_dir(ext).ok_or_else(|| {
+        problem(
+            Exit::Failure,
+            "no CMake package found: this program has no package data and was not built in a checkout; \
+             install the Python package (it ships cmake/ and include/) or use a checkout's cmake/",
+        )
+    })?;
+    let include = dir.parent().map_or_else(|| dir.join("../include"), |p| p.join("include"));
+    out.result(
+        &json!({
+            "cmake_dir": dir.display().to_string(),
+            "include_dir": include.display().to_string(),
+            "config": dir.join("situateConfig.cmake").display().to_string(),
+            "abi_version": situate_cabi::abi::SITUATE_ABI_VERSION,
+        }),
+        || dir.display().to_string(),
+    );
     Ok(())
 }
 
