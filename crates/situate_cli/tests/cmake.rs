@@ -97,3 +97,30 @@ fn a_c_skill_builds_with_the_situate_program_alone() {
     let runaway = types.as_array().unwrap().iter().find(|t| t["name"] == "c.runaway").expect("c.runaway");
     assert_eq!(runaway["params"][0]["name"], "safe_distance");
 }
+
+#[test]
+fn the_manifests_in_the_docs_generate_and_compile() {
+    let doc = std::fs::read_to_string(repo().join("docs/manifests.md")).unwrap();
+    let blocks: Vec<&str> =
+        doc.split("```yaml manifest\n").skip(1).map(|rest| rest.split("```").next().unwrap()).collect();
+    assert!(!blocks.is_empty(), "docs/manifests.md has a `yaml manifest` block");
+    let tmp = tempfile::tempdir().unwrap();
+    for (i, block) in blocks.iter().enumerate() {
+        let manifest = tmp.path().join(format!("m{i}.yaml"));
+        std::fs::write(&manifest, block).unwrap();
+        for lang in ["c", "cpp"] {
+            let out = situate(&["gen", lang, &manifest.display().to_string(), "-o", &tmp.path().display().to_string()]);
+            assert!(out.status.success(), "docs/manifests.md block {i}, {lang}:\n{}", stderr(&out));
+            let header = stdout(&out).trim().to_string();
+            let compiler = if lang == "c" { ["gcc", "-xc", "-std=c11"] } else { ["g++", "-xc++", "-std=c++17"] };
+            run_ok(
+                Command::new(compiler[0])
+                    .args(&compiler[1..])
+                    .arg("-fsyntax-only")
+                    .arg("-I")
+                    .arg(repo().join("include"))
+                    .arg(&header),
+            );
+        }
+    }
+}
