@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# The Python package's data: copies demo/, maps/ and examples/ (the files git tracks, or all of
-# them outside a git checkout) into python/situate/_data/, where the wheel and the sdist pick them
-# up and `situate demo` finds them once installed. The originals stay where they are; the copy is
+# The Python package's data: copies demo/, maps/, examples/, and the CMake package for C/C++
+# skills (cmake/, include/) (the files git tracks, or all of them outside a git checkout) into
+# python/situate/_data/, where the wheel and the sdist pick them up: `situate demo` finds the demo
+# once installed, `situate cmake-dir` prints _data/cmake (whose ../include holds the headers). The originals stay where they are; the copy is
 # not tracked (.gitignore) and is made again on every build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DEST=python/situate/_data
-DIRS=(demo maps examples)
+DIRS=(demo maps examples cmake include)
 rm -rf "$DEST"
 mkdir -p "$DEST"
 if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then

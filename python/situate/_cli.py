@@ -52,7 +52,10 @@ def main(argv: Sequence[str] | None = None) -> None:
 
 
 def data_dir() -> Path | None:
-    """The package data: ``demo/``, ``maps/`` and ``examples/`` as the wheel ships them.
+    """The package data: ``demo/``, ``maps/``, ``examples/``, ``cmake/`` and ``include/``.
+
+    As the wheel ships them; ``situate cmake-dir`` prints its ``cmake/`` (the CMake package for
+    C/C++ skills, whose ``../include`` holds ``situate.h`` and ``situate.hpp``).
 
     ``None`` when the package runs from a checkout without them (``situate demo`` then uses the
     checkout's ``demo/``).

@@ -4,7 +4,8 @@ A fenced block tagged `yaml` is a robot file when it starts with `robot:` and is
 any other is a fragment, checked inside a robot with the toy sonar and wheels (unless it has its
 own `devices:`). Paths in the examples are relative to a robot file in a folder at the top of the
 repository (such as `examples/`). A block tagged `yaml schema` shows a file's shape with
-placeholders and is not checked. So a doc example cannot rot: this test names the doc and line.
+placeholders and is not checked; one tagged `yaml manifest` is a skill manifest, which `situate gen
+c` must accept. So a doc example cannot rot: this test names the doc and line.
 """
 
 from __future__ import annotations
@@ -78,7 +79,9 @@ def test_the_docs_have_yaml_examples() -> None:
     assert len(ROBOT_FILES) >= 3
 
 
-@pytest.mark.parametrize("block", [b for b in BLOCKS if "schema" not in b.tags], ids=str)
+@pytest.mark.parametrize(
+    "block", [b for b in BLOCKS if not {"schema", "manifest"} & set(b.tags)], ids=str
+)
 def test_a_doc_example_passes_check(root: Path, block: Block) -> None:
     whole = block.text.startswith("robot:")
     has_devices = re.search(r"^devices:", block.text, re.MULTILINE) is not None
@@ -96,6 +99,14 @@ def test_a_doc_example_passes_check(root: Path, block: Block) -> None:
 
     report = re.sub(re.escape(str(path)) + r":(\d+):", to_doc, result.stderr)
     assert result.returncode == 0, f"the example at {block} fails `situate check`:\n{report}"
+
+
+@pytest.mark.parametrize("block", [b for b in BLOCKS if "manifest" in b.tags], ids=str)
+def test_a_doc_manifest_generates(tmp_path: Path, block: Block) -> None:
+    path = tmp_path / "manifest.yaml"
+    path.write_text(block.text)
+    result = situate("gen", "c", str(path), "-o", str(tmp_path))
+    assert result.returncode == 0, f"the manifest at {block} fails `situate gen`:\n{result.stderr}"
 
 
 @pytest.mark.parametrize("path", ROBOT_FILES, ids=lambda p: str(p.relative_to(REPO)))

@@ -1,10 +1,12 @@
 """The installed package on its own: its version, `python -m situate`, the shipped demo run from
-anywhere with the package's own interpreter, and the program's exit codes through the wheel."""
+anywhere with the package's own interpreter, a C skill built with the shipped CMake package, and
+the program's exit codes through the wheel."""
 
 from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -38,6 +40,7 @@ def test_the_demo_maps_and_examples_ship_with_the_package() -> None:
     data = _cli.data_dir()
     assert data is not None, "the wheel ships situate/_data (scripts/package-data.sh)"
     shipped = ["demo/robot.yaml", "demo/deliver.py", "maps/small.yaml", "examples/toybot.yaml"]
+    shipped += ["cmake/situateConfig.cmake", "include/situate.h", "include/situate.hpp"]
     for path in shipped:
         assert (data / path).is_file(), path
 
@@ -60,6 +63,47 @@ def test_the_demo_runs_outside_the_checkout_with_the_packages_interpreter(tmp_pa
     outcome = json.loads(result.stdout.strip().splitlines()[-1])
     assert outcome["sequencer_exit"] == 0, result.stderr[-3000:]
     assert outcome["delivered"] is True
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="needs cmake and a C compiler")
+def test_a_c_skill_builds_with_the_packages_cmake_and_program_alone(tmp_path: Path) -> None:
+    data = _cli.data_dir()
+    assert data is not None
+    where = json.loads(situate("cmake-dir", "--json").stdout)
+    assert Path(where["cmake_dir"]) == (data / "cmake").resolve()
+    assert (Path(where["include_dir"]) / "situate.h").is_file()
+    assert situate("--cmake-dir").stdout.strip() == where["cmake_dir"]
+    # The example, copied out of the package; on PATH only the package's scripts and the system's
+    # tools: no situate-gen anywhere, the structs come from `situate gen`.
+    source = tmp_path / "runaway"
+    shutil.copytree(data / "examples" / "c" / "runaway", source)
+    scripts = str(Path(situate_program()).parent)
+    env = {**os.environ, "PATH": os.pathsep.join([scripts, "/usr/local/bin", "/usr/bin", "/bin"])}
+    env.pop("SITUATE_PROGRAM", None)
+    assert shutil.which("situate-gen", path=env["PATH"]) is None
+    build = tmp_path / "build"
+    configure = subprocess.run(
+        ["cmake", "-S", str(source), "-B", str(build), f"-Dsituate_DIR={where['cmake_dir']}"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        check=False,
+    )
+    assert configure.returncode == 0, configure.stdout + configure.stderr
+    assert f"situate: C/C++ skill structs by `{situate_program()} -q gen`" in configure.stdout
+    built = subprocess.run(
+        ["cmake", "--build", str(build)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+        check=False,
+    )
+    assert built.returncode == 0, built.stdout + built.stderr
+    types = situate("types", "--library", str(build / "libc_runaway.so"), "--json")
+    assert types.returncode == 0, types.stderr
+    assert "c.runaway" in [t["name"] for t in json.loads(types.stdout)]
 
 
 @pytest.mark.parametrize(

@@ -5,7 +5,7 @@
 //! - [`manifest`]: a foreign skill's declaration (YAML, with its `name`);
 //! - [`layout`]: the C layout of a skill's inputs, outputs and parameters,
 //!   computed from its declaration;
-//! - [`gen`]: `situate gen c|cpp|python`, the typed structs for an author;
+//! - [`gen`]: `situate gen c|cpp`, the typed structs for an author;
 //! - [`loader`]: [`load_library`], a shared library's skill types.
 //!
 //! A C body that returns an error status faults its skill (deactivated, an

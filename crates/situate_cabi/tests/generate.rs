@@ -1,5 +1,6 @@
-//! `situate-gen` as a program: the files it writes (C, C++ compile; Python
-//! imports) and its errors (naming the manifest and the line).
+//! `situate-gen` as a program: its errors (naming the manifest and the line),
+//! and Python refused with the reason (the C and C++ files it writes are
+//! compiled by the other tests).
 
 mod common;
 
@@ -8,16 +9,20 @@ use std::process::Command;
 use common::*;
 
 #[test]
-fn the_python_module_imports_and_its_dataclasses_have_the_defaults() {
+fn python_is_refused_with_the_reason() {
     let dir = scratch("gen_python");
-    gen("python", &repo().join("examples/c/runaway/runaway.yaml"), &dir);
-    let script = "import sys\nsys.path.insert(0, sys.argv[1])\nimport c_runaway as m\n\
-                  assert m.TYPE_NAME == 'c.runaway'\nassert m.Params().safe_distance == 0.5\n\
-                  i = m.Inputs(sonar=m.Sonar(range=[1.0] * 24))\nassert m.Outputs().drive is None\n\
-                  o = m.Outputs(drive=m.Drive(v=0.1, w=-0.2))\nprint(len(i.sonar.range), o.drive.w)\n";
-    let out = Command::new("python3").arg("-c").arg(script).arg(&dir).output().expect("python3 runs");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(String::from_utf8_lossy(&out.stdout), "24 -0.2\n");
+    let manifest = repo().join("examples/c/runaway/runaway.yaml");
+    let out = Command::new(env!("CARGO_BIN_EXE_situate-gen"))
+        .arg("python")
+        .arg(&manifest)
+        .arg("-o")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("nothing is generated for Python") && err.contains("@situate.skill"), "{err}");
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "nothing written");
 }
 
 #[test]

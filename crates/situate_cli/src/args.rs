@@ -54,16 +54,22 @@ pub(crate) enum Command {
     /// The delivery demo: the simulated robot, the skill manager and the Python sequencer of
     /// demo/deliver.py (and the GUI unless --headless). Prints one line per phase and the outcome.
     Demo(DemoOptions),
-    /// Generate a skill's typed I/O (structs or classes and the glue) from its YAML manifest.
+    /// Generate a C or C++ skill's typed I/O (structs and the glue) from its YAML manifest
+    /// (docs/manifests.md).
     Gen {
-        /// `c`, `cpp` or `python`.
-        #[arg(value_parser = ["c", "cpp", "c++", "python", "py"])]
+        /// `c` or `cpp`.
+        #[arg(value_parser = gen_languages())]
         lang: String,
         manifest: PathBuf,
         /// The directory to write into.
         #[arg(short, long, default_value = ".")]
         out: PathBuf,
     },
+    /// Print the directory of the CMake package for C/C++ skills (`situateConfig.cmake`; the
+    /// headers `situate.h`, `situate.hpp` are in its `../include`):
+    /// `cmake -Dsituate_DIR="$(situate cmake-dir)"`.
+    #[command(name = "cmake-dir", long_flag = "cmake-dir")]
+    CmakeDir,
     /// List the skill types this program knows, with their declarations (and those of the
     /// libraries and Python files given).
     Types {
@@ -118,6 +124,16 @@ pub(crate) enum Command {
 
     #[command(flatten)]
     Client(ClientCommand),
+}
+
+/// `gen`'s languages; `python` is accepted only to say why nothing is generated for it.
+fn gen_languages() -> clap::builder::PossibleValuesParser {
+    use clap::builder::PossibleValue;
+    clap::builder::PossibleValuesParser::new([
+        PossibleValue::new("c"),
+        PossibleValue::new("cpp").alias("c++"),
+        PossibleValue::new("python").alias("py").hide(true),
+    ])
 }
 
 /// What composes a robot file at launch (`check`, `run`, `signals`, `graph`).

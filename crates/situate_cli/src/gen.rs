@@ -1,27 +1,72 @@
-//! What the program knows of skill types: `situate types` lists them, and
-//! `situate gen` writes a manifest's typed I/O for C, C++ or Python.
+//! What the program knows of skill types: `situate types` lists them,
+//! `situate gen` writes a manifest's typed I/O for C or C++, and `situate
+//! cmake-dir` says where the CMake package for C/C++ skills is.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
 use serde_json::{json, Value as Json};
 use situate::manager::Registry;
 
 use crate::output::{problem, Exit, Out, Problem};
+use crate::Extensions;
 
 /// `situate gen LANG MANIFEST -o DIR`: the files written, one per line (a JSON list under `--json`).
+/// A file whose contents are unchanged is left alone (build systems do not rebuild); a manifest's
+/// problems are said as `FILE:LINE:COL: error: …`.
 pub(crate) fn generate(lang: &str, manifest: &Path, out_dir: &Path, out: Out) -> anyhow::Result<()> {
     let lang =
-        situate_cabi::Lang::parse(lang).ok_or_else(|| problem(Exit::Usage, format!("unknown language `{lang}`")))?;
-    let files = situate_cabi::generate(lang, manifest).map_err(|e| Problem::file_problem(e.to_string()))?;
-    std::fs::create_dir_all(out_dir).with_context(|| format!("creating `{}`", out_dir.display()))?;
-    let mut written = Vec::new();
-    for f in files {
-        let path = out_dir.join(&f.path);
-        std::fs::write(&path, f.contents).with_context(|| format!("writing `{}`", path.display()))?;
-        written.push(path.display().to_string());
-    }
+        situate_cabi::Lang::parse(lang).ok_or_else(|| problem(Exit::Usage, situate_cabi::Lang::unknown(lang)))?;
+    let files = situate_cabi::generate(lang, manifest).map_err(|e| match e {
+        situate_cabi::GenError::Manifest { source, .. } => Problem::bad_file(
+            manifest,
+            source
+                .problems
+                .iter()
+                .map(|p| format!("{}:{}:{}: error: {}", manifest.display(), p.line, p.col, p.message))
+                .collect(),
+        ),
+        other => Problem::file_problem(other.to_string()),
+    })?;
+    let written = situate_cabi::write_generated(&files, out_dir).map_err(|e| problem(Exit::Failure, e.to_string()))?;
+    let written: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
     out.result(&json!(written), || written.join("\n"));
+    Ok(())
+}
+
+/// The CMake package's directory (`situateConfig.cmake`; the headers are in its `../include`):
+/// the host's package data (the wheel ships `cmake/` and `include/`), else the checkout this
+/// program was built from, if it is still there.
+pub(crate) fn cmake_dir(ext: &Extensions) -> Option<PathBuf> {
+    let checkout = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cmake");
+    ext.data_dir
+        .iter()
+        .map(|d| d.join("cmake"))
+        .chain(std::iter::once(checkout))
+        .find(|d| d.join("situateConfig.cmake").is_file() && d.join("../include/situate.h").is_file())
+        .map(|d| d.canonicalize().unwrap_or(d))
+}
+
+/// `situate cmake-dir` (or `situate --cmake-dir`): where `find_package(situate)` finds the
+/// package, for `cmake -Dsituate_DIR="$(situate cmake-dir)"`. Under `--json`:
+/// `{"cmake_dir", "include_dir", "config", "abi_version"}`.
+pub(crate) fn print_cmake_dir(ext: &Extensions, out: Out) -> anyhow::Result<()> {
+    let dir = cmake_dir(ext).ok_or_else(|| {
+        problem(
+            Exit::Failure,
+            "no CMake package found: this program has no package data and was not built in a checkout; \
+             install the Python package (it ships cmake/ and include/) or use a checkout's cmake/",
+        )
+    })?;
+    let include = dir.parent().map_or_else(|| dir.join("../include"), |p| p.join("include"));
+    out.result(
+        &json!({
+            "cmake_dir": dir.display().to_string(),
+            "include_dir": include.display().to_string(),
+            "config": dir.join("situateConfig.cmake").display().to_string(),
+            "abi_version": situate_cabi::abi::SITUATE_ABI_VERSION,
+        }),
+        || dir.display().to_string(),
+    );
     Ok(())
 }
 

@@ -9,7 +9,7 @@
 //! - `robot`: robot files loaded, checked, started and run; `serve-skill`;
 //! - `client`: the verbs that drive a running robot over the link, and
 //!   introspection (`signals`, `graph`, `winners`, `monitors`, `param dump|load`);
-//! - `demo`: the delivery demo; `gen`: `types` and `gen`; `map`: maps; `schema`:
+//! - `demo`: the delivery demo; `gen`: `types`, `gen` and `cmake-dir`; `map`: maps; `schema`:
 //!   the JSON Schemas of the file formats; `sim`: the simulated world;
 //!   `signals`: stopping on SIGINT/SIGTERM/SIGHUP.
 
@@ -48,7 +48,8 @@ pub struct Extensions {
     pub python: Option<PythonLoader>,
     /// The Python interpreter the host runs in (`sys.executable`).
     pub interpreter: Option<PathBuf>,
-    /// A directory holding `demo/`, `maps/` and `examples/` (the wheel's package data).
+    /// A directory holding `demo/`, `maps/`, `examples/`, `cmake/` and `include/` (the wheel's
+    /// package data).
     pub data_dir: Option<PathBuf>,
 }
 
@@ -122,6 +123,7 @@ fn run(command: Command, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
         Command::Run(args) => robot::run_robot(args, ext, out)?,
         Command::Demo(demo) => return demo::run_demo(&demo, ext, out),
         Command::Gen { lang, manifest, out: dir } => gen::generate(&lang, &manifest, &dir, out)?,
+        Command::CmakeDir => gen::print_cmake_dir(ext, out)?,
         Command::Types { library, python } => gen::types(&robot::registry_with(&library, &python, ext)?, out),
         Command::Client(command) => client::run(command, ext, out)?,
         Command::Map(command) => return map::map_command(command, out),

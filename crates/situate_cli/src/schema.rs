@@ -47,23 +47,46 @@ fn signal_type() -> Json {
     })
 }
 
+/// A manifest's port: its type, or `{type, signal, doc}` (and `optional` for an input).
+fn port(input: bool) -> Json {
+    let mut properties = json!({
+        "type": signal_type(),
+        "signal": {"type": "string", "pattern": DOTTED, "maxLength": 256,
+                   "description": "The signal the port connects to unless a robot file remaps it (default: the port's name)."},
+        "doc": {"type": "string", "description": "What the port carries."}
+    });
+    if input {
+        properties["optional"] =
+            json!({"type": "boolean", "description": "Optional: the skill runs without it (default false)."});
+    }
+    json!({
+        "anyOf": [
+            signal_type(),
+            {"type": "object", "additionalProperties": false, "required": ["type"], "properties": properties}
+        ]
+    })
+}
+
 fn manifest_body() -> Json {
+    let scalar =
+        json!({"type": ["number", "boolean", "string"], "description": "A default: a number, true/false or text."});
     json!({
         "doc": {"type": "string", "description": "What the skill does."},
         "priority": {"type": "integer", "minimum": i32::MIN, "maximum": i32::MAX,
                      "description": "Priority over a resource (a signal several skills write): higher wins."},
         "inputs": {
             "type": "object",
-            "description": "Input ports, `port: type` (a trailing `?` makes one optional).",
+            "description": "Input ports, `port: type` (a trailing `?` makes one optional) or \
+                            `port: {type, signal, optional, doc}`.",
             "propertyNames": {"pattern": IDENT},
-            "additionalProperties": signal_type(),
+            "additionalProperties": port(true),
             "maxProperties": 256
         },
         "outputs": {
             "type": "object",
-            "description": "Output ports, `port: type`.",
+            "description": "Output ports, `port: type` or `port: {type, signal, doc}`.",
             "propertyNames": {"pattern": IDENT},
-            "additionalProperties": signal_type(),
+            "additionalProperties": port(false),
             "maxProperties": 256
         },
         "params": {
@@ -73,13 +96,14 @@ fn manifest_body() -> Json {
             "maxProperties": 256,
             "additionalProperties": {
                 "anyOf": [
-                    param_value(),
+                    scalar,
                     {
                         "type": "object",
                         "additionalProperties": false,
+                        "required": ["default"],
                         "properties": {
-                            "type": {"type": "string", "enum": ["bool", "i64", "f64", "string", "f64[]"]},
-                            "default": param_value(),
+                            "type": {"type": "string", "enum": ["bool", "i64", "int", "f64", "float", "string", "str"]},
+                            "default": scalar,
                             "min": {"type": "number"},
                             "max": {"type": "number"},
                             "unit": {"type": "string"},
@@ -108,7 +132,7 @@ pub(crate) fn manifest() -> Json {
         "$schema": DIALECT,
         "$id": "situate:manifest",
         "title": "situate skill manifest",
-        "description": "A skill type's declaration as data: its ports and parameters (docs/robot-files.md).",
+        "description": "A skill type's declaration as data: its ports and parameters (docs/manifests.md).",
         "type": "object",
         "additionalProperties": false,
         "properties": properties

@@ -448,11 +448,27 @@ fn gen_writes_the_typed_io_of_a_manifest_and_refuses_a_bad_one() {
     let header = std::fs::read_to_string(&written[0]).unwrap();
     assert!(header.contains("safe_distance"), "{header}");
 
+    // Unchanged: not written again (a build system would rebuild).
+    let modified = std::fs::metadata(&written[0]).unwrap().modified().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let again = situate(["gen".as_ref(), "c".as_ref(), manifest.as_ref(), "-o".as_ref(), dir.path().as_os_str()]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(std::fs::metadata(&written[0]).unwrap().modified().unwrap(), modified);
+
     let (_d, bad) = robot_file("bad.yaml", "name: c.bad\ninputs: {x: f99}\n");
-    let out = situate(["gen".as_ref(), "python".as_ref(), bad.as_os_str(), "-o".as_ref(), dir.path().as_os_str()]);
+    let out = situate(["gen".as_ref(), "c".as_ref(), bad.as_os_str(), "-o".as_ref(), dir.path().as_os_str()]);
     assert_no_panic(&out);
-    assert!(!out.status.success());
-    assert!(stderr(&out).contains(&shown(&bad)), "{}", stderr(&out));
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(&format!("{}:2:13: error: port `x`: unknown type `f99`", shown(&bad))),
+        "{}",
+        stderr(&out)
+    );
+
+    // Nothing is generated for Python, and the program says why.
+    let out = situate(["gen".as_ref(), "python".as_ref(), manifest.as_ref(), "-o".as_ref(), dir.path().as_os_str()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("@situate.skill"), "{}", stderr(&out));
 }
 
 #[test]

@@ -1,12 +1,13 @@
 //! Skill manifests: a skill's declaration written as data (YAML), for skills
 //! whose code the manager does not hold — remote skills served by another
-//! process today, C and C++ skills later.
+//! process, C and C++ skills (docs/manifests.md).
 //!
 //! ```yaml
 //! doc: Doubles its input.           # optional
 //! priority: 0                       # optional
 //! inputs:  {x: f64, bump: "bool?"}  # port: type; a trailing `?` makes it optional
-//! outputs: {y: f64}
+//! outputs:
+//!   y: {type: f64, signal: out.y, doc: "…"}  # long form: the default signal (else `y`)
 //! params:
 //!   gain: 2.0                       # a default alone (its type is the default's)
 //!   limit: {type: f64, default: 1.0, min: 0, max: 10, unit: m, doc: "…"}
@@ -24,6 +25,8 @@ pub const MAX_PORTS: usize = 256;
 /// The longest port type (`{x: f64, y: f64}`), in characters.
 pub const MAX_TYPE_CHARS: usize = 1024;
 const PARAM_KEYS: &[&str] = &["type", "default", "min", "max", "unit", "doc"];
+/// A port's keys in its long form (outputs: the first three).
+const PORT_KEYS: &[&str] = &["type", "signal", "doc", "optional"];
 
 /// Reads a manifest into a declaration of `type_name` and `kind`. Errors
 /// carry the position of the offending key or value.
@@ -73,42 +76,10 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
                         errors.push((port.pos, format!("port name `{}` is not an identifier", port.value)));
                         continue;
                     }
-                    let Some(text) = ty.value.as_text() else {
-                        errors.push((
-                            ty.pos,
-                            format!(
-                                "port `{}` expects a type such as f64 or f32[24], got {}",
-                                port.value,
-                                ty.value.describe()
-                            ),
-                        ));
-                        continue;
-                    };
-                    if text.chars().count() > MAX_TYPE_CHARS {
-                        errors.push((
-                            ty.pos,
-                            format!("port `{}`: a type may have at most {MAX_TYPE_CHARS} characters", port.value),
-                        ));
-                        continue;
-                    }
-                    let (text, optional) = match text.trim().strip_suffix('?') {
-                        Some(t) if !output => (t, true),
-                        _ => (text.trim(), false),
-                    };
-                    match SignalType::parse(text) {
-                        Ok(t) => {
-                            let mut spec = PortSpec::new(&port.value, t);
-                            spec.optional = optional;
-                            if output {
-                                decl.outputs.push(spec);
-                            } else {
-                                decl.inputs.push(spec);
-                            }
-                        }
-                        Err(e) => errors.push((
-                            Pos { line: ty.pos.line, col: ty.pos.col + e.column - 1 },
-                            format!("port `{}`: {}", port.value, e.message),
-                        )),
+                    match port_spec(&port.value, ty, output) {
+                        Ok(spec) if output => decl.outputs.push(spec),
+                        Ok(spec) => decl.inputs.push(spec),
+                        Err(e) => errors.push(e),
                     }
                 }
             }
@@ -155,6 +126,101 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
 /// "`inputs` declares 300 entries; a skill may have at most 256".
 fn too_many(key: &str, n: usize) -> String {
     format!("`{key}` declares {n} entries; a skill may have at most {MAX_PORTS}")
+}
+
+/// One port: `type` (a trailing `?` makes an input optional), or
+/// `{type, signal, optional, doc}`.
+fn port_spec(name: &str, node: &Spanned<Node>, output: bool) -> Result<PortSpec, (Pos, String)> {
+    let expects = |got: &Node| {
+        format!(
+            "port `{name}` expects a type such as f64 or f32[24], or {{type, signal{}, doc}}, got {}",
+            if output { "" } else { ", optional" },
+            got.describe()
+        )
+    };
+    let (ty, signal, mut optional, doc) = match node.value.as_map() {
+        None => (node, None, false, String::new()),
+        Some(entries) => {
+            let (mut ty, mut signal, mut optional, mut doc) = (None, None, false, String::new());
+            let keys = if output { &PORT_KEYS[..3] } else { PORT_KEYS };
+            for (key, value) in entries {
+                match key.value.as_str() {
+                    "type" => ty = Some(value),
+                    "signal" => match value.value.as_text().map(str::trim) {
+                        Some(s) if s.chars().count() > MAX_NAME_CHARS => {
+                            return Err((
+                                value.pos,
+                                format!("port `{name}`: a signal name may have at most {MAX_NAME_CHARS} characters"),
+                            ))
+                        }
+                        Some(s) if crate::config::is_signal_name(s) => signal = Some(s.to_string()),
+                        _ => {
+                            return Err((
+                                value.pos,
+                                format!(
+                                    "port `{name}`: `signal` expects a signal name (identifiers joined by `.`, like \
+                                     `sonar.range`), got {}",
+                                    value.value.describe()
+                                ),
+                            ))
+                        }
+                    },
+                    "optional" if !output => match value.value.as_bool() {
+                        Some(b) => optional = b,
+                        _ => {
+                            return Err((
+                                value.pos,
+                                format!(
+                                    "port `{name}`: `optional` expects true or false, got {}",
+                                    value.value.describe()
+                                ),
+                            ))
+                        }
+                    },
+                    "doc" => match value.value.as_text() {
+                        Some(t) => doc = t.to_string(),
+                        None => {
+                            return Err((
+                                value.pos,
+                                format!("port `{name}`: `doc` expects text, got {}", value.value.describe()),
+                            ))
+                        }
+                    },
+                    other => {
+                        return Err((
+                            key.pos,
+                            format!("port `{name}`: unknown key `{other}`{}", suggestion(other, keys.iter().copied())),
+                        ))
+                    }
+                }
+            }
+            let ty = ty.ok_or((node.pos, format!("port `{name}` needs a `type`")))?;
+            (ty, signal, optional, doc)
+        }
+    };
+    let Some(text) = ty.value.as_text() else {
+        return Err((ty.pos, expects(&ty.value)));
+    };
+    if text.chars().count() > MAX_TYPE_CHARS {
+        return Err((ty.pos, format!("port `{name}`: a type may have at most {MAX_TYPE_CHARS} characters")));
+    }
+    let text = match text.trim().strip_suffix('?') {
+        Some(t) if !output => {
+            optional = true;
+            t
+        }
+        _ => text.trim(),
+    };
+    let t = SignalType::parse(text).map_err(|e| {
+        (Pos { line: ty.pos.line, col: ty.pos.col + e.column - 1 }, format!("port `{name}`: {}", e.message))
+    })?;
+    let mut spec = PortSpec::new(name, t);
+    spec.optional = optional;
+    spec.doc = doc;
+    if let Some(s) = signal {
+        spec.signal = s;
+    }
+    Ok(spec)
 }
 
 fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, String)> {
@@ -273,6 +339,51 @@ mod tests {
         assert_eq!(e[0].1, "unknown key `ouputs` in the skill manifest — did you mean `outputs`?");
         let e = manifest("params:\n  g: {type: f64, default: 5, max: 1}\n").unwrap_err();
         assert_eq!(e[0].1, "parameter `g`: the default expects a number ≤ 1.0, got 5");
+    }
+
+    #[test]
+    fn a_port_may_name_its_default_signal() {
+        let d = manifest(
+            "inputs:\n  range: {type: \"f32[24]\", signal: sonar.range, doc: Metres.}\n  bump: {type: bool, optional: true}\n  \
+             x: \"f64?\"\noutputs:\n  y: {type: f64, signal: cmd.y}\n  z: f64\n",
+        )
+        .unwrap();
+        assert_eq!(
+            (d.inputs[0].signal.as_str(), d.inputs[0].doc.as_str(), d.inputs[0].optional),
+            ("sonar.range", "Metres.", false)
+        );
+        assert_eq!(d.inputs[0].ty, SignalType::parse("f32[24]").unwrap());
+        assert!(d.inputs[1].optional && d.inputs[1].signal == "bump");
+        assert!(d.inputs[2].optional && d.inputs[2].signal == "x");
+        assert_eq!((d.outputs[0].signal.as_str(), d.outputs[1].signal.as_str()), ("cmd.y", "z"));
+    }
+
+    #[test]
+    fn a_bad_port_says_which_key() {
+        let e = manifest("inputs:\n  r: {type: f64, signal: sonar..range}\n").unwrap_err();
+        assert_eq!(
+            e[0],
+            (
+                Pos { line: 2, col: 26 },
+                "port `r`: `signal` expects a signal name (identifiers joined by `.`, like `sonar.range`), got \
+                 \"sonar..range\""
+                    .into()
+            )
+        );
+        let e = manifest("inputs:\n  r: {type: f64, signl: s}\n").unwrap_err();
+        assert_eq!(e[0], (Pos { line: 2, col: 18 }, "port `r`: unknown key `signl` — did you mean `signal`?".into()));
+        let e = manifest("outputs:\n  y: {type: f64, optional: true}\n").unwrap_err();
+        assert_eq!(e[0].0, Pos { line: 2, col: 18 });
+        assert!(e[0].1.starts_with("port `y`: unknown key `optional`"), "{}", e[0].1);
+        let e = manifest("inputs:\n  r: {signal: s}\n").unwrap_err();
+        assert_eq!(e[0], (Pos { line: 2, col: 6 }, "port `r` needs a `type`".into()));
+        let e = manifest("inputs:\n  r: {type: f46}\n").unwrap_err();
+        assert_eq!(e[0].0, Pos { line: 2, col: 13 });
+        assert!(e[0].1.starts_with("port `r`: unknown type `f46`"), "{}", e[0].1);
+        let e = manifest("inputs:\n  r: [f64]\n").unwrap_err();
+        assert!(e[0].1.starts_with("port `r` expects a type such as f64"), "{}", e[0].1);
+        let e = manifest("inputs:\n  r: {type: f64, optional: maybe}\n").unwrap_err();
+        assert_eq!(e[0].1, "port `r`: `optional` expects true or false, got \"maybe\"");
     }
 
     #[test]

@@ -1,12 +1,13 @@
-//! `situate-gen c|cpp|python MANIFEST [-o DIR]`: writes a skill's typed I/O
-//! (see `situate_cabi::gen`). Prints the written paths.
+//! `situate-gen c|cpp MANIFEST [-o DIR]`: writes a skill's typed I/O (see
+//! `situate_cabi::gen`). Prints the written paths. The `situate` program's
+//! `situate gen` does the same; the CMake package uses either.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use situate_cabi::{generate, write_generated, Lang};
 
-const USAGE: &str = "usage: situate-gen c|cpp|python MANIFEST [-o DIR]";
+const USAGE: &str = "usage: situate-gen c|cpp MANIFEST [-o DIR]";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -34,7 +35,7 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     };
     let Some(lang) = Lang::parse(lang) else {
-        eprintln!("situate-gen: unknown language `{lang}` (c, cpp, python)\n{USAGE}");
+        eprintln!("situate-gen: {}\n{USAGE}", Lang::unknown(lang));
         return ExitCode::from(2);
     };
     let files = match generate(lang, manifest.as_ref()) {
