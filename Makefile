@@ -10,7 +10,7 @@ help: ## Show the targets.
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
 
 demo: python gui ## The delivery demo: simulator, manager, Python sequencer; GUI on http://127.0.0.1:8080.
-	$(CARGO) run --release -q -p situate_cli -- demo --python .venv/bin/python $(DEMO_ARGS)
+	$(CARGO) run --release -p situate_cli -- demo --python .venv/bin/python $(DEMO_ARGS)
 
 test: ## Run every test in every language (what CI runs); one line per stage with its time, and the total.
 	scripts/test.sh
