@@ -89,7 +89,8 @@ fn demo_files(demo: &DemoOptions, ext: &Extensions) -> anyhow::Result<(PathBuf, 
                 problem(
                     Exit::Usage,
                     format!(
-                        "no demo found (looked in {}): run it from the repository's top directory, install the                          Python package (which ships it), or give --robot and --sequencer",
+                        "no demo found (looked in {}): run it from the repository's top directory, install the \
+                         Python package (which ships it), or give --robot and --sequencer",
                         looked.join(", ")
                     ),
                 )
