@@ -493,30 +493,15 @@ class Sequencer:
         finally:
             await self.restore("fit_wall", "bearing_deg")
             await self.restore("fit_wall", "half_angle_deg")
-        if normal is None and self.corridor_heading is not None:
-            # The sonars cannot tell (a door beside the barcode fills their view). The barcode
-            # is on a wall of the corridor being followed: a side wall, or the end wall.
-            self.prefetch("odom")
-            w = await self.odom()
+        if self.corridor_heading is not None:
             axis = self.corridor_heading
-            lateral = -(px - w.x) * math.sin(axis) + (py - w.y) * math.cos(axis)
-            side = axis + math.copysign(math.pi / 2, lateral)
-            # The end wall only if a wall lies across the corridor about as far ahead as the
-            # barcode, and none along its side as far as the barcode lies to that side (the
-            # sonars may look through the door beside it): barcodes beside doors are mostly
-            # on side walls. Walls fitted, not single echoes: someone standing in the
-            # corridor is no wall.
-            ahead = (px - w.x) * math.cos(axis) + (py - w.y) * math.sin(axis)
-            end = await self.wall_towards(axis)
-            on_end = end is not None and abs(wrap(end[0] - axis)) < math.radians(20)
-            on_end = on_end and end is not None and abs(end[1] - ahead) < 0.35
-            by = await self.wall_towards(side)
-            on_side = by is not None and abs(wrap(by[0] - side)) < math.radians(20)
-            on_side = on_side and by is not None and abs(by[1] - abs(lateral)) < 0.35
-            normal = axis if on_end and not on_side else side
-            if self.debug:
-                await self.say(f"      end wall {end} ({ahead:.2f} on), side {by} ({lateral:.2f})")
-            await self.say(f"    no wall through barcode {barcode} in sight: taking the corridor's")
+            across = normal is not None and abs(wrap(normal - axis)) < math.radians(25)
+            if normal is None or across:
+                # No wall through the barcode, or one across the corridor: clutter on both
+                # walls or a bin and someone standing by line up across the way too, and
+                # barcodes beside doors are mostly on side walls. The corridor's own walls
+                # decide (docs/maps.md: along the corridor or across its end).
+                normal = await self.corridor_wall_at(barcode, px, py, axis, fitted=normal)
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")
             return False
@@ -525,6 +510,42 @@ class Sequencer:
         if not await self.goto(gx, gy, within=30):
             return False
         return await self.turn(wrap(normal - (await self.odom()).theta))
+
+    async def corridor_wall_at(
+        self, barcode: int, px: float, py: float, axis: float, *, fitted: float | None
+    ) -> float:
+        """The normal (odometry frame) of the corridor's wall ``barcode`` at (px, py) is on.
+
+        The corridor runs along ``axis``: the point is on a side wall when a wall along the
+        corridor lies about as far to that side as the point does; on the end wall when a
+        wall lies across the corridor about as far ahead as the point, and no side wall
+        holds it. ``fitted`` is a wall across the way fitted through the point (kept, with
+        its angle, when it is the end wall). Walls fitted, not single echoes: someone
+        standing in the corridor is no wall. With neither, the sonars cannot tell (a door
+        beside the barcode fills their view): the side it lies to.
+        """
+        self.prefetch("odom")
+        w = await self.odom()
+        lateral = -(px - w.x) * math.sin(axis) + (py - w.y) * math.cos(axis)
+        side = axis + math.copysign(math.pi / 2, lateral)
+        ahead = (px - w.x) * math.cos(axis) + (py - w.y) * math.sin(axis)
+        by = await self.wall_towards(side)
+        on_side = by is not None and abs(wrap(by[0] - side)) < math.radians(20)
+        on_side = on_side and by is not None and abs(by[1] - abs(lateral)) < 0.35
+        end = await self.wall_towards(axis)
+        on_end = end is not None and abs(wrap(end[0] - axis)) < math.radians(20)
+        on_end = on_end and end is not None and abs(end[1] - ahead) < 0.35
+        if self.debug:
+            await self.say(
+                f"      end wall {end} ({ahead:.2f} on), side {by} ({lateral:.2f}), fitted {fitted}"
+            )
+        if on_side or not (on_end or fitted is not None):
+            if fitted is None:
+                await self.say(
+                    f"    no wall through barcode {barcode} in sight: taking the corridor's"
+                )
+            return side
+        return fitted if fitted is not None else axis
 
     async def wall_towards(self, direction: float) -> tuple[float, float] | None:
         """`std.fit_wall`'s wall within 50° of ``direction`` (odometry frame), as the robot stands.
