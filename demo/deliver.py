@@ -134,6 +134,8 @@ class Delivery(Sequencer):
         self.m = mission
         self.car = 0
         self.button_pose: Pose | None = None
+        #: Patrols so far: each starts the other way along the button's wall from the last.
+        self.patrols = 0
 
     async def leave_lab(self) -> None:
         """Phases 1 to 3: out of the lab."""
@@ -255,9 +257,14 @@ class Delivery(Sequencer):
             # passes beside, its door seen by the side sonars.
             c, s = math.cos(b.theta), math.sin(b.theta)
             await self.goto(b.x - PATROL_BACK_M * c, b.y - PATROL_BACK_M * s, within=30)
-            along = wrap(b.theta - math.pi / 2 - (await self.odom()).theta)
+            # Right first, then left after the next call, and so on: a car on one side whose
+            # door stays open only a few seconds is missed while the robot patrols the other
+            # side, on every call if the robot always went the same way first.
+            first = -math.pi / 2 if self.patrols % 2 == 0 else math.pi / 2
+            along = wrap(b.theta + first - (await self.odom()).theta)
         else:
-            along = -math.pi / 2
+            along = -math.pi / 2 if self.patrols % 2 == 0 else math.pi / 2
+        self.patrols += 1
         if not await self.turn(along, keep=["runaway"]):
             return False
         await self.set("identify_car", "first_id", m.car_barcode_first)
