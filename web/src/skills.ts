@@ -146,6 +146,7 @@ class ParamEditor {
   private readonly current: HTMLElement;
   private readonly error: HTMLElement;
   private readonly type: string;
+  private edited = false;
 
   constructor(
     private readonly conn: Connection,
@@ -172,6 +173,9 @@ class ParamEditor {
       this.input = h("input", { type: "text", "data-testid": id });
     }
     this.setValue(spec["value"]);
+    // Typed and not yet set: live updates leave it alone (clicking Set moves the focus off
+    // the input before the click is handled, and an update in between would undo the edit).
+    this.input.addEventListener("input", () => (this.edited = true));
     const set = linkControl(h("button", { "data-testid": `${id}-set` }, "Set"));
     set.addEventListener("click", () => void this.submit());
     this.input.addEventListener("keydown", (e) => {
@@ -235,6 +239,7 @@ class ParamEditor {
       await this.conn.request("set_param", { skill: this.skill, param: str(this.spec["name"]), value });
       setText(this.error, "");
       this.input.classList.remove("refused");
+      this.edited = false;
     } catch (e) {
       setText(this.error, errorText(e));
       this.input.classList.add("refused");
@@ -243,7 +248,7 @@ class ParamEditor {
 
   update(spec: JsonObject): void {
     setText(this.current, show(spec["value"]));
-    if (document.activeElement !== this.input && this.error.textContent === "") this.setValue(spec["value"]);
+    if (!this.edited && document.activeElement !== this.input && this.error.textContent === "") this.setValue(spec["value"]);
   }
 }
 
@@ -302,6 +307,7 @@ class SkillPanel {
   private active = false;
   private lastParams: [string, Json][] = [];
   private lastCycle = 0;
+  private priorityEdited = false;
 
   constructor(
     private readonly conn: Connection,
@@ -318,6 +324,8 @@ class SkillPanel {
     // The priority decides contention over a resource; the manager applies a change from the next cycle.
     this.priority = h("input", { type: "number", step: "1", class: "short", "data-testid": `priority-${n}` });
     this.priority.value = String(num(info["priority"]));
+    // As with parameters: a typed priority stays until it is set.
+    this.priority.addEventListener("input", () => (this.priorityEdited = true));
     this.priorityError = h("span", { class: "error", "data-testid": `priority-${n}-error` });
     const setPriority = linkControl(h("button", { "data-testid": `priority-${n}-set` }, "Set"));
     setPriority.addEventListener("click", () => void this.submitPriority());
@@ -401,6 +409,7 @@ class SkillPanel {
     try {
       await this.conn.request("set_priority", { skill: this.name, priority: value });
       setText(this.priorityError, "");
+      this.priorityEdited = false;
     } catch (e) {
       setText(this.priorityError, errorText(e));
     }
@@ -428,7 +437,7 @@ class SkillPanel {
     this.el.classList.toggle("active", this.active);
     this.el.classList.toggle("faulted", typeof fault === "string");
     setText(this.activate, this.active ? "Deactivate" : "Activate");
-    if (document.activeElement !== this.priority && this.priorityError.textContent === "") {
+    if (!this.priorityEdited && document.activeElement !== this.priority && this.priorityError.textContent === "") {
       this.priority.value = String(num(info["priority"]));
     }
     const t = info["timing"];

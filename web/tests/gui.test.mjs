@@ -108,6 +108,13 @@ describe("situate GUI", () => {
     const before = (await skillsOverLink()).wander.priority;
     const input = page.getByTestId("priority-wander");
     await input.fill(String(before + 7));
+    // Typed, then the focus elsewhere while telemetry updates the panel (as clicking Set
+    // does, between its press and its click): the typed value stays until it is set.
+    await input.blur();
+    const samples = async () => Number(await page.evaluate(() => document.body.dataset.samples ?? "0"));
+    const seen = await samples();
+    await until(async () => (await samples()) >= seen + 2, "two telemetry updates");
+    assert.equal(await input.inputValue(), String(before + 7), "a live update undid the typed priority");
     await page.getByTestId("priority-wander-set").click();
     await until(async () => (await skillsOverLink()).wander.priority === before + 7, "the new priority over the link");
     await input.fill("2.5");
