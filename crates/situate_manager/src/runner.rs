@@ -15,6 +15,7 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use situate_core::value::recycle;
 use situate_core::{Context, Io, Skill, SkillKind, Value};
 
 /// The runnable part of a skill instance: its body and reusable port buffers.
@@ -74,8 +75,17 @@ impl Exec {
     /// (`None` where no watchdog looks: a manager not spawned).
     ///
     /// Outputs are `None` on entry: the manager takes every produced output
-    /// when it commits, and clears them when a body fails.
+    /// when it commits, and clears them when a body fails; an output buffer
+    /// it left holding the value a committed output replaced in its slot
+    /// (see `Manager::commit_plain`) is recycled here.
     pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
+        for out in &mut self.outputs {
+            if out.is_some() {
+                if let Some(old) = out.take() {
+                    recycle(old);
+                }
+            }
+        }
         self.cx.set(cycle, time_s);
         let mark = clock.map(|c| c.enter(start.coarse()));
         self.result = match &mut self.skill {

@@ -30,13 +30,26 @@ impl Manager {
         self.begin_cycle();
         let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
+        // The coarse clock's reading at the end of the last body, carried
+        // to the next one (see `run_level_serial`).
+        let mut t = None;
         for level in 0..plan.levels.len() {
-            // A level that may go parallel gathers copies of its inputs.
-            let lend = self.pool.is_none() || !plan.parallel_level(level);
-            self.prepare_steps(&plan, level, &mut ready, lend);
-            self.run_ready(&plan, &ready, lend);
+            if self.pool.is_some() && plan.parallel_level(level) {
+                // A level that may go parallel gathers copies of its inputs.
+                self.prepare_steps(&plan, level, &mut ready);
+                self.run_ready(&plan, &ready);
+                t = None;
+            } else {
+                t = self.run_level_serial(&plan, level, &mut ready, t);
+            }
+            let mut faulted = false;
             for &k in &ready {
-                self.finish_step(&plan, k);
+                faulted |= !self.finish_step(&plan, k);
+            }
+            // A precise reading is taken afresh for each level, so a body's
+            // exact time holds no commits; so is one after a fault.
+            if faulted || matches!(t, Some(Stamp::Precise(_))) {
+                t = None;
             }
         }
         self.ready = ready;
@@ -104,15 +117,15 @@ impl Manager {
         }
         let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
-        self.prepare_steps(&plan, level, &mut ready, false);
+        self.prepare_steps(&plan, level, &mut ready);
         self.ready = ready;
         self.schedule = plan;
         true
     }
 
-    /// Gathers the inputs of level `level`'s steps; those ready to run go to `ready`.
-    /// `lend`: the level runs serially on this thread (see [`Manager::run_lent`]).
-    pub(super) fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>, lend: bool) {
+    /// Gathers copies of the inputs of level `level`'s steps; those ready
+    /// to run go to `ready`.
+    pub(super) fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>) {
         ready.clear();
         let Some(steps) = plan.level(level) else { return };
         for k in steps {
@@ -120,12 +133,12 @@ impl Manager {
             match step.kind {
                 StepKind::AsyncThreaded => self.exchange_async(step.inst),
                 StepKind::AsyncInCycle => {
-                    if self.gather_step(plan, step, false, lend) {
+                    if self.gather_step(plan, step, false) {
                         ready.push(k);
                     }
                 }
                 StepKind::Sync => {
-                    if self.gather_step(plan, step, true, lend) {
+                    if self.gather_step(plan, step, true) {
                         ready.push(k);
                     }
                 }
@@ -165,20 +178,11 @@ impl Manager {
     /// their slot, the others through the graph. `fresh`: every required
     /// input must have been written this cycle (sync cskills); otherwise the
     /// latest values do (async cskills). Returns whether the skill is ready.
-    /// `lend`: only check readiness; the inputs are lent to the body when
-    /// it runs ([`Manager::run_lent`]).
-    pub(super) fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool, lend: bool) -> bool {
+    pub(super) fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
         let i = step.inst;
         let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
         if !step.plain_ins {
             return self.gather(i, fresh);
-        }
-        if lend {
-            let cycle = self.cycle;
-            return ports.iter().all(|port| {
-                let slot = &self.slots[port.leaf];
-                port.optional || (slot.value.is_some() && (!fresh || slot.stamp == cycle))
-            });
         }
         let exec = &mut self.execs[i];
         let cycle = self.cycle;
@@ -235,7 +239,9 @@ impl Manager {
         let exec = &mut self.execs[i];
         let elapsed = exec.elapsed_ns;
         let timed = exec.timed;
-        let result = std::mem::replace(&mut exec.result, Ok(()));
+        // Read in place when it is `Ok` (nearly always): moving a `Result`
+        // through a temporary costs more than the test.
+        let result = if exec.result.is_ok() { Ok(()) } else { std::mem::replace(&mut exec.result, Ok(())) };
         let inst = &mut self.insts[i];
         inst.timing.record(timed.then_some(elapsed));
         if exec.cx.has_prints() {
@@ -268,13 +274,13 @@ impl Manager {
         outcome
     }
 
-    /// Commits a step's outputs, or marks the skill faulted.
-    pub(super) fn finish_step(&mut self, plan: &Plan, k: usize) {
+    /// Commits a step's outputs, or marks the skill faulted (then false).
+    pub(super) fn finish_step(&mut self, plan: &Plan, k: usize) -> bool {
         let step = &plan.steps[k];
         let i = step.inst;
         if let Err(cause) = self.account_by(i, step.deadline_ns) {
             self.fault(i, cause);
-            return;
+            return false;
         }
         let mut outputs = std::mem::take(&mut self.execs[i].outputs);
         let outcome = if step.plain_outs {
@@ -283,8 +289,12 @@ impl Manager {
             self.commit(i, &mut outputs)
         };
         self.execs[i].outputs = outputs;
-        if let Err(cause) = outcome {
-            self.fault(i, cause);
+        match outcome {
+            Ok(()) => true,
+            Err(cause) => {
+                self.fault(i, cause);
+                false
+            }
         }
     }
 

@@ -4,7 +4,10 @@
 
 use std::sync::{Arc, Mutex};
 
+use situate_core::value::recycle;
+
 use super::plan::{Plan, Step, StepKind};
+use super::slots::Slot;
 use super::Manager;
 use crate::config::ExecutorKind;
 use crate::runner::{Exec, Stamp};
@@ -57,10 +60,11 @@ impl Manager {
         total - longest >= PARALLEL_WORTH_NS / 2 && total >= PARALLEL_WORTH_NS
     }
 
-    /// `lent`: the inputs of plain steps are lent when they run.
-    pub(super) fn run_ready(&mut self, plan: &Plan, ready: &[usize], lent: bool) {
+    /// Runs a level's ready steps, their inputs gathered as copies: on the
+    /// pool when worth it ([`Manager::worth_parallel`]), else in order.
+    pub(super) fn run_ready(&mut self, plan: &Plan, ready: &[usize]) {
         let (cycle, time_s) = (self.cycle, self.time_s);
-        if !lent && self.worth_parallel(plan, ready) {
+        if self.worth_parallel(plan, ready) {
             for batch in self.batches(plan, ready) {
                 let Some(pool) = &self.pool else { return };
                 let jobs: Vec<Mutex<&mut Exec>> =
@@ -79,38 +83,105 @@ impl Manager {
                 if precise != matches!(t, Stamp::Precise(_)) {
                     t = Stamp::now(precise);
                 }
-                if lent && step.plain_ins {
-                    t = self.run_lent(plan, step, t);
-                } else {
-                    t = self.execs[step.inst].run(cycle, time_s, t, None);
-                }
+                t = self.execs[step.inst].run(cycle, time_s, t, None);
             }
         }
     }
 
-    /// Runs a step whose inputs are all plain ports on the slots' own
-    /// values: each present input is moved from its slot into the body's
-    /// buffer and back after the run (no reference counting; nothing else
-    /// reads a slot while a serial level runs). The readiness was checked
-    /// by [`Manager::gather_step`] and the slots have not changed since.
-    pub(super) fn run_lent(&mut self, plan: &Plan, step: &Step, t: Stamp) -> Stamp {
+    /// The serial executor on level `level`: each step in order has its
+    /// inputs checked and gathered (a plain step's lent: see
+    /// [`Manager::lend_inputs`]) and runs at once; the ready ones go to
+    /// `ready`, to be committed in order after the level. The same as
+    /// gathering the whole level first: no step of a level reads what
+    /// another one of it writes (it would be a level later), and a lent
+    /// input is back in its slot before the next step looks.
+    ///
+    /// `t`: a clock reading to time the first body from, `None` to read the
+    /// clock; returns the reading at the end of the last body (`None` if
+    /// none ran). Back to back bodies share a reading, so each body costs
+    /// one clock read.
+    pub(super) fn run_level_serial(
+        &mut self,
+        plan: &Plan,
+        level: usize,
+        ready: &mut Vec<usize>,
+        mut t: Option<Stamp>,
+    ) -> Option<Stamp> {
+        ready.clear();
+        let Some(steps) = plan.level(level) else { return t };
+        let (cycle, time_s, sampled) = (self.cycle, self.time_s, self.sampled);
+        for k in steps {
+            let step = &plan.steps[k];
+            let fresh = match step.kind {
+                StepKind::AsyncThreaded => {
+                    self.exchange_async(step.inst);
+                    // Not the time of a body: the next one reads the clock.
+                    t = None;
+                    continue;
+                }
+                StepKind::AsyncInCycle => false,
+                StepKind::Sync => true,
+            };
+            let lent = step.plain_ins;
+            let ready_now = if lent { self.lend_inputs(plan, step, fresh) } else { self.gather(step.inst, fresh) };
+            if !ready_now {
+                continue;
+            }
+            let precise = sampled || step.precise;
+            let start = match t {
+                Some(t) if precise == matches!(t, Stamp::Precise(_)) => t,
+                _ => Stamp::now(precise),
+            };
+            let exec = &mut self.execs[step.inst];
+            t = Some(exec.run(cycle, time_s, start, None));
+            if lent {
+                // Back to their slots, swapped (see `lend_inputs`).
+                let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+                for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+                    if input.is_some() {
+                        std::mem::swap(input, &mut self.slots[port.leaf].value);
+                        if input.is_some() {
+                            if let Some(old) = input.take() {
+                                recycle(old);
+                            }
+                        }
+                    }
+                }
+            }
+            ready.push(k);
+        }
+        t
+    }
+
+    /// Lends a plain step its inputs if it is ready: each present input is
+    /// moved from its slot into the body's buffer (no reference counting;
+    /// nothing else reads a slot while a serial level runs), to be put
+    /// back after the run. `fresh`: as in [`Manager::gather_step`]. Returns
+    /// whether the step is ready (if not, nothing was moved).
+    #[inline]
+    fn lend_inputs(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
         let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
-        let exec = &mut self.execs[step.inst];
-        let fresh = step.kind == StepKind::Sync;
         let cycle = self.cycle;
+        let slots = &mut self.slots;
+        let present = |slot: &Slot| slot.value.is_some() && (!fresh || slot.stamp == cycle);
+        if !ports.iter().all(|port| port.optional || present(&slots[port.leaf])) {
+            return false;
+        }
+        let exec = &mut self.execs[step.inst];
+        // Values are swapped between slot and buffer, never moved through a
+        // temporary (whose copy in halves stalls the load that follows).
         for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
-            let slot = &mut self.slots[port.leaf];
-            if slot.value.is_some() && (!fresh || slot.stamp == cycle) {
-                *input = slot.value.take();
+            if input.is_some() {
+                if let Some(old) = input.take() {
+                    recycle(old);
+                }
+            }
+            let slot = &mut slots[port.leaf];
+            if present(slot) {
+                std::mem::swap(input, &mut slot.value);
             }
         }
-        let end = exec.run(cycle, self.time_s, t, None);
-        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
-            if let Some(v) = input.take() {
-                self.slots[port.leaf].value = Some(v);
-            }
-        }
-        end
+        true
     }
 
     /// The executor in use (parallel falls back to serial if no pool could be made).

@@ -48,18 +48,34 @@ impl Manager {
         // it only when it lost the slot (see `save_displaced`).
         let cycle = self.cycle;
         for (p, (port, out)) in ports.iter().zip(outputs.iter_mut()).enumerate() {
-            let Some(value) = out.take() else { continue };
+            if out.is_none() {
+                continue;
+            }
             let last = &mut self.insts[i].last_outputs[p];
-            match write_leaf(&mut self.slots[port.leaf], value, cycle, step.rank, i) {
-                Ok(displaced) => {
-                    if let Some(old) = last.take() {
-                        recycle(old);
+            // `out` is swapped with the slot's value, never moved through a
+            // temporary: `out` then holds the value it replaced.
+            match write_leaf_in_place(&mut self.slots[port.leaf], out, cycle, step.rank, i) {
+                Some(displaced) => {
+                    if last.is_some() {
+                        if let Some(old) = last.take() {
+                            recycle(old);
+                        }
                     }
-                    if let Some((w, old)) = displaced {
-                        self.save_displaced(port.leaf, w, old);
+                    // The value it replaced stays in the output buffer when
+                    // it was this skill's own: the next run recycles it on
+                    // entry ([`Exec::run`](crate::runner::Exec::run)), long
+                    // after the swap's stores (taking it now would stall).
+                    if let Some(w) = displaced {
+                        if let Some(old) = out.take() {
+                            self.save_displaced(port.leaf, w, old);
+                        }
                     }
                 }
-                Err(lost) => *last = Some(lost),
+                // Lost: kept as its last output (the previous one dropped).
+                None => {
+                    std::mem::swap(last, out);
+                    *out = None;
+                }
             }
         }
         Ok(())
@@ -164,6 +180,31 @@ fn write_leaf(
         Ok(displaced)
     } else {
         Err(value)
+    }
+}
+
+/// [`write_leaf`] with the value in `value` (`Some`), swapped in place: if
+/// it wins (`Some`), `value` then holds what the slot held, and the result
+/// says whose it was when another writer had written it (`Some(writer)`);
+/// if it loses (`None`), `value` is unchanged.
+#[inline]
+fn write_leaf_in_place(
+    slot: &mut Slot,
+    value: &mut Option<Value>,
+    cycle: u64,
+    rank: (i32, u32),
+    writer: usize,
+) -> Option<Option<usize>> {
+    if slot.stamp != cycle || rank > slot.rank {
+        std::mem::swap(&mut slot.value, value);
+        let displaced =
+            (value.is_some() && slot.writer as usize != writer && slot.stamp > 0).then_some(slot.writer as usize);
+        slot.stamp = cycle;
+        slot.rank = rank;
+        slot.writer = writer as u32;
+        Some(displaced)
+    } else {
+        None
     }
 }
 
