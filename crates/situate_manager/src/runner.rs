@@ -88,10 +88,12 @@ impl Exec {
         }
         self.cx.set(cycle, time_s);
         let mark = clock.map(|c| c.enter(start.coarse()));
-        self.result = match &mut self.skill {
-            Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
-            None => Err("the body is not here (it runs on its own thread)".into()),
-        };
+        match &mut self.skill {
+            Some(skill) => {
+                run_body_into(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx, &mut self.result)
+            }
+            None => self.result = Err("the body is not here (it runs on its own thread)".into()),
+        }
         if let (Some(clock), Some(mark)) = (clock, mark) {
             clock.leave(mark);
         }
@@ -220,6 +222,30 @@ impl BodyClock {
     /// The watchdog left the body with `mark` behind: it no longer counts.
     pub fn forget(&self, mark: u64) {
         self.leave(mark);
+    }
+}
+
+/// [`run_body`] writing its outcome to `result`, and only when it differs
+/// from what `result` holds: inlined, so the body's arguments and an `Ok`
+/// outcome never go through the stack (a copy there, read back at once in
+/// wider pieces than it was written, stalls the cycle's thread).
+#[inline(always)]
+fn run_body_into(
+    skill: &mut dyn Skill,
+    inputs: &[Option<Value>],
+    outputs: &mut [Option<Value>],
+    cx: &mut Context,
+    result: &mut Result<(), String>,
+) {
+    let mut io = Io { inputs, outputs, cx };
+    match catch_unwind(AssertUnwindSafe(|| skill.step(&mut io))) {
+        Ok(Ok(())) => {
+            if result.is_err() {
+                *result = Ok(());
+            }
+        }
+        Ok(Err(e)) => *result = Err(e.message),
+        Err(panic) => *result = Err(format!("panicked: {}", panic_message(&*panic))),
     }
 }
 
