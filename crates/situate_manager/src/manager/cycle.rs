@@ -56,9 +56,11 @@ impl Manager {
         self.schedule = plan;
         self.prepare_exchanges();
         let exchanging = std::mem::take(&mut self.exchanging);
-        let mut t = Stamp::now(true);
-        for &d in &exchanging {
-            t = self.execs[d].run(self.cycle, self.time_s, t, None);
+        if !exchanging.is_empty() {
+            let mut t = Stamp::now(true);
+            for &d in &exchanging {
+                t = self.execs[d].run(self.cycle, self.time_s, t, None);
+            }
         }
         for &d in &exchanging {
             self.finish_exchange(d);
