@@ -237,22 +237,32 @@ impl Manager {
         self.account_by(i, deadline.as_nanos().min(u64::MAX as u128) as u64)
     }
 
+    #[inline]
     pub(super) fn account_by(&mut self, i: usize, deadline_ns: u64) -> Result<(), String> {
         let exec = &mut self.execs[i];
         let elapsed = exec.elapsed_ns;
         let timed = exec.timed;
-        // Read in place when it is `Ok` (nearly always): moving a `Result`
-        // through a temporary costs more than the test.
-        let result = if exec.result.is_ok() { Ok(()) } else { std::mem::replace(&mut exec.result, Ok(())) };
-        let inst = &mut self.insts[i];
-        inst.timing.record(timed.then_some(elapsed));
+        self.insts[i].timing.record(timed.then_some(elapsed));
         if exec.cx.has_prints() {
             let prints = exec.cx.take_prints();
             self.record_prints(i, prints);
         }
         // On the coarse clock a run is late only when it certainly is: its
         // reading can exceed the exact time by up to one tick.
-        let late = if timed { elapsed > deadline_ns } else { elapsed > deadline_ns.saturating_add(coarse_tick_ns()) };
+        let late = elapsed > deadline_ns && (timed || elapsed > deadline_ns.saturating_add(coarse_tick_ns()));
+        if !late && self.execs[i].result.is_ok() {
+            // Nothing moved (a `Result` moved through a temporary costs more
+            // than the test).
+            return Ok(());
+        }
+        self.failed_run(i, elapsed, deadline_ns, late)
+    }
+
+    /// [`Manager::account_by`] for a run that failed or was late: the cause,
+    /// its outputs dropped.
+    #[cold]
+    fn failed_run(&mut self, i: usize, elapsed: u64, deadline_ns: u64, late: bool) -> Result<(), String> {
+        let result = std::mem::replace(&mut self.execs[i].result, Ok(()));
         let outcome = match result {
             Err(e) => Err(e),
             Ok(()) if late => {
