@@ -135,44 +135,6 @@ pub(crate) fn flatten(path: &str, ty: &SignalType, out: &mut Vec<(String, Signal
     }
 }
 
-/// Builds a value of type `ty` from leaf values given in flattened order.
-pub(crate) fn assemble<'v>(ty: &SignalType, leaves: &mut impl Iterator<Item = &'v Value>) -> Option<Value> {
-    match ty {
-        SignalType::Record(r) => {
-            let mut fields = Vec::with_capacity(r.fields.len());
-            for (name, fty) in &r.fields {
-                fields.push((Arc::from(name.as_str()), assemble(fty, leaves)?));
-            }
-            Some(Value::Record(Arc::new(situate_core::RecordValue { fields })))
-        }
-        _ => leaves.next().cloned(),
-    }
-}
-
-/// Splits a value of type `ty` into leaf values in flattened order; false if
-/// the value does not conform.
-pub(crate) fn decompose(ty: &SignalType, value: &Value, out: &mut Vec<Value>) -> bool {
-    match (ty, value) {
-        (SignalType::Record(rt), Value::Record(rv)) => {
-            rt.fields.len() == rv.fields.len()
-                && rt
-                    .fields
-                    .iter()
-                    .zip(&rv.fields)
-                    .all(|((tn, tt), (vn, vv))| tn.as_str() == &**vn && decompose(tt, vv, out))
-        }
-        (SignalType::Record(_), _) => false,
-        (t, v) => {
-            if v.conforms(t) {
-                out.push(v.clone());
-                true
-            } else {
-                false
-            }
-        }
-    }
-}
-
 /// Where each input and output port of an instance was configured.
 type PortPositions = (Vec<Option<Pos>>, Vec<Option<Pos>>);
 

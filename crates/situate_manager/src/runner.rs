@@ -15,6 +15,7 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use situate_core::value::recycle;
 use situate_core::{Context, Io, Skill, SkillKind, Value};
 
 /// The runnable part of a skill instance: its body and reusable port buffers.
@@ -74,14 +75,25 @@ impl Exec {
     /// (`None` where no watchdog looks: a manager not spawned).
     ///
     /// Outputs are `None` on entry: the manager takes every produced output
-    /// when it commits, and clears them when a body fails.
+    /// when it commits, and clears them when a body fails; an output buffer
+    /// it left holding the value a committed output replaced in its slot
+    /// (see `Manager::commit_plain`) is recycled here.
     pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
+        for out in &mut self.outputs {
+            if out.is_some() {
+                if let Some(old) = out.take() {
+                    recycle(old);
+                }
+            }
+        }
         self.cx.set(cycle, time_s);
         let mark = clock.map(|c| c.enter(start.coarse()));
-        self.result = match &mut self.skill {
-            Some(skill) => run_body(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx),
-            None => Err("the body is not here (it runs on its own thread)".into()),
-        };
+        match &mut self.skill {
+            Some(skill) => {
+                run_body_into(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx, &mut self.result)
+            }
+            None => self.result = Err("the body is not here (it runs on its own thread)".into()),
+        }
         if let (Some(clock), Some(mark)) = (clock, mark) {
             clock.leave(mark);
         }
@@ -210,6 +222,30 @@ impl BodyClock {
     /// The watchdog left the body with `mark` behind: it no longer counts.
     pub fn forget(&self, mark: u64) {
         self.leave(mark);
+    }
+}
+
+/// [`run_body`] writing its outcome to `result`, and only when it differs
+/// from what `result` holds: inlined, so the body's arguments and an `Ok`
+/// outcome never go through the stack (a copy there, read back at once in
+/// wider pieces than it was written, stalls the cycle's thread).
+#[inline(always)]
+fn run_body_into(
+    skill: &mut dyn Skill,
+    inputs: &[Option<Value>],
+    outputs: &mut [Option<Value>],
+    cx: &mut Context,
+    result: &mut Result<(), String>,
+) {
+    let mut io = Io { inputs, outputs, cx };
+    match catch_unwind(AssertUnwindSafe(|| skill.step(&mut io))) {
+        Ok(Ok(())) => {
+            if result.is_err() {
+                *result = Ok(());
+            }
+        }
+        Ok(Err(e)) => *result = Err(e.message),
+        Err(panic) => *result = Err(format!("panicked: {}", panic_message(&*panic))),
     }
 }
 

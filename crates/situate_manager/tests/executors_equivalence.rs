@@ -138,3 +138,46 @@ proptest! {
         }
     }
 }
+
+/// A skill whose level stops going parallel (a sibling is deactivated) has
+/// its inputs lent from then on. An optional input absent in that cycle is
+/// absent to its body: not the copy gathered for it in the parallel level
+/// before, and that copy is not written back to the signal.
+#[test]
+fn an_optional_input_absent_after_a_level_stops_being_parallel_is_absent() {
+    let seen = log();
+    let mut reg = Registry::new();
+    // Writes `s` in cycle 1 only.
+    reg.add(fn_type(decl("once", SkillKind::Sync, &[], &[("out", "f64")]), |io, _| {
+        if io.cx.cycle() == 1 {
+            io.outputs[0] = Some(Value::F64(7.0));
+        }
+        Ok(())
+    }));
+    for name in ["reader", "sibling"] {
+        let seen = seen.clone();
+        let tag = name.to_string();
+        reg.add(fn_type(decl(name, SkillKind::Sync, &[("x", "f64?")], &[("y", "f64")]), move |io, _| {
+            let x = io.inputs[0].as_ref().and_then(Value::as_f64);
+            seen.lock().unwrap().push(format!("{tag} {} {x:?}", io.cx.cycle()));
+            io.outputs[0] = Some(Value::F64(x.unwrap_or(-1.0)));
+            Ok(())
+        }));
+    }
+    let spec = simulated("lend")
+        .executor(ExecutorKind::Parallel, Some(2))
+        .skill(skill("once", "once").remap("out", "s"))
+        .skill(skill("reader", "reader").remap("x", "s").remap("y", "r"))
+        .skill(skill("sibling", "sibling").remap("x", "s").remap("y", "q"));
+    let mut m = Manager::build(&spec, &reg).unwrap();
+    assert_eq!(m.executor(), ExecutorKind::Parallel);
+    m.step(1).unwrap();
+    m.deactivate(&["sibling"]).unwrap();
+    m.step(1).unwrap();
+    let reader: Vec<String> = entries(&seen).into_iter().filter(|e| e.starts_with("reader")).collect();
+    assert_eq!(reader, ["reader 1 Some(7.0)", "reader 2 None"]);
+    assert_eq!(m.query("r").unwrap().value, Some(Value::F64(-1.0)));
+    // `s` still holds what `once` wrote in cycle 1, written then.
+    let s = m.query("s").unwrap();
+    assert_eq!((s.value, s.cycle), (Some(Value::F64(7.0)), 1));
+}

@@ -3,6 +3,7 @@
 //! monitors, run/stop/step — and the resolver that turns names in monitor
 //! conditions into the manager's signals and parameters.
 
+use super::slots::assemble;
 use super::*;
 
 impl Manager {

@@ -23,7 +23,9 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 
-use super::{raise_thread_priority, run_parallel, Manager};
+use super::executor::run_parallel;
+use super::pacing::raise_thread_priority;
+use super::Manager;
 use crate::control::{ControlError, Envelope, Handle, Reply, Request};
 use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
 

@@ -1,0 +1,501 @@
+//! One cycle of the manager, step by step (see the parent module): the
+//! boundary, the dskills' readings, the plan's levels gathered, run and
+//! committed, the dskills' commands, the monitors, the cycle's statistics;
+//! and the exchanges with skills on threads of their own.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use situate_core::value::recycle;
+use situate_core::{SignalType, Value};
+
+use super::plan::{Plan, Step, StepKind};
+use super::slots::{assemble, Slot};
+use super::{fmt_duration, Inst, Manager, RefTarget, TIMING_SAMPLE};
+use crate::config::ClockKind;
+use crate::control::{Event, Request};
+use crate::expr::Lookup;
+use crate::runner::{coarse_tick_ns, Stamp, WorkerStats};
+
+impl Manager {
+    pub(super) fn compile_schedule(&mut self) {
+        let insts = &self.insts;
+        self.schedule =
+            Plan::compile(&self.graph, |i| insts[i].active, |i| insts[i].priority, |i| insts[i].worker.is_some());
+        self.schedule_dirty = false;
+    }
+
+    /// Runs one cycle.
+    pub fn cycle(&mut self) {
+        self.begin_cycle();
+        let plan = std::mem::take(&mut self.schedule);
+        let mut ready = std::mem::take(&mut self.ready);
+        // The coarse clock's reading at the end of the last body, carried
+        // to the next one (see `run_level_serial`).
+        let mut t = None;
+        for level in 0..plan.levels.len() {
+            if self.pool.is_some() && plan.parallel_level(level) {
+                // A level that may go parallel gathers copies of its inputs.
+                self.prepare_steps(&plan, level, &mut ready);
+                self.run_ready(&plan, &ready);
+                t = None;
+            } else {
+                t = self.run_level_serial(&plan, level, &mut ready, t);
+            }
+            let mut faulted = false;
+            for &k in &ready {
+                faulted |= !self.finish_step(&plan, k);
+            }
+            // A precise reading is taken afresh for each level, so a body's
+            // exact time holds no commits; so is one after a fault.
+            if faulted || matches!(t, Some(Stamp::Precise(_))) {
+                t = None;
+            }
+        }
+        self.ready = ready;
+        self.schedule = plan;
+        self.prepare_exchanges();
+        let exchanging = std::mem::take(&mut self.exchanging);
+        if !exchanging.is_empty() {
+            let mut t = Stamp::now(true);
+            for &d in &exchanging {
+                t = self.execs[d].run(self.cycle, self.time_s, t, None);
+            }
+        }
+        for &d in &exchanging {
+            self.finish_exchange(d);
+        }
+        self.exchanging = exchanging;
+        self.end_cycle();
+    }
+
+    /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
+    pub(super) fn begin_cycle(&mut self) {
+        self.cycle_start = Instant::now();
+        if let Some(due) = self.due.take() {
+            if self.cycle_start.saturating_duration_since(due).as_secs_f64() > self.period_s / 2.0 {
+                self.late_starts += 1;
+            }
+        }
+        if let Some(last) = self.last_start {
+            let dt = self.cycle_start.saturating_duration_since(last).as_secs_f64();
+            // Over about the last 20 cycles.
+            self.interval_s = Some(match self.interval_s {
+                Some(avg) => avg + (dt - avg) / 20.0,
+                None => dt,
+            });
+        }
+        self.last_start = Some(self.cycle_start);
+        self.cycle += 1;
+        self.sampled = self.cycle % TIMING_SAMPLE == 1;
+        self.time_s = match self.clock {
+            ClockKind::Simulated => self.cycle as f64 * self.period_s,
+            ClockKind::Wall => self.started.elapsed().as_secs_f64(),
+        };
+        if !self.activated.is_empty() || !self.deactivated.is_empty() {
+            let event = Event::ActivationApplied {
+                activated: std::mem::take(&mut self.activated),
+                deactivated: std::mem::take(&mut self.deactivated),
+                cycle: self.cycle,
+            };
+            self.bus.send(event);
+        }
+        if self.schedule_dirty {
+            self.compile_schedule();
+        }
+        let devices = std::mem::take(&mut self.schedule.devices);
+        for &d in &devices {
+            self.take_readings(d);
+        }
+        self.schedule.devices = devices;
+    }
+
+    /// Step 3 for level `level`: exchanges with threaded async cskills, and
+    /// the steps ready to run in the cycle in `self.ready`. False when
+    /// there is no such level.
+    pub(super) fn prepare_level(&mut self, level: usize) -> bool {
+        if level >= self.schedule.levels.len() {
+            return false;
+        }
+        let plan = std::mem::take(&mut self.schedule);
+        let mut ready = std::mem::take(&mut self.ready);
+        self.prepare_steps(&plan, level, &mut ready);
+        self.ready = ready;
+        self.schedule = plan;
+        true
+    }
+
+    /// Gathers copies of the inputs of level `level`'s steps; those ready
+    /// to run go to `ready`.
+    pub(super) fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>) {
+        ready.clear();
+        let Some(steps) = plan.level(level) else { return };
+        for k in steps {
+            let step = &plan.steps[k];
+            match step.kind {
+                StepKind::AsyncThreaded => self.exchange_async(step.inst),
+                StepKind::AsyncInCycle => {
+                    if self.gather_step(plan, step, false) {
+                        ready.push(k);
+                    }
+                }
+                StepKind::Sync => {
+                    if self.gather_step(plan, step, true) {
+                        ready.push(k);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Step 4: hand every active dskill the commands written this cycle;
+    /// the lockstep ones whose device exchange runs in the cycle go to
+    /// `self.exchanging`.
+    pub(super) fn prepare_exchanges(&mut self) {
+        let devices = std::mem::take(&mut self.schedule.devices);
+        let mut exchanging = std::mem::take(&mut self.exchanging);
+        exchanging.clear();
+        for &d in &devices {
+            if self.hand_commands(d) {
+                exchanging.push(d);
+            }
+        }
+        self.exchanging = exchanging;
+        self.schedule.devices = devices;
+    }
+
+    /// Steps 5 and 6: monitors, then the cycle's statistics.
+    pub(super) fn end_cycle(&mut self) {
+        self.evaluate_monitors();
+        let elapsed = self.cycle_start.elapsed().as_nanos() as u64;
+        self.last_cycle_ns = elapsed;
+        self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
+        self.total_cycle_ns += elapsed;
+        if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
+            self.overruns += 1;
+        }
+    }
+
+    /// Collects a step's inputs into its buffers: plain ports straight from
+    /// their slot, the others through the graph. `fresh`: every required
+    /// input must have been written this cycle (sync cskills); otherwise the
+    /// latest values do (async cskills). Returns whether the skill is ready.
+    pub(super) fn gather_step(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
+        let i = step.inst;
+        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        if !step.plain_ins {
+            return self.gather(i, fresh);
+        }
+        let exec = &mut self.execs[i];
+        let cycle = self.cycle;
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            let slot = &self.slots[port.leaf];
+            let present = slot.value.is_some() && (!fresh || slot.stamp == cycle);
+            if !present && !port.optional {
+                return false;
+            }
+            let new = if present { slot.value.clone() } else { None };
+            if let Some(old) = std::mem::replace(input, new) {
+                recycle(old);
+            }
+        }
+        true
+    }
+
+    /// Collects instance `i`'s inputs into its buffers. `fresh`: every
+    /// required input must have been written this cycle (sync cskills,
+    /// dskill commands); otherwise the latest values do (async cskills).
+    /// Returns whether the skill is ready.
+    pub(super) fn gather(&mut self, i: usize, fresh: bool) -> bool {
+        let def = &self.graph.instances[i];
+        let exec = &mut self.execs[i];
+        let cycle = self.cycle;
+        for (p, port) in def.inputs.iter().enumerate() {
+            let present = port.leaves.iter().all(|&l| {
+                let s = &self.slots[l];
+                s.value.is_some() && (!fresh || s.stamp == cycle)
+            });
+            exec.inputs[p] = if !present {
+                if !port.optional {
+                    return false;
+                }
+                None
+            } else if port.leaves.len() == 1 && !matches!(port.ty, SignalType::Record(_)) {
+                self.slots[port.leaves[0]].value.clone()
+            } else {
+                let slots = &self.slots;
+                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
+            };
+        }
+        true
+    }
+
+    /// Records a run's timing and prints; the cause of its fault if it failed
+    /// or ran over its deadline (its outputs are then dropped).
+    pub(super) fn account(&mut self, i: usize) -> Result<(), String> {
+        let deadline = self.graph.instances[i].in_cycle_deadline();
+        self.account_by(i, deadline.as_nanos().min(u64::MAX as u128) as u64)
+    }
+
+    #[inline]
+    pub(super) fn account_by(&mut self, i: usize, deadline_ns: u64) -> Result<(), String> {
+        let exec = &mut self.execs[i];
+        let elapsed = exec.elapsed_ns;
+        let timed = exec.timed;
+        self.insts[i].timing.record(timed.then_some(elapsed));
+        if exec.cx.has_prints() {
+            let prints = exec.cx.take_prints();
+            self.record_prints(i, prints);
+        }
+        // On the coarse clock a run is late only when it certainly is: its
+        // reading can exceed the exact time by up to one tick.
+        let late = elapsed > deadline_ns && (timed || elapsed > deadline_ns.saturating_add(coarse_tick_ns()));
+        if !late && self.execs[i].result.is_ok() {
+            // Nothing moved (a `Result` moved through a temporary costs more
+            // than the test).
+            return Ok(());
+        }
+        self.failed_run(i, elapsed, deadline_ns, late)
+    }
+
+    /// [`Manager::account_by`] for a run that failed or was late: the cause,
+    /// its outputs dropped.
+    #[cold]
+    fn failed_run(&mut self, i: usize, elapsed: u64, deadline_ns: u64, late: bool) -> Result<(), String> {
+        let result = std::mem::replace(&mut self.execs[i].result, Ok(()));
+        let outcome = match result {
+            Err(e) => Err(e),
+            Ok(()) if late => {
+                let def = &self.graph.instances[i];
+                let (what, key) = if def.kind.is_threaded() {
+                    ("liveness deadline", "liveness_ms")
+                } else {
+                    ("execution budget", "budget_ms")
+                };
+                Err(format!(
+                    "its body ran for {}, over its {what} of {} (`{key}`); what it produced is dropped",
+                    fmt_duration(Duration::from_nanos(elapsed)),
+                    fmt_duration(Duration::from_nanos(deadline_ns))
+                ))
+            }
+            Ok(()) => Ok(()),
+        };
+        if outcome.is_err() {
+            self.execs[i].outputs.fill(None);
+        }
+        outcome
+    }
+
+    /// Commits a step's outputs, or marks the skill faulted (then false).
+    pub(super) fn finish_step(&mut self, plan: &Plan, k: usize) -> bool {
+        let step = &plan.steps[k];
+        let i = step.inst;
+        if let Err(cause) = self.account_by(i, step.deadline_ns) {
+            self.fault(i, cause);
+            return false;
+        }
+        let mut outputs = std::mem::take(&mut self.execs[i].outputs);
+        let outcome = if step.plain_outs {
+            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize], &mut outputs)
+        } else {
+            self.commit(i, &mut outputs)
+        };
+        self.execs[i].outputs = outputs;
+        match outcome {
+            Ok(()) => true,
+            Err(cause) => {
+                self.fault(i, cause);
+                false
+            }
+        }
+    }
+
+    /// Commits a run's outputs (for the spawned manager: step `k` of the
+    /// current plan).
+    pub(super) fn finish(&mut self, k: usize) {
+        let plan = std::mem::take(&mut self.schedule);
+        self.finish_step(&plan, k);
+        self.schedule = plan;
+    }
+
+    /// Async cskill on its thread: hand over the latest inputs, take the
+    /// latest result. Never waits for the body.
+    pub(super) fn exchange_async(&mut self, i: usize) {
+        let ready = self.gather(i, false);
+        let Some(worker) = self.insts[i].worker.as_ref() else { return };
+        let shared = Arc::clone(&worker.shared);
+        let (outputs, fault, prints, busy) = {
+            let mut mb = shared.lock();
+            if ready {
+                for (slot, v) in mb.inputs.iter_mut().zip(&self.execs[i].inputs) {
+                    slot.clone_from(v);
+                }
+                mb.inputs_new = true;
+                mb.cycle = self.cycle;
+                mb.time_s = self.time_s;
+            }
+            (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
+        };
+        shared.notify();
+        self.threaded_results(i, outputs, fault, prints, busy);
+    }
+
+    /// dskill readings at the start of a cycle: those produced since the
+    /// last cycle took them.
+    pub(super) fn take_readings(&mut self, d: usize) {
+        let (outputs, fault, prints, busy) = match self.insts[d].worker.as_ref() {
+            Some(worker) => {
+                let mut mb = worker.shared.lock();
+                (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
+            }
+            None => {
+                (self.insts[d].lockstep_readings.iter_mut().map(Option::take).collect(), None, Vec::new(), (None, None))
+            }
+        };
+        self.threaded_results(d, outputs, fault, prints, busy);
+    }
+
+    /// `busy` is when the body's current run began and the worker's run
+    /// statistics, read under the same lock as `outputs` (so `runs` counts
+    /// exactly the runs whose results have been taken).
+    pub(super) fn threaded_results(
+        &mut self,
+        i: usize,
+        mut outputs: Vec<Option<Value>>,
+        fault: Option<String>,
+        prints: Vec<String>,
+        busy: (Option<Instant>, Option<WorkerStats>),
+    ) {
+        let (busy_since, stats) = busy;
+        if let Some(stats) = stats {
+            self.insts[i].timing = stats;
+        }
+        if !prints.is_empty() {
+            self.record_prints(i, prints);
+        }
+        if let Some(cause) = fault {
+            if self.insts[i].worker.as_ref().is_some_and(|w| w.shared.lock().dead) {
+                // Its thread is gone: activating it again makes a fresh body and thread.
+                self.insts[i].abandoned = true;
+            }
+            self.fault(i, cause);
+            return;
+        }
+        if let Some(since) = busy_since {
+            let ran = since.elapsed();
+            if ran > self.graph.instances[i].liveness {
+                self.abandon(i, ran);
+                return;
+            }
+        }
+        if let Err(cause) = self.commit(i, &mut outputs) {
+            self.fault(i, cause);
+        }
+    }
+
+    /// dskill commands at the end of a cycle: those written this cycle. A
+    /// threaded dskill gets them in its mailbox; true for a lockstep one,
+    /// whose device exchange then runs in the cycle.
+    pub(super) fn hand_commands(&mut self, d: usize) -> bool {
+        if !self.insts[d].active {
+            return false;
+        }
+        // Every command port is optional for a device: gather never refuses.
+        let def = &self.graph.instances[d];
+        let cycle = self.cycle;
+        for (p, port) in def.inputs.iter().enumerate() {
+            let fresh = port.leaves.iter().all(|&l| self.slots[l].stamp == cycle && self.slots[l].value.is_some());
+            self.execs[d].inputs[p] = if fresh {
+                let slots = &self.slots;
+                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
+            } else {
+                None
+            };
+        }
+        match self.insts[d].worker.as_ref() {
+            Some(worker) => {
+                let mut mb = worker.shared.lock();
+                for (slot, v) in mb.inputs.iter_mut().zip(&self.execs[d].inputs) {
+                    if v.is_some() {
+                        slot.clone_from(v);
+                    }
+                }
+                mb.cycle = cycle;
+                mb.time_s = self.time_s;
+                false
+            }
+            None => true,
+        }
+    }
+
+    /// After a lockstep dskill's device exchange: its readings are taken at
+    /// the start of the next cycle; a failed exchange's are dropped.
+    pub(super) fn finish_exchange(&mut self, d: usize) {
+        let outcome = self.account(d);
+        let exec = &mut self.execs[d];
+        for (slot, out) in self.insts[d].lockstep_readings.iter_mut().zip(&mut exec.outputs) {
+            if let Some(v) = out.take() {
+                *slot = Some(v);
+            }
+        }
+        if let Err(cause) = outcome {
+            self.fault(d, cause);
+        }
+    }
+
+    pub(super) fn evaluate_monitors(&mut self) {
+        self.paused = false;
+        if self.monitors.list.is_empty() {
+            return;
+        }
+        let mut fired: Vec<Event> = Vec::new();
+        let mut pause = false;
+        let clock = [Value::F64(self.time_s), Value::I64(self.cycle as i64)];
+        let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts, clock: &clock };
+        let (cycle, time_s) = (self.cycle, self.time_s);
+        let changed = |r: usize| match self.refs.get(r) {
+            Some(RefTarget::Leaf(l)) => self.slots.get(*l).is_some_and(|s| s.stamp == cycle),
+            Some(RefTarget::Param(i, _)) => self.insts.get(*i).is_some_and(|s| s.params_from >= cycle),
+            Some(RefTarget::Time | RefTarget::Cycle) | None => true,
+        };
+        self.monitors.evaluate(&env, &changed, |m| {
+            pause |= m.pause;
+            let values =
+                m.reads.iter().chain(&m.report).map(|(name, r)| (name.clone(), env.value(*r).cloned())).collect();
+            fired.push(Event::MonitorFired {
+                monitor: m.id,
+                condition: m.source.clone(),
+                cycle,
+                time_s,
+                values,
+                held: m.held_indexes(),
+            });
+        });
+        for e in fired {
+            self.bus.send(e);
+        }
+        self.paused = pause;
+        if pause && self.running {
+            let _ = self.request(Request::Stop);
+        }
+    }
+}
+
+struct Env<'a> {
+    refs: &'a [RefTarget],
+    slots: &'a [Slot],
+    insts: &'a [Inst],
+    /// `[time, cycle]`.
+    clock: &'a [Value; 2],
+}
+
+impl Lookup for Env<'_> {
+    fn value(&self, id: usize) -> Option<&Value> {
+        match self.refs.get(id)? {
+            RefTarget::Leaf(l) => self.slots.get(*l)?.value.as_ref(),
+            RefTarget::Param(i, p) => self.insts.get(*i)?.params.get(*p),
+            RefTarget::Time => Some(&self.clock[0]),
+            RefTarget::Cycle => Some(&self.clock[1]),
+        }
+    }
+}
