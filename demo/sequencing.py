@@ -131,7 +131,9 @@ class Sequencer:
         trace = os.environ.get("DELIVER_TRACE")
         self.trace = open(trace, "w") if trace else None  # noqa: SIM115 (open for the run)
         self.active: set[str] = set()
+        #: The simulated time at the last pause (a monitor fired); `step` makes it stale.
         self.t = 0.0
+        self.t_stale = False
         self.phase_no = 0
         self.phase_text = ""
         #: Searches so far: each wanders along a path of its own (seeded by ``seed`` and this).
@@ -162,6 +164,8 @@ class Sequencer:
         if verb in ("run", "step"):
             self.readings.clear()  # the cycle runs: every signal may change
             self.carried.clear()
+        if verb == "step":
+            self.t_stale = True  # the time moved on by the cycles stepped
         self.pending.append(self.r.send(verb, **args))
 
     def prefetch(self, *signals: str) -> None:
@@ -184,12 +188,25 @@ class Sequencer:
                 raise r
         return results
 
+    async def now(self) -> float:
+        """The simulated time now (``t``, asked of the robot when cycles were stepped since)."""
+        if self.t_stale:
+            stats = self.r.send("stats")
+            self.pending.append(stats)
+            await self.flush()
+            self.t = float((await stats)["time_s"])
+            self.t_stale = False
+        return self.t
+
     async def wait(self, *conditions: str, within: float | None = None) -> int:
         """Runs the cycle until one of ``conditions`` holds; returns its index.
 
-        With ``within`` (simulated seconds), returns ``len(conditions)`` when that time passed
-        first. The cycle is paused at the cycle the condition held.
+        With ``within`` (simulated seconds from now), returns ``len(conditions)`` when that
+        time passed first. The cycle is paused at the cycle the condition held.
         """
+        # From the time now: after stepping (a look at a wall for 6 s, say) a deadline
+        # from the last pause's time could be over before the wait began.
+        await self.now()
         deadline = min(self.t + within, self.limit_s) if within is not None else self.limit_s
         # The deadline exactly (repr: the shortest text that reads back as the same float).
         watched = [*conditions, f"time >= {deadline!r}"]
@@ -310,7 +327,7 @@ class Sequencer:
                         f"   (truth: floor {p['floor']} x {p['x']:.2f} y {p['y']:.2f}"
                         f" heading {math.degrees(p['theta']):.0f}°)"
                     )
-        print(f"[{self.t:7.1f} s] {text}{extra}", flush=True)
+        print(f"[{await self.now():7.1f} s] {text}{extra}", flush=True)
 
     async def phase(self, number: int, text: str) -> None:
         """The progress line of phase ``number`` of the narrative."""
