@@ -47,6 +47,8 @@ WALL_STAYS_S = 6.0
 FOLLOW_SLICE_S = 20.0
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
+#: Where only one side's wall is seen, the robot keeps at least this far from it, m.
+SIDE_CLEAR_M = 0.8
 #: A junction a route's `distance` leads to lies within this of where looking began, m.
 PROBE_LOOK_M = 6.0
 #: Where it is probed for, along the corridor from there, m.
@@ -990,11 +992,57 @@ class Sequencer:
                 return False
             restarts += 1
             await self.say(f"    {made:.1f} of {metres:.1f} m made, no more: from the start again")
+            if self.debug:
+                self.prefetch("drive", "odom", "sonar.range")
+                drive = await self.value("drive")
+                ranges = [round(r, 2) for r in await self.sonar()]
+                await self.say(f"      drive {drive} pose {o} sonar {ranges}")
             await self.goto(start.x, start.y, within=40)
             await self.turn(wrap(heading - (await self.odom()).theta))
+            await self.recentre(heading)
             await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
             best = 0.0
         return False
+
+    async def recentre(self, heading: float) -> None:
+        """Facing ``heading`` along a corridor: sideways to its middle, then facing it again.
+
+        A robot that stopped just out of a door (something ahead) stands with a jamb at its
+        side, where avoidance turns it away as often as following turns it back: it makes
+        no way. Each side's wall is the nearest perpendicular distance the sonars from 30°
+        to 150° to that side see (a doorway's jambs are on the wall's line; clutter counts,
+        it narrows the way); with walls on both sides within a corridor's width, it moves to
+        midway between them, else to at least `SIDE_CLEAR_M` from the one it sees.
+        """
+        ranges = await self.sonar()
+
+        def wall(sign: float) -> float:
+            return min(
+                ranges[i] * abs(math.sin(bearing_of(i)))
+                for i in range(SONARS)
+                if math.radians(30) <= sign * bearing_of(i) <= math.radians(150)
+            )
+
+        left, right = wall(1.0), wall(-1.0)
+        if self.debug:
+            await self.say(f"      walls: left {left:.2f}, right {right:.2f}")
+        if max(left, right) < 2.6:
+            shift = (left - right) / 2  # positive: to the left
+        elif min(left, right) < SIDE_CLEAR_M:
+            shift = (SIDE_CLEAR_M - min(left, right)) * (1.0 if left > right else -1.0)
+        else:
+            return
+        if abs(shift) < 0.15:
+            return
+        o = await self.odom()
+        x = o.x - shift * math.sin(heading)
+        y = o.y + shift * math.cos(heading)
+        await self.set("runaway", "safe_distance", 0.12)
+        try:
+            await self.goto(x, y, within=15)
+            await self.turn(wrap(heading - (await self.odom()).theta))
+        finally:
+            await self.restore("runaway", "safe_distance")
 
     async def run_route(
         self,
