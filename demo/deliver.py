@@ -81,6 +81,7 @@ NORMAL = {
     ("fit_wall", "half_angle_deg"): 80.0,
     ("locate_door", "wall_distance"): 0.0,
     ("locate_door", "wall_normal_deg"): 0.0,
+    ("locate_door", "max_width"): 1.8,
 }
 
 #: Time to get out of the lab before giving up, s.

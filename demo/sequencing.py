@@ -47,6 +47,9 @@ WALL_STAYS_S = 6.0
 FOLLOW_SLICE_S = 20.0
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
+#: Turned into a junction, the robot moves in line with the side corridor's mouth when
+#: farther than this off its middle, m.
+MOUTH_OFF_M = 0.35
 #: Where only one side's wall is seen, the robot keeps at least this far from it, m.
 SIDE_CLEAR_M = 0.8
 #: A junction a route's `distance` leads to lies within this of where looking began, m.
@@ -968,8 +971,9 @@ class Sequencer:
         The way is the route's heading, not any straight line from here: pushed out of a
         corridor's mouth into the crossing corridor (going round someone), the robot would go
         on along the wrong one, pressing towards its way. Making less than 0.5 m of way in
-        ``FOLLOW_SLICE_S``, it goes back to where the step began, faces the way and starts
-        again (twice at most).
+        ``FOLLOW_SLICE_S``, it goes back to where the step began, faces the way, moves to the
+        corridor's middle (`recentre`) and starts again (twice at most), each time with the
+        whole time budget.
         """
         start = await self.odom()
         heading = start.theta if self.corridor_heading is None else self.corridor_heading
@@ -1002,7 +1006,43 @@ class Sequencer:
             await self.recentre(heading)
             await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
             best = 0.0
+            # A whole budget again: the time spent waiting for people who kept the way
+            # (a busy corridor to a lobby) is no sign the way is wrong.
+            deadline = await self.now() + 60 + 10 * metres
         return False
+
+    async def into_mouth(self, heading: float) -> None:
+        """Turned towards a side corridor at a junction: in line with its mouth, facing it.
+
+        The junction's centre is an estimate (someone in the mouth, clutter by it): turned
+        a few tenths off it, the robot faces the corner with the mouth beside it, and a
+        corner is what neither following nor avoidance gets round. The mouth is an opening
+        in the near wall's line ahead (`std.locate_door`, as wide as a side corridor may
+        be; at least 1 m of it seen); off its middle by more than `MOUTH_OFF_M`, the robot
+        moves sideways to it.
+        """
+        await self.set("locate_door", "max_width", 3.0)
+        try:
+            fix = await self.clue("locate_door", "opening")
+        finally:
+            await self.restore("locate_door", "max_width")
+        if self.debug:
+            await self.say(f"      mouth {fix}")
+        if fix is None or float(fix["width"]) < 1.0 or float(fix["wall"]) > 2.0:
+            return
+        lateral = float(fix["y"])
+        if abs(lateral) < MOUTH_OFF_M or abs(float(fix["normal"])) > math.radians(25):
+            return
+        await self.say(f"    {abs(lateral):.1f} m off the side corridor's mouth: in line with it")
+        o = await self.odom()
+        x = o.x - lateral * math.sin(heading)
+        y = o.y + lateral * math.cos(heading)
+        await self.set("runaway", "safe_distance", 0.12)
+        try:
+            await self.goto(x, y, within=15)
+            await self.turn(wrap(heading - (await self.odom()).theta))
+        finally:
+            await self.restore("runaway", "safe_distance")
 
     async def recentre(self, heading: float) -> None:
         """Facing ``heading`` along a corridor: sideways to its middle, then facing it again.
@@ -1119,5 +1159,7 @@ class Sequencer:
                 goal = (here if self.corridor_heading is None else self.corridor_heading) + angle
                 ok = await self.turn(wrap(goal - here))
                 self.corridor_heading = goal
+                if ok and step.get("until") == "junction" and angle != math.pi:
+                    await self.into_mouth(goal)
             if not ok:
                 raise PhaseFailed(f"route {leg}, step {n + 1} ({text}) failed")

@@ -139,6 +139,8 @@ GENERATED_REGRESSIONS = [
     (20000, [*HARD, "8"]),  # a car left of the button, open 10-15 s, missed on every call
     (20049, [*HARD, "9"]),  # the turn after a 12 s look at the wall timed out before it began
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
+    (20035, [*HARD, "19"]),  # turned at a side corridor's near corner, not its mouth
+    (20148, [*HARD, "12"]),  # out of time while people kept the way to the lobby busy
 ]
 
 
