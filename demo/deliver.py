@@ -154,6 +154,7 @@ class Delivery(Sequencer):
                 await self.say("    not found")
                 continue
             await self.phase(2, f"homing on the lab door's barcode {m.lab_door_barcode}")
+            self.wall_fix = None
             # Homing with avoidance; failing that, straight at the barcode and square in front
             # of it (fitting the wall): near the wall avoidance can slide the robot along it,
             # where a barcode beside the door is seen too obliquely to read.
@@ -180,8 +181,13 @@ class Delivery(Sequencer):
                 if not await self.line_up(m.lab_door_barcode, stop):
                     await self.say("    the barcode was lost (or the way blocked): looking again")
                     continue
+            else:
+                # The barcode's wall, as line_up places it: the door is then looked for in
+                # that wall, not in a line through the lab's clutter, and passing it is
+                # checked against it (beyond its line).
+                self.wall_fix = await self.barcode_wall(m.lab_door_barcode)
             await self.phase(3, "looking for the door opening and passing the lab door")
-            if await self.pass_door(m.lab_door_barcode, None):
+            if await self.pass_door(m.lab_door_barcode, None) and await self.beyond_wall():
                 return
             await self.say("    could not pass the door: looking again")
             await self.escape(5)

@@ -479,13 +479,30 @@ class Sequencer:
                 return False
         finally:
             await self.restore("runaway", "safe_distance")
+        fix = await self.barcode_wall(barcode)
+        if fix is None:
+            return False
+        self.wall_fix = fix
+        px, py, normal = fix
+        gx, gy = px - standoff * math.cos(normal), py - standoff * math.sin(normal)
+        if not await self.goto(gx, gy, within=30):
+            return False
+        return await self.turn(wrap(normal - (await self.odom()).theta))
+
+    async def barcode_wall(self, barcode: int) -> tuple[float, float, float] | None:
+        """Where ``barcode`` (in view) is and the wall it is on, as the robot stands.
+
+        The barcode's place and its wall's normal (towards the wall), in the odometry
+        frame: the wall fitted through it (`std.fit_wall` looking towards it), or, failing
+        that, the corridor's wall it lies on. None if it is out of view or no wall is found.
+        """
         # Standing still (the base may still be turning when homing ends): the barcode's place.
         await self.use("track_barcode")
         await self.wait("abs(odom.v) < 0.02 && abs(odom.w) < 0.02", within=3)
         self.prefetch("target", "odom")
         t = await self.value("target")
         if not t["seen"]:
-            return False
+            return None
         o = await self.odom()
         bearing, distance = float(t["bearing"]), float(t["distance"])
         px = o.x + distance * math.cos(o.theta + bearing)
@@ -526,12 +543,8 @@ class Sequencer:
                 normal = await self.corridor_wall_at(barcode, px, py, axis, fitted=normal)
         if normal is None:
             await self.say(f"    no wall through barcode {barcode} in sight")
-            return False
-        self.wall_fix = (px, py, normal)
-        gx, gy = px - standoff * math.cos(normal), py - standoff * math.sin(normal)
-        if not await self.goto(gx, gy, within=30):
-            return False
-        return await self.turn(wrap(normal - (await self.odom()).theta))
+            return None
+        return px, py, normal
 
     async def corridor_wall_at(
         self, barcode: int, px: float, py: float, axis: float, *, fitted: float | None
