@@ -864,8 +864,7 @@ class Sequencer:
         if until == "barcode":
             code = int(step["barcode"])
             await self.set("track_barcode", "id", code)
-            await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
-            return await self.wait(f"target.seen && target.id == {code}", within=180) == 0
+            return await self.follow_until(f"target.seen && target.id == {code}", 180)
         if until == "wall":
             # Up to the wall ahead: about the middle of the corridor it ends in (corridors are
             # 1.8 to 2.6 m wide), before avoidance would start turning away from it.
@@ -944,6 +943,35 @@ class Sequencer:
                     o.x + forward * math.cos(along), o.y + forward * math.sin(along), within=10
                 )
         return True
+
+    async def follow_until(self, condition: str, within: float) -> bool:
+        """Follows the hallway (barcode tracking on) until ``condition`` holds.
+
+        Making less than 0.5 m of way along the route's heading in ``FOLLOW_SLICE_S``
+        (pushed into a doorway by someone coming the other way, with a jamb beside it), the
+        robot faces the way, moves to the corridor's middle (`recentre`) and goes on.
+        """
+        o = await self.odom()
+        heading = o.theta if self.corridor_heading is None else self.corridor_heading
+        c, s = math.cos(heading), math.sin(heading)
+        deadline = await self.now() + within
+        await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
+        best = 0.0
+        while self.t < deadline:
+            slice_s = min(FOLLOW_SLICE_S, deadline - self.t)
+            if await self.wait(condition, within=slice_s) == 0:
+                return True
+            here = await self.odom()
+            made = (here.x - o.x) * c + (here.y - o.y) * s
+            if made > best + 0.5:
+                best = made
+                continue
+            await self.say(f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle")
+            await self.turn(wrap(heading - here.theta))
+            await self.recentre(heading)
+            await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
+            best = made
+        return False
 
     async def probe_junction(self, look_from: Pose, side: str) -> bool:
         """The junction on ``side`` the detector missed, probed where a route says it is.

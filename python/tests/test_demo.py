@@ -141,6 +141,7 @@ GENERATED_REGRESSIONS = [
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
     (20035, [*HARD, "19"]),  # turned at a side corridor's near corner, not its mouth
     (20148, [*HARD, "12"]),  # out of time while people kept the way to the lobby busy
+    (20186, [*HARD, "2"]),  # pushed into a doorway looking for the office's barcode, for good
 ]
 
 
