@@ -482,12 +482,41 @@ class Sequencer:
         fix = await self.barcode_wall(barcode)
         if fix is None:
             return False
-        self.wall_fix = fix
         px, py, normal = fix
-        gx, gy = px - standoff * math.cos(normal), py - standoff * math.sin(normal)
-        if not await self.goto(gx, gy, within=30):
-            return False
-        return await self.turn(wrap(normal - (await self.odom()).theta))
+        # The wall is checked where the robot ends up: facing it, the barcode must be in
+        # view straight ahead (a barcode is read only from within 80° of the way it faces).
+        # A line fitted through people or clutter across the way, taken for the wall, puts
+        # the robot beside the barcode, where it is not read: then the next likeliest wall
+        # (square to the first, on the side the barcode was read from) is tried.
+        o = await self.odom()
+        towards = math.atan2(py - o.y, px - o.x)
+        others = [normal + k * math.pi / 2 for k in (1, -1)]
+        others = [n for n in others if abs(wrap(n - towards)) < math.radians(80)]
+        others.sort(key=lambda n: abs(wrap(n - towards)))
+        for n in [normal, *others][:2]:
+            gx, gy = px - standoff * math.cos(n), py - standoff * math.sin(n)
+            if not await self.goto(gx, gy, within=30):
+                return False
+            if not await self.turn(wrap(n - (await self.odom()).theta)):
+                return False
+            if await self.barcode_ahead(barcode, standoff):
+                self.wall_fix = (px, py, wrap(n))
+                return True
+            await self.say(f"    barcode {barcode} not straight ahead: lining up with another wall")
+        return False
+
+    async def barcode_ahead(self, barcode: int, distance: float) -> bool:
+        """Whether ``barcode`` is in view about straight ahead, about ``distance`` m away."""
+        await self.set("track_barcode", "id", barcode)
+        await self.use("track_barcode")
+        self.send("step", cycles=3)
+        t = await self.value("target")
+        return bool(
+            t["seen"]
+            and int(t["id"]) == barcode
+            and abs(float(t["bearing"])) < 0.35
+            and abs(float(t["distance"]) - distance) < 0.45
+        )
 
     async def barcode_wall(self, barcode: int) -> tuple[float, float, float] | None:
         """Where ``barcode`` (in view) is and the wall it is on, as the robot stands.
