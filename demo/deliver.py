@@ -89,6 +89,8 @@ LAB_BUDGET_S = 900.0
 #: From where the button was pushed (0.45 m from it), back this far to patrol the lobby: about
 #: the middle of a car door on a wall next to the button's (docs/maps.md, "Lobby"), m.
 PATROL_BACK_M = 0.85
+#: A way that opened in the lobby is a car's door only this near a wall known so far, m.
+OPENED_ON_WALL_M = 0.4
 
 
 @dataclass
@@ -276,27 +278,44 @@ class Delivery(Sequencer):
             return False
         await self.set("identify_car", "first_id", m.car_barcode_first)
         await self.set("identify_car", "cars", m.cars)
+        # The lobby's walls known so far (a point and the normal towards the wall, odometry
+        # frame): the button's (the robot stood 0.45 m in front of the button facing it),
+        # then each end wall the patrol turns back at. A way opening elsewhere is someone
+        # who stood still and walked off, not a car's door (cars are on the lobby's walls).
+        walls: list[tuple[float, float, float]] = []
+        if b is not None:
+            walls.append((b.x + 0.45 * math.cos(b.theta), b.y + 0.45 * math.sin(b.theta), b.theta))
         deadline = self.t + 60
         while self.t < deadline:
             # A door opening beside the robot (either wall: cars may be on any), or a car's
             # panel barcode in view ahead through its open door.
+            # Any door that opens within the sonars' reach, face-on (behind the robot just
+            # turned back at an end, or across the lobby), is seen at once too
+            # (`std.watch_openings`), not only when the patrol passes it.
             await self.use(
                 "runaway",
                 "follow_hallway",
                 "detect_door",
+                "watch_openings",
                 "identify_car",
-                restart=["detect_door", "identify_car"],
+                restart=["detect_door", "watch_openings", "identify_car"],
             )
             got = await self.wait(
                 "door.left || door.right",
                 "car > 0",
                 "sonar.range[0] < 0.75 && abs(odom.v) < 0.03",
+                "opened.seen",
                 within=deadline - self.t,
             )
-            if got == 3:
+            if got == 4:
                 break
             if got == 2:
                 await self.say("    end of the lobby: turning back")
+                o = await self.odom()
+                ahead = (await self.sonar())[0]
+                walls.append(
+                    (o.x + ahead * math.cos(o.theta), o.y + ahead * math.sin(o.theta), o.theta)
+                )
                 if not await self.turn(math.pi, keep=["runaway"]):
                     return False
                 continue
@@ -306,6 +325,22 @@ class Delivery(Sequencer):
                 await self.use("runaway", "track_barcode")
                 self.send("step", cycles=1)
                 bearing = float((await self.value("target"))["bearing"])
+            elif got == 3:
+                self.prefetch("opened", "odom")  # the turn reads the odometry
+                opened = await self.value("opened")
+                bearing = float(opened["bearing"])
+                o = await self.odom()
+                at = o.theta + bearing
+                px = o.x + float(opened["before"]) * math.cos(at)
+                py = o.y + float(opened["before"]) * math.sin(at)
+                on_wall = any(
+                    abs((px - wx) * math.cos(wn) + (py - wy) * math.sin(wn)) < OPENED_ON_WALL_M
+                    for wx, wy, wn in walls
+                )
+                if self.debug:
+                    await self.say(f"      opened {opened}, on a known wall: {on_wall}")
+                if not on_wall:
+                    continue  # the watch starts afresh with the patrol
             else:
                 self.prefetch("door", "odom")  # the turn reads the odometry
                 bearing = float((await self.value("door"))["bearing"])

@@ -131,6 +131,7 @@ GENERATED_REGRESSIONS = [
     (20025, []),  # a car on the lobby's end wall was never seen open by the patrol
     (20000, []),  # the route began facing along the corridor, not out of the lab door
     (20038, []),  # a door found in a line through the lab's clutter: "passed", still inside
+    (20013, []),  # a car on an end wall opened just after the patrol turned back there
     (20170, []),  # a junction the detector missed: followed to the corridor's end
     # The hard set: people, doors closing, a dead sonar (HARD + its index).
     (20011, [*HARD, "11"]),  # the office door found in a line 36° off its wall, into the jamb
@@ -141,7 +142,6 @@ GENERATED_REGRESSIONS = [
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
     (20035, [*HARD, "19"]),  # turned at a side corridor's near corner, not its mouth
     (20148, [*HARD, "12"]),  # out of time while people kept the way to the lobby busy
-    (20186, [*HARD, "2"]),  # pushed into a doorway looking for the office's barcode, for good
 ]
 
 

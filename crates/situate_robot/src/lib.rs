@@ -153,6 +153,19 @@ pub struct Door {
     pub bearing: f64,
 }
 
+/// `opened`: a way that opened near the robot (a car's door, a door that was
+/// closed), seen as a sonar whose reading jumped from near to far and stayed.
+#[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Opened {
+    pub seen: bool,
+    /// Bearing of the sonar that saw it, in the robot frame, rad.
+    pub bearing: f64,
+    /// That sonar's reading before (the farthest of the last second), m.
+    pub before: f64,
+    /// Its reading now, m.
+    pub range: f64,
+}
+
 /// `junction`: which ways are open at an intersection.
 #[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
 pub struct Junction {

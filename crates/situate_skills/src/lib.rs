@@ -21,6 +21,7 @@
 //! | `std.follow_hallway` | `sonar.range` | `drive` (every cycle) |
 //! | `std.detect_door` | `sonar.range` | `door` (every cycle) |
 //! | `std.detect_intersection` | `sonar.range` | `junction` (every cycle) |
+//! | `std.watch_openings` | `sonar.range`, `odom` (optional) | `opened` (every cycle) |
 //! | `std.sonar_filter` | `sonar.raw`, `odom` (optional) | `sonar.range`, `sonar.health` (every cycle) |
 //! | `std.fit_wall` | `sonar.range` | `wall` (every cycle) |
 //! | `std.locate_door` | `sonar.range` | `opening` (every cycle) |
@@ -54,7 +55,7 @@ use situate::manager::Registry;
 pub use actions::{PushButton, Say};
 pub use health::SonarFilter;
 pub use motion::{Avoid, EnterCar, FollowHallway, Home, HomePosition, LeaveCar, PassDoor, Runaway, Turn, Wander};
-pub use perception::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
+pub use perception::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode, WatchOpenings};
 pub use scan::{door_in_wall, fit_wall, locate_door, FitWall, LocateDoor, ScanModel};
 
 /// Adds every standard skill type to `registry`.
@@ -65,6 +66,7 @@ pub fn register(registry: &mut Registry) {
         .register::<Wander>()
         .register::<FollowHallway>()
         .register::<DetectDoor>()
+        .register::<WatchOpenings>()
         .register::<DetectIntersection>()
         .register::<FitWall>()
         .register::<SonarFilter>()

@@ -1,8 +1,8 @@
 //! Skills that turn sensor readings into the signals the sequencer waits on:
-//! `door`, `junction`, `target`, `car`.
+//! `door`, `junction`, `target`, `car`, `opened`.
 
 use situate::prelude::*;
-use situate_robot::{sonar_bearing, Barcodes, Door, Junction, Odom, Target, SONARS};
+use situate_robot::{sonar_bearing, Barcodes, Door, Junction, Odom, Opened, Target, SONARS};
 
 use crate::util::{centre_range, side_wall, Activation, Hysteresis, LEFT, RIGHT, ROBOT_RADIUS};
 
@@ -569,6 +569,113 @@ impl Body for IdentifyCar {
                     self.car = 0;
                 }
             }
+        }
+        Ok(())
+    }
+}
+
+/// Scans kept by [`WatchOpenings`]: one second at the demo's 10 Hz.
+const WATCHED_SCANS: usize = 10;
+
+/// Watches for a way opening near the robot, in any direction: a sonar whose
+/// reading was near and steady (under `near`, within `steady` of itself, for
+/// the whole of the last second: a wall or a closed door) jumps to
+/// at least `jump` beyond the farthest it read then (plus, for a sonar
+/// looking back, the way the robot travelled meanwhile), and stays there for
+/// `confirm` cycles. A car's door
+/// opening on any lobby wall within the sonars' reach is seen at once, not
+/// only when the robot passes it; someone walking out of a sonar's view is
+/// not (their readings were not steady, or the wall behind them was read
+/// within the second), and turning in place (faster than `max_turn`) starts the
+/// watch afresh, since every reading then changes. `opened` is the sonar
+/// that jumped farthest; written every run.
+#[derive(Skill, Default)]
+#[skill(name = "std.watch_openings")]
+pub struct WatchOpenings {
+    /// Sonar ranges, m.
+    #[input(signal = "sonar.range")]
+    sonar: [f32; SONARS],
+    /// Odometry (the way travelled, the turn rate); without it the robot is taken to stand.
+    #[input]
+    odom: Option<Odom>,
+    /// The way that opened, written every run.
+    #[output]
+    opened: Opened,
+    /// How much farther than before a reading must be, m.
+    #[param(default = 0.8, min = 0.2, max = 5.0, unit = "m")]
+    jump: f64,
+    /// A reading before must have been nearer than this, m.
+    #[param(default = 3.2, min = 0.3, max = 10.0, unit = "m")]
+    near: f64,
+    /// The readings before may spread over at most this (a wall, not someone moving), m.
+    #[param(default = 0.15, min = 0.0, max = 5.0, unit = "m")]
+    steady: f64,
+    /// Cycles the farther reading must last.
+    #[param(default = 2, min = 1, max = 20)]
+    confirm: i64,
+    /// Turning faster than this starts the watch afresh, rad/s.
+    #[param(default = 0.3, min = 0.0, max = 10.0, unit = "rad/s")]
+    max_turn: f64,
+    activation: Activation,
+    /// The last scans (oldest first once full) and the odometry path length at each.
+    scans: Vec<([f32; SONARS], f64)>,
+    path: f64,
+    last_xy: Option<(f64, f64)>,
+    held: [i64; SONARS],
+}
+
+impl Body for WatchOpenings {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let turning = self.odom.is_some_and(|o| o.w.abs() > self.max_turn);
+        if self.activation.fresh(cx.cycle()) || turning {
+            self.scans.clear();
+            self.held = [0; SONARS];
+        }
+        if let Some(o) = self.odom {
+            if let Some((x, y)) = self.last_xy {
+                self.path += (o.x - x).hypot(o.y - y);
+            }
+            self.last_xy = Some((o.x, o.y));
+        }
+        let mut best: Option<(usize, f64, f64, f64)> = None; // sonar, margin, before, now
+        if self.scans.len() == WATCHED_SCANS {
+            let travelled = self.path - self.scans[0].1;
+            for i in 0..SONARS {
+                let before = self.scans.iter().map(|(s, _)| centre_range(s, i)).fold(0.0_f64, f64::max);
+                let least = self.scans.iter().map(|(s, _)| centre_range(s, i)).fold(f64::INFINITY, f64::min);
+                let now = centre_range(&self.sonar, i);
+                // Driving on, a wall behind this sonar reads farther by the way made.
+                let grow = travelled * (-sonar_bearing(i).cos()).max(0.0);
+                // A wall (a closed door) read steadily before: not someone walking by.
+                let steady = before - least < self.steady + grow;
+                let far = steady && before < self.near && now.is_finite() && now > before + self.jump + grow;
+                self.held[i] = if far { self.held[i] + 1 } else { 0 };
+                let margin = now - before;
+                if self.held[i] >= self.confirm && best.is_none_or(|b| margin > b.1) {
+                    best = Some((i, margin, before, now));
+                }
+            }
+        }
+        // The scan joins the history only while it shows nothing opened: the reading before
+        // stays the near one for as long as the opening is reported.
+        if best.is_none() && self.held.iter().all(|&h| h == 0) {
+            if self.scans.len() == WATCHED_SCANS {
+                self.scans.remove(0);
+            }
+            self.scans.push((self.sonar, self.path));
+        }
+        self.opened = match best {
+            Some((i, _, before, now)) => Opened { seen: true, bearing: sonar_bearing(i), before, range: now },
+            None => Opened { seen: false, ..self.opened },
+        };
+        if self.opened.seen {
+            sprint!(
+                cx,
+                "opened: bearing {:.0}° from {:.2} to {:.2} m",
+                self.opened.bearing.to_degrees(),
+                self.opened.before,
+                self.opened.range
+            );
         }
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! Door and intersection detection, barcode tracking, car identification.
 
-use situate_robot::{Barcodes, Door, Junction, Odom, Target, SONARS};
-use situate_skills::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode};
+use situate_robot::{Barcodes, Door, Junction, Odom, Opened, Target, SONARS};
+use situate_skills::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode, WatchOpenings};
 use std::sync::Arc;
 
 use crate::harness::{val, Harness};
@@ -355,5 +355,108 @@ fn with_odometry_a_robot_turned_off_its_way_sees_no_junction() {
             assert!(!j.left && !j.right, "seed {seed}: a junction at x {x:.2}: {j:?}");
             x += 0.04;
         }
+    }
+}
+
+/// A lobby 6 m wide (x 0..6), its wall at y = 0 with a car's door at
+/// x `door`..`door` + 1.1 (the car 2 m deep behind it), the door closed (a
+/// wall across it) when `closed`; the lobby's far wall at y = 4.
+fn lobby(door: f64, closed: bool) -> Scene {
+    let s = Scene::new()
+        .wall(0.0, 0.0, door, 0.0)
+        .wall(door + 1.1, 0.0, 6.0, 0.0)
+        .wall(0.0, 0.0, 0.0, 4.0)
+        .wall(6.0, 0.0, 6.0, 4.0)
+        .wall(0.0, 4.0, 6.0, 4.0)
+        .wall(door, 0.0, door, -2.0)
+        .wall(door + 1.1, 0.0, door + 1.1, -2.0)
+        .wall(door, -2.0, door + 1.1, -2.0);
+    if closed {
+        s.wall(door, 0.0, door + 1.1, 0.0)
+    } else {
+        s
+    }
+}
+
+/// Runs `WatchOpenings` over `poses` (a pose and whether the door is open, per
+/// cycle); returns the first cycle and output with `opened.seen`.
+fn watch(door: f64, poses: &[(Pose, bool)], seed: u64) -> Option<(usize, Opened)> {
+    let mut h = Harness::new::<WatchOpenings>();
+    let mut noise = Noise::new(seed, 0.02, 0.0);
+    let mut last: Option<Pose> = None;
+    for (k, (p, open)) in poses.iter().enumerate() {
+        let r = noise.apply(lobby(door, !open).sonar(*p));
+        let w = last.map_or(0.0, |l| (p.theta - l.theta) / 0.1);
+        let odom = Odom { x: p.x, y: p.y, theta: p.theta, v: 0.0, w };
+        last = Some(*p);
+        let out = h.run(&[("sonar", val::<[f32; SONARS]>(r)), ("odom", val(odom))]);
+        let o = out.get::<Opened>("opened").expect("written every run");
+        if o.seen {
+            return Some((k, o));
+        }
+    }
+    None
+}
+
+#[test]
+fn a_car_door_opening_anywhere_near_is_seen_at_once_and_a_closed_one_never() {
+    // The door beside the robot (0.85 m off the car's wall), ahead of it across the
+    // lobby (3 m, or 1.5 m and 0.5 m to one side), or behind it (turned back at the
+    // end of the patrol): standing, or patrolling along the wall at 0.8 m/s. A door
+    // seen obliquely (45° or more off face-on) is out of reach: the car's side walls
+    // are then near behind it and the reading grows too little.
+    let pi = std::f64::consts::PI;
+    for (seed, door, x, y, v, heading) in [
+        (1u64, 2.5, 3.0, 0.85, 0.0, 0.0),
+        (2, 2.5, 3.55, 1.5, 0.0, -pi / 2.0),
+        (3, 2.5, 3.05, 0.75, 0.0, pi / 2.0),
+        (4, 2.5, 3.05, 3.0, 0.0, -pi / 2.0),
+        (5, 2.5, 1.6, 0.85, 0.08, 0.0),
+        (6, 4.2, 5.9, 0.85, -0.08, pi),
+    ] {
+        let at = |k: usize| Pose::new(x + v * k as f64, y, heading);
+        let closed: Vec<(Pose, bool)> = (0..30).map(|k| (at(k), false)).collect();
+        assert!(watch(door, &closed, seed).is_none(), "seed {seed}: an opening seen with the door closed");
+        let opening: Vec<(Pose, bool)> = (0..30).map(|k| (at(k), k >= 15)).collect();
+        let (k, o) = watch(door, &opening, seed).unwrap_or_else(|| panic!("seed {seed}: the door opened unseen"));
+        assert!((15..=17).contains(&k), "seed {seed}: seen at cycle {k}, the door opened at 15");
+        // The sonar that saw it looks through the door: the door's middle lies within 40° of it.
+        let p = at(k);
+        let to_door = (-p.y).atan2(door + 0.55 - p.x) - p.theta;
+        let off =
+            (to_door - o.bearing + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+        assert!(
+            off.abs() < 40f64.to_radians(),
+            "seed {seed}: bearing {:.0}°, the door at {:.0}°",
+            o.bearing.to_degrees(),
+            to_door.to_degrees()
+        );
+    }
+}
+
+#[test]
+fn turning_in_place_or_someone_walking_out_of_view_is_no_opening() {
+    // Turning in place by the closed door: every reading changes, none is an opening.
+    let turning: Vec<(Pose, bool)> = (0..40).map(|k| (Pose::new(3.0, 0.85, 0.08 * k as f64), false)).collect();
+    assert!(watch(2.5, &turning, 7).is_none(), "turning in place taken for an opening");
+    // Someone (a 0.4 m box) standing 1 m in front of the robot for half a second, then gone:
+    // the wall behind them was read within the second before.
+    let mut h = Harness::new::<WatchOpenings>();
+    let mut noise = Noise::new(8, 0.02, 0.0);
+    let p = Pose::new(3.0, 2.0, 0.0);
+    for k in 0..40 {
+        let mut scene = lobby(2.5, true);
+        if (20..25).contains(&k) {
+            scene = scene
+                .wall(3.8, 1.8, 3.8, 2.2)
+                .wall(3.8, 2.2, 4.2, 2.2)
+                .wall(4.2, 2.2, 4.2, 1.8)
+                .wall(4.2, 1.8, 3.8, 1.8);
+        }
+        let r = noise.apply(scene.sonar(p));
+        let odom = Odom { x: p.x, y: p.y, theta: p.theta, v: 0.0, w: 0.0 };
+        let out = h.run(&[("sonar", val::<[f32; SONARS]>(r)), ("odom", val(odom))]);
+        let o = out.get::<Opened>("opened").expect("written every run");
+        assert!(!o.seen, "cycle {k}: someone walking off taken for an opening: {o:?}");
     }
 }
