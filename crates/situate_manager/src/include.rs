@@ -47,13 +47,16 @@ pub struct SourceFile {
     pub included_at: Option<Pos>,
 }
 
+/// Looks an environment variable up: its value, `None` when unset.
+pub type EnvLookup<'a> = &'a dyn Fn(&str) -> Option<String>;
+
 /// How a robot file is read.
 #[derive(Clone, Copy, Default)]
 pub struct LoadOptions<'a> {
     /// When given, `${NAME}` in the file and in every file it includes is
     /// replaced from this lookup (see [`substitute_env`]); usually
     /// `std::env::var(name).ok()`.
-    pub env: Option<&'a dyn Fn(&str) -> Option<String>>,
+    pub env: Option<EnvLookup<'a>>,
 }
 
 type Entries = Vec<(Spanned<String>, Spanned<Node>)>;
