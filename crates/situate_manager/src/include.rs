@@ -383,3 +383,50 @@ pub fn substitute_env(source: &str, lookup: impl Fn(&str) -> Option<String>) -> 
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shown_paths_are_tidied_lexically() {
+        assert_eq!(tidy(Path::new("common/../lab.yaml")), "lab.yaml");
+        assert_eq!(tidy(Path::new("./a/./b.yaml")), "a/b.yaml");
+        assert_eq!(tidy(Path::new("../up.yaml")), "../up.yaml");
+        assert_eq!(tidy(Path::new("/r/x/../y.yaml")), "/r/y.yaml");
+    }
+
+    #[test]
+    fn substitution_counts_columns_in_characters() {
+        let env = |name: &str| (name == "A").then(|| "1".to_string());
+        assert_eq!(substitute_env("x: ${A}\n", env), Ok("x: 1\n".to_string()));
+        let e = substitute_env("é: ${B}\n", env).expect_err("B is unset");
+        assert_eq!((e.0, e.1), (1, 4));
+        assert_eq!(substitute_env("# ${B}\nx: $${B}\n", env), Ok("# ${B}\nx: ${B}\n".to_string()));
+    }
+
+    fn map(source: &str) -> Entries {
+        match yaml::parse(source).expect("YAML").value {
+            Node::Map(entries) => entries,
+            other => panic!("not a mapping: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn later_sections_replace_and_entries_merge_by_name() {
+        let base =
+            map("cycle: {rate_hz: 10, clock: simulated}\nskills:\n  - {name: a, type: t.a, params: {x: 1, y: 2}}\n");
+        let over = map("cycle: {rate_hz: 50}\nskills:\n  - {name: a, params: {y: 3}}\n  - {name: b, type: t.b}\n");
+        let merged = merge(base, over);
+        let root = Node::Map(merged);
+        let cycle = root.get("cycle").expect("cycle");
+        assert!(cycle.value.get("clock").is_none(), "replaced whole, not merged");
+        let skills = root.get("skills").and_then(|s| s.value.as_seq()).expect("skills");
+        assert_eq!(skills.len(), 2);
+        let a = &skills[0].value;
+        assert_eq!(a.get("type").and_then(|t| t.value.as_text()), Some("t.a"));
+        let params = a.get("params").expect("params");
+        assert_eq!(params.value.get("x").and_then(|v| v.value.as_i64()), Some(1));
+        assert_eq!(params.value.get("y").and_then(|v| v.value.as_i64()), Some(3));
+    }
+}
