@@ -1,6 +1,6 @@
 //! The client verbs of `situate`: drive a running robot over the link
 //! (`skills`, `activate`, `param`, `query`, `monitor`, `events`, `stats`,
-//! `cycle`) and look into it (`signals`, `graph`, `winners`, `monitors`,
+//! `cycle`; `echo` and `hz` in `telemetry`) and look into it (`signals`, `graph`, `winners`, `monitors`,
 //! `param dump|load`); `signals` and `graph` also read a robot file
 //! statically. Every failure is one sentence (`situate: …`) with its exit
 //! code: 4 when no robot answered, 5 when the robot refused the request.
@@ -116,6 +116,36 @@ pub(crate) enum ClientCommand {
     /// Print events as they come (one JSON object per line).
     Events {
         /// Stop after this many events.
+        #[arg(long)]
+        count: Option<u64>,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Print signals' values as the robot's telemetry brings them, one line per sample (`--json`:
+    /// one object per line), like `ros2 topic echo`: `echo sonar.range odom.x --count 10`.
+    Echo {
+        /// Signals (`sonar.range`) or whole records (`odom`).
+        #[arg(required = true)]
+        signals: Vec<String>,
+        /// Print at most this many lines a second (the robot's telemetry rate, `link.telemetry_hz`,
+        /// default 10, is the most there are).
+        #[arg(long, value_name = "HZ")]
+        rate: Option<f64>,
+        /// Stop after this many lines (default: until interrupted).
+        #[arg(long)]
+        count: Option<u64>,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// How often a signal is written, like `ros2 topic hz`: a report each window (of all seen
+    /// since the start).
+    #[command(alias = "rate")]
+    Hz {
+        signal: String,
+        /// Seconds between reports.
+        #[arg(long, default_value_t = 1.0, value_name = "S")]
+        window: f64,
+        /// Stop after this many reports (default: until interrupted).
         #[arg(long)]
         count: Option<u64>,
         #[command(flatten)]
@@ -267,6 +297,12 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             }
             Ok(())
         }),
+        ClientCommand::Echo { signals, rate, count, remote } => {
+            crate::telemetry::echo(&signals, rate, count, &remote, out)
+        }
+        ClientCommand::Hz { signal, window, count, remote } => {
+            crate::telemetry::hz(&signal, window, count, &remote, out)
+        }
         ClientCommand::Stats(remote) => client_verb(&remote, |c, robot| {
             let s = c.request(robot, "stats", &json!({}))?;
             out.result(&s, || {

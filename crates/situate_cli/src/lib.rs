@@ -11,7 +11,7 @@
 //!   introspection (`signals`, `graph`, `winners`, `monitors`, `param dump|load`);
 //! - `demo`: the delivery demo; `gen`: `types`, `gen` and `cmake-dir`; `map`: maps; `schema`:
 //!   the JSON Schemas of the file formats; `sim`: the simulated world;
-//!   `signals`: stopping on SIGINT/SIGTERM/SIGHUP.
+//!   `signals`: stopping on SIGINT/SIGTERM/SIGHUP; `telemetry`: `echo` and `hz`.
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -29,6 +29,7 @@ mod robot;
 mod schema;
 mod signals;
 mod sim;
+mod telemetry;
 
 use args::{Cli, Command, Global};
 pub use output::Exit;

@@ -1,5 +1,5 @@
-//! Robot files: loading one (with what composes it at launch: `${ENV}`
-//! substitution and `--set`), checking it, starting it, running it until it
+//! Robot files: loading one (with what composes it at launch: `include:`,
+//! `${ENV}` substitution and `--set`), checking it, starting it, running it until it
 //! is told to stop, and serving one skill type out of process.
 
 use std::path::{Path, PathBuf};
@@ -33,23 +33,13 @@ pub(crate) struct Loaded {
     pub(crate) remote: Vec<(String, situate_core::SkillDecl)>,
 }
 
-/// Reads a robot file (its `${NAME}`s replaced from the environment),
+/// Reads a robot file and those it includes (their `${NAME}`s replaced from the environment),
 /// applies `--set`, and checks its `link:` and remote skills. Every problem
 /// is a [`Problem`] of kind [`Exit::BadFile`] (or [`Exit::Usage`] for a bad `--set`).
 pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
-    let shown = path.display().to_string();
-    let source =
-        situate::manager::yaml::read_source(path, "robot file", situate::manager::config::MAX_ROBOT_FILE_BYTES)
-            .map_err(|e| {
-                let at = match e.pos() {
-                    Some(pos) => situate::manager::config::ConfigError::new(&shown, pos, e.to_string()),
-                    None => situate::manager::config::ConfigError::whole_file(&shown, e.to_string()),
-                };
-                bad_file(path, &[at])
-            })?;
-    let source = substitute_env(&source, |name| std::env::var(name).ok())
-        .map_err(|(line, col, message)| bad_file(path, &[format!("{shown}:{line}:{col}: error: {message}")]))?;
-    let mut robot_file = RobotFile::parse(&shown, &source).map_err(|errors| bad_file(path, &errors))?;
+    let env = |name: &str| std::env::var(name).ok();
+    let options = situate::manager::config::LoadOptions { env: Some(&env) };
+    let mut robot_file = RobotFile::load_with(path, options).map_err(|errors| bad_file(path, &errors))?;
     apply_sets(&mut robot_file, &compose.set)?;
     let link = match &robot_file.link {
         None => LinkConfig::default(),
@@ -93,65 +83,6 @@ pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
 /// A file's problems, each on its line, then the count.
 pub(crate) fn bad_file(path: &Path, errors: &[impl std::fmt::Display]) -> anyhow::Error {
     Problem::bad_file(path, errors.iter().map(ToString::to_string).collect()).into()
-}
-
-/// Replaces `${NAME}` with the environment's value of NAME, and
-/// `${NAME:-default}` with the default when NAME is unset or empty; `$${`
-/// stays a literal `${`. Comment lines (`#` first) are left alone. An unset
-/// NAME without a default is an error at its line and column (1-based).
-pub(crate) fn substitute_env(
-    source: &str,
-    lookup: impl Fn(&str) -> Option<String>,
-) -> Result<String, (usize, usize, String)> {
-    if !source.contains("${") {
-        return Ok(source.to_string());
-    }
-    let mut out = String::with_capacity(source.len());
-    for (n, line) in source.split_inclusive('\n').enumerate() {
-        if line.trim_start().starts_with('#') {
-            out.push_str(line);
-            continue;
-        }
-        let mut rest = line;
-        while let Some(at) = rest.find("${") {
-            if rest[..at].ends_with('$') {
-                out.push_str(&rest[..at - 1]);
-                out.push_str("${");
-                rest = &rest[at + 2..];
-                continue;
-            }
-            out.push_str(&rest[..at]);
-            let col = line.len() - rest.len() + at + 1;
-            let Some(end) = rest[at..].find('}') else {
-                return Err((n + 1, col, "`${` without its closing `}` (write `$${` for a literal `${`)".into()));
-            };
-            let inner = &rest[at + 2..at + end];
-            let (name, default) = match inner.split_once(":-") {
-                Some((name, default)) => (name, Some(default)),
-                None => (inner, None),
-            };
-            let valid = !name.is_empty()
-                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                && !name.starts_with(|c: char| c.is_ascii_digit());
-            if !valid {
-                return Err((n + 1, col, format!("`${{{inner}}}`: `{name}` is not an environment variable's name")));
-            }
-            match (lookup(name).filter(|v| !v.is_empty()), default) {
-                (Some(value), _) => out.push_str(&value),
-                (None, Some(default)) => out.push_str(default),
-                (None, None) => {
-                    return Err((
-                        n + 1,
-                        col,
-                        format!("`${{{name}}}`: the environment variable `{name}` is not set (give a default: `${{{name}:-value}}`)"),
-                    ))
-                }
-            }
-            rest = &rest[at + end + 1..];
-        }
-        out.push_str(rest);
-    }
-    Ok(out)
 }
 
 /// `--set SKILL.PARAM=VALUE`: the value (YAML: a scalar or a list of
@@ -237,7 +168,7 @@ pub(crate) fn registry_for(
     }
     let mut errors = Vec::new();
     for lib in &robot_file.libraries {
-        let path = robot_file.resolve(&lib.value);
+        let path = robot_file.resolve_at(lib.pos, &lib.value);
         match load_library(&path) {
             Ok(types) => {
                 for t in types {
@@ -248,7 +179,7 @@ pub(crate) fn registry_for(
         }
     }
     for py in &robot_file.python {
-        let path = robot_file.resolve(&py.value);
+        let path = robot_file.resolve_at(py.pos, &py.value);
         let result = match &ext.python {
             Some(loader) => loader(&path),
             None => Err(format!(

@@ -172,8 +172,11 @@ pub(crate) fn robot() -> Json {
                 "additionalProperties": {"type": "string", "pattern": DOTTED}
             }
         },
-        "oneOf": [{"required": ["type"]}, {"required": ["remote"]}]
+        // Either, not both; an entry that overrides an included one of its name may give neither
+        // (see the top level's `if`).
+        "not": {"required": ["type", "remote"]}
     });
+    let typed = json!({"type": "array", "items": {"anyOf": [{"required": ["type"]}, {"required": ["remote"]}]}});
     let endpoints = json!({"type": "array", "items": {"type": "string", "pattern": "^[a-z0-9]+/"},
                            "description": "Zenoh endpoints, e.g. tcp/127.0.0.1:7447."});
     json!({
@@ -183,9 +186,16 @@ pub(crate) fn robot() -> Json {
         "description": "A robot: its cycle, devices (dskills), skills (cskills) and link (docs/robot-files.md).",
         "type": "object",
         "additionalProperties": false,
-        "required": ["robot"],
+        // A file that includes others may take its name from them, and override their entries by
+        // name alone; one that includes nothing is a whole robot.
+        "if": {"required": ["include"]},
+        "else": {"required": ["robot"], "properties": {"devices": typed.clone(), "skills": typed}},
         "properties": {
             "robot": {"type": "string", "pattern": IDENT, "description": "The robot's name (its link keys are situate/<robot>/…)."},
+            "include": {
+                "description": "Robot files merged before this one, relative to this file: their devices and skills first (an entry of the same name here overrides theirs key by key), their other sections replaced by this file's.",
+                "anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]
+            },
             "cycle": {
                 "type": "object",
                 "additionalProperties": false,
@@ -364,8 +374,19 @@ mod tests {
         let s = robot();
         let mut top = keys(&s);
         top.sort_unstable();
-        let mut want =
-            vec!["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui", "ros2"];
+        let mut want = vec![
+            "robot",
+            "include",
+            "cycle",
+            "libraries",
+            "python",
+            "simulator",
+            "devices",
+            "skills",
+            "link",
+            "gui",
+            "ros2",
+        ];
         want.sort_unstable();
         assert_eq!(top, want);
         let mut entry = keys(&s["properties"]["skills"]["items"]);

@@ -76,7 +76,7 @@ pub(crate) fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<
                 match key.value.as_str() {
                     "map" => match value.value.as_text() {
                         Some(p) => {
-                            map_path = Some(robot_file.resolve(p));
+                            map_path = Some(robot_file.resolve_at(value.pos, p));
                             map_at = Some(value.pos);
                         }
                         None => errors.push(robot_file.error(value.pos, "`map` expects the path of a map file")),

@@ -226,3 +226,64 @@ fn a_map_file_over_its_cap_is_refused_by_its_size() {
         "{err}"
     );
 }
+
+#[test]
+fn check_reports_errors_of_an_included_file_with_its_own_path_and_line() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    std::fs::create_dir(dir.path().join("parts")).unwrap();
+    let base = dir.path().join("parts/base.yaml");
+    std::fs::write(
+        &base,
+        "skills:\n  - name: runaway\n    type: toy.runaway\n    params: {safe_distance: 0.5}\n  - name: wander\n    type: toy.wandr\n",
+    )
+    .unwrap();
+    let main = dir.path().join("robot.yaml");
+    std::fs::write(&main, "robot: inc\ninclude: [parts/base.yaml, parts/gone.yaml]\n").unwrap();
+    let out = check(&main);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    let d = dir.path().display();
+    assert_eq!(
+        err.lines().next(),
+        Some(
+            format!(
+                "{}:2:28: error: cannot read the included file `{d}/parts/gone.yaml`: no such file",
+                main.display()
+            )
+            .as_str()
+        ),
+        "{err}"
+    );
+    // Fixed, the manager's own check (an unknown type) names the included file too.
+    std::fs::write(&main, "robot: inc\ninclude: [parts/base.yaml]\n").unwrap();
+    let out = check(&main);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.starts_with(&format!("{d}/parts/base.yaml:6:11: error: skill `wander`: unknown skill type `toy.wandr`")),
+        "{err}"
+    );
+
+    // `${ENV}` in the included file and `--set` on an entry it defines.
+    std::fs::write(&base, "skills:\n  - name: wander\n    type: ${INC_WANDER_TYPE:-toy.wander}\n").unwrap();
+    std::fs::write(&main, "robot: inc\ninclude: [parts/base.yaml]\nskills:\n  - name: wander\n    priority: 3\n")
+        .unwrap();
+    let out = situate_in(
+        dir.path(),
+        [
+            OsStr::new("check"),
+            main.as_os_str(),
+            OsStr::new("--json"),
+            OsStr::new("--set"),
+            OsStr::new("wander.speed=0.4"),
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}{}", stdout(&out), stderr(&out));
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
+    assert_eq!(j["skills"], 1, "{j}");
+    let bad = situate_in(
+        dir.path(),
+        [OsStr::new("check"), main.as_os_str(), OsStr::new("--set"), OsStr::new("wander.nosuch=1")],
+    );
+    assert_eq!(bad.status.code(), Some(3), "{}", stderr(&bad));
+}

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use situate_core::names::suggestion;
 use situate_core::value::Value;
 
+pub use crate::include::{LoadOptions, SourceFile};
 use crate::yaml;
 pub use crate::yaml::{Node, Pos, Spanned};
 
@@ -38,7 +39,7 @@ const DEADLINE_RANGE: &str = "a number > 0 and ≤ 86400000 (a day)";
 pub const MAX_THREADS: usize = 64;
 
 const TOP_KEYS: &[&str] =
-    &["robot", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui", "ros2"];
+    &["robot", "include", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui", "ros2"];
 const CYCLE_KEYS: &[&str] = &["rate_hz", "period_ms", "clock", "executor", "threads", "budget_ms", "liveness_ms"];
 const ENTRY_KEYS: &[&str] = &[
     "name",
@@ -255,6 +256,9 @@ pub struct RobotFile {
     /// The raw `simulator:` section, if any (read by the program that runs
     /// a simulator).
     pub simulator: Option<Spanned<Node>>,
+    /// The files read: `[0]` is this file, then those it includes, in the
+    /// order read; a position's [`Pos::src`] indexes it.
+    pub sources: Vec<SourceFile>,
 }
 
 impl RobotFile {
@@ -299,7 +303,7 @@ impl RobotFile {
         type_name: &str,
         skill: &str,
     ) -> Result<situate_core::SkillDecl, Vec<ConfigError>> {
-        let resolved = self.resolve(path.trim());
+        let resolved = self.resolve_at(pos, path.trim());
         let shown = resolved.display().to_string();
         let in_manifest = |pos: Pos, msg: String| ConfigError::new(&shown, pos, format!("skill `{skill}`: {msg}"));
         let text = yaml::read_source(&resolved, "skill manifest", MAX_ROBOT_FILE_BYTES).map_err(|e| {
@@ -333,19 +337,22 @@ impl RobotFile {
     /// Parses and shape-checks a robot file; `file` names it in messages.
     /// Returns every error found, in file order.
     pub fn parse(file: &str, source: &str) -> Result<RobotFile, Vec<ConfigError>> {
-        let mut cx = Checker { file, errors: Vec::new(), entries: 0 };
-        let parsed = match yaml::parse(source) {
-            Ok(root) => cx.robot_file(root),
-            Err(e) => {
-                cx.push(e.pos, e.message);
-                None
-            }
-        };
+        RobotFile::parse_with(file, source, LoadOptions::default())
+    }
+
+    /// [`RobotFile::parse`], reading the files it includes (`include:`,
+    /// relative to `file`'s directory) and substituting `${NAME}`s as
+    /// `options` say. Errors come in file order: this file's, then each
+    /// included file's.
+    pub fn parse_with(file: &str, source: &str, options: LoadOptions<'_>) -> Result<RobotFile, Vec<ConfigError>> {
+        let (tree, composer) = crate::include::Composer::compose(file, source, options);
+        let mut cx = Checker { file, sources: composer.sources, errors: composer.errors, entries: 0 };
+        let parsed = tree.and_then(|root| cx.robot_file(root));
         match parsed {
             Some(robot) if cx.errors.is_empty() => Ok(robot),
             _ => {
-                cx.errors.sort_by_key(ConfigError::pos);
-                Err(cx.errors)
+                cx.errors.sort_by_key(|(pos, _)| *pos);
+                Err(cx.errors.into_iter().map(|(_, e)| e).collect())
             }
         }
     }
@@ -355,9 +362,14 @@ impl RobotFile {
     /// read, or is too large, is one error without a position; invalid
     /// UTF-8 one at its place.
     pub fn load(path: &Path) -> Result<RobotFile, Vec<ConfigError>> {
+        RobotFile::load_with(path, LoadOptions::default())
+    }
+
+    /// [`RobotFile::load`] with [`RobotFile::parse_with`]'s options.
+    pub fn load_with(path: &Path, options: LoadOptions<'_>) -> Result<RobotFile, Vec<ConfigError>> {
         let file = path.display().to_string();
         match yaml::read_source(path, "robot file", MAX_ROBOT_FILE_BYTES) {
-            Ok(source) => RobotFile::parse(&file, &source),
+            Ok(source) => RobotFile::parse_with(&file, &source, options),
             Err(e) => Err(vec![match e.pos() {
                 Some(pos) => ConfigError::new(&file, pos, e.to_string()),
                 None => ConfigError::whole_file(&file, e.to_string()),
@@ -374,9 +386,24 @@ impl RobotFile {
         self.dir.join(path)
     }
 
-    /// An error at `pos` in this file, for checks made after parsing.
+    /// A path written at `pos`, made absolute from the directory of the
+    /// file it is written in (this file or one it includes).
+    pub fn resolve_at(&self, pos: Pos, path: &str) -> PathBuf {
+        match self.sources.get(pos.src) {
+            Some(source) if pos.src > 0 => source.dir.join(path),
+            _ => self.resolve(path),
+        }
+    }
+
+    /// The file a position is in, as shown in messages.
+    pub fn file_of(&self, pos: Pos) -> &str {
+        self.sources.get(pos.src).map_or(&self.file, |s| &s.file)
+    }
+
+    /// An error at `pos` in this file (or the included file it is in), for
+    /// checks made after parsing.
     pub fn error(&self, pos: Pos, message: impl Into<String>) -> ConfigError {
-        ConfigError::new(&self.file, pos, message)
+        ConfigError::new(self.file_of(pos), pos, message)
     }
 
     /// The entries of one section, in file order.
@@ -387,7 +414,7 @@ impl RobotFile {
 
 /// The absolute directory of the robot file named `file` (relative to the
 /// current directory when `file` is).
-fn base_dir(file: &str) -> PathBuf {
+pub(crate) fn base_dir(file: &str) -> PathBuf {
     let file = Path::new(file);
     let dir = file.parent().unwrap_or(Path::new(""));
     let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
@@ -455,7 +482,10 @@ pub fn is_robot_name(s: &str) -> bool {
 /// Walks the node tree, collecting errors.
 struct Checker<'a> {
     file: &'a str,
-    errors: Vec<ConfigError>,
+    /// The files read (this one and those it includes).
+    sources: Vec<SourceFile>,
+    /// Errors, each with its position for sorting.
+    errors: Vec<(Pos, ConfigError)>,
     /// Entries of `devices` and `skills` read so far.
     entries: usize,
 }
@@ -464,7 +494,23 @@ type Entries = Vec<(Spanned<String>, Spanned<Node>)>;
 
 impl Checker<'_> {
     fn push(&mut self, pos: Pos, message: impl Into<String>) {
-        self.errors.push(ConfigError::new(self.file, pos, message));
+        let file = self.sources.get(pos.src).map_or(self.file, |s| s.file.as_str());
+        self.errors.push((pos, ConfigError::new(file, pos, message)));
+    }
+
+    /// The directory relative paths written at `pos` start from.
+    fn dir_of(&self, pos: Pos) -> PathBuf {
+        match self.sources.get(pos.src) {
+            Some(source) => source.dir.clone(),
+            None => base_dir(self.file),
+        }
+    }
+
+    /// Paths written once: the same file named again (by this file and one
+    /// it includes, say) is dropped.
+    fn dedup_paths(&self, paths: Vec<Spanned<String>>) -> Vec<Spanned<String>> {
+        let mut seen = std::collections::HashSet::new();
+        paths.into_iter().filter(|p| seen.insert(self.dir_of(p.pos).join(&p.value))).collect()
     }
 
     fn unknown_key(&mut self, key: &Spanned<String>, place: &str, allowed: &[&str]) {
@@ -535,8 +581,11 @@ impl Checker<'_> {
         devices.append(&mut skills);
         let dir = base_dir(self.file);
         if let Some(link) = &mut link {
-            resolve_zenoh_paths(&mut link.value, &dir, false);
+            let link_dir = self.dir_of(link.pos);
+            resolve_zenoh_paths(&mut link.value, &link_dir, false);
         }
+        let libraries = self.dedup_paths(libraries);
+        let python = self.dedup_paths(python);
         Some(RobotFile {
             file: self.file.to_string(),
             dir,
@@ -549,6 +598,7 @@ impl Checker<'_> {
             libraries,
             python,
             simulator,
+            sources: std::mem::take(&mut self.sources),
         })
     }
 

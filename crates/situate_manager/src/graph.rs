@@ -153,7 +153,7 @@ impl Checker<'_> {
 
     /// The diagnostics of a failed build: errors in file order, then warnings.
     fn finish(mut self) -> BuildError {
-        self.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
+        self.diags.sort_by_key(|d| d.pos.map_or((usize::MAX, usize::MAX, usize::MAX), |p| (p.src, p.line, p.col)));
         let (errors, warnings): (Vec<_>, Vec<_>) = self.diags.into_iter().partition(Diagnostic::is_error);
         BuildError { diagnostics: errors.into_iter().chain(warnings).collect() }
     }
@@ -187,13 +187,22 @@ impl Graph {
         // Duplicates are found in file order, so "first" means first in the file
         // whichever section comes first.
         let mut by_pos: Vec<usize> = (0..spec.skills.len()).collect();
-        by_pos.sort_by_key(|&i| item_pos(&spec.skills[i]).map_or((usize::MAX, usize::MAX), |p| (p.line, p.col)));
+        by_pos.sort_by_key(|&i| {
+            item_pos(&spec.skills[i]).map_or((usize::MAX, usize::MAX, usize::MAX), |p| (p.src, p.line, p.col))
+        });
         let mut duplicate = vec![false; spec.skills.len()];
         let mut seen: HashMap<&str, Option<Pos>> = HashMap::new();
         for &i in &by_pos {
             let s = &spec.skills[i];
             if let Some(first) = seen.get(s.name.as_str()) {
-                let at = first.map(|p| format!(" (first defined at line {})", p.line)).unwrap_or_default();
+                let at = first
+                    .map(|p| match spec.sources.get(p.src) {
+                        Some(file) if item_pos(s).is_some_and(|q| q.src != p.src) => {
+                            format!(" (first defined at {file}:{})", p.line)
+                        }
+                        _ => format!(" (first defined at line {})", p.line),
+                    })
+                    .unwrap_or_default();
                 ck.error(item_pos(s), format!("duplicate skill name `{}`{at}", s.name));
                 duplicate[i] = true;
             } else {
@@ -564,7 +573,7 @@ impl Graph {
         // skills that wait for one another in the same cycle.
         for group in loops(&instances, &leaves) {
             let names: Vec<&str> = group.iter().map(|&i| instances[i].name.as_str()).collect();
-            let first = group.iter().filter_map(|&i| item_pos(specs[i])).min_by_key(|p| (p.line, p.col));
+            let first = group.iter().filter_map(|&i| item_pos(specs[i])).min();
             let msg = if names.len() == 1 {
                 format!("data-flow loop: skill `{}` reads its own output in the same cycle", names[0])
             } else {

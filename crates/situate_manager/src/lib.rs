@@ -13,6 +13,7 @@ pub mod config;
 pub mod control;
 pub mod expr;
 pub mod graph;
+pub mod include;
 pub mod manager;
 pub mod manifest;
 pub mod monitor;

@@ -211,9 +211,8 @@ fn port_spec(name: &str, node: &Spanned<Node>, output: bool) -> Result<PortSpec,
         }
         _ => text.trim(),
     };
-    let t = SignalType::parse(text).map_err(|e| {
-        (Pos { line: ty.pos.line, col: ty.pos.col + e.column - 1 }, format!("port `{name}`: {}", e.message))
-    })?;
+    let t = SignalType::parse(text)
+        .map_err(|e| (Pos { col: ty.pos.col + e.column - 1, ..ty.pos }, format!("port `{name}`: {}", e.message)))?;
     let mut spec = PortSpec::new(name, t);
     spec.optional = optional;
     spec.doc = doc;
@@ -333,7 +332,7 @@ mod tests {
     #[test]
     fn manifest_errors_point_at_the_problem() {
         let e = manifest("inputs: {x: f46}\n").unwrap_err();
-        assert_eq!(e[0].0, Pos { line: 1, col: 13 });
+        assert_eq!(e[0].0, Pos::new(1, 13));
         assert!(e[0].1.starts_with("port `x`: unknown type `f46`"), "{}", e[0].1);
         let e = manifest("ouputs: {}\n").unwrap_err();
         assert_eq!(e[0].1, "unknown key `ouputs` in the skill manifest — did you mean `outputs`?");
@@ -364,21 +363,21 @@ mod tests {
         assert_eq!(
             e[0],
             (
-                Pos { line: 2, col: 26 },
+                Pos::new(2, 26),
                 "port `r`: `signal` expects a signal name (identifiers joined by `.`, like `sonar.range`), got \
                  \"sonar..range\""
                     .into()
             )
         );
         let e = manifest("inputs:\n  r: {type: f64, signl: s}\n").unwrap_err();
-        assert_eq!(e[0], (Pos { line: 2, col: 18 }, "port `r`: unknown key `signl` — did you mean `signal`?".into()));
+        assert_eq!(e[0], (Pos::new(2, 18), "port `r`: unknown key `signl` — did you mean `signal`?".into()));
         let e = manifest("outputs:\n  y: {type: f64, optional: true}\n").unwrap_err();
-        assert_eq!(e[0].0, Pos { line: 2, col: 18 });
+        assert_eq!(e[0].0, Pos::new(2, 18));
         assert!(e[0].1.starts_with("port `y`: unknown key `optional`"), "{}", e[0].1);
         let e = manifest("inputs:\n  r: {signal: s}\n").unwrap_err();
-        assert_eq!(e[0], (Pos { line: 2, col: 6 }, "port `r` needs a `type`".into()));
+        assert_eq!(e[0], (Pos::new(2, 6), "port `r` needs a `type`".into()));
         let e = manifest("inputs:\n  r: {type: f46}\n").unwrap_err();
-        assert_eq!(e[0].0, Pos { line: 2, col: 13 });
+        assert_eq!(e[0].0, Pos::new(2, 13));
         assert!(e[0].1.starts_with("port `r`: unknown type `f46`"), "{}", e[0].1);
         let e = manifest("inputs:\n  r: [f64]\n").unwrap_err();
         assert!(e[0].1.starts_with("port `r` expects a type such as f64"), "{}", e[0].1);
@@ -390,26 +389,20 @@ mod tests {
     fn ports_params_and_types_are_capped() {
         let ports: Vec<String> = (0..=MAX_PORTS).map(|i| format!("p{i}: f64")).collect();
         let e = manifest(&format!("inputs: {{{}}}\n", ports.join(", "))).unwrap_err();
-        assert_eq!(
-            e[0],
-            (Pos { line: 1, col: 9 }, "`inputs` declares 257 entries; a skill may have at most 256".into())
-        );
+        assert_eq!(e[0], (Pos::new(1, 9), "`inputs` declares 257 entries; a skill may have at most 256".into()));
         let e = manifest(&format!("params: {{{}}}\n", ports.join(", "))).unwrap_err();
         assert_eq!(e[0].1, "`params` declares 257 entries; a skill may have at most 256");
         // Deeply nested records: refused by length before the type parser
         // recurses into them.
         let deep = format!("{}f64{}", "{a: ".repeat(300), "}".repeat(300));
         let e = manifest(&format!("outputs: {{y: \"{deep}\"}}\n")).unwrap_err();
-        assert_eq!(e[0], (Pos { line: 1, col: 14 }, "port `y`: a type may have at most 1024 characters".into()));
+        assert_eq!(e[0], (Pos::new(1, 14), "port `y`: a type may have at most 1024 characters".into()));
     }
 
     #[test]
     fn numbers_out_of_range_are_quoted_as_written() {
         let e = manifest("params:\n  g: {type: f64, default: 1e300, max: 1}\n").unwrap_err();
-        assert_eq!(
-            e[0],
-            (Pos { line: 2, col: 27 }, "parameter `g`: the default expects a number ≤ 1.0, got 1e300".into())
-        );
+        assert_eq!(e[0], (Pos::new(2, 27), "parameter `g`: the default expects a number ≤ 1.0, got 1e300".into()));
         let e = manifest("priority: 0x80000000\n").unwrap_err();
         assert_eq!(
             e[0].1,

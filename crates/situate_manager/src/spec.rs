@@ -184,6 +184,9 @@ pub struct RobotSpec {
     pub skills: Vec<SkillSpec>,
     /// The robot file it came from, for messages.
     pub file: Option<String>,
+    /// The files a position may be in, by [`Pos::src`]: `[0]` the robot
+    /// file, then those it includes (empty: all positions are in `file`).
+    pub sources: Vec<String>,
 }
 
 impl RobotSpec {
@@ -198,6 +201,7 @@ impl RobotSpec {
             liveness_ms: None,
             skills: Vec::new(),
             file: None,
+            sources: Vec::new(),
         }
     }
 
@@ -245,6 +249,7 @@ impl RobotSpec {
             budget_ms: file.cycle.budget_ms,
             liveness_ms: file.cycle.liveness_ms,
             file: Some(file.file.clone()),
+            sources: file.sources.iter().map(|s| s.file.clone()).collect(),
             skills: file
                 .skills
                 .iter()
@@ -288,6 +293,10 @@ impl RobotSpec {
     }
 
     pub(crate) fn diag(&self, severity: Severity, pos: Option<Pos>, message: String) -> Diagnostic {
-        Diagnostic { severity, file: self.file.clone(), pos, message }
+        let file = match pos {
+            Some(p) if p.src > 0 => self.sources.get(p.src).cloned().or_else(|| self.file.clone()),
+            _ => self.file.clone(),
+        };
+        Diagnostic { severity, file, pos, message }
     }
 }

@@ -32,24 +32,33 @@ use yaml_rust2::scanner::{Marker, ScanError, TScalarStyle};
 pub const MAX_DEPTH: usize = 64;
 
 /// A position in a source file; line and column both start at 1. Columns
-/// count characters (not bytes).
+/// count characters (not bytes). `src` says which file: 0 for the file
+/// parsed, and for a robot file that includes others, the index of the
+/// included file in [`RobotFile::sources`](crate::config::RobotFile::sources)
+/// (positions order by file first).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Pos {
+    pub src: usize,
     pub line: usize,
     pub col: usize,
 }
 
 impl Pos {
     /// Line 1, column 1.
-    pub const START: Pos = Pos { line: 1, col: 1 };
+    pub const START: Pos = Pos { src: 0, line: 1, col: 1 };
 
     pub fn new(line: usize, col: usize) -> Pos {
-        Pos { line, col }
+        Pos { src: 0, line, col }
+    }
+
+    /// This position in source file `src`.
+    pub fn in_src(self, src: usize) -> Pos {
+        Pos { src, ..self }
     }
 
     /// `yaml-rust2` markers have a 1-based line and a 0-based column.
     fn from_marker(m: &Marker) -> Pos {
-        Pos { line: m.line().max(1), col: m.col() + 1 }
+        Pos { src: 0, line: m.line().max(1), col: m.col() + 1 }
     }
 }
 
@@ -405,6 +414,26 @@ enum Frame {
 impl Frame {
     fn expects_key(&self) -> bool {
         matches!(self, Frame::Map { key: None, .. })
+    }
+}
+
+/// Marks every position in `node` as one of source file `src` (see
+/// [`Pos::src`]).
+pub fn set_src(node: &mut Spanned<Node>, src: usize) {
+    node.pos = node.pos.in_src(src);
+    match &mut node.value {
+        Node::Map(entries) => {
+            for (key, value) in entries {
+                key.pos = key.pos.in_src(src);
+                set_src(value, src);
+            }
+        }
+        Node::Seq(items) => {
+            for item in items {
+                set_src(item, src);
+            }
+        }
+        _ => {}
     }
 }
 

@@ -45,7 +45,7 @@ fn registry_for(py: Python<'_>, file: &RobotFile) -> Result<Registry, String> {
         );
     }
     for py_file in &file.python {
-        let path = file.resolve(&py_file.value);
+        let path = file.resolve_at(py_file.pos, &py_file.value);
         match py.detach(|| loader::load_file(&path)) {
             Ok(types) => {
                 for t in types {
