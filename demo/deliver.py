@@ -89,8 +89,10 @@ LAB_BUDGET_S = 900.0
 #: From where the button was pushed (0.45 m from it), back this far to patrol the lobby: about
 #: the middle of a car door on a wall next to the button's (docs/maps.md, "Lobby"), m.
 PATROL_BACK_M = 0.85
-#: A way that opened in the lobby is a car's door only this near a wall known so far, m.
+#: A way that opened in the lobby is a car's door only this near an end wall found, m.
 OPENED_ON_WALL_M = 0.4
+#: In front of a car's door that opened, this far from its wall, before entering, m.
+FACE_DOOR_M = 0.85
 
 
 @dataclass
@@ -278,14 +280,16 @@ class Delivery(Sequencer):
             return False
         await self.set("identify_car", "first_id", m.car_barcode_first)
         await self.set("identify_car", "cars", m.cars)
-        # The lobby's walls known so far (a point and the normal towards the wall, odometry
-        # frame): the button's (the robot stood 0.45 m in front of the button facing it),
-        # then each end wall the patrol turns back at. A way opening elsewhere is someone
-        # who stood still and walked off, not a car's door (cars are on the lobby's walls).
+        # The lobby's end walls found so far (a point and the normal towards the wall,
+        # odometry frame), where the patrol turned back. A way that opens on one of them is
+        # a car's door (one that opened just after the robot turned back there); elsewhere
+        # it is someone who stood still and walked off, or a doorway the patrol's own motion
+        # revealed. A car's door on the patrol's own wall is left to the door detector,
+        # which sees it beside the robot, face-on. The robot goes to stand in front of the
+        # door, facing its wall (seen aslant from afar, the car's panel is not read).
         walls: list[tuple[float, float, float]] = []
-        if b is not None:
-            walls.append((b.x + 0.45 * math.cos(b.theta), b.y + 0.45 * math.sin(b.theta), b.theta))
         deadline = self.t + 60
+        afresh = ["detect_door", "watch_openings", "identify_car"]
         while self.t < deadline:
             # A door opening beside the robot (either wall: cars may be on any), or a car's
             # panel barcode in view ahead through its open door.
@@ -298,8 +302,9 @@ class Delivery(Sequencer):
                 "detect_door",
                 "watch_openings",
                 "identify_car",
-                restart=["detect_door", "watch_openings", "identify_car"],
+                restart=afresh,
             )
+            afresh = ["detect_door", "watch_openings", "identify_car"]
             got = await self.wait(
                 "door.left || door.right",
                 "car > 0",
@@ -333,14 +338,23 @@ class Delivery(Sequencer):
                 at = o.theta + bearing
                 px = o.x + float(opened["before"]) * math.cos(at)
                 py = o.y + float(opened["before"]) * math.sin(at)
-                on_wall = any(
-                    abs((px - wx) * math.cos(wn) + (py - wy) * math.sin(wn)) < OPENED_ON_WALL_M
+                on = [
+                    wn
                     for wx, wy, wn in walls
-                )
+                    if abs((px - wx) * math.cos(wn) + (py - wy) * math.sin(wn)) < OPENED_ON_WALL_M
+                ]
                 if self.debug:
-                    await self.say(f"      opened {opened}, on a known wall: {on_wall}")
-                if not on_wall:
-                    continue  # the watch starts afresh with the patrol
+                    await self.say(f"      opened {opened}, on a known wall: {bool(on)}")
+                if not on:
+                    # The watch starts afresh; the door detector keeps the walls it tracks.
+                    afresh = ["watch_openings"]
+                    continue
+                gx, gy = px - FACE_DOOR_M * math.cos(on[0]), py - FACE_DOOR_M * math.sin(on[0])
+                if math.hypot(gx - o.x, gy - o.y) > 0.3:
+                    await self.set("runaway", "safe_distance", 0.12)
+                    await self.goto(gx, gy, within=10)
+                    await self.restore_lobby_patrol()
+                bearing = wrap(on[0] - (await self.odom()).theta)
             else:
                 self.prefetch("door", "odom")  # the turn reads the odometry
                 bearing = float((await self.value("door"))["bearing"])

@@ -131,13 +131,11 @@ GENERATED_REGRESSIONS = [
     (20025, []),  # a car on the lobby's end wall was never seen open by the patrol
     (20000, []),  # the route began facing along the corridor, not out of the lab door
     (20038, []),  # a door found in a line through the lab's clutter: "passed", still inside
-    (20013, []),  # a car on an end wall opened just after the patrol turned back there
     (20170, []),  # a junction the detector missed: followed to the corridor's end
     # The hard set: people, doors closing, a dead sonar (HARD + its index).
     (20011, [*HARD, "11"]),  # the office door found in a line 36° off its wall, into the jamb
     (20088, [*HARD, "0"]),  # the car's open door unseen with the front sonar dead
     (20197, [*HARD, "13"]),  # two bins across the corridor taken for the office barcode's wall
-    (20000, [*HARD, "8"]),  # a car left of the button, open 10-15 s, missed on every call
     (20049, [*HARD, "9"]),  # the turn after a 12 s look at the wall timed out before it began
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
     (20035, [*HARD, "19"]),  # turned at a side corridor's near corner, not its mouth
