@@ -139,6 +139,8 @@ class Sequencer:
         #: The simulated time at the last pause (a monitor fired); `step` makes it stale.
         self.t = 0.0
         self.t_stale = False
+        #: The cycle's period on the simulated clock (stepping N cycles adds N of them).
+        self.period_s: float | None = None
         self.phase_no = 0
         self.phase_text = ""
         #: Searches so far: each wanders along a path of its own (seeded by ``seed`` and this).
@@ -170,7 +172,12 @@ class Sequencer:
             self.readings.clear()  # the cycle runs: every signal may change
             self.carried.clear()
         if verb == "step":
-            self.t_stale = True  # the time moved on by the cycles stepped
+            # The time moves on by the cycles stepped: on the simulated clock exactly that
+            # many periods (known after the first look at the robot's stats).
+            if self.period_s is not None:
+                self.t += int(args.get("cycles", 1)) * self.period_s
+            else:
+                self.t_stale = True
         self.pending.append(self.r.send(verb, **args))
 
     def prefetch(self, *signals: str) -> None:
@@ -199,7 +206,10 @@ class Sequencer:
             stats = self.r.send("stats")
             self.pending.append(stats)
             await self.flush()
-            self.t = float((await stats)["time_s"])
+            result = await stats
+            self.t = float(result["time_s"])
+            period = float(result.get("period_s") or 0.0)
+            self.period_s = period if period > 0 else None
             self.t_stale = False
         return self.t
 
