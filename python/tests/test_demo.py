@@ -135,6 +135,7 @@ GENERATED_REGRESSIONS = [
     # The hard set: people, doors closing, a dead sonar (HARD + its index).
     (20011, [*HARD, "11"]),  # the office door found in a line 36° off its wall, into the jamb
     (20088, [*HARD, "0"]),  # the car's open door unseen with the front sonar dead
+    (20087, [*HARD, "23"]),  # a line through people across the way taken for the office wall
     (20197, [*HARD, "13"]),  # two bins across the corridor taken for the office barcode's wall
     (20049, [*HARD, "9"]),  # the turn after a 12 s look at the wall timed out before it began
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
