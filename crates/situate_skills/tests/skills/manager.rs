@@ -91,7 +91,7 @@ fn runaway_beats_wander_near_a_wall_and_leaves_the_drive_to_it_when_clear() {
 fn every_standard_skill_is_registered_under_std() {
     let r = situate_skills::registry();
     let names: Vec<&str> = r.names().collect();
-    assert_eq!(names.len(), 19, "{names:?}");
+    assert_eq!(names.len(), 20, "{names:?}");
     assert!(names.iter().all(|n| n.starts_with("std.")), "{names:?}");
     for (name, priority) in [("std.runaway", 50), ("std.avoid", 40), ("std.pass_door", 35), ("std.home", 30)] {
         assert_eq!(r.get(name).unwrap().decl.priority, priority, "{name}");
