@@ -1114,15 +1114,7 @@ class Sequencer:
         if abs(lateral) < MOUTH_OFF_M or abs(float(fix["normal"])) > math.radians(25):
             return
         await self.say(f"    {abs(lateral):.1f} m off the side corridor's mouth: in line with it")
-        o = await self.odom()
-        x = o.x - lateral * math.sin(heading)
-        y = o.y + lateral * math.cos(heading)
-        await self.set("runaway", "safe_distance", 0.12)
-        try:
-            await self.goto(x, y, within=15)
-            await self.turn(wrap(heading - (await self.odom()).theta))
-        finally:
-            await self.restore("runaway", "safe_distance")
+        await self.shift_sideways(lateral, heading)
 
     async def recentre(self, heading: float) -> None:
         """Facing ``heading`` along a corridor: sideways to its middle, then facing it again.
@@ -1154,9 +1146,13 @@ class Sequencer:
             return
         if abs(shift) < 0.15:
             return
+        await self.shift_sideways(shift, heading)
+
+    async def shift_sideways(self, metres: float, heading: float) -> None:
+        """Moves ``metres`` across ``heading`` (positive: to its left), then faces it."""
         o = await self.odom()
-        x = o.x - shift * math.sin(heading)
-        y = o.y + shift * math.cos(heading)
+        x = o.x - metres * math.sin(heading)
+        y = o.y + metres * math.cos(heading)
         await self.set("runaway", "safe_distance", 0.12)
         try:
             await self.goto(x, y, within=15)
