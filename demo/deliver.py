@@ -535,6 +535,8 @@ class Delivery(Sequencer):
         await self.use()
         await self.flush()
         await self.say("mission complete")
+        if self.debug:
+            print(f"round trips to the robot: {self.round_trips}")
 
 
 async def main(argv: Sequence[str] | None = None) -> int:

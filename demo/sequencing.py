@@ -45,6 +45,13 @@ DOOR_WAIT_S = 75.0
 WALL_STAYS_S = 6.0
 #: Following for a distance: the time in which some way must be made, s.
 FOLLOW_SLICE_S = 20.0
+#: Following to a wall: turned off the way by more than this (rad) and this far to its side
+#: (m), the robot has gone round a corner into a side corridor.
+SIDE_EXIT_RAD = math.radians(60)
+SIDE_EXIT_M = 1.0
+#: Following to a wall: the time budget, renewed while way is made, up to the longest, s.
+WALL_BUDGET_S = 180.0
+WALL_LONGEST_S = 600.0
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
 #: Turned into a junction, the robot moves in line with the side corridor's mouth when
@@ -99,6 +106,19 @@ def farther_than(o: Pose, metres: float) -> str:
     """The condition: the robot is more than ``metres`` (straight line) from pose ``o``."""
     dx, dy = f"(odom.x - {o.x!r})", f"(odom.y - {o.y!r})"
     return f"{dx} * {dx} + {dy} * {dy} > {metres * metres!r}"
+
+
+def heading_off(along: float, rad: float) -> str:
+    """The condition: the odometry heading is more than ``rad`` (< pi) off ``along``.
+
+    ``odom.theta`` is wrapped into (-pi, pi]; the allowed range around ``along`` may wrap too.
+    """
+    lo, hi = wrap(along) - rad, wrap(along) + rad
+    if hi > math.pi:
+        return f"odom.theta < {lo!r} && odom.theta > {hi - 2 * math.pi!r}"
+    if lo < -math.pi:
+        return f"odom.theta > {hi!r} && odom.theta < {lo + 2 * math.pi!r}"
+    return f"(odom.theta < {lo!r} || odom.theta > {hi!r})"
 
 
 def bearing_of(i: int) -> float:
@@ -157,6 +177,8 @@ class Sequencer:
         self.pending: list[asyncio.Future[Any]] = []
         #: Queries sent since the cycle last ran, by signal: their answers stand until it runs.
         self.readings: dict[str, asyncio.Future[Any]] = {}
+        #: Round trips to the robot so far (each `flush`; DELIVER_DEBUG prints them at the end).
+        self.round_trips = 0
         #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
         self.carried: dict[str, dict[str, Any]] = {}
 
@@ -194,6 +216,7 @@ class Sequencer:
     async def flush(self) -> list[Any]:
         """Awaits the replies to every pending request; raises the first refusal."""
         pending, self.pending = self.pending, []
+        self.round_trips += 1
         results = await asyncio.gather(*pending, return_exceptions=True)
         for r in results:
             if isinstance(r, BaseException):
@@ -905,36 +928,7 @@ class Sequencer:
             await self.set("track_barcode", "id", code)
             return await self.follow_until(f"target.seen && target.id == {code}", 180)
         if until == "wall":
-            # Up to the wall ahead: about the middle of the corridor it ends in (corridors are
-            # 1.8 to 2.6 m wide), before avoidance would start turning away from it.
-            # A wall across the way: a line fitted to at least 5 of the 7 sonars within 45° of
-            # ahead, square to the way. Neither a jamb caught by the front sonar's cone nor
-            # clutter or someone in the corridor (a person fills two or three sonars' view,
-            # and a narrow corridor's side walls lie along the way) is taken for it.
-            await self.set("fit_wall", "bearing_deg", 0.0)
-            await self.set("fit_wall", "half_angle_deg", 45.0)
-            await self.use("runaway", "avoid", "follow_hallway", "fit_wall", restart=["fit_wall"])
-            try:
-                ahead = (
-                    f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
-                    f" && wall.distance < {WALL_AHEAD_M}"
-                )
-                deadline = self.t + 180
-                while await self.wait(ahead, within=deadline - self.t) == 0:
-                    along = self.corridor_heading
-                    facing = (await self.odom()).theta
-                    if along is None or abs(wrap(facing - along)) < math.radians(30):
-                        if await self.wall_stays():
-                            return True
-                        await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
-                        continue
-                    # Facing a side wall (turned there by avoidance, round clutter): not the end.
-                    if await self.wait(f"!({ahead})", within=deadline - self.t):
-                        return False
-                return False
-            finally:
-                await self.restore("fit_wall", "bearing_deg")
-                await self.restore("fit_wall", "half_angle_deg")
+            return await self.follow_to_wall()
         detector, signal = (
             ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
         )
@@ -982,6 +976,99 @@ class Sequencer:
                     o.x + forward * math.cos(along), o.y + forward * math.sin(along), within=10
                 )
         return True
+
+    async def follow_to_wall(self) -> bool:
+        """Follows the hallway up to the wall it ends in (`until: wall`).
+
+        Up to the wall ahead: about the middle of the corridor it ends in (corridors are 1.8
+        to 2.6 m wide), before avoidance would start turning away from it. A wall across the
+        way: a line fitted to at least 5 of the 7 sonars within 45° of ahead, square to the
+        way, that stays put (`wall_stays`). Neither a jamb caught by the front sonar's cone
+        nor clutter or someone in the corridor (a person fills two or three sonars' view, and
+        a narrow corridor's side walls lie along the way) is taken for it.
+
+        Where the corridor ends in a T, following may take the robot round the corner before
+        the wall is near enough (people in the crossing, a narrow crossing corridor). Turned
+        off the way by more than ``SIDE_EXIT_RAD`` and ``SIDE_EXIT_M`` to its side, it goes
+        back onto the way's line, faces the way and looks for the wall there; none near, it
+        follows on (it was a crossing on the way). The time budget is renewed while way is
+        made along the route's heading (a busy lobby), up to ``WALL_LONGEST_S``.
+        """
+        start = await self.odom()
+        along = start.theta if self.corridor_heading is None else self.corridor_heading
+        c, s = math.cos(along), math.sin(along)
+        lateral = f"(odom.y - {start.y!r}) * {c!r} - (odom.x - {start.x!r}) * {s!r}"
+        side_exit = f"{heading_off(along, SIDE_EXIT_RAD)} && abs({lateral}) > {SIDE_EXIT_M!r}"
+        ahead = (
+            f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
+            f" && wall.distance < {WALL_AHEAD_M}"
+        )
+
+        async def watch_ahead() -> None:
+            await self.set("fit_wall", "bearing_deg", 0.0)
+            await self.set("fit_wall", "half_angle_deg", 45.0)
+
+        await watch_ahead()
+        await self.use("runaway", "avoid", "follow_hallway", "fit_wall", restart=["fit_wall"])
+        began = await self.now()
+        deadline = began + WALL_BUDGET_S
+        best = 0.0
+        try:
+            while self.t < deadline:
+                within = min(FOLLOW_SLICE_S, deadline - self.t)
+                held = await self.wait(ahead, side_exit, within=within)
+                if held == 0:
+                    facing = (await self.odom()).theta
+                    if abs(wrap(facing - along)) < math.radians(30):
+                        if await self.wall_stays():
+                            return True
+                        await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
+                        continue
+                    # Facing a side wall (turned there by avoidance, round clutter): not the end.
+                    if await self.wait(f"!({ahead})", within=deadline - self.t):
+                        return False
+                    continue
+                if held == 1:
+                    if await self.wall_from_the_way(start, along):
+                        return True
+                    await watch_ahead()
+                    await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
+                o = await self.odom()
+                made = (o.x - start.x) * c + (o.y - start.y) * s
+                if made > best + 0.5:
+                    best = made
+                    renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
+                    deadline = min(renewed, began + WALL_LONGEST_S)
+            return False
+        finally:
+            await self.restore("fit_wall", "bearing_deg")
+            await self.restore("fit_wall", "half_angle_deg")
+
+    async def wall_from_the_way(self, start: Pose, along: float) -> bool:
+        """Gone round a corner off the way that began at ``start``: whether the way ends here.
+
+        Back onto the way's line (abreast of where the robot is), facing the way: a wall
+        square to it within a corridor's width and a half (the far wall of the crossing
+        corridor) is driven up to and must stay put (`wall_stays`).
+        """
+        o = await self.odom()
+        c, s = math.cos(along), math.sin(along)
+        made = (o.x - start.x) * c + (o.y - start.y) * s
+        await self.say("    turned into a side corridor: back onto the way, looking for its end")
+        await self.goto(start.x + made * c, start.y + made * s, within=30)
+        await self.turn(wrap(along - (await self.odom()).theta))
+        wall = await self.wall_towards(along)
+        if self.debug:
+            await self.say(f"      wall towards the way: {wall}")
+        if wall is None or abs(wrap(wall[0] - along)) > math.radians(25) or wall[1] > 3.5:
+            return False
+        go = wall[1] - (WALL_AHEAD_M - 0.3)
+        if go > 0.1:
+            o = await self.odom()
+            await self.goto(o.x + go * c, o.y + go * s, within=20)
+        await self.set("fit_wall", "bearing_deg", 0.0)
+        await self.set("fit_wall", "half_angle_deg", 45.0)
+        return await self.wall_stays()
 
     async def follow_until(self, condition: str, within: float) -> bool:
         """Follows the hallway (barcode tracking on) until ``condition`` holds.

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import os
 import subprocess
 import sys
@@ -141,6 +142,8 @@ GENERATED_REGRESSIONS = [
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
     (20035, [*HARD, "19"]),  # turned at a side corridor's near corner, not its mouth
     (20148, [*HARD, "12"]),  # out of time while people kept the way to the lobby busy
+    (20186, [*HARD, "18"]),  # `until: wall` at a T: round the corner first, down the branch
+    (20133, [*HARD, "21"]),  # the same, turned into the branch the route then takes
 ]
 
 
@@ -203,3 +206,17 @@ def test_mission_reads_the_maps_mission_section() -> None:
     m = d.Mission.from_json(text)
     assert (m.goal_floor, m.start_floor, m.cars, m.message) == (4, -1, 4, "Hi")
     assert m.route["car_to_office"][1] == {"home": 40}
+
+
+def test_heading_off_holds_exactly_outside_the_allowed_range_also_where_it_wraps() -> None:
+    d = _deliver()
+    seq = sys.modules["sequencing"]
+    for along_deg in (0, 45, 150, 179, -179, -120, 180):
+        along = math.radians(along_deg)
+        cond = seq.heading_off(along, math.radians(60))
+        # The monitor language's operators, as Python (the condition reads odom.theta only).
+        as_python = cond.replace("&&", " and ").replace("||", " or ").replace("odom.theta", "t")
+        for probe_deg in range(-179, 181, 7):
+            t = math.radians(probe_deg)
+            off = abs(d.wrap(t - along)) > math.radians(60)
+            assert eval(as_python, {}, {"t": t}) == off, (along_deg, probe_deg, cond)
