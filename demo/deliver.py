@@ -34,6 +34,7 @@ from signal import SIGHUP, SIGINT, SIGTERM, Signals
 from typing import Any
 
 from sequencing import (
+    SONARS,
     OutOfTime,
     PhaseFailed,
     Pose,
@@ -86,13 +87,33 @@ NORMAL = {
 
 #: Time to get out of the lab before giving up, s.
 LAB_BUDGET_S = 900.0
-#: From where the button was pushed (0.45 m from it), back this far to patrol the lobby: about
-#: the middle of a car door on a wall next to the button's (docs/maps.md, "Lobby"), m.
+#: The robot pushes the call button from this far from it (its centre from the barcode), m.
+BUTTON_STANDOFF_M = 0.45
+#: From where the button was pushed, back this far to patrol the lobby: about the middle of a
+#: car door on a wall next to the button's (docs/maps.md, "Lobby"), m.
 PATROL_BACK_M = 0.85
 #: A way that opened in the lobby is a car's door only this near an end wall found, m.
 OPENED_ON_WALL_M = 0.4
 #: In front of a car's door that opened, this far from its wall, before entering, m.
 FACE_DOOR_M = 0.85
+#: Abreast of a door that opened within this (along its wall), the robot only turns to it, m.
+ABREAST_M = 0.35
+#: An end wall of the lobby is taken from the sonars only nearer than this (their reach is 4 m), m.
+END_WALL_SEEN_M = 3.6
+
+
+def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
+    """Whether sonar ``i`` reads a wall across its axis (not someone standing there).
+
+    A wall square to the axis reads nearer than `END_WALL_SEEN_M` in sonar ``i`` and about
+    that over the cosine of 15° in both neighbours (a person, some 0.4 m across, fills
+    one sonar's view from 1.5 m on; the neighbours then read past them).
+    """
+    r = ranges[i]
+    if r >= END_WALL_SEEN_M:
+        return False
+    expect = r / math.cos(math.radians(15))
+    return all(abs(ranges[(i + k) % SONARS] - expect) < 0.3 for k in (-1, 1))
 
 
 @dataclass
@@ -228,7 +249,7 @@ class Delivery(Sequencer):
             ):
                 raise PhaseFailed("the call button is nowhere in sight")
             homed = await self.line_up(m.call_button_barcode, 1.0) and await self.home_on(
-                m.call_button_barcode, 0.45, avoid=False, slack=0.12, aim=0.3
+                m.call_button_barcode, BUTTON_STANDOFF_M, avoid=False, slack=0.12, aim=0.3
             )
             if not homed:
                 await self.say("    could not reach the button: backing off, trying again")
@@ -288,6 +309,24 @@ class Delivery(Sequencer):
         # which sees it beside the robot, face-on. The robot goes to stand in front of the
         # door, facing its wall (seen aslant from afar, the car's panel is not read).
         walls: list[tuple[float, float, float]] = []
+        if b is not None:
+            # The button's wall holds nothing but cars (docs/maps.md, "Lobby"): a way that
+            # opens on it is a car's door, one the patrol may be walking away from.
+            r = BUTTON_STANDOFF_M
+            walls.append((b.x + r * math.cos(b.theta), b.y + r * math.sin(b.theta), b.theta))
+        # The end walls in sonar reach from where the patrol begins, ahead and behind: a car's
+        # door on the one behind (a short lobby) is seen opening while the robot walks the
+        # other way, not only after the robot came to it and turned back there.
+        ranges = await self.sonar()
+        o = await self.odom()
+        for i in (0, SONARS // 2):
+            if seen_wall_ends_at(ranges, i):
+                toward = wrap(o.theta + bearing_of(i))
+                r = ranges[i]
+                walls.append((o.x + r * math.cos(toward), o.y + r * math.sin(toward), toward))
+        if self.debug:
+            looks = [round(ranges[k % SONARS], 2) for k in (-1, 0, 1, 11, 12, 13)]
+            await self.say(f"      walls known: {len(walls)} (sonars {looks})")
         deadline = self.t + 60
         afresh = ["detect_door", "watch_openings", "identify_car"]
         while self.t < deadline:
@@ -343,14 +382,31 @@ class Delivery(Sequencer):
                     for wx, wy, wn in walls
                     if abs((px - wx) * math.cos(wn) + (py - wy) * math.sin(wn)) < OPENED_ON_WALL_M
                 ]
+                # A door opening ahead on the wall the patrol walks along is the door
+                # detector's: it sees it beside the robot a moment later, face-on, and the
+                # robot turns straight into it (going to stand in front of it takes longer
+                # than some cars stay open). Beside or behind the robot, or on an end wall,
+                # it is this.
+                ahead_along = [
+                    wn
+                    for wn in on
+                    if abs(math.cos(wn - o.theta)) < 0.5 and abs(bearing) < math.radians(60)
+                ]
                 if self.debug:
-                    await self.say(f"      opened {opened}, on a known wall: {bool(on)}")
-                if not on:
+                    await self.say(
+                        f"      opened {opened}, on a known wall: {bool(on)}"
+                        f"{' (ahead, along it)' if ahead_along else ''}"
+                    )
+                if not on or ahead_along:
                     # The watch starts afresh; the door detector keeps the walls it tracks.
                     afresh = ["watch_openings"]
                     continue
                 gx, gy = px - FACE_DOOR_M * math.cos(on[0]), py - FACE_DOOR_M * math.sin(on[0])
-                if math.hypot(gx - o.x, gy - o.y) > 0.3:
+                # Abreast of the door already (it opened beside the robot), the robot only
+                # turns to face it: entering works from a little farther off the wall too.
+                abreast = abs(-(gx - o.x) * math.sin(on[0]) + (gy - o.y) * math.cos(on[0]))
+                off_wall = (px - o.x) * math.cos(on[0]) + (py - o.y) * math.sin(on[0])
+                if abreast > ABREAST_M or not 0.6 < off_wall < 1.6:
                     await self.set("runaway", "safe_distance", 0.12)
                     await self.goto(gx, gy, within=10)
                     await self.restore_lobby_patrol()

@@ -133,6 +133,7 @@ GENERATED_REGRESSIONS = [
     (20000, []),  # the route began facing along the corridor, not out of the lab door
     (20038, []),  # a door found in a line through the lab's clutter: "passed", still inside
     (20170, []),  # a junction the detector missed: followed to the corridor's end
+    (20013, []),  # a car's door on an end wall, seen aslant: never boarded
     # The hard set: people, doors closing, a dead sonar (HARD + its index).
     (20011, [*HARD, "11"]),  # the office door found in a line 36° off its wall, into the jamb
     (20088, [*HARD, "0"]),  # the car's open door unseen with the front sonar dead
@@ -144,6 +145,8 @@ GENERATED_REGRESSIONS = [
     (20148, [*HARD, "12"]),  # out of time while people kept the way to the lobby busy
     (20186, [*HARD, "18"]),  # `until: wall` at a T: round the corner first, down the branch
     (20133, [*HARD, "21"]),  # the same, turned into the branch the route then takes
+    (20063, [*HARD, "23"]),  # cars on both end walls of a short lobby: each opened behind the robot
+    (20021, [*HARD, "21"]),  # a car on the button's wall opened after the patrol walked past it
 ]
 
 

@@ -372,7 +372,7 @@ impl Body for DetectIntersection {
         }
         if let Some(o) = self.odom {
             if let Some((x, y)) = self.last_xy {
-                self.path += (o.x - x).hypot(o.y - y);
+                self.path += (o.x - x) * o.theta.cos() + (o.y - y) * o.theta.sin();
             }
             self.last_xy = Some((o.x, o.y));
         }
@@ -580,9 +580,12 @@ const WATCHED_SCANS: usize = 10;
 /// Watches for a way opening near the robot, in any direction: a sonar whose
 /// reading was near and steady (under `near`, within `steady` of itself, for
 /// the whole of the last second: a wall or a closed door) jumps to
-/// at least `jump` beyond the farthest it read then (plus, for a sonar
-/// looking back, the way the robot travelled meanwhile), and stays there for
-/// `confirm` cycles. A car's door
+/// at least `jump` beyond the farthest it read then, and stays there for
+/// `confirm` cycles. Readings are compared as of now: driving on by `d`, a
+/// wall along the way reads as before, and one square to the sonar's axis
+/// `d·cos(bearing)` nearer (ahead it comes nearer, behind it recedes); readings
+/// steady under either count. So a door opening beside the robot, ahead of it
+/// or behind it is seen while it drives. A car's door
 /// opening on any lobby wall within the sonars' reach is seen at once, not
 /// only when the robot passes it; someone walking out of a sonar's view is
 /// not (their readings were not steady, or the wall behind them was read
@@ -617,8 +620,9 @@ pub struct WatchOpenings {
     #[param(default = 0.3, min = 0.0, max = 10.0, unit = "rad/s")]
     max_turn: f64,
     activation: Activation,
-    /// The last scans (oldest first once full) and the odometry path length at each.
+    /// The last scans (oldest first once full) and the way made along the heading at each.
     scans: Vec<([f32; SONARS], f64)>,
+    /// The way made along the heading (odometry), signed: backing off counts negative, m.
     path: f64,
     last_xy: Option<(f64, f64)>,
     held: [i64; SONARS],
@@ -639,16 +643,28 @@ impl Body for WatchOpenings {
         }
         let mut best: Option<(usize, f64, f64, f64)> = None; // sonar, margin, before, now
         if self.scans.len() == WATCHED_SCANS {
-            let travelled = self.path - self.scans[0].1;
             for i in 0..SONARS {
-                let before = self.scans.iter().map(|(s, _)| centre_range(s, i)).fold(0.0_f64, f64::max);
-                let least = self.scans.iter().map(|(s, _)| centre_range(s, i)).fold(f64::INFINITY, f64::min);
+                // The readings before as they would read now, for a wall along the way (they
+                // stay as they were) and for one square to the sonar's axis (the way made
+                // since, along the axis, brings it that much nearer): the wall (a closed
+                // door) read steadily before under either, not someone walking by.
+                let axis = sonar_bearing(i).cos();
+                let (mut along, mut square) = ((0.0_f64, f64::INFINITY), (0.0_f64, f64::INFINITY));
+                for (scan, at) in &self.scans {
+                    let r = centre_range(scan, i);
+                    let r_square = r - (self.path - at) * axis;
+                    along = (along.0.max(r), along.1.min(r));
+                    square = (square.0.max(r_square), square.1.min(r_square));
+                }
+                let steady = |(most, least): (f64, f64)| most - least < self.steady;
+                let before = match (steady(along), steady(square)) {
+                    (true, _) => Some(along.0),
+                    (false, true) => Some(square.0),
+                    (false, false) => None,
+                };
                 let now = centre_range(&self.sonar, i);
-                // Driving on, a wall behind this sonar reads farther by the way made.
-                let grow = travelled * (-sonar_bearing(i).cos()).max(0.0);
-                // A wall (a closed door) read steadily before: not someone walking by.
-                let steady = before - least < self.steady + grow;
-                let far = steady && before < self.near && now.is_finite() && now > before + self.jump + grow;
+                let far = before.is_some_and(|b| b < self.near && now.is_finite() && now > b + self.jump);
+                let before = before.unwrap_or(f64::INFINITY);
                 self.held[i] = if far { self.held[i] + 1 } else { 0 };
                 let margin = now - before;
                 if self.held[i] >= self.confirm && best.is_none_or(|b| margin > b.1) {

@@ -405,16 +405,20 @@ fn a_car_door_opening_anywhere_near_is_seen_at_once_and_a_closed_one_never() {
     // end of the patrol): standing, or patrolling along the wall at 0.8 m/s. A door
     // seen obliquely (45° or more off face-on) is out of reach: the car's side walls
     // are then near behind it and the reading grows too little.
+    // Driving towards the door's wall or away from it (the door ahead or behind, 0.5 and
+    // 0.8 m/s), the readings before are compared as they would read now.
     let pi = std::f64::consts::PI;
-    for (seed, door, x, y, v, heading) in [
-        (1u64, 2.5, 3.0, 0.85, 0.0, 0.0),
-        (2, 2.5, 3.55, 1.5, 0.0, -pi / 2.0),
-        (3, 2.5, 3.05, 0.75, 0.0, pi / 2.0),
-        (4, 2.5, 3.05, 3.0, 0.0, -pi / 2.0),
-        (5, 2.5, 1.6, 0.85, 0.08, 0.0),
-        (6, 4.2, 5.9, 0.85, -0.08, pi),
+    for (seed, door, x, y, vx, vy, heading) in [
+        (1u64, 2.5, 3.0, 0.85, 0.0, 0.0, 0.0),
+        (2, 2.5, 3.55, 1.5, 0.0, 0.0, -pi / 2.0),
+        (3, 2.5, 3.05, 0.75, 0.0, 0.0, pi / 2.0),
+        (4, 2.5, 3.05, 3.0, 0.0, 0.0, -pi / 2.0),
+        (5, 2.5, 1.6, 0.85, 0.08, 0.0, 0.0),
+        (6, 4.2, 5.9, 0.85, -0.08, 0.0, pi),
+        (9, 2.5, 3.05, 3.2, 0.0, -0.05, -pi / 2.0),
+        (10, 2.5, 3.05, 0.85, 0.0, 0.08, pi / 2.0),
     ] {
-        let at = |k: usize| Pose::new(x + v * k as f64, y, heading);
+        let at = |k: usize| Pose::new(x + vx * k as f64, y + vy * k as f64, heading);
         let closed: Vec<(Pose, bool)> = (0..30).map(|k| (at(k), false)).collect();
         assert!(watch(door, &closed, seed).is_none(), "seed {seed}: an opening seen with the door closed");
         let opening: Vec<(Pose, bool)> = (0..30).map(|k| (at(k), k >= 15)).collect();
