@@ -49,6 +49,8 @@ FOLLOW_SLICE_S = 20.0
 #: (m), the robot has gone round a corner into a side corridor.
 SIDE_EXIT_RAD = math.radians(60)
 SIDE_EXIT_M = 1.0
+#: Walls on both sides nearer together than this: a corridor (they are 1.8 to 2.6 m wide), m.
+CORRIDOR_MAX_M = 3.0
 #: Following to a wall: the time budget, renewed while way is made, up to the longest, s.
 WALL_BUDGET_S = 180.0
 WALL_LONGEST_S = 600.0
@@ -65,6 +67,8 @@ PROBE_LOOK_M = 6.0
 PROBE_AT_M = (2.4, 2.9, 1.9, 3.4)
 #: The way into it is open when the front sonars read beyond this, m.
 PROBE_OPEN_M = 2.2
+#: A junction found on the way back this far before where looking began is still the one, m.
+JUNCTION_DRIFT_M = 1.0
 #: Wandering between two looks round, s.
 SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
@@ -124,6 +128,25 @@ def heading_off(along: float, rad: float) -> str:
 def bearing_of(i: int) -> float:
     """Bearing of sonar ``i`` in the robot frame (sonar 0 ahead, counter-clockwise)."""
     return wrap(i * 2 * math.pi / SONARS)
+
+
+def side_walls(ranges: Sequence[float], spread_deg: float = 60.0) -> tuple[float, float]:
+    """The nearest wall on the left and on the right, across the robot's heading, m.
+
+    Each side's is the nearest perpendicular distance the sonars within ``spread_deg`` of
+    square to that side see (from 30° to 150° by default: a doorway's jambs are on the
+    wall's line; clutter counts, it narrows the way).
+    """
+    lo, hi = math.radians(90 - spread_deg), math.radians(90 + spread_deg)
+
+    def wall(sign: float) -> float:
+        return min(
+            ranges[i] * abs(math.sin(bearing_of(i)))
+            for i in range(SONARS)
+            if lo <= sign * bearing_of(i) <= hi
+        )
+
+    return wall(1.0), wall(-1.0)
 
 
 class Sequencer:
@@ -940,10 +963,14 @@ class Sequencer:
         if until == "junction" and step.get("distance") is not None and count == 1:
             look_from = await self.odom()
             # Unseen by PROBE_LOOK_M on, or the way ahead blocked for good (a dead end just
-            # past it): probe for it.
+            # past it): look for it on the way back, then probe for it.
             beyond = farther_than(look_from, PROBE_LOOK_M)
             if await self.wait(seen, beyond, within=120) != 0:
-                return len(sides) == 1 and await self.probe_junction(look_from, sides[0])
+                if len(sides) != 1:
+                    return False
+                if await self.junction_on_the_way_back(look_from, sides[0]):
+                    return True
+                return await self.probe_junction(look_from, sides[0])
         else:
             for k in range(1, count + 1):
                 if await self.wait(seen, within=180):
@@ -956,26 +983,83 @@ class Sequencer:
                     if await self.wait(f"!({seen}) && {away}", within=60):
                         return False
         if until == "junction":
-            # Into the junction's middle before turning: `junction.centre` says where it is
-            # along the way (the detector may have waited until the robot was well past its
-            # near edge).
-            self.prefetch("junction", "odom")
-            junction: dict[str, Any] = await self.value("junction") or {}
-            centre = float(junction.get("centre", 0.6))
-            # Never more than 0.6 m on (a corridor that opens into a hall has no far edge), and
-            # never back: past the centre the robot is still well inside the junction.
-            forward = max(-1.5, min(0.6, centre)) if math.isfinite(centre) else 0.6
             o = await self.odom()
-            along = o.theta if self.corridor_heading is None else self.corridor_heading
-            if self.debug:
-                await self.say(f"      junction {junction}: {forward:+.2f} m on")
-            # Best effort: someone standing there may keep the robot from the very middle,
-            # and the turn and the next corridor's following work from near it too.
-            if abs(forward) > 0.1:
-                await self.goto(
-                    o.x + forward * math.cos(along), o.y + forward * math.sin(along), within=10
-                )
+            await self.junction_centre(
+                o.theta if self.corridor_heading is None else self.corridor_heading
+            )
         return True
+
+    async def junction_centre(self, along: float) -> None:
+        """Into the middle of the junction the detector saw, going ``along``, before turning.
+
+        `junction.centre` says where it is along the way (the detector may have waited until
+        the robot was well past its near edge).
+        """
+        self.prefetch("junction", "odom")
+        junction: dict[str, Any] = await self.value("junction") or {}
+        centre = float(junction.get("centre", 0.6))
+        # Never more than 0.6 m on (a corridor that opens into a hall has no far edge), and
+        # never back: past the centre the robot is still well inside the junction.
+        forward = max(-1.5, min(0.6, centre)) if math.isfinite(centre) else 0.6
+        o = await self.odom()
+        if self.debug:
+            await self.say(f"      junction {junction}: {forward:+.2f} m on")
+        # Best effort: someone standing there may keep the robot from the very middle,
+        # and the turn and the next corridor's following work from near it too.
+        if abs(forward) > 0.1:
+            await self.goto(
+                o.x + forward * math.cos(along), o.y + forward * math.sin(along), within=10
+            )
+
+    async def junction_on_the_way_back(self, look_from: Pose, side: str) -> bool:
+        """The junction on ``side`` the detector missed going on, looked for coming back.
+
+        Someone standing in its mouth, or clutter by it, hid it on the way; the robot turns
+        round and follows the corridor back to 2.5 m past ``look_from`` (where `distance`
+        brought it, before the junction; odometry drifts) with the detector watching the
+        other side. Seen no more than `JUNCTION_DRIFT_M` before ``look_from``, the robot
+        stands in the junction's middle (the route's next turn is from the heading it
+        planned, whichever way the robot faces).
+        """
+        along = look_from.theta if self.corridor_heading is None else self.corridor_heading
+        back = wrap(along + math.pi)
+        other = "right" if side == "left" else "left"
+        await self.say(f"      no junction seen on the {side}: looking for it on the way back")
+        if not await self.turn(wrap(back - (await self.odom()).theta)):
+            return False
+        o = await self.odom()
+        c, s = math.cos(back), math.sin(back)
+        made = f"(odom.x - {o.x!r}) * {c!r} + (odom.y - {o.y!r}) * {s!r}"
+        todo = (o.x - look_from.x) * math.cos(along) + (o.y - look_from.y) * math.sin(along) + 2.5
+        if todo > 0.5:
+            await self.use(
+                "runaway",
+                "avoid",
+                "follow_hallway",
+                "detect_intersection",
+                restart=["detect_intersection"],
+            )
+            passed = f"{made} > {todo!r}"
+            if await self.wait(f"junction.{other}", passed, within=30 + 10 * todo) == 0:
+                # Where its middle lies along the way from ``look_from``: the junction the
+                # route means lies ahead of it, give or take odometry's drift; one well
+                # before it is one the robot was meant to pass.
+                self.prefetch("junction", "odom")
+                junction: dict[str, Any] = await self.value("junction") or {}
+                centre = float(junction.get("centre", 0.0))
+                here = await self.odom()
+                at = (here.x - look_from.x) * math.cos(along) + (here.y - look_from.y) * math.sin(
+                    along
+                )
+                if math.isfinite(centre):
+                    at -= centre
+                if self.debug:
+                    await self.say(f"      a junction {at:+.1f} m along the way from the look")
+                if at > -JUNCTION_DRIFT_M:
+                    await self.junction_centre(back)
+                    return True
+        await self.turn(wrap(along - (await self.odom()).theta))
+        return False
 
     async def follow_to_wall(self) -> bool:
         """Follows the hallway up to the wall it ends in (`until: wall`).
@@ -989,16 +1073,21 @@ class Sequencer:
 
         Where the corridor ends in a T, following may take the robot round the corner before
         the wall is near enough (people in the crossing, a narrow crossing corridor). Turned
-        off the way by more than ``SIDE_EXIT_RAD`` and ``SIDE_EXIT_M`` to its side, it goes
-        back onto the way's line, faces the way and looks for the wall there; none near, it
-        follows on (it was a crossing on the way). The time budget is renewed while way is
+        off the way by more than ``SIDE_EXIT_RAD`` and ``SIDE_EXIT_M`` to its side, between
+        walls as near as a corridor's (else it is in a room, a lobby, whose way out was only
+        roughly planned: the way is where it now goes), it goes back onto the way's line,
+        faces the way and looks for the wall there; none near, it follows on (it was a
+        crossing on the way). The time budget is renewed while way is
         made along the route's heading (a busy lobby), up to ``WALL_LONGEST_S``.
         """
         start = await self.odom()
         along = start.theta if self.corridor_heading is None else self.corridor_heading
-        c, s = math.cos(along), math.sin(along)
-        lateral = f"(odom.y - {start.y!r}) * {c!r} - (odom.x - {start.x!r}) * {s!r}"
-        side_exit = f"{heading_off(along, SIDE_EXIT_RAD)} && abs({lateral}) > {SIDE_EXIT_M!r}"
+
+        def side_exit(start: Pose, along: float) -> str:
+            c, s = math.cos(along), math.sin(along)
+            lateral = f"(odom.y - {start.y!r}) * {c!r} - (odom.x - {start.x!r}) * {s!r}"
+            return f"{heading_off(along, SIDE_EXIT_RAD)} && abs({lateral}) > {SIDE_EXIT_M!r}"
+
         ahead = (
             f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
             f" && wall.distance < {WALL_AHEAD_M}"
@@ -1016,7 +1105,7 @@ class Sequencer:
         try:
             while self.t < deadline:
                 within = min(FOLLOW_SLICE_S, deadline - self.t)
-                held = await self.wait(ahead, side_exit, within=within)
+                held = await self.wait(ahead, side_exit(start, along), within=within)
                 if held == 0:
                     facing = (await self.odom()).theta
                     if abs(wrap(facing - along)) < math.radians(30):
@@ -1029,12 +1118,22 @@ class Sequencer:
                         return False
                     continue
                 if held == 1:
+                    # Square to each side only: corners ahead and behind are no walls of it.
+                    left, right = side_walls(await self.sonar(), 30.0)
+                    if self.debug:
+                        await self.say(f"      off the way: walls {left:.2f} and {right:.2f}")
+                    if left + right > CORRIDOR_MAX_M:
+                        # Not in a corridor (a lobby, a hall): the way bends with the room
+                        # (the heading planned out of it is only roughly the corridor's).
+                        start = await self.odom()
+                        along, best = start.theta, 0.0
+                        continue
                     if await self.wall_from_the_way(start, along):
                         return True
                     await watch_ahead()
                     await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
                 o = await self.odom()
-                made = (o.x - start.x) * c + (o.y - start.y) * s
+                made = (o.x - start.x) * math.cos(along) + (o.y - start.y) * math.sin(along)
                 if made > best + 0.5:
                     best = made
                     renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
@@ -1208,21 +1307,10 @@ class Sequencer:
 
         A robot that stopped just out of a door (something ahead) stands with a jamb at its
         side, where avoidance turns it away as often as following turns it back: it makes
-        no way. Each side's wall is the nearest perpendicular distance the sonars from 30°
-        to 150° to that side see (a doorway's jambs are on the wall's line; clutter counts,
-        it narrows the way); with walls on both sides within a corridor's width, it moves to
-        midway between them, else to at least `SIDE_CLEAR_M` from the one it sees.
+        no way. With walls on both sides within a corridor's width (`side_walls`), it moves
+        to midway between them, else to at least `SIDE_CLEAR_M` from the one it sees.
         """
-        ranges = await self.sonar()
-
-        def wall(sign: float) -> float:
-            return min(
-                ranges[i] * abs(math.sin(bearing_of(i)))
-                for i in range(SONARS)
-                if math.radians(30) <= sign * bearing_of(i) <= math.radians(150)
-            )
-
-        left, right = wall(1.0), wall(-1.0)
+        left, right = side_walls(await self.sonar())
         if self.debug:
             await self.say(f"      walls: left {left:.2f}, right {right:.2f}")
         if max(left, right) < 2.6:

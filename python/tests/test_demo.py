@@ -223,3 +223,20 @@ def test_heading_off_holds_exactly_outside_the_allowed_range_also_where_it_wraps
             t = math.radians(probe_deg)
             off = abs(d.wrap(t - along)) > math.radians(60)
             assert eval(as_python, {}, {"t": t}) == off, (along_deg, probe_deg, cond)
+
+
+def test_side_walls_are_the_nearest_square_to_each_side_and_corners_count_only_when_asked() -> None:
+    _deliver()
+    seq = sys.modules["sequencing"]
+    ranges = []
+    for i in range(seq.SONARS):
+        b = seq.bearing_of(i)
+        across = math.sin(b)
+        ranges.append(4.0 if abs(across) < 0.25 else (0.9 if across > 0 else 1.1) / abs(across))
+    left, right = seq.side_walls(ranges)
+    assert (round(left, 6), round(right, 6)) == (0.9, 1.1)
+    # A corner 0.5 m away at 30° to the left: a wall of the way for recentring (30°-150°),
+    # none for the corridor's width (60°-120° only).
+    ranges[2] = 0.5
+    assert math.isclose(seq.side_walls(ranges)[0], 0.25)
+    assert math.isclose(seq.side_walls(ranges, 30.0)[0], 0.9)
