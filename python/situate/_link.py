@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Union
@@ -91,6 +92,15 @@ def zenoh_config(
     return parsed
 
 
+#: A source location some Zenoh errors end with: `` at /home/…/zenoh/src/x.rs:447.``.
+_SOURCE_AT = re.compile(r"\s+at\s+\S*\.rs:\d+\.?")
+
+
+def zenoh_error(e: BaseException) -> str:
+    """A Zenoh error's text without the build machine's source paths it may carry."""
+    return _SOURCE_AT.sub("", str(e)).rstrip()
+
+
 def open_session(endpoints: Sequence[str], extra: ZenohSettings | None = None) -> zenoh.Session:
     """Opens a client session to ``endpoints``; :class:`NotRunning` if none accepts."""
     try:
@@ -98,7 +108,7 @@ def open_session(endpoints: Sequence[str], extra: ZenohSettings | None = None) -
     except zenoh.ZError as e:
         where = ", ".join(endpoints)
         raise NotRunning(
-            f"no skill manager answered at {where}: could not connect ({e}); "
+            f"no skill manager answered at {where}: could not connect ({zenoh_error(e)}); "
             "is `situate run` running and reachable there, and does it accept these "
             "credentials (user and password, certificates)?"
         ) from e
@@ -158,7 +168,7 @@ def request(
     try:
         replies = session.get(key, payload=json.dumps(args), timeout=timeout)
     except zenoh.ZError as e:
-        raise NotRunning(f"could not send `{key}`: {e}") from e
+        raise NotRunning(f"could not send `{key}`: {zenoh_error(e)}") from e
     for reply in replies:
         return _result(key, reply, timeout, endpoints)
     raise _no_answer(key, timeout, endpoints)
@@ -216,7 +226,7 @@ def send(
     try:
         session.get(key, handler, payload=json.dumps(args), timeout=timeout)
     except zenoh.ZError as e:
-        raise NotRunning(f"could not send `{key}`: {e}") from e
+        raise NotRunning(f"could not send `{key}`: {zenoh_error(e)}") from e
 
 
 def robots(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:
