@@ -7,10 +7,10 @@ interpreter), pushes the call button, patrols the lobby until a car's door opens
 car it is, enters, pushes the goal floor, waits for it, leaves, follows the corridor to the
 office's barcode and says its message inside the office.
 
-The means (the link, skill switching, waits, the behaviours shared by phases, the route
-interpreter) are in ``sequencing.py`` beside this file; the perceiving is done by skills
-(`std.locate_door`, `std.fit_wall`, the detectors and trackers). Every wait has a time-out on the
-robot's clock, and failed phases are retried a bounded number of times.
+The means are beside this file: the link, skill switching, waits and the behaviours shared by
+phases in ``sequencing.py``, the route interpreter in ``routes.py``; the perceiving is done by
+skills (`std.locate_door`, `std.fit_wall`, the detectors and trackers). Every wait has a
+time-out on the robot's clock, and failed phases are retried a bounded number of times.
 
 ``--mode all-active`` is the experiment's baseline: every skill is switched on at the start and
 never off; the sequencer sets the same parameters and waits on the same monitors, and the
@@ -33,12 +33,12 @@ from dataclasses import dataclass, field
 from signal import SIGHUP, SIGINT, SIGTERM, Signals
 from typing import Any
 
+from routes import RouteSequencer
 from sequencing import (
     SONARS,
     OutOfTime,
     PhaseFailed,
     Pose,
-    Sequencer,
     bearing_of,
     wrap,
 )
@@ -152,7 +152,7 @@ class Mission:
         )
 
 
-class Delivery(Sequencer):
+class Delivery(RouteSequencer):
     """The delivery mission: one method per phase of the narrative."""
 
     def __init__(self, robot: situate.Robot, mission: Mission, **kw: Any) -> None:

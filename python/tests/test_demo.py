@@ -181,7 +181,7 @@ def test_a_seed_replays_exactly() -> None:
 
 
 def _deliver() -> ModuleType:
-    sys.path.insert(0, str(ROOT / "demo"))  # deliver.py imports sequencing.py beside it
+    sys.path.insert(0, str(ROOT / "demo"))  # deliver.py imports the modules beside it
     spec = importlib.util.spec_from_file_location("deliver", ROOT / "demo" / "deliver.py")
     assert spec is not None
     assert spec.loader is not None
@@ -213,7 +213,7 @@ def test_mission_reads_the_maps_mission_section() -> None:
 
 def test_heading_off_holds_exactly_outside_the_allowed_range_also_where_it_wraps() -> None:
     d = _deliver()
-    seq = sys.modules["sequencing"]
+    seq = sys.modules["routes"]
     for along_deg in (0, 45, 150, 179, -179, -120, 180):
         along = math.radians(along_deg)
         cond = seq.heading_off(along, math.radians(60))
@@ -227,7 +227,7 @@ def test_heading_off_holds_exactly_outside_the_allowed_range_also_where_it_wraps
 
 def test_side_walls_are_the_nearest_square_to_each_side_and_corners_count_only_when_asked() -> None:
     _deliver()
-    seq = sys.modules["sequencing"]
+    seq = sys.modules["routes"]
     ranges = []
     for i in range(seq.SONARS):
         b = seq.bearing_of(i)

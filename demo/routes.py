@@ -1,0 +1,580 @@
+"""The route interpreter: route hints of a map (docs/maps.md, "Route steps") followed by a robot.
+
+`RouteSequencer` adds to `Sequencer` (the link, waits, skill switching and the behaviours every
+mission shares) what following a route takes: following a hallway until a junction, a door, a
+barcode, a wall or a distance (`follow`), with the fall-backs each needs when people, clutter
+or odometry get in the way (a junction looked for on the way back and probed for, a wall
+found round a corner, way made measured along the route's heading); turning at a junction
+into the side corridor's mouth; and `run_route`, which runs a leg's steps in order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from typing import Any
+
+from sequencing import (
+    DOOR_STANDOFF,
+    SONARS,
+    WALL_AHEAD_M,
+    PhaseFailed,
+    Pose,
+    Sequencer,
+    bearing_of,
+    wrap,
+)
+
+#: Following for a distance: the time in which some way must be made, s.
+FOLLOW_SLICE_S = 20.0
+#: Following to a wall: turned off the way by more than this (rad) and this far to its side
+#: (m), the robot has gone round a corner into a side corridor.
+SIDE_EXIT_RAD = math.radians(60)
+SIDE_EXIT_M = 1.0
+#: Walls on both sides nearer together than this: a corridor (they are 1.8 to 2.6 m wide), m.
+CORRIDOR_MAX_M = 3.0
+#: Following to a wall: the time budget, renewed while way is made, up to the longest, s.
+WALL_BUDGET_S = 180.0
+WALL_LONGEST_S = 600.0
+#: Turned into a junction, the robot moves in line with the side corridor's mouth when
+#: farther than this off its middle, m.
+MOUTH_OFF_M = 0.35
+#: Where only one side's wall is seen, the robot keeps at least this far from it, m.
+SIDE_CLEAR_M = 0.8
+#: A junction a route's `distance` leads to lies within this of where looking began, m.
+PROBE_LOOK_M = 6.0
+#: Where it is probed for, along the corridor from there, m.
+PROBE_AT_M = (2.4, 2.9, 1.9, 3.4)
+#: The way into it is open when the front sonars read beyond this, m.
+PROBE_OPEN_M = 2.2
+#: A junction found on the way back this far before where looking began is still the one, m.
+JUNCTION_DRIFT_M = 1.0
+
+
+def farther_than(o: Pose, metres: float) -> str:
+    """The condition: the robot is more than ``metres`` (straight line) from pose ``o``."""
+    dx, dy = f"(odom.x - {o.x!r})", f"(odom.y - {o.y!r})"
+    return f"{dx} * {dx} + {dy} * {dy} > {metres * metres!r}"
+
+
+def heading_off(along: float, rad: float) -> str:
+    """The condition: the odometry heading is more than ``rad`` (< pi) off ``along``.
+
+    ``odom.theta`` is wrapped into (-pi, pi]; the allowed range around ``along`` may wrap too.
+    """
+    lo, hi = wrap(along) - rad, wrap(along) + rad
+    if hi > math.pi:
+        return f"odom.theta < {lo!r} && odom.theta > {hi - 2 * math.pi!r}"
+    if lo < -math.pi:
+        return f"odom.theta > {hi!r} && odom.theta < {lo + 2 * math.pi!r}"
+    return f"(odom.theta < {lo!r} || odom.theta > {hi!r})"
+
+
+def side_walls(ranges: Sequence[float], spread_deg: float = 60.0) -> tuple[float, float]:
+    """The nearest wall on the left and on the right, across the robot's heading, m.
+
+    Each side's is the nearest perpendicular distance the sonars within ``spread_deg`` of
+    square to that side see (from 30° to 150° by default: a doorway's jambs are on the
+    wall's line; clutter counts, it narrows the way).
+    """
+    lo, hi = math.radians(90 - spread_deg), math.radians(90 + spread_deg)
+
+    def wall(sign: float) -> float:
+        return min(
+            ranges[i] * abs(math.sin(bearing_of(i)))
+            for i in range(SONARS)
+            if lo <= sign * bearing_of(i) <= hi
+        )
+
+    return wall(1.0), wall(-1.0)
+
+
+class RouteSequencer(Sequencer):
+    """A `Sequencer` that follows a map's route hints (`run_route`)."""
+
+    async def follow(self, step: Mapping[str, Any]) -> bool:
+        """A route step ``follow: hallway, until: …`` (docs/maps.md, "Route steps").
+
+        ``until: junction`` or ``door`` waits for the ``count``-th opening (default 1) on
+        ``side`` (either when not given) since the step began, each counted once, as it passes;
+        ``until: barcode`` until that barcode is in view; ``until: wall`` until a wall stops the
+        robot; ``until: distance`` after ``distance`` m. With ``distance`` and another ``until``,
+        the first ``distance`` m are followed without looking.
+        """
+        until = str(step.get("until"))
+        side = step.get("side")
+        count = int(step.get("count", 1))
+        await self.restore("follow_hallway", "speed")
+        if step.get("distance") is not None:
+            if not await self.follow_for(float(step["distance"])):
+                return False
+            if until == "distance":
+                return True
+        if until == "barcode":
+            code = int(step["barcode"])
+            await self.set("track_barcode", "id", code)
+            return await self.follow_until(f"target.seen && target.id == {code}", 180)
+        if until == "wall":
+            return await self.follow_to_wall()
+        detector, signal = (
+            ("detect_intersection", "junction") if until == "junction" else ("detect_door", "door")
+        )
+        await self.use("runaway", "avoid", "follow_hallway", detector, restart=[detector])
+        sides = [side] if side in ("left", "right") else ["left", "right"]
+        seen = " || ".join(f"{signal}.{s}" for s in sides)
+        # A junction expected just ahead (`distance` brought the robot to about 1.5 m before
+        # it: docs/maps.md) that the detector misses is probed for where it should be.
+        if until == "junction" and step.get("distance") is not None and count == 1:
+            look_from = await self.odom()
+            # Unseen by PROBE_LOOK_M on, or the way ahead blocked for good (a dead end just
+            # past it): look for it on the way back, then probe for it.
+            beyond = farther_than(look_from, PROBE_LOOK_M)
+            if await self.wait(seen, beyond, within=120) != 0:
+                if len(sides) != 1:
+                    return False
+                if await self.junction_on_the_way_back(look_from, sides[0]):
+                    return True
+                return await self.probe_junction(look_from, sides[0])
+        else:
+            for k in range(1, count + 1):
+                if await self.wait(seen, within=180):
+                    return False
+                if k < count:
+                    await self.say(f"      {until} {k} of {count} passed")
+                    # On past this one: the next is another only once this one is behind
+                    # (its flag off) and the robot a metre on (a flag flickering counts once).
+                    away = farther_than(await self.odom(), 1.0)
+                    if await self.wait(f"!({seen}) && {away}", within=60):
+                        return False
+        if until == "junction":
+            o = await self.odom()
+            await self.junction_centre(
+                o.theta if self.corridor_heading is None else self.corridor_heading
+            )
+        return True
+
+    async def junction_centre(self, along: float) -> None:
+        """Into the middle of the junction the detector saw, going ``along``, before turning.
+
+        `junction.centre` says where it is along the way (the detector may have waited until
+        the robot was well past its near edge).
+        """
+        self.prefetch("junction", "odom")
+        junction: dict[str, Any] = await self.value("junction") or {}
+        centre = float(junction.get("centre", 0.6))
+        # Never more than 0.6 m on (a corridor that opens into a hall has no far edge), and
+        # never back: past the centre the robot is still well inside the junction.
+        forward = max(-1.5, min(0.6, centre)) if math.isfinite(centre) else 0.6
+        o = await self.odom()
+        if self.debug:
+            await self.say(f"      junction {junction}: {forward:+.2f} m on")
+        # Best effort: someone standing there may keep the robot from the very middle,
+        # and the turn and the next corridor's following work from near it too.
+        if abs(forward) > 0.1:
+            await self.goto(
+                o.x + forward * math.cos(along), o.y + forward * math.sin(along), within=10
+            )
+
+    async def junction_on_the_way_back(self, look_from: Pose, side: str) -> bool:
+        """The junction on ``side`` the detector missed going on, looked for coming back.
+
+        Someone standing in its mouth, or clutter by it, hid it on the way; the robot turns
+        round and follows the corridor back to 2.5 m past ``look_from`` (where `distance`
+        brought it, before the junction; odometry drifts) with the detector watching the
+        other side. Seen no more than `JUNCTION_DRIFT_M` before ``look_from``, the robot
+        stands in the junction's middle (the route's next turn is from the heading it
+        planned, whichever way the robot faces).
+        """
+        along = look_from.theta if self.corridor_heading is None else self.corridor_heading
+        back = wrap(along + math.pi)
+        other = "right" if side == "left" else "left"
+        await self.say(f"      no junction seen on the {side}: looking for it on the way back")
+        if not await self.turn(wrap(back - (await self.odom()).theta)):
+            return False
+        o = await self.odom()
+        c, s = math.cos(back), math.sin(back)
+        made = f"(odom.x - {o.x!r}) * {c!r} + (odom.y - {o.y!r}) * {s!r}"
+        todo = (o.x - look_from.x) * math.cos(along) + (o.y - look_from.y) * math.sin(along) + 2.5
+        if todo > 0.5:
+            await self.use(
+                "runaway",
+                "avoid",
+                "follow_hallway",
+                "detect_intersection",
+                restart=["detect_intersection"],
+            )
+            passed = f"{made} > {todo!r}"
+            if await self.wait(f"junction.{other}", passed, within=30 + 10 * todo) == 0:
+                # Where its middle lies along the way from ``look_from``: the junction the
+                # route means lies ahead of it, give or take odometry's drift; one well
+                # before it is one the robot was meant to pass.
+                self.prefetch("junction", "odom")
+                junction: dict[str, Any] = await self.value("junction") or {}
+                centre = float(junction.get("centre", 0.0))
+                here = await self.odom()
+                at = (here.x - look_from.x) * math.cos(along) + (here.y - look_from.y) * math.sin(
+                    along
+                )
+                if math.isfinite(centre):
+                    at -= centre
+                if self.debug:
+                    await self.say(f"      a junction {at:+.1f} m along the way from the look")
+                if at > -JUNCTION_DRIFT_M:
+                    await self.junction_centre(back)
+                    return True
+        await self.turn(wrap(along - (await self.odom()).theta))
+        return False
+
+    async def follow_to_wall(self) -> bool:
+        """Follows the hallway up to the wall it ends in (`until: wall`).
+
+        Up to the wall ahead: about the middle of the corridor it ends in (corridors are 1.8
+        to 2.6 m wide), before avoidance would start turning away from it. A wall across the
+        way: a line fitted to at least 5 of the 7 sonars within 45° of ahead, square to the
+        way, that stays put (`wall_stays`). Neither a jamb caught by the front sonar's cone
+        nor clutter or someone in the corridor (a person fills two or three sonars' view, and
+        a narrow corridor's side walls lie along the way) is taken for it.
+
+        Where the corridor ends in a T, following may take the robot round the corner before
+        the wall is near enough (people in the crossing, a narrow crossing corridor). Turned
+        off the way by more than ``SIDE_EXIT_RAD`` and ``SIDE_EXIT_M`` to its side, between
+        walls as near as a corridor's (else it is in a room, a lobby, whose way out was only
+        roughly planned: the way is where it now goes), it goes back onto the way's line,
+        faces the way and looks for the wall there; none near, it follows on (it was a
+        crossing on the way). The time budget is renewed while way is
+        made along the route's heading (a busy lobby), up to ``WALL_LONGEST_S``.
+        """
+        start = await self.odom()
+        along = start.theta if self.corridor_heading is None else self.corridor_heading
+
+        def side_exit(start: Pose, along: float) -> str:
+            c, s = math.cos(along), math.sin(along)
+            lateral = f"(odom.y - {start.y!r}) * {c!r} - (odom.x - {start.x!r}) * {s!r}"
+            return f"{heading_off(along, SIDE_EXIT_RAD)} && abs({lateral}) > {SIDE_EXIT_M!r}"
+
+        ahead = (
+            f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
+            f" && wall.distance < {WALL_AHEAD_M}"
+        )
+
+        async def watch_ahead() -> None:
+            await self.set("fit_wall", "bearing_deg", 0.0)
+            await self.set("fit_wall", "half_angle_deg", 45.0)
+
+        await watch_ahead()
+        await self.use("runaway", "avoid", "follow_hallway", "fit_wall", restart=["fit_wall"])
+        began = await self.now()
+        deadline = began + WALL_BUDGET_S
+        best = 0.0
+        try:
+            while self.t < deadline:
+                within = min(FOLLOW_SLICE_S, deadline - self.t)
+                held = await self.wait(ahead, side_exit(start, along), within=within)
+                if held == 0:
+                    facing = (await self.odom()).theta
+                    if abs(wrap(facing - along)) < math.radians(30):
+                        if await self.wall_stays():
+                            return True
+                        await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
+                        continue
+                    # Facing a side wall (turned there by avoidance, round clutter): not the end.
+                    if await self.wait(f"!({ahead})", within=deadline - self.t):
+                        return False
+                    continue
+                if held == 1:
+                    # Square to each side only: corners ahead and behind are no walls of it.
+                    left, right = side_walls(await self.sonar(), 30.0)
+                    if self.debug:
+                        await self.say(f"      off the way: walls {left:.2f} and {right:.2f}")
+                    if left + right > CORRIDOR_MAX_M:
+                        # Not in a corridor (a lobby, a hall): the way bends with the room
+                        # (the heading planned out of it is only roughly the corridor's).
+                        start = await self.odom()
+                        along, best = start.theta, 0.0
+                        continue
+                    if await self.wall_from_the_way(start, along):
+                        return True
+                    await watch_ahead()
+                    await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
+                o = await self.odom()
+                made = (o.x - start.x) * math.cos(along) + (o.y - start.y) * math.sin(along)
+                if made > best + 0.5:
+                    best = made
+                    renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
+                    deadline = min(renewed, began + WALL_LONGEST_S)
+            return False
+        finally:
+            await self.restore("fit_wall", "bearing_deg")
+            await self.restore("fit_wall", "half_angle_deg")
+
+    async def wall_from_the_way(self, start: Pose, along: float) -> bool:
+        """Gone round a corner off the way that began at ``start``: whether the way ends here.
+
+        Back onto the way's line (abreast of where the robot is), facing the way: a wall
+        square to it within a corridor's width and a half (the far wall of the crossing
+        corridor) is driven up to and must stay put (`wall_stays`).
+        """
+        o = await self.odom()
+        c, s = math.cos(along), math.sin(along)
+        made = (o.x - start.x) * c + (o.y - start.y) * s
+        await self.say("    turned into a side corridor: back onto the way, looking for its end")
+        await self.goto(start.x + made * c, start.y + made * s, within=30)
+        await self.turn(wrap(along - (await self.odom()).theta))
+        wall = await self.wall_towards(along)
+        if self.debug:
+            await self.say(f"      wall towards the way: {wall}")
+        if wall is None or abs(wrap(wall[0] - along)) > math.radians(25) or wall[1] > 3.5:
+            return False
+        go = wall[1] - (WALL_AHEAD_M - 0.3)
+        if go > 0.1:
+            o = await self.odom()
+            await self.goto(o.x + go * c, o.y + go * s, within=20)
+        await self.set("fit_wall", "bearing_deg", 0.0)
+        await self.set("fit_wall", "half_angle_deg", 45.0)
+        return await self.wall_stays()
+
+    async def follow_until(self, condition: str, within: float) -> bool:
+        """Follows the hallway (barcode tracking on) until ``condition`` holds.
+
+        Making less than 0.5 m of way along the route's heading in ``FOLLOW_SLICE_S``
+        (pushed into a doorway by someone coming the other way, with a jamb beside it), the
+        robot faces the way, moves to the corridor's middle (`recentre`) and goes on.
+        """
+        o = await self.odom()
+        heading = o.theta if self.corridor_heading is None else self.corridor_heading
+        c, s = math.cos(heading), math.sin(heading)
+        deadline = await self.now() + within
+        await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
+        best = 0.0
+        while self.t < deadline:
+            slice_s = min(FOLLOW_SLICE_S, deadline - self.t)
+            if await self.wait(condition, within=slice_s) == 0:
+                return True
+            here = await self.odom()
+            made = (here.x - o.x) * c + (here.y - o.y) * s
+            if made > best + 0.5:
+                best = made
+                continue
+            await self.say(f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle")
+            await self.turn(wrap(heading - here.theta))
+            await self.recentre(heading)
+            await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
+            best = made
+        return False
+
+    async def probe_junction(self, look_from: Pose, side: str) -> bool:
+        """The junction on ``side`` the detector missed, probed where a route says it is.
+
+        It lies 1.5 m or more ahead of ``look_from`` (docs/maps.md, route hints with
+        `distance`), 1.8 to 2.6 m wide: at points along the corridor the robot turns to that side
+        and takes the first where the way is open (the three front sonars read beyond
+        `PROBE_OPEN_M`), standing in it facing the corridor's way, as the detector would
+        have left it.
+        """
+        axis = look_from.theta if self.corridor_heading is None else self.corridor_heading
+        turn = math.pi / 2 if side == "left" else -math.pi / 2
+        await self.say(f"      no junction seen: probing for it on the {side}")
+        for along in PROBE_AT_M:
+            x = look_from.x + along * math.cos(axis)
+            y = look_from.y + along * math.sin(axis)
+            if not await self.goto(x, y, within=30):
+                continue
+            if not await self.turn(wrap(axis + turn - (await self.odom()).theta)):
+                continue
+            ranges = await self.sonar()
+            if self.debug:
+                await self.say(
+                    f"        at {along} m: ahead {[round(r, 2) for r in ranges[-2:] + ranges[:3]]}"
+                )
+            # The sonars at ±15° see the side corridor's walls from about 2 m on, and one of
+            # them its corner when the robot stands near an edge (odometry is off by some
+            # tenths after a long corridor): one of them open, the other not blocked at once.
+            pair = sorted((ranges[1], ranges[-1]))
+            if ranges[0] > PROBE_OPEN_M and pair[1] > PROBE_OPEN_M - 0.6 and pair[0] > 0.7:
+                await self.turn(wrap(axis - (await self.odom()).theta))
+                return True
+        return False
+
+    async def follow_for(self, metres: float) -> bool:
+        """Follows the hallway for ``metres`` along the way (odometry).
+
+        The way is the route's heading, not any straight line from here: pushed out of a
+        corridor's mouth into the crossing corridor (going round someone), the robot would go
+        on along the wrong one, pressing towards its way. Making less than 0.5 m of way in
+        ``FOLLOW_SLICE_S``, it goes back to where the step began, faces the way, moves to the
+        corridor's middle (`recentre`) and starts again (twice at most), each time with the
+        whole time budget.
+        """
+        start = await self.odom()
+        heading = start.theta if self.corridor_heading is None else self.corridor_heading
+        c, s = math.cos(heading), math.sin(heading)
+        made_expr = f"(odom.x - {start.x!r}) * {c!r} + (odom.y - {start.y!r}) * {s!r}"
+        # 0.3 m/s, with time to wait for people in the way and to go round them.
+        deadline = self.t + 60 + 10 * metres
+        await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
+        best, restarts = 0.0, 0
+        while self.t < deadline:
+            within = min(FOLLOW_SLICE_S, deadline - self.t)
+            if await self.wait(f"{made_expr} > {metres!r}", within=within) == 0:
+                return True
+            o = await self.odom()
+            made = (o.x - start.x) * c + (o.y - start.y) * s
+            if made > best + 0.5:
+                best = made
+                continue
+            if restarts == 2:
+                return False
+            restarts += 1
+            await self.say(f"    {made:.1f} of {metres:.1f} m made, no more: from the start again")
+            if self.debug:
+                self.prefetch("drive", "odom", "sonar.range")
+                drive = await self.value("drive")
+                ranges = [round(r, 2) for r in await self.sonar()]
+                await self.say(f"      drive {drive} pose {o} sonar {ranges}")
+            await self.goto(start.x, start.y, within=40)
+            await self.turn(wrap(heading - (await self.odom()).theta))
+            await self.recentre(heading)
+            await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
+            best = 0.0
+            # A whole budget again: the time spent waiting for people who kept the way
+            # (a busy corridor to a lobby) is no sign the way is wrong.
+            deadline = await self.now() + 60 + 10 * metres
+        return False
+
+    async def into_mouth(self, heading: float) -> None:
+        """Turned towards a side corridor at a junction: in line with its mouth, facing it.
+
+        The junction's centre is an estimate (someone in the mouth, clutter by it): turned
+        a few tenths off it, the robot faces the corner with the mouth beside it, and a
+        corner is what neither following nor avoidance gets round. The mouth is an opening
+        in the near wall's line ahead (`std.locate_door`, as wide as a side corridor may
+        be; at least 1 m of it seen); off its middle by more than `MOUTH_OFF_M`, the robot
+        moves sideways to it.
+        """
+        await self.set("locate_door", "max_width", 3.0)
+        try:
+            fix = await self.clue("locate_door", "opening")
+        finally:
+            await self.restore("locate_door", "max_width")
+        if self.debug:
+            await self.say(f"      mouth {fix}")
+        if fix is None or float(fix["width"]) < 1.0 or float(fix["wall"]) > 2.0:
+            return
+        lateral = float(fix["y"])
+        if abs(lateral) < MOUTH_OFF_M or abs(float(fix["normal"])) > math.radians(25):
+            return
+        await self.say(f"    {abs(lateral):.1f} m off the side corridor's mouth: in line with it")
+        await self.shift_sideways(lateral, heading)
+
+    async def recentre(self, heading: float) -> None:
+        """Facing ``heading`` along a corridor: sideways to its middle, then facing it again.
+
+        A robot that stopped just out of a door (something ahead) stands with a jamb at its
+        side, where avoidance turns it away as often as following turns it back: it makes
+        no way. With walls on both sides within a corridor's width (`side_walls`), it moves
+        to midway between them, else to at least `SIDE_CLEAR_M` from the one it sees.
+        """
+        left, right = side_walls(await self.sonar())
+        if self.debug:
+            await self.say(f"      walls: left {left:.2f}, right {right:.2f}")
+        if max(left, right) < 2.6:
+            shift = (left - right) / 2  # positive: to the left
+        elif min(left, right) < SIDE_CLEAR_M:
+            shift = (SIDE_CLEAR_M - min(left, right)) * (1.0 if left > right else -1.0)
+        else:
+            return
+        if abs(shift) < 0.15:
+            return
+        await self.shift_sideways(shift, heading)
+
+    async def shift_sideways(self, metres: float, heading: float) -> None:
+        """Moves ``metres`` across ``heading`` (positive: to its left), then faces it."""
+        o = await self.odom()
+        x = o.x - metres * math.sin(heading)
+        y = o.y + metres * math.cos(heading)
+        await self.set("runaway", "safe_distance", 0.12)
+        try:
+            await self.goto(x, y, within=15)
+            await self.turn(wrap(heading - (await self.odom()).theta))
+        finally:
+            await self.restore("runaway", "safe_distance")
+
+    async def run_route(
+        self,
+        leg: str,
+        steps: Sequence[Mapping[str, Any]],
+        *,
+        stop_before_home: int | None = None,
+        on_home: Callable[[int], Awaitable[None]] | None = None,
+        heading: float | None = None,
+    ) -> None:
+        """Interprets the route hints ``steps`` of ``leg`` (docs/maps.md, "Route steps").
+
+        Stops before a ``home`` on ``stop_before_home``; ``on_home`` is told each barcode homed on.
+        ``heading`` is the way the leg begins facing, in the odometry frame (default: the robot's).
+        """
+        pending_home: int | None = None
+        # The way the leg begins facing: ``heading`` (odometry) when the caller knows it (out
+        # through the door just passed, however the robot ended up turned), else the robot's.
+        self.corridor_heading = (await self.odom()).theta if heading is None else heading
+        for n, step in enumerate(steps):
+            if step.get("home") is not None and int(step["home"]) == stop_before_home:
+                return
+            text = ", ".join(f"{k} {v}" for k, v in step.items())
+            await self.say(f"    route {leg}, step {n + 1}: {text}")
+            ok = True
+            if step.get("follow"):
+                ok = await self.follow(step)
+            if ok and step.get("home") is not None:
+                pending_home = int(step["home"])
+                if on_home is not None:
+                    await on_home(pending_home)
+                ok = False
+                for _attempt in range(3):
+                    await self.set("track_barcode", "id", pending_home)
+                    await self.use("runaway", "avoid", "track_barcode")
+                    self.send("step", cycles=3)
+                    if not (await self.value("target"))["seen"] and not await self.search(
+                        pending_home, 60
+                    ):
+                        continue
+                    if any(s.get("pass") for s in steps[n + 1 :]):
+                        ok = await self.line_up(pending_home, DOOR_STANDOFF)
+                    else:
+                        ok = await self.home_on(
+                            pending_home, self.normal[("home", "stop_distance")]
+                        )
+                    if ok:
+                        self.corridor_heading = (await self.odom()).theta
+                        break
+                    await self.say(f"    could not home on barcode {pending_home}: again")
+            if ok and step.get("pass"):
+                hint = next(
+                    (str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None
+                )
+                for _attempt in range(3):
+                    ok = await self.pass_door(pending_home, hint) and await self.beyond_wall()
+                    if ok or pending_home is None:
+                        break
+                    await self.say(f"    lining up with barcode {pending_home} again")
+                    await self.look_round(pending_home)
+                    await self.line_up(pending_home, DOOR_STANDOFF)
+                pending_home = None
+            elif ok and step.get("turn"):
+                if any(s.get("pass") for s in steps[n + 1 : n + 2]) and pending_home is not None:
+                    await self.say("      (the door finder of the next step faces the door)")
+                    continue
+                angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
+                    str(step["turn"])
+                ]
+                # From the heading the route planned (the last turn's, or the robot's where the
+                # leg began or after homing), not from wherever following a corridor and
+                # stepping into a junction left it facing: errors do not add up turn by turn.
+                here = (await self.odom()).theta
+                goal = (here if self.corridor_heading is None else self.corridor_heading) + angle
+                ok = await self.turn(wrap(goal - here))
+                self.corridor_heading = goal
+                if ok and step.get("until") == "junction" and angle != math.pi:
+                    await self.into_mouth(goal)
+            if not ok:
+                raise PhaseFailed(f"route {leg}, step {n + 1} ({text}) failed")
