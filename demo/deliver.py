@@ -530,9 +530,16 @@ class Delivery(RouteSequencer):
             # The route starts in front of this floor's call button, whichever car came up.
             button = m.goal_button_barcode
             await self.phase(11, f"finding this floor's call button (barcode {button})")
-            if not await self.look_round(button) and not await self.search(button, 120):
-                raise PhaseFailed(f"the call button of floor {m.goal_floor} is nowhere in sight")
-            if not await self.line_up(button, 1.0):
+            # Someone passing between may hide the barcode while lining up: look again.
+            for _attempt in range(3):
+                if not await self.look_round(button) and not await self.search(button, 120):
+                    raise PhaseFailed(
+                        f"the call button of floor {m.goal_floor} is nowhere in sight"
+                    )
+                if await self.line_up(button, 1.0):
+                    break
+                await self.say(f"    could not line up with barcode {button}: again")
+            else:
                 raise PhaseFailed(f"could not line up with barcode {button}")
             await self.say(f"    following the route to the office's barcode {m.office_barcode}")
             await self.run_route("button_to_office", m.route["button_to_office"], on_home=homing)
