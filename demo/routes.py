@@ -47,6 +47,8 @@ PROBE_LOOK_M = 6.0
 PROBE_AT_M = (2.4, 2.9, 1.9, 3.4)
 #: The way into it is open when the front sonars read beyond this, m.
 PROBE_OPEN_M = 2.2
+#: Looks (half a second apart) a probe takes, each sonar's farthest reading counting.
+PROBE_LOOKS = 6
 #: A junction found on the way back this far before where looking began is still the one, m.
 JUNCTION_DRIFT_M = 1.0
 
@@ -368,20 +370,34 @@ class RouteSequencer(Sequencer):
         It lies 1.5 m or more ahead of ``look_from`` (docs/maps.md, route hints with
         `distance`), 1.8 to 2.6 m wide: at points along the corridor the robot turns to that side
         and takes the first where the way is open (the three front sonars read beyond
-        `PROBE_OPEN_M`), standing in it facing the corridor's way, as the detector would
-        have left it.
+        `PROBE_OPEN_M` at least once in `PROBE_LOOKS` looks: people there move on), standing
+        in it facing the corridor's way, as the detector would have left it.
         """
         axis = look_from.theta if self.corridor_heading is None else self.corridor_heading
         turn = math.pi / 2 if side == "left" else -math.pi / 2
         await self.say(f"      no junction seen: probing for it on the {side}")
+        c, s = math.cos(axis), math.sin(axis)
+        made = f"(odom.x - {look_from.x!r}) * {c!r} + (odom.y - {look_from.y!r}) * {s!r}"
         for along in PROBE_AT_M:
-            x = look_from.x + along * math.cos(axis)
-            y = look_from.y + along * math.sin(axis)
-            if not await self.goto(x, y, within=30):
+            here = await self.odom()
+            if (here.x - look_from.x) * c + (here.y - look_from.y) * s < along - 0.3:
+                # On to it by following the corridor: it keeps to the middle and goes round
+                # people, where a point drawn by odometry after a long way may be off the
+                # middle, near a wall the robot cannot come close to.
+                await self.turn(wrap(axis - here.theta))
+                await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
+                if await self.wait(f"{made} > {along!r}", within=30) != 0:
+                    continue
+            elif not await self.goto(look_from.x + along * c, look_from.y + along * s, within=30):
                 continue
             if not await self.turn(wrap(axis + turn - (await self.odom()).theta)):
                 continue
+            # The farthest each sonar reads over a few seconds: people walking in the side
+            # corridor move on, its walls do not.
             ranges = await self.sonar()
+            for _look in range(PROBE_LOOKS - 1):
+                self.send("step", cycles=5)
+                ranges = [max(a, b) for a, b in zip(ranges, await self.sonar())]
             if self.debug:
                 await self.say(
                     f"        at {along} m: ahead {[round(r, 2) for r in ranges[-2:] + ranges[:3]]}"
