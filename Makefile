@@ -18,11 +18,18 @@ test: ## Run every test in every language (what CI runs); one line per stage wit
 system-deps: ## Install the system tools the tests use (iproute2), when missing.
 	scripts/system-deps.sh
 
+# The example crate outside the workspace (your own `situate` with Rust skills), linted in the
+# workspace's target folder with the workspace's features, so it reuses what clippy compiled there.
+EXTENSION := --manifest-path examples/rust/extension/Cargo.toml
+
 lint: ## Formatting and lints: rustfmt, clippy -D warnings.
 	$(CARGO) fmt --all -- --check
+	$(CARGO) fmt $(EXTENSION) -- --check
 	$(CARGO) clippy --workspace --all-targets --locked -- -D warnings
+	$(CARGO) clippy $(EXTENSION) --all-targets --locked --features workspace-features \
+		--target-dir "$${CARGO_TARGET_DIR:-target}" -- -D warnings
 
-test-rust: ## The Rust tests (unit, integration, property, doc).
+test-rust: ## The Rust tests (unit, integration, property, doc; tests/extension.rs builds examples/rust/extension).
 	$(CARGO) test --workspace --locked
 
 gui: ## Build the GUI's web app (web/dist, embedded into the `situate` program).

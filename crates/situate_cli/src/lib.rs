@@ -39,19 +39,71 @@ pub use sim::Simulation;
 /// Loads the skill types of one `python:` file of a robot file.
 pub type PythonLoader = Arc<dyn Fn(&Path) -> Result<Vec<situate_core::SkillType>, String> + Send + Sync>;
 
+/// Adds Rust skill types to a [`Registry`](situate::manager::Registry): what
+/// [`Extensions::skills`] takes.
+pub type RustSkills = Arc<dyn Fn(&mut situate::manager::Registry) + Send + Sync>;
+
 /// What a host adds to the program. The Python package's `situate` passes a
 /// [`PythonLoader`], so robot files run from it can hold in-process Python
 /// skills, its interpreter (the demo's sequencer runs with it) and where its
 /// package data is (the demo, maps and examples); the Rust binary has none
-/// of these and says where to get them.
+/// of these and says where to get them. A Rust program adds its own skill
+/// types with [`Extensions::skills`].
+///
+/// ```no_run
+/// use situate::prelude::*;
+///
+/// #[derive(Skill, Default)]
+/// #[skill(name = "mine.hello")]
+/// struct Hello {
+///     #[output]
+///     greeting: f64,
+/// }
+///
+/// impl Body for Hello {
+///     fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+///         self.greeting = 1.0;
+///         Ok(())
+///     }
+/// }
+///
+/// fn main() -> std::process::ExitCode {
+///     let ext = situate_cli::Extensions::default().skills(|r| {
+///         r.register::<Hello>();
+///     });
+///     std::process::ExitCode::from(situate_cli::main_with(std::env::args_os(), ext))
+/// }
+/// ```
 #[derive(Default, Clone)]
 pub struct Extensions {
     pub python: Option<PythonLoader>,
+    /// Rust skill types added to the built-in ones wherever the program
+    /// builds its registry (`run`, `check`, `types`, `signals`/`graph` of a
+    /// file, `serve-skill`, `demo`): see [`Extensions::skills`].
+    pub rust: Vec<RustSkills>,
     /// The Python interpreter the host runs in (`sys.executable`).
     pub interpreter: Option<PathBuf>,
     /// A directory holding `demo/`, `maps/`, `examples/`, `cmake/` and `include/` (the wheel's
     /// package data).
     pub data_dir: Option<PathBuf>,
+}
+
+impl Extensions {
+    /// Adds Rust skill types: `register` is given an empty
+    /// [`Registry`](situate::manager::Registry) to `register::<T>()` (or
+    /// `add`) them in, each time the program builds its registry, and robot
+    /// files can then name them like the built-in ones; `situate types` lists
+    /// them.
+    ///
+    /// Their names must be new: a type named like a built-in one, one under
+    /// `std.` or `sim.` (the standard library's and the simulator's), or one
+    /// registered by two calls is refused with an error naming it, and the
+    /// command fails (exit code 1) instead of running with the wrong type.
+    #[must_use]
+    pub fn skills(mut self, register: impl Fn(&mut situate::manager::Registry) + Send + Sync + 'static) -> Self {
+        self.rust.push(Arc::new(register));
+        self
+    }
 }
 
 /// Runs the program with these arguments (the first is the program name).

@@ -8,22 +8,7 @@ mod common;
 use common::*;
 use std::ffi::OsStr;
 use std::path::Path;
-use std::process::{Command, Output};
-
-const TOYBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/toybot.yaml");
-
-/// Runs `situate ARGS…` to completion.
-fn situate<I, S>(args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    Command::new(env!("CARGO_BIN_EXE_situate"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("the situate binary runs")
-}
+use std::process::Command;
 
 fn lines(text: &str) -> Vec<&str> {
     text.lines().collect()

@@ -8,32 +8,7 @@ mod common;
 use common::*;
 use serde_json::Value as Json;
 use std::ffi::OsStr;
-use std::io::{BufRead as _, BufReader};
-use std::process::{Child, Command, Output, Stdio};
-use std::time::{Duration, Instant};
-
-const TOYBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/toybot.yaml");
-
-/// How long a test waits for a robot to come up: generous, this is no timing assertion.
-const WAIT: Duration = Duration::from_secs(60);
-
-fn situate<I, S>(args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    Command::new(env!("CARGO_BIN_EXE_situate"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("the situate binary runs")
-}
-
-/// Stdout as one JSON value.
-fn json_of(out: &Output) -> Json {
-    serde_json::from_str(&stdout(out))
-        .unwrap_or_else(|e| panic!("stdout is not one JSON value ({e}):\n{}\nstderr:\n{}", stdout(out), stderr(out)))
-}
+use std::process::{Command, Output};
 
 /// The failure under `--json`: this exit code, one JSON error of this kind on stdout, nothing on stderr.
 fn json_error(out: &Output, code: i32, kind: &str) -> Json {
@@ -190,53 +165,6 @@ fn schema_and_completions() {
     let bash = situate(["completions", "bash"]);
     assert!(bash.status.success());
     assert!(stdout(&bash).contains("situate") && stdout(&bash).contains("signals"), "{}", stdout(&bash));
-}
-
-/// `situate run` in the background on a free endpoint; killed when dropped.
-struct Robot {
-    child: Child,
-    endpoint: String,
-}
-
-impl Robot {
-    fn start() -> Robot {
-        let endpoint = free_endpoint();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_situate"))
-            .args(["run", TOYBOT, "--listen", &endpoint])
-            .env_remove("RUST_LOG")
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("situate run starts");
-        let err = BufReader::new(child.stderr.take().expect("stderr"));
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in err.lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
-        let deadline = Instant::now() + WAIT;
-        let robot = Robot { child, endpoint };
-        loop {
-            let line = rx
-                .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-                .expect("situate run says it serves the link");
-            if line.contains("serving situate/toybot/**") {
-                return robot;
-            }
-        }
-    }
-
-    fn verb(&self, args: &[&str]) -> Output {
-        situate(args.iter().copied().chain(["--connect", &self.endpoint, "--timeout", "30"]))
-    }
-}
-
-impl Drop for Robot {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 #[test]

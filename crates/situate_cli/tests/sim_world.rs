@@ -5,18 +5,8 @@ mod common;
 
 use common::*;
 use std::ffi::OsStr;
-use std::process::{Command, Output};
 
 const MAPS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../maps");
-const TOYBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/toybot.yaml");
-
-fn situate<I, S>(args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    Command::new(env!("CARGO_BIN_EXE_situate")).args(args).env_remove("RUST_LOG").output().expect("situate runs")
-}
 
 /// A simulated robot whose `simulator:` section ends with `keys` (block style, one per line).
 fn sim_robot(keys: &str) -> String {

@@ -6,84 +6,9 @@ mod common;
 
 use common::*;
 use serde_json::{json, Value as Json};
-use std::ffi::OsStr;
 use std::io::{BufRead as _, BufReader};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-const TOYBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/toybot.yaml");
-
-/// How long a test waits for something to happen: generous, this is no timing assertion.
-const WAIT: Duration = Duration::from_secs(60);
-
-fn situate<I, S>(args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    Command::new(env!("CARGO_BIN_EXE_situate"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("the situate binary runs")
-}
-
-/// `situate run` of the toybot in the background on a free endpoint; killed when dropped.
-struct Robot {
-    child: Child,
-    endpoint: String,
-}
-
-impl Robot {
-    fn start() -> Robot {
-        let endpoint = free_endpoint();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_situate"))
-            .args(["run", TOYBOT, "--listen", &endpoint])
-            .env_remove("RUST_LOG")
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("situate run starts");
-        let err = BufReader::new(child.stderr.take().expect("stderr"));
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in err.lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
-        let deadline = Instant::now() + WAIT;
-        let robot = Robot { child, endpoint };
-        loop {
-            let line = rx
-                .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-                .expect("situate run says it serves the link");
-            if line.contains("serving situate/toybot/**") {
-                return robot;
-            }
-        }
-    }
-
-    fn args<'a>(&'a self, args: &[&'a str]) -> Vec<&'a str> {
-        args.iter().copied().chain(["--connect", &self.endpoint, "--timeout", "30"]).collect()
-    }
-
-    fn verb(&self, args: &[&str]) -> Output {
-        situate(self.args(args))
-    }
-
-    fn client(&self) -> situate_link::Client {
-        let mut c = situate_link::Client::connect(std::slice::from_ref(&self.endpoint)).expect("a client connects");
-        c.timeout = Duration::from_secs(30);
-        c
-    }
-}
-
-impl Drop for Robot {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
 
 fn json_lines(out: &Output) -> Vec<Json> {
     stdout(out)

@@ -249,8 +249,9 @@ pub fn register(registry: &mut Registry) {
 }
 
 /// The Rust one of the four runaway examples (`examples/{rust,c,cpp,python}/runaway`), built in so
-/// robot files can name `rust.runaway` next to the others.
-#[path = "../../../examples/rust/runaway/runaway.rs"]
+/// robot files can name `rust.runaway` next to the others. `rust_runaway.rs` is a link to the
+/// example's file, so the packaged crate carries the file itself.
+#[path = "rust_runaway.rs"]
 pub mod example;
 
 /// Checks that up to four writers of a `drive` command agree exactly: every

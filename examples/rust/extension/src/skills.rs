@@ -1,0 +1,73 @@
+//! This program's own skill types: `ext.nearest` finds the nearest obstacle in the sonar ring,
+//! `ext.brake` turns the robot on the spot while one is closer than `stop_distance`.
+
+use situate::prelude::*;
+
+/// A velocity command: forward m/s, turn rad/s (the toy wheels' `drive`; records match by their
+/// fields, so this one is the same signal type).
+#[derive(Record, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Drive {
+    pub v: f64,
+    pub w: f64,
+}
+
+/// The nearest obstacle the sonar ring sees: its range and bearing.
+#[derive(Skill, Default)]
+#[skill(name = "ext.nearest")]
+pub struct Nearest {
+    /// Sonar ranges in metres, sonar 0 forward, counter-clockwise, evenly spread.
+    #[input(signal = "sonar.range")]
+    sonar: Arc<[f32]>,
+    /// The shortest range, metres (infinite with no sonar).
+    #[output(signal = "obstacle.range")]
+    range: f64,
+    /// Its bearing, radians in (-π, π], 0 forward, counter-clockwise.
+    #[output(signal = "obstacle.bearing")]
+    bearing: f64,
+}
+
+impl Body for Nearest {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        let n = self.sonar.len();
+        let nearest = self.sonar.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1));
+        (self.range, self.bearing) = match nearest {
+            Some((i, &r)) => {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                (f64::from(r), if a > std::f64::consts::PI { a - std::f64::consts::TAU } else { a })
+            }
+            None => (f64::INFINITY, 0.0),
+        };
+        Ok(())
+    }
+}
+
+/// Turns on the spot, away from the nearest obstacle, while it is closer than `stop_distance`;
+/// otherwise writes nothing (so a lower-priority writer of `drive` wins).
+#[derive(Skill, Default)]
+#[skill(name = "ext.brake", priority = 30)]
+pub struct Brake {
+    #[input(signal = "obstacle.range")]
+    range: f64,
+    #[input(signal = "obstacle.bearing")]
+    bearing: f64,
+    /// Written only when something is too near.
+    #[output]
+    drive: Option<Drive>,
+    /// Obstacles nearer than this stop the robot.
+    #[param(default = 0.3, min = 0.05, max = 3.0, unit = "m")]
+    stop_distance: f64,
+    /// Turn rate while stopped.
+    #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
+    turn: f64,
+}
+
+impl Body for Brake {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        if self.range < self.stop_distance {
+            let away = if self.bearing >= 0.0 { -self.turn } else { self.turn };
+            self.drive = Some(Drive { v: 0.0, w: away });
+            sprint!(cx, "obstacle at {:.2} m: braking", self.range);
+        }
+        Ok(())
+    }
+}
