@@ -52,11 +52,21 @@ def blocks() -> list[Block]:
 
 
 BLOCKS = blocks()
+
+
+def own_program(path: Path) -> bool:
+    """Whether the robot file belongs to a program of its own (a Cargo package at or above it,
+    under examples/: its skill types are that program's; crates/situate_cli/tests/extension.rs
+    builds the program and checks the file with it)."""
+    return any((d / "Cargo.toml").exists() for d in path.parents if REPO / "examples" in d.parents)
+
+
 ROBOT_FILES = sorted(
     p
     for folder in ("examples", "demo")
     for p in (REPO / folder).rglob("*.yaml")
-    if p.read_text().lstrip().startswith("robot:") or "\nrobot:" in p.read_text()
+    if (p.read_text().lstrip().startswith("robot:") or "\nrobot:" in p.read_text())
+    and not own_program(p)
 )
 
 

@@ -219,14 +219,14 @@ fn the_example_program_lists_checks_and_runs_its_own_types() {
     assert_eq!(brake["priority"], 30, "{brake}");
     assert!(brake["params"].as_array().is_some_and(|p| p.iter().any(|p| p["name"] == "stop_distance")), "{brake}");
 
-    let check = my_situate(&["check", "robot.yml", "--json"]);
+    let check = my_situate(&["check", "robot.yaml", "--json"]);
     assert_eq!(check.status.code(), Some(0), "{}", stderr(&check));
     let check = json_of(&check);
     assert_eq!((&check["robot"], &check["skills"]), (&Json::from("extbot"), &Json::from(5)), "{check}");
 
     // A bounded run on the simulated clock: nearest and brake run in every cycle that has a sonar
     // reading (all but the first), and brake says it brakes.
-    let run = my_situate(&["run", "robot.yml", "--no-link", "--cycles", "20", "--clock", "simulated", "--json"]);
+    let run = my_situate(&["run", "robot.yaml", "--no-link", "--cycles", "20", "--clock", "simulated", "--json"]);
     assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
     let run = json_of(&run);
     assert_eq!(run["stats"]["cycle"], 20, "{run}");
@@ -244,7 +244,7 @@ fn the_example_program_lists_checks_and_runs_its_own_types() {
 
 #[test]
 fn the_example_program_serves_its_robot_and_its_brake_wins_the_drive() {
-    let robot = Robot::start_with(program(), &example().join("robot.yml"), "extbot");
+    let robot = Robot::start_with(program(), &example().join("robot.yaml"), "extbot");
     // The workspace's `situate` is the client: the verbs speak the protocol, whatever the skills.
     // The toy sonar's drifting box is always nearer than brake's stop_distance, so brake wins the
     // drive over wander in every cycle that has a new sonar reading (on the wall clock, a busy
