@@ -143,10 +143,10 @@ GENERATED_REGRESSIONS = [
     (20084, [*HARD, "20"]),  # stopped just out of the lab door, a jamb beside: no way made
     (20035, [*HARD, "19"]),  # turned at a side corridor's near corner, not its mouth
     (20148, [*HARD, "12"]),  # out of time while people kept the way to the lobby busy
-    (20186, [*HARD, "18"]),  # `until: wall` at a T: round the corner first, down the branch
+    (20186, [*HARD, "2"]),  # `until: wall` at a T: round the corner first, down the branch
     (20133, [*HARD, "21"]),  # the same, turned into the branch the route then takes
     (20063, [*HARD, "23"]),  # cars on both end walls of a short lobby: each opened behind the robot
-    (20021, [*HARD, "21"]),  # a car on the button's wall opened after the patrol walked past it
+    (20021, [*HARD, "5"]),  # a car on the button's wall opened after the patrol walked past it
     (20099, [*HARD, "11"]),  # the goal floor's button hidden once while lining up: given up
 ]
 
