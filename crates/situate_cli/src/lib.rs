@@ -7,6 +7,8 @@
 //! - [`args`](crate::args): the command line (clap), nothing run;
 //! - `output`: the output contract: results, notes, errors (text or JSON) and exit codes;
 //! - `robot`: robot files loaded, checked, started and run; `serve-skill`;
+//! - `skill_types`: the skill types a robot can name (the program's, a host's Rust
+//!   ones, the simulator's, libraries and Python files);
 //! - `client`: the verbs that drive a running robot over the link, and
 //!   introspection (`signals`, `graph`, `winners`, `monitors`, `param dump|load`);
 //! - `demo`: the delivery demo; `gen`: `types`, `gen` and `cmake-dir`; `map`: maps; `schema`:
@@ -29,6 +31,7 @@ mod robot;
 mod schema;
 mod signals;
 mod sim;
+mod skill_types;
 mod telemetry;
 
 use args::{Cli, Command, Global};
@@ -177,7 +180,7 @@ fn run(command: Command, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
         Command::Demo(demo) => return demo::run_demo(&demo, ext, out),
         Command::Gen { lang, manifest, out: dir } => gen::generate(&lang, &manifest, &dir, out)?,
         Command::CmakeDir => gen::print_cmake_dir(ext, out)?,
-        Command::Types { library, python } => gen::types(&robot::registry_with(&library, &python, ext)?, out),
+        Command::Types { library, python } => gen::types(&skill_types::registry_with(&library, &python, ext)?, out),
         Command::Client(command) => client::run(command, ext, out)?,
         Command::Map(command) => return map::map_command(command, out),
         Command::ServeSkill { skill, name, library, python, remote } => {
