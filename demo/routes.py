@@ -59,6 +59,17 @@ def farther_than(o: Pose, metres: float) -> str:
     return f"{dx} * {dx} + {dy} * {dy} > {metres * metres!r}"
 
 
+def way_made(o: Pose, start: Pose, heading: float) -> float:
+    """The way from ``start`` to ``o`` along ``heading`` (negative: behind), m."""
+    return (o.x - start.x) * math.cos(heading) + (o.y - start.y) * math.sin(heading)
+
+
+def way_made_expr(start: Pose, heading: float) -> str:
+    """`way_made` from ``start`` of the robot's odometry, in the monitor language."""
+    c, s = math.cos(heading), math.sin(heading)
+    return f"(odom.x - {start.x!r}) * {c!r} + (odom.y - {start.y!r}) * {s!r}"
+
+
 def heading_off(along: float, rad: float) -> str:
     """The condition: the odometry heading is more than ``rad`` (< pi) off ``along``.
 
@@ -194,9 +205,7 @@ class RouteSequencer(Sequencer):
         if not await self.turn(wrap(back - (await self.odom()).theta)):
             return False
         o = await self.odom()
-        c, s = math.cos(back), math.sin(back)
-        made = f"(odom.x - {o.x!r}) * {c!r} + (odom.y - {o.y!r}) * {s!r}"
-        todo = (o.x - look_from.x) * math.cos(along) + (o.y - look_from.y) * math.sin(along) + 2.5
+        todo = way_made(o, look_from, along) + 2.5
         if todo > 0.5:
             await self.use(
                 "runaway",
@@ -205,7 +214,7 @@ class RouteSequencer(Sequencer):
                 "detect_intersection",
                 restart=["detect_intersection"],
             )
-            passed = f"{made} > {todo!r}"
+            passed = f"{way_made_expr(o, back)} > {todo!r}"
             if await self.wait(f"junction.{other}", passed, within=30 + 10 * todo) == 0:
                 # Where its middle lies along the way from ``look_from``: the junction the
                 # route means lies ahead of it, give or take odometry's drift; one well
@@ -214,9 +223,7 @@ class RouteSequencer(Sequencer):
                 junction: dict[str, Any] = await self.value("junction") or {}
                 centre = float(junction.get("centre", 0.0))
                 here = await self.odom()
-                at = (here.x - look_from.x) * math.cos(along) + (here.y - look_from.y) * math.sin(
-                    along
-                )
+                at = way_made(here, look_from, along)
                 if math.isfinite(centre):
                     at -= centre
                 if self.debug:
@@ -299,7 +306,7 @@ class RouteSequencer(Sequencer):
                     await watch_ahead()
                     await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
                 o = await self.odom()
-                made = (o.x - start.x) * math.cos(along) + (o.y - start.y) * math.sin(along)
+                made = way_made(o, start, along)
                 if made > best + 0.5:
                     best = made
                     renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
@@ -318,7 +325,7 @@ class RouteSequencer(Sequencer):
         """
         o = await self.odom()
         c, s = math.cos(along), math.sin(along)
-        made = (o.x - start.x) * c + (o.y - start.y) * s
+        made = way_made(o, start, along)
         await self.say("    turned into a side corridor: back onto the way, looking for its end")
         await self.goto(start.x + made * c, start.y + made * s, within=30)
         await self.turn(wrap(along - (await self.odom()).theta))
@@ -344,7 +351,6 @@ class RouteSequencer(Sequencer):
         """
         o = await self.odom()
         heading = o.theta if self.corridor_heading is None else self.corridor_heading
-        c, s = math.cos(heading), math.sin(heading)
         deadline = await self.now() + within
         await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
         best = 0.0
@@ -353,7 +359,7 @@ class RouteSequencer(Sequencer):
             if await self.wait(condition, within=slice_s) == 0:
                 return True
             here = await self.odom()
-            made = (here.x - o.x) * c + (here.y - o.y) * s
+            made = way_made(here, o, heading)
             if made > best + 0.5:
                 best = made
                 continue
@@ -377,10 +383,10 @@ class RouteSequencer(Sequencer):
         turn = math.pi / 2 if side == "left" else -math.pi / 2
         await self.say(f"      no junction seen: probing for it on the {side}")
         c, s = math.cos(axis), math.sin(axis)
-        made = f"(odom.x - {look_from.x!r}) * {c!r} + (odom.y - {look_from.y!r}) * {s!r}"
+        made = way_made_expr(look_from, axis)
         for along in PROBE_AT_M:
             here = await self.odom()
-            if (here.x - look_from.x) * c + (here.y - look_from.y) * s < along - 0.3:
+            if way_made(here, look_from, axis) < along - 0.3:
                 # On to it by following the corridor: it keeps to the middle and goes round
                 # people, where a point drawn by odometry after a long way may be off the
                 # middle, near a wall the robot cannot come close to.
@@ -423,8 +429,7 @@ class RouteSequencer(Sequencer):
         """
         start = await self.odom()
         heading = start.theta if self.corridor_heading is None else self.corridor_heading
-        c, s = math.cos(heading), math.sin(heading)
-        made_expr = f"(odom.x - {start.x!r}) * {c!r} + (odom.y - {start.y!r}) * {s!r}"
+        made_expr = way_made_expr(start, heading)
         # 0.3 m/s, with time to wait for people in the way and to go round them.
         deadline = self.t + 60 + 10 * metres
         await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
@@ -434,7 +439,7 @@ class RouteSequencer(Sequencer):
             if await self.wait(f"{made_expr} > {metres!r}", within=within) == 0:
                 return True
             o = await self.odom()
-            made = (o.x - start.x) * c + (o.y - start.y) * s
+            made = way_made(o, start, heading)
             if made > best + 0.5:
                 best = made
                 continue
