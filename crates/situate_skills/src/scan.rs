@@ -49,13 +49,6 @@ impl Default for ScanModel {
     }
 }
 
-/// What sonar `i` reads of a wall in direction `normal` at `d`, with the
-/// cone taken into account: the nearest point of the wall within the cone.
-fn cone_factor(i: usize, normal: f64, half_cone: f64) -> f64 {
-    let off = crate::util::wrap(sonar_bearing(i) - normal).abs();
-    (off - half_cone).max(0.0).cos()
-}
-
 /// The wall around `m.bearing` as `(normal, distance, inliers)` in the
 /// robot frame.
 ///
@@ -68,16 +61,23 @@ fn cone_factor(i: usize, normal: f64, half_cone: f64) -> f64 {
 /// than 0.3 m or farther than 3 m, or on fewer than `min_inliers` echoes,
 /// are none.
 pub fn fit_wall(range: &[f32; SONARS], m: &ScanModel) -> Option<(f64, f64, usize)> {
-    let sonars: Vec<usize> =
-        around(m.bearing, m.half_angle).into_iter().filter(|&i| centre_range(range, i) < m.max_range).collect();
+    let sonars: Vec<(usize, f64)> = around(m.bearing, m.half_angle)
+        .into_iter()
+        .map(|i| (i, centre_range(range, i)))
+        .filter(|&(_, r)| r < m.max_range)
+        .collect();
     // For direction `phi`: (inliers, spread, distance) of the best-supported distance.
     let score = |phi: f64| -> Option<(usize, f64, f64)> {
         // At most one estimate per sonar: on the stack, no allocation per direction tried.
         let mut buf = [0.0f64; SONARS];
         let mut n_est = 0;
-        for &i in &sonars {
-            if crate::util::wrap(sonar_bearing(i) - phi).abs() < std::f64::consts::FRAC_PI_2 - m.half_cone {
-                buf[n_est] = centre_range(range, i) * cone_factor(i, phi, m.half_cone);
+        for &(i, r) in &sonars {
+            // What sonar i reads of a wall in direction `phi` at distance 1: the nearest
+            // point within its cone (cos 0 = 1 exactly, so no cosine on the axis).
+            let off = crate::util::wrap(sonar_bearing(i) - phi).abs();
+            if off < std::f64::consts::FRAC_PI_2 - m.half_cone {
+                let outside = off - m.half_cone;
+                buf[n_est] = if outside > 0.0 { r * outside.cos() } else { r };
                 n_est += 1;
             }
         }
@@ -85,8 +85,9 @@ pub fn fit_wall(range: &[f32; SONARS], m: &ScanModel) -> Option<(f64, f64, usize
         let mut best: Option<(usize, f64, f64)> = None;
         for &seed in est {
             let on = || est.iter().copied().filter(move |e| (e - seed).abs() < m.tolerance / 2.0);
-            let count = on().count();
-            let d = on().sum::<f64>() / count as f64;
+            // Count and sum in one pass (the same order of addition as two: the same `d`).
+            let (count, sum) = on().fold((0usize, 0.0f64), |(n, s), e| (n + 1, s + e));
+            let d = sum / count as f64;
             let spread: f64 = on().map(|e| (e - d) * (e - d)).sum();
             let cand = (count, spread, d);
             let better = match best {
