@@ -5,7 +5,7 @@
 //! follow_hallway/turn 25, wander 10). A skill with nothing to say this cycle
 //! leaves `drive` unset, so a lower-priority writer's command stands.
 
-use std::f64::consts::FRAC_PI_2;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 use situate::prelude::*;
 use situate_robot::{sonar_bearing, Drive, Odom, Target, SONARS};
@@ -473,8 +473,9 @@ impl Body for Home {
 
 /// Drives to the point (`x`, `y`) of the odometry frame: turns in place
 /// first when it lies more than `turn_angle` off the heading, then drives to
-/// it and stops within `stop_distance`. Writes `drive` every run (a stop
-/// once there).
+/// it and stops within `stop_distance`. A goal just behind (within
+/// `reverse_within`) is backed up to instead. Writes `drive` every run (a
+/// stop once there).
 #[derive(Skill, Default)]
 #[skill(name = "std.home_position", priority = 30)]
 pub struct HomePosition {
@@ -502,6 +503,10 @@ pub struct HomePosition {
     /// Largest turn rate, rad/s.
     #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
     max_turn: f64,
+    /// A goal behind the robot (more than 90° off its heading) and at most this far is
+    /// driven to backwards, without turning round first (0: never), m.
+    #[param(default = 0.0, min = 0.0, max = 3.0, unit = "m")]
+    reverse_within: f64,
     approach: Approach,
     arrived: bool,
     activation: Activation,
@@ -531,7 +536,16 @@ impl Body for HomePosition {
             Drive::default()
         } else {
             let bearing = wrap(dy.atan2(dx) - o.theta);
-            self.approach.command(bearing, to_go - self.stop_distance, self.speed, self.turn_angle, self.max_turn)
+            if bearing.abs() > FRAC_PI_2 && to_go <= self.reverse_within {
+                // Backwards: the robot's back steers as its front would (the back turns
+                // with the heading, so the same turn rate closes the same angle).
+                let back = wrap(bearing - PI);
+                let d =
+                    self.approach.command(back, to_go - self.stop_distance, self.speed, self.turn_angle, self.max_turn);
+                Drive { v: -d.v, w: d.w }
+            } else {
+                self.approach.command(bearing, to_go - self.stop_distance, self.speed, self.turn_angle, self.max_turn)
+            }
         };
         Ok(())
     }

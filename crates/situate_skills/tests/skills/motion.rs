@@ -188,6 +188,34 @@ fn home_position_reaches_an_odometry_goal() {
     assert!((pose.x - gx).hypot(pose.y - gy) <= 0.1, "the goal just behind: {pose:?}");
 }
 
+#[test]
+fn home_position_backs_up_to_a_goal_just_behind_when_allowed() {
+    // 0.8 m behind and a little to the left: backed up to, facing the same way.
+    let (gx, gy) = (-0.8, 0.1);
+    let mut h =
+        Harness::new::<HomePosition>().param("x", val(gx)).param("y", val(gy)).param("reverse_within", val(1.0));
+    let mut pose = Pose::new(0.0, 0.0, 0.0);
+    let mut backwards = false;
+    for _ in 0..600 {
+        let d = drive_of(&mut h, &[("odom", odom(pose))]).expect("always writes");
+        backwards |= d.v < 0.0;
+        pose = pose.step(d, DT);
+    }
+    assert!(backwards, "drove backwards");
+    assert!((pose.x - gx).hypot(pose.y - gy) <= 0.1, "{pose:?}");
+    assert!(pose.theta.abs() < 20f64.to_radians(), "did not turn round: {:.0}°", pose.theta.to_degrees());
+    // Farther than `reverse_within`: turns round and drives forwards, as by default.
+    let mut h =
+        Harness::new::<HomePosition>().param("x", val(-1.5)).param("y", val(0.0)).param("reverse_within", val(1.0));
+    let mut pose = Pose::new(0.0, 0.0, 0.0);
+    for _ in 0..600 {
+        let d = drive_of(&mut h, &[("odom", odom(pose))]).expect("always writes");
+        assert!(d.v >= 0.0, "forwards only");
+        pose = pose.step(d, DT);
+    }
+    assert!((pose.x + 1.5).hypot(pose.y) <= 0.1, "{pose:?}");
+}
+
 /// Runs `turn` on a base with acceleration limits until it falls silent
 /// and the base has stopped; the heading turned.
 fn turn_until_silent(h: &mut Harness, pose: &mut Pose) -> f64 {
