@@ -233,22 +233,31 @@ class Delivery(RouteSequencer):
         m = self.m
         for _attempt in range(6):
             await self.phase(5, f"homing on the call button (barcode {m.call_button_barcode})")
+            facing = False
             if self.button_pose is not None:
-                # Called before: back to where the button was pushed, by odometry.
+                # Called before: back to where the button was pushed, by odometry (in the
+                # lobby, across open floor: at the patrol's speed).
                 b = self.button_pose
                 back = (b.x - 0.9 * math.cos(b.theta), b.y - 0.9 * math.sin(b.theta))
                 await self.set("runaway", "safe_distance", 0.15)
-                if await self.goto(*back, within=60):
-                    await self.turn(wrap(b.theta - (await self.odom()).theta), keep=["runaway"])
+                if await self.goto(*back, within=60, speed=0.6):
+                    facing = await self.turn(
+                        wrap(b.theta - (await self.odom()).theta), keep=["runaway"]
+                    )
                 await self.restore("runaway", "safe_distance")
             await self.set("track_barcode", "id", m.call_button_barcode)
             await self.use("runaway", "avoid", "track_barcode")
             self.send("step", cycles=3)
-            if not (await self.value("target"))["seen"] and not await self.search(
-                m.call_button_barcode, 120
-            ):
+            target = await self.value("target")
+            if not target["seen"] and not await self.search(m.call_button_barcode, 120):
                 raise PhaseFailed("the call button is nowhere in sight")
-            homed = await self.line_up(m.call_button_barcode, 1.0) and await self.home_on(
+            # Back in front of the button and facing it (the odometry drifts little in a
+            # minute in the lobby), it is straight ahead: the last approach only. Else
+            # line up with it first.
+            straight = facing and target["seen"] and abs(float(target["bearing"])) < 0.2
+            homed = (
+                straight or await self.line_up(m.call_button_barcode, 1.0)
+            ) and await self.home_on(
                 m.call_button_barcode, BUTTON_STANDOFF_M, avoid=False, slack=0.12, aim=0.3
             )
             if not homed:
@@ -288,7 +297,15 @@ class Delivery(RouteSequencer):
             # view through its open door the whole way towards it; a car on the button's wall
             # passes beside, its door seen by the side sonars.
             c, s = math.cos(b.theta), math.sin(b.theta)
-            await self.goto(b.x - PATROL_BACK_M * c, b.y - PATROL_BACK_M * s, within=30)
+            # Backwards: turning round to drive there and round again to patrol took some
+            # 8 s of a car's 15 to 35 s from the call to its door closing.
+            await self.goto(
+                b.x - PATROL_BACK_M * c,
+                b.y - PATROL_BACK_M * s,
+                within=30,
+                speed=0.5,
+                reverse_within=1.5,
+            )
             # Right first, then left after the next call, and so on: a car on one side whose
             # door stays open only a few seconds is missed while the robot patrols the other
             # side, on every call if the robot always went the same way first.
@@ -408,7 +425,8 @@ class Delivery(RouteSequencer):
                 off_wall = (px - o.x) * math.cos(on[0]) + (py - o.y) * math.sin(on[0])
                 if abreast > ABREAST_M or not 0.6 < off_wall < 1.6:
                     await self.set("runaway", "safe_distance", 0.12)
-                    await self.goto(gx, gy, within=10)
+                    # Backwards if the door is just behind (the robot walked past it).
+                    await self.goto(gx, gy, within=10, speed=0.5, reverse_within=1.5)
                     await self.restore_lobby_patrol()
                 bearing = wrap(on[0] - (await self.odom()).theta)
             else:
@@ -440,11 +458,20 @@ class Delivery(RouteSequencer):
             # Inside? Walls all round but for the door (the sonars), and the car's own
             # barcode on the panel, near once the robot looks round.
             self.car = int(await self.value("car")) or self.car
-            if self.car > 0 and await self.enclosed():
-                code = m.car_barcode_first + self.car - 1
-                if await self.look_round(code):
-                    await self.say(f"    inside car {self.car}")
-                    return True
+            code = m.car_barcode_first + self.car - 1
+            if self.car > 0 and not await self.enclosed():
+                # Stopped short: aslant in the doorway, a jamb ahead. While the car's panel
+                # is in view, its door is open: facing the panel, in again.
+                for _again in range(2):
+                    if not await self.face_barcode(code):
+                        break
+                    await self.use("runaway", "enter_car", restart=["enter_car"])
+                    await self.wait("car_entered", within=15)
+                    if await self.enclosed():
+                        break
+            if self.car > 0 and await self.enclosed() and await self.look_round(code):
+                await self.say(f"    inside car {self.car}")
+                return True
             if self.debug:
                 await self.say(f"      car {self.car} target {await self.value('target')}")
             await self.say("    the car left before the robot got in")

@@ -428,8 +428,22 @@ class Sequencer:
         finally:
             await self.restore("runaway", "safe_distance")
 
-    async def goto(self, x: float, y: float, *, within: float = 40) -> bool:
-        """Drives to (x, y) of the odometry frame."""
+    async def goto(
+        self,
+        x: float,
+        y: float,
+        *,
+        within: float = 40,
+        speed: float = 0.3,
+        reverse_within: float = 0.0,
+    ) -> bool:
+        """Drives to (x, y) of the odometry frame at up to ``speed`` m/s.
+
+        A goal behind the robot and at most ``reverse_within`` m away is backed up to
+        (`std.home_position`), without turning round twice.
+        """
+        await self.set("home_position", "speed", speed)
+        await self.set("home_position", "reverse_within", reverse_within)
         await self.set("home_position", "x", x)
         await self.set("home_position", "y", y)
         await self.use("runaway", "home_position", restart=["home_position"])
@@ -845,6 +859,17 @@ class Sequencer:
         """Whether walls are near all round (inside a car: all but the door's sonars)."""
         ranges = await self.sonar()
         return sum(1 for r in ranges if r < 1.9) >= SONARS - 6
+
+    async def face_barcode(self, barcode: int) -> bool:
+        """Turns in place to face ``barcode`` if it is in view now; False if it is not."""
+        await self.set("track_barcode", "id", barcode)
+        await self.use("runaway", "track_barcode")
+        self.send("step", cycles=2)
+        self.prefetch("target", "odom")  # the turn reads the odometry
+        target = await self.value("target")
+        if not (target["seen"] and int(target["id"]) == barcode):
+            return False
+        return await self.turn(float(target["bearing"]), keep=["runaway"])
 
     async def look_round(self, barcode: int) -> bool:
         """Turns round in place until ``barcode`` is in view; False if it never is."""

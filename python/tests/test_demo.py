@@ -148,6 +148,8 @@ GENERATED_REGRESSIONS = [
     (20063, [*HARD, "23"]),  # cars on both end walls of a short lobby: each opened behind the robot
     (20021, [*HARD, "5"]),  # a car on the button's wall opened after the patrol walked past it
     (20099, [*HARD, "11"]),  # the goal floor's button hidden once while lining up: given up
+    (20106, [*HARD, "18"]),  # turning round twice to start the patrol: the car beside closed
+    (20061, [*HARD, "21"]),  # walked past an open car: turning round to face it, it closed
 ]
 
 
