@@ -41,6 +41,9 @@ DOOR_WIDTH = 1.1
 WALL_AHEAD_M = 1.2
 #: How long to wait in front of a door that shows no opening (closed doors open again), s.
 DOOR_WAIT_S = 75.0
+#: A door's nearer jamb is at most this far from its barcode (docs/maps.md: 0.1 to 0.6 m), with
+#: the slack of placing a jamb by sonar; an opening farther off is some other way, m.
+DOOR_BESIDE_BARCODE_M = 1.0
 #: How long a wall across the way must stay put while the robot stands (people move on), s.
 WALL_STAYS_S = 6.0
 #: Through a door: this far beyond the wall's line, m.
@@ -710,6 +713,21 @@ class Sequencer:
                 await self.restore("locate_door", "wall_distance")
                 await self.restore("locate_door", "wall_normal_deg")
 
+    async def barcode_across(self, barcode: int | None) -> float | None:
+        """Where the barcode just lined up with is across the robot's view (robot frame, m).
+
+        Its lateral offset, left positive, from `line_up`'s fix; None without a barcode or a
+        fix, or when the fix is not in front of the robot (some earlier barcode's).
+        """
+        if barcode is None or self.wall_fix is None:
+            return None
+        px, py, _normal = self.wall_fix
+        o = await self.odom()
+        dx, dy = px - o.x, py - o.y
+        ahead = dx * math.cos(o.theta) + dy * math.sin(o.theta)
+        across = -dx * math.sin(o.theta) + dy * math.cos(o.theta)
+        return across if 0.2 < ahead < 3.0 and abs(across) < 2.0 else None
+
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
         """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
 
@@ -717,11 +735,25 @@ class Sequencer:
         is used only when it finds none.
         """
         fix = await self.opening()
+        beside = await self.barcode_across(barcode)
+        if fix is not None and beside is not None:
+            gap = abs(float(fix["y"]) - beside) - float(fix["width"]) / 2
+            if gap > DOOR_BESIDE_BARCODE_M:
+                # Its door closed (or someone in it), the scan finds another way along the
+                # wall: a corridor's mouth, the next room's door.
+                await self.say(f"    an opening {gap:.1f} m from barcode {barcode}: not its door")
+                fix = None
         if fix is None or float(fix["width"]) < 0.3:
             # A door closed for a while, or someone standing in it: wait for the opening.
             await self.say("    no opening in sight (a closed door, someone in it?): waiting")
             await self.use("locate_door", restart=["locate_door"])
-            if await self.wait("opening.seen && opening.width > 0.6", within=DOOR_WAIT_S) == 0:
+            wanted = "opening.seen && opening.width > 0.6"
+            if beside is not None:
+                wanted += (
+                    f" && abs(opening.y - {beside:.3f}) - opening.width / 2"
+                    f" < {DOOR_BESIDE_BARCODE_M}"
+                )
+            if await self.wait(wanted, within=DOOR_WAIT_S) == 0:
                 fix = await self.opening()
         pose = await self.odom()
         if fix is None or float(fix["width"]) < 0.3:
@@ -756,15 +788,27 @@ class Sequencer:
             if not await self.turn(wrap(heading - here.theta)):
                 return False
             start = await self.odom()
-            await self.set("pass_door", "distance", DOOR_STANDOFF + 1.1)
-            await self.use("runaway", "pass_door", restart=["pass_door"])
-            if await self.wait("door_passed", within=30):
-                return False
-            # Through? Well beyond the wall line along the heading, not stopped at the wall.
-            end = await self.odom()
-            went = (end.x - start.x) * math.cos(start.theta) + (end.y - start.y) * math.sin(
-                start.theta
-            )
+            went = 0.0
+            for push in range(3):
+                if push > 0:
+                    # Stopped by someone ahead in the doorway or just beyond (a room's
+                    # people walk about): they move on; the robot waits, then goes on.
+                    await self.say("    someone in the way through the door: waiting")
+                    await self.use("runaway")
+                    await self.wait(f"sonar.range[0] > {ROBOT_RADIUS + 0.9}", within=10)
+                await self.set("pass_door", "distance", DOOR_STANDOFF + 1.1 - went)
+                await self.use("runaway", "pass_door", restart=["pass_door"])
+                if await self.wait("door_passed", within=30):
+                    return False
+                # Through? Well beyond the wall line along the heading, not stopped at it.
+                end = await self.odom()
+                went = (end.x - start.x) * math.cos(start.theta) + (end.y - start.y) * math.sin(
+                    start.theta
+                )
+                # Stopped short, but in the doorway already (some way past the standoff):
+                # it was someone beyond, not the jambs.
+                if went >= DOOR_STANDOFF + 0.3 or went < DOOR_STANDOFF - 0.3:
+                    break
             if went < DOOR_STANDOFF + 0.3:
                 await self.say("    stopped short of the door: backing off")
                 await self.use()
