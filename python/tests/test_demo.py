@@ -150,7 +150,7 @@ GENERATED_REGRESSIONS = [
     (20099, [*HARD, "11"]),  # the goal floor's button hidden once while lining up: given up
     (20106, [*HARD, "18"]),  # turning round twice to start the patrol: the car beside closed
     (20061, [*HARD, "21"]),  # walked past an open car: turning round to face it, it closed
-    (20176, [*HARD, "8"]),  # the office door closed: a corridor's mouth 1.1 m off taken for it
+    (20176, [*HARD, "16"]),  # the office door closed: a corridor's mouth 1.1 m off taken for it
     (20111, [*HARD, "23"]),  # someone in the office just beyond its door: stopped short, thrice
 ]
 
