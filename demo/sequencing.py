@@ -794,6 +794,9 @@ class Sequencer:
                     # Stopped by someone ahead in the doorway or just beyond (a room's
                     # people walk about): they move on; the robot waits, then goes on.
                     await self.say("    someone in the way through the door: waiting")
+                    here = await self.odom()
+                    if abs(wrap(start.theta - here.theta)) > 0.2:  # pushed aside meanwhile
+                        await self.turn(wrap(start.theta - here.theta))
                     await self.use("runaway")
                     await self.wait(f"sonar.range[0] > {ROBOT_RADIUS + 0.9}", within=10)
                 await self.set("pass_door", "distance", DOOR_STANDOFF + 1.1 - went)
