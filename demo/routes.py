@@ -49,6 +49,11 @@ PROBE_AT_M = (2.4, 2.9, 1.9, 3.4)
 PROBE_OPEN_M = 2.2
 #: Looks (half a second apart) a probe takes, each sonar's farthest reading counting.
 PROBE_LOOKS = 6
+#: Turned into a junction and facing a wall: where the mouth is probed for, along the
+#: corridor from there (the detector's centre is off by some metre at worst), m.
+MOUTH_PROBE_AT_M = (0.0, -1.0, 1.0, -1.8, 1.8)
+#: ... facing a wall: the front sonar reads nearer than this in every one of a few looks, m.
+MOUTH_BLOCKED_M = 1.6
 #: A junction found on the way back this far before where looking began is still the one, m.
 JUNCTION_DRIFT_M = 1.0
 
@@ -370,21 +375,31 @@ class RouteSequencer(Sequencer):
             best = made
         return False
 
-    async def probe_junction(self, look_from: Pose, side: str) -> bool:
+    async def probe_junction(
+        self,
+        look_from: Pose,
+        side: str,
+        *,
+        at: Sequence[float] = PROBE_AT_M,
+        axis: float | None = None,
+    ) -> bool:
         """The junction on ``side`` the detector missed, probed where a route says it is.
 
         It lies 1.5 m or more ahead of ``look_from`` (docs/maps.md, route hints with
         `distance`), 1.8 to 2.6 m wide: at points along the corridor the robot turns to that side
         and takes the first where the way is open (the three front sonars read beyond
         `PROBE_OPEN_M` at least once in `PROBE_LOOKS` looks: people there move on), standing
-        in it facing the corridor's way, as the detector would have left it.
+        in it facing the corridor's way, as the detector would have left it. ``at`` gives
+        the points (m along the corridor from ``look_from``, behind it if negative) and
+        ``axis`` the corridor's way (default: the route's heading).
         """
-        axis = look_from.theta if self.corridor_heading is None else self.corridor_heading
+        if axis is None:
+            axis = look_from.theta if self.corridor_heading is None else self.corridor_heading
         turn = math.pi / 2 if side == "left" else -math.pi / 2
         await self.say(f"      no junction seen: probing for it on the {side}")
         c, s = math.cos(axis), math.sin(axis)
         made = way_made_expr(look_from, axis)
-        for along in PROBE_AT_M:
+        for along in at:
             here = await self.odom()
             if way_made(here, look_from, axis) < along - 0.3:
                 # On to it by following the corridor: it keeps to the middle and goes round
@@ -462,7 +477,20 @@ class RouteSequencer(Sequencer):
             deadline = await self.now() + 60 + 10 * metres
         return False
 
-    async def into_mouth(self, heading: float) -> None:
+    async def wall_ahead_stays(self) -> bool:
+        """Whether the front sonar reads nearer than `MOUTH_BLOCKED_M` in each of a few looks.
+
+        Someone standing in the way moves on within them (docs/maps.md, people); a wall
+        does not.
+        """
+        await self.use("runaway")
+        for _look in range(PROBE_LOOKS):
+            self.send("step", cycles=5)
+            if (await self.sonar())[0] >= MOUTH_BLOCKED_M:
+                return False
+        return True
+
+    async def into_mouth(self, heading: float, turned: float) -> None:
         """Turned towards a side corridor at a junction: in line with its mouth, facing it.
 
         The junction's centre is an estimate (someone in the mouth, clutter by it): turned
@@ -479,6 +507,17 @@ class RouteSequencer(Sequencer):
             await self.restore("locate_door", "max_width")
         if self.debug:
             await self.say(f"      mouth {fix}")
+        if fix is None and await self.wall_ahead_stays():
+            # No mouth, a wall ahead: the junction's centre was far off (a crossing's stub
+            # just before it seen with it, clutter by it). Probed for, from here.
+            await self.say("    a wall where the side corridor should be: probing for its mouth")
+            axis = wrap(heading - turned)
+            here = await self.odom()
+            side = "left" if turned > 0 else "right"
+            at = Pose(here.x, here.y, axis)
+            if await self.probe_junction(at, side, at=MOUTH_PROBE_AT_M, axis=axis):
+                await self.turn(wrap(heading - (await self.odom()).theta))
+            return
         if fix is None or float(fix["width"]) < 1.0 or float(fix["wall"]) > 2.0:
             return
         lateral = float(fix["y"])
@@ -596,6 +635,6 @@ class RouteSequencer(Sequencer):
                 ok = await self.turn(wrap(goal - here))
                 self.corridor_heading = goal
                 if ok and step.get("until") == "junction" and angle != math.pi:
-                    await self.into_mouth(goal)
+                    await self.into_mouth(goal, angle)
             if not ok:
                 raise PhaseFailed(f"route {leg}, step {n + 1} ({text}) failed")

@@ -134,6 +134,7 @@ GENERATED_REGRESSIONS = [
     (20038, []),  # a door found in a line through the lab's clutter: "passed", still inside
     (20170, []),  # a junction the detector missed: followed to the corridor's end
     (20013, []),  # a car's door on an end wall, seen aslant: never boarded
+    (20129, []),  # a crossing's stub just before the junction: turned to a wall, the mouth 1.3 m on
     # The hard set: people, doors closing, a dead sonar (HARD + its index).
     (20011, [*HARD, "11"]),  # the office door found in a line 36° off its wall, into the jamb
     (20088, [*HARD, "0"]),  # the car's open door unseen with the front sonar dead
