@@ -49,7 +49,7 @@ from typing import Any, Generic, TypeVar
 import zenoh
 
 from . import _link
-from .errors import NotRunning, SituateError
+from .errors import BadReply, NotRunning, SituateError, UnknownVerb, from_reply
 from .events import Event, MonitorFired, Telemetry, parse_event, parse_telemetry
 from .info import Graph, Hello, MonitorInfo, Reading, SkillInfo, Stats, Winner, monitor_target
 from .values import decode_untyped, encode
@@ -60,6 +60,12 @@ DEFAULT_ENDPOINT = _link.DEFAULT_ENDPOINT
 
 #: The monitor modes of ``monitor_add``.
 MONITOR_MODES = ("once", "edge", "level")
+
+#: Most requests one ``batch`` query carries (the manager's cap, docs/protocol.md).
+MAX_BATCH = 64
+
+#: A request waiting to leave: its verb, its encoded arguments, its reply's future.
+_Outgoing = tuple[str, dict[str, Any], "asyncio.Future[Any]"]
 
 T = TypeVar("T")
 
@@ -172,6 +178,10 @@ class Robot:
         self.name: str = hello.robot
         #: Seconds to wait for each reply before :class:`~situate.NotRunning`.
         self.timeout: float = timeout
+        #: Requests sent since the loop last ran: they leave together (see `send`).
+        self._outbox: list[_Outgoing] = []
+        #: Whether the manager takes ``batch`` (a manager older than it does not).
+        self._batches = True
 
     def __repr__(self) -> str:
         return f"<situate.Robot {self.name!r} at {', '.join(self._endpoints)}>"
@@ -187,39 +197,103 @@ class Robot:
         return await self.send(verb, **args)
 
     def send(self, verb: str, **args: Any) -> asyncio.Future[Any]:
-        """Sends a request now and returns a future of its raw ``ok`` result (or error).
+        """Sends a request and returns a future of its raw ``ok`` result (or error).
 
-        Like :meth:`request`, but the request leaves before this returns, and
-        the manager handles requests in the order they were sent: a sequencer
-        can send several changes and then await them all, paying for one round
-        trip instead of one each::
+        Like :meth:`request`, but without waiting: the request leaves as soon as
+        the calling coroutine next yields to the loop, and the manager handles
+        requests in the order they were sent. A sequencer can send several
+        changes and then await them all, paying for one round trip instead of
+        one each::
 
             sent = [robot.send("set_param", skill="avoid", param="distance", value=0.5),
                     robot.send("activate", skills=["avoid"])]
             await asyncio.gather(*sent)
 
-        Await every future (a refused request raises there), from a coroutine
-        of the loop that sent it.
+        Requests sent before the loop runs again travel together, as one
+        ``batch`` query (docs/protocol.md): each is still answered on its own,
+        exactly as if it had been sent alone. Await every future (a refused
+        request raises there), from a coroutine of the loop that sent it.
         """
         loop = asyncio.get_running_loop()
         future: asyncio.Future[Any] = loop.create_future()
+        if not self._outbox:
+            loop.call_soon(self._send_outbox)
+        self._outbox.append((verb, {k: encode(v) for k, v in args.items()}, future))
+        return future
+
+    def _send_outbox(self) -> None:
+        """Sends the requests waiting to leave: alone, or together as ``batch`` queries."""
+        outbox, self._outbox = self._outbox, []
+        if len(outbox) == 1 or not self._batches:
+            for verb, args, future in outbox:
+                self._send_one(verb, args, future)
+            return
+        for start in range(0, len(outbox), MAX_BATCH):
+            self._send_batch(outbox[start : start + MAX_BATCH])
+
+    def _send_one(self, verb: str, args: dict[str, Any], future: asyncio.Future[Any]) -> None:
+        loop = future.get_loop()
 
         def done(result: Any, error: BaseException | None) -> None:
             # On a Zenoh thread: hand the outcome over to the loop.
             with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
                 loop.call_soon_threadsafe(_settle, future, result, error)
 
-        payload = {k: encode(v) for k, v in args.items()}
-        _link.send(
-            self._session,
-            self.name,
-            verb,
-            payload,
-            timeout=self.timeout,
-            endpoints=self._endpoints,
-            done=done,
-        )
-        return future
+        try:
+            _link.send(
+                self._session,
+                self.name,
+                verb,
+                args,
+                timeout=self.timeout,
+                endpoints=self._endpoints,
+                done=done,
+            )
+        except SituateError as e:
+            _settle(future, None, e)
+
+    def _send_batch(self, batch: list[_Outgoing]) -> None:
+        loop = batch[0][2].get_loop()
+
+        def settle_all(result: Any, error: BaseException | None) -> None:
+            # On the loop: each request's own reply, in order.
+            if isinstance(error, UnknownVerb) and self._batches:
+                # A manager older than `batch`: each request on its own, from now on.
+                self._batches = False
+                for verb, args, future in batch:
+                    self._send_one(verb, args, future)
+                return
+            if error is None and not (isinstance(result, list) and len(result) == len(batch)):
+                error = BadReply(f"`batch`: not a list of {len(batch)} replies: {result!r}")
+            for n, (_verb, _args, future) in enumerate(batch):
+                if error is not None:
+                    _settle(future, None, error)
+                    continue
+                reply = result[n]
+                if isinstance(reply, dict) and "ok" in reply:
+                    _settle(future, reply["ok"], None)
+                elif isinstance(reply, dict) and isinstance(reply.get("error"), dict):
+                    _settle(future, None, from_reply(reply["error"]))
+                else:
+                    _settle(future, None, BadReply(f"`batch`: reply {n} is {reply!r}"))
+
+        def done(result: Any, error: BaseException | None) -> None:
+            with contextlib.suppress(RuntimeError):  # the loop is closed: nobody waits
+                loop.call_soon_threadsafe(settle_all, result, error)
+
+        requests = [{"verb": verb, "args": args} for verb, args, _future in batch]
+        try:
+            _link.send(
+                self._session,
+                self.name,
+                "batch",
+                {"requests": requests},
+                timeout=self.timeout,
+                endpoints=self._endpoints,
+                done=done,
+            )
+        except SituateError as e:
+            settle_all(None, e)
 
     async def close(self) -> None:
         """Ends every stream and closes the Zenoh session."""

@@ -100,6 +100,75 @@ def test_a_robot_that_takes_requests_and_never_answers_is_a_sentence() -> None:
         session.close()
 
 
+# ----- send: requests that travel together ----------------------------------------------
+
+
+def test_requests_sent_together_are_answered_each_as_if_alone_and_in_order(
+    toybot: Manager,
+) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            sent = [
+                robot.send("set_param", skill="wander", param="speed", value=0.3),
+                robot.send("get_param", skill="wander", param="speed"),
+                robot.send("activate", skills=["wandr"]),
+                robot.send("set_param", skill="wander", param="speed", value=0.4),
+                robot.send("get_param", skill="wander", param="speed"),
+            ]
+            results = await asyncio.gather(*sent, return_exceptions=True)
+            assert results[1] == 0.3, results  # the set before it, not the one after
+            assert results[4] == 0.4, results
+            assert isinstance(results[2], situate.UnknownSkill), results
+            assert "did you mean `wander`?" in str(results[2])
+            # More than one query carries (64): all of them, in order.
+            values = [0.1 + k / 1000 for k in range(70)]
+            sets = [robot.send("set_param", skill="wander", param="speed", value=v) for v in values]
+            await asyncio.gather(*sets)
+            assert await robot.get_param("wander", "speed") == values[-1]
+
+    run(main())
+
+
+def test_a_manager_without_batch_gets_each_request_on_its_own() -> None:
+    # A test double of a manager older than `batch` (it refuses the verb as unknown), on a
+    # real Zenoh session; the requests sent together must still each get their answer.
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    asked: list[str] = []
+    session = zenoh.open(_link.zenoh_config(listen=[endpoint], mode="peer"))
+
+    def answer(query: zenoh.Query) -> None:
+        verb = str(query.key_expr).rsplit("/", 1)[-1]
+        asked.append(verb)
+        if verb == "hello":
+            body: object = {"ok": {"protocol": 1, "robot": "oldbot", "version": "0.0.1"}}
+        elif verb == "get_param":
+            args = json.loads(query.payload.to_string()) if query.payload else {}
+            body = {"ok": f"{args['skill']}.{args['param']}"}
+        else:
+            body = {"error": {"kind": "unknown_verb", "message": f"unknown request `{verb}`"}}
+        query.reply(query.key_expr, json.dumps(body))
+
+    try:
+        queryable = session.declare_queryable("situate/oldbot/req/*", answer)
+
+        async def main() -> None:
+            async with situate.connect("oldbot", endpoint=endpoint, timeout=5.0) as robot:
+                for _round in range(2):
+                    got = await asyncio.gather(
+                        robot.send("get_param", skill="a", param="x"),
+                        robot.send("get_param", skill="b", param="y"),
+                    )
+                    assert got == ["a.x", "b.y"]
+
+        run(main())
+        # One batch refused, then every request alone, the second round too.
+        assert asked.count("batch") == 1, asked
+        assert asked.count("get_param") == 4, asked
+        queryable.undeclare()
+    finally:
+        session.close()
+
+
 # ----- activate / deactivate -----------------------------------------------------------
 
 

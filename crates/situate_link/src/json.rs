@@ -480,6 +480,53 @@ fn payload_args<'a>(verb: &'a str, payload: &[u8]) -> Result<Args<'a>, WireError
 }
 
 /// Decodes a request payload for `verb`. Never panics, whatever the bytes.
+/// The link's envelope for several requests in one query (not a manager request: no GUI verb).
+pub const BATCH: &str = "batch";
+/// Most requests one `batch` carries.
+pub const MAX_BATCH: usize = 64;
+/// Largest `batch` payload, bytes (each request in it is bounded by [`MAX_PAYLOAD_BYTES`] too).
+pub const MAX_BATCH_BYTES: usize = 4 * MAX_PAYLOAD_BYTES;
+
+/// The requests of a `batch` payload (`{"requests": [{"verb": …, "args": {…}}, …]}`), in
+/// order: each verb and its arguments' JSON text as sent (`{}` without `args`), to be
+/// decoded one by one with [`decode_request`] as if each came alone.
+pub fn decode_batch(payload: &[u8]) -> Result<Vec<(String, Vec<u8>)>, WireError> {
+    let bad = |m: String| WireError::bad_request(format!("`{BATCH}`: {m}"));
+    if payload.len() > MAX_BATCH_BYTES {
+        return Err(bad(format!("the request is {} bytes, at most {MAX_BATCH_BYTES} are taken", payload.len())));
+    }
+    let outer = serde_json::from_slice::<BTreeMap<String, Box<RawValue>>>(payload)
+        .map_err(|e| bad(format!("the payload must be a JSON object with `requests`: {e}")))?;
+    if let Some(other) = outer.keys().find(|k| k.as_str() != "requests") {
+        return Err(bad(format!("unknown argument `{other}` (expected: requests)")));
+    }
+    let requests = outer.get("requests").ok_or_else(|| bad("missing `requests`: a list of requests".into()))?;
+    let items = serde_json::from_str::<Vec<BTreeMap<String, Box<RawValue>>>>(requests.get())
+        .map_err(|_| bad("`requests` must be a list of objects, each with `verb` and optional `args`".into()))?;
+    if items.is_empty() || items.len() > MAX_BATCH {
+        return Err(bad(format!("`requests` holds {} requests; 1 to {MAX_BATCH} are taken", items.len())));
+    }
+    items
+        .into_iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let at = |m: String| bad(format!("request {i}: {m}"));
+            if let Some(other) = item.keys().find(|k| !matches!(k.as_str(), "verb" | "args")) {
+                return Err(at(format!("unknown key `{other}` (expected: verb, args)")));
+            }
+            let verb = item
+                .get("verb")
+                .and_then(|v| serde_json::from_str::<String>(v.get()).ok())
+                .ok_or_else(|| at("`verb` must be a string".into()))?;
+            if verb == BATCH {
+                return Err(at("a batch cannot hold a batch".into()));
+            }
+            let args = item.get("args").map_or_else(|| b"{}".to_vec(), |a| a.get().as_bytes().to_vec());
+            Ok((verb, args))
+        })
+        .collect()
+}
+
 pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> {
     if !VERBS.contains(&verb) {
         return Err(WireError {

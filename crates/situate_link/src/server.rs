@@ -189,6 +189,22 @@ struct InFlight {
 enum Answer {
     Ready(Json),
     Manager(Pending),
+    /// A `batch`: each request's answer, in order.
+    Batch(Vec<Answer>),
+}
+
+impl Answer {
+    /// The reply body: a manager's answer awaited (a batch's, one after another).
+    fn resolve(self) -> Json {
+        match self {
+            Answer::Ready(body) => body,
+            Answer::Manager(pending) => match pending.wait(MANAGER_TIMEOUT) {
+                Ok(r) => json::ok(json::reply_to_json(&r)),
+                Err(e) => json::control_error(&e),
+            },
+            Answer::Batch(answers) => json::ok(Json::Array(answers.into_iter().map(Answer::resolve).collect())),
+        }
+    }
 }
 
 fn bridge(
@@ -211,14 +227,7 @@ fn bridge(
             next = if burst.len() < BURST { rx.try_recv().ok() } else { None };
         }
         for InFlight { query, reply_key, answer } in burst.drain(..) {
-            let body = match answer {
-                Answer::Ready(body) => body,
-                Answer::Manager(pending) => match pending.wait(MANAGER_TIMEOUT) {
-                    Ok(r) => json::ok(json::reply_to_json(&r)),
-                    Err(e) => json::control_error(&e),
-                },
-            };
-            reply_on(&query, &reply_key, &body);
+            reply_on(&query, &reply_key, &answer.resolve());
         }
     }
 }
@@ -231,11 +240,25 @@ fn reply_key(query: &Query, prefix: &str) -> String {
     format!("{prefix}{concrete}")
 }
 
-/// Decodes a query and answers it, or submits it to the manager.
+/// Decodes a query and answers it, or submits it to the manager (a `batch`: each of its
+/// requests in order, as if each came alone).
 fn answer(query: &Query, handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str) -> Answer {
     let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("");
     let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
-    Answer::Ready(match json::decode_request(verb, &payload) {
+    if verb == json::BATCH {
+        return match json::decode_batch(&payload) {
+            Err(e) => Answer::Ready(json::wire_error(&e)),
+            Ok(requests) => Answer::Batch(
+                requests.iter().map(|(verb, args)| answer_one(verb, args, handle, telemetry, robot)).collect(),
+            ),
+        };
+    }
+    answer_one(verb, &payload, handle, telemetry, robot)
+}
+
+/// One request: answered here, or submitted to the manager.
+fn answer_one(verb: &str, payload: &[u8], handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str) -> Answer {
+    Answer::Ready(match json::decode_request(verb, payload) {
         Err(e) => json::wire_error(&e),
         Ok(Decoded::Hello) => {
             json::ok(json!({"protocol": json::PROTOCOL, "robot": robot, "version": env!("CARGO_PKG_VERSION")}))

@@ -468,3 +468,50 @@ fn a_telemetry_rate_out_of_range_is_bad_param_and_a_slow_one_never_holds_shutdow
     });
     assert!(done_rx.recv_timeout(Duration::from_secs(60)).is_ok(), "the link did not stop within a minute");
 }
+
+#[test]
+fn a_batch_is_its_requests_in_order_each_answered_as_alone() {
+    let r = start(ClockKind::Wall);
+    let c = client(&r);
+    let batch = json!({"requests": [
+        {"verb": "set_param", "args": {"skill": "runaway", "param": "speed", "value": 0.3}},
+        {"verb": "get_param", "args": {"skill": "runaway", "param": "speed"}},
+        {"verb": "activate", "args": {"skills": ["wandr"]}},
+        {"verb": "nosuch"},
+        {"verb": "hello"},
+        {"verb": "set_param", "args": {"skill": "runaway", "param": "speed", "value": 0.4}},
+        {"verb": "get_param", "args": {"skill": "runaway", "param": "speed"}},
+    ]});
+    let replies = c.request("linkbot", "batch", &batch).unwrap();
+    let replies = replies.as_array().expect("a list of replies");
+    assert_eq!(replies.len(), 7);
+    // In order: each get sees the set before it, not the one after.
+    assert_eq!(replies[1]["ok"], json!(0.3));
+    assert_eq!(replies[6]["ok"], json!(0.4));
+    // A refusal is that request's alone, the same as sent by itself; the others go on.
+    let alone = remote_err(c.request("linkbot", "activate", &json!({"skills": ["wandr"]})).unwrap_err());
+    assert_eq!(replies[2]["error"]["kind"], json!(alone.0));
+    assert_eq!(replies[2]["error"]["message"], json!(alone.1));
+    assert_eq!(replies[3]["error"]["kind"], json!("unknown_verb"));
+    assert_eq!(replies[4]["ok"]["robot"], json!("linkbot"));
+    // A batch that is no batch is refused whole, saying where.
+    let many: Vec<Json> = (0..65).map(|_| json!({"verb": "hello"})).collect();
+    for (payload, says) in [
+        (json!({"requests": []}).to_string(), "1 to 64"),
+        (json!({"requests": many}).to_string(), "holds 65 requests"),
+        (
+            json!({"requests": [{"verb": "hello"}, {"verb": "batch", "args": {"requests": []}}]}).to_string(),
+            "request 1: a batch cannot hold a batch",
+        ),
+        (json!({"requests": [{"verb": 3}]}).to_string(), "request 0: `verb` must be a string"),
+        (json!({"requests": [{"verb": "hello", "arg": {}}]}).to_string(), "request 0: unknown key `arg`"),
+        (json!({"reqs": []}).to_string(), "unknown argument `reqs`"),
+        ("[1, 2]".to_string(), "must be a JSON object"),
+    ] {
+        let (kind, message) = refused_raw(&c, "batch", &payload);
+        assert_eq!(kind, "bad_request", "{payload}");
+        assert!(message.contains(says), "{payload}: {message}");
+    }
+    // Nothing refused whole changed anything.
+    assert_eq!(c.request("linkbot", "get_param", &json!({"skill": "runaway", "param": "speed"})).unwrap(), json!(0.4));
+}
