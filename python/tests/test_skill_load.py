@@ -187,6 +187,29 @@ def test_two_skills_of_one_name_in_a_file_are_refused(files: Write) -> None:
         sit.LocalRobot(path)
 
 
+def test_a_file_that_brings_a_skill_type_again_is_refused_naming_both(files: Write) -> None:
+    files("a.py", GOOD)
+    files("b.py", GOOD)
+    path = files("robot.yaml", robot("a.py, b.py"))
+    expected = "skill type `ok.skill` is defined already by `a.py`"
+    with pytest.raises(ValueError, match="defined already") as info:
+        sit.LocalRobot(path)
+    assert expected in str(info.value)
+    result = situate("check", str(path))
+    assert result.returncode == 3, result.stderr
+    assert expected in result.stderr
+    assert "robot.yaml:3:" in result.stderr
+    # A built-in type's name is the program's.
+    files("c.py", GOOD.replace('name="ok.skill"', 'name="std.wander"'))
+    path = files("robot.yaml", robot("c.py"))
+    result = situate("check", str(path))
+    assert result.returncode == 3, result.stderr
+    assert "skill type `std.wander` is defined already by the program" in result.stderr
+    # The same file twice (two included robot files may list it): loaded once, no clash.
+    path = files("robot.yaml", robot("a.py, ./a.py"))
+    assert situate("check", str(path)).returncode == 0
+
+
 def test_a_skill_class_must_be_made_without_arguments() -> None:
     class NeedsArgs:
         def __init__(self, port: str) -> None:

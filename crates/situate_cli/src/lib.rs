@@ -38,6 +38,7 @@ use args::{Cli, Command, Global};
 pub use output::Exit;
 use output::{Out, Problem};
 pub use sim::Simulation;
+pub use skill_types::{Origins as SkillTypeOrigins, THE_PROGRAM};
 
 /// Loads the skill types of one `python:` file of a robot file.
 pub type PythonLoader = Arc<dyn Fn(&Path) -> Result<Vec<situate_core::SkillType>, String> + Send + Sync>;

@@ -4,20 +4,72 @@
 //! and those of `--library`/`--python` files or of a robot file's `libraries:`
 //! and `python:` (errors at their line).
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use situate::manager::{Registry, RobotFile};
+use situate_core::SkillType;
 
 use crate::output::{problem, Exit};
 use crate::sim::{simulation, SimOverrides, Simulation};
 use crate::Extensions;
 
+/// Where each skill type came from, so that a file that brings a name again is refused
+/// (it used to replace the first silently), naming both. A file loaded twice (the same path,
+/// say through two `include:`d robot files) adds nothing the second time.
+pub struct Origins {
+    by_name: BTreeMap<String, String>,
+    files: BTreeSet<PathBuf>,
+}
+
+impl Origins {
+    /// The registry's types so far, all from `origin`.
+    pub fn of(registry: &Registry, origin: &str) -> Origins {
+        let by_name = registry.names().map(|n| (n.to_string(), origin.to_string())).collect();
+        Origins { by_name, files: BTreeSet::new() }
+    }
+
+    /// Whether `path` is new (and from now on known).
+    pub fn first_load(&mut self, path: &Path) -> bool {
+        self.files.insert(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()))
+    }
+
+    /// Adds a file's types (`from`: how it is named), all or none: none when one of them has a
+    /// name taken already.
+    pub fn add(&mut self, registry: &mut Registry, types: Vec<SkillType>, from: &str) -> Result<(), String> {
+        let mut names = BTreeSet::new();
+        for t in &types {
+            let name = &t.decl.type_name;
+            if let Some(origin) = self.by_name.get(name) {
+                return Err(format!(
+                    "skill type `{name}` is defined already by {origin}; a file cannot replace it: give the \
+                     type in {from} a name of its own"
+                ));
+            }
+            if !names.insert(name.clone()) {
+                return Err(format!("{from} defines skill type `{name}` twice"));
+            }
+        }
+        for t in types {
+            self.by_name.insert(t.decl.type_name.clone(), from.to_string());
+            registry.add(t);
+        }
+        Ok(())
+    }
+}
+
+/// How the program's own skill types are named in a clash.
+pub const THE_PROGRAM: &str = "the program (a built-in or the program's own Rust type)";
+
 /// The program's skill types and those of `--library` and `--python` files.
 pub(crate) fn registry_with(libraries: &[PathBuf], python: &[PathBuf], ext: &Extensions) -> anyhow::Result<Registry> {
     let mut registry = program_registry(ext)?;
+    let mut origins = Origins::of(&registry, THE_PROGRAM);
     for path in libraries {
-        for t in load_library(path).map_err(|e| problem(Exit::BadFile, format!("--library {}: {e}", path.display())))? {
-            registry.add(t);
+        let from = format!("--library {}", path.display());
+        let types = load_library(path).map_err(|e| problem(Exit::BadFile, format!("{from}: {e}")))?;
+        if origins.first_load(path) {
+            origins.add(&mut registry, types, &from).map_err(|e| problem(Exit::BadFile, format!("{from}: {e}")))?;
         }
     }
     for path in python {
@@ -31,8 +83,10 @@ pub(crate) fn registry_with(libraries: &[PathBuf], python: &[PathBuf], ext: &Ext
                 ),
             )
         })?;
-        for t in loader(path).map_err(|e| problem(Exit::BadFile, format!("--python {}: {e}", path.display())))? {
-            registry.add(t);
+        let from = format!("--python {}", path.display());
+        let types = loader(path).map_err(|e| problem(Exit::BadFile, format!("{from}: {e}")))?;
+        if origins.first_load(path) {
+            origins.add(&mut registry, types, &from).map_err(|e| problem(Exit::BadFile, format!("{from}: {e}")))?;
         }
     }
     Ok(registry)
@@ -48,19 +102,27 @@ pub(crate) fn registry_for(
     over: &SimOverrides,
 ) -> Result<(Registry, Option<Simulation>), Vec<String>> {
     let sim = simulation(robot_file, over)?;
+    let mut origins = Origins::of(&registry, THE_PROGRAM);
     if let Some(sim) = &sim {
-        situate_sim::register(&mut registry, sim.world.clone());
+        let mut devices = Registry::new();
+        situate_sim::register(&mut devices, sim.world.clone());
+        for name in devices.names() {
+            if let Some(t) = devices.get(name) {
+                origins.by_name.insert(name.to_string(), "the simulator (its devices)".to_string());
+                registry.add(t.clone());
+            }
+        }
     }
     let mut errors = Vec::new();
     for lib in &robot_file.libraries {
         let path = robot_file.resolve_at(lib.pos, &lib.value);
-        match load_library(&path) {
-            Ok(types) => {
-                for t in types {
-                    registry.add(t);
-                }
-            }
-            Err(e) => errors.push(robot_file.error(lib.pos, e).to_string()),
+        let from = format!("`{}`", lib.value);
+        let added = load_library(&path).and_then(|types| match origins.first_load(&path) {
+            true => origins.add(&mut registry, types, &from),
+            false => Ok(()),
+        });
+        if let Err(e) = added {
+            errors.push(robot_file.error(lib.pos, e).to_string());
         }
     }
     for py in &robot_file.python {
@@ -73,13 +135,13 @@ pub(crate) fn registry_for(
                 py.value
             )),
         };
-        match result {
-            Ok(types) => {
-                for t in types {
-                    registry.add(t);
-                }
-            }
-            Err(e) => errors.push(robot_file.error(py.pos, e).to_string()),
+        let from = format!("`{}`", py.value);
+        let added = result.and_then(|types| match origins.first_load(&path) {
+            true => origins.add(&mut registry, types, &from),
+            false => Ok(()),
+        });
+        if let Err(e) = added {
+            errors.push(robot_file.error(py.pos, e).to_string());
         }
     }
     if errors.is_empty() {
@@ -235,5 +297,33 @@ mod tests {
             });
         let twice = with_rust_skills(builtin_registry(), &ext);
         assert_eq!(twice.err(), Some(NameClash::Twice("mine.own".into())));
+    }
+
+    #[test]
+    fn a_file_that_brings_a_type_name_again_is_refused_naming_both_and_adds_nothing() {
+        let mut registry = builtin_registry();
+        let mut origins = Origins::of(&registry, THE_PROGRAM);
+        // A file's types join when their names are new.
+        origins.add(&mut registry, vec![SkillType::of::<Own>()], "`a.py`").expect("a new name");
+        assert!(registry.get("mine.own").is_some());
+        // Another file with a taken name: refused, naming where the name came from; its other
+        // types are not added either.
+        let clash = origins.add(&mut registry, vec![SkillType::of::<UnderSim>(), SkillType::of::<Own>()], "`b.py`");
+        let text = clash.expect_err("a taken name");
+        assert!(text.contains("skill type `mine.own` is defined already by `a.py`"), "{text}");
+        assert!(text.contains("give the type in `b.py` a name of its own"), "{text}");
+        assert!(registry.get("sim.mine").is_none(), "all or nothing");
+        // A built-in name: the program's.
+        let text = origins.add(&mut registry, vec![SkillType::of::<LikeWander>()], "`c.py`").expect_err("built in");
+        assert!(text.contains("`toy.wander` is defined already by the program"), "{text}");
+        // One file with a name twice.
+        let text = origins
+            .add(&mut registry, vec![SkillType::of::<UnderSim>(), SkillType::of::<UnderSim>()], "`d.py`")
+            .expect_err("twice");
+        assert!(text.contains("`d.py` defines skill type `sim.mine` twice"), "{text}");
+        // The same file again (two included robot files list it): loaded once.
+        let here = std::env::current_dir().expect("a working directory");
+        assert!(origins.first_load(&here.join("Cargo.toml")));
+        assert!(!origins.first_load(Path::new("Cargo.toml")), "the same file by another path");
     }
 }

@@ -44,15 +44,17 @@ fn registry_for(py: Python<'_>, file: &RobotFile) -> Result<Registry, String> {
             .to_string(),
         );
     }
+    // A file that brings a type name again is refused, as by the program.
+    let mut origins = situate_cli::SkillTypeOrigins::of(&registry, situate_cli::THE_PROGRAM);
     for py_file in &file.python {
         let path = file.resolve_at(py_file.pos, &py_file.value);
-        match py.detach(|| loader::load_file(&path)) {
-            Ok(types) => {
-                for t in types {
-                    registry.add(t);
-                }
-            }
-            Err(e) => errors.push(file.error(py_file.pos, e).to_string()),
+        let from = format!("`{}`", py_file.value);
+        let added = py.detach(|| loader::load_file(&path)).and_then(|types| match origins.first_load(&path) {
+            true => origins.add(&mut registry, types, &from),
+            false => Ok(()),
+        });
+        if let Err(e) = added {
+            errors.push(file.error(py_file.pos, e).to_string());
         }
     }
     if errors.is_empty() {
