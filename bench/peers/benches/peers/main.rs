@@ -1,10 +1,11 @@
-//! The chain benchmark beside bevy_ecs: the same chain of N steps passing
-//! `[f32; 24]`, each adding a constant, as situate skills and as bevy_ecs
-//! systems on a single-threaded schedule, against the same direct-call
+//! The chain benchmark beside its peers: the same chain of N steps passing
+//! `[f32; 24]`, each adding a constant, as situate skills, as bevy_ecs
+//! systems on a single-threaded schedule and (with `--features copper`, for
+//! N = 10 and 100) as copper-rs tasks, against the same direct-call
 //! baseline, all interleaved in one run (see `bench/README.md`, "Peers").
 //!
 //! ```text
-//! cd bench/peers && cargo bench --bench peers [-- --quick] [--samples N] [--json PATH]
+//! cd bench/peers && cargo bench --bench peers [--features copper] [-- --quick] [--samples N] [--json PATH]
 //! ```
 
 use std::hint::black_box;
@@ -127,6 +128,12 @@ fn situate_chain(n: usize) -> Manager {
 }
 
 const PASSINGS: [Passing; 2] = [Passing::Resource, Passing::Components];
+const SITUATE: &str = "situate (derive [f32; 24])";
+#[cfg(feature = "copper")]
+const COPPER: &str = "copper-rs (cu29 tasks)";
+
+#[cfg(feature = "copper")]
+mod copper;
 
 fn main() {
     let mut settings = Settings::default();
@@ -153,65 +160,91 @@ fn main() {
     let bench = "peers";
     let cpu0 = CpuTimes::now();
 
-    // Per N: the baseline, situate, then each way of passing in bevy_ecs.
-    let per_n = 2 + PASSINGS.len();
-    let mut managers: Vec<Manager> = NS.iter().map(|&n| situate_chain(n)).collect();
-    let mut bevies: Vec<Vec<(World, Schedule)>> =
-        NS.iter().map(|&n| PASSINGS.iter().map(|&p| bevy_chain(n, p)).collect()).collect();
-    let mut t = 0.0f32;
-    let out = interleaved(&settings, NS.len() * per_n, &mut |s, iters| {
-        let (ni, k) = (s / per_n, s % per_n);
-        match k {
-            0 => {
+    // Per N: the baseline, situate, then the peers; each subject runs
+    // `iters` cycles of its chain.
+    type Subject = Box<dyn FnMut(u64)>;
+    #[cfg(feature = "copper")]
+    let copper_dir = std::env::temp_dir().join(format!("situate-peers-{}", std::process::id()));
+    #[cfg(feature = "copper")]
+    if let Err(e) = std::fs::create_dir_all(&copper_dir) {
+        panic!("{}: {e}", copper_dir.display());
+    }
+    let mut labels: Vec<Vec<&'static str>> = Vec::new();
+    let mut subjects: Vec<Subject> = Vec::new();
+    for &n in &NS {
+        let mut t = 0.0f32;
+        let mut row: Vec<(&'static str, Subject)> = vec![(
+            "baseline: direct calls",
+            Box::new(move |iters| {
                 for _ in 0..iters {
-                    black_box(skills::baseline_chain(NS[ni], &mut t));
+                    black_box(skills::baseline_chain(n, &mut t));
                 }
-            }
-            1 => {
-                let m = &mut managers[ni];
+            }),
+        )];
+        let mut m = situate_chain(n);
+        row.push((
+            SITUATE,
+            Box::new(move |iters| {
                 for _ in 0..iters {
                     m.cycle();
                 }
-            }
-            _ => {
-                let (world, schedule) = &mut bevies[ni][k - 2];
-                for _ in 0..iters {
-                    schedule.run(world);
-                }
-            }
+            }),
+        ));
+        for p in PASSINGS {
+            let (mut world, mut schedule) = bevy_chain(n, p);
+            row.push((
+                p.label(),
+                Box::new(move |iters| {
+                    for _ in 0..iters {
+                        schedule.run(&mut world);
+                    }
+                }),
+            ));
         }
-    });
+        #[cfg(feature = "copper")]
+        if copper::NS.contains(&n) {
+            let mut step = copper::chain(n, &copper_dir);
+            row.push((
+                COPPER,
+                Box::new(move |iters| {
+                    for _ in 0..iters {
+                        step();
+                    }
+                }),
+            ));
+        }
+        labels.push(row.iter().map(|(l, _)| *l).collect());
+        subjects.extend(row.into_iter().map(|(_, s)| s));
+    }
+    let out = interleaved(&settings, subjects.len(), &mut |s, iters| subjects[s](iters));
 
     let mut worst_ratio: Vec<(usize, Summary)> = Vec::new();
+    let mut at = 0;
     for (ni, &n) in NS.iter().enumerate() {
-        let base = &out[ni * per_n];
+        let row = &out[at..at + labels[ni].len()];
+        at += labels[ni].len();
+        let base = &row[0];
         report.figure(bench, &format!("N={n:<4} baseline: direct calls"), "ns", base);
-        let per_skill = |c: &Summary| paired(base, c, |b, c| (c - b) / n as f64);
-        let sit = per_skill(&out[ni * per_n + 1]);
-        report.figure(bench, &format!("N={n:<4} overhead per step, situate (derive [f32; 24])"), "ns", &sit);
-        for (pi, p) in PASSINGS.iter().enumerate() {
-            let bev = per_skill(&out[ni * per_n + 2 + pi]);
-            report.figure(bench, &format!("N={n:<4} overhead per step, {}", p.label()), "ns", &bev);
+        for (label, cyc) in labels[ni].iter().zip(row).skip(1) {
+            let o = paired(base, cyc, |b, c| (c - b) / n as f64);
+            report.figure(bench, &format!("N={n:<4} overhead per step, {label}"), "ns", &o);
         }
-        for (pi, p) in PASSINGS.iter().enumerate() {
-            // Per round: situate's overhead over bevy_ecs's, both from that round's baseline.
-            let cyc_s = &out[ni * per_n + 1];
-            let cyc_b = &out[ni * per_n + 2 + pi];
+        // Per round: situate's overhead over each peer's, both from that
+        // round's baseline.
+        let sit = &row[1];
+        for (label, peer) in labels[ni].iter().zip(row).skip(2) {
             let r = Summary::of(
-                base.samples
-                    .iter()
-                    .zip(&cyc_s.samples)
-                    .zip(&cyc_b.samples)
-                    .map(|((b, s), v)| (s - b) / (v - b))
-                    .collect(),
+                base.samples.iter().zip(&sit.samples).zip(&peer.samples).map(|((b, s), v)| (s - b) / (v - b)).collect(),
             );
-            report.figure(bench, &format!("N={n:<4} situate / {} (per-step overhead)", p.label()), "×", &r);
-            if *p == Passing::Resource {
+            report.figure(bench, &format!("N={n:<4} situate / {label} (per-step overhead)"), "×", &r);
+            if *label == Passing::Resource.label() {
                 worst_ratio.push((n, r));
             }
         }
     }
-    report.print_table(bench, "chain of N steps passing f32[24]: situate vs bevy_ecs (single-threaded), one run");
+    #[cfg(feature = "copper")]
+    drop(std::fs::remove_dir_all(&copper_dir));
+    report.print_table(bench, "chain of N steps passing f32[24]: situate beside its peers (single-threaded), one run");
     let share = cpu0.and_then(|c| c.since(&CpuTimes::now()?));
     let (wn, w) = worst_ratio.iter().fold((0, f64::MIN), |a, (n, r)| if r.median > a.1 { (*n, r.median) } else { a });
     let inconclusive = share.filter(|s| s.busy()).map(|s| format!("the machine was busy ({s})"));
