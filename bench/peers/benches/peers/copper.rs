@@ -128,8 +128,28 @@ mod chain100 {
     }
 }
 
+mod chain1000 {
+    use cu29::prelude::*;
+
+    #[allow(unused_imports)]
+    use super::{Add, Gen, Sink};
+
+    #[copper_runtime(config = "copper/chain1000.ron")]
+    struct Chain1000 {}
+
+    pub fn start(log: &std::path::Path) -> CuResult<super::Iteration> {
+        let app = Chain1000::builder().with_log_path(log, Some(64 * 1024 * 1024))?.build()?;
+        let mut running = app.start()?;
+        Ok(Box::new(move || {
+            if let Err(e) = running.run_one_iteration() {
+                panic!("copper iteration: {e}");
+            }
+        }))
+    }
+}
+
 /// The chain lengths with a task graph (`copper/gen.py`).
-pub const NS: [usize; 2] = [10, 100];
+pub const NS: [usize; 3] = [10, 100, 1000];
 
 /// Starts the chain of `n` tasks, logging to a file in `dir`, and checks one
 /// iteration: the sink sees `1 + (n − 1) K`.
@@ -138,6 +158,7 @@ pub fn chain(n: usize, dir: &std::path::Path) -> Iteration {
     let started = match n {
         10 => chain10::start(&log),
         100 => chain100::start(&log),
+        1000 => chain1000::start(&log),
         _ => panic!("no copper task graph for N = {n}"),
     };
     let mut step = match started {
