@@ -102,7 +102,9 @@ impl From<&str> for SkillError {
 /// `inputs[i]` belongs to the declaration's input `i`; it is `Some` for every
 /// required input and `None` for an optional input nobody produced.
 /// The body sets `outputs[j]` to `Some` for each output it produces (the
-/// manager clears them before each run).
+/// manager clears them before each run, unless the skill
+/// [fills its outputs](Skill::fills_outputs): then an output may hold a
+/// spare value on entry, which the body replaces).
 pub struct Io<'a> {
     pub inputs: &'a [Option<Value>],
     pub outputs: &'a mut [Option<Value>],
@@ -117,6 +119,17 @@ pub trait Skill: Send + 'static {
     /// Applies parameter `index` of the declaration. The manager has already
     /// checked `value` against the parameter's type and range.
     fn set_param(&mut self, index: usize, value: &Value);
+
+    /// Whether [`Skill::step`] sets every output (to `Some` or `None`)
+    /// whenever it returns `Ok`, taking what an output held on entry as a
+    /// spare buffer ([`SignalValue::into_output`](crate::SignalValue::into_output)).
+    /// Then the manager may leave in an output, instead of `None`, the value
+    /// its previous one replaced in its slot, and a fixed-size array is
+    /// written into that buffer. `#[derive(Skill)]` says yes; by default
+    /// outputs are `None` on entry.
+    fn fills_outputs(&self) -> bool {
+        false
+    }
 }
 
 /// The computational body of a Rust skill.

@@ -190,6 +190,35 @@ pub trait SignalValue: Sized {
     fn signal_type() -> SignalType;
     fn from_value(value: &Value) -> Option<Self>;
     fn into_value(self) -> Value;
+
+    /// Writes this value into an output port's buffer, which may hold a
+    /// spare on entry: the value that this output's previous one replaced
+    /// in its slot (see [`Skill::fills_outputs`](crate::Skill::fills_outputs)).
+    /// A fixed-size array copies itself into the spare's buffer when nobody
+    /// else holds it; by default the spare is handed back ([`recycle`]) and
+    /// [`SignalValue::into_value`] makes the value.
+    #[inline]
+    fn into_output(self, output: &mut Option<Value>) {
+        if let Some(spare) = output.take() {
+            recycle(spare);
+        }
+        *output = Some(self.into_value());
+    }
+}
+
+/// Writes an optional output (`#[derive(Skill)]`'s glue for an `Option<T>`
+/// output port): `Some` through [`SignalValue::into_output`]; `None` leaves
+/// the buffer empty, its spare handed back ([`recycle`]).
+#[inline]
+pub fn optional_output<T: SignalValue>(value: Option<T>, output: &mut Option<Value>) {
+    match value {
+        Some(v) => v.into_output(output),
+        None => {
+            if let Some(spare) = output.take() {
+                recycle(spare);
+            }
+        }
+    }
 }
 
 macro_rules! scalar_signal {
@@ -259,13 +288,33 @@ macro_rules! fixed_array_signal {
                 }
                 Value::$variant(Arc::from(&self[..]))
             }
+
+            #[inline]
+            fn into_output(self, output: &mut Option<Value>) {
+                // The output's own spare first: no trip through the
+                // thread's spare list.
+                if let Some(Value::$variant(a)) = output {
+                    if a.len() == N {
+                        if let Some(buf) = Arc::get_mut(a) {
+                            buf.copy_from_slice(&self);
+                            return;
+                        }
+                    }
+                }
+                if let Some(spare) = output.take() {
+                    recycle(spare);
+                }
+                *output = Some(self.into_value());
+            }
         }
     };
 }
 
 /// Spare array buffers of this thread, reused by the next array made: a
-/// few cells, so that taking and giving back cost a few loads and stores.
-struct Spares([std::cell::Cell<Option<Value>>; SPARES]);
+/// few entries, looked at in place (their tags are read, and only the one
+/// taken or filled is moved), so that taking and giving back cost a few
+/// loads and stores.
+struct Spares(std::cell::RefCell<[Option<Value>; SPARES]>);
 
 /// At most this many spare buffers per thread.
 const SPARES: usize = 4;
@@ -273,28 +322,21 @@ const SPARES: usize = 4;
 impl Spares {
     #[inline]
     fn take_where(&self, want: impl Fn(&Value) -> bool) -> Option<Value> {
-        for cell in &self.0 {
-            match cell.take() {
-                Some(v) if want(&v) => return Some(v),
-                other => cell.set(other),
-            }
-        }
-        None
+        let mut spares = self.0.try_borrow_mut().ok()?;
+        spares.iter_mut().find(|s| s.as_ref().is_some_and(&want))?.take()
     }
 
     #[inline]
     fn give(&self, value: Value) {
-        for cell in &self.0 {
-            match cell.take() {
-                None => return cell.set(Some(value)),
-                other => cell.set(other),
-            }
+        let Ok(mut spares) = self.0.try_borrow_mut() else { return };
+        if let Some(free) = spares.iter_mut().find(|s| s.is_none()) {
+            *free = Some(value);
         }
     }
 }
 
 thread_local! {
-    static SPARE: Spares = const { Spares([const { std::cell::Cell::new(None) }; SPARES]) };
+    static SPARE: Spares = const { Spares(std::cell::RefCell::new([const { None }; SPARES])) };
 }
 
 /// Hands back a value that is no longer needed. When it is an array that
@@ -355,6 +397,31 @@ mod tests {
             (Value::F32s(a), Value::F32s(b)) => assert!(Arc::ptr_eq(a, b)),
             _ => unreachable!(),
         }
+    }
+
+    #[test]
+    fn an_output_reuses_its_spare_only_when_nobody_else_holds_it() {
+        let ptr = |v: &Option<Value>| match v {
+            Some(Value::F32s(a)) => a.as_ptr(),
+            _ => unreachable!(),
+        };
+        let mut out = Some([0.0f32; 3].into_value());
+        let before = ptr(&out);
+        [1.0f32, 2.0, 3.0].into_output(&mut out);
+        assert_eq!(ptr(&out), before, "a unique spare of the right length is written in place");
+        assert_eq!(<[f32; 3]>::from_value(out.as_ref().unwrap()), Some([1.0, 2.0, 3.0]));
+        let held = out.clone();
+        [4.0f32, 5.0, 6.0].into_output(&mut out);
+        assert_ne!(ptr(&out), before, "a shared spare is left alone");
+        assert_eq!(<[f32; 3]>::from_value(held.as_ref().unwrap()), Some([1.0, 2.0, 3.0]));
+        assert_eq!(<[f32; 3]>::from_value(out.as_ref().unwrap()), Some([4.0, 5.0, 6.0]));
+        let mut wrong = Some(Value::F64(1.0));
+        [7.0f32].into_output(&mut wrong);
+        assert_eq!(wrong, Some(Value::F32s(vec![7.0].into())));
+        optional_output::<[f32; 1]>(None, &mut wrong);
+        assert_eq!(wrong, None);
+        optional_output(Some(2.0f64), &mut wrong);
+        assert_eq!(wrong, Some(Value::F64(2.0)));
     }
 
     #[test]

@@ -493,19 +493,22 @@ fn generate(
 
     let write_outputs = outputs.iter().enumerate().map(|(j, p)| {
         let Port { field, ty, .. } = p;
-        let into = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::into_value);
+        // The output may hold a spare on entry (see `fills_outputs`): the
+        // value is written into its buffer when it can be.
         if p.optional {
+            let put = quote_spanned!(ty.span()=> #core::value::optional_output::<#ty>);
             quote! {
                 let #value = ::core::option::Option::take(&mut self.#field);
                 if let ::core::option::Option::Some(#slot) = #io.outputs.get_mut(#j) {
-                    *#slot = #value.map(#into);
+                    #put(#value, #slot);
                 }
             }
         } else {
+            let into = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::into_output);
             let clone = quote_spanned!(ty.span()=> ::core::clone::Clone::clone(&self.#field));
             quote! {
                 if let ::core::option::Option::Some(#slot) = #io.outputs.get_mut(#j) {
-                    *#slot = ::core::option::Option::Some(#into(#clone));
+                    #into(#clone, #slot);
                 }
             }
         }
@@ -580,6 +583,10 @@ fn generate(
 
             fn set_param(&mut self, #index: ::core::primitive::usize, #value: &#core::Value) {
                 #set_param
+            }
+
+            fn fills_outputs(&self) -> bool {
+                true
             }
         }
     }

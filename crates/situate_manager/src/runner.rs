@@ -33,6 +33,10 @@ pub(crate) struct Exec {
     /// How long the last run took, exactly when `timed`, else on the coarse clock.
     pub elapsed_ns: u64,
     pub timed: bool,
+    /// The body [fills its outputs](Skill::fills_outputs): an output buffer
+    /// holding the value its last output replaced is handed to the body as
+    /// a spare instead of being recycled on entry.
+    pub fills: bool,
 }
 
 impl Default for Exec {
@@ -45,6 +49,7 @@ impl Default for Exec {
             result: Ok(()),
             elapsed_ns: 0,
             timed: false,
+            fills: false,
         }
     }
 }
@@ -52,6 +57,7 @@ impl Default for Exec {
 impl Exec {
     pub fn new(skill: Box<dyn Skill>, inputs: usize, outputs: usize) -> Self {
         Exec {
+            fills: skill.fills_outputs(),
             skill: Some(skill),
             inputs: vec![None; inputs],
             outputs: vec![None; outputs],
@@ -77,12 +83,16 @@ impl Exec {
     /// Outputs are `None` on entry: the manager takes every produced output
     /// when it commits, and clears them when a body fails; an output buffer
     /// it left holding the value a committed output replaced in its slot
-    /// (see `Manager::commit_plain`) is recycled here.
+    /// (see `Manager::commit_plain`) is recycled here, or, when the body
+    /// [fills its outputs](Skill::fills_outputs), left to it as a spare
+    /// (a body that fails leaves its outputs to be cleared as before).
     pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
-        for out in &mut self.outputs {
-            if out.is_some() {
-                if let Some(old) = out.take() {
-                    recycle(old);
+        if !self.fills {
+            for out in &mut self.outputs {
+                if out.is_some() {
+                    if let Some(old) = out.take() {
+                        recycle(old);
+                    }
                 }
             }
         }
