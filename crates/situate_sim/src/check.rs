@@ -13,6 +13,9 @@
 //!   sight) from some cell the robot reaches, and the goal floor's call button
 //!   from in front of every car;
 //! - every car boardable and every door wide enough;
+//! - the lab door's and the office door's barcodes beside their doors (0.1 to
+//!   0.6 m from the nearer jamb), and no opening but cars' doors in the call
+//!   button's wall: what the robot relies on to find a door and to board;
 //! - route steps naming barcodes that exist on the leg's floor.
 //!
 //! Every finding names the element and the map line it is on.
@@ -37,6 +40,11 @@ pub const PRESS_STANDOFF: f64 = 0.4;
 /// Where the robot stands when it has just left a car: this far in front of
 /// the car's door, m.
 pub const CAR_APRON: f64 = 1.0;
+/// A door's barcode (the lab door's, the office's) is this far from the door's
+/// nearer jamb at most, m: the robot takes an opening farther off for another way.
+pub const BARCODE_JAMB_MAX: f64 = 0.6;
+/// Slack on the rules' distances for coordinates written to the centimetre, m.
+const SLACK: f64 = 0.02;
 
 /// One problem found: the element, its line in the map file and what is wrong.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -98,12 +106,134 @@ pub fn lint(map: &Map) -> Vec<Finding> {
     let goal_floor = map.floor(m.goal_floor);
     if let Some(f) = start_floor {
         start_checks(map, f, &mut out, line("start"));
+        door_beside(f, m.lab_door_barcode, &mut out);
     }
     if let Some(f) = goal_floor {
         goal_checks(map, f, &mut out, line("goal_floor"));
+        // An office with a door (one on its outline): its barcode marks it.
+        let office_door = f.office.as_ref().is_some_and(|o| {
+            let outline: Vec<Seg> =
+                o.polygon.iter().zip(o.polygon.iter().cycle().skip(1)).map(|(a, b)| Seg::new(*a, *b)).collect();
+            f.doors.iter().any(|d| outline.iter().any(|e| e.dist_to(d.seg.at(0.5)) <= 0.1))
+        });
+        if office_door {
+            door_beside(f, m.office_barcode, &mut out);
+        }
+    }
+    for f in &map.floors {
+        button_wall(map, f, &mut out);
     }
     route(map, &mut out);
     out
+}
+
+/// The door a barcode marks is beside it: on a door's line, 0.1 to
+/// [`BARCODE_JAMB_MAX`] m from its nearer jamb (`docs/maps.md`, "Lab door" and
+/// "Office"). The robot, lined up with the barcode, looks for its door there.
+fn door_beside(f: &Floor, id: i64, out: &mut Vec<Finding>) {
+    let Some((el, b)) = floor_barcode(f, id) else { return };
+    // For each door: how far the barcode is off its line, and from its nearer jamb along it.
+    let nearest = f
+        .doors
+        .iter()
+        .map(|d| {
+            let len = d.seg.len();
+            let along_dir = d.seg.b.minus(d.seg.a).scale(1.0 / len.max(1e-9));
+            let rel = b.at.minus(d.seg.a);
+            let along = rel.dot(along_dir);
+            let off = rel.cross(along_dir).abs();
+            let jamb = if along < 0.0 {
+                -along
+            } else if along > len {
+                along - len
+            } else {
+                0.0
+            };
+            (off, jamb)
+        })
+        .min_by(|x, y| x.0.hypot(x.1).total_cmp(&y.0.hypot(y.1)));
+    let ok = nearest
+        .is_some_and(|(off, jamb)| off <= 0.1 + SLACK && (0.1 - SLACK..=BARCODE_JAMB_MAX + SLACK).contains(&jamb));
+    if !ok {
+        let what = match nearest {
+            None => "there is no door on its floor".to_string(),
+            Some((off, jamb)) => {
+                format!("the nearest door's nearer jamb is {jamb:.2} m along its wall and {off:.2} m off it")
+            }
+        };
+        out.push(Finding::new(
+            b.line,
+            el,
+            format!(
+                "barcode {id} marks a door, but {what}: it must be on the door's wall, 0.1 to {BARCODE_JAMB_MAX} m \
+                 from the nearer jamb"
+            ),
+        ));
+    }
+}
+
+/// The call button's wall has no openings but cars' doors (`docs/maps.md`,
+/// "Lobby"): the robot takes a way that opens there for a car's door. Along
+/// the button's wall, walls one after another with gaps between them: a gap
+/// not filled by a car's shaft is an opening.
+fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Finding>) {
+    let Some(l) = &f.lobby else { return };
+    let normal = P2::dir(l.facing);
+    let along_dir = P2::new(-normal.y, normal.x);
+    let on_line = |p: P2| p.minus(l.button).dot(normal).abs() <= 0.05;
+    let coord = |p: P2| p.minus(l.button).dot(along_dir);
+    // The stretches along the line covered by walls, and by the cars' shafts (their walls).
+    let mut cover: Vec<(f64, f64)> = f
+        .walls
+        .iter()
+        .filter(|w| on_line(w.a) && on_line(w.b))
+        .map(|w| (coord(w.a).min(coord(w.b)), coord(w.a).max(coord(w.b))))
+        .collect();
+    let walls = cover.len();
+    for c in &map.elevator.cars {
+        let corners = [P2::new(c.x0, c.y0), P2::new(c.x1, c.y0), P2::new(c.x1, c.y1), P2::new(c.x0, c.y1)];
+        for k in 0..4 {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            if on_line(a) && on_line(b) {
+                cover.push((coord(a).min(coord(b)), coord(a).max(coord(b))));
+            }
+        }
+    }
+    if walls == 0 {
+        return; // no wall drawn through the button: the loader's and the other checks' business
+    }
+    cover.sort_by(|x, y| x.0.total_cmp(&y.0));
+    // The run of covered stretches that holds the button; a gap in it narrower than a corridor
+    // is an opening in the button's wall (a wider one ends the wall: a corner, elsewhere).
+    let mut runs: Vec<(f64, f64, Vec<(f64, f64)>)> = Vec::new();
+    for (a, b) in cover {
+        match runs.last_mut() {
+            Some((_, end, gaps)) if a <= *end + 3.0 => {
+                if a > *end + SLACK {
+                    gaps.push((*end, a));
+                }
+                *end = end.max(b);
+            }
+            _ => runs.push((a, b, Vec::new())),
+        }
+    }
+    let Some((_, _, gaps)) = runs.into_iter().find(|(a, b, _)| *a - SLACK <= 0.0 && 0.0 <= *b + SLACK) else {
+        return;
+    };
+    for (a, b) in gaps {
+        let at = l.button.plus(along_dir.scale((a + b) / 2.0));
+        out.push(Finding::new(
+            l.line,
+            format!("floor {}, lobby", f.level),
+            format!(
+                "an opening {:.2} m wide at ({:.2}, {:.2}) in the call button's wall: that wall may have no \
+                 openings but cars' doors (the robot takes a way that opens there for a car's)",
+                b - a,
+                at.x,
+                at.y
+            ),
+        ));
+    }
 }
 
 /// Every floor door wide enough for the robot.
@@ -532,6 +662,25 @@ mod tests {
             let f: Vec<String> = lint(&m).iter().map(|f| f.render(name)).collect();
             assert!(f.is_empty(), "{name}: {f:#?}");
         }
+    }
+
+    #[test]
+    fn a_door_barcode_far_from_its_door_is_found_on_its_line() {
+        // 0.9 m from the lab door's nearer jamb (the rule: 0.1 to 0.6 m).
+        let (text, f) = lint_changed("{id: 10, at: [4.25, 0.02]", "{id: 10, at: [3.5, 0.02]");
+        let at = line_of(&text, "{id: 10, at: [3.5, 0.02]");
+        assert!(has(&f, at, "barcode 10 marks a door, but the nearest door's nearer jamb is 0.90 m"), "{f:#?}");
+        // 0.5 m is within it.
+        let (_, f) = lint_changed("{id: 10, at: [4.25, 0.02]", "{id: 10, at: [3.9, 0.02]");
+        assert!(f.is_empty(), "{f:#?}");
+    }
+
+    #[test]
+    fn an_opening_in_the_call_buttons_wall_is_found_on_the_lobby_line() {
+        // A narrower shaft leaves 0.4 m of the button's wall open beside it.
+        let (text, f) = lint_changed("{rect: [3.2, 4.0, 5.2, 6.0]", "{rect: [3.2, 4.0, 4.8, 6.0]");
+        let at = line_of(&text, "lobby: {button: [3.0, 3.98], facing_deg: -90, barcode: 30}");
+        assert!(has(&f, at, "an opening 0.40 m wide at (5.00, 3.98) in the call button's wall"), "{f:#?}");
     }
 
     #[test]
