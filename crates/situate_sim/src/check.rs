@@ -205,7 +205,9 @@ fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Finding>) {
     cover.sort_by(|x, y| x.0.total_cmp(&y.0));
     // The run of covered stretches that holds the button; a gap in it narrower than a corridor
     // is an opening in the button's wall (a wider one ends the wall: a corner, elsewhere).
-    let mut runs: Vec<(f64, f64, Vec<(f64, f64)>)> = Vec::new();
+    // Each run: where it starts and ends along the line, and the gaps in it.
+    type Run = (f64, f64, Vec<(f64, f64)>);
+    let mut runs: Vec<Run> = Vec::new();
     for (a, b) in cover {
         match runs.last_mut() {
             Some((_, end, gaps)) if a <= *end + 3.0 => {
