@@ -40,7 +40,7 @@ pub(crate) enum MapCommand {
         /// The elevator's open_s, s (default: drawn from [8, 12] to [15, 25]).
         #[arg(long, value_parser = generate::parse_range)]
         open_s: Option<(f64, f64)>,
-        /// A door barcode's distance from the nearer jamb, m (within 0.05..1.0).
+        /// A door barcode's distance from the nearer jamb, m (within 0.1..0.6, the rule maps are held to).
         #[arg(long, value_parser = generate::parse_range, default_value = "0.1..0.6")]
         barcode_offset: (f64, f64),
         /// No route hints in the mission.
