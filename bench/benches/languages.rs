@@ -192,25 +192,10 @@ fn on_cpu(settings: &Settings, managers: &mut [Manager]) -> Option<Vec<situate_b
 }
 
 fn main() {
-    let mut settings = Settings::default();
-    let mut json = None;
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--bench" => {}
-            "--quick" => settings = Settings::quick(),
-            "--samples" => {
-                if let Some(n) = args.next().and_then(|n| n.parse().ok()) {
-                    settings.samples = n;
-                }
-            }
-            "--json" => json = args.next().map(PathBuf::from),
-            other => {
-                eprintln!("unknown argument `{other}` (options: --quick, --samples N, --json PATH)");
-                std::process::exit(2);
-            }
-        }
-    }
+    let (settings, json) = Settings::from_args("languages", std::env::args().skip(1)).unwrap_or_else(|e| {
+        eprintln!("{e}");
+        std::process::exit(2);
+    });
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("languages");
     if let Err(e) = std::fs::create_dir_all(&dir) {
         eprintln!("{}: {e}", dir.display());

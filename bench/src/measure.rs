@@ -33,6 +33,33 @@ impl Settings {
     pub fn quick() -> Self {
         Settings { samples: 11, min_sample: Duration::from_millis(1), warmup: Duration::from_millis(20) }
     }
+
+    /// The options every benchmark program takes (`--quick`, `--samples N`, `--json PATH`;
+    /// `--bench`, which `cargo bench` passes, is ignored): the settings and where to write JSON.
+    /// Anything else is an error naming it and `program`'s usage.
+    pub fn from_args(
+        program: &str,
+        args: impl IntoIterator<Item = String>,
+    ) -> Result<(Settings, Option<std::path::PathBuf>), String> {
+        let mut settings = Settings::default();
+        let mut json = None;
+        let mut args = args.into_iter();
+        while let Some(a) = args.next() {
+            match a.as_str() {
+                "--bench" => {}
+                "--quick" => settings = Settings::quick(),
+                "--samples" => match args.next().and_then(|n| n.parse().ok()) {
+                    Some(n) if n > 0 => settings.samples = n,
+                    _ => return Err(format!("{program}: --samples needs a whole number above 0")),
+                },
+                "--json" => json = Some(args.next().ok_or(format!("{program}: --json needs a PATH"))?.into()),
+                other => {
+                    return Err(format!("{program} [--quick] [--samples N] [--json PATH]: unknown argument `{other}`"))
+                }
+            }
+        }
+        Ok((settings, json))
+    }
 }
 
 /// A set of samples (one figure per round) and its quartiles.
@@ -138,6 +165,19 @@ pub fn interleaved(settings: &Settings, subjects: usize, run: &mut dyn FnMut(usi
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn the_common_options_are_read_and_anything_else_is_named() {
+        let args = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (s, json) = Settings::from_args("b", args(&["--bench", "--samples", "7", "--json", "x.json"])).unwrap();
+        assert_eq!((s.samples, json), (7, Some("x.json".into())));
+        let (s, json) = Settings::from_args("b", args(&["--quick"])).unwrap();
+        assert_eq!((s.samples, json), (Settings::quick().samples, None));
+        let e = Settings::from_args("b", args(&["--nope"])).unwrap_err();
+        assert!(e.contains("unknown argument `--nope`"), "{e}");
+        assert!(Settings::from_args("b", args(&["--samples", "x"])).is_err());
+        assert!(Settings::from_args("b", args(&["--json"])).is_err());
+    }
     use super::*;
 
     #[test]

@@ -9,7 +9,6 @@
 //! ```
 
 use std::hint::black_box;
-use std::path::PathBuf;
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::SingleThreadedExecutor;
@@ -136,25 +135,10 @@ const COPPER: &str = "copper-rs (cu29 tasks)";
 mod copper;
 
 fn main() {
-    let mut settings = Settings::default();
-    let mut json: Option<PathBuf> = None;
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--bench" => {}
-            "--quick" => settings = Settings::quick(),
-            "--samples" => {
-                if let Some(n) = args.next().and_then(|n| n.parse().ok()) {
-                    settings.samples = n;
-                }
-            }
-            "--json" => json = args.next().map(PathBuf::from),
-            other => {
-                eprintln!("peers [--quick] [--samples N] [--json PATH]: unknown argument `{other}`");
-                std::process::exit(2);
-            }
-        }
-    }
+    let (settings, json) = Settings::from_args("peers", std::env::args().skip(1)).unwrap_or_else(|e| {
+        eprintln!("{e}");
+        std::process::exit(2);
+    });
     let machine = Machine::detect(&std::env::args().skip(1).collect::<Vec<_>>().join(" "));
     let mut report = Report::default();
     let bench = "peers";
