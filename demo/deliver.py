@@ -131,6 +131,8 @@ class Mission:
     route: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
     #: The goal floor's call button barcode (where the `button_to_office` route starts).
     goal_button_barcode: int | None = None
+    #: Each floor's call button barcode, for the floors with a lobby.
+    lobbies: dict[int, int] = field(default_factory=dict)
 
     @staticmethod
     def from_json(text: str) -> Mission:
@@ -149,7 +151,31 @@ class Mission:
             goal_button_barcode=(
                 int(m["goal_button_barcode"]) if m.get("goal_button_barcode") is not None else None
             ),
+            lobbies={int(x["floor"]): int(x["barcode"]) for x in m.get("lobbies") or []},
         )
+
+
+#: A stop of a task: ``("office", goal floor)`` or ``("lobby", floor)``.
+Stop = tuple[str, int]
+
+
+def parse_task(text: str, mission: Mission) -> list[Stop]:
+    """The stops of ``--task`` (``office,lobby:3``: see ``situate_sim::task``), checked."""
+    stops: list[Stop] = []
+    for i, part in enumerate(p.strip() for p in text.split(",")):
+        kind, _, floor = part.partition(":")
+        if part == "office":
+            stops.append(("office", mission.goal_floor))
+        elif kind == "lobby" and floor.strip().lstrip("-").isdigit():
+            stops.append(("lobby", int(floor)))
+        else:
+            raise ValueError(f"task {text!r}: stop {i + 1} {part!r}: expected office or lobby:N")
+    for kind, level in stops:
+        if kind == "lobby" and level not in mission.lobbies:
+            raise ValueError(f"task {text!r}: floor {level} has no lobby")
+    if ("office", mission.goal_floor) in stops[:-1]:
+        raise ValueError(f"task {text!r}: the office must be the last stop (no route leads back)")
+    return stops
 
 
 class Delivery(RouteSequencer):
@@ -159,6 +185,9 @@ class Delivery(RouteSequencer):
         super().__init__(robot, normal=NORMAL, **kw)
         self.m = mission
         self.car = 0
+        #: The floor the robot is on, and the floor the next ride goes to.
+        self.here = mission.start_floor
+        self.to = mission.goal_floor
         self.button_pose: Pose | None = None
         #: Patrols so far: each starts the other way along the button's wall from the last.
         self.patrols = 0
@@ -228,11 +257,16 @@ class Delivery(RouteSequencer):
             heading=self.passed_heading,  # the leg begins facing out of the lab door
         )
 
+    @property
+    def button_here(self) -> int:
+        """The call button's barcode on the floor the robot is on."""
+        return self.m.lobbies.get(self.here, self.m.call_button_barcode)
+
     async def call_and_board(self) -> None:
         """Phases 5 to 7: call a car, wait for it, identify it, enter it (calling again)."""
-        m = self.m
+        button = self.button_here
         for _attempt in range(6):
-            await self.phase(5, f"homing on the call button (barcode {m.call_button_barcode})")
+            await self.phase(5, f"homing on the call button (barcode {button})")
             facing = False
             if self.button_pose is not None:
                 # Called before: back to where the button was pushed, by odometry (in the
@@ -245,20 +279,18 @@ class Delivery(RouteSequencer):
                         wrap(b.theta - (await self.odom()).theta), keep=["runaway"]
                     )
                 await self.restore("runaway", "safe_distance")
-            await self.set("track_barcode", "id", m.call_button_barcode)
+            await self.set("track_barcode", "id", button)
             await self.use("runaway", "avoid", "track_barcode")
             self.send("step", cycles=3)
             target = await self.value("target")
-            if not target["seen"] and not await self.search(m.call_button_barcode, 120):
+            if not target["seen"] and not await self.search(button, 120):
                 raise PhaseFailed("the call button is nowhere in sight")
             # Back in front of the button and facing it (the odometry drifts little in a
             # minute in the lobby), it is straight ahead: the last approach only. Else
             # line up with it first.
             straight = facing and target["seen"] and abs(float(target["bearing"])) < 0.2
-            homed = (
-                straight or await self.line_up(m.call_button_barcode, 1.0)
-            ) and await self.home_on(
-                m.call_button_barcode, BUTTON_STANDOFF_M, avoid=False, slack=0.12, aim=0.3
+            homed = (straight or await self.line_up(button, 1.0)) and await self.home_on(
+                button, BUTTON_STANDOFF_M, avoid=False, slack=0.12, aim=0.3
             )
             if not homed:
                 await self.say("    could not reach the button: backing off, trying again")
@@ -491,7 +523,7 @@ class Delivery(RouteSequencer):
             await self.turn(float(wall["normal"]), keep=["runaway"])
         await self.centre_between_walls()
         for _attempt in range(3):
-            await self.phase(8, f"pushing the button for floor {m.goal_floor}")
+            await self.phase(8, f"pushing the button for floor {self.to}")
             if self.car == 0:
                 await self.set("identify_car", "first_id", m.car_barcode_first)
                 await self.set("identify_car", "cars", m.cars)
@@ -501,7 +533,7 @@ class Delivery(RouteSequencer):
                 code = m.car_barcode_first + self.car - 1 if self.car else -1
             presses = int(await self.value("arm.presses") or 0)
             await self.set("track_barcode", "id", code)
-            await self.set("push_button", "button", m.goal_floor)
+            await self.set("push_button", "button", self.to)
             await self.set("home", "stop_distance", 0.45)
             await self.use(
                 "runaway", "track_barcode", "home", "push_button", restart=["push_button"]
@@ -509,11 +541,11 @@ class Delivery(RouteSequencer):
             if await self.wait(f"arm.presses > {presses}", within=15) == 0:
                 break
         else:
-            raise PhaseFailed(f"could not push the button for floor {m.goal_floor}")
+            raise PhaseFailed(f"could not push the button for floor {self.to}")
         await self.restore("home", "stop_distance")
-        await self.phase(9, f"riding to floor {m.goal_floor}; turning to face the door")
+        await self.phase(9, f"riding to floor {self.to}; turning to face the door")
         await self.use("runaway")
-        if await self.wait(f"floor != {m.start_floor}", within=30):
+        if await self.wait(f"floor != {self.here}", within=30):
             raise PhaseFailed("the car does not move")
         # Face the door squarely: the back wall (the panel's) straight behind.
         wall = await self.clue("fit_wall", "wall", keep=["runaway"])
@@ -526,9 +558,9 @@ class Delivery(RouteSequencer):
         look = await self.live_sonar_ahead()
         if look != 0 and not await self.turn(-bearing_of(look), keep=["runaway"]):
             raise PhaseFailed("could not turn round in the car")
-        if await self.wait(f"floor == {m.goal_floor} && sonar.range[{look}] > 2.2", within=90):
-            raise PhaseFailed(f"the car never opened on floor {m.goal_floor}")
-        await self.phase(10, f"floor {m.goal_floor}: leaving the car")
+        if await self.wait(f"floor == {self.to} && sonar.range[{look}] > 2.2", within=90):
+            raise PhaseFailed(f"the car never opened on floor {self.to}")
+        await self.phase(10, f"floor {self.to}: leaving the car")
         await self.set("leave_car", "distance", 3.0)
         for _attempt in range(4):
             start = await self.odom()
@@ -545,6 +577,10 @@ class Delivery(RouteSequencer):
             raise PhaseFailed("could not leave the car")
         await self.restore("runaway", "safe_distance")
         await self.restore("follow_hallway", "speed")
+        # A new floor: its lobby is not known yet.
+        self.here = self.to
+        self.button_pose = None
+        self.patrols = 0
 
     async def to_office(self) -> None:
         """Phases 11 to 13: the route hints from the car to the office, then deliver."""
@@ -556,18 +592,7 @@ class Delivery(RouteSequencer):
         if "button_to_office" in m.route and m.goal_button_barcode is not None:
             # The route starts in front of this floor's call button, whichever car came up.
             button = m.goal_button_barcode
-            await self.phase(11, f"finding this floor's call button (barcode {button})")
-            # Someone passing between may hide the barcode while lining up: look again.
-            for _attempt in range(3):
-                if not await self.look_round(button) and not await self.search(button, 120):
-                    raise PhaseFailed(
-                        f"the call button of floor {m.goal_floor} is nowhere in sight"
-                    )
-                if await self.line_up(button, 1.0):
-                    break
-                await self.say(f"    could not line up with barcode {button}: again")
-            else:
-                raise PhaseFailed(f"could not line up with barcode {button}")
+            await self.to_button(button)
             await self.say(f"    following the route to the office's barcode {m.office_barcode}")
             await self.run_route("button_to_office", m.route["button_to_office"], on_home=homing)
         else:
@@ -576,6 +601,22 @@ class Delivery(RouteSequencer):
             )
             await self.run_route("car_to_office", m.route.get("car_to_office", []), on_home=homing)
         await self.phase(13, "delivering the message")
+        await self.deliver()
+
+    async def to_button(self, button: int) -> None:
+        """Phase 11: about 1 m in front of this floor's call button, facing it."""
+        await self.phase(11, f"finding this floor's call button (barcode {button})")
+        # Someone passing between may hide the barcode while lining up: look again.
+        for _attempt in range(3):
+            if not await self.look_round(button) and not await self.search(button, 120):
+                raise PhaseFailed(f"the call button of floor {self.here} is nowhere in sight")
+            if await self.line_up(button, 1.0):
+                return
+            await self.say(f"    could not line up with barcode {button}: again")
+        raise PhaseFailed(f"could not line up with barcode {button}")
+
+    async def deliver(self) -> None:
+        """Says the message where the robot is."""
         count = int(await self.value("speaker.count") or 0)
         await self.set("say", "message", self.m.message)
         await self.use("say", restart=["say"])
@@ -601,14 +642,41 @@ class Delivery(RouteSequencer):
                 break
             self.send("step", cycles=1)
 
-    async def run(self, first: str, last: str) -> None:
-        """Runs the phases from ``first`` to ``last`` (names of ``PHASES``)."""
+    async def run(self, first: str, last: str, stops: Sequence[Stop] = ()) -> None:
+        """Runs the phases from ``first`` to ``last`` (names of ``PHASES``).
+
+        A task other than the delivery alone runs its ``stops`` instead.
+        """
         async with self.r.events("monitor_fired") as stream:
             self.stream = stream
             try:
-                await self.run_phases(first, last)
+                if stops and list(stops) != [("office", self.m.goal_floor)]:
+                    await self.run_stops(stops)
+                else:
+                    await self.run_phases(first, last)
             finally:
                 self.stream = None
+
+    async def run_stops(self, stops: Sequence[Stop]) -> None:
+        """A task of several stops: out of the lab to the lobby, then each stop in turn."""
+        await self.setup()
+        await self.leave_lab()
+        await self.to_lobby()
+        for n, (kind, floor) in enumerate(stops, 1):
+            await self.say(f"stop {n} of {len(stops)}: {kind} on floor {floor}")
+            if floor != self.here:
+                self.to = floor
+                await self.call_and_board()
+                await self.ride()
+            if kind == "office":
+                await self.to_office()
+            else:
+                await self.to_button(self.button_here)
+                await self.phase(13, f"saying the message in the lobby of floor {floor}")
+                await self.deliver()
+        await self.use()
+        await self.flush()
+        await self.say("mission complete")
 
     async def run_phases(self, first: str, last: str) -> None:
         """The phases from ``first`` to ``last``."""
@@ -651,14 +719,23 @@ async def main(argv: Sequence[str] | None = None) -> int:
         default=os.environ.get("DELIVER_TO") or PHASES[-1],
         help="stop after this phase (env DELIVER_TO)",
     )
+    p.add_argument(
+        "--task",
+        default="office",
+        help="stops where the message is said, in order: office, lobby:FLOOR (comma-separated)",
+    )
     p.add_argument("--quiet", action="store_true")
     p.add_argument("--seed", type=int, default=1, help="seeds the wander paths (the run's seed)")
     a = p.parse_args(argv)
     mission = Mission.from_json(a.mission)
+    try:
+        stops = parse_task(a.task, mission)
+    except ValueError as e:
+        p.error(str(e))
     async with situate.connect(a.robot, endpoint=a.connect, timeout=30) as robot:
         seq = Delivery(robot, mission, mode=a.mode, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
         try:
-            await seq.run(a.first, a.last)
+            await seq.run(a.first, a.last, stops)
         except (PhaseFailed, OutOfTime) as e:
             await seq.say(f"mission failed: {e}")
             with contextlib.suppress(situate.SituateError):

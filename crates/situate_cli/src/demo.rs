@@ -40,6 +40,10 @@ pub(crate) struct DemoOptions {
     /// `all-active`: every skill always on, priority arbitration only.
     #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active"])]
     pub(crate) mode: String,
+    /// What to do: stops where the message is said, in order, separated by commas: `office`
+    /// (the delivery) or `lobby:FLOOR` (in front of that floor's call button).
+    #[arg(long, default_value = "office")]
+    pub(crate) task: String,
     /// The sequencer program (default: demo/deliver.py next to the robot file).
     #[arg(long)]
     pub(crate) sequencer: Option<PathBuf>,
@@ -146,6 +150,15 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         ));
     };
     let mission = sim.map.mission_json().to_string();
+    let stops = situate_sim::task::parse(&demo.task)
+        .and_then(|stops| situate_sim::task::check(&demo.task, &stops, &sim.map).map(|()| stops));
+    let stops = match stops {
+        Ok(stops) => stops,
+        Err(e) => {
+            let _ = running.finish();
+            return Err(problem(Exit::Usage, format!("--task: {e}")));
+        }
+    };
     let python = interpreter(demo, ext);
     let started = Instant::now();
     let mut command = std::process::Command::new(&python);
@@ -153,7 +166,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         .arg(&sequencer)
         .args(["--connect", &endpoint, "--robot", &running.robot, "--mode", &demo.mode])
         .args(["--limit-s", &demo.limit_s.to_string(), "--mission", &mission])
-        .args(["--seed", &demo.seed.to_string()])
+        .args(["--seed", &demo.seed.to_string(), "--task", &demo.task])
         .args(if out.json { &["--quiet"][..] } else { &[][..] });
     let run =
         run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
@@ -167,10 +180,11 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     if stay {
         let _ = running.handle.request_timeout(situate::manager::Request::Stop, Duration::from_secs(2));
     }
-    let (delivered_at, sim_time) = {
+    let (delivered_at, sim_time, made) = {
         let w = sim.world.lock().map_err(|_| anyhow::anyhow!("the simulator failed"))?;
-        (w.delivered_at(), w.time_s())
+        (w.delivered_at(), w.time_s(), situate_sim::task::judge(&sim.map, &stops, w.said()))
     };
+    let task_done = made.iter().all(Option::is_some);
     let mut running = Some(running);
     let (stats, skills) = if stay {
         let mut handle = running.as_ref().map(|r| r.handle.clone()).context("the robot")?;
@@ -192,6 +206,10 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         "skill_cpu_ms": cpu_ns as f64 / 1e6,
         "wall_s": wall_s,
         "speedup": if wall_s > 0.0 { sim_time / wall_s } else { 0.0 },
+        "task": demo.task,
+        "stops": stops.iter().zip(&made).map(|(s, t)| json!({"stop": s.to_string(), "made_at_s": t})).collect::<Vec<_>>(),
+        "task_done": task_done,
+        "task_time_s": if task_done { made.last().copied().flatten().unwrap_or(sim_time) } else { sim_time },
         "sequencer_exit": run.status.code(),
         "interrupted": run.interrupted.map(signals::name),
         "phase": run.phase,
@@ -213,6 +231,17 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             (None, Some(_)) => println!("demo: {delivered} (seed {})", demo.seed),
             (None, None) => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
         }
+        if stops != [situate_sim::task::Stop::Office] {
+            let list: Vec<String> = stops
+                .iter()
+                .zip(&made)
+                .map(|(s, t)| match t {
+                    Some(t) => format!("{s} at {t:.1} s"),
+                    None => format!("{s} not made"),
+                })
+                .collect();
+            println!("demo: task {}: {}", if task_done { "done" } else { "NOT done" }, list.join(", "));
+        }
         println!(
             "demo: {} cycles, {runs} skill runs, {:.1} ms in skills, {wall_s:.1} s wall ({:.0}× real time)",
             stats.cycle,
@@ -220,10 +249,10 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
         );
     }
-    let code = match (run.interrupted, delivered_at) {
+    let code = match (run.interrupted, task_done) {
         (Some(sig), _) => signals::status(sig),
-        (None, Some(_)) => Exit::Ok.code(),
-        (None, None) => Exit::Failure.code(),
+        (None, true) => Exit::Ok.code(),
+        (None, false) => Exit::Failure.code(),
     };
     if let Some(running) = running {
         if let Some(gui) = &running.gui {

@@ -16,6 +16,7 @@ pub mod geom;
 pub mod map;
 pub mod people;
 pub mod skills;
+pub mod task;
 pub mod world;
 
 pub use map::{load_map, Map, MapError};

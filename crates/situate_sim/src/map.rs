@@ -400,6 +400,7 @@ impl Map {
             "call_button_barcode": m.call_button_barcode, "office_barcode": m.office_barcode,
             "car_barcode_first": m.car_barcode_first, "cars": self.elevator.cars.len(),
             "goal_button_barcode": goal_button,
+            "lobbies": self.floors.iter().filter_map(|f| f.lobby.as_ref().map(|l| json!({"floor": f.level, "barcode": l.barcode}))).collect::<Vec<_>>(),
             "message": m.message, "route": route,
         })
     }

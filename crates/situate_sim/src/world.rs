@@ -189,7 +189,7 @@ pub struct World {
     calls: Vec<i64>,
     pending: Vec<Pending>,
     pending_drive: Option<((f64, f64), BaseLimits)>,
-    said: Vec<String>,
+    said: Vec<crate::task::Utterance>,
     delivered_at: Option<f64>,
     arm_attempts: i64,
     arm_presses: i64,
@@ -377,8 +377,8 @@ impl World {
         self.odom
     }
 
-    /// Utterances said so far.
-    pub fn said(&self) -> &[String] {
+    /// Utterances said so far: what, when and where (ground truth).
+    pub fn said(&self) -> &[crate::task::Utterance] {
         &self.said
     }
 
@@ -565,7 +565,8 @@ impl World {
                         self.delivered_at = Some(at);
                         tracing::info!(at, "message delivered");
                     }
-                    self.said.push(text);
+                    let floor = self.robot.floor;
+                    self.said.push(crate::task::Utterance { time_s: at, floor, at: self.pos(), text });
                 }
             }
         }

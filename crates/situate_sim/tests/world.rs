@@ -226,6 +226,38 @@ fn saying_the_message_in_the_office_delivers_it() {
     w.advance_to(1.05);
     assert_eq!(w.delivered_at(), Some(1.0));
     assert_eq!(w.said().len(), 2);
+    // Where each was said, for tasks with several stops (`situate_sim::task`).
+    let said = w.said();
+    assert_eq!((said[1].floor, said[1].text.as_str(), said[1].time_s), (1, "hello", 1.0));
+    assert!((said[1].at.x - 3.0).abs() < 1e-9 && (said[1].at.y - 2.0).abs() < 1e-9);
+    let m = map("small.yaml");
+    use situate_sim::task::{judge, parse};
+    assert_eq!(judge(&m, &parse("office").unwrap(), said), vec![Some(1.0)]);
+    // The first was said at the start, 1.5 m from floor 0's call button; each utterance
+    // makes one stop at most, in order.
+    assert_eq!(judge(&m, &parse("lobby:0,office").unwrap(), said), vec![Some(0.0), Some(1.0)]);
+    assert_eq!(judge(&m, &parse("office,office").unwrap(), said), vec![Some(1.0), None]);
+    assert_eq!(judge(&m, &parse("office,lobby:0").unwrap(), said), vec![Some(1.0), None]);
+}
+
+#[test]
+fn a_lobby_stop_is_made_in_front_of_that_floors_button_only() {
+    use situate_sim::task::{judge, parse, LOBBY_REACH_M};
+    let m = map("small.yaml");
+    let button = m.floor(0).and_then(|f| f.lobby.as_ref()).map(|l| l.button).expect("floor 0 has a lobby");
+    let mut w = World::new(m.clone(), 1);
+    // Near enough, on floor 0; then as near on floor 1's plan but on floor 0 far away.
+    w.place_robot(0, button.x, button.y - (LOBBY_REACH_M - 0.5), 0.0);
+    w.say("first");
+    w.advance_to(0.1);
+    w.place_robot(0, button.x, button.y - (LOBBY_REACH_M + 1.0), 0.0);
+    w.say("too far");
+    w.advance_to(0.2);
+    assert_eq!(judge(&m, &parse("lobby:0").unwrap(), w.said()), vec![Some(0.0)]);
+    assert_eq!(judge(&m, &parse("lobby:0,lobby:0").unwrap(), w.said()), vec![Some(0.0), None]);
+    assert_eq!(judge(&m, &parse("lobby:1").unwrap(), w.said()), vec![None]);
+    assert!(situate_sim::task::check("lobby:7", &parse("lobby:7").unwrap(), &m).is_err());
+    assert!(situate_sim::task::check("lobby:1,office", &parse("lobby:1,office").unwrap(), &m).is_ok());
 }
 
 #[test]
