@@ -702,7 +702,7 @@ async def main(argv: Sequence[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--connect", default=os.environ.get("SITUATE_CONNECT", "tcp/127.0.0.1:7447"))
     p.add_argument("--robot", default=None)
-    p.add_argument("--mode", choices=["sequenced", "all-active"], default="sequenced")
+    p.add_argument("--mode", choices=["sequenced", "all-active", "reactive"], default="sequenced")
     p.add_argument("--limit-s", type=float, default=1800.0, help="give up after this (simulated)")
     p.add_argument("--mission", required=True, help="the map's mission section, as JSON")
     p.add_argument(
@@ -733,6 +733,8 @@ async def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as e:
         p.error(str(e))
     async with situate.connect(a.robot, endpoint=a.connect, timeout=30) as robot:
+        if a.mode == "reactive":
+            return await run_reactive(robot, mission, stops, a)
         seq = Delivery(robot, mission, mode=a.mode, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
         try:
             await seq.run(a.first, a.last, stops)
@@ -752,6 +754,25 @@ async def main(argv: Sequence[str] | None = None) -> int:
             raise
         with contextlib.suppress(situate.SituateError):
             await robot.stop()
+    return 0
+
+
+async def run_reactive(
+    robot: situate.Robot, mission: Mission, stops: list[Stop], a: argparse.Namespace
+) -> int:
+    """The experiment's reactive robot (`reactive.py`) on the same task; the exit status."""
+    from reactive import Reactive
+
+    seq = Reactive(robot, mission, stops, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
+    try:
+        await seq.run_task()
+    except OutOfTime as e:
+        await seq.say(f"mission failed: {e}")
+        with contextlib.suppress(situate.SituateError):
+            await robot.stop()
+        return 1
+    with contextlib.suppress(situate.SituateError):
+        await robot.stop()
     return 0
 
 

@@ -37,8 +37,9 @@ pub(crate) struct DemoOptions {
     #[arg(long)]
     pub(crate) headless: bool,
     /// `sequenced`: the sequencer switches skills on and off (the paper's way);
-    /// `all-active`: every skill always on, priority arbitration only.
-    #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active"])]
+    /// `all-active`: every skill always on, priority arbitration only; `reactive`: no
+    /// sequencer, a rule list picks the skills every cycle (demo/reactive.py).
+    #[arg(long, default_value = "sequenced", value_parser = ["sequenced", "all-active", "reactive"])]
     pub(crate) mode: String,
     /// What to do: stops where the message is said, in order, separated by commas: `office`
     /// (the delivery) or `lobby:FLOOR` (in front of that floor's call button).

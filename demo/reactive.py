@@ -1,0 +1,797 @@
+"""The experiment's reactive robot: a teleo-reactive rule list instead of a sequencer.
+
+``situate demo --mode reactive`` runs it. There are no phases and no procedures. Every
+cycle the controller reads what the robot senses, then goes down one ordered list of
+rules (`Reactive.rules`). The first rule whose condition holds acts. Its action is a set
+of standard skills (the same ones the sequenced robot uses) with their parameters. The
+action stays on while the rule stays the first that applies (Nilsson's teleo-reactive
+programs; a subsumption design arbitrated by priority would pick the same one).
+
+A condition reads the senses and a little state the robot keeps:
+
+- the stops said so far;
+- whether it is out of the lab, or in a car;
+- whether it has called a car on this floor, and pushed the floor's button in the car;
+- where it is on a route leg.
+
+There is no phase counter: if a wheel slips, a person pushes the robot about, or a door
+closes, the rule that fits the new situation takes over. Perception is always on:
+`PERCEPTION` runs every cycle, because any rule may need any percept at any time.
+
+Handling every task in one program means the conditions name the next stop: its floor,
+and whether it is a lobby or the office. Adding a task kind means new rules, or new
+terms in the old ones; `docs/experiment.md` counts them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from sequencing import SONARS, WALL_AHEAD_M, OutOfTime, Pose, Sequencer, wrap
+
+import situate
+
+if TYPE_CHECKING:
+    from deliver import Mission, Stop
+
+#: Skills every rule may read: on all the time.
+PERCEPTION = (
+    "fit_wall",
+    "detect_intersection",
+    "detect_door",
+    "watch_openings",
+    "identify_car",
+    "locate_door",
+)
+#: What the controller reads every cycle.
+PERCEPTS = (
+    "odom",
+    "sonar.range",
+    "barcodes",
+    "floor",
+    "arm",
+    "speaker",
+    "junction",
+    "door",
+    "opened",
+    "car",
+    "opening",
+    "wall",
+    "door_passed",
+    "car_entered",
+    "car_exited",
+)
+#: Parameters the rules set once, at the start (as the sequenced robot's ``NORMAL``).
+SETTINGS = {
+    ("runaway", "safe_distance"): 0.3,
+    ("avoid", "distance"): 0.6,
+    ("avoid", "stop_distance"): 0.2,
+    ("follow_hallway", "speed"): 0.4,
+    ("turn", "max_turn"): 1.2,
+    ("detect_door", "confirm"): 2,
+    ("track_barcode", "hold"): 15,
+    ("locate_door", "max_width"): 1.8,
+    ("leave_car", "distance"): 3.0,
+}
+#: Within this of a barcode, the robot has homed on it, m.
+HOMED_M = 1.1
+#: The call button is pushed from this near (its centre to the barcode), m.
+PUSH_M = 0.5
+#: Waiting for a car longer than this after calling, the robot calls again, s.
+CALL_AGAIN_S = 45.0
+#: A car door seen opening this recently is still worth going to, s.
+OPENED_FRESH_S = 4.0
+#: In front of a car's door that opened, this far from it, before entering, m.
+FACE_DOOR_M = 0.85
+#: Going into a car that opened takes at most this long, s.
+CAR_ENTER_S = 25.0
+#: Turned into a junction, the robot drives this far into the side corridor, m.
+INTO_MOUTH_M = 1.5
+#: In front of a door, this far from it, before passing it, m.
+DOOR_STANDOFF = 0.9
+
+
+@dataclass
+class Senses:
+    """What the robot senses in one cycle (the skills' outputs and the devices')."""
+
+    t: float
+    pose: Pose
+    sonar: list[float]
+    barcodes: dict[int, tuple[float, float]]  # id: (bearing, distance)
+    floor: int
+    presses: int
+    said: int
+    junction: dict[str, Any]
+    door: dict[str, Any]
+    opened: dict[str, Any]
+    car: int
+    opening: dict[str, Any]
+    wall: dict[str, Any]
+    door_passed: bool
+    car_entered: bool
+    car_exited: bool
+
+    def enclosed(self) -> bool:
+        """Walls near all round (inside a car: all but the door's sonars)."""
+        return sum(1 for r in self.sonar if r < 1.9) >= SONARS - 6
+
+    def sees(self, barcode: int, within: float = 5.0) -> bool:
+        """Whether ``barcode`` is in view within ``within`` m."""
+        return barcode in self.barcodes and self.barcodes[barcode][1] <= within
+
+
+@dataclass
+class Action:
+    """A rule's action: skills on, their parameters, and a key that restarts it when new."""
+
+    skills: tuple[str, ...]
+    params: dict[tuple[str, str], Any] = field(default_factory=dict)
+    key: Any = None
+
+
+@dataclass
+class Memory:
+    """The little state the reactive robot keeps (all else is sensed anew every cycle)."""
+
+    made: int = 0
+    said_at_start: int = 0
+    out_of_lab: bool = False
+    in_car: bool = False
+    pressed_floor: int | None = None
+    #: The simulated time the call button was pushed on this floor (None: not called).
+    called_at: float | None = None
+    presses_seen: int = 0
+    #: The floor whose call button was seen since arriving on it (the lobby is reached).
+    lobby_seen_on: int | None = None
+    in_office: bool = False
+    #: The last car door seen opening: (time, bearing in the odometry frame).
+    opened: tuple[float, float] | None = None
+    #: The point in front of that door (odometry), and how far the robot has got with it.
+    car_goal: tuple[float, float] | None = None
+    enter_stage: str = ""
+    #: Route legs done, and the step the current one is at.
+    legs_done: set[str] = field(default_factory=set)
+    route: RouteState | None = None
+    #: A door being passed: the point in front of it and the heading through (odometry).
+    door_goal: tuple[float, float, float] | None = None
+    door_stage: str = ""
+    door_fixes: int = 0
+    passed_heading: float | None = None
+    turned_in_car: bool = False
+    #: Where the call button was pushed from (odometry), to wait for a car a step back.
+    called_from: Pose | None = None
+
+
+@dataclass
+class RouteState:
+    """Where the robot is on a route leg (docs/maps.md, route steps)."""
+
+    leg: str
+    step: int = 0
+    stage: str = "start"
+    start: Pose | None = None
+    count: int = 0
+    last_side: bool = False
+    heading: float | None = None
+    turn_goal: float | None = None
+
+
+class Reactive(Sequencer):
+    """The teleo-reactive controller: every cycle, the first applicable rule acts."""
+
+    def __init__(
+        self, robot: situate.Robot, mission: Mission, stops: Sequence[Stop], **kw: Any
+    ) -> None:
+        # The skills are switched as the sequenced robot's are (`use`), by the rules.
+        super().__init__(robot, normal=SETTINGS, **{**kw, "mode": "sequenced"})
+        self.m = mission
+        self.stops = list(stops)
+        self.mem = Memory()
+        self.action_key: Any = None
+        self.rule_name = ""
+        #: The heading the last turn action aims at (odometry), to tell when it is done.
+        self.turn_goal: float | None = None
+        #: Rule changes (the drive's winner changing), for the experiment.
+        self.switches = 0
+        self.rules: list[tuple[str, Callable[[Senses], bool], Callable[[Senses], Action]]] = [
+            ("done", self.all_made, lambda s: Action(())),
+            ("say", self.at_stop, self.say_message),
+            ("leave car", self.car_arrived, self.leave_car),
+            ("ride", self.riding, self.ride),
+            ("push floor", self.in_car_to_press, self.push_floor),
+            ("enter car", self.car_opened, self.enter_car),
+            ("wait for car", self.waiting_for_car, self.wait_for_car),
+            ("push call", self.at_call_button, self.push_call),
+            ("home on button", self.button_in_view, self.home_on_button),
+            ("to office", self.office_route_applies, self.route_action),
+            ("to lobby", self.lobby_route_applies, self.route_action),
+            ("look for button", self.off_start_floor, self.look_for_button),
+            ("pass lab door", self.at_lab_door, self.pass_door_action),
+            ("home on lab door", self.lab_door_in_view, self.home_on_lab_door),
+            ("search", lambda s: True, self.wander_about),
+        ]
+
+    # ----- the senses --------------------------------------------------------------------
+
+    async def sense(self) -> Senses:
+        """Runs one cycle and reads every percept, in one round trip."""
+        self.send("step", cycles=1)
+        self.prefetch(*PERCEPTS)
+        await self.flush()
+        v = {k: situate.Reading.from_json(await self.readings[k]).value for k in PERCEPTS}
+        o = v["odom"] or {"x": 0.0, "y": 0.0, "theta": 0.0}
+        b = v["barcodes"] or {"ids": [], "bearing": [], "distance": []}
+        codes = {
+            int(i): (float(a), float(d))
+            for i, a, d in zip(b["ids"], b["bearing"], b["distance"], strict=False)
+        }
+        return Senses(
+            t=self.t,
+            pose=Pose(float(o["x"]), float(o["y"]), float(o["theta"])),
+            sonar=[float(r) for r in (v["sonar.range"] or [4.0] * SONARS)],
+            barcodes=codes,
+            floor=int(v["floor"] if v["floor"] is not None else self.m.start_floor),
+            presses=int((v["arm"] or {}).get("presses", 0)),
+            said=int((v["speaker"] or {}).get("count", 0)),
+            junction=dict(v["junction"] or {}),
+            door=dict(v["door"] or {}),
+            opened=dict(v["opened"] or {}),
+            car=int(v["car"] or 0),
+            opening=dict(v["opening"] or {}),
+            wall=dict(v["wall"] or {}),
+            door_passed=bool(v["door_passed"]),
+            car_entered=bool(v["car_entered"]),
+            car_exited=bool(v["car_exited"]),
+        )
+
+    # ----- the next stop -------------------------------------------------------------------
+
+    def stop(self) -> Stop:
+        """The next stop (the last one once all are made)."""
+        return self.stops[min(self.mem.made, len(self.stops) - 1)]
+
+    def stop_floor(self) -> int:
+        """The floor of the next stop."""
+        return self.stop()[1]
+
+    def button(self, floor: int) -> int:
+        """The call button's barcode on ``floor``."""
+        return self.m.lobbies.get(floor, self.m.call_button_barcode)
+
+    # ----- conditions (each reads the senses and the memory only) ---------------------------
+
+    def all_made(self, s: Senses) -> bool:
+        """Every stop made."""
+        return self.mem.made >= len(self.stops)
+
+    def at_stop(self, s: Senses) -> bool:
+        """At the next stop's place: in front of its floor's button, or in the office."""
+        kind, floor = self.stop()
+        if self.mem.in_car or s.floor != floor:
+            return False
+        if kind == "office":
+            return self.mem.in_office
+        return s.sees(self.button(floor), HOMED_M + 0.3)
+
+    def car_arrived(self, s: Senses) -> bool:
+        """In the car, on the stop's floor, the door open ahead."""
+        return (
+            self.mem.in_car
+            and self.mem.pressed_floor == self.stop_floor()
+            and s.floor == self.stop_floor()
+            # The door open ahead; once going out, on out (the doors do not close on it).
+            and (s.sonar[0] > 2.2 or self.rule_name == "leave car")
+        )
+
+    def riding(self, s: Senses) -> bool:
+        """In the car, the stop's floor pushed."""
+        return self.mem.in_car and self.mem.pressed_floor == self.stop_floor()
+
+    def in_car_to_press(self, s: Senses) -> bool:
+        """In a car (the floor not pushed yet)."""
+        return self.mem.in_car
+
+    def car_opened(self, s: Senses) -> bool:
+        """Called, and a car's door seen opening just now."""
+        m = self.mem
+        if m.in_car or s.floor == self.stop_floor() or m.opened is None:
+            return False
+        # Just seen opening; or going in already (committed until in, or until it took too long).
+        entering = self.rule_name == "enter car" and s.t - m.opened[0] < CAR_ENTER_S
+        return entering or s.t - m.opened[0] < OPENED_FRESH_S
+
+    def waiting_for_car(self, s: Senses) -> bool:
+        """Called on this floor, not long ago."""
+        m = self.mem
+        return (
+            not m.in_car
+            and s.floor != self.stop_floor()
+            and m.called_at is not None
+            and s.t - m.called_at < CALL_AGAIN_S
+        )
+
+    def at_call_button(self, s: Senses) -> bool:
+        """In the lobby, near enough to this floor's call button to push it."""
+        return (
+            not self.mem.in_car
+            and s.floor != self.stop_floor()
+            and self.lobby_reached(s)
+            # Once pushing, until a bit farther: the reading jitters.
+            and s.sees(
+                self.button(s.floor), PUSH_M + (0.3 if self.rule_name == "push call" else 0.08)
+            )
+        )
+
+    def button_in_view(self, s: Senses) -> bool:
+        """Out of the lab, this floor's call button in view, and the way goes by it."""
+        # The button of this floor, once on a floor where it matters: to call a car, or
+        # to say the message, or to start the route to the office from.
+        if self.mem.in_car or not self.mem.out_of_lab or not s.sees(self.button(s.floor)):
+            return False
+        if s.floor == self.m.start_floor and "lab_to_lobby" not in self.mem.legs_done:
+            # Seeing the button ends the way to the lobby, wherever the route hints were.
+            self.mem.legs_done.add("lab_to_lobby")
+            self.mem.route = None
+        self.mem.lobby_seen_on = s.floor
+        kind, floor = self.stop()
+        if kind == "office" and s.floor == floor:
+            # The office route starts in front of the button, and then leaves it behind.
+            on_route = self.mem.route is not None and self.mem.route.leg == self.office_leg()
+            return (
+                self.office_leg() == "button_to_office" and not on_route and not self.near_button(s)
+            )
+        return True
+
+    def office_route_applies(self, s: Senses) -> bool:
+        """On the office's floor, on the route to the office (or at its start)."""
+        kind, floor = self.stop()
+        if kind != "office" or self.mem.in_car or s.floor != floor or self.mem.in_office:
+            return False
+        leg = self.office_leg()
+        if self.mem.route is None or self.mem.route.leg != leg:
+            if leg == "button_to_office" and not self.near_button(s):
+                return False
+            self.mem.route = RouteState(leg)
+        return True
+
+    def office_leg(self) -> str:
+        """The route to the office: from the goal floor's button, or (older maps) the car."""
+        return "button_to_office" if "button_to_office" in self.m.route else "car_to_office"
+
+    def lobby_route_applies(self, s: Senses) -> bool:
+        """Out of the lab, on the start floor, before the lobby."""
+        if not self.mem.out_of_lab or s.floor != self.m.start_floor:
+            return False
+        if "lab_to_lobby" in self.mem.legs_done or self.mem.in_car:
+            return False
+        if self.mem.route is None:
+            # The leg begins facing out of the lab door.
+            self.mem.route = RouteState("lab_to_lobby", heading=self.mem.passed_heading)
+        return True
+
+    def off_start_floor(self, s: Senses) -> bool:
+        """Out of the lab and out of any car (somewhere in a lobby or corridor)."""
+        return self.mem.out_of_lab and not self.mem.in_car
+
+    def at_lab_door(self, s: Senses) -> bool:
+        """In the lab, in front of the lab door's barcode (or passing the door)."""
+        return not self.mem.out_of_lab and (
+            self.mem.door_goal is not None or s.sees(self.m.lab_door_barcode, HOMED_M)
+        )
+
+    def lab_door_in_view(self, s: Senses) -> bool:
+        """In the lab, the lab door's barcode in view."""
+        return not self.mem.out_of_lab and s.sees(self.m.lab_door_barcode)
+
+    # ----- helpers of conditions -----------------------------------------------------------
+
+    def lobby_reached(self, s: Senses) -> bool:
+        """This floor's call button was seen since the robot came to this floor."""
+        return self.mem.lobby_seen_on == s.floor
+
+    def near_button(self, s: Senses) -> bool:
+        """About 1 m in front of this floor's call button, facing it."""
+        b = s.barcodes.get(self.button(s.floor))
+        return b is not None and b[1] <= HOMED_M and abs(b[0]) < 0.25
+
+    # ----- actions ---------------------------------------------------------------------------
+
+    def say_message(self, s: Senses) -> Action:
+        """Says the message."""
+        return Action(("say",), {("say", "message"): self.m.message}, key=("say", self.mem.made))
+
+    def leave_car(self, s: Senses) -> Action:
+        """Drives out of the car."""
+        return Action(("runaway", "leave_car"), key="leave car")
+
+    def ride(self, s: Senses) -> Action:
+        """Turns round to face the car's door once, then waits."""
+        # Pushed: turn round to face the door, then wait.
+        if not self.mem.turned_in_car:
+            return Action(("runaway", "turn"), {("turn", "angle"): math.pi}, key="turn in car")
+        return Action(("runaway",), key="ride")
+
+    def push_floor(self, s: Senses) -> Action:
+        """Homes on the car's panel and pushes the stop's floor."""
+        code = self.m.car_barcode_first + s.car - 1 if s.car else -1
+        return Action(
+            ("runaway", "track_barcode", "home", "push_button"),
+            {
+                ("track_barcode", "id"): code,
+                ("home", "stop_distance"): 0.45,
+                ("push_button", "button"): self.stop_floor(),
+            },
+            key=("push floor", code),
+        )
+
+    def enter_car(self, s: Senses) -> Action:
+        """Faces the car door seen opening, then drives in."""
+        m = self.mem
+        assert m.opened is not None
+        assert m.car_goal is not None
+        gx, gy = m.car_goal
+        if m.enter_stage == "goto":
+            if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15:
+                return Action(
+                    ("runaway", "home_position"),
+                    {("home_position", "x"): gx, ("home_position", "y"): gy},
+                    key=("to car", m.opened),
+                )
+            m.enter_stage = "face"
+        if m.enter_stage == "face":
+            off = wrap(m.opened[1] - s.pose.theta)
+            if abs(off) > 0.08:
+                return Action(("turn",), {("turn", "angle"): off}, key=("face car", m.opened))
+            m.enter_stage = "in"
+        return Action(("runaway", "enter_car"), key=("enter car", m.opened))
+
+    def wait_for_car(self, s: Senses) -> Action:
+        """Waits a step back from the call button."""
+        # A step back from the button: the cars' doors beside it come into the sonars' view.
+        b = self.mem.called_from
+        if b is None:
+            return Action(("runaway",), key="wait for car")
+        x, y = b.x - 1.0 * math.cos(b.theta), b.y - 1.0 * math.sin(b.theta)
+        return Action(
+            ("runaway", "home_position"),
+            {
+                ("home_position", "x"): x,
+                ("home_position", "y"): y,
+                ("home_position", "reverse_within"): 1.5,
+            },
+            key=("wait for car", x, y),
+        )
+
+    def push_call(self, s: Senses) -> Action:
+        """Homes the last bit to the call button and pushes it."""
+        code = self.button(s.floor)
+        return Action(
+            ("track_barcode", "home", "push_button"),
+            {
+                ("track_barcode", "id"): code,
+                ("home", "stop_distance"): PUSH_M - 0.05,
+                ("push_button", "button"): 0,
+            },
+            key=("push call", code),
+        )
+
+    def home_on_button(self, s: Senses) -> Action:
+        """Homes on this floor's call button (to push it, or to stand 1 m from it)."""
+        code = self.button(s.floor)
+        calling = s.floor != self.stop_floor()
+        stop = PUSH_M - 0.05 if calling else 1.0
+        return Action(
+            ("runaway", "track_barcode", "home"),
+            {("track_barcode", "id"): code, ("home", "stop_distance"): stop},
+            key=("home", code, stop),
+        )
+
+    def look_for_button(self, s: Senses) -> Action:
+        """Looks round for the call button, wandering between looks."""
+        return self.wander_about(s)
+
+    def home_on_lab_door(self, s: Senses) -> Action:
+        """Homes on the lab door's barcode."""
+        return Action(
+            ("runaway", "avoid", "track_barcode", "home"),
+            {("track_barcode", "id"): self.m.lab_door_barcode, ("home", "stop_distance"): 0.9},
+            key="home lab door",
+        )
+
+    def wander_about(self, s: Senses) -> Action:
+        """Wanders (avoiding obstacles), turning round in place now and then."""
+        # The reader looks ahead only: a turn in place now and then, wandering between.
+        leg = int(s.t // 25)
+        if s.t % 25 < 9:
+            return Action(
+                ("runaway", "avoid", "turn"), {("turn", "angle"): 2 * math.pi}, key=("look", leg)
+            )
+        return Action(
+            ("runaway", "avoid", "wander"),
+            {("wander", "seed"): (self.seed * 7919 + leg) % (1 << 31)},
+            key=("wander", leg),
+        )
+
+    def pass_door_action(self, s: Senses) -> Action:
+        """In front of a door beside a barcode: to the opening, face it, through."""
+        m = self.mem
+        if m.door_stage == "check":
+            # In front of it and facing it: the opening straight ahead, else placed anew
+            # from here (seen from aside, the first fix is rough).
+            o = s.opening
+            lateral = abs(float(o.get("y", 0.0))) if o.get("seen") else 0.0
+            if lateral > 0.15 and m.door_fixes < 3:
+                m.door_goal = None
+            else:
+                m.door_stage = "pass"
+        if m.door_goal is None:
+            o = s.opening
+            if not o.get("seen") or float(o.get("width", 0.0)) < 0.6:
+                return Action(("runaway",), key="wait for opening")
+            m.door_fixes += 1
+            normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
+            ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)
+            c, sn = math.cos(s.pose.theta), math.sin(s.pose.theta)
+            m.door_goal = (
+                s.pose.x + c * ax - sn * ay,
+                s.pose.y + sn * ax + c * ay,
+                s.pose.theta + normal,
+            )
+            m.door_stage = "goto"
+        gx, gy, heading = m.door_goal
+        if m.door_stage == "goto":
+            if math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.12:
+                m.door_stage = "face"
+            else:
+                return Action(
+                    ("runaway", "home_position"),
+                    {("home_position", "x"): gx, ("home_position", "y"): gy},
+                    key=("door goto", m.door_goal),
+                )
+        if m.door_stage == "face":
+            off = wrap(heading - s.pose.theta)
+            if abs(off) > 0.06:
+                return Action(("turn",), {("turn", "angle"): off}, key=("door face", m.door_goal))
+            m.door_stage = "check"
+            return Action(("runaway",), key=("door check", m.door_goal))
+        return Action(("runaway", "pass_door"), key=("door pass", m.door_goal))
+
+    def through_door(self, s: Senses) -> bool:
+        """Passed (`door_passed`) and truly beyond the door's line (not stopped in it)."""
+        m = self.mem
+        if not s.door_passed or m.door_stage != "pass" or m.door_goal is None:
+            return False
+        gx, gy, heading = m.door_goal
+        went = (s.pose.x - gx) * math.cos(heading) + (s.pose.y - gy) * math.sin(heading)
+        if went >= DOOR_STANDOFF + 0.4:
+            m.door_goal, m.door_stage, m.door_fixes = None, "", 0
+            return True
+        # Stopped short (someone in the way, a jamb): place the door anew and go again.
+        m.door_goal, m.door_stage = None, ""
+        return False
+
+    def route_action(self, s: Senses) -> Action:
+        """The route leg's current step (docs/maps.md)."""
+        r = self.mem.route
+        assert r is not None
+        steps = self.m.route.get(r.leg, [])
+        if r.step >= len(steps):
+            return Action(("runaway",), key=("route end", r.leg))
+        step = steps[r.step]
+        if r.start is None:
+            r.start, r.count, r.stage = s.pose, 0, "follow"
+            r.last_side = False
+            if r.heading is None:
+                r.heading = s.pose.theta
+        if step.get("home") is not None:
+            code = int(step["home"])
+            if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
+                return self.next_step(r, s)
+            if s.sees(code):
+                return Action(
+                    ("runaway", "track_barcode", "home"),
+                    {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
+                    key=("route home", code),
+                )
+            return Action(
+                ("runaway", "avoid", "turn"), {("turn", "angle"): 2 * math.pi}, key=("look", code)
+            )
+        if step.get("pass"):
+            if self.through_door(s):
+                if r.leg == self.office_leg():
+                    self.mem.in_office = True
+                return self.next_step(r, s)
+            return self.pass_door_action(s)
+        if r.stage == "follow" and step.get("follow"):
+            if self.step_until_met(step, r, s):
+                r.stage = "turn" if step.get("turn") else "done"
+            else:
+                return Action(("runaway", "avoid", "follow_hallway"), key=("follow", r.leg, r.step))
+        if step.get("turn") and r.stage in ("follow", "turn"):
+            # A turn after the next step's door finder faces the door itself.
+            after = steps[r.step + 1] if r.step + 1 < len(steps) else {}
+            if after.get("pass"):
+                return self.next_step(r, s)
+            if r.turn_goal is None:
+                angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
+                    str(step["turn"])
+                ]
+                base = r.heading if r.heading is not None else s.pose.theta
+                r.turn_goal = wrap(base + angle)
+            off = wrap(r.turn_goal - s.pose.theta)
+            if abs(off) > 0.05 and r.stage != "into":
+                return Action(("turn",), {("turn", "angle"): off}, key=("route turn", r.step))
+            r.heading = r.turn_goal
+            if step.get("until") == "junction" and str(step["turn"]) != "back":
+                # Into the side corridor's mouth, straight on, before following it: in the
+                # crossing the hallway follower could take either corridor.
+                if r.stage != "into":
+                    r.stage, r.start = "into", s.pose
+                assert r.start is not None
+                gx = r.start.x + INTO_MOUTH_M * math.cos(r.heading)
+                gy = r.start.y + INTO_MOUTH_M * math.sin(r.heading)
+                if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
+                    return Action(
+                        ("runaway", "home_position"),
+                        {("home_position", "x"): gx, ("home_position", "y"): gy},
+                        key=("into mouth", r.step),
+                    )
+        return self.next_step(r, s)
+
+    def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
+        """Whether a follow step's `until` holds (counting openings as they pass)."""
+        assert r.start is not None
+        went = math.hypot(s.pose.x - r.start.x, s.pose.y - r.start.y)
+        until = step.get("until")
+        first = float(step.get("distance", 0.0))
+        if until == "distance":
+            return went >= first
+        if went < first:
+            return False
+        if until == "wall":
+            return s.sonar[0] < WALL_AHEAD_M
+        if until == "barcode":
+            return s.sees(int(step["barcode"]))
+        if until in ("junction", "door"):
+            seen = s.junction if until == "junction" else s.door
+            side = step.get("side")
+            now = bool(seen.get(side)) if side else bool(seen.get("left") or seen.get("right"))
+            if now and not r.last_side:
+                r.count += 1
+            r.last_side = now
+            if r.count >= int(step.get("count", 1)):
+                # At the junction's middle before turning into it.
+                centre = float(s.junction.get("centre", 0.0)) if until == "junction" else 0.0
+                return not step.get("turn") or centre <= 0.15
+        return False
+
+    def next_step(self, r: RouteState, s: Senses) -> Action:
+        """Moves on to the route's next step."""
+        r.step += 1
+        r.start, r.stage, r.turn_goal = None, "start", None
+        return Action(("runaway",), key=("route step", r.leg, r.step))
+
+    # ----- memory updates from what was sensed -------------------------------------------------
+
+    def remember(self, s: Senses) -> None:
+        """Updates the little state from this cycle's senses (events the skills report)."""
+        m = self.mem
+        made = s.said - m.said_at_start
+        if made > m.made:
+            m.made = made
+        if s.presses > m.presses_seen:
+            m.presses_seen = s.presses
+            if self.rule_name == "push call":
+                # The button's wall: its normal from the wall ahead, if fitted.
+                normal = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
+                p = s.pose
+                m.called_at, m.called_from = s.t, Pose(p.x, p.y, wrap(p.theta + normal))
+            elif self.rule_name == "push floor":
+                m.pressed_floor = self.stop_floor()
+                m.turned_in_car = False
+        if self.rule_name == "ride" and not m.turned_in_car and self.turn_goal_reached(s):
+            m.turned_in_car = True
+        fresh = m.opened is not None and s.t - m.opened[0] < CAR_ENTER_S
+        if s.opened.get("seen") and m.called_at is not None and not m.in_car and not fresh:
+            bearing = wrap(s.pose.theta + float(s.opened.get("bearing", 0.0)))
+            before = float(s.opened.get("before", 1.0))
+            door = (s.pose.x + before * math.cos(bearing), s.pose.y + before * math.sin(bearing))
+            normal = self.door_normal(door, s.pose)
+            # FACE_DOOR_M in front of the door, square to its wall.
+            m.car_goal = (
+                door[0] - FACE_DOOR_M * math.cos(normal),
+                door[1] - FACE_DOOR_M * math.sin(normal),
+            )
+            m.opened, m.enter_stage = (s.t, normal), "goto"
+        if s.car_entered and self.rule_name == "enter car" and m.enter_stage == "in":
+            if s.enclosed():
+                m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
+            else:  # stopped short (the door closed, someone in the way): wait for the next
+                m.opened, m.enter_stage = None, ""
+        if s.car_exited and self.rule_name == "leave car":
+            m.in_car, m.lobby_seen_on, m.route = False, None, None
+        if self.rule_name == "pass lab door" and m.door_goal is not None:
+            heading = m.door_goal[2]
+            if self.through_door(s):
+                m.passed_heading, m.out_of_lab = heading, True
+        if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
+            m.called_at = None
+
+    def door_normal(self, door: tuple[float, float], pose: Pose) -> float:
+        """The heading into a car whose door is at ``door`` (odometry frame).
+
+        Cars open on the button's wall or on the walls at its ends (docs/maps.md); the
+        robot faced the button's wall when it pushed the button.
+        """
+        b = self.mem.called_from
+        if b is None:
+            return math.atan2(door[1] - pose.y, door[0] - pose.x)
+        n = (math.cos(b.theta), math.sin(b.theta))
+        button = (b.x + PUSH_M * n[0], b.y + PUSH_M * n[1])
+        if abs((door[0] - button[0]) * n[0] + (door[1] - button[1]) * n[1]) < 0.6:
+            return b.theta
+        side = (door[0] - pose.x) * -n[1] + (door[1] - pose.y) * n[0]
+        return wrap(b.theta + (math.pi / 2 if side > 0 else -math.pi / 2))
+
+    def turn_goal_reached(self, s: Senses) -> bool:
+        """The last turn action's heading is reached."""
+        goal = self.turn_goal
+        return goal is not None and abs(wrap(goal - s.pose.theta)) < 0.1
+
+    # ----- the loop -----------------------------------------------------------------------------
+
+    async def apply(self, name: str, action: Action, s: Senses) -> None:
+        """Switches to ``action`` when it is new (its key changed): skills and parameters."""
+        key = (name, action.key)
+        if key == self.action_key:
+            return
+        if self.rule_name != name:
+            self.switches += 1
+        if self.debug:
+            await self.say(f"rule: {name} {action.key}")
+        self.action_key, self.rule_name = key, name
+        for (skill, param), value in action.params.items():
+            await self.set(skill, param, value)
+        if "turn" in action.skills:
+            self.turn_goal = wrap(s.pose.theta + float(action.params.get(("turn", "angle"), 0.0)))
+        await self.use(*PERCEPTION, *action.skills, restart=action.skills)
+
+    async def run_task(self) -> None:
+        """Runs the rule list every cycle until every stop is made (or the time is up)."""
+        for (skill, param), value in SETTINGS.items():
+            await self.set(skill, param, value)
+        self.send("deactivate", skills=sorted(set(self._all_skills())))
+        await self.use(*PERCEPTION)
+        self.t_stale = True
+        await self.now()  # the clock and the cycle's period: `step` advances `t` by it
+        s = await self.sense()
+        self.mem.said_at_start = s.said
+        self.mem.presses_seen = s.presses
+        traced = 0.0
+        while True:
+            s = await self.sense()
+            if self.trace is not None and s.t >= traced + 0.25:  # DELIVER_TRACE: the true pose
+                traced = s.t
+                await self._trace()
+            self.remember(s)
+            if self.mem.made >= len(self.stops):
+                break
+            if s.t >= self.limit_s:
+                raise OutOfTime(f"the mission's {self.limit_s:.0f} s are up")
+            for name, applies, act in self.rules:
+                if applies(s):
+                    await self.apply(name, act(s), s)
+                    break
+        await self.use()
+        await self.flush()
+        await self.say(f"mission complete ({self.switches} rule switches)")
+
+    @staticmethod
+    def _all_skills() -> tuple[str, ...]:
+        from deliver import SKILLS
+
+        return SKILLS
