@@ -26,6 +26,7 @@ terms in the old ones; `docs/experiment.md` counts them.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -88,6 +89,10 @@ OPENED_FRESH_S = 4.0
 FACE_DOOR_M = 0.85
 #: Going into a car that opened takes at most this long, s.
 CAR_ENTER_S = 25.0
+#: Side sonars reading farther than this see a corridor's mouth abeam, m.
+MOUTH_M = 2.6
+#: Counted a junction abeam, the robot goes this much farther before turning into it, m.
+JUNCTION_ON_M = 0.7
 #: Turned into a junction, the robot drives this far into the side corridor, m.
 INTO_MOUTH_M = 1.5
 #: In front of a door, this far from it, before passing it, m.
@@ -118,6 +123,12 @@ class Senses:
     def enclosed(self) -> bool:
         """Walls near all round (inside a car: all but the door's sonars)."""
         return sum(1 for r in self.sonar if r < 1.9) >= SONARS - 6
+
+    def open_abeam(self, side: str) -> bool:
+        """Whether two neighbouring sonars about abeam on ``side`` read far: a mouth."""
+        mid = SONARS // 4 if side == "left" else 3 * SONARS // 4
+        far = [self.sonar[(mid + k) % SONARS] > MOUTH_M for k in range(-2, 3)]
+        return any(a and b for a, b in zip(far, far[1:], strict=False))
 
     def sees(self, barcode: int, within: float = 5.0) -> bool:
         """Whether ``barcode`` is in view within ``within`` m."""
@@ -178,6 +189,8 @@ class RouteState:
     last_side: bool = False
     heading: float | None = None
     turn_goal: float | None = None
+    #: How far along the step the last opening was counted, m.
+    counted_at: float | None = None
 
 
 class Reactive(Sequencer):
@@ -584,7 +597,7 @@ class Reactive(Sequencer):
         step = steps[r.step]
         if r.start is None:
             r.start, r.count, r.stage = s.pose, 0, "follow"
-            r.last_side = False
+            r.last_side, r.counted_at = False, None
             if r.heading is None:
                 r.heading = s.pose.theta
         if step.get("home") is not None:
@@ -597,9 +610,7 @@ class Reactive(Sequencer):
                     {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
                     key=("route home", code),
                 )
-            return Action(
-                ("runaway", "avoid", "turn"), {("turn", "angle"): 2 * math.pi}, key=("look", code)
-            )
+            return self.wander_about(s)
         if step.get("pass"):
             if self.through_door(s):
                 if r.leg == self.office_leg():
@@ -610,7 +621,11 @@ class Reactive(Sequencer):
             if self.step_until_met(step, r, s):
                 r.stage = "turn" if step.get("turn") else "done"
             else:
-                return Action(("runaway", "avoid", "follow_hallway"), key=("follow", r.leg, r.step))
+                # The step's detectors start afresh with it (as the sequenced robot's do).
+                return Action(
+                    ("runaway", "avoid", "follow_hallway", "detect_intersection", "detect_door"),
+                    key=("follow", r.leg, r.step),
+                )
         if step.get("turn") and r.stage in ("follow", "turn"):
             # A turn after the next step's door finder faces the door itself.
             after = steps[r.step + 1] if r.step + 1 < len(steps) else {}
@@ -659,14 +674,25 @@ class Reactive(Sequencer):
         if until in ("junction", "door"):
             seen = s.junction if until == "junction" else s.door
             side = step.get("side")
-            now = bool(seen.get(side)) if side else bool(seen.get("left") or seen.get("right"))
-            if now and not r.last_side:
+            sides = [str(side)] if side in ("left", "right") else ["left", "right"]
+            # The detector's flag, or (junctions) the side sonars reading far into a mouth
+            # abeam: the detector counts an opening only once well past its near edge.
+            now = any(bool(seen.get(x)) for x in sides)
+            if until == "junction":
+                now = now or any(s.open_abeam(x) for x in sides)
+            if self.debug and os.environ.get("REACTIVE_DEBUG_JUNCTION"):
+                ring = " ".join(f"{x:.1f}" for x in s.sonar[3:10])
+                print(f"[{s.t:7.1f} s] {went:.1f} m {seen} left sonars {ring} now {now}")
+            fresh = went - (r.counted_at if r.counted_at is not None else first) > 1.0
+            if now and not r.last_side and fresh:
                 r.count += 1
+                r.counted_at = went
+                if self.debug:
+                    print(f"[{s.t:7.1f} s]   {until} {side or ''} {r.count} at {went:.1f} m")
             r.last_side = now
-            if r.count >= int(step.get("count", 1)):
-                # At the junction's middle before turning into it.
-                centre = float(s.junction.get("centre", 0.0)) if until == "junction" else 0.0
-                return not step.get("turn") or centre <= 0.15
+            if r.count >= int(step.get("count", 1)) and r.counted_at is not None:
+                # On into the junction's middle (about half a corridor) before turning.
+                return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
         return False
 
     def next_step(self, r: RouteState, s: Senses) -> Action:
