@@ -144,6 +144,26 @@ class Action:
     key: Any = None
 
 
+def goto(
+    x: float,
+    y: float,
+    key: Any,
+    *,
+    speed: float = 0.3,
+    reverse_within: float = 0.0,
+    avoid: bool = False,
+) -> Action:
+    """Drives to (x, y) of the odometry frame (`std.home_position`), runaway on."""
+    skills = ("runaway", "avoid", "home_position") if avoid else ("runaway", "home_position")
+    params = {
+        ("home_position", "x"): x,
+        ("home_position", "y"): y,
+        ("home_position", "speed"): speed,
+        ("home_position", "reverse_within"): reverse_within,
+    }
+    return Action(skills, params, key=key)
+
+
 @dataclass
 class Memory:
     """The little state the reactive robot keeps (all else is sensed anew every cycle)."""
@@ -173,6 +193,10 @@ class Memory:
     door_fixes: int = 0
     passed_heading: float | None = None
     turned_in_car: bool = False
+    #: Per floor, the point in front of the car door last seen opening (odometry).
+    car_doors: dict[int, tuple[float, float]] = field(default_factory=dict)
+    #: Per floor, where the call button was last seen from near (odometry).
+    button_seen_from: dict[int, Pose] = field(default_factory=dict)
     #: Where the call button was pushed from (odometry), to wait for a car a step back.
     called_from: Pose | None = None
 
@@ -368,7 +392,11 @@ class Reactive(Sequencer):
         if self.mem.route is None or self.mem.route.leg != leg:
             if leg == "button_to_office" and not self.near_button(s):
                 return False
-            self.mem.route = RouteState(leg)
+            # The leg's headings are from square in front of the button: the wall's normal.
+            heading = None
+            if leg == "button_to_office" and s.wall.get("seen"):
+                heading = wrap(s.pose.theta + float(s.wall["normal"]))
+            self.mem.route = RouteState(leg, heading=heading)
         return True
 
     def office_leg(self) -> str:
@@ -430,7 +458,12 @@ class Reactive(Sequencer):
 
     def push_floor(self, s: Senses) -> Action:
         """Homes on the car's panel and pushes the stop's floor."""
-        code = self.m.car_barcode_first + s.car - 1 if s.car else -1
+        if not s.car:
+            # The panel (its barcode says which car) not in view: look round for it.
+            return Action(
+                ("turn",), {("turn", "angle"): 2 * math.pi}, key=("look for panel", s.t // 10)
+            )
+        code = self.m.car_barcode_first + s.car - 1
         return Action(
             ("runaway", "track_barcode", "home", "push_button"),
             {
@@ -449,11 +482,7 @@ class Reactive(Sequencer):
         gx, gy = m.car_goal
         if m.enter_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15:
-                return Action(
-                    ("runaway", "home_position"),
-                    {("home_position", "x"): gx, ("home_position", "y"): gy},
-                    key=("to car", m.opened),
-                )
+                return goto(gx, gy, ("to car", m.opened), speed=0.6)
             m.enter_stage = "face"
         if m.enter_stage == "face":
             off = wrap(m.opened[1] - s.pose.theta)
@@ -463,21 +492,17 @@ class Reactive(Sequencer):
         return Action(("runaway", "enter_car"), key=("enter car", m.opened))
 
     def wait_for_car(self, s: Senses) -> Action:
-        """Waits a step back from the call button."""
-        # A step back from the button: the cars' doors beside it come into the sonars' view.
+        """Waits in front of the car door last seen open here, else a step back from the button."""
+        # A step back from the button, the cars' doors beside it come into the sonars' view.
         b = self.mem.called_from
-        if b is None:
+        door = self.mem.car_doors.get(s.floor)
+        if door is not None:
+            x, y = door
+        elif b is not None:
+            x, y = b.x - 1.0 * math.cos(b.theta), b.y - 1.0 * math.sin(b.theta)
+        else:
             return Action(("runaway",), key="wait for car")
-        x, y = b.x - 1.0 * math.cos(b.theta), b.y - 1.0 * math.sin(b.theta)
-        return Action(
-            ("runaway", "home_position"),
-            {
-                ("home_position", "x"): x,
-                ("home_position", "y"): y,
-                ("home_position", "reverse_within"): 1.5,
-            },
-            key=("wait for car", x, y),
-        )
+        return goto(x, y, ("wait for car", x, y), reverse_within=1.5)
 
     def push_call(self, s: Senses) -> Action:
         """Homes the last bit to the call button and pushes it."""
@@ -504,7 +529,14 @@ class Reactive(Sequencer):
         )
 
     def look_for_button(self, s: Senses) -> Action:
-        """Looks round for the call button, wandering between looks."""
+        """Back to where the call button was last seen from near, else looks round for it."""
+        seen_from = self.mem.button_seen_from.get(s.floor)
+        if (
+            seen_from is not None
+            and math.hypot(s.pose.x - seen_from.x, s.pose.y - seen_from.y) > 0.3
+        ):
+            key = ("back to button", s.floor, seen_from.x, seen_from.y)
+            return goto(seen_from.x, seen_from.y, key, avoid=True)
         return self.wander_about(s)
 
     def home_on_lab_door(self, s: Senses) -> Action:
@@ -560,11 +592,7 @@ class Reactive(Sequencer):
             if math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.12:
                 m.door_stage = "face"
             else:
-                return Action(
-                    ("runaway", "home_position"),
-                    {("home_position", "x"): gx, ("home_position", "y"): gy},
-                    key=("door goto", m.door_goal),
-                )
+                return goto(gx, gy, ("door goto", m.door_goal))
         if m.door_stage == "face":
             off = wrap(heading - s.pose.theta)
             if abs(off) > 0.06:
@@ -650,11 +678,7 @@ class Reactive(Sequencer):
                 gx = r.start.x + INTO_MOUTH_M * math.cos(r.heading)
                 gy = r.start.y + INTO_MOUTH_M * math.sin(r.heading)
                 if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
-                    return Action(
-                        ("runaway", "home_position"),
-                        {("home_position", "x"): gx, ("home_position", "y"): gy},
-                        key=("into mouth", r.step),
-                    )
+                    return goto(gx, gy, ("into mouth", r.step))
         return self.next_step(r, s)
 
     def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
@@ -706,6 +730,9 @@ class Reactive(Sequencer):
     def remember(self, s: Senses) -> None:
         """Updates the little state from this cycle's senses (events the skills report)."""
         m = self.mem
+        b = s.barcodes.get(self.button(s.floor))
+        if b is not None and b[1] < 1.6 and abs(b[0]) < 0.3 and not m.in_car:
+            m.button_seen_from[s.floor] = s.pose
         made = s.said - m.said_at_start
         if made > m.made:
             m.made = made
@@ -725,14 +752,14 @@ class Reactive(Sequencer):
         if s.opened.get("seen") and m.called_at is not None and not m.in_car and not fresh:
             bearing = wrap(s.pose.theta + float(s.opened.get("bearing", 0.0)))
             before = float(s.opened.get("before", 1.0))
-            door = (s.pose.x + before * math.cos(bearing), s.pose.y + before * math.sin(bearing))
-            normal = self.door_normal(door, s.pose)
+            door, normal = self.place_car_door(s.pose, bearing, before)
             # FACE_DOOR_M in front of the door, square to its wall.
             m.car_goal = (
                 door[0] - FACE_DOOR_M * math.cos(normal),
                 door[1] - FACE_DOOR_M * math.sin(normal),
             )
             m.opened, m.enter_stage = (s.t, normal), "goto"
+            m.car_doors[s.floor] = m.car_goal
         if s.car_entered and self.rule_name == "enter car" and m.enter_stage == "in":
             if s.enclosed():
                 m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
@@ -747,21 +774,30 @@ class Reactive(Sequencer):
         if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
             m.called_at = None
 
-    def door_normal(self, door: tuple[float, float], pose: Pose) -> float:
-        """The heading into a car whose door is at ``door`` (odometry frame).
+    def place_car_door(
+        self, pose: Pose, bearing: float, before: float
+    ) -> tuple[tuple[float, float], float]:
+        """Where a car door seen opening is (odometry), and the heading into the car.
 
-        Cars open on the button's wall or on the walls at its ends (docs/maps.md); the
-        robot faced the button's wall when it pushed the button.
+        Cars open on the button's wall or on the walls at its ends (docs/maps.md). The robot
+        faced the button's wall when it pushed the button. A door on that wall is where the
+        sonar's bearing meets the wall's line: seen aslant, the bearing is sure, the range
+        (``before``, the reading while it was shut) is not.
         """
+        c, sn = math.cos(bearing), math.sin(bearing)
+        door = (pose.x + before * c, pose.y + before * sn)
         b = self.mem.called_from
         if b is None:
-            return math.atan2(door[1] - pose.y, door[0] - pose.x)
+            return door, bearing
         n = (math.cos(b.theta), math.sin(b.theta))
         button = (b.x + PUSH_M * n[0], b.y + PUSH_M * n[1])
-        if abs((door[0] - button[0]) * n[0] + (door[1] - button[1]) * n[1]) < 0.6:
-            return b.theta
+        towards = c * n[0] + sn * n[1]
+        if towards > 0.1:
+            reach = ((button[0] - pose.x) * n[0] + (button[1] - pose.y) * n[1]) / towards
+            if abs(reach - before) < 1.0:
+                return (pose.x + reach * c, pose.y + reach * sn), b.theta
         side = (door[0] - pose.x) * -n[1] + (door[1] - pose.y) * n[0]
-        return wrap(b.theta + (math.pi / 2 if side > 0 else -math.pi / 2))
+        return door, wrap(b.theta + (math.pi / 2 if side > 0 else -math.pi / 2))
 
     def turn_goal_reached(self, s: Senses) -> bool:
         """The last turn action's heading is reached."""
@@ -777,8 +813,10 @@ class Reactive(Sequencer):
             return
         if self.rule_name != name:
             self.switches += 1
+            # The rule in charge, as the narrative's phase (`situate demo` notes the last).
+            await self.phase(1 + [n for n, _, _ in self.rules].index(name), f"rule {name!r}")
         if self.debug:
-            await self.say(f"rule: {name} {action.key}")
+            await self.say(f"  {action.key}")
         self.action_key, self.rule_name = key, name
         for (skill, param), value in action.params.items():
             await self.set(skill, param, value)
