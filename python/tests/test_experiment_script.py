@@ -251,3 +251,25 @@ def test_design_cost_of_the_repositorys_designs() -> None:
     assert cost["sequenced"]["loc"] == sum(cost["sequenced"]["files"].values())
     assert cost["reactive"]["rules"] >= 5
     assert cost["reactive"]["condition_methods"] >= 5
+
+
+def test_paired_task_time_keeps_the_runs_every_design_did() -> None:
+    rows = [
+        _run("a", 0, True),
+        _run("a", 1, True),
+        _run("b", 0, True, task_time_s=50.0),
+        _run("b", 1, False),
+    ]
+    assert exp.done_by_all(rows, ["a", "b"]) == {(1, 0)}
+    stats = exp.by_k(rows, ["a", "b"], 2)
+    assert stats["a"][2]["task_time_mean_s"] == pytest.approx(150.0)
+    assert stats["a"][2]["task_time_mean_common_s"] == pytest.approx(100.0)
+    assert stats["b"][2]["task_time_mean_common_s"] == pytest.approx(50.0)
+    assert stats["b"][2]["common_done"] == 1
+
+
+def test_load_cache_keys_runs_and_skips_broken_lines(tmp_path: Path) -> None:
+    cache = tmp_path / "runs.jsonl"
+    cache.write_text('{"design": "a", "building": 1, "task_id": "T2"}\n{"trunc\n[]\n')
+    assert list(exp.load_cache(cache)) == [exp.run_key("a", 1, "T2")]
+    assert exp.load_cache(tmp_path / "none.jsonl") == {}
