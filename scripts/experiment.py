@@ -1,28 +1,459 @@
-"""The message-delivery experiment: explicit sequencing versus every skill always active.
+"""The experiment of issue 13: explicit sequencing versus a reactive design as the task class grows.
 
-Runs ``situate demo --headless --json`` for each seed in both modes (``sequenced``: the
-sequencer switches skills on and off; ``all-active``: every skill on from the start, priority
-arbitration only), then writes the raw outcomes (``docs/experiment-results.json``), prints a
-markdown table and draws ``docs/experiment.png`` with matplotlib (installed into the running
-interpreter's environment if missing). Usage, from the repository's top directory::
+Generates buildings from a held-out range of seeds (keeping those of at least three floors),
+runs every design on every building for each task of the class T1..T8 (``situate demo
+--headless --json --task ... --mode DESIGN``), caches each outcome as a JSON line as it
+completes (``--resume`` skips the runs already done), aggregates per design and class size
+k = 1, 2, 4, 8, measures each design's cost from its sources, and writes
+``experiment-results.json``, ``experiment.png`` and ``experiment.md`` into ``--out``. The
+report's "Reading" section (between ``<!-- reading -->`` and ``<!-- /reading -->``) is kept
+from the existing report; everything else is generated. Usage, from the repository's top::
 
-    .venv/bin/python scripts/experiment.py [--seeds 20] [--bin target/release/situate]
+    .venv/bin/python scripts/experiment.py [--buildings 12] [--jobs 2] [--resume]
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
+import concurrent.futures
 import importlib
 import json
 import os
+import re
+import signal
 import statistics
 import subprocess
 import sys
+import tempfile
+import threading
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import asdict, dataclass
 from pathlib import Path
+from subprocess import PIPE
 from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
-MODES = ("sequenced", "all-active")
+DESIGNS = ("sequenced", "reactive")
+KS = (1, 2, 4, 8)
+#: Each design's program, measured for the design-cost table (paths from the repository top).
+DESIGN_SOURCES: dict[str, tuple[str, ...]] = {
+    "sequenced": ("demo/deliver.py", "demo/sequencing.py", "demo/routes.py"),
+    "reactive": ("demo/reactive.py",),
+}
+#: The short names of T1..T8, in order.
+TASK_NAMES = (
+    "deliver to the office",
+    "announce on the goal floor",
+    "two messages in one trip",
+    "up and back down",
+    "announce in the home lobby",
+    "announce on the next floor",
+    "up then part way down",
+    "three stops",
+)
+READING_OPEN = "<!-- reading -->"
+READING_CLOSE = "<!-- /reading -->"
+READING_PLACEHOLDER = "(to be written after looking at the figures)"
+RUNS_FILE = "experiment-runs.jsonl"
+
+
+@dataclass(frozen=True)
+class Building:
+    """A generated building: its seed, its floors and the mission's start and goal floors."""
+
+    seed: int
+    floors: tuple[int, ...]
+    start: int
+    goal: int
+
+
+# ----- buildings and tasks (pure) -------------------------------------------------------------
+
+
+def parse_building(seed: int, text: str) -> Building:
+    """Reads the floors, the start floor and the goal floor from a generated map's YAML."""
+    floors = tuple(int(f) for f in re.findall(r"^\s*-\s*level:\s*(-?\d+)\s*$", text, re.M))
+    mission = text[text.index("\nmission:") :] if "\nmission:" in text else text
+    start = re.search(r"^\s+start:.*?\bfloor:\s*(-?\d+)", mission, re.M)
+    goal = re.search(r"^\s+goal_floor:\s*(-?\d+)", mission, re.M)
+    if not start or not goal:
+        raise ValueError(f"building {seed}: no mission start floor or goal_floor")
+    return Building(seed, floors, int(start.group(1)), int(goal.group(1)))
+
+
+def skip_reason(b: Building) -> str | None:
+    """Why the experiment skips ``b`` (None: kept): it needs a goal two floors above the start."""
+    if len(b.floors) < 3:
+        return "fewer than 3 floors"
+    if b.goal - b.start < 2:
+        return "goal floor less than 2 floors above the start floor"
+    return None
+
+
+def _tasks(s: str, g: str, m: str) -> list[str]:
+    return [
+        "office",
+        f"lobby:{g}",
+        f"lobby:{m},office",
+        f"lobby:{g},lobby:{s}",
+        f"lobby:{s}",
+        f"lobby:{m}",
+        f"lobby:{g},lobby:{m}",
+        f"lobby:{s},lobby:{m},office",
+    ]
+
+
+def task_class(start: int, goal: int) -> list[str]:
+    """The tasks T1..T8 (``--task`` values) for start floor ``start`` and goal floor ``goal``."""
+    return _tasks(str(start), str(goal), str(start + 1))
+
+
+def symbolic_task_class() -> list[str]:
+    """The task class written with S (start), G (goal) and M = S+1, for the report."""
+    return _tasks("S", "G", "M")
+
+
+def run_key(design: str, seed: int, task_id: str) -> str:
+    """The cache key of one run."""
+    return f"{design}/{seed}/{task_id}"
+
+
+# ----- aggregation (pure) -----------------------------------------------------------------------
+
+
+def _nan_none(x: float) -> float | None:
+    return None if x != x else x
+
+
+def _pooled(rows: Sequence[dict[str, Any]], key: str, scale: float) -> float | None:
+    """Sum of ``key`` over the rows' summed simulated time, times ``scale``, or None if absent."""
+    with_key = [r for r in rows if r.get(key) is not None and r.get("mission_time_s")]
+    sim = sum(float(r["mission_time_s"]) for r in with_key)
+    if not with_key or sim <= 0:
+        return None
+    return scale * sum(float(r[key]) for r in with_key) / sim
+
+
+def aggregate(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Success and cost figures over ``rows`` (outcomes; a failed run has ``error`` and no times).
+
+    Times are over the successful runs (``task_done``); the rates are pooled over the runs that
+    have an outcome: the sum of the count over the sum of the simulated time.
+    """
+    ok = [r for r in rows if r.get("task_done")]
+    outcomes = [r for r in rows if "error" not in r]
+    times = [float(r["task_time_s"]) for r in ok]
+    walls = [float(r["wall_s"]) for r in outcomes if r.get("wall_s") is not None]
+    return {
+        "runs": len(rows),
+        "done": len(ok),
+        "errors": len(rows) - len(outcomes),
+        "success_rate": len(ok) / len(rows) if rows else None,
+        "task_time_mean_s": statistics.fmean(times) if times else None,
+        "task_time_median_s": statistics.median(times) if times else None,
+        "skill_runs_per_sim_s": _pooled(outcomes, "skill_runs", 1.0),
+        "skill_cpu_us_per_sim_s": _pooled(outcomes, "skill_cpu_ms", 1000.0),
+        "rule_switches_per_sim_min": _pooled(outcomes, "rule_switches", 60.0),
+        "drive_winner_changes_per_sim_min": _pooled(outcomes, "drive_winner_changes", 60.0),
+        "wall_s_mean": statistics.fmean(walls) if walls else None,
+    }
+
+
+def done_by_all(rows: Sequence[dict[str, Any]], designs: Sequence[str]) -> set[tuple[int, int]]:
+    """The (building, task index) pairs that every design did: a paired comparison of times."""
+    done = [
+        {(r["building"], r["task_index"]) for r in rows if r["design"] == d and r.get("task_done")}
+        for d in designs
+    ]
+    return set.intersection(*done) if done else set()
+
+
+def by_k(
+    rows: Sequence[dict[str, Any]], designs: Sequence[str], n_tasks: int
+) -> dict[str, dict[int, dict[str, Any]]]:
+    """Per design and class size k (1, 2, 4, 8 up to ``n_tasks``): the runs of the first k tasks.
+
+    Besides `aggregate`'s figures, ``task_time_mean_common_s`` is the mean task time over the
+    runs whose building and task every design did.
+    """
+    common = done_by_all(rows, designs)
+    stats: dict[str, dict[int, dict[str, Any]]] = {}
+    for d in designs:
+        stats[d] = {}
+        for k in (k for k in KS if k <= n_tasks):
+            mine = [r for r in rows if r["design"] == d and r["task_index"] < k]
+            paired = [
+                float(r["task_time_s"])
+                for r in mine
+                if r.get("task_done") and (r["building"], r["task_index"]) in common
+            ]
+            stats[d][k] = aggregate(mine) | {
+                "common_done": len(paired),
+                "task_time_mean_common_s": statistics.fmean(paired) if paired else None,
+            }
+    return stats
+
+
+def by_task(
+    rows: Sequence[dict[str, Any]], designs: Sequence[str], n_tasks: int
+) -> dict[str, dict[str, tuple[int, int]]]:
+    """Per task id and design: (successful runs, runs)."""
+    table: dict[str, dict[str, tuple[int, int]]] = {}
+    for i in range(n_tasks):
+        table[f"T{i + 1}"] = {}
+        for d in designs:
+            mine = [r for r in rows if r["design"] == d and r["task_index"] == i]
+            table[f"T{i + 1}"][d] = (sum(bool(r.get("task_done")) for r in mine), len(mine))
+    return table
+
+
+# ----- design cost (pure) -----------------------------------------------------------------------
+
+
+def count_loc(source: str) -> int:
+    """Non-blank lines that are not comments alone."""
+    return sum(1 for ln in source.splitlines() if ln.strip() and not ln.strip().startswith("#"))
+
+
+def _rules_list(tree: ast.AST) -> ast.List | None:
+    for node in ast.walk(tree):
+        targets: list[ast.expr] = []
+        if isinstance(node, ast.Assign):
+            targets = list(node.targets)
+        elif isinstance(node, ast.AnnAssign):
+            targets = [node.target]
+        else:
+            continue
+        value = node.value
+        for t in targets:
+            if (
+                isinstance(t, ast.Attribute)
+                and t.attr == "rules"
+                and isinstance(t.value, ast.Name)
+                and t.value.id == "self"
+                and isinstance(value, ast.List)
+            ):
+                return value
+    return None
+
+
+def count_rules(source: str) -> dict[str, int]:
+    """The rules of ``self.rules = [(name, condition, action), ...]`` in ``source``.
+
+    Returns the number of rules, of distinct condition methods (``self.NAME``) and of inline
+    conditions (lambdas).
+    """
+    rules = _rules_list(ast.parse(source))
+    if rules is None:
+        return {"rules": 0, "condition_methods": 0, "inline_conditions": 0}
+    methods: set[str] = set()
+    inline = 0
+    for entry in rules.elts:
+        if not isinstance(entry, ast.Tuple) or len(entry.elts) < 2:
+            continue
+        cond = entry.elts[1]
+        if isinstance(cond, ast.Attribute) and isinstance(cond.value, ast.Name):
+            methods.add(cond.attr)
+        elif isinstance(cond, ast.Lambda):
+            inline += 1
+    return {
+        "rules": len(rules.elts),
+        "condition_methods": len(methods),
+        "inline_conditions": inline,
+    }
+
+
+def design_cost(root: Path, designs: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """Lines of code per source file of each design, and the reactive design's rule counts."""
+    cost: dict[str, dict[str, Any]] = {}
+    for d in designs:
+        files = {f: count_loc((root / f).read_text()) for f in DESIGN_SOURCES.get(d, ())}
+        entry: dict[str, Any] = {"files": files, "loc": sum(files.values())}
+        if d == "reactive":
+            entry.update(count_rules((root / "demo" / "reactive.py").read_text()))
+        cost[d] = entry
+    return cost
+
+
+# ----- the report (pure) ------------------------------------------------------------------------
+
+
+def reading_section(existing: str | None) -> str:
+    """The "Reading" text between the markers in ``existing`` (the placeholder if none)."""
+    if existing:
+        start = existing.find(READING_OPEN)
+        end = existing.find(READING_CLOSE, start + 1)
+        if start >= 0 and end > start:
+            return existing[start + len(READING_OPEN) : end].strip("\n")
+    return READING_PLACEHOLDER
+
+
+def _f(x: float | None, fmt: str = ".0f") -> str:
+    return "—" if x is None else format(x, fmt)
+
+
+def k_table(stats: dict[str, dict[int, dict[str, Any]]]) -> str:
+    """The markdown table of the figures per design and k."""
+    switches = any(
+        s.get(key) is not None
+        for ks in stats.values()
+        for s in ks.values()
+        for key in ("rule_switches_per_sim_min", "drive_winner_changes_per_sim_min")
+    )
+    head = (
+        "| design | k | tasks done | success | task time, s (mean / median, done runs) "
+        "| task time, s (mean, runs every design did) | skill runs / sim s | skill CPU µs / sim s |"
+    )
+    sep = "|---|---|---|---|---|---|---|---|"
+    if switches:
+        head += " rule switches / sim min | drive winner changes / sim min |"
+        sep += "---|---|"
+    head += " wall s / run |"
+    sep += "---|"
+    lines = [head, sep]
+    for d, ks in stats.items():
+        for k, s in ks.items():
+            rate = "—" if s["success_rate"] is None else f"{100 * s['success_rate']:.0f}%"
+            row = (
+                f"| {d} | {k} | {s['done']}/{s['runs']} | {rate} "
+                f"| {_f(s['task_time_mean_s'])} / {_f(s['task_time_median_s'])} "
+                f"| {_f(s.get('task_time_mean_common_s'))} (n = {s.get('common_done', 0)}) "
+                f"| {_f(s['skill_runs_per_sim_s'], '.1f')} | {_f(s['skill_cpu_us_per_sim_s'])} |"
+            )
+            if switches:
+                row += (
+                    f" {_f(s['rule_switches_per_sim_min'], '.1f')} "
+                    f"| {_f(s['drive_winner_changes_per_sim_min'], '.1f')} |"
+                )
+            row += f" {_f(s['wall_s_mean'], '.1f')} |"
+            lines.append(row)
+    return "\n".join(lines)
+
+
+def task_table(per_task: dict[str, dict[str, tuple[int, int]]], designs: Sequence[str]) -> str:
+    """The markdown table of successes per task (rows) and design (columns)."""
+    lines = [
+        "| task | name | " + " | ".join(designs) + " |",
+        "|---|---|" + "---|" * len(designs),
+    ]
+    for tid, cells in per_task.items():
+        name = TASK_NAMES[int(tid[1:]) - 1]
+        counts = " | ".join(f"{cells[d][0]}/{cells[d][1]}" for d in designs)
+        lines.append(f"| {tid} | {name} | {counts} |")
+    return "\n".join(lines)
+
+
+def class_table(n_tasks: int) -> str:
+    """The markdown table of the task class T1..Tn."""
+    lines = ["| task | name | stops (`--task`) |", "|---|---|---|"]
+    for i, t in enumerate(symbolic_task_class()[:n_tasks]):
+        lines.append(f"| T{i + 1} | {TASK_NAMES[i]} | `{t}` |")
+    return "\n".join(lines)
+
+
+def cost_table(cost: dict[str, dict[str, Any]]) -> str:
+    """The markdown table of each design's lines of code and rules."""
+    lines = [
+        "| design | program (non-blank, non-comment lines) | lines | rules | condition methods |",
+        "|---|---|---|---|---|",
+    ]
+    for d, c in cost.items():
+        files = ", ".join(f"`{f}` {n}" for f, n in c["files"].items())
+        if d == "reactive":
+            files += (
+                " (reuses the link layer of `demo/sequencing.py` and the entry point of"
+                " `demo/deliver.py`)"
+            )
+        rules = str(c.get("rules", "—"))
+        conds = str(c.get("condition_methods", "—"))
+        if c.get("inline_conditions"):
+            conds += f" (+{c['inline_conditions']} inline)"
+        lines.append(f"| {d} | {files} | {c['loc']} | {rules} | {conds} |")
+    return "\n".join(lines)
+
+
+def _duration(s: float) -> str:
+    return f"{s / 60:.1f} min" if s >= 120 else f"{s:.0f} s"
+
+
+def render_report(results: dict[str, Any], reading: str) -> str:
+    """The whole of ``experiment.md`` from the results (as written to the JSON) and the reading."""
+    cfg = results["config"]
+    designs: list[str] = cfg["designs"]
+    kept = results["buildings"]["kept"]
+    skipped = results["buildings"]["skipped"]
+    reasons: dict[str, int] = {}
+    for s in skipped:
+        reasons[s["reason"]] = reasons.get(s["reason"], 0) + 1
+    skipped_text = (
+        "; ".join(f"{n} because {why}" for why, n in reasons.items()) if skipped else "none"
+    )
+    seeds = ", ".join(str(b["seed"]) for b in kept)
+    n_runs = len(results["runs"])
+    tm = results["timing"]
+    made = f"{tm['runs_this_invocation']} runs made"
+    if tm["runs_this_invocation"] < n_runs:
+        made += f", {n_runs - tm['runs_this_invocation']} from the cache of an earlier invocation"
+    k_stats = {d: {int(k): s for k, s in ks.items()} for d, ks in results["by_k"].items()}
+    per_task = {t: {d: (c[0], c[1]) for d, c in ds.items()} for t, ds in results["by_task"].items()}
+    return f"""# Experiment: explicit sequencing vs a reactive design as the class of tasks grows
+
+Generated by `scripts/experiment.py` (issue 13); only the section "Reading" is written by hand.
+
+## Set-up
+
+- **Designs.** `sequenced`: the sequencer of `demo/deliver.py` switches the skills on and off,
+  step by step (explicit sequencing). `reactive`: `demo/reactive.py`, a teleo-reactive ordered
+  rule list evaluated every cycle over the same skills, perception always on, no phases.
+  Both run as `situate demo --headless --json --mode DESIGN --task TASK`.
+- **Tasks.** S is the start floor, G the goal floor (the office's), M = S+1. The class of size k
+  is T1..Tk; every design runs every task of the class on every building, once.
+
+{class_table(cfg["tasks"])}
+
+- **Buildings.** {len(kept)} generated building(s) (`situate map generate`), seeds from
+  {cfg["first_seed"]} on, held out from tuning, kept when they have at least 3 floors and the goal
+  is at least 2 floors above the start: seeds {seeds}. Skipped: {len(skipped)} ({skipped_text}).
+- **Runs.** {n_runs} runs ({len(designs)} designs by {len(kept)} building(s) by
+  {cfg["tasks"]} tasks),
+  demo seed = building seed, simulated time limit {cfg["limit_s"]:.0f} s, wall limit
+  {cfg["timeout_s"]:.0f} s per run, {cfg["jobs"]} at a time on a machine of {cfg["cpus"]} CPUs.
+  This invocation took {_duration(tm["elapsed_s"])} ({made}); the runs' wall times add up to
+  {_duration(tm["run_wall_s_total"])}.
+- **Measures.** A task is done when every stop was made, in order (the simulator's ground truth).
+  Task time: when the last stop was made (done runs only; the paired column keeps only the
+  building and task pairs that every design did, so that the designs' times compare). Rates:
+  summed over the runs with an outcome, divided by their summed simulated time.
+
+## Results
+
+Per design and class size k (the runs of T1..Tk over all buildings):
+
+{k_table(k_stats)}
+
+Tasks done per task:
+
+{task_table(per_task, designs)}
+
+![success, task time and cost per class size](experiment.png)
+
+## Design cost
+
+Measured from the sources by the script:
+
+{cost_table(results["design_cost"])}
+
+## Reading
+
+{READING_OPEN}
+{reading}
+{READING_CLOSE}
+"""
+
+
+# ----- running (impure) -------------------------------------------------------------------------
 
 
 def find_binary(given: str | None) -> Path:
@@ -39,57 +470,94 @@ def find_binary(given: str | None) -> Path:
     )
 
 
-def run_one(binary: Path, seed: int, mode: str, extra: list[str]) -> dict[str, Any]:
-    """Runs one headless demo and returns its JSON outcome."""
-    cmd = [str(binary), "demo", "--headless", "--json", "--seed", str(seed), "--mode", mode]
-    cmd += ["--python", sys.executable, *extra]
-    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
-    lines = [ln for ln in done.stdout.splitlines() if ln.startswith("{")]
-    if not lines:
-        raise RuntimeError(f"seed {seed} {mode}: no outcome\n{done.stdout}\n{done.stderr}")
-    outcome: dict[str, Any] = json.loads(lines[-1])
-    return outcome
+def generate(binary: Path, seed: int, maps: Path) -> tuple[Building, Path]:
+    """Generates the building of ``seed`` into ``maps`` and reads it."""
+    path = maps / f"building-{seed}.yaml"
+    subprocess.run(
+        [str(binary), "map", "generate", "--seed", str(seed), "--output", str(path)],
+        check=True,
+        capture_output=True,
+    )
+    return parse_building(seed, path.read_text()), path
 
 
-def summary(rows: list[dict[str, Any]]) -> dict[str, float]:
-    """Success rate and means over ``rows`` (times over the successful runs only)."""
-    ok = [r for r in rows if r["delivered"]]
-    mean = statistics.fmean
-
-    def ok_mean(key: str) -> float:
-        return mean(r[key] for r in ok) if ok else float("nan")
-
-    return {
-        "runs": len(rows),
-        "delivered": len(ok),
-        "mission_time_s": ok_mean("mission_time_s"),
-        "sim_time_s_all": mean(r["mission_time_s"] for r in rows),
-        "skill_runs": mean(r["skill_runs"] for r in rows),
-        "skill_cpu_ms": mean(r["skill_cpu_ms"] for r in rows),
-        "runs_per_cycle": mean(r["skill_runs"] / max(r["cycles"], 1) for r in rows),
-        "cpu_us_per_sim_s": mean(
-            1000 * r["skill_cpu_ms"] / max(r["mission_time_s"], 1e-9) for r in rows
-        ),
-        "speedup": mean(r["speedup"] for r in rows),
-        "speedup_min": min(r["speedup"] for r in rows),
-    }
+def select_buildings(
+    binary: Path, first_seed: int, wanted: int, maps: Path
+) -> tuple[list[tuple[Building, Path]], list[dict[str, Any]]]:
+    """Generates buildings from ``first_seed`` on until ``wanted`` are kept; returns the skipped."""
+    kept: list[tuple[Building, Path]] = []
+    skipped: list[dict[str, Any]] = []
+    seed = first_seed
+    while len(kept) < wanted:
+        b, path = generate(binary, seed, maps)
+        why = skip_reason(b)
+        if why is None:
+            kept.append((b, path))
+        else:
+            skipped.append({**asdict(b), "reason": why})
+        seed += 1
+        if len(skipped) > 50 * wanted + 100:
+            sys.exit(f"too many buildings skipped from seed {first_seed} on")
+    return kept, skipped
 
 
-def table(stats: dict[str, dict[str, float]]) -> str:
-    """The markdown table of the two modes."""
-    lines = [
-        "| mode | delivered | mission time, s (delivered runs) | skill runs | skill runs / cycle "
-        "| CPU in skills, ms | CPU µs per simulated s | speed vs real time (mean, min) |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for mode, s in stats.items():
-        time = "—" if s["mission_time_s"] != s["mission_time_s"] else f"{s['mission_time_s']:.0f}"
-        lines.append(
-            f"| {mode} | {s['delivered']:.0f}/{s['runs']:.0f} | {time} "
-            f"| {s['skill_runs']:.0f} | {s['runs_per_cycle']:.1f} | {s['skill_cpu_ms']:.0f} "
-            f"| {s['cpu_us_per_sim_s']:.0f} | {s['speedup']:.0f}x, {s['speedup_min']:.0f}x |"
-        )
-    return "\n".join(lines)
+def run_one(
+    binary: Path, design: str, b: Building, path: Path, task_index: int, args: argparse.Namespace
+) -> dict[str, Any]:
+    """Runs one mission; the outcome, or ``{"error": ...}`` if it failed or timed out."""
+    task = task_class(b.start, b.goal)[task_index]
+    cmd = [str(binary), "demo", "--headless", "--json", "--seed", str(b.seed)]
+    cmd += ["--map", str(path), "--task", task, "--mode", design, "--python", args.python]
+    cmd += ["--robot", str(ROOT / "demo" / "robot.yaml"), "--limit-s", str(args.limit_s)]
+    meta = {"design": design, "building": b.seed, "task_index": task_index}
+    meta |= {"task_id": f"T{task_index + 1}", "task_stops": task, "limit_s": args.limit_s}
+    t0 = time.monotonic()
+    # A session of its own, so that a timeout ends the demo's sequencer too, not the demo only.
+    with subprocess.Popen(
+        cmd, cwd=ROOT, stdout=PIPE, stderr=PIPE, text=True, start_new_session=True
+    ) as proc:
+        try:
+            stdout, stderr = proc.communicate(timeout=args.timeout_s)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            error = f"timeout after {args.timeout_s:.0f} s wall"
+            return {**meta, "error": error, "task_done": False, "wall_s": time.monotonic() - t0}
+    lines = [ln for ln in stdout.splitlines() if ln.startswith("{")]
+    try:
+        outcome: dict[str, Any] = json.loads(lines[-1]) if lines else {}
+    except json.JSONDecodeError:
+        outcome = {}
+    if "task_done" not in outcome:
+        tail = (stderr or stdout).strip().splitlines()[-3:]
+        error = f"exit {proc.returncode}, no outcome: " + " / ".join(tail)
+        return {**meta, "error": error, "task_done": False, "wall_s": time.monotonic() - t0}
+    return {**outcome, **meta}
+
+
+def load_cache(path: Path) -> dict[str, dict[str, Any]]:
+    """The runs already in the cache file, by key (unreadable lines are ignored)."""
+    runs: dict[str, dict[str, Any]] = {}
+    if path.is_file():
+        for line in path.read_text().splitlines():
+            try:
+                r = json.loads(line)
+                runs[run_key(r["design"], r["building"], r["task_id"])] = r
+            except (json.JSONDecodeError, KeyError, TypeError):
+                continue
+    return runs
+
+
+def progress_line(n: int, total: int, r: dict[str, Any]) -> str:
+    """One line about a finished run."""
+    head = f"[{n:>4}/{total}] {r['design']:>9} building {r['building']} {r['task_id']}"
+    if "error" in r:
+        return f"{head}: ERROR {r['error']}"
+    state = "done  " if r.get("task_done") else "FAILED"
+    return (
+        f"{head}: {state} t {float(r.get('task_time_s', 0)):7.1f} s  "
+        f"runs {r.get('skill_runs', 0):7}  wall {float(r.get('wall_s', 0)):6.1f} s"
+    )
 
 
 def pyplot() -> Any:
@@ -103,66 +571,151 @@ def pyplot() -> Any:
     return importlib.import_module("matplotlib.pyplot")
 
 
-def plot(results: dict[str, list[dict[str, Any]]], out: Path) -> None:
-    """Draws per-seed mission time, skill runs and CPU time of both modes."""
+def plot(stats: dict[str, dict[int, dict[str, Any]]], out: Path) -> None:
+    """Draws success, task time, CPU and switches (or skill runs) against k, one line per design."""
     plt = pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    has_switches = any(
+        s.get("drive_winner_changes_per_sim_min") is not None
+        or s.get("rule_switches_per_sim_min") is not None
+        for ks in stats.values()
+        for s in ks.values()
+    )
+    last = (
+        ("drive_winner_changes_per_sim_min", "drive winner changes per simulated min")
+        if has_switches
+        else ("skill_runs_per_sim_s", "skill runs per simulated s")
+    )
     panels = [
-        ("mission_time_s", "simulated mission time, s (x: not delivered)"),
-        ("skill_runs", "skill executions"),
-        ("skill_cpu_ms", "CPU time in skills, ms"),
+        ("success_rate", "success rate"),
+        ("task_time_mean_s", "mean task time of done runs, s"),
+        ("skill_cpu_us_per_sim_s", "skill CPU µs per simulated s"),
+        last,
     ]
-    colours = {"sequenced": "tab:blue", "all-active": "tab:red"}
-    for ax, (key, title) in zip(axes, panels):
-        for mode, rows in results.items():
-            seeds = [r["seed"] for r in rows]
-            values = [r[key] for r in rows]
-            markers = ["o" if r["delivered"] else "x" for r in rows]
-            for s, v, mk in zip(seeds, values, markers):
-                ax.scatter(s, v, marker=mk, color=colours.get(mode, "k"))
-            ax.plot(seeds, values, color=colours.get(mode, "k"), alpha=0.4, label=mode)
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7.5))
+    markers = ["o", "s", "^", "D", "v"]
+    for ax, (key, title) in zip(axes.flat, panels):
+        for i, (d, ks) in enumerate(stats.items()):
+            pts = [(k, s.get(key)) for k, s in ks.items()]
+            if key == "drive_winner_changes_per_sim_min":
+                pts = [
+                    (k, v if v is not None else s.get("rule_switches_per_sim_min"))
+                    for (k, v), s in zip(pts, ks.values())
+                ]
+            xs = [k for k, v in pts if v is not None]
+            ys = [v for _, v in pts if v is not None]
+            ax.plot(xs, ys, marker=markers[i % len(markers)], label=d)
+        ax.set_xscale("log", base=2)
+        ax.set_xticks(list(KS))
+        ax.set_xticklabels([str(k) for k in KS])
+        ax.set_xlabel("tasks in the class, k")
         ax.set_title(title, fontsize=10)
-        ax.set_xlabel("seed")
-        ax.set_xticks(sorted({r["seed"] for rows in results.values() for r in rows}))
         ax.grid(alpha=0.3)
-    axes[0].legend()
-    fig.suptitle("Message delivery: explicit sequencing vs all skills always active")
+        if key == "success_rate":
+            ax.set_ylim(-0.05, 1.05)
+        ax.legend()
+    fig.suptitle("Explicit sequencing vs reactive, as the class of tasks grows")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
+    plt.close(fig)
 
 
-def main() -> int:
-    """Runs the experiment."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seeds", type=int, default=20, help="seeds 1..N")
-    p.add_argument("--bin", default=None, help="the situate binary")
-    p.add_argument("--modes", default=",".join(MODES))
-    p.add_argument("--out", default=str(ROOT / "docs"), help="directory for the results and plot")
-    p.add_argument("extra", nargs="*", help="more arguments for `situate demo` (after --)")
-    a = p.parse_args()
-    binary = find_binary(a.bin)
-    out = Path(a.out)
-    results: dict[str, list[dict[str, Any]]] = {}
-    for mode in a.modes.split(","):
-        rows = results.setdefault(mode, [])
-        for seed in range(1, a.seeds + 1):
-            r = run_one(binary, seed, mode, a.extra)
-            rows.append(r)
-            print(
-                f"{mode:>10} seed {seed:2}: {'delivered' if r['delivered'] else 'FAILED   '} "
-                f"t {r['mission_time_s']:7.1f} s  runs {r['skill_runs']:7}  "
-                f"cpu {r['skill_cpu_ms']:8.1f} ms  {r['speedup']:6.0f}x",
-                flush=True,
-            )
-    stats = {mode: summary(rows) for mode, rows in results.items()}
-    clean = {m: {k: (None if v != v else v) for k, v in st.items()} for m, st in stats.items()}
-    (out / "experiment-results.json").write_text(
-        json.dumps({"runs": results, "summary": clean}, indent=1) + "\n"
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The command line."""
+    p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    p.add_argument("--buildings", type=int, default=12, help="buildings to keep (default 12)")
+    p.add_argument("--first-seed", type=int, default=50000, help="first building seed (50000)")
+    p.add_argument("--designs", default=",".join(DESIGNS), help="comma-separated demo modes")
+    p.add_argument("--tasks", type=int, default=8, choices=range(1, 9), help="T1..Tn (8)")
+    p.add_argument("--jobs", type=int, default=2, help="runs in parallel (2)")
+    p.add_argument("--bin", default=None, help="the situate binary (default $SITUATE_BIN, target/)")
+    p.add_argument("--out", default=str(ROOT / "docs"), help="directory of the report (docs/)")
+    p.add_argument("--resume", action="store_true", help="keep the runs cached in --out")
+    p.add_argument("--limit-s", type=float, default=1800, help="simulated limit per run (1800)")
+    p.add_argument("--timeout-s", type=float, default=600, help="wall limit per run (600)")
+    p.add_argument("--python", default=sys.executable, help="the sequencer's interpreter")
+    return p.parse_args(argv)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Runs the experiment and writes the results, the plot and the report."""
+    args = parse_args(argv)
+    started = time.monotonic()
+    binary = find_binary(args.bin)
+    designs = [d for d in args.designs.split(",") if d]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    cache_path = out / RUNS_FILE
+    cached = {
+        key: r
+        for key, r in (load_cache(cache_path) if args.resume else {}).items()
+        if r.get("limit_s") == args.limit_s  # a run under another limit is run again
+    }
+    if not args.resume:
+        cache_path.write_text("")
+    with tempfile.TemporaryDirectory(prefix="situate-experiment-") as tmp:
+        kept, skipped = select_buildings(binary, args.first_seed, args.buildings, Path(tmp))
+        print(
+            f"buildings: kept {[b.seed for b, _ in kept]}, skipped {len(skipped)}",
+            flush=True,
+        )
+        todo = [
+            (d, b, path, i)
+            for d in designs
+            for b, path in kept
+            for i in range(args.tasks)
+            if run_key(d, b.seed, f"T{i + 1}") not in cached
+        ]
+        total = len(todo)
+        lock = threading.Lock()
+        made: list[dict[str, Any]] = []
+        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+            futures = [pool.submit(run_one, binary, d, b, p, i, args) for d, b, p, i in todo]
+            for fut in concurrent.futures.as_completed(futures):
+                r = fut.result()
+                with lock, cache_path.open("a") as f:
+                    f.write(json.dumps(r) + "\n")
+                made.append(r)
+                print(progress_line(len(made), total, r), flush=True)
+    seeds = {b.seed for b, _ in kept}
+    wanted = {run_key(d, s, f"T{i + 1}") for d in designs for s in seeds for i in range(args.tasks)}
+    every = {**cached, **{run_key(r["design"], r["building"], r["task_id"]): r for r in made}}
+    rows = sorted(
+        (r for key, r in every.items() if key in wanted),
+        key=lambda r: (designs.index(r["design"]), r["building"], r["task_index"]),
     )
-    print()
-    print(table(stats))
-    plot(results, out / "experiment.png")
-    print(f"\nwrote {out / 'experiment.png'} and {out / 'experiment-results.json'}")
+    stats = by_k(rows, designs, args.tasks)
+    results: dict[str, Any] = {
+        "config": {
+            "designs": designs,
+            "tasks": args.tasks,
+            "buildings": args.buildings,
+            "first_seed": args.first_seed,
+            "limit_s": args.limit_s,
+            "timeout_s": args.timeout_s,
+            "jobs": args.jobs,
+            "cpus": os.cpu_count(),
+        },
+        "timing": {
+            "elapsed_s": time.monotonic() - started,
+            "runs_this_invocation": len(made),
+            "run_wall_s_total": sum(float(r.get("wall_s") or 0) for r in rows),
+        },
+        "buildings": {
+            "kept": [{**asdict(b), "tasks": task_class(b.start, b.goal)} for b, _ in kept],
+            "skipped": skipped,
+        },
+        "design_cost": design_cost(ROOT, designs),
+        "by_k": {d: {str(k): s for k, s in ks.items()} for d, ks in stats.items()},
+        "by_task": by_task(rows, designs, args.tasks),
+        "runs": rows,
+    }
+    (out / "experiment-results.json").write_text(json.dumps(results, indent=1) + "\n")
+    plot(stats, out / "experiment.png")
+    report = out / "experiment.md"
+    reading = reading_section(report.read_text() if report.is_file() else None)
+    report.write_text(render_report(results, reading))
+    print(k_table(stats))
+    print(f"wrote {report}, {out / 'experiment-results.json'} and {out / 'experiment.png'}")
     return 0
 
 
