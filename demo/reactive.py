@@ -76,6 +76,8 @@ SETTINGS = {
     ("track_barcode", "hold"): 15,
     ("locate_door", "max_width"): 1.8,
     ("leave_car", "distance"): 3.0,
+    # Cars stay open 10 s or so: in before the door closes.
+    ("enter_car", "speed"): 0.35,
 }
 #: Within this of a barcode, the robot has homed on it, m.
 HOMED_M = 1.1
@@ -230,6 +232,8 @@ class Reactive(Sequencer):
         self.mem = Memory()
         self.action_key: Any = None
         self.rule_name = ""
+        #: When the rule in charge took over (simulated time).
+        self.rule_since = 0.0
         #: The heading the last turn action aims at (odometry), to tell when it is done.
         self.turn_goal: float | None = None
         #: Rule changes (the drive's winner changing), for the experiment.
@@ -488,7 +492,12 @@ class Reactive(Sequencer):
             off = wrap(m.opened[1] - s.pose.theta)
             if abs(off) > 0.08:
                 return Action(("turn",), {("turn", "angle"): off}, key=("face car", m.opened))
+            if s.sonar[0] < 1.6:
+                # No open door ahead: it closed meanwhile, or it was no car's door.
+                m.opened, m.enter_stage = None, ""
+                return Action(("runaway",), key="no door ahead")
             m.enter_stage = "in"
+            m.car_doors[s.floor] = (gx, gy)
         return Action(("runaway", "enter_car"), key=("enter car", m.opened))
 
     def wait_for_car(self, s: Senses) -> Action:
@@ -549,9 +558,11 @@ class Reactive(Sequencer):
 
     def wander_about(self, s: Senses) -> Action:
         """Wanders (avoiding obstacles), turning round in place now and then."""
-        # The reader looks ahead only: a turn in place now and then, wandering between.
-        leg = int(s.t // 25)
-        if s.t % 25 < 9:
+        # The reader looks ahead only: a turn in place first, and again now and then,
+        # wandering between (timed from when the rule in charge last changed).
+        since = s.t - self.rule_since
+        leg = int(since // 25)
+        if since % 25 < 9:
             return Action(
                 ("runaway", "avoid", "turn"), {("turn", "angle"): 2 * math.pi}, key=("look", leg)
             )
@@ -759,7 +770,6 @@ class Reactive(Sequencer):
                 door[1] - FACE_DOOR_M * math.sin(normal),
             )
             m.opened, m.enter_stage = (s.t, normal), "goto"
-            m.car_doors[s.floor] = m.car_goal
         if s.car_entered and self.rule_name == "enter car" and m.enter_stage == "in":
             if s.enclosed():
                 m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
@@ -813,6 +823,7 @@ class Reactive(Sequencer):
             return
         if self.rule_name != name:
             self.switches += 1
+            self.rule_since = s.t
             # The rule in charge, as the narrative's phase (`situate demo` notes the last).
             await self.phase(1 + [n for n, _, _ in self.rules].index(name), f"rule {name!r}")
         if self.debug:
