@@ -95,6 +95,10 @@ CAR_ENTER_S = 25.0
 MOUTH_M = 2.6
 #: Counted a junction abeam, the robot goes this much farther before turning into it, m.
 JUNCTION_ON_M = 0.7
+#: In front of a barcode, the robot waits this long for the door beside it to show, s.
+DOOR_WAIT_S = 30.0
+#: Having given up on a door, the robot leaves it alone this long, s.
+DOOR_AGAIN_S = 40.0
 #: Turned into a junction, the robot drives this far into the side corridor, m.
 INTO_MOUTH_M = 1.5
 #: In front of a door, this far from it, before passing it, m.
@@ -193,8 +197,13 @@ class Memory:
     door_goal: tuple[float, float, float] | None = None
     door_stage: str = ""
     door_fixes: int = 0
+    door_waiting_since: float | None = None
+    door_given_up_at: float = -1e9
     passed_heading: float | None = None
     turned_in_car: bool = False
+    #: In a car, the heading out through its door (odometry).
+    door_heading: float | None = None
+    exits_tried: int = 0
     #: Per floor, the point in front of the car door last seen opening (odometry).
     car_doors: dict[int, tuple[float, float]] = field(default_factory=dict)
     #: Per floor, where the call button was last seen from near (odometry).
@@ -323,6 +332,7 @@ class Reactive(Sequencer):
         return (
             self.mem.in_car
             and self.mem.pressed_floor == self.stop_floor()
+            and self.mem.turned_in_car
             and s.floor == self.stop_floor()
             # The door open ahead; once going out, on out (the doors do not close on it).
             and (s.sonar[0] > 2.2 or self.rule_name == "leave car")
@@ -424,12 +434,16 @@ class Reactive(Sequencer):
 
     def at_lab_door(self, s: Senses) -> bool:
         """In the lab, in front of the lab door's barcode (or passing the door)."""
+        if s.t - self.mem.door_given_up_at < DOOR_AGAIN_S:
+            return False
         return not self.mem.out_of_lab and (
             self.mem.door_goal is not None or s.sees(self.m.lab_door_barcode, HOMED_M)
         )
 
     def lab_door_in_view(self, s: Senses) -> bool:
         """In the lab, the lab door's barcode in view."""
+        if s.t - self.mem.door_given_up_at < DOOR_AGAIN_S:
+            return False
         return not self.mem.out_of_lab and s.sees(self.m.lab_door_barcode)
 
     # ----- helpers of conditions -----------------------------------------------------------
@@ -451,13 +465,20 @@ class Reactive(Sequencer):
 
     def leave_car(self, s: Senses) -> Action:
         """Drives out of the car."""
-        return Action(("runaway", "leave_car"), key="leave car")
+        return Action(("runaway", "leave_car"), key=("leave car", self.mem.exits_tried))
 
     def ride(self, s: Senses) -> Action:
-        """Turns round to face the car's door once, then waits."""
-        # Pushed: turn round to face the door, then wait.
-        if not self.mem.turned_in_car:
-            return Action(("runaway", "turn"), {("turn", "angle"): math.pi}, key="turn in car")
+        """Turns round to face the car's door (the panel's wall behind), then waits."""
+        m = self.mem
+        if m.door_heading is None:
+            normal = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
+            m.door_heading = wrap(s.pose.theta + normal + math.pi)
+        off = wrap(m.door_heading - s.pose.theta)
+        if not m.turned_in_car and abs(off) > 0.08:
+            return Action(
+                ("runaway", "turn"), {("turn", "angle"): off}, key=("turn in car", s.t // 8)
+            )
+        m.turned_in_car = True
         return Action(("runaway",), key="ride")
 
     def push_floor(self, s: Senses) -> Action:
@@ -587,7 +608,17 @@ class Reactive(Sequencer):
         if m.door_goal is None:
             o = s.opening
             if not o.get("seen") or float(o.get("width", 0.0)) < 0.6:
+                # Square to the wall the barcode is on: the door finder looks along it.
+                if s.wall.get("seen") and abs(float(s.wall["normal"])) > 0.1:
+                    off = float(s.wall["normal"])
+                    return Action(("turn",), {("turn", "angle"): off}, key=("square", s.t // 5))
+                if m.door_waiting_since is None:
+                    m.door_waiting_since = s.t
+                elif s.t - m.door_waiting_since > DOOR_WAIT_S:
+                    # No door here after all (or shut for long): leave it, look again later.
+                    m.door_given_up_at, m.door_waiting_since = s.t, None
                 return Action(("runaway",), key="wait for opening")
+            m.door_waiting_since = None
             m.door_fixes += 1
             normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
             ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)
@@ -756,9 +787,7 @@ class Reactive(Sequencer):
                 m.called_at, m.called_from = s.t, Pose(p.x, p.y, wrap(p.theta + normal))
             elif self.rule_name == "push floor":
                 m.pressed_floor = self.stop_floor()
-                m.turned_in_car = False
-        if self.rule_name == "ride" and not m.turned_in_car and self.turn_goal_reached(s):
-            m.turned_in_car = True
+                m.turned_in_car, m.door_heading = False, None
         fresh = m.opened is not None and s.t - m.opened[0] < CAR_ENTER_S
         if s.opened.get("seen") and m.called_at is not None and not m.in_car and not fresh:
             bearing = wrap(s.pose.theta + float(s.opened.get("bearing", 0.0)))
@@ -776,7 +805,10 @@ class Reactive(Sequencer):
             else:  # stopped short (the door closed, someone in the way): wait for the next
                 m.opened, m.enter_stage = None, ""
         if s.car_exited and self.rule_name == "leave car":
-            m.in_car, m.lobby_seen_on, m.route = False, None, None
+            if s.enclosed():  # stopped in the doorway (someone outside): out again
+                m.exits_tried += 1
+            else:
+                m.in_car, m.lobby_seen_on, m.route = False, None, None
         if self.rule_name == "pass lab door" and m.door_goal is not None:
             heading = m.door_goal[2]
             if self.through_door(s):
