@@ -79,6 +79,8 @@ SETTINGS = {
     # Cars stay open 10 s or so: in before the door closes.
     ("enter_car", "speed"): 0.35,
 }
+#: The office route starts this far square in front of the goal floor's button, m.
+BUTTON_STANDOFF_M = 1.0
 #: Within this of a barcode, the robot has homed on it, m.
 HOMED_M = 1.1
 #: The call button is pushed from this near (its centre to the barcode), m.
@@ -89,6 +91,11 @@ CALL_AGAIN_S = 45.0
 OPENED_FRESH_S = 4.0
 #: In front of a car's door that opened, this far from it, before entering, m.
 FACE_DOOR_M = 0.85
+#: Waiting for a car, the robot walks this far each way along the button's wall, m, this far
+#: off it, m, turning back after this long, s.
+PATROL_HALF_M = 2.5
+PATROL_OFF_M = 1.0
+PATROL_LEG_S = 14.0
 #: Going into a car that opened takes at most this long, s.
 CAR_ENTER_S = 25.0
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
@@ -224,6 +231,8 @@ class RouteState:
     last_side: bool = False
     heading: float | None = None
     turn_goal: float | None = None
+    #: Before the leg: the point square in front of where it starts (odometry).
+    square_at: tuple[float, float] | None = None
     #: How far along the step the last opening was counted, m.
     counted_at: float | None = None
 
@@ -410,6 +419,20 @@ class Reactive(Sequencer):
             heading = None
             if leg == "button_to_office" and s.wall.get("seen"):
                 heading = wrap(s.pose.theta + float(s.wall["normal"]))
+                b = s.barcodes[self.button(s.floor)]
+                at = s.pose.theta + b[0]
+                code = (s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at))
+                # Square in front of the button first: the route's turns are from there.
+                self.mem.route = RouteState(
+                    leg,
+                    heading=heading,
+                    stage="square",
+                    square_at=(
+                        code[0] - BUTTON_STANDOFF_M * math.cos(heading),
+                        code[1] - BUTTON_STANDOFF_M * math.sin(heading),
+                    ),
+                )
+                return True
             self.mem.route = RouteState(leg, heading=heading)
         return True
 
@@ -522,17 +545,18 @@ class Reactive(Sequencer):
         return Action(("runaway", "enter_car"), key=("enter car", m.opened))
 
     def wait_for_car(self, s: Senses) -> Action:
-        """Waits in front of the car door last seen open here, else a step back from the button."""
-        # A step back from the button, the cars' doors beside it come into the sonars' view.
+        """Walks to and fro along the button's wall, a metre off it, watching for a car."""
+        # The door watcher sees a door open only roughly face-on: walking along the wall
+        # brings each car door on it, and those on the end walls, into view.
         b = self.mem.called_from
-        door = self.mem.car_doors.get(s.floor)
-        if door is not None:
-            x, y = door
-        elif b is not None:
-            x, y = b.x - 1.0 * math.cos(b.theta), b.y - 1.0 * math.sin(b.theta)
-        else:
+        if b is None:
             return Action(("runaway",), key="wait for car")
-        return goto(x, y, ("wait for car", x, y), reverse_within=1.5)
+        leg = int((s.t - self.rule_since) // PATROL_LEG_S)
+        along = PATROL_HALF_M * (1 if leg % 2 == 0 else -1)
+        n = (math.cos(b.theta), math.sin(b.theta))
+        x = b.x - PATROL_OFF_M * n[0] - along * n[1]
+        y = b.y - PATROL_OFF_M * n[1] + along * n[0]
+        return goto(x, y, ("wait for car", leg), reverse_within=1.5)
 
     def push_call(self, s: Senses) -> Action:
         """Homes the last bit to the call button and pushes it."""
@@ -665,6 +689,14 @@ class Reactive(Sequencer):
         if r.step >= len(steps):
             return Action(("runaway",), key=("route end", r.leg))
         step = steps[r.step]
+        if r.stage == "square" and r.square_at is not None and r.heading is not None:
+            gx, gy = r.square_at
+            if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
+                return goto(gx, gy, ("square", r.leg), reverse_within=1.5)
+            off = wrap(r.heading - s.pose.theta)
+            if abs(off) > 0.06:
+                return Action(("turn",), {("turn", "angle"): off}, key=("square turn", r.leg))
+            r.stage = "start"
         if r.start is None:
             r.start, r.count, r.stage = s.pose, 0, "follow"
             r.last_side, r.counted_at = False, None
@@ -809,10 +841,9 @@ class Reactive(Sequencer):
                 m.exits_tried += 1
             else:
                 m.in_car, m.lobby_seen_on, m.route = False, None, None
-        if self.rule_name == "pass lab door" and m.door_goal is not None:
-            heading = m.door_goal[2]
-            if self.through_door(s):
-                m.passed_heading, m.out_of_lab = heading, True
+        if self.rule_name == "pass lab door" and m.door_goal is not None and self.through_door(s):
+            # The leg to the lobby begins facing out through the door, as now.
+            m.passed_heading, m.out_of_lab = s.pose.theta, True
         if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
             m.called_at = None
 
