@@ -220,6 +220,10 @@ class Winner:
     writers: list[str]
     winner: str | None
     cycle: int
+    #: How often the winner changed to another skill since the start.
+    switches: int = 0
+    #: Cycles in which some skill wrote it.
+    held_cycles: int = 0
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> Winner:
@@ -229,6 +233,8 @@ class Winner:
             writers=_strings(j.get("writers")),
             winner=_opt_str(j.get("winner")),
             cycle=int(j.get("cycle", 0)),
+            switches=int(j.get("switches", 0)),
+            held_cycles=int(j.get("held_cycles", 0)),
         )
 
 

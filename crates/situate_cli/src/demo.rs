@@ -186,6 +186,14 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         (w.delivered_at(), w.time_s(), situate_sim::task::judge(&sim.map, &stops, w.said()))
     };
     let task_done = made.iter().all(Option::is_some);
+    // Arbitration of the base: how often `drive` changed hands (oscillation), for the experiment.
+    let drive = {
+        use situate::manager::Control;
+        let mut handle = running.handle.clone();
+        // A record resource is arbitrated leaf by leaf, all alike: its first leaf tells.
+        let winners = handle.winners().unwrap_or_default();
+        winners.into_iter().find(|w| w.signal == "drive" || w.signal.starts_with("drive."))
+    };
     let mut running = Some(running);
     let (stats, skills) = if stay {
         let mut handle = running.as_ref().map(|r| r.handle.clone()).context("the robot")?;
@@ -210,6 +218,8 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         "task": demo.task,
         "stops": stops.iter().zip(&made).map(|(s, t)| json!({"stop": s.to_string(), "made_at_s": t})).collect::<Vec<_>>(),
         "task_done": task_done,
+        "drive_winner_changes": drive.as_ref().map(|d| d.switches),
+        "drive_held_cycles": drive.as_ref().map(|d| d.held_cycles),
         "task_time_s": if task_done { made.last().copied().flatten().unwrap_or(sim_time) } else { sim_time },
         "sequencer_exit": run.status.code(),
         "interrupted": run.interrupted.map(signals::name),

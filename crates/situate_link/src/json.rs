@@ -788,7 +788,10 @@ pub fn reply_to_json(reply: &Reply) -> Json {
         Reply::Skills(list) => Json::Array(list.iter().map(skill_to_json).collect()),
         Reply::Winners(w) => Json::Array(
             w.iter()
-                .map(|w| json!({"signal": w.signal, "writers": w.writers, "winner": w.winner, "cycle": w.cycle}))
+                .map(|w| {
+                    json!({"signal": w.signal, "writers": w.writers, "winner": w.winner, "cycle": w.cycle,
+                        "switches": w.switches, "held_cycles": w.held_cycles})
+                })
                 .collect(),
         ),
         Reply::Graph(g) => graph_to_json(g),

@@ -295,6 +295,11 @@ pub struct ResourceWinner {
     /// The writer whose value stands this cycle, if any wrote.
     pub winner: Option<String>,
     pub cycle: u64,
+    /// How often the winner changed to another skill since the start (cycles
+    /// nobody wrote it in do not count): arbitration's hand-overs.
+    pub switches: u64,
+    /// Cycles in which some skill wrote it.
+    pub held_cycles: u64,
 }
 
 /// The wiring, as built.

@@ -106,6 +106,16 @@ pub(crate) enum RefTarget {
     Cycle,
 }
 
+/// Who has held one resource leaf (a contested signal such as `drive`): the
+/// winner last seen, how often it changed hands, how many cycles anyone held it.
+#[derive(Debug, Clone, Copy, Default)]
+struct Tally {
+    leaf: usize,
+    last: Option<u32>,
+    switches: u64,
+    held: u64,
+}
+
 /// The skill manager.
 pub struct Manager {
     /// Never changes once built; shared with handles (see `front`).
@@ -129,6 +139,8 @@ pub struct Manager {
     max_cycle_ns: u64,
     total_cycle_ns: u64,
     overruns: u64,
+    /// Per resource leaf: who won it, counted at the end of every cycle.
+    tallies: Vec<Tally>,
     /// Cycles that started more than half a period after they were due, and
     /// periods skipped because the cycle could not keep up: whatever held the
     /// cycle back (a long body, requests, a busy machine).
@@ -251,6 +263,13 @@ impl Manager {
             max_cycle_ns: 0,
             total_cycle_ns: 0,
             overruns: 0,
+            tallies: graph
+                .leaves
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.is_resource())
+                .map(|(leaf, _)| Tally { leaf, ..Tally::default() })
+                .collect(),
             late_starts: 0,
             due: None,
             request_hold_ns: 0,

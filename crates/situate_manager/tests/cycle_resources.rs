@@ -77,6 +77,16 @@ fn a_silent_high_priority_writer_leaves_the_resource_to_others() {
         seen,
         vec![(0.2, "w".to_string()), (-1.0, "r".to_string()), (0.2, "w".to_string()), (-1.0, "r".to_string())]
     );
+    // Every hand-over is counted (w, r, w, r: three), and every cycle it was held.
+    let w = &m.winners().unwrap()[0];
+    assert_eq!((w.switches, w.held_cycles), (3, 4));
+    // A cycle nobody writes it in is no hand-over: r, nobody, r.
+    m.deactivate(&["w"]).unwrap();
+    for _ in 0..4 {
+        m.step(1).unwrap();
+    }
+    let w = &m.winners().unwrap()[0];
+    assert_eq!((w.switches, w.held_cycles), (3, 6), "{w:?}");
 }
 
 #[test]

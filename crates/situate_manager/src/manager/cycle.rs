@@ -167,12 +167,30 @@ impl Manager {
     /// Steps 5 and 6: monitors, then the cycle's statistics.
     pub(super) fn end_cycle(&mut self) {
         self.evaluate_monitors();
+        self.tally_winners();
         let elapsed = self.cycle_start.elapsed().as_nanos() as u64;
         self.last_cycle_ns = elapsed;
         self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
         self.total_cycle_ns += elapsed;
         if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
             self.overruns += 1;
+        }
+    }
+
+    /// Counts, per resource, whether a skill won it this cycle and whether
+    /// that was another skill than the last winner (a handful of leaves: the
+    /// cycle's cost does not change).
+    fn tally_winners(&mut self) {
+        for t in &mut self.tallies {
+            let slot = &self.slots[t.leaf];
+            if slot.stamp != self.cycle || slot.stamp == 0 {
+                continue;
+            }
+            t.held += 1;
+            if t.last.is_some_and(|w| w != slot.writer) {
+                t.switches += 1;
+            }
+            t.last = Some(slot.writer);
         }
     }
 

@@ -187,6 +187,7 @@ impl Manager {
             .filter(|(_, l)| l.is_resource())
             .map(|(li, l)| {
                 let slot = &self.slots[li];
+                let tally = self.tallies.iter().find(|t| t.leaf == li).copied().unwrap_or_default();
                 let mut writers: Vec<String> =
                     l.writers.iter().map(|&(w, _)| self.graph.instances[w].name.clone()).collect();
                 writers.dedup();
@@ -196,6 +197,8 @@ impl Manager {
                     winner: (slot.stamp == self.cycle && slot.stamp > 0)
                         .then(|| self.graph.instances[slot.writer as usize].name.clone()),
                     cycle: slot.stamp,
+                    switches: tally.switches,
+                    held_cycles: tally.held,
                 }
             })
             .collect()
