@@ -233,6 +233,8 @@ class RouteState:
     turn_goal: float | None = None
     #: Before the leg: the point square in front of where it starts (odometry).
     square_at: tuple[float, float] | None = None
+    #: The step squared up at last (-1: none).
+    squared: int = -1
     #: How far along the step the last opening was counted, m.
     counted_at: float | None = None
 
@@ -692,11 +694,15 @@ class Reactive(Sequencer):
         if r.stage == "square" and r.square_at is not None and r.heading is not None:
             gx, gy = r.square_at
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
-                return goto(gx, gy, ("square", r.leg), reverse_within=1.5)
+                return goto(gx, gy, ("square", r.leg, r.step), reverse_within=1.5)
             off = wrap(r.heading - s.pose.theta)
             if abs(off) > 0.06:
-                return Action(("turn",), {("turn", "angle"): off}, key=("square turn", r.leg))
-            r.stage = "start"
+                return Action(
+                    ("turn",), {("turn", "angle"): off}, key=("square turn", r.leg, r.step)
+                )
+            r.stage, r.squared = "start", r.step
+            if step.get("home") is not None:
+                return self.next_step(r, s)
         if r.start is None:
             r.start, r.count, r.stage = s.pose, 0, "follow"
             r.last_side, r.counted_at = False, None
@@ -705,6 +711,20 @@ class Reactive(Sequencer):
         if step.get("home") is not None:
             code = int(step["home"])
             if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
+                door_next = any(x.get("pass") for x in steps[r.step + 1 :])
+                if door_next and s.wall.get("seen") and r.squared != r.step:
+                    # A door beside the barcode: square in front of it first, so that the
+                    # door finder looks along its wall.
+                    h = wrap(s.pose.theta + float(s.wall["normal"]))
+                    b = s.barcodes[code]
+                    at = s.pose.theta + b[0]
+                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
+                    r.heading, r.stage = h, "square"
+                    r.square_at = (
+                        cx - DOOR_STANDOFF * math.cos(h),
+                        cy - DOOR_STANDOFF * math.sin(h),
+                    )
+                    return Action(("runaway",), key=("squaring", r.step))
                 return self.next_step(r, s)
             if s.sees(code):
                 return Action(
