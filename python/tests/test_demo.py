@@ -161,8 +161,14 @@ GENERATED_REGRESSIONS = [
 def test_generated_buildings_that_failed_now_deliver(
     seed: int, extra: list[str], tmp_path: Path
 ) -> None:
+    out = demo(seed, map_file=str(_generated(seed, tmp_path)), extra=extra)
+    assert out["delivered"], out
+    assert out["sequencer_exit"] == 0, out
+
+
+def _generated(seed: int, where: Path) -> Path:
     assert BIN is not None
-    building = tmp_path / f"g{seed}.yaml"
+    building = where / f"g{seed}.yaml"
     made = subprocess.run(
         [str(BIN), "map", "generate", "--seed", str(seed), "-o", str(building)],
         capture_output=True,
@@ -170,9 +176,43 @@ def test_generated_buildings_that_failed_now_deliver(
         timeout=120,
     )
     assert made.returncode == 0, made.stderr
-    out = demo(seed, map_file=str(building), extra=extra)
+    return building
+
+
+@needs_bin
+def test_a_task_of_several_stops_is_made_in_order_on_other_floors(tmp_path: Path) -> None:
+    # Building 20003: floors 0 to 3. A message in the lobby of floor 1, then the office (3):
+    # the robot boards twice, from two floors; the simulator judges each stop.
+    out = demo(20003, map_file=str(_generated(20003, tmp_path)), extra=["--task", "lobby:1,office"])
+    assert out["task_done"], out
+    assert [s["stop"] for s in out["stops"]] == ["lobby:1", "office"]
+    first, second = (s["made_at_s"] for s in out["stops"])
+    assert 0 < first < second == out["task_time_s"], out
+    # Going up for the office, the base changed hands between skills many times.
+    assert out["drive_winner_changes"] > 10, out
+    assert 0 < out["drive_held_cycles"] <= out["cycles"], out
+
+
+@needs_bin
+def test_a_task_the_building_cannot_hold_is_refused_naming_the_stop() -> None:
+    assert BIN is not None
+    done = subprocess.run(
+        [str(BIN), "demo", "--headless", "--task", "lobby:1,lobby:9", "--python", sys.executable],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2, done
+    assert "stop 2 `lobby:9`: the map has no floor 9" in done.stderr, done.stderr
+
+
+@needs_bin
+def test_the_reactive_robot_delivers_without_a_sequencer() -> None:
+    # The experiment's baseline (demo/reactive.py): a rule list every cycle, no phases.
+    out = demo(1, extra=["--mode", "reactive"])
     assert out["delivered"], out
-    assert out["sequencer_exit"] == 0, out
+    assert out["mode"] == "reactive"
 
 
 @needs_bin
