@@ -23,6 +23,17 @@ impl Manager {
         self.schedule =
             Plan::compile(&self.graph, |i| insts[i].active, |i| insts[i].priority, |i| insts[i].worker.is_some());
         self.schedule_dirty = false;
+        // Input buffers may hold copies from a run under the last plan (a
+        // parallel level gathers copies); a step that now reads its input in
+        // place leaves its buffer alone, and a query of the skill's inputs
+        // must not show an old copy from there (it reads the slot instead).
+        for step in &self.schedule.steps {
+            for input in &mut self.execs[step.inst].inputs {
+                if let Some(old) = input.take() {
+                    recycle(old);
+                }
+            }
+        }
     }
 
     /// Runs one cycle.
@@ -35,21 +46,17 @@ impl Manager {
         let mut t = None;
         for level in 0..plan.levels.len() {
             if self.pool.is_some() && plan.parallel_level(level) {
-                // A level that may go parallel gathers copies of its inputs.
+                // A level that may go parallel gathers copies of its inputs,
+                // runs them all, then commits in order.
                 self.prepare_steps(&plan, level, &mut ready);
                 self.run_ready(&plan, &ready);
+                for &k in &ready {
+                    self.finish_step(&plan, k);
+                }
                 t = None;
             } else {
-                t = self.run_level_serial(&plan, level, &mut ready, t);
-            }
-            let mut faulted = false;
-            for &k in &ready {
-                faulted |= !self.finish_step(&plan, k);
-            }
-            // A precise reading is taken afresh for each level, so a body's
-            // exact time holds no commits; so is one after a fault.
-            if faulted || matches!(t, Some(Stamp::Precise(_))) {
-                t = None;
+                // Each step committed as it runs (see `run_level_serial`).
+                t = self.run_level_serial(&plan, level, t);
             }
         }
         self.ready = ready;
@@ -294,13 +301,14 @@ impl Manager {
             self.fault(i, cause);
             return false;
         }
-        let mut outputs = std::mem::take(&mut self.execs[i].outputs);
         let outcome = if step.plain_outs {
-            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize], &mut outputs)
+            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize])
         } else {
-            self.commit(i, &mut outputs)
+            let mut outputs = std::mem::take(&mut self.execs[i].outputs);
+            let outcome = self.commit(i, &mut outputs);
+            self.execs[i].outputs = outputs;
+            outcome
         };
-        self.execs[i].outputs = outputs;
         match outcome {
             Ok(()) => true,
             Err(cause) => {

@@ -27,14 +27,11 @@ impl Manager {
         (self.insts[i].priority, u32::MAX - i as u32)
     }
 
-    /// [`Manager::commit`] for a step whose outputs are all plain ports.
-    pub(super) fn commit_plain(
-        &mut self,
-        step: &Step,
-        ports: &[OutPort],
-        outputs: &mut [Option<Value>],
-    ) -> Result<(), String> {
+    /// [`Manager::commit`] for a step whose outputs are all plain ports, in
+    /// its output buffers.
+    pub(super) fn commit_plain(&mut self, step: &Step, ports: &[OutPort]) -> Result<(), String> {
         let i = step.inst;
+        let outputs = &mut self.execs[i].outputs;
         for (p, (port, value)) in ports.iter().zip(outputs.iter()).enumerate() {
             if let Some(value) = value {
                 if !port.check.admits(value) {
@@ -47,24 +44,31 @@ impl Manager {
         // it, so a winning value is moved, not shared: `last_outputs` keeps
         // it only when it lost the slot (see `save_displaced`).
         let cycle = self.cycle;
-        for (p, (port, out)) in ports.iter().zip(outputs.iter_mut()).enumerate() {
+        for (p, port) in ports.iter().enumerate() {
+            let out = &mut self.execs[i].outputs[p];
             if out.is_none() {
                 continue;
             }
-            let last = &mut self.insts[i].last_outputs[p];
+            let slot = &mut self.slots[port.leaf];
+            // This skill held the slot: its kept last output is empty (it is
+            // set only when the skill loses or is displaced, and then the
+            // slot is another's until this skill wins it again, which
+            // empties it), so it need not be looked at.
+            let held = slot.writer as usize == i && slot.stamp > 0;
             // `out` is swapped with the slot's value, never moved through a
             // temporary: `out` then holds the value it replaced.
-            match write_leaf_in_place(&mut self.slots[port.leaf], out, cycle, step.rank, i) {
+            match write_leaf_in_place(slot, out, cycle, step.rank, i) {
                 Some(displaced) => {
-                    if last.is_some() {
-                        if let Some(old) = last.take() {
+                    if !held {
+                        if let Some(old) = self.insts[i].last_outputs[p].take() {
                             recycle(old);
                         }
                     }
                     // The value it replaced stays in the output buffer when
                     // it was this skill's own: the next run recycles it on
-                    // entry ([`Exec::run`](crate::runner::Exec::run)), long
-                    // after the swap's stores (taking it now would stall).
+                    // entry ([`Exec::run`](crate::runner::Exec::run)), or
+                    // writes into it, long after the swap's stores (taking
+                    // it now would stall).
                     if let Some(w) = displaced {
                         if let Some(old) = out.take() {
                             self.save_displaced(port.leaf, w, old);
@@ -73,6 +77,7 @@ impl Manager {
                 }
                 // Lost: kept as its last output (the previous one dropped).
                 None => {
+                    let last = &mut self.insts[i].last_outputs[p];
                     std::mem::swap(last, out);
                     *out = None;
                 }
