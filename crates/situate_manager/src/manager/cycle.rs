@@ -294,7 +294,33 @@ impl Manager {
     }
 
     /// Commits a step's outputs, or marks the skill faulted (then false).
+    ///
+    /// The usual run (on time, no error, no prints, plain outputs) is
+    /// accounted here and its outputs committed; any other goes the long
+    /// way ([`Manager::finish_step_slow`], out of line, so this stays small).
     pub(super) fn finish_step(&mut self, plan: &Plan, k: usize) -> bool {
+        let step = &plan.steps[k];
+        let i = step.inst;
+        let exec = &self.execs[i];
+        // Within its deadline it is on time on either clock (`account_by`).
+        if !step.plain_outs || exec.elapsed_ns > step.deadline_ns || exec.result.is_err() || exec.cx.has_prints() {
+            return self.finish_step_slow(plan, k);
+        }
+        let timed = exec.timed.then_some(exec.elapsed_ns);
+        self.insts[i].timing.record(timed);
+        match self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize]) {
+            Ok(()) => true,
+            Err(cause) => {
+                self.fault(i, cause);
+                false
+            }
+        }
+    }
+
+    /// [`Manager::finish_step`] for any run: accounted (faulted if it failed
+    /// or ran late), then committed.
+    #[inline(never)]
+    fn finish_step_slow(&mut self, plan: &Plan, k: usize) -> bool {
         let step = &plan.steps[k];
         let i = step.inst;
         if let Err(cause) = self.account_by(i, step.deadline_ns) {

@@ -29,6 +29,7 @@ impl Manager {
 
     /// [`Manager::commit`] for a step whose outputs are all plain ports, in
     /// its output buffers.
+    #[inline]
     pub(super) fn commit_plain(&mut self, step: &Step, ports: &[OutPort]) -> Result<(), String> {
         let i = step.inst;
         let outputs = &mut self.execs[i].outputs;
@@ -213,6 +214,8 @@ fn write_leaf_in_place(
     }
 }
 
+#[cold]
+#[inline(never)]
 fn wrong_output(port: &str, ty: &SignalType, value: &Value) -> String {
     format!("output `{port}` expects {ty}, the body produced a {}", value.kind_name())
 }
