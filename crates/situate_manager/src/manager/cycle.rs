@@ -41,22 +41,28 @@ impl Manager {
         self.begin_cycle();
         let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
-        // The coarse clock's reading at the end of the last body, carried
-        // to the next one (see `run_level_serial`).
-        let mut t = None;
-        for level in 0..plan.levels.len() {
-            if self.pool.is_some() && plan.parallel_level(level) {
-                // A level that may go parallel gathers copies of its inputs,
-                // runs them all, then commits in order.
-                self.prepare_steps(&plan, level, &mut ready);
-                self.run_ready(&plan, &ready);
-                for &k in &ready {
-                    self.finish_step(&plan, k);
+        if self.pool.is_none() {
+            // Serial: one pass, levels make no difference (see `run_serial`).
+            self.run_serial(&plan, 0..plan.steps.len(), None);
+        } else {
+            // The coarse clock's reading at the end of the last body, carried
+            // to the next one (see `run_serial`).
+            let mut t = None;
+            for level in 0..plan.levels.len() {
+                let Some(steps) = plan.level(level) else { break };
+                if plan.parallel_level(level) {
+                    // A level that may go parallel gathers copies of its
+                    // inputs, runs them all, then commits in order.
+                    self.prepare_steps(&plan, level, &mut ready);
+                    self.run_ready(&plan, &ready);
+                    for &k in &ready {
+                        self.finish_step(&plan, k);
+                    }
+                    t = None;
+                } else {
+                    // Each step committed as it runs.
+                    t = self.run_serial(&plan, steps, t);
                 }
-                t = None;
-            } else {
-                // Each step committed as it runs (see `run_level_serial`).
-                t = self.run_level_serial(&plan, level, t);
             }
         }
         self.ready = ready;

@@ -60,6 +60,9 @@ pub(crate) struct Step {
     /// Every input is a plain port (one leaf, not a record), each on a
     /// slot of its own.
     pub plain_ins: bool,
+    /// The slot of its input when it has exactly one, plain: the body reads
+    /// it there, in place (kept inline: one look-up fewer per run).
+    pub one_input: Option<usize>,
 }
 
 /// An input port: `leaf` is its slot when `plain` (one leaf, not a
@@ -198,6 +201,10 @@ impl Plan {
                         let ins = &plan.ins[ins0 as usize..];
                         ins.iter().all(|p| p.plain)
                             && ins.iter().enumerate().all(|(a, p)| ins[..a].iter().all(|q| q.leaf != p.leaf))
+                    },
+                    one_input: match plan.ins[ins0 as usize..] {
+                        [InPort { leaf, plain: true, .. }] => Some(leaf),
+                        _ => None,
                     },
                 });
             }
