@@ -32,59 +32,84 @@ impl Manager {
     #[inline]
     pub(super) fn commit_plain(&mut self, step: &Step, ports: &[OutPort]) -> Result<(), String> {
         let i = step.inst;
-        let outputs = &mut self.execs[i].outputs;
+        // One output, the usual case: no loops.
+        if let [port] = ports {
+            match &self.execs[i].outputs[0] {
+                None => return Ok(()),
+                Some(value) if !port.check.admits(value) => return Err(self.wrong_output(i, 0)),
+                Some(_) => {}
+            }
+            self.commit_plain_port(step, 0, port);
+            return Ok(());
+        }
+        let outputs = &self.execs[i].outputs;
         for (p, (port, value)) in ports.iter().zip(outputs.iter()).enumerate() {
             if let Some(value) = value {
                 if !port.check.admits(value) {
-                    let def = &self.graph.instances[i].outputs[p];
-                    return Err(wrong_output(&def.name, &def.ty, value));
+                    return Err(self.wrong_output(i, p));
                 }
             }
         }
-        // A plain output's last value is its slot's while this skill holds
-        // it, so a winning value is moved, not shared: `last_outputs` keeps
-        // it only when it lost the slot (see `save_displaced`).
-        let cycle = self.cycle;
         for (p, port) in ports.iter().enumerate() {
-            let out = &mut self.execs[i].outputs[p];
-            if out.is_none() {
-                continue;
-            }
-            let slot = &mut self.slots[port.leaf];
-            // This skill held the slot: its kept last output is empty (it is
-            // set only when the skill loses or is displaced, and then the
-            // slot is another's until this skill wins it again, which
-            // empties it), so it need not be looked at.
-            let held = slot.writer as usize == i && slot.stamp > 0;
-            // `out` is swapped with the slot's value, never moved through a
-            // temporary: `out` then holds the value it replaced.
-            match write_leaf_in_place(slot, out, cycle, step.rank, i) {
-                Some(displaced) => {
-                    if !held {
-                        if let Some(old) = self.insts[i].last_outputs[p].take() {
-                            recycle(old);
-                        }
-                    }
-                    // The value it replaced stays in the output buffer when
-                    // it was this skill's own: the next run recycles it on
-                    // entry ([`Exec::run`](crate::runner::Exec::run)), or
-                    // writes into it, long after the swap's stores (taking
-                    // it now would stall).
-                    if let Some(w) = displaced {
-                        if let Some(old) = out.take() {
-                            self.save_displaced(port.leaf, w, old);
-                        }
-                    }
-                }
-                // Lost: kept as its last output (the previous one dropped).
-                None => {
-                    let last = &mut self.insts[i].last_outputs[p];
-                    std::mem::swap(last, out);
-                    *out = None;
-                }
+            if self.execs[i].outputs[p].is_some() {
+                self.commit_plain_port(step, p, port);
             }
         }
         Ok(())
+    }
+
+    /// Commits output `p` (`Some`, checked) of a plain step.
+    #[inline(always)]
+    fn commit_plain_port(&mut self, step: &Step, p: usize, port: &OutPort) {
+        let i = step.inst;
+        let out = &mut self.execs[i].outputs[p];
+        let slot = &mut self.slots[port.leaf];
+        // A plain output's last value is its slot's while this skill holds
+        // it, so a winning value is moved, not shared: `last_outputs` keeps
+        // it only when it lost the slot (see `save_displaced`). So while
+        // this skill held the slot its kept last output is empty (it is set
+        // only when the skill loses or is displaced, and then the slot is
+        // another's until this skill wins it again, which empties it), and
+        // need not be looked at.
+        let held = slot.writer as usize == i && slot.stamp > 0;
+        // `out` is swapped with the slot's value, never moved through a
+        // temporary: `out` then holds the value it replaced.
+        match write_leaf_in_place(slot, out, self.cycle, step.rank, i) {
+            Some(displaced) => {
+                if !held {
+                    if let Some(old) = self.insts[i].last_outputs[p].take() {
+                        recycle(old);
+                    }
+                }
+                // The value it replaced stays in the output buffer when it
+                // was this skill's own: the next run recycles it on entry
+                // ([`Exec::run`](crate::runner::Exec::run)), or writes into
+                // it, long after the swap's stores (taking it now would
+                // stall).
+                if let Some(w) = displaced {
+                    if let Some(old) = out.take() {
+                        self.save_displaced(port.leaf, w, old);
+                    }
+                }
+            }
+            // Lost: kept as its last output (the previous one dropped).
+            None => {
+                let last = &mut self.insts[i].last_outputs[p];
+                std::mem::swap(last, out);
+                *out = None;
+            }
+        }
+    }
+
+    /// The fault of instance `i` whose output `p` is of the wrong type.
+    #[cold]
+    #[inline(never)]
+    fn wrong_output(&self, i: usize, p: usize) -> String {
+        let def = &self.graph.instances[i].outputs[p];
+        match &self.execs[i].outputs[p] {
+            Some(value) => wrong_output(&def.name, &def.ty, value),
+            None => format!("output `{}`: no value", def.name),
+        }
     }
 
     /// Writes instance `i`'s produced outputs to their leaves: all of them,
