@@ -70,8 +70,9 @@ impl Manager {
         // this skill held the slot its kept last output is empty (it is set
         // only when the skill loses or is displaced, and then the slot is
         // another's until this skill wins it again, which empties it), and
-        // need not be looked at.
-        let held = slot.writer as usize == i && slot.stamp > 0;
+        // need not be looked at. (Unless another of its outputs writes the
+        // same leaf: the slot's writer does not tell which port it was.)
+        let held = slot.writer as usize == i && slot.stamp > 0 && !port.leaf_shared;
         // `out` is swapped with the slot's value, never moved through a
         // temporary: `out` then holds the value it replaced.
         match write_leaf_in_place(slot, out, self.cycle, step.rank, i) {
