@@ -7,8 +7,10 @@
 //! 3. run the active cskills level by level in order of input readiness:
 //!    a sync cskill runs when all its required inputs were written this
 //!    cycle; an async cskill hands over its latest inputs and gives back its
-//!    latest result at once. After each level its outputs are committed to
-//!    the leaf slots (the paper's *update-record*); a leaf with several
+//!    latest result at once. A run's outputs are committed to the leaf
+//!    slots (the paper's *update-record*) after its level, or, on the serial
+//!    executor, as soon as it returns, which is the same since no skill of a
+//!    level reads what another one of it writes; a leaf with several
 //!    writers keeps the value of the highest-priority one (arbitration);
 //! 4. hand every active dskill the commands written this cycle;
 //! 5. evaluate monitors and send events;

@@ -87,6 +87,22 @@ impl Exec {
     /// [fills its outputs](Skill::fills_outputs), left to it as a spare
     /// (a body that fails leaves its outputs to be cleared as before).
     pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
+        self.run_on(None, cycle, time_s, start, clock)
+    }
+
+    /// [`Exec::run`] with the body's inputs read in place from `input`
+    /// when it is `Some` (a step with one plain input reads it straight
+    /// from its leaf slot: a one-element slice, nothing moved), else from
+    /// the input buffers.
+    #[inline(always)]
+    pub fn run_on(
+        &mut self,
+        input: Option<&Option<Value>>,
+        cycle: u64,
+        time_s: f64,
+        start: Stamp,
+        clock: Option<&BodyClock>,
+    ) -> Stamp {
         if !self.fills {
             for out in &mut self.outputs {
                 if out.is_some() {
@@ -98,10 +114,12 @@ impl Exec {
         }
         self.cx.set(cycle, time_s);
         let mark = clock.map(|c| c.enter(start.coarse()));
+        let inputs = match input {
+            Some(input) => std::slice::from_ref(input),
+            None => &self.inputs[..],
+        };
         match &mut self.skill {
-            Some(skill) => {
-                run_body_into(skill.as_mut(), &self.inputs, &mut self.outputs, &mut self.cx, &mut self.result)
-            }
+            Some(skill) => run_body_into(skill.as_mut(), inputs, &mut self.outputs, &mut self.cx, &mut self.result),
             None => self.result = Err("the body is not here (it runs on its own thread)".into()),
         }
         if let (Some(clock), Some(mark)) = (clock, mark) {

@@ -146,3 +146,39 @@ fn a_failing_or_panicking_body_is_faulted_and_deactivated_while_the_rest_runs() 
     m.step(1).unwrap();
     assert!(m.skill("f").unwrap().active);
 }
+
+/// One skill whose two outputs write the same signal: the first wins while
+/// it writes; in a cycle it is silent, the second's value is committed, and
+/// the skill's last outputs show that value (a port's last output is read
+/// from its slot while its skill holds it), not the one the second output
+/// lost with before.
+#[test]
+fn a_skill_with_two_outputs_on_one_signal_reports_what_each_last_wrote() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::sync::Arc;
+    let runs = Arc::new(AtomicU64::new(0));
+    let counter = Arc::clone(&runs);
+    let d = decl("twice", SkillKind::Sync, &[], &[("a", "f64"), ("b", "f64")]);
+    let mut reg = Registry::new();
+    reg.add(fn_type(d, move |io, _| {
+        let n = counter.fetch_add(1, Ordering::Relaxed) + 1;
+        // `a` is silent in the third run only; `b` always writes.
+        io.outputs[0] = (n != 3).then_some(Value::F64(n as f64));
+        io.outputs[1] = Some(Value::F64(100.0 + n as f64));
+        Ok(())
+    }));
+    let spec = simulated("twice").skill(skill("t", "twice").remap("a", "s").remap("b", "s"));
+    let mut m = build(&spec, &reg);
+    let last = |m: &mut situate_manager::Manager| -> Vec<Option<f64>> {
+        m.skill("t").unwrap().outputs.iter().map(|p| p.value.as_ref().and_then(Value::as_f64)).collect()
+    };
+    m.step(2).unwrap();
+    assert_eq!(m.query("s").unwrap().value.and_then(|v| v.as_f64()), Some(2.0), "the first output wins");
+    assert_eq!(last(&mut m), vec![Some(2.0), Some(102.0)]);
+    m.step(1).unwrap();
+    assert_eq!(m.query("s").unwrap().value.and_then(|v| v.as_f64()), Some(103.0), "`a` was silent");
+    assert_eq!(last(&mut m), vec![Some(103.0), Some(103.0)]);
+    m.step(1).unwrap();
+    assert_eq!(m.query("s").unwrap().value.and_then(|v| v.as_f64()), Some(4.0));
+    assert_eq!(last(&mut m), vec![Some(4.0), Some(104.0)]);
+}

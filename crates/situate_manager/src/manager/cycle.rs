@@ -23,6 +23,17 @@ impl Manager {
         self.schedule =
             Plan::compile(&self.graph, |i| insts[i].active, |i| insts[i].priority, |i| insts[i].worker.is_some());
         self.schedule_dirty = false;
+        // Input buffers may hold copies from a run under the last plan (a
+        // parallel level gathers copies); a step that now reads its input in
+        // place leaves its buffer alone, and a query of the skill's inputs
+        // must not show an old copy from there (it reads the slot instead).
+        for step in &self.schedule.steps {
+            for input in &mut self.execs[step.inst].inputs {
+                if let Some(old) = input.take() {
+                    recycle(old);
+                }
+            }
+        }
     }
 
     /// Runs one cycle.
@@ -30,26 +41,28 @@ impl Manager {
         self.begin_cycle();
         let plan = std::mem::take(&mut self.schedule);
         let mut ready = std::mem::take(&mut self.ready);
-        // The coarse clock's reading at the end of the last body, carried
-        // to the next one (see `run_level_serial`).
-        let mut t = None;
-        for level in 0..plan.levels.len() {
-            if self.pool.is_some() && plan.parallel_level(level) {
-                // A level that may go parallel gathers copies of its inputs.
-                self.prepare_steps(&plan, level, &mut ready);
-                self.run_ready(&plan, &ready);
-                t = None;
-            } else {
-                t = self.run_level_serial(&plan, level, &mut ready, t);
-            }
-            let mut faulted = false;
-            for &k in &ready {
-                faulted |= !self.finish_step(&plan, k);
-            }
-            // A precise reading is taken afresh for each level, so a body's
-            // exact time holds no commits; so is one after a fault.
-            if faulted || matches!(t, Some(Stamp::Precise(_))) {
-                t = None;
+        if self.pool.is_none() {
+            // Serial: one pass, levels make no difference (see `run_serial`).
+            self.run_serial(&plan, 0..plan.steps.len(), None);
+        } else {
+            // The coarse clock's reading at the end of the last body, carried
+            // to the next one (see `run_serial`).
+            let mut t = None;
+            for level in 0..plan.levels.len() {
+                let Some(steps) = plan.level(level) else { break };
+                if plan.parallel_level(level) {
+                    // A level that may go parallel gathers copies of its
+                    // inputs, runs them all, then commits in order.
+                    self.prepare_steps(&plan, level, &mut ready);
+                    self.run_ready(&plan, &ready);
+                    for &k in &ready {
+                        self.finish_step(&plan, k);
+                    }
+                    t = None;
+                } else {
+                    // Each step committed as it runs.
+                    t = self.run_serial(&plan, steps, t);
+                }
             }
         }
         self.ready = ready;
@@ -305,20 +318,47 @@ impl Manager {
     }
 
     /// Commits a step's outputs, or marks the skill faulted (then false).
+    ///
+    /// The usual run (on time, no error, no prints, plain outputs) is
+    /// accounted here and its outputs committed; any other goes the long
+    /// way ([`Manager::finish_step_slow`], out of line, so this stays small).
     pub(super) fn finish_step(&mut self, plan: &Plan, k: usize) -> bool {
+        let step = &plan.steps[k];
+        let i = step.inst;
+        let exec = &self.execs[i];
+        // Within its deadline it is on time on either clock (`account_by`).
+        if !step.plain_outs || exec.elapsed_ns > step.deadline_ns || exec.result.is_err() || exec.cx.has_prints() {
+            return self.finish_step_slow(plan, k);
+        }
+        let timed = exec.timed.then_some(exec.elapsed_ns);
+        self.insts[i].timing.record(timed);
+        match self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize]) {
+            Ok(()) => true,
+            Err(cause) => {
+                self.fault(i, cause);
+                false
+            }
+        }
+    }
+
+    /// [`Manager::finish_step`] for any run: accounted (faulted if it failed
+    /// or ran late), then committed.
+    #[inline(never)]
+    fn finish_step_slow(&mut self, plan: &Plan, k: usize) -> bool {
         let step = &plan.steps[k];
         let i = step.inst;
         if let Err(cause) = self.account_by(i, step.deadline_ns) {
             self.fault(i, cause);
             return false;
         }
-        let mut outputs = std::mem::take(&mut self.execs[i].outputs);
         let outcome = if step.plain_outs {
-            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize], &mut outputs)
+            self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize])
         } else {
-            self.commit(i, &mut outputs)
+            let mut outputs = std::mem::take(&mut self.execs[i].outputs);
+            let outcome = self.commit(i, &mut outputs);
+            self.execs[i].outputs = outputs;
+            outcome
         };
-        self.execs[i].outputs = outputs;
         match outcome {
             Ok(()) => true,
             Err(cause) => {

@@ -88,27 +88,31 @@ impl Manager {
         }
     }
 
-    /// The serial executor on level `level`: each step in order has its
-    /// inputs checked and gathered (a plain step's lent: see
-    /// [`Manager::lend_inputs`]) and runs at once; the ready ones go to
-    /// `ready`, to be committed in order after the level. The same as
-    /// gathering the whole level first: no step of a level reads what
-    /// another one of it writes (it would be a level later), and a lent
-    /// input is back in its slot before the next step looks.
+    /// The serial executor on the plan's steps `steps`: one level, or, with
+    /// no pool, all of them in one pass (the steps are in topological order,
+    /// level after level). Each step in order has its inputs checked and
+    /// gathered (a plain step's lent: see [`Manager::lend_inputs`], or read
+    /// in place from its one slot), runs at once, and has its outputs
+    /// committed at once. The same as running each level whole and
+    /// committing after it: no step of a level reads what another one of it
+    /// writes (it would be a level later), arbitration does not depend on
+    /// the order of commits, and a lent input is back in its slot before the
+    /// next step looks. Committing at once touches each step's data while it
+    /// is still in the cache, and leaves no list of ready steps to walk again.
     ///
     /// `t`: a clock reading to time the first body from, `None` to read the
     /// clock; returns the reading at the end of the last body (`None` if
-    /// none ran). Back to back bodies share a reading, so each body costs
-    /// one clock read.
-    pub(super) fn run_level_serial(
+    /// none ran, or when the next body needs a fresh one). Back to back
+    /// bodies on the coarse clock share a reading, so each costs one clock
+    /// read (its commit is counted in the next body's coarse time, well
+    /// within a tick). An exact reading is never shared: a timed body's
+    /// exact time holds no commits; nor is one after a fault.
+    pub(super) fn run_serial(
         &mut self,
         plan: &Plan,
-        level: usize,
-        ready: &mut Vec<usize>,
+        steps: std::ops::Range<usize>,
         mut t: Option<Stamp>,
     ) -> Option<Stamp> {
-        ready.clear();
-        let Some(steps) = plan.level(level) else { return t };
         let (cycle, time_s, sampled) = (self.cycle, self.time_s, self.sampled);
         for k in steps {
             let step = &plan.steps[k];
@@ -122,8 +126,17 @@ impl Manager {
                 StepKind::AsyncInCycle => false,
                 StepKind::Sync => true,
             };
-            let lent = step.plain_ins;
-            let ready_now = if lent { self.lend_inputs(plan, step, fresh) } else { self.gather(step.inst, fresh) };
+            // One plain input, present: the body reads it where it is.
+            let in_place = match step.one_input {
+                Some(leaf) => {
+                    let slot = &self.slots[leaf];
+                    slot.value.is_some() && (!fresh || slot.stamp == cycle)
+                }
+                None => false,
+            };
+            let lent = step.plain_ins && !in_place;
+            let ready_now =
+                in_place || if lent { self.lend_inputs(plan, step, fresh) } else { self.gather(step.inst, fresh) };
             if !ready_now {
                 continue;
             }
@@ -133,11 +146,15 @@ impl Manager {
                 _ => Stamp::now(precise),
             };
             let exec = &mut self.execs[step.inst];
-            t = Some(exec.run(cycle, time_s, start, None));
+            let input = match step.one_input {
+                Some(leaf) if in_place => Some(&self.slots[leaf].value),
+                _ => None,
+            };
+            let end = exec.run_on(input, cycle, time_s, start, None);
             if lent {
                 // Back to their slots, swapped (see `lend_inputs`).
-                let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
-                for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+                let ins = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+                for (port, input) in ins.iter().zip(exec.inputs.iter_mut()) {
                     if input.is_some() {
                         std::mem::swap(input, &mut self.slots[port.leaf].value);
                         if input.is_some() {
@@ -148,7 +165,11 @@ impl Manager {
                     }
                 }
             }
-            ready.push(k);
+            let ok = self.finish_step(plan, k);
+            t = match end {
+                Stamp::Coarse(_) if ok => Some(end),
+                _ => None,
+            };
         }
         t
     }

@@ -60,6 +60,9 @@ pub(crate) struct Step {
     /// Every input is a plain port (one leaf, not a record), each on a
     /// slot of its own.
     pub plain_ins: bool,
+    /// The slot of its input when it has exactly one, plain: the body reads
+    /// it there, in place (kept inline: one look-up fewer per run).
+    pub one_input: Option<usize>,
 }
 
 /// An input port: `leaf` is its slot when `plain` (one leaf, not a
@@ -76,6 +79,9 @@ pub(crate) struct InPort {
 pub(crate) struct OutPort {
     pub leaf: usize,
     pub check: Check,
+    /// Another output of the same skill writes this leaf too (a slot's
+    /// writer then does not tell which of its ports wrote it).
+    pub leaf_shared: bool,
 }
 
 /// An output's type check without a call; `Record` for the ports that go
@@ -173,11 +179,11 @@ impl Plan {
                     optional: p.optional,
                 }));
                 let outs0 = plan.outs.len() as u32;
-                plan.outs.extend(
-                    def.outputs
-                        .iter()
-                        .map(|p| OutPort { leaf: p.leaves.first().copied().unwrap_or(0), check: Check::of(p) }),
-                );
+                plan.outs.extend(def.outputs.iter().map(|p| OutPort {
+                    leaf: p.leaves.first().copied().unwrap_or(0),
+                    check: Check::of(p),
+                    leaf_shared: def.outputs.iter().filter(|q| q.leaves.first() == p.leaves.first()).count() > 1,
+                }));
                 let deadline_ns = def.in_cycle_deadline().as_nanos().min(u64::MAX as u128) as u64;
                 let kind = match (def.kind, threaded(i)) {
                     (SkillKind::Async, true) => StepKind::AsyncThreaded,
@@ -198,6 +204,10 @@ impl Plan {
                         let ins = &plan.ins[ins0 as usize..];
                         ins.iter().all(|p| p.plain)
                             && ins.iter().enumerate().all(|(a, p)| ins[..a].iter().all(|q| q.leaf != p.leaf))
+                    },
+                    one_input: match plan.ins[ins0 as usize..] {
+                        [InPort { leaf, plain: true, .. }] => Some(leaf),
+                        _ => None,
                     },
                 });
             }

@@ -27,58 +27,90 @@ impl Manager {
         (self.insts[i].priority, u32::MAX - i as u32)
     }
 
-    /// [`Manager::commit`] for a step whose outputs are all plain ports.
-    pub(super) fn commit_plain(
-        &mut self,
-        step: &Step,
-        ports: &[OutPort],
-        outputs: &mut [Option<Value>],
-    ) -> Result<(), String> {
+    /// [`Manager::commit`] for a step whose outputs are all plain ports, in
+    /// its output buffers.
+    #[inline]
+    pub(super) fn commit_plain(&mut self, step: &Step, ports: &[OutPort]) -> Result<(), String> {
         let i = step.inst;
+        // One output, the usual case: no loops.
+        if let [port] = ports {
+            match &self.execs[i].outputs[0] {
+                None => return Ok(()),
+                Some(value) if !port.check.admits(value) => return Err(self.wrong_output(i, 0)),
+                Some(_) => {}
+            }
+            self.commit_plain_port(step, 0, port);
+            return Ok(());
+        }
+        let outputs = &self.execs[i].outputs;
         for (p, (port, value)) in ports.iter().zip(outputs.iter()).enumerate() {
             if let Some(value) = value {
                 if !port.check.admits(value) {
-                    let def = &self.graph.instances[i].outputs[p];
-                    return Err(wrong_output(&def.name, &def.ty, value));
+                    return Err(self.wrong_output(i, p));
                 }
             }
         }
-        // A plain output's last value is its slot's while this skill holds
-        // it, so a winning value is moved, not shared: `last_outputs` keeps
-        // it only when it lost the slot (see `save_displaced`).
-        let cycle = self.cycle;
-        for (p, (port, out)) in ports.iter().zip(outputs.iter_mut()).enumerate() {
-            if out.is_none() {
-                continue;
-            }
-            let last = &mut self.insts[i].last_outputs[p];
-            // `out` is swapped with the slot's value, never moved through a
-            // temporary: `out` then holds the value it replaced.
-            match write_leaf_in_place(&mut self.slots[port.leaf], out, cycle, step.rank, i) {
-                Some(displaced) => {
-                    if last.is_some() {
-                        if let Some(old) = last.take() {
-                            recycle(old);
-                        }
-                    }
-                    // The value it replaced stays in the output buffer when
-                    // it was this skill's own: the next run recycles it on
-                    // entry ([`Exec::run`](crate::runner::Exec::run)), long
-                    // after the swap's stores (taking it now would stall).
-                    if let Some(w) = displaced {
-                        if let Some(old) = out.take() {
-                            self.save_displaced(port.leaf, w, old);
-                        }
-                    }
-                }
-                // Lost: kept as its last output (the previous one dropped).
-                None => {
-                    std::mem::swap(last, out);
-                    *out = None;
-                }
+        for (p, port) in ports.iter().enumerate() {
+            if self.execs[i].outputs[p].is_some() {
+                self.commit_plain_port(step, p, port);
             }
         }
         Ok(())
+    }
+
+    /// Commits output `p` (`Some`, checked) of a plain step.
+    #[inline(always)]
+    fn commit_plain_port(&mut self, step: &Step, p: usize, port: &OutPort) {
+        let i = step.inst;
+        let out = &mut self.execs[i].outputs[p];
+        let slot = &mut self.slots[port.leaf];
+        // A plain output's last value is its slot's while this skill holds
+        // it, so a winning value is moved, not shared: `last_outputs` keeps
+        // it only when it lost the slot (see `save_displaced`). So while
+        // this skill held the slot its kept last output is empty (it is set
+        // only when the skill loses or is displaced, and then the slot is
+        // another's until this skill wins it again, which empties it), and
+        // need not be looked at. (Unless another of its outputs writes the
+        // same leaf: the slot's writer does not tell which port it was.)
+        let held = slot.writer as usize == i && slot.stamp > 0 && !port.leaf_shared;
+        // `out` is swapped with the slot's value, never moved through a
+        // temporary: `out` then holds the value it replaced.
+        match write_leaf_in_place(slot, out, self.cycle, step.rank, i) {
+            Some(displaced) => {
+                if !held {
+                    if let Some(old) = self.insts[i].last_outputs[p].take() {
+                        recycle(old);
+                    }
+                }
+                // The value it replaced stays in the output buffer when it
+                // was this skill's own: the next run recycles it on entry
+                // ([`Exec::run`](crate::runner::Exec::run)), or writes into
+                // it, long after the swap's stores (taking it now would
+                // stall).
+                if let Some(w) = displaced {
+                    if let Some(old) = out.take() {
+                        self.save_displaced(port.leaf, w, old);
+                    }
+                }
+            }
+            // Lost: kept as its last output (the previous one dropped).
+            None => {
+                let last = &mut self.insts[i].last_outputs[p];
+                std::mem::swap(last, out);
+                *out = None;
+            }
+        }
+    }
+
+    /// The fault of instance `i` whose output `p` is of the wrong type.
+    #[cold]
+    #[inline(never)]
+    fn wrong_output(&self, i: usize, p: usize) -> String {
+        let def = &self.graph.instances[i].outputs[p];
+        match &self.execs[i].outputs[p] {
+            Some(value) => wrong_output(&def.name, &def.ty, value),
+            None => format!("output `{}`: no value", def.name),
+        }
     }
 
     /// Writes instance `i`'s produced outputs to their leaves: all of them,
@@ -208,6 +240,8 @@ fn write_leaf_in_place(
     }
 }
 
+#[cold]
+#[inline(never)]
 fn wrong_output(port: &str, ty: &SignalType, value: &Value) -> String {
     format!("output `{port}` expects {ty}, the body produced a {}", value.kind_name())
 }
