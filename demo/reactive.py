@@ -418,24 +418,10 @@ class Reactive(Sequencer):
             if leg == "button_to_office" and not self.near_button(s):
                 return False
             # The leg's headings are from square in front of the button: the wall's normal.
-            heading = None
-            if leg == "button_to_office" and s.wall.get("seen"):
-                heading = wrap(s.pose.theta + float(s.wall["normal"]))
-                b = s.barcodes[self.button(s.floor)]
-                at = s.pose.theta + b[0]
-                code = (s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at))
-                # Square in front of the button first: the route's turns are from there.
-                self.mem.route = RouteState(
-                    leg,
-                    heading=heading,
-                    stage="square",
-                    square_at=(
-                        code[0] - BUTTON_STANDOFF_M * math.cos(heading),
-                        code[1] - BUTTON_STANDOFF_M * math.sin(heading),
-                    ),
-                )
-                return True
-            self.mem.route = RouteState(leg, heading=heading)
+            # From the button, the route's turns are from square in front of it: up to the
+            # button first, where its wall is what the wall fitter sees, then back.
+            stage = "approach" if leg == "button_to_office" else "start"
+            self.mem.route = RouteState(leg, stage=stage)
         return True
 
     def office_leg(self) -> str:
@@ -691,6 +677,29 @@ class Reactive(Sequencer):
         if r.step >= len(steps):
             return Action(("runaway",), key=("route end", r.leg))
         step = steps[r.step]
+        if r.stage == "approach":
+            code = self.button(s.floor)
+            b = s.barcodes.get(code)
+            normal = float(s.wall.get("normal", 0.0))
+            if b is not None and b[1] < PUSH_M + 0.15 and abs(b[0]) < 0.25:
+                if s.wall.get("seen") and abs(normal) < 0.7:
+                    h = wrap(s.pose.theta + normal)
+                    at = s.pose.theta + b[0]
+                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
+                    r.heading, r.stage = h, "square"
+                    r.square_at = (
+                        cx - BUTTON_STANDOFF_M * math.cos(h),
+                        cy - BUTTON_STANDOFF_M * math.sin(h),
+                    )
+                    return Action(("runaway",), key=("squaring", r.leg))
+                return Action(("runaway",), key=("fitting the wall", r.leg, s.t // 3))
+            if b is None:
+                return self.wander_about(s)
+            return Action(
+                ("track_barcode", "home"),
+                {("track_barcode", "id"): code, ("home", "stop_distance"): PUSH_M},
+                key=("approach", r.leg),
+            )
         if r.stage == "square" and r.square_at is not None and r.heading is not None:
             gx, gy = r.square_at
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
@@ -712,12 +721,15 @@ class Reactive(Sequencer):
             code = int(step["home"])
             if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
                 door_next = any(x.get("pass") for x in steps[r.step + 1 :])
-                if door_next and s.wall.get("seen") and r.squared != r.step:
+                b = s.barcodes[code]
+                at = s.pose.theta + b[0]
+                if door_next and r.squared != r.step and r.heading is not None:
                     # A door beside the barcode: square in front of it first, so that the
-                    # door finder looks along its wall.
-                    h = wrap(s.pose.theta + float(s.wall["normal"]))
-                    b = s.barcodes[code]
-                    at = s.pose.theta + b[0]
+                    # door finder looks along its wall. The barcode is on a wall of the
+                    # corridor the route followed: its normal is square to the route's
+                    # heading, on the barcode's side.
+                    side = math.pi / 2 if wrap(at - r.heading) > 0 else -math.pi / 2
+                    h = wrap(r.heading + side)
                     cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
                     r.heading, r.stage = h, "square"
                     r.square_at = (
@@ -738,6 +750,13 @@ class Reactive(Sequencer):
                 if r.leg == self.office_leg():
                     self.mem.in_office = True
                 return self.next_step(r, s)
+            if self.mem.door_given_up_at > s.t - 1.0:
+                # No door showed here: back to the barcode's step, to home and square again.
+                homes = [n for n in range(r.step) if steps[n].get("home") is not None]
+                if homes:
+                    r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
+                    self.mem.door_goal, self.mem.door_stage = None, ""
+                    return Action(("runaway",), key=("door again", s.t))
             return self.pass_door_action(s)
         if r.stage == "follow" and step.get("follow"):
             if self.step_until_met(step, r, s):
