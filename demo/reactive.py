@@ -133,9 +133,9 @@ class Senses:
     car_entered: bool
     car_exited: bool
 
-    def enclosed(self) -> bool:
-        """Walls near all round (inside a car: all but the door's sonars)."""
-        return sum(1 for r in self.sonar if r < 1.9) >= SONARS - 6
+    def enclosed(self, *, tight: bool = False) -> bool:
+        """Walls near all round (inside a car: all but the door's sonars; ``tight``: all)."""
+        return sum(1 for r in self.sonar if r < 1.9) >= SONARS - (1 if tight else 6)
 
     def open_abeam(self, side: str) -> bool:
         """Whether two neighbouring sonars about abeam on ``side`` read far: a mouth."""
@@ -870,6 +870,9 @@ class Reactive(Sequencer):
                 door[1] - FACE_DOOR_M * math.sin(normal),
             )
             m.opened, m.enter_stage = (s.t, normal), "goto"
+        if not m.in_car and m.out_of_lab and s.enclosed(tight=True):
+            # Walls all round, nearer than a car is wide: inside a car (its door shut).
+            m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
         if s.car_entered and self.rule_name == "enter car" and m.enter_stage == "in":
             if s.enclosed():
                 m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
