@@ -216,6 +216,19 @@ def test_the_reactive_robot_delivers_without_a_sequencer() -> None:
 
 
 @needs_bin
+@pytest.mark.parametrize(
+    "seed",
+    [
+        20002,  # in a car whose door shut before it was known to be in: walls all round
+        20003,  # beside the office door, off at an angle: square to the corridor first
+    ],
+)
+def test_the_reactive_robot_delivers_where_it_once_failed(seed: int, tmp_path: Path) -> None:
+    out = demo(seed, map_file=str(_generated(seed, tmp_path)), extra=["--mode", "reactive"])
+    assert out["delivered"], out
+
+
+@needs_bin
 def test_a_seed_replays_exactly() -> None:
     a = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
     b = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
