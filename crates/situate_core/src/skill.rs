@@ -11,6 +11,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use crate::decl::SkillDecl;
+use crate::types::SignalType;
 use crate::value::Value;
 
 /// What a body sees of the world besides its ports.
@@ -128,6 +129,21 @@ pub trait Skill: Send + 'static {
     /// written into that buffer. `#[derive(Skill)]` says yes; by default
     /// outputs are `None` on entry.
     fn fills_outputs(&self) -> bool {
+        false
+    }
+
+    /// Whether every value [`Skill::step`] puts in output `port` is, by
+    /// construction, a value of type `ty` (the port's type in the robot
+    /// being built). The manager then does not check that output's values
+    /// (it reads this once per instance when it makes the body, never per
+    /// run). Say yes only where it holds for every run: a wrongly typed
+    /// value would then reach the output's signal unchecked. By default
+    /// no, and every output is checked: a wrongly typed value faults the
+    /// skill. `#[derive(Skill)]` says yes for an output field of a built-in
+    /// signal type ([`SignalValue::ALWAYS_CONFORMS`](crate::SignalValue::ALWAYS_CONFORMS))
+    /// whose type feeds `ty` ([`SignalType::feeds`]).
+    fn output_typed(&self, port: usize, ty: &SignalType) -> bool {
+        let _ = (port, ty);
         false
     }
 }

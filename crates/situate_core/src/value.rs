@@ -187,9 +187,41 @@ impl fmt::Display for Value {
 /// `Arc<[f32]>`, `Arc<[f64]>`, `Arc<[i64]>`, fixed arrays `[f32; N]`,
 /// `[f64; N]`, `[i64; N]`, and by `#[derive(Record)]` for structs.
 pub trait SignalValue: Sized {
+    /// Whether every value [`SignalValue::into_value`] and
+    /// [`SignalValue::into_output`] make is a value of
+    /// [`SignalValue::signal_type`], by construction. True for the built-in
+    /// types; an implementation of your own is checked by the manager
+    /// unless it says so (and then it must hold).
+    const ALWAYS_CONFORMS: bool = false;
+
     fn signal_type() -> SignalType;
     fn from_value(value: &Value) -> Option<Self>;
     fn into_value(self) -> Value;
+
+    /// Reads an input port's value into `dst` (`#[derive(Skill)]`'s glue):
+    /// false, `dst` untouched, if `value` is not one of this type. A
+    /// fixed-size array copies itself straight into `dst`.
+    #[inline]
+    fn read_input(value: &Value, dst: &mut Self) -> bool {
+        match Self::from_value(value) {
+            Some(x) => {
+                *dst = x;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// [`SignalValue::into_output`] from a reference (`#[derive(Skill)]`'s
+    /// glue for an output field): a fixed-size array is copied straight
+    /// from `self` into the spare's buffer; by default a clone is written.
+    #[inline]
+    fn write_output(&self, output: &mut Option<Value>)
+    where
+        Self: Clone,
+    {
+        self.clone().into_output(output);
+    }
 
     /// Writes this value into an output port's buffer, which may hold a
     /// spare on entry: the value that this output's previous one replaced
@@ -224,6 +256,7 @@ pub fn optional_output<T: SignalValue>(value: Option<T>, output: &mut Option<Val
 macro_rules! scalar_signal {
     ($t:ty, $variant:ident, $st:expr) => {
         impl SignalValue for $t {
+            const ALWAYS_CONFORMS: bool = true;
             fn signal_type() -> SignalType {
                 $st
             }
@@ -250,6 +283,7 @@ scalar_signal!(Arc<[f64]>, F64s, SignalType::array(ElemType::F64, None));
 scalar_signal!(Arc<[i64]>, I64s, SignalType::array(ElemType::I64, None));
 
 impl SignalValue for String {
+    const ALWAYS_CONFORMS: bool = true;
     fn signal_type() -> SignalType {
         SignalType::Str
     }
@@ -267,6 +301,8 @@ impl SignalValue for String {
 macro_rules! fixed_array_signal {
     ($t:ty, $variant:ident, $elem:expr) => {
         impl<const N: usize> SignalValue for [$t; N] {
+            const ALWAYS_CONFORMS: bool = true;
+
             fn signal_type() -> SignalType {
                 SignalType::array($elem, Some(N))
             }
@@ -291,12 +327,28 @@ macro_rules! fixed_array_signal {
 
             #[inline]
             fn into_output(self, output: &mut Option<Value>) {
+                self.write_output(output);
+            }
+
+            #[inline]
+            fn read_input(value: &Value, dst: &mut Self) -> bool {
+                match value {
+                    Value::$variant(a) if a.len() == N => {
+                        dst.copy_from_slice(a);
+                        true
+                    }
+                    _ => false,
+                }
+            }
+
+            #[inline]
+            fn write_output(&self, output: &mut Option<Value>) {
                 // The output's own spare first: no trip through the
-                // thread's spare list.
+                // thread's spare list, and no copy of `self` on the way.
                 if let Some(Value::$variant(a)) = output {
                     if a.len() == N {
                         if let Some(buf) = Arc::get_mut(a) {
-                            buf.copy_from_slice(&self);
+                            buf.copy_from_slice(self);
                             return;
                         }
                     }
@@ -304,7 +356,7 @@ macro_rules! fixed_array_signal {
                 if let Some(spare) = output.take() {
                     recycle(spare);
                 }
-                *output = Some(self.into_value());
+                *output = Some((*self).into_value());
             }
         }
     };

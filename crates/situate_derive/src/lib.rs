@@ -102,8 +102,12 @@
 //!   if one is missing the run fails with "input `x`: missing or not a …".
 //! - **Optional inputs** (`#[input] x: Option<T>`) don't hold the skill back:
 //!   the body sees `None` when nobody produced the signal this cycle.
-//! - **Outputs** (`#[output] x: T`) are written after every run with a clone
-//!   of the field (so `T: Clone`; `Arc`-backed values clone a pointer).
+//! - **Outputs** (`#[output] x: T`) are written after every run from the
+//!   field (`SignalValue::write_output`: a clone, so `T: Clone`; `Arc`-backed
+//!   values clone a pointer; a fixed-size array is copied straight into the
+//!   buffer its last value left, when nobody else holds that). An output of
+//!   a built-in type is of its port's type by construction, so the manager
+//!   does not check it (`Skill::output_typed`).
 //!   An `Option<T>` output is written only in the runs where the body set it
 //!   to `Some`, and is taken (left `None`) after each run, so a value is
 //!   produced once.

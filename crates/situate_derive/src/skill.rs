@@ -407,8 +407,8 @@ fn generate(
 ) -> TokenStream {
     let core = quote!(::situate::__core);
     // Locals the user's default expressions can't see or shadow.
-    let [decl, port, param, skill, io, value, x, slot, index] =
-        ["decl", "port", "param", "skill", "io", "value", "x", "slot", "index"].map(util::local);
+    let [decl, port, param, skill, io, value, x, slot, index, ty_param] =
+        ["decl", "port", "param", "skill", "io", "value", "x", "slot", "index", "ty"].map(util::local);
     let ident = &input.ident;
     let (impl_generics, ty_generics, where_clause) = input.generics.split_for_impl();
 
@@ -478,10 +478,12 @@ fn generate(
                 };
             }
         } else {
+            // Read straight into the field (no copy through a temporary).
+            let read = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::read_input);
             quote! {
-                match #input.and_then(#from) {
-                    ::core::option::Option::Some(#x) => self.#field = #x,
-                    ::core::option::Option::None => {
+                match #input {
+                    ::core::option::Option::Some(#value) if #read(#value, &mut self.#field) => {}
+                    _ => {
                         return ::core::result::Result::Err(#core::SkillError::new(::std::format!(
                             "input `{}`: missing or not a {}", #name, #signal_type
                         )));
@@ -504,14 +506,24 @@ fn generate(
                 }
             }
         } else {
-            let into = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::into_output);
-            let clone = quote_spanned!(ty.span()=> ::core::clone::Clone::clone(&self.#field));
+            // Written from the field itself: a fixed-size array is copied
+            // straight into the spare's buffer, not through a clone.
+            let write = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::write_output);
             quote! {
                 if let ::core::option::Option::Some(#slot) = #io.outputs.get_mut(#j) {
-                    #into(#clone, #slot);
+                    #write(&self.#field, #slot);
                 }
             }
         }
+    });
+
+    // Whether an output's values are of the port's type by construction
+    // (see `Skill::output_typed`).
+    let typed_arms = outputs.iter().enumerate().map(|(j, p)| {
+        let ty = &p.ty;
+        let conforms = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::ALWAYS_CONFORMS);
+        let signal_type = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::signal_type());
+        quote!(#j => #conforms && #core::SignalType::feeds(&#signal_type, #ty_param),)
     });
 
     let set_param = if params.is_empty() {
@@ -587,6 +599,20 @@ fn generate(
 
             fn fills_outputs(&self) -> bool {
                 true
+            }
+
+            fn output_typed(
+                &self,
+                #index: ::core::primitive::usize,
+                #ty_param: &#core::SignalType,
+            ) -> bool {
+                match #index {
+                    #(#typed_arms)*
+                    _ => {
+                        let _ = #ty_param;
+                        false
+                    }
+                }
             }
         }
     }

@@ -31,11 +31,11 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::Receiver;
-use situate_core::{SkillKind, Value};
+use situate_core::{Skill, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
-use crate::graph::Graph;
+use crate::graph::{Graph, InstanceDef};
 use crate::monitor::Monitors;
 use crate::registry::Registry;
 use crate::runner::{BodyClock, Exec, Worker, WorkerClock};
@@ -95,6 +95,10 @@ struct Inst {
     /// The cycle from which its parameters last changed (monitors reading
     /// one are evaluated again then).
     params_from: u64,
+    /// Every output of its body is of its port's type by construction
+    /// ([`Skill::output_typed`], asked when the body is made): the plan
+    /// does not check them.
+    typed_outputs: bool,
 }
 
 /// What a monitor condition can name: a leaf signal or a parameter.
@@ -204,6 +208,7 @@ impl Manager {
                     format!("skill `{}`: could not create `{}`: {e}", def.name, def.skill_type.decl.type_name),
                 )],
             })?;
+            let typed_outputs = outputs_typed(skill.as_ref(), def);
             let mut exec = Exec::new(skill, def.inputs.len(), def.outputs.len());
             if let Some(skill) = exec.skill.as_mut() {
                 for (i, v) in def.params.iter().enumerate() {
@@ -226,6 +231,7 @@ impl Manager {
                 lockstep_readings: vec![None; def.outputs.len()],
                 abandoned: false,
                 params_from: 0,
+                typed_outputs,
             });
         }
         let started = Instant::now();
@@ -373,8 +379,10 @@ impl Manager {
         for (p, v) in self.insts[i].params.iter().enumerate() {
             skill.set_param(p, v);
         }
+        let typed_outputs = outputs_typed(skill.as_ref(), def);
         self.execs[i] = Exec::new(skill, def.inputs.len(), def.outputs.len());
         let inst = &mut self.insts[i];
+        inst.typed_outputs = typed_outputs;
         if inst.worker.is_some() {
             inst.worker = Some(Worker::new(def.inputs.len(), def.outputs.len()));
         }
@@ -471,4 +479,10 @@ pub(crate) fn fmt_duration(d: Duration) -> String {
     } else {
         format!("{:.0} µs", s * 1e6)
     }
+}
+
+/// Whether every output of `skill` is of its port's type by construction
+/// ([`Skill::output_typed`]); asked once per body made, never per run.
+fn outputs_typed(skill: &dyn Skill, def: &InstanceDef) -> bool {
+    def.outputs.iter().enumerate().all(|(p, port)| skill.output_typed(p, &port.ty))
 }

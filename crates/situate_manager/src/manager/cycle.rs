@@ -20,8 +20,13 @@ use crate::runner::{coarse_tick_ns, Stamp, WorkerStats};
 impl Manager {
     pub(super) fn compile_schedule(&mut self) {
         let insts = &self.insts;
-        self.schedule =
-            Plan::compile(&self.graph, |i| insts[i].active, |i| insts[i].priority, |i| insts[i].worker.is_some());
+        self.schedule = Plan::compile(
+            &self.graph,
+            |i| insts[i].active,
+            |i| insts[i].priority,
+            |i| insts[i].worker.is_some(),
+            |i| insts[i].typed_outputs,
+        );
         self.schedule_dirty = false;
         // Input buffers may hold copies from a run under the last plan (a
         // parallel level gathers copies); a step that now reads its input in

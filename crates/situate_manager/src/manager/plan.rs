@@ -57,6 +57,9 @@ pub(crate) struct Step {
     pub outs: (u32, u32),
     /// Every output is a plain port (one leaf, checked inline).
     pub plain_outs: bool,
+    /// Every output is a plain port whose values are of its type by
+    /// construction (`Skill::output_typed`): not checked when committed.
+    pub typed_outs: bool,
     /// Every input is a plain port (one leaf, not a record), each on a
     /// slot of its own.
     pub plain_ins: bool,
@@ -135,11 +138,14 @@ impl Plan {
     /// Compiles the schedule of the skills `active` says are active:
     /// cskills in topological order (ties: declaration order), grouped into
     /// levels (a skill is one level after the latest of its writers).
+    /// `typed(i)`: every output of instance `i` is of its port's type by
+    /// construction (`Skill::output_typed`, read when the body was made).
     pub fn compile(
         graph: &Graph,
         active: impl Fn(usize) -> bool,
         priority: impl Fn(usize) -> i32,
         threaded: impl Fn(usize) -> bool,
+        typed: impl Fn(usize) -> bool,
     ) -> Plan {
         let order = topo_order(&graph.instances, &graph.leaves, &active);
         let mut level = vec![0usize; graph.instances.len()];
@@ -190,6 +196,7 @@ impl Plan {
                     (SkillKind::Async, false) => StepKind::AsyncInCycle,
                     _ => StepKind::Sync,
                 };
+                let plain_outs = plan.outs[outs0 as usize..].iter().all(|o| o.check != Check::Record);
                 plan.steps.push(Step {
                     inst: i,
                     kind,
@@ -198,7 +205,8 @@ impl Plan {
                     precise: deadline_ns < PRECISE_DEADLINE_NS,
                     ins: (ins0, plan.ins.len() as u32),
                     outs: (outs0, plan.outs.len() as u32),
-                    plain_outs: plan.outs[outs0 as usize..].iter().all(|o| o.check != Check::Record),
+                    plain_outs,
+                    typed_outs: plain_outs && typed(i),
                     plain_ins: {
                         // Lent inputs must come from distinct slots.
                         let ins = &plan.ins[ins0 as usize..];
