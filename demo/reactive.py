@@ -26,17 +26,14 @@ terms in the old ones; `docs/experiment.md` counts them.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from deliver import NORMAL, SKILLS, Mission, Stop
 from sequencing import SONARS, WALL_AHEAD_M, OutOfTime, Pose, Sequencer, wrap
 
 import situate
-
-if TYPE_CHECKING:
-    from deliver import Mission, Stop
 
 #: Skills every rule may read: on all the time.
 PERCEPTION = (
@@ -65,16 +62,9 @@ PERCEPTS = (
     "car_entered",
     "car_exited",
 )
-#: Parameters the rules set once, at the start (as the sequenced robot's ``NORMAL``).
+#: Parameters the rules set once, at the start: the sequenced robot's, and two of its own.
 SETTINGS = {
-    ("runaway", "safe_distance"): 0.3,
-    ("avoid", "distance"): 0.6,
-    ("avoid", "stop_distance"): 0.2,
-    ("follow_hallway", "speed"): 0.4,
-    ("turn", "max_turn"): 1.2,
-    ("detect_door", "confirm"): 2,
-    ("track_barcode", "hold"): 15,
-    ("locate_door", "max_width"): 1.8,
+    **NORMAL,
     ("leave_car", "distance"): 3.0,
     # Cars stay open 10 s or so: in before the door closes.
     ("enter_car", "speed"): 0.35,
@@ -211,8 +201,6 @@ class Memory:
     #: In a car, the heading out through its door (odometry).
     door_heading: float | None = None
     exits_tried: int = 0
-    #: Per floor, the point in front of the car door last seen opening (odometry).
-    car_doors: dict[int, tuple[float, float]] = field(default_factory=dict)
     #: Per floor, where the call button was last seen from near (odometry).
     button_seen_from: dict[int, Pose] = field(default_factory=dict)
     #: Where the call button was pushed from (odometry), to wait for a car a step back.
@@ -254,8 +242,6 @@ class Reactive(Sequencer):
         self.rule_name = ""
         #: When the rule in charge took over (simulated time).
         self.rule_since = 0.0
-        #: The heading the last turn action aims at (odometry), to tell when it is done.
-        self.turn_goal: float | None = None
         #: Rule changes (the drive's winner changing), for the experiment.
         self.switches = 0
         self.rules: list[tuple[str, Callable[[Senses], bool], Callable[[Senses], Action]]] = [
@@ -529,7 +515,6 @@ class Reactive(Sequencer):
                 m.opened, m.enter_stage = None, ""
                 return Action(("runaway",), key="no door ahead")
             m.enter_stage = "in"
-            m.car_doors[s.floor] = (gx, gy)
         return Action(("runaway", "enter_car"), key=("enter car", m.opened))
 
     def wait_for_car(self, s: Senses) -> Action:
@@ -817,9 +802,6 @@ class Reactive(Sequencer):
             now = any(bool(seen.get(x)) for x in sides)
             if until == "junction":
                 now = now or any(s.open_abeam(x) for x in sides)
-            if self.debug and os.environ.get("REACTIVE_DEBUG_JUNCTION"):
-                ring = " ".join(f"{x:.1f}" for x in s.sonar[3:10])
-                print(f"[{s.t:7.1f} s] {went:.1f} m {seen} left sonars {ring} now {now}")
             fresh = went - (r.counted_at if r.counted_at is not None else first) > 1.0
             if now and not r.last_side and fresh:
                 r.count += 1
@@ -914,11 +896,6 @@ class Reactive(Sequencer):
         side = (door[0] - pose.x) * -n[1] + (door[1] - pose.y) * n[0]
         return door, wrap(b.theta + (math.pi / 2 if side > 0 else -math.pi / 2))
 
-    def turn_goal_reached(self, s: Senses) -> bool:
-        """The last turn action's heading is reached."""
-        goal = self.turn_goal
-        return goal is not None and abs(wrap(goal - s.pose.theta)) < 0.1
-
     # ----- the loop -----------------------------------------------------------------------------
 
     async def apply(self, name: str, action: Action, s: Senses) -> None:
@@ -936,15 +913,13 @@ class Reactive(Sequencer):
         self.action_key, self.rule_name = key, name
         for (skill, param), value in action.params.items():
             await self.set(skill, param, value)
-        if "turn" in action.skills:
-            self.turn_goal = wrap(s.pose.theta + float(action.params.get(("turn", "angle"), 0.0)))
         await self.use(*PERCEPTION, *action.skills, restart=action.skills)
 
     async def run_task(self) -> None:
         """Runs the rule list every cycle until every stop is made (or the time is up)."""
         for (skill, param), value in SETTINGS.items():
             await self.set(skill, param, value)
-        self.send("deactivate", skills=sorted(set(self._all_skills())))
+        self.send("deactivate", skills=sorted(SKILLS))
         await self.use(*PERCEPTION)
         self.t_stale = True
         await self.now()  # the clock and the cycle's period: `step` advances `t` by it
@@ -969,9 +944,3 @@ class Reactive(Sequencer):
         await self.use()
         await self.flush()
         await self.say(f"mission complete ({self.switches} rule switches)")
-
-    @staticmethod
-    def _all_skills() -> tuple[str, ...]:
-        from deliver import SKILLS
-
-        return SKILLS

@@ -45,6 +45,9 @@ pub enum TaskError {
 
 /// Parses `office,lobby:3,…` (stops separated by commas, spaces allowed).
 pub fn parse(task: &str) -> Result<Vec<Stop>, TaskError> {
+    if task.trim().is_empty() {
+        return Err(TaskError::Empty { task: task.to_string() });
+    }
     let mut stops = Vec::new();
     for (i, s) in task.split(',').map(str::trim).enumerate() {
         let bad = || TaskError::Syntax { task: task.to_string(), index: i + 1, stop: s.to_string() };
@@ -54,9 +57,6 @@ pub fn parse(task: &str) -> Result<Vec<Stop>, TaskError> {
             _ => return Err(bad()),
         };
         stops.push(stop);
-    }
-    if task.trim().is_empty() {
-        return Err(TaskError::Empty { task: task.to_string() });
     }
     Ok(stops)
 }
@@ -130,7 +130,8 @@ mod tests {
         let e = parse("lobby:3,ofice").unwrap_err().to_string();
         assert!(e.contains("stop 2 `ofice`"), "{e}");
         assert!(parse("lobby:x").is_err());
-        assert!(parse("").is_err());
+        assert_eq!(parse(" "), Err(TaskError::Empty { task: " ".into() }));
+        assert!(matches!(parse("office,"), Err(TaskError::Syntax { index: 2, .. })));
         for s in [Stop::Office, Stop::Lobby(-2)] {
             assert_eq!(parse(&s.to_string()).unwrap(), vec![s]);
         }
