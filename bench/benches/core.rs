@@ -20,7 +20,7 @@ use situate_bench::measure::{interleaved, paired, ratio, Settings, Summary};
 use situate_bench::report::{results_path, CpuTimes, Machine, Report, Target};
 use situate_bench::skills::{self, Flavor};
 
-const BENCHES: &[&str] = &["chain", "inactive", "parallel", "request", "monitor", "parts"];
+const BENCHES: &[&str] = &["chain", "spawned", "inactive", "parallel", "request", "monitor", "parts"];
 
 type Bench = fn(&Settings, &mut Report);
 
@@ -91,8 +91,9 @@ fn main() {
     );
     let started = Instant::now();
     let mut report = Report::default();
-    let benches: [(&str, Bench); 6] = [
+    let benches: [(&str, Bench); 7] = [
         ("chain", chain),
+        ("spawned", spawned),
         ("inactive", inactive),
         ("parallel", parallel),
         ("request", request),
@@ -236,20 +237,76 @@ fn chain(settings: &Settings, report: &mut Report) {
     });
 }
 
-/// Runs the N = 1000 derive chain for `seconds`, unmeasured: a steady load
-/// for `perf record`.
+/// Runs the derive chain (N = 1000, or `$PROFILE_N`) for `seconds`,
+/// unmeasured: a steady load for `perf record`.
 fn profile_chain(seconds: f64) {
+    let n = std::env::var("PROFILE_N").ok().and_then(|n| n.parse().ok()).unwrap_or(1000);
     let mut spec = skills::robot("chain");
-    spec.skills = skills::chain("", 1000, Flavor::Derive, true);
+    spec.skills = skills::chain("", n, Flavor::Derive, true);
     let mut m = skills::build(&spec);
-    skills::check_chain(&mut m, "", 1000);
+    skills::check_chain(&mut m, "", n);
     let end = Instant::now() + std::time::Duration::from_secs_f64(seconds);
     while Instant::now() < end {
         for _ in 0..100 {
             m.cycle();
         }
     }
-    println!("{} cycles of a 1000-skill chain", m.cycle_count());
+    println!("{} cycles of a {n}-skill chain", m.cycle_count());
+}
+
+// ----- 1b. the chain on the spawned manager ------------------------------------
+
+/// The chain of N = 10 and 100 run by a spawned manager (its own cycle thread
+/// and watchdog, cycles asked for with a `Step` request of `iters` cycles:
+/// the path a running robot takes) beside `Manager::cycle` on this thread.
+/// Reported: the spawned path's extra cost per skill and its ratio.
+fn spawned(settings: &Settings, report: &mut Report) {
+    use situate::manager::control::Control;
+    let bench = "spawned";
+    const NS: [usize; 2] = [10, 100];
+    let mut plain: Vec<Manager> = Vec::new();
+    let mut handles = Vec::new();
+    for &n in &NS {
+        let mut spec = skills::robot("chain");
+        spec.skills = skills::chain("", n, Flavor::Derive, true);
+        let mut m = skills::build(&spec);
+        skills::check_chain(&mut m, "", n);
+        plain.push(m);
+        let mut m = skills::build(&spec);
+        skills::check_chain(&mut m, "", n);
+        handles.push(m.spawn(false));
+    }
+    let out = interleaved(settings, NS.len() * 2, &mut |s, iters| {
+        let (ni, spawned) = (s / 2, s % 2 == 1);
+        if spawned {
+            let handle = &mut handles[ni].0;
+            if let Err(e) = handle.request(Request::Step { cycles: iters }) {
+                panic!("spawned chain: step refused: {e}");
+            }
+        } else {
+            for _ in 0..iters {
+                plain[ni].cycle();
+            }
+        }
+    });
+    let mut worst = (0usize, f64::MIN);
+    for (ni, &n) in NS.iter().enumerate() {
+        let (a, b) = (&out[ni * 2], &out[ni * 2 + 1]);
+        report.figure(bench, &format!("N={n:<4} cycle, Manager::cycle"), "ns", a);
+        report.figure(bench, &format!("N={n:<4} cycle, spawned (Step)"), "ns", b);
+        let extra = paired(a, b, |a, b| (b - a) / n as f64);
+        report.figure(bench, &format!("N={n:<4} spawned − plain, per skill"), "ns", &extra);
+        report.figure(bench, &format!("N={n:<4} spawned / plain"), "×", &ratio(b, a));
+        if extra.median > worst.1 {
+            worst = (n, extra.median);
+        }
+    }
+    for (handle, joiner) in handles {
+        drop(handle);
+        let _ = joiner.join_timeout(std::time::Duration::from_secs(10));
+    }
+    report.print_table(bench, "1b. the chain on a spawned manager (Step requests) vs Manager::cycle (serial)");
+    report.note(format!("spawned: worst extra cost per skill {:.1} ns at N={}", worst.1, worst.0));
 }
 
 // ----- 2. inactive skills ------------------------------------------------------

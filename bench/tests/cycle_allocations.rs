@@ -2,7 +2,8 @@
 //! of this thread's allocations, not a time, so it cannot flake), for
 //! derived skills (`#[derive(Skill)]` with `[f32; 24]` and `f64` ports),
 //! hand-written Rust skills (`FnSkill`, the path bindings use) and C skills
-//! through the C ABI.
+//! through the C ABI; and on a spawned manager (its own cycle thread, the path
+//! a running robot takes), counted over every thread.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -21,11 +22,15 @@ thread_local! {
     static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
 }
 
+/// Allocations on every thread.
+static ALL_ALLOCATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 // SAFETY: every call is passed on to the system allocator unchanged; the
 // count is a thread-local `Cell` without a destructor, which never allocates.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
+        ALL_ALLOCATIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         // SAFETY: the caller's contract is the system allocator's.
         unsafe { System.alloc(layout) }
     }
@@ -37,6 +42,7 @@ unsafe impl GlobalAlloc for Counting {
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
+        ALL_ALLOCATIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         // SAFETY: as above.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -63,6 +69,32 @@ fn allocations_per_steady_cycles(m: &mut Manager, cycles: u64) -> u64 {
         m.cycle();
     }
     allocations() - before
+}
+
+#[test]
+fn a_steady_cycle_of_a_spawned_manager_allocates_nothing() {
+    use situate::manager::control::Control;
+    let mut spec = robot();
+    spec.skills.extend(skills::chain("c", 50, Flavor::Derive, true));
+    let mut m = skills::build(&spec);
+    skills::check_chain(&mut m, "c", 50);
+    let (mut handle, joiner) = m.spawn(false);
+    let mut step = |cycles: u64| {
+        let before = ALL_ALLOCATIONS.load(std::sync::atomic::Ordering::Relaxed);
+        if let Err(e) = handle.request(Request::Step { cycles }) {
+            panic!("step refused: {e}");
+        }
+        ALL_ALLOCATIONS.load(std::sync::atomic::Ordering::Relaxed) - before
+    };
+    step(200);
+    // A step request of 1 cycle and one of 501 cost the same to ask and
+    // answer: the difference is what 500 cycles allocate, on any thread.
+    // Another thread of the process allocating at the same time can only
+    // add to one of them: the least of a few tries is the cycles' own.
+    let extra = (0..5).map(|_| step(501).saturating_sub(step(1))).min();
+    assert_eq!(extra, Some(0), "500 steady cycles of a spawned manager allocated");
+    drop(handle);
+    assert!(joiner.join_timeout(std::time::Duration::from_secs(60)).is_ok(), "the manager did not end");
 }
 
 #[derive(Skill, Default)]

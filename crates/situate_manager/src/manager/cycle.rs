@@ -128,21 +128,6 @@ impl Manager {
         self.schedule.devices = devices;
     }
 
-    /// Step 3 for level `level`: exchanges with threaded async cskills, and
-    /// the steps ready to run in the cycle in `self.ready`. False when
-    /// there is no such level.
-    pub(super) fn prepare_level(&mut self, level: usize) -> bool {
-        if level >= self.schedule.levels.len() {
-            return false;
-        }
-        let plan = std::mem::take(&mut self.schedule);
-        let mut ready = std::mem::take(&mut self.ready);
-        self.prepare_steps(&plan, level, &mut ready);
-        self.ready = ready;
-        self.schedule = plan;
-        true
-    }
-
     /// Gathers copies of the inputs of level `level`'s steps; those ready
     /// to run go to `ready`.
     pub(super) fn prepare_steps(&mut self, plan: &Plan, level: usize, ready: &mut Vec<usize>) {
@@ -371,14 +356,6 @@ impl Manager {
                 false
             }
         }
-    }
-
-    /// Commits a run's outputs (for the spawned manager: step `k` of the
-    /// current plan).
-    pub(super) fn finish(&mut self, k: usize) {
-        let plan = std::mem::take(&mut self.schedule);
-        self.finish_step(&plan, k);
-        self.schedule = plan;
     }
 
     /// Async cskill on its thread: hand over the latest inputs, take the

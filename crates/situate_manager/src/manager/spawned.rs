@@ -25,6 +25,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 
 use super::executor::run_parallel;
 use super::pacing::raise_thread_priority;
+use super::plan::{Plan, StepKind};
 use super::Manager;
 use crate::control::{ControlError, Envelope, Handle, Reply, Request};
 use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
@@ -359,36 +360,57 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
 
 /// One cycle with every body run outside the lock. `None`: this thread was
 /// left behind while a body ran.
+///
+/// The plan is held by this thread for the cycle (out of the manager): the
+/// watchdog, should it leave a body behind, marks the schedule to be
+/// compiled again, so the next cycle thread never runs without one.
 fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<'a>> {
-    current(&mut g, generation)?.begin_cycle();
-    let mut level = 0;
-    loop {
-        let m = current(&mut g, generation)?;
-        if !m.prepare_level(level) {
-            break;
+    let m = current(&mut g, generation)?;
+    m.begin_cycle();
+    let plan = std::mem::take(&mut m.schedule);
+    let mut ready = std::mem::take(&mut m.ready);
+    if core.pool.is_none() {
+        // Serial: one pass, levels make no difference (see `Manager::run_serial`).
+        g = run_steps(core, g, generation, &plan, 0..plan.steps.len(), None, true)?.0;
+    } else {
+        let mut t = None;
+        for level in 0..plan.levels.len() {
+            let Some(steps) = plan.level(level) else { break };
+            let m = current(&mut g, generation)?;
+            if plan.parallel_level(level) {
+                // Copies of the inputs gathered for the level, run (on the
+                // pool when worth it), then committed in order.
+                m.prepare_steps(&plan, level, &mut ready);
+                if m.worth_parallel(&plan, &ready) {
+                    g = run_batches(core, g, generation, &plan, &ready)?;
+                } else {
+                    g = run_steps(core, g, generation, &plan, ready.iter().copied(), None, false)?.0;
+                }
+                let m = current(&mut g, generation)?;
+                for &k in &ready {
+                    m.finish_step(&plan, k);
+                }
+                t = None;
+            } else {
+                (g, t) = run_steps(core, g, generation, &plan, steps, t, true)?;
+            }
         }
-        let ready = std::mem::take(&mut m.ready);
-        let plan = std::mem::take(&mut m.schedule);
-        let parallel = m.worth_parallel(&plan, &ready);
-        let skills: Vec<(usize, bool)> = ready.iter().map(|&k| (plan.steps[k].inst, plan.steps[k].precise)).collect();
-        m.schedule = plan;
-        g = if parallel {
-            run_batches(core, g, generation, &ready)?
-        } else {
-            run_serial(core, g, generation, &skills)?
-        };
-        let m = current(&mut g, generation)?;
-        for &k in &ready {
-            m.finish(k);
-        }
-        m.ready = ready;
-        level += 1;
     }
     let m = current(&mut g, generation)?;
+    m.ready = ready;
+    m.schedule = plan;
     m.prepare_exchanges();
     let exchanging = std::mem::take(&mut m.exchanging);
-    let devices: Vec<(usize, bool)> = exchanging.iter().map(|&d| (d, true)).collect();
-    g = run_serial(core, g, generation, &devices)?;
+    for &d in &exchanging {
+        let m = current(&mut g, generation)?;
+        let (cycle, time_s) = (m.cycle, m.time_s);
+        let mut exec = std::mem::take(&mut m.execs[d]);
+        drop(g);
+        exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[d]));
+        g = core.lock();
+        // Left behind: the body's late result is dropped with it.
+        current(&mut g, generation)?.execs[d] = exec;
+    }
     let m = current(&mut g, generation)?;
     for &d in &exchanging {
         m.finish_exchange(d);
@@ -398,30 +420,84 @@ fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<
     Some(g)
 }
 
-/// Runs bodies one after the other, each with the lock let go; `skills`:
-/// (instance, timed exactly even when the cycle is not sampled).
-fn run_serial<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, skills: &[(usize, bool)]) -> Option<Guard<'a>> {
-    for &(i, precise) in skills {
+/// Runs the plan's steps `steps` one after the other, each body with the
+/// lock let go, as `Manager::run_serial` does on the cycle's own thread:
+/// each step's inputs checked and gathered, its body run, its outputs
+/// committed at once (`commit`; false when the caller commits the level's
+/// steps itself, with their inputs already gathered). `t` and the returned
+/// reading: the coarse clock's reading carried from one body to the next
+/// (see `Manager::run_serial`).
+///
+/// A body gets copies of its inputs (a reference count each), not the slot's
+/// values lent or read in place: a body left behind holds its copies, and
+/// its inputs' slots keep their values. The copies are dropped as soon as the
+/// body returns, so the buffers they share are again the slots' own when
+/// their producers next write them (reused, nothing allocated).
+fn run_steps<'a>(
+    core: &'a Core,
+    mut g: Guard<'a>,
+    generation: u64,
+    plan: &Plan,
+    steps: impl Iterator<Item = usize>,
+    mut t: Option<Stamp>,
+    commit: bool,
+) -> Option<(Guard<'a>, Option<Stamp>)> {
+    for k in steps {
+        let step = &plan.steps[k];
+        let i = step.inst;
         let m = current(&mut g, generation)?;
+        if commit {
+            let fresh = match step.kind {
+                StepKind::AsyncThreaded => {
+                    m.exchange_async(i);
+                    t = None;
+                    continue;
+                }
+                StepKind::AsyncInCycle => false,
+                StepKind::Sync => true,
+            };
+            if !m.gather_step(plan, step, fresh) {
+                continue;
+            }
+        }
+        let precise = m.sampled || step.precise;
+        let start = match t {
+            Some(t) if precise == matches!(t, Stamp::Precise(_)) => t,
+            _ => Stamp::now(precise),
+        };
         let (cycle, time_s) = (m.cycle, m.time_s);
-        let precise = precise || m.sampled;
         let mut exec = std::mem::take(&mut m.execs[i]);
         drop(g);
-        exec.run(cycle, time_s, Stamp::now(precise), Some(&core.clocks[i]));
+        let end = exec.run(cycle, time_s, start, Some(&core.clocks[i]));
+        for input in &mut exec.inputs {
+            *input = None;
+        }
         g = core.lock();
         // Left behind: the body's late result is dropped with it.
-        current(&mut g, generation)?.execs[i] = exec;
+        let m = current(&mut g, generation)?;
+        m.execs[i] = exec;
+        let ok = !commit || m.finish_step(plan, k);
+        t = match end {
+            Stamp::Coarse(_) if ok && commit => Some(end),
+            _ => None,
+        };
     }
-    Some(g)
+    Some((g, t))
 }
 
 /// Runs a level on the parallel executor, batch by batch; each body goes
 /// back to the manager as soon as it returns, so one stuck body holds no
 /// other.
-fn run_batches<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, ready: &[usize]) -> Option<Guard<'a>> {
+fn run_batches<'a>(
+    core: &'a Core,
+    mut g: Guard<'a>,
+    generation: u64,
+    plan: &Plan,
+    ready: &[usize],
+) -> Option<Guard<'a>> {
     let pool = core.pool.as_ref()?;
     let m = current(&mut g, generation)?;
-    let batches = m.batches(&m.schedule, ready);
+    let batches = m.batches(plan, ready);
     for batch in batches {
         let m = current(&mut g, generation)?;
         let (cycle, time_s) = (m.cycle, m.time_s);
@@ -480,6 +556,8 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
             }
         }
         if left {
+            // The stuck thread holds the plan (see `cycle`).
+            m.schedule_dirty = true;
             m.generation += 1;
             let generation = m.generation;
             if let Some(reply) = core.step_reply().take() {
