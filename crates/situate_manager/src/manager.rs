@@ -138,12 +138,23 @@ pub struct Manager {
     cycle: u64,
     time_s: f64,
     started: Instant,
-    /// When the cycle running now started.
+    /// When the cycle running now started (a timed cycle: `cycle_timed`).
     cycle_start: Instant,
+    /// When it started on the coarse clock (a cycle not timed exactly).
+    cycle_start_coarse: u64,
+    /// This cycle is timed on the exact clock: every cycle of a paced
+    /// manager (wall clock, or a simulated one at a set speed), one in
+    /// [`TIMING_SAMPLE`] of an unpaced simulated clock, where cycles run back
+    /// to back and two exact readings would be a noticeable part of a small
+    /// cycle. The others are timed on the coarse clock, for the maximum.
+    cycle_timed: bool,
     running: bool,
+    /// The last timed cycle's time.
     last_cycle_ns: u64,
     max_cycle_ns: u64,
+    /// The timed cycles' time, in all, and how many there were.
     total_cycle_ns: u64,
+    timed_cycles: u64,
     overruns: u64,
     /// Per resource leaf: who won it, counted at the end of every cycle.
     tallies: Vec<Tally>,
@@ -163,7 +174,8 @@ pub struct Manager {
     /// The achieved rate: a moving average of the wall time between cycle
     /// starts while running (`None` until two cycles ran back to back).
     interval_s: Option<f64>,
-    last_start: Option<Instant>,
+    /// When the last timed cycle started, and which it was.
+    last_start: Option<(Instant, u64)>,
     monitors: Monitors,
     refs: Vec<RefTarget>,
     bus: EventBus,
@@ -266,10 +278,13 @@ impl Manager {
             time_s: 0.0,
             started,
             cycle_start: started,
+            cycle_start_coarse: 0,
+            cycle_timed: false,
             running: false,
             last_cycle_ns: 0,
             max_cycle_ns: 0,
             total_cycle_ns: 0,
+            timed_cycles: 0,
             overruns: 0,
             tallies: graph
                 .leaves

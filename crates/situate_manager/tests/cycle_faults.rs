@@ -332,3 +332,29 @@ fn a_cycle_held_back_counts_its_late_starts_and_stats_show_the_achieved_rate() {
     handle.request(Request::Shutdown).unwrap();
     join.join_timeout(BOUND).ok().expect("the manager ended").unwrap();
 }
+
+#[test]
+fn an_unpaced_simulated_cycle_is_timed_on_samples_and_a_long_one_still_shows_in_the_maximum() {
+    // Cycles back to back are timed exactly one in `TIMING_SAMPLE`; the
+    // others on the coarse clock, which still sees a long one. The long
+    // cycle here is not a sampled one (cycle 5; samples are 1, 33, …).
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("sometimes_slow", SkillKind::Sync, &[], &[("y", "f64")]), |io, _| {
+        if io.cx.cycle() == 5 {
+            std::thread::sleep(Duration::from_millis(40));
+        }
+        io.outputs[0] = Some(Value::F64(1.0));
+        Ok(())
+    }));
+    let spec = simulated("sampled").skill(skill("s", "sometimes_slow").budget_ms(10_000.0));
+    let mut m = build(&spec, &reg);
+    assert_ne!(5 % situate_manager::manager::TIMING_SAMPLE, 1, "cycle 5 is not a sample");
+    m.run_cycles(100);
+    let stats = m.stats().unwrap();
+    assert_eq!(stats.cycle, 100);
+    // The sleep is never shorter than asked; the coarse clock lags by less than a tick (≤ 10 ms).
+    assert!(stats.max_cycle_ns >= 30_000_000, "the long cycle is in the maximum: {stats:?}");
+    // Cycles 1, 33, 65 and 97 were timed exactly, none of them the long one.
+    assert!(stats.last_cycle_ns > 0 && stats.last_cycle_ns < 30_000_000, "{stats:?}");
+    assert!(stats.mean_cycle_ns > 0.0 && stats.mean_cycle_ns < 30_000_000.0, "{stats:?}");
+}

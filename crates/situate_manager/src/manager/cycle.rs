@@ -15,7 +15,7 @@ use super::{fmt_duration, Inst, Manager, RefTarget, TIMING_SAMPLE};
 use crate::config::ClockKind;
 use crate::control::{Event, Request};
 use crate::expr::Lookup;
-use crate::runner::{coarse_tick_ns, Stamp, WorkerStats};
+use crate::runner::{coarse_ns, coarse_tick_ns, Stamp, WorkerStats};
 
 impl Manager {
     pub(super) fn compile_schedule(&mut self) {
@@ -48,7 +48,9 @@ impl Manager {
         let mut ready = std::mem::take(&mut self.ready);
         if self.pool.is_none() {
             // Serial: one pass, levels make no difference (see `run_serial`).
-            self.run_serial(&plan, 0..plan.steps.len(), None);
+            // An untimed cycle's coarse start is the first body's too.
+            let t = (!self.cycle_timed).then_some(Stamp::Coarse(self.cycle_start_coarse));
+            self.run_serial(&plan, 0..plan.steps.len(), t);
         } else {
             // The coarse clock's reading at the end of the last body, carried
             // to the next one (see `run_serial`).
@@ -89,23 +91,29 @@ impl Manager {
 
     /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
     pub(super) fn begin_cycle(&mut self) {
-        self.cycle_start = Instant::now();
-        if let Some(due) = self.due.take() {
-            if self.cycle_start.saturating_duration_since(due).as_secs_f64() > self.period_s / 2.0 {
-                self.late_starts += 1;
-            }
-        }
-        if let Some(last) = self.last_start {
-            let dt = self.cycle_start.saturating_duration_since(last).as_secs_f64();
-            // Over about the last 20 cycles.
-            self.interval_s = Some(match self.interval_s {
-                Some(avg) => avg + (dt - avg) / 20.0,
-                None => dt,
-            });
-        }
-        self.last_start = Some(self.cycle_start);
         self.cycle += 1;
         self.sampled = self.cycle % TIMING_SAMPLE == 1;
+        self.cycle_timed = self.sampled || self.clock == ClockKind::Wall || self.speed.is_some() || self.due.is_some();
+        if self.cycle_timed {
+            self.cycle_start = Instant::now();
+            if let Some(due) = self.due.take() {
+                if self.cycle_start.saturating_duration_since(due).as_secs_f64() > self.period_s / 2.0 {
+                    self.late_starts += 1;
+                }
+            }
+            if let Some((last, at)) = self.last_start {
+                let cycles = self.cycle.saturating_sub(at).max(1) as f64;
+                let dt = self.cycle_start.saturating_duration_since(last).as_secs_f64() / cycles;
+                // Over about the last 20 timed cycles.
+                self.interval_s = Some(match self.interval_s {
+                    Some(avg) => avg + (dt - avg) / 20.0,
+                    None => dt,
+                });
+            }
+            self.last_start = Some((self.cycle_start, self.cycle));
+        } else {
+            self.cycle_start_coarse = coarse_ns();
+        }
         self.time_s = match self.clock {
             ClockKind::Simulated => self.cycle as f64 * self.period_s,
             ClockKind::Wall => self.started.elapsed().as_secs_f64(),
@@ -171,10 +179,17 @@ impl Manager {
     pub(super) fn end_cycle(&mut self) {
         self.evaluate_monitors();
         self.tally_winners();
+        if !self.cycle_timed {
+            // Between samples: the coarse clock catches a long cycle.
+            let elapsed = coarse_ns().saturating_sub(self.cycle_start_coarse);
+            self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
+            return;
+        }
         let elapsed = self.cycle_start.elapsed().as_nanos() as u64;
         self.last_cycle_ns = elapsed;
         self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
         self.total_cycle_ns += elapsed;
+        self.timed_cycles += 1;
         if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
             self.overruns += 1;
         }

@@ -241,7 +241,11 @@ impl Manager {
             running: self.running,
             period_s: self.period_s,
             last_cycle_ns: self.last_cycle_ns,
-            mean_cycle_ns: if self.cycle == 0 { 0.0 } else { self.total_cycle_ns as f64 / self.cycle as f64 },
+            mean_cycle_ns: if self.timed_cycles == 0 {
+                0.0
+            } else {
+                self.total_cycle_ns as f64 / self.timed_cycles as f64
+            },
             max_cycle_ns: self.max_cycle_ns,
             overruns: self.overruns,
             late_starts: self.late_starts,

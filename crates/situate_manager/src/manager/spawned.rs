@@ -371,7 +371,8 @@ fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<
     let mut ready = std::mem::take(&mut m.ready);
     if core.pool.is_none() {
         // Serial: one pass, levels make no difference (see `Manager::run_serial`).
-        g = run_steps(core, g, generation, &plan, 0..plan.steps.len(), None, true)?.0;
+        let t = (!m.cycle_timed).then_some(Stamp::Coarse(m.cycle_start_coarse));
+        g = run_steps(core, g, generation, &plan, 0..plan.steps.len(), t, true)?.0;
     } else {
         let mut t = None;
         for level in 0..plan.levels.len() {
