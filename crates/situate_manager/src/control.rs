@@ -253,6 +253,12 @@ impl SkillTiming {
         }
     }
 
+    /// Counts `n` runs that were not timed (each as long as the last timed one).
+    pub fn add_untimed(&mut self, n: u64) {
+        self.runs += n;
+        self.total_ns += n * self.last_ns;
+    }
+
     /// Counts one run, with its time if it was timed.
     pub fn record(&mut self, elapsed_ns: Option<u64>) {
         self.runs += 1;

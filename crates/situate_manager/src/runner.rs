@@ -33,6 +33,11 @@ pub(crate) struct Exec {
     /// How long the last run took, exactly when `timed`, else on the coarse clock.
     pub elapsed_ns: u64,
     pub timed: bool,
+    /// Runs not timed exactly since the last one that was: counted here,
+    /// where the cycle looks anyway, and added to the skill's timing (in
+    /// memory the cycle does not touch otherwise) at its next timed run, or
+    /// when the timing is asked for (see `Manager::count_run`).
+    pub untimed_runs: u64,
     /// The body [fills its outputs](Skill::fills_outputs): an output buffer
     /// holding the value its last output replaced is handed to the body as
     /// a spare instead of being recycled on entry.
@@ -49,6 +54,7 @@ impl Default for Exec {
             result: Ok(()),
             elapsed_ns: 0,
             timed: false,
+            untimed_runs: 0,
             fills: false,
         }
     }
@@ -65,6 +71,7 @@ impl Exec {
             result: Ok(()),
             elapsed_ns: 0,
             timed: false,
+            untimed_runs: 0,
         }
     }
 

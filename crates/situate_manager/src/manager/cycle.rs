@@ -275,10 +275,9 @@ impl Manager {
 
     #[inline]
     pub(super) fn account_by(&mut self, i: usize, deadline_ns: u64) -> Result<(), String> {
+        self.count_run(i);
         let exec = &mut self.execs[i];
-        let elapsed = exec.elapsed_ns;
-        let timed = exec.timed;
-        self.insts[i].timing.record(timed.then_some(elapsed));
+        let (elapsed, timed) = (exec.elapsed_ns, exec.timed);
         if exec.cx.has_prints() {
             let prints = exec.cx.take_prints();
             self.record_prints(i, prints);
@@ -292,6 +291,22 @@ impl Manager {
             return Ok(());
         }
         self.failed_run(i, elapsed, deadline_ns, late)
+    }
+
+    /// Counts instance `i`'s last run in its timing: a timed one there at
+    /// once, with the untimed ones before it; an untimed one only in its
+    /// `Exec` (see [`Exec::untimed_runs`](crate::runner::Exec)), so that the
+    /// cycle does not touch the instance's other state on most runs.
+    #[inline(always)]
+    pub(super) fn count_run(&mut self, i: usize) {
+        let exec = &mut self.execs[i];
+        if exec.timed {
+            let timing = &mut self.insts[i].timing;
+            timing.add_untimed(std::mem::take(&mut exec.untimed_runs));
+            timing.record(Some(exec.elapsed_ns));
+        } else {
+            exec.untimed_runs += 1;
+        }
     }
 
     /// [`Manager::account_by`] for a run that failed or was late: the cause,
@@ -335,8 +350,7 @@ impl Manager {
         if !step.plain_outs || exec.elapsed_ns > step.deadline_ns || exec.result.is_err() || exec.cx.has_prints() {
             return self.finish_step_slow(plan, k);
         }
-        let timed = exec.timed.then_some(exec.elapsed_ns);
-        self.insts[i].timing.record(timed);
+        self.count_run(i);
         match self.commit_plain(step, &plan.outs[step.outs.0 as usize..step.outs.1 as usize]) {
             Ok(()) => true,
             Err(cause) => {

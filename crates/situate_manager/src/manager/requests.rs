@@ -174,7 +174,11 @@ impl Manager {
                 .map(|(p, v)| port(p, v.clone().or_else(|| self.lent_input(i, p))))
                 .collect(),
             outputs: def.outputs.iter().enumerate().map(|(k, p)| port(p, self.last_output(i, k))).collect(),
-            timing: inst.timing,
+            timing: {
+                let mut timing = inst.timing;
+                timing.add_untimed(self.execs[i].untimed_runs);
+                timing
+            },
             prints: inst.prints.iter().cloned().collect(),
         }
     }
