@@ -17,6 +17,7 @@ PYTHON=${PYTHON:-python3}
 VENV=.venv
 TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==${SITUATE_ZENOH_VERSION:-1.10.2}" "numpy>=1.22")
 TOOLS+=("rosbags>=0.10,<1") # python/tests/test_ros2.py decodes the ROS 2 bridge's CDR with it
+TOOLS+=("mcap>=1.6,<2") # python/tests/test_recording.py reads `--record` files with the MCAP reference reader
 TARGET=${CARGO_TARGET_DIR:-target}
 PROFILE=${SITUATE_PY_PROFILE:-release}
 say() { if [[ -t 1 ]]; then printf '\033[1mpython.sh:\033[0m %s\n' "$*"; else printf 'python.sh: %s\n' "$*"; fi; }

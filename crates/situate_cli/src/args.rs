@@ -181,6 +181,10 @@ pub(crate) struct RunArgs {
     /// No GUI, even if the robot file has a `gui:` section.
     #[arg(long, conflicts_with = "gui")]
     pub(crate) no_gui: bool,
+    /// Record the run to this MCAP file: every signal, event, print and resource winner
+    /// (docs/recording.md).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) record: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) compose: Compose,
 }

@@ -65,6 +65,10 @@ pub(crate) struct DemoOptions {
     /// outcome, until Ctrl-C). Headless, the demo always exits when the mission ends.
     #[arg(long)]
     pub(crate) exit_when_done: bool,
+    /// Record the run to this MCAP file: every signal, event, print and resource winner
+    /// (docs/recording.md).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) record: Option<PathBuf>,
 }
 
 /// A free TCP port on the loopback interface.
@@ -138,6 +142,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         stopped: true,
         gui: (!demo.headless).then(|| demo.gui.clone()),
         no_gui: demo.headless,
+        record: demo.record.clone(),
         ..RunOptions::default()
     };
     // Ctrl-C (and SIGTERM, SIGHUP) stop the sequencer and end the demo with its outcome.
@@ -195,12 +200,14 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         winners.into_iter().find(|w| w.signal == "drive" || w.signal.starts_with("drive."))
     };
     let mut running = Some(running);
-    let (stats, skills) = if stay {
+    let (stats, skills, recorded) = if stay {
         let mut handle = running.as_ref().map(|r| r.handle.clone()).context("the robot")?;
-        (handle.stats()?, handle.skills()?)
+        (handle.stats()?, handle.skills()?, None)
     } else {
         running.take().context("the robot")?.finish()?
     };
+    // With the GUI staying up, the recording goes on until it closes (said then).
+    let recording = recorded.transpose().map_err(|e| problem(Exit::Failure, format!("--record: {e}")))?;
     let run = run?;
     let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
     let cpu_ns: u64 =
@@ -224,6 +231,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         "sequencer_exit": run.status.code(),
         "interrupted": run.interrupted.map(signals::name),
         "phase": run.phase,
+        "recording": recording.as_ref().map(crate::robot::recording_json),
     });
     if out.json {
         println!("{outcome}");
@@ -259,6 +267,9 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             cpu_ns as f64 / 1e6,
             if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
         );
+        if let Some(r) = &recording {
+            print!("demo: {}", crate::robot::recording_text(r));
+        }
     }
     let code = match (run.interrupted, task_done) {
         (Some(sig), _) => signals::status(sig),
@@ -277,7 +288,12 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             std::thread::sleep(Duration::from_millis(50));
         }
         out.note(format_args!("{}: closing the GUI", stop.signal().map(signals::name).unwrap_or("stop")));
-        running.finish()?;
+        let (_, _, recorded) = running.finish()?;
+        match recorded {
+            Some(Ok(r)) => out.note(format_args!("{}", crate::robot::recording_text(&r).trim_end())),
+            Some(Err(e)) => return Err(problem(Exit::Failure, format!("--record: {e}"))),
+            None => {}
+        }
     }
     // A Ctrl-C after the mission only closes the GUI: the status is the mission's.
     Ok(code)

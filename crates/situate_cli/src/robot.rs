@@ -215,6 +215,8 @@ pub(crate) struct RunOptions {
     pub(crate) no_gui: bool,
     /// `--set`.
     pub(crate) compose: Compose,
+    /// `--record`: the MCAP file.
+    pub(crate) record: Option<PathBuf>,
 }
 
 /// A robot running on its own threads, serving the link.
@@ -228,14 +230,21 @@ pub(crate) struct Running {
     pub(crate) gui: Option<situate_gui::GuiServer>,
     pub(crate) sim: Option<Simulation>,
     pub(crate) robot: String,
+    /// `--record`: ended after the manager, with what it holds.
+    pub(crate) recorder: Option<situate_record::Recorder>,
 }
+
+/// What [`Running::finish`] leaves: the final statistics, the skills, and
+/// the recording's outcome if one was made.
+pub(crate) type Finished =
+    (ManagerStats, Vec<SkillInfo>, Option<Result<situate_record::Summary, situate_record::RecordError>>);
 
 impl Running {
     /// Stops everything and returns the final statistics, within
     /// [`signals::stop_bound`]: a cycle stuck in a skill's body (or a part
     /// that does not stop) is left behind, and the error says which.
-    pub(crate) fn finish(self) -> Result<(ManagerStats, Vec<SkillInfo>), Stuck> {
-        let Running { mut handle, join, served, ros2, gui, .. } = self;
+    pub(crate) fn finish(self) -> Result<Finished, Stuck> {
+        let Running { mut handle, join, served, ros2, gui, recorder, .. } = self;
         let stage = Arc::new(std::sync::atomic::AtomicU8::new(Stage::Stats as u8));
         let (tx, rx) = crossbeam_channel::bounded(1);
         let at = Arc::clone(&stage);
@@ -253,14 +262,16 @@ impl Running {
             at.store(Stage::Cycle as u8, Ordering::SeqCst);
             let _ = handle.request(situate::manager::Request::Shutdown);
             let _ = join.join();
-            let _ = tx.send((stats, skills));
+            // After the manager: every cycle it ran is in the file.
+            let recorded = recorder.map(situate_record::Recorder::finish);
+            let _ = tx.send((stats, skills, recorded));
         };
         if let Err(e) = std::thread::Builder::new().name("situate-teardown".into()).spawn(teardown) {
             return Err(Stuck { stage: Stage::Spawn, detail: e.to_string() });
         }
         match rx.recv_timeout(signals::stop_bound()) {
-            Ok((Ok(stats), Ok(skills))) => Ok((stats, skills)),
-            Ok((Err(e), _) | (_, Err(e))) => Err(Stuck { stage: Stage::Stats, detail: e.to_string() }),
+            Ok((Ok(stats), Ok(skills), recorded)) => Ok((stats, skills, recorded)),
+            Ok((Err(e), _, _) | (_, Err(e), _)) => Err(Stuck { stage: Stage::Stats, detail: e.to_string() }),
             Err(_) => {
                 let stage = match stage.load(Ordering::SeqCst) {
                     s if s == Stage::Gui as u8 => Stage::Gui,
@@ -376,9 +387,16 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     manager.stop_after(opts.cycles);
     manager.set_speed(opts.speed);
     let events = manager.events();
+    let recorder = match &opts.record {
+        Some(path) => Some(
+            situate_record::Recorder::start(path, &mut manager)
+                .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
+        ),
+        None => None,
+    };
     let (handle, join) = manager.spawn(!opts.stopped);
     let mut running =
-        Running { handle, join, events, served: None, ros2: None, gui: None, sim, robot: spec.robot.clone() };
+        Running { handle, join, events, served: None, ros2: None, gui: None, sim, robot: spec.robot.clone(), recorder };
     if let Some(session) = session {
         match Link::serve(&spec.robot, running.handle.clone(), session, &link).context("serving the link") {
             Ok(l) => {
@@ -478,8 +496,22 @@ pub(crate) fn gui_address(robot_file: &RobotFile, opts: &RunOptions) -> Result<O
 
 /// `situate run`.
 pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Result<()> {
-    let RunArgs { file, cycles, executor, clock, no_link, listen, map, seed, world, speed, gui, no_gui, compose } =
-        args;
+    let RunArgs {
+        file,
+        cycles,
+        executor,
+        clock,
+        no_link,
+        listen,
+        map,
+        seed,
+        world,
+        speed,
+        gui,
+        no_gui,
+        record,
+        compose,
+    } = args;
     let opts = RunOptions {
         cycles,
         executor,
@@ -492,6 +524,7 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         gui,
         no_gui,
         compose,
+        record,
     };
     // Before starting: a signal during the start stops the robot once started.
     let interrupted = signals::Stop::install()?;
@@ -522,8 +555,22 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         }
     }
     match running.finish() {
-        Ok((stats, skills)) => {
-            out.result(&summary_json(&stats, &skills), || summary_text(&stats, &skills));
+        Ok((stats, skills, recorded)) => {
+            let recording = match recorded.transpose() {
+                Ok(summary) => summary,
+                Err(e) => return Err(problem(Exit::Failure, format!("--record: {e}"))),
+            };
+            let mut json = summary_json(&stats, &skills);
+            if let Some(r) = &recording {
+                json["recording"] = recording_json(r);
+            }
+            out.result(&json, || {
+                let mut text = summary_text(&stats, &skills);
+                if let Some(r) = &recording {
+                    text.push_str(&recording_text(r));
+                }
+                text
+            });
             Ok(())
         }
         Err(stuck) => Err(Problem {
@@ -610,6 +657,33 @@ fn summary_json(stats: &ManagerStats, skills: &[SkillInfo]) -> Json {
         "stats": situate_link::json::stats_to_json(stats),
         "skills": skills.iter().map(situate_link::json::skill_to_json).collect::<Vec<_>>(),
     })
+}
+
+/// A finished recording in JSON (`"recording"` of `run` and `demo`).
+pub(crate) fn recording_json(r: &situate_record::Summary) -> Json {
+    json!({
+        "path": r.path.display().to_string(),
+        "cycles": r.frames,
+        "first_cycle": r.cycles.map(|c| c.0),
+        "last_cycle": r.cycles.map(|c| c.1),
+        "messages": r.messages,
+        "channels": r.channels,
+        "dropped_cycles": r.dropped,
+        "bytes": r.bytes,
+    })
+}
+
+/// A finished recording, one line.
+pub(crate) fn recording_text(r: &situate_record::Summary) -> String {
+    format!(
+        "recorded {} cycles ({} messages on {} channels, {:.1} MB{}) to {}\n",
+        r.frames,
+        r.messages,
+        r.channels,
+        r.bytes as f64 / 1e6,
+        if r.dropped > 0 { format!("; {} cycles dropped: the disk did not keep up", r.dropped) } else { String::new() },
+        r.path.display()
+    )
 }
 
 fn summary_text(stats: &ManagerStats, skills: &[SkillInfo]) -> String {

@@ -209,7 +209,7 @@ pub fn check_name(s: &LitStr, what: &str) -> syn::Result<String> {
 pub fn doc(attrs: &[Attribute]) -> TokenStream {
     enum Piece {
         Text(String),
-        Expr(Expr),
+        Expr(Box<Expr>),
     }
     let mut pieces: Vec<Piece> = Vec::new();
     for attr in attrs {
@@ -223,7 +223,7 @@ pub fn doc(attrs: &[Attribute]) -> TokenStream {
                 let lines: Vec<&str> = text.lines().map(|l| l.strip_prefix(' ').unwrap_or(l).trim_end()).collect();
                 pieces.push(Piece::Text(lines.join("\n")));
             }
-            other => pieces.push(Piece::Expr(other.clone())),
+            other => pieces.push(Piece::Expr(Box::new(other.clone()))),
         }
     }
     if pieces.iter().all(|p| matches!(p, Piece::Text(_))) {

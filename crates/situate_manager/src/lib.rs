@@ -29,7 +29,7 @@ pub use control::{
     SignalReading, SkillInfo, SkillTiming,
 };
 pub use graph::Graph;
-pub use manager::{Joiner, Manager, MAX_MONITORS, MAX_MONITORS_PER_CLIENT};
+pub use manager::{Frame, Joiner, Manager, TapReceiver, MAX_MONITORS, MAX_MONITORS_PER_CLIENT};
 pub use monitor::{MonitorCondition, MonitorMode, MAX_ANY_CONDITIONS};
 pub use registry::Registry;
 pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

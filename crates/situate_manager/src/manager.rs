@@ -59,6 +59,40 @@ use plan::Plan;
 use slots::Slot;
 pub use spawned::Joiner;
 
+/// The values written in one cycle, leaf by leaf (see [`Manager::tap`]).
+#[derive(Debug, Clone)]
+pub struct Frame {
+    pub cycle: u64,
+    /// The manager's clock at the cycle, in seconds.
+    pub time_s: f64,
+    /// (leaf index in the graph, value), in leaf order.
+    pub values: Vec<(usize, Value)>,
+    /// (instance index, line): the skills' prints of this cycle, verbose or not.
+    pub prints: Vec<(usize, String)>,
+    /// (leaf index, instance index): who won each resource written this cycle.
+    pub winners: Vec<(usize, usize)>,
+}
+
+/// The cycle's end of a tap.
+struct Tap {
+    tx: crossbeam_channel::Sender<Frame>,
+    dropped: Arc<std::sync::atomic::AtomicU64>,
+}
+
+/// The reader's end of a tap ([`Manager::tap`]): the frames, and how many
+/// were dropped because it was full. It ends when the manager does.
+pub struct TapReceiver {
+    pub frames: Receiver<Frame>,
+    dropped: Arc<std::sync::atomic::AtomicU64>,
+}
+
+impl TapReceiver {
+    /// Frames dropped so far because the receiver was full.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
 /// The cycle times every body exactly once in this many cycles (and the
 /// bodies with a short deadline always); in the others it reads only the
 /// coarse clock, enough to see a run past its deadline.
@@ -193,6 +227,10 @@ pub struct Manager {
     sampled: bool,
     /// The ready steps of a level (kept to reuse its allocation).
     ready: Vec<usize>,
+    /// Where every cycle's written values go, when something records them.
+    tap: Option<Tap>,
+    /// This cycle's prints, for the tap.
+    tap_prints: Vec<(usize, String)>,
     /// The lockstep dskills whose device exchange runs this cycle.
     exchanging: Vec<usize>,
     /// Record outputs decomposed into leaves before a commit (reused).
@@ -310,6 +348,8 @@ impl Manager {
             sampled: true,
             ready: Vec::new(),
             exchanging: Vec::new(),
+            tap: None,
+            tap_prints: Vec::new(),
             parts: Vec::new(),
             clocks,
             generation: 0,
@@ -340,6 +380,19 @@ impl Manager {
 
     pub fn time_s(&self) -> f64 {
         self.time_s
+    }
+
+    /// Taps the cycle: from now on, at the end of every cycle, the values
+    /// written in it (leaf by leaf, as [`Frame`]s) go to the returned
+    /// receiver, which holds up to `capacity` frames. The cycle never waits
+    /// for it: a frame that finds it full is dropped and counted (see
+    /// [`TapReceiver::dropped`]). One tap at a time; a new one replaces the
+    /// last. The leaves are those of [`Manager::graph`] (`leaves[i]`).
+    pub fn tap(&mut self, capacity: usize) -> TapReceiver {
+        let (tx, rx) = crossbeam_channel::bounded(capacity.max(1));
+        let dropped = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        self.tap = Some(Tap { tx, dropped: Arc::clone(&dropped) });
+        TapReceiver { frames: rx, dropped }
     }
 
     pub fn events(&self) -> Receiver<Event> {
@@ -444,6 +497,9 @@ impl Manager {
     fn record_prints(&mut self, i: usize, prints: Vec<String>) {
         let inst = &mut self.insts[i];
         for line in prints {
+            if self.tap.is_some() {
+                self.tap_prints.push((i, line.clone()));
+            }
             if inst.verbose {
                 self.bus.send(Event::Print {
                     skill: self.graph.instances[i].name.clone(),

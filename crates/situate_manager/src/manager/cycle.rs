@@ -11,7 +11,7 @@ use situate_core::{SignalType, Value};
 
 use super::plan::{Plan, Step, StepKind};
 use super::slots::{assemble, Slot};
-use super::{fmt_duration, Inst, Manager, RefTarget, TIMING_SAMPLE};
+use super::{fmt_duration, Frame, Inst, Manager, RefTarget, TIMING_SAMPLE};
 use crate::config::ClockKind;
 use crate::control::{Event, Request};
 use crate::expr::Lookup;
@@ -179,6 +179,9 @@ impl Manager {
     pub(super) fn end_cycle(&mut self) {
         self.evaluate_monitors();
         self.tally_winners();
+        if self.tap.is_some() {
+            self.send_frame();
+        }
         if !self.cycle_timed {
             // Between samples: the coarse clock catches a long cycle.
             let elapsed = coarse_ns().saturating_sub(self.cycle_start_coarse);
@@ -192,6 +195,35 @@ impl Manager {
         self.timed_cycles += 1;
         if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
             self.overruns += 1;
+        }
+    }
+
+    /// Hands the values written this cycle to the tap (never waits: a full
+    /// tap loses the frame, counted; a closed one is removed).
+    #[cold]
+    fn send_frame(&mut self) {
+        let Some(tap) = &self.tap else { return };
+        let cycle = self.cycle;
+        let values = self
+            .slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.stamp == cycle)
+            .filter_map(|(l, s)| s.value.clone().map(|v| (l, v)))
+            .collect();
+        let winners = self
+            .tallies
+            .iter()
+            .filter(|t| self.slots[t.leaf].stamp == cycle)
+            .map(|t| (t.leaf, self.slots[t.leaf].writer as usize))
+            .collect();
+        let prints = std::mem::take(&mut self.tap_prints);
+        match tap.tx.try_send(Frame { cycle, time_s: self.time_s, values, prints, winners }) {
+            Ok(()) => {}
+            Err(crossbeam_channel::TrySendError::Full(_)) => {
+                tap.dropped.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+            Err(crossbeam_channel::TrySendError::Disconnected(_)) => self.tap = None,
         }
     }
 

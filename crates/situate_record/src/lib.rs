@@ -1,0 +1,344 @@
+//! Recording a robot's run to an MCAP file, for Foxglove, PlotJuggler,
+//! Rerun or the `mcap` libraries.
+//!
+//! [`Recorder::start`] taps the manager's cycle ([`Manager::tap`]) and
+//! subscribes to its events before it is spawned; a thread of its own writes
+//! them as they come, so the file grows with the run and memory stays flat.
+//! The cycle never waits for the recorder: a frame that finds the queue full
+//! is dropped and counted ([`Summary::dropped`]).
+//!
+//! What the file holds (JSON messages, each channel with a JSON Schema, so a
+//! viewer needs no plug-in):
+//! - one channel per signal leaf (topic: its path, such as `sonar.range` or
+//!   `odom.x`), a message `{"cycle", "value"}` in each cycle that wrote it;
+//! - one channel per kind of event (topic `situate/events/<kind>`: skill
+//!   activations, parameter changes, monitor events, faults, the manager
+//!   started or stopped, …), each message the event's JSON as the link
+//!   publishes it (`docs/protocol.md`);
+//! - `situate/prints`: every skill's prints, verbose or not
+//!   (`{"cycle", "skill", "line"}`);
+//! - `situate/winners`: who holds each resource, when that changes
+//!   (`{"cycle", "resource", "skill"}`);
+//! - a metadata record `situate` (robot, period, clock, leaves).
+//!
+//! A message's `log_time` and `publish_time` are the manager's clock at the
+//! cycle (simulated or wall) in nanoseconds; the cycle is in every message.
+//! The file is chunked (zstd) and indexed, so a reader can seek by time.
+
+mod schema;
+
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::thread::JoinHandle;
+
+use crossbeam_channel::{select, Receiver, Sender};
+use serde_json::{json, Value as Json};
+use situate_core::SignalType;
+use situate_link::json::{event_to_json, value_to_json};
+use situate_manager::{Control, Event, Frame, Manager, TapReceiver};
+
+pub use schema::{leaf_schema, message_schema};
+
+/// Frames the cycle may get ahead of the file by (at 100 Hz, 40 s).
+pub const QUEUE_FRAMES: usize = 4096;
+
+/// What went wrong with a recording.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{}: writing MCAP: {source}", path.display())]
+    Mcap { path: PathBuf, source: mcap::McapError },
+    #[error("{}: the recorder's thread ended without finishing the file", path.display())]
+    Lost { path: PathBuf },
+}
+
+/// What a finished recording holds.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Summary {
+    pub path: PathBuf,
+    /// Cycles recorded.
+    pub frames: u64,
+    /// Messages written, all channels.
+    pub messages: u64,
+    pub channels: usize,
+    /// Cycles lost because the writer fell behind by [`QUEUE_FRAMES`].
+    pub dropped: u64,
+    /// The file's size.
+    pub bytes: u64,
+    /// The first and last cycle recorded.
+    pub cycles: Option<(u64, u64)>,
+}
+
+/// A recording under way (see the module).
+pub struct Recorder {
+    stop: Sender<()>,
+    thread: JoinHandle<Result<Summary, RecordError>>,
+    path: PathBuf,
+}
+
+impl Recorder {
+    /// Starts recording `manager`'s cycles and events to `path` (created, or
+    /// emptied). Call it before the manager is spawned or run. The file is
+    /// opened here, so a path that cannot be written is an error now.
+    pub fn start(path: &Path, manager: &mut Manager) -> Result<Recorder, RecordError> {
+        let io = |source| RecordError::Io { path: path.to_path_buf(), source };
+        let file = File::create(path).map_err(io)?;
+        let mut writer = mcap::Writer::new(BufWriter::new(file)).map_err(|source| mcap_error(path, source))?;
+        let graph = manager.graph();
+        let leaves: Vec<(String, SignalType)> = graph.leaves.iter().map(|l| (l.path.clone(), l.ty.clone())).collect();
+        let robot = graph.robot.clone();
+        let skills: Vec<String> = graph.instances.iter().map(|d| d.name.clone()).collect();
+        let stats = manager.stats().ok();
+        let mut meta = BTreeMap::new();
+        meta.insert("robot".to_string(), robot);
+        if let Some(stats) = &stats {
+            meta.insert("period_s".to_string(), stats.period_s.to_string());
+        }
+        meta.insert(
+            "leaves".to_string(),
+            serde_json::to_string(
+                &leaves.iter().map(|(p, t)| json!({"path": p, "type": t.to_string()})).collect::<Vec<_>>(),
+            )
+            .unwrap_or_default(),
+        );
+        meta.insert("situate_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
+        writer
+            .write_metadata(&mcap::records::Metadata { name: "situate".to_string(), metadata: meta })
+            .map_err(|source| mcap_error(path, source))?;
+        let period_s = stats.map(|s| s.period_s).unwrap_or(0.0);
+        let tap = manager.tap(QUEUE_FRAMES);
+        let events = manager.events();
+        let (stop, stopped) = crossbeam_channel::bounded(1);
+        let file = Writing {
+            path: path.to_path_buf(),
+            writer,
+            leaves,
+            skills,
+            holders: HashMap::new(),
+            leaf_channels: HashMap::new(),
+            event_channels: HashMap::new(),
+            sequence: HashMap::new(),
+            period_s,
+            times: std::collections::VecDeque::new(),
+            summary: Summary { path: path.to_path_buf(), ..Summary::default() },
+        };
+        let thread = std::thread::Builder::new()
+            .name("situate-record".into())
+            .spawn(move || file.run(tap, events, stopped))
+            .map_err(io)?;
+        Ok(Recorder { stop, thread, path: path.to_path_buf() })
+    }
+
+    /// Writes what is still queued, ends the file (its summary and index)
+    /// and says what it holds. Call it after the manager has stopped, or at
+    /// any time to end the recording there.
+    pub fn finish(self) -> Result<Summary, RecordError> {
+        let _ = self.stop.send(());
+        match self.thread.join() {
+            Ok(outcome) => outcome,
+            Err(_) => Err(RecordError::Lost { path: self.path }),
+        }
+    }
+}
+
+fn mcap_error(path: &Path, source: mcap::McapError) -> RecordError {
+    RecordError::Mcap { path: path.to_path_buf(), source }
+}
+
+/// The writer's side.
+struct Writing {
+    path: PathBuf,
+    writer: mcap::Writer<BufWriter<File>>,
+    leaves: Vec<(String, SignalType)>,
+    /// Instance names.
+    skills: Vec<String>,
+    /// Who held each resource leaf at the last change.
+    holders: HashMap<usize, usize>,
+    leaf_channels: HashMap<usize, u16>,
+    event_channels: HashMap<&'static str, u16>,
+    sequence: HashMap<u16, u32>,
+    period_s: f64,
+    /// The recent frames' cycles and times, for the time of events (an
+    /// event may be read after frames of later cycles).
+    times: std::collections::VecDeque<(u64, f64)>,
+    summary: Summary,
+}
+
+impl Writing {
+    fn run(mut self, tap: TapReceiver, events: Receiver<Event>, stop: Receiver<()>) -> Result<Summary, RecordError> {
+        loop {
+            select! {
+                recv(tap.frames) -> frame => match frame {
+                    Ok(frame) => self.frame(&frame)?,
+                    // The manager is gone: nothing more will come.
+                    Err(_) => break,
+                },
+                recv(events) -> event => match event {
+                    Ok(event) => {
+                        // The frames sent before it first: an event is
+                        // timed by its cycle, from the frames around it.
+                        while let Ok(frame) = tap.frames.try_recv() {
+                            self.frame(&frame)?;
+                        }
+                        self.event(&event)?;
+                    }
+                    Err(_) => break,
+                },
+                recv(stop) -> _ => break,
+            }
+        }
+        // What is queued still goes in, frames first (events name their cycle).
+        while let Ok(frame) = tap.frames.try_recv() {
+            self.frame(&frame)?;
+        }
+        while let Ok(event) = events.try_recv() {
+            self.event(&event)?;
+        }
+        self.summary.dropped = tap.dropped();
+        self.writer.finish().map_err(|source| mcap_error(&self.path, source))?;
+        self.summary.channels = self.leaf_channels.len() + self.event_channels.len();
+        self.summary.bytes = std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
+        Ok(self.summary)
+    }
+
+    fn frame(&mut self, frame: &Frame) -> Result<(), RecordError> {
+        let time = nanos(frame.time_s);
+        for (leaf, value) in &frame.values {
+            let channel = match self.leaf_channels.get(leaf) {
+                Some(&c) => c,
+                None => {
+                    let Some((path, ty)) = self.leaves.get(*leaf) else { continue };
+                    let schema = serde_json::to_vec(&message_schema(ty)).unwrap_or_default();
+                    let (path, ty) = (path.clone(), ty.to_string());
+                    let c = self.channel(&format!("situate.{ty}"), &schema, &path, &[("type", ty.as_str())])?;
+                    self.leaf_channels.insert(*leaf, c);
+                    c
+                }
+            };
+            let data = json!({"cycle": frame.cycle, "value": value_to_json(value)});
+            self.write(channel, time, &data)?;
+        }
+        for (i, line) in &frame.prints {
+            let channel = self.fixed_channel("print")?;
+            let skill = self.skills.get(*i).cloned().unwrap_or_default();
+            self.write(channel, time, &json!({"cycle": frame.cycle, "skill": skill, "line": line}))?;
+        }
+        for &(leaf, i) in &frame.winners {
+            if self.holders.insert(leaf, i) == Some(i) {
+                continue;
+            }
+            let channel = self.fixed_channel("winner")?;
+            let resource = self.leaves.get(leaf).map(|(p, _)| p.clone()).unwrap_or_default();
+            let skill = self.skills.get(i).cloned().unwrap_or_default();
+            self.write(channel, time, &json!({"cycle": frame.cycle, "resource": resource, "skill": skill}))?;
+        }
+        self.summary.frames += 1;
+        self.summary.cycles = Some(match self.summary.cycles {
+            Some((first, _)) => (first, frame.cycle),
+            None => (frame.cycle, frame.cycle),
+        });
+        if self.times.len() == 2 * QUEUE_FRAMES {
+            self.times.pop_front();
+        }
+        self.times.push_back((frame.cycle, frame.time_s));
+        Ok(())
+    }
+
+    fn event(&mut self, event: &Event) -> Result<(), RecordError> {
+        let (kind, data) = event_to_json(event);
+        let channel = match self.event_channels.get(kind) {
+            Some(&c) => c,
+            None => {
+                let schema = serde_json::to_vec(&schema::event_schema(kind)).unwrap_or_default();
+                let c =
+                    self.channel(&format!("situate.event.{kind}"), &schema, &format!("situate/events/{kind}"), &[])?;
+                self.event_channels.insert(kind, c);
+                c
+            }
+        };
+        let cycle = data.get("cycle").and_then(Json::as_u64);
+        let time_s = match data.get("time_s").and_then(Json::as_f64) {
+            Some(t) => t,
+            None => self.time_of(cycle),
+        };
+        self.write(channel, nanos(time_s), &data)
+    }
+
+    /// The manager's clock at `cycle`: that frame's time when it is among
+    /// the recent ones; else from the nearest recent frame, a period per cycle
+    /// apart (exact on a simulated clock), or from cycle 0 at time 0.
+    fn time_of(&self, cycle: Option<u64>) -> f64 {
+        let Some(cycle) = cycle else {
+            return self.times.back().map_or(0.0, |&(_, t)| t);
+        };
+        let k = self.times.partition_point(|&(c, _)| c < cycle);
+        let near = match (self.times.get(k), k.checked_sub(1).and_then(|j| self.times.get(j))) {
+            (Some(&(c, t)), _) if c == cycle => return t,
+            (Some(&after), None) => after,
+            (_, Some(&before)) => before,
+            // Before any frame: cycles a period apart from 0.
+            (None, None) => (0, 0.0),
+        };
+        let (c, t) = near;
+        (t + (cycle as f64 - c as f64) * self.period_s).max(0.0)
+    }
+
+    /// The channel of the prints (`"print"`) or of the winners (`"winner"`).
+    fn fixed_channel(&mut self, what: &'static str) -> Result<u16, RecordError> {
+        let key = if what == "print" { "\0print" } else { "\0winner" };
+        if let Some(&c) = self.event_channels.get(key) {
+            return Ok(c);
+        }
+        let (topic, schema) = if what == "print" {
+            ("situate/prints", schema::print_schema())
+        } else {
+            ("situate/winners", schema::winner_schema())
+        };
+        let schema = serde_json::to_vec(&schema).unwrap_or_default();
+        let c = self.channel(&format!("situate.{what}"), &schema, topic, &[])?;
+        self.event_channels.insert(key, c);
+        Ok(c)
+    }
+
+    fn channel(
+        &mut self,
+        schema_name: &str,
+        schema: &[u8],
+        topic: &str,
+        meta: &[(&str, &str)],
+    ) -> Result<u16, RecordError> {
+        let schema_id = self
+            .writer
+            .add_schema(schema_name, "jsonschema", schema)
+            .map_err(|source| mcap_error(&self.path, source))?;
+        let meta: BTreeMap<String, String> = meta.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        self.writer.add_channel(schema_id, topic, "json", &meta).map_err(|source| mcap_error(&self.path, source))
+    }
+
+    fn write(&mut self, channel: u16, time_ns: u64, data: &Json) -> Result<(), RecordError> {
+        let bytes = serde_json::to_vec(data).unwrap_or_default();
+        let sequence = self.sequence.entry(channel).or_insert(0);
+        *sequence = sequence.wrapping_add(1);
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: *sequence,
+            log_time: time_ns,
+            publish_time: time_ns,
+        };
+        self.writer.write_to_known_channel(&header, &bytes).map_err(|source| mcap_error(&self.path, source))?;
+        self.summary.messages += 1;
+        Ok(())
+    }
+}
+
+/// Seconds of the manager's clock as MCAP nanoseconds (negative: 0).
+fn nanos(time_s: f64) -> u64 {
+    if time_s.is_finite() && time_s > 0.0 {
+        (time_s * 1e9).round() as u64
+    } else {
+        0
+    }
+}

@@ -1,0 +1,131 @@
+//! A recording read back with the `mcap` crate: one channel per signal leaf
+//! written, one per kind of event, JSON Schemas, a message per cycle with its
+//! cycle and the manager's clock as `log_time`.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use situate::manager::{ClockKind, Manager, Registry, Request, RobotSpec, SkillSpec};
+use situate::prelude::*;
+use situate_record::{RecordError, Recorder};
+
+#[derive(Skill, Default)]
+#[skill(name = "rec.count")]
+struct Count {
+    #[output]
+    n: f64,
+    #[output]
+    ramp: [f32; 3],
+}
+
+impl Body for Count {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.n = cx.cycle() as f64;
+        self.ramp = [0.0, 1.0, f32::NAN];
+        if cx.cycle() == 3 {
+            cx.print("three");
+        }
+        Ok(())
+    }
+}
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("situate-record-{}-{name}.mcap", std::process::id()))
+}
+
+fn manager() -> Manager {
+    let mut registry = Registry::new();
+    registry.register::<Count>();
+    let spec = RobotSpec::new("rec")
+        .clock(ClockKind::Simulated)
+        .period_s(0.1)
+        .skill(SkillSpec::new("c", "rec.count").remap("n", "count").remap("ramp", "ramp").active(true))
+        // A second writer of `count`, of higher priority, switched on later.
+        .skill(SkillSpec::new("c2", "rec.count").remap("n", "count").remap("ramp", "ramp2").priority(2).active(false));
+    match Manager::build(&spec, &registry) {
+        Ok(m) => m,
+        Err(e) => panic!("build failed:\n{e}"),
+    }
+}
+
+#[test]
+fn a_recording_has_a_channel_per_written_leaf_and_per_event_kind_read_back_with_mcap() {
+    let path = temp("channels");
+    let mut m = manager();
+    let recorder = Recorder::start(&path, &mut m).unwrap_or_else(|e| panic!("{e}"));
+    m.run_cycles(10);
+    m.request(Request::Activate { skills: vec!["c2".into()], with_providers: false }).unwrap();
+    m.run_cycles(10);
+    drop(m);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(summary.frames, 20, "{summary:?}");
+    assert_eq!(summary.dropped, 0, "{summary:?}");
+    assert_eq!(summary.cycles, Some((1, 20)), "{summary:?}");
+
+    let bytes = std::fs::read(&path).unwrap();
+    let mut per_topic: BTreeMap<String, Vec<(u64, serde_json::Value)>> = BTreeMap::new();
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        let message = message.unwrap();
+        let channel = &message.channel;
+        assert_eq!(channel.message_encoding, "json");
+        let schema = channel.schema.as_ref().expect("every channel has a schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        let schema: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        assert_eq!(schema["type"], "object", "{schema}");
+        let data: serde_json::Value = serde_json::from_slice(&message.data).unwrap();
+        per_topic.entry(channel.topic.clone()).or_default().push((message.log_time, data));
+    }
+    let topics: Vec<&str> = per_topic.keys().map(String::as_str).collect();
+    assert!(topics.contains(&"count") && topics.contains(&"ramp"), "{topics:?}");
+    assert!(topics.contains(&"situate/prints"), "{topics:?}");
+
+    // One message per cycle, the cycle in it, the manager's clock as log time.
+    let count = &per_topic["count"];
+    assert_eq!(count.len(), 20);
+    for (k, (log_time, data)) in count.iter().enumerate() {
+        let cycle = k as u64 + 1;
+        assert_eq!(data["cycle"], cycle);
+        assert_eq!(data["value"], cycle as f64);
+        assert_eq!(*log_time, cycle * 100_000_000, "cycle {cycle} at {} s", cycle as f64 * 0.1);
+    }
+    // Non-finite floats as the link writes them, and the schema allows them.
+    assert_eq!(per_topic["ramp"][0].1["value"], serde_json::json!([0.0, 1.0, "nan"]));
+    let print = &per_topic["situate/prints"];
+    assert_eq!(print.len(), 1, "{print:?}");
+    assert_eq!(print[0].1["line"], "three");
+    assert_eq!(print[0].1["cycle"], 3);
+    assert_eq!(print[0].0, 300_000_000, "an event at its cycle's time");
+
+    // Who holds the resource `count`, when that changes; the activation event.
+    let winners: Vec<(u64, String)> = per_topic["situate/winners"]
+        .iter()
+        .map(|(_, d)| (d["cycle"].as_u64().unwrap(), d["skill"].as_str().unwrap().to_string()))
+        .collect();
+    assert_eq!(winners, vec![(1, "c".to_string()), (11, "c2".to_string())]);
+    let activations = &per_topic["situate/events/activation_applied"];
+    assert_eq!(activations.len(), 1, "{activations:?}");
+    assert_eq!(activations[0].1["activated"], serde_json::json!(["c2"]));
+    assert_eq!(activations[0].1["cycle"], 11);
+    assert_eq!(activations[0].0, 1_100_000_000);
+
+    // Indexed: the summary section lists the channels and counts the messages.
+    let index = mcap::Summary::read(&bytes).unwrap().expect("a summary section");
+    let stats = index.stats.expect("statistics");
+    assert_eq!(stats.message_count, summary.messages);
+    assert_eq!(index.channels.len(), summary.channels);
+    assert!(!index.chunk_indexes.is_empty(), "chunked, so readers can seek");
+    std::fs::remove_file(&path).ok();
+}
+
+#[test]
+fn a_path_that_cannot_be_written_is_an_error_naming_it_and_nothing_is_tapped() {
+    let path = std::env::temp_dir().join("situate-no-such-dir").join("sub").join("x.mcap");
+    let mut m = manager();
+    match Recorder::start(&path, &mut m) {
+        Err(e @ RecordError::Io { .. }) => assert!(e.to_string().contains("situate-no-such-dir"), "{e}"),
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("a recording into a missing directory started"),
+    }
+    // The robot runs on.
+    m.run_cycles(3);
+}

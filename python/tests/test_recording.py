@@ -1,0 +1,108 @@
+"""`situate demo --record FILE` read back with the `mcap` package (the MCAP reference reader).
+
+The demo robot's run on the default building: one channel per signal leaf and per kind of
+event, JSON messages under JSON Schemas, each message's cycle and the manager's clock as its
+log time, and an index a reader can seek by time with. No timing assertions.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import pytest
+from mcap.reader import make_reader
+from test_demo import BIN, ROOT, needs_bin, situate_bin  # noqa: F401 (the fixture)
+
+
+def _record(path: Path) -> dict[str, Any]:
+    assert BIN is not None
+    cmd = [str(BIN), "demo", "--headless", "--json", "--seed", "1", "--python", sys.executable]
+    cmd += ["--record", str(path)]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    lines = [ln for ln in done.stdout.splitlines() if ln.startswith("{")]
+    assert lines, f"no outcome from `situate demo`:\n{done.stdout}\n{done.stderr[-3000:]}"
+    outcome: dict[str, Any] = json.loads(lines[-1])
+    return outcome
+
+
+@needs_bin
+def test_a_recorded_delivery_reads_back_with_the_mcap_reader(tmp_path: Path) -> None:
+    path = tmp_path / "delivery.mcap"
+    out = _record(path)
+    assert out["delivered"], out
+    rec = out["recording"]
+    assert rec["path"] == str(path), rec
+    assert rec["bytes"] == path.stat().st_size > 0, rec
+    assert rec["cycles"] == out["cycles"], rec
+    assert rec["dropped_cycles"] == 0, rec
+    assert (rec["first_cycle"], rec["last_cycle"]) == (1, out["cycles"]), rec
+
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None
+        assert summary.statistics is not None
+        assert summary.statistics.message_count == rec["messages"]
+        assert len(summary.channels) == rec["channels"]
+        meta = {m.name: m.metadata for m in reader.iter_metadata()}
+        period_s = float(meta["situate"]["period_s"])
+        assert meta["situate"]["robot"] == "deliverybot"
+
+        per_topic: dict[str, list[tuple[int, dict[str, Any]]]] = defaultdict(list)
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            assert channel.message_encoding == "json"
+            assert schema is not None
+            assert schema.encoding == "jsonschema"
+            assert json.loads(schema.data)["type"] == "object"
+            per_topic[channel.topic].append((message.log_time, json.loads(message.data)))
+
+    topics = set(per_topic)
+    # Signals the delivery writes, the simulator's ground truth, events, prints, winners.
+    for topic in ["sonar.range", "odom.x", "drive.v", "truth.pose.x", "speaker.say"]:
+        assert topic in topics, sorted(topics)
+    for topic in ["situate/events/activation_applied", "situate/prints", "situate/winners"]:
+        assert topic in topics, sorted(topics)
+    # Every message carries its cycle; its log time is the manager's (simulated) clock at it.
+    for topic, messages in per_topic.items():
+        for log_time, data in messages:
+            assert 1 <= data["cycle"] <= out["cycles"], (topic, data)
+            assert log_time == pytest.approx(data["cycle"] * period_s * 1e9, abs=1e3), (topic, data)
+    # The sonar ring, read every cycle but the first (readings arrive for the next cycle).
+    ranges = per_topic["sonar.range"]
+    assert len(ranges) >= out["cycles"] - 1
+    assert all(isinstance(r, (int, float, str)) for _, d in ranges[:50] for r in d["value"])
+    # The base changed hands as the sequencer switched skills; the activations are there.
+    assert len(per_topic["situate/winners"]) > 2
+    assert len(per_topic["situate/events/activation_applied"]) > 5
+    said = [d["value"] for _, d in per_topic["speaker.say"]]
+    assert any(said), said
+
+
+@needs_bin
+def test_a_recording_can_be_read_from_any_time_through_its_index(tmp_path: Path) -> None:
+    path = tmp_path / "delivery.mcap"
+    out = _record(path)
+    middle = int(out["mission_time_s"] / 2 * 1e9)
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        messages = reader.iter_messages(topics=["odom.x"], starting_at=middle)
+        late = [m.log_time for _, _, m in messages]
+    assert late, middle
+    assert min(late) >= middle, (middle, late[:3])
+    assert sorted(late) == late, "read in time order"
+
+
+def test_the_reader_is_the_reference_one() -> None:
+    # The `mcap` package comes from scripts/python.sh; say so if it is missing.
+    import mcap
+
+    assert Path(mcap.__file__).exists()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(subprocess.call([sys.executable, "-m", "pytest", __file__]))
