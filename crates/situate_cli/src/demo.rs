@@ -218,6 +218,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         "delivered": delivered_at.is_some(),
         "mission_time_s": delivered_at.unwrap_or(sim_time),
         "cycles": stats.cycle,
+        "mean_cycle_ns": stats.mean_cycle_ns,
         "skill_runs": runs,
         "skill_cpu_ms": cpu_ns as f64 / 1e6,
         "wall_s": wall_s,
