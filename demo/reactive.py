@@ -31,7 +31,16 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deliver import NORMAL, SKILLS, Mission, Stop
-from sequencing import SONARS, WALL_AHEAD_M, OutOfTime, Pose, Sequencer, wrap
+from reactive_route import (
+    DOOR_STANDOFF,
+    HOMED_M,
+    PUSH_M,
+    Action,
+    RouteFollower,
+    RouteState,
+    goto,
+)
+from sequencing import SONARS, OutOfTime, Pose, Sequencer, wrap
 
 import situate
 
@@ -69,12 +78,6 @@ SETTINGS = {
     # Cars stay open 10 s or so: in before the door closes.
     ("enter_car", "speed"): 0.35,
 }
-#: The office route starts this far square in front of the goal floor's button, m.
-BUTTON_STANDOFF_M = 1.0
-#: Within this of a barcode, the robot has homed on it, m.
-HOMED_M = 1.1
-#: The call button is pushed from this near (its centre to the barcode), m.
-PUSH_M = 0.5
 #: Waiting for a car longer than this after calling, the robot calls again, s.
 CALL_AGAIN_S = 45.0
 #: A car door seen opening this recently is still worth going to, s.
@@ -90,16 +93,10 @@ PATROL_LEG_S = 14.0
 CAR_ENTER_S = 25.0
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
 MOUTH_M = 2.6
-#: Counted a junction abeam, the robot goes this much farther before turning into it, m.
-JUNCTION_ON_M = 0.7
 #: In front of a barcode, the robot waits this long for the door beside it to show, s.
 DOOR_WAIT_S = 30.0
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
-#: Turned into a junction, the robot drives this far into the side corridor, m.
-INTO_MOUTH_M = 1.5
-#: In front of a door, this far from it, before passing it, m.
-DOOR_STANDOFF = 0.9
 
 
 @dataclass
@@ -136,35 +133,6 @@ class Senses:
     def sees(self, barcode: int, within: float = 5.0) -> bool:
         """Whether ``barcode`` is in view within ``within`` m."""
         return barcode in self.barcodes and self.barcodes[barcode][1] <= within
-
-
-@dataclass
-class Action:
-    """A rule's action: skills on, their parameters, and a key that restarts it when new."""
-
-    skills: tuple[str, ...]
-    params: dict[tuple[str, str], Any] = field(default_factory=dict)
-    key: Any = None
-
-
-def goto(
-    x: float,
-    y: float,
-    key: Any,
-    *,
-    speed: float = 0.3,
-    reverse_within: float = 0.0,
-    avoid: bool = False,
-) -> Action:
-    """Drives to (x, y) of the odometry frame (`std.home_position`), runaway on."""
-    skills = ("runaway", "avoid", "home_position") if avoid else ("runaway", "home_position")
-    params = {
-        ("home_position", "x"): x,
-        ("home_position", "y"): y,
-        ("home_position", "speed"): speed,
-        ("home_position", "reverse_within"): reverse_within,
-    }
-    return Action(skills, params, key=key)
 
 
 @dataclass
@@ -207,27 +175,7 @@ class Memory:
     called_from: Pose | None = None
 
 
-@dataclass
-class RouteState:
-    """Where the robot is on a route leg (docs/maps.md, route steps)."""
-
-    leg: str
-    step: int = 0
-    stage: str = "start"
-    start: Pose | None = None
-    count: int = 0
-    last_side: bool = False
-    heading: float | None = None
-    turn_goal: float | None = None
-    #: Before the leg: the point square in front of where it starts (odometry).
-    square_at: tuple[float, float] | None = None
-    #: The step squared up at last (-1: none).
-    squared: int = -1
-    #: How far along the step the last opening was counted, m.
-    counted_at: float | None = None
-
-
-class Reactive(Sequencer):
+class Reactive(RouteFollower, Sequencer):
     """The teleo-reactive controller: every cycle, the first applicable rule acts."""
 
     def __init__(
@@ -653,172 +601,6 @@ class Reactive(Sequencer):
         # Stopped short (someone in the way, a jamb): place the door anew and go again.
         m.door_goal, m.door_stage = None, ""
         return False
-
-    def route_action(self, s: Senses) -> Action:
-        """The route leg's current step (docs/maps.md)."""
-        r = self.mem.route
-        assert r is not None
-        steps = self.m.route.get(r.leg, [])
-        if r.step >= len(steps):
-            return Action(("runaway",), key=("route end", r.leg))
-        step = steps[r.step]
-        if r.stage == "approach":
-            code = self.button(s.floor)
-            b = s.barcodes.get(code)
-            normal = float(s.wall.get("normal", 0.0))
-            if b is not None and b[1] < PUSH_M + 0.15 and abs(b[0]) < 0.25:
-                if s.wall.get("seen") and abs(normal) < 0.7:
-                    h = wrap(s.pose.theta + normal)
-                    at = s.pose.theta + b[0]
-                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
-                    r.heading, r.stage = h, "square"
-                    r.square_at = (
-                        cx - BUTTON_STANDOFF_M * math.cos(h),
-                        cy - BUTTON_STANDOFF_M * math.sin(h),
-                    )
-                    return Action(("runaway",), key=("squaring", r.leg))
-                return Action(("runaway",), key=("fitting the wall", r.leg, s.t // 3))
-            if b is None:
-                return self.wander_about(s)
-            return Action(
-                ("track_barcode", "home"),
-                {("track_barcode", "id"): code, ("home", "stop_distance"): PUSH_M},
-                key=("approach", r.leg),
-            )
-        if r.stage == "square" and r.square_at is not None and r.heading is not None:
-            gx, gy = r.square_at
-            if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
-                return goto(gx, gy, ("square", r.leg, r.step), reverse_within=1.5)
-            off = wrap(r.heading - s.pose.theta)
-            if abs(off) > 0.06:
-                return Action(
-                    ("turn",), {("turn", "angle"): off}, key=("square turn", r.leg, r.step)
-                )
-            r.stage, r.squared = "start", r.step
-            if step.get("home") is not None:
-                return self.next_step(r, s)
-        if r.start is None:
-            r.start, r.count, r.stage = s.pose, 0, "follow"
-            r.last_side, r.counted_at = False, None
-            if r.heading is None:
-                r.heading = s.pose.theta
-        if step.get("home") is not None:
-            code = int(step["home"])
-            if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
-                door_next = any(x.get("pass") for x in steps[r.step + 1 :])
-                b = s.barcodes[code]
-                at = s.pose.theta + b[0]
-                if door_next and r.squared != r.step and r.heading is not None:
-                    # A door beside the barcode: square in front of it first, so that the
-                    # door finder looks along its wall. The barcode is on a wall of the
-                    # corridor the route followed: its normal is square to the route's
-                    # heading, on the barcode's side.
-                    side = math.pi / 2 if wrap(at - r.heading) > 0 else -math.pi / 2
-                    h = wrap(r.heading + side)
-                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
-                    r.heading, r.stage = h, "square"
-                    r.square_at = (
-                        cx - DOOR_STANDOFF * math.cos(h),
-                        cy - DOOR_STANDOFF * math.sin(h),
-                    )
-                    return Action(("runaway",), key=("squaring", r.step))
-                return self.next_step(r, s)
-            if s.sees(code):
-                return Action(
-                    ("runaway", "track_barcode", "home"),
-                    {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
-                    key=("route home", code),
-                )
-            return self.wander_about(s)
-        if step.get("pass"):
-            if self.through_door(s):
-                if r.leg == self.office_leg():
-                    self.mem.in_office = True
-                return self.next_step(r, s)
-            if self.mem.door_given_up_at > s.t - 1.0:
-                # No door showed here: back to the barcode's step, to home and square again.
-                homes = [n for n in range(r.step) if steps[n].get("home") is not None]
-                if homes:
-                    r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
-                    self.mem.door_goal, self.mem.door_stage = None, ""
-                    return Action(("runaway",), key=("door again", s.t))
-            return self.pass_door_action(s)
-        if r.stage == "follow" and step.get("follow"):
-            if self.step_until_met(step, r, s):
-                r.stage = "turn" if step.get("turn") else "done"
-            else:
-                # The step's detectors start afresh with it (as the sequenced robot's do).
-                return Action(
-                    ("runaway", "avoid", "follow_hallway", "detect_intersection", "detect_door"),
-                    key=("follow", r.leg, r.step),
-                )
-        if step.get("turn") and r.stage in ("follow", "turn"):
-            # A turn after the next step's door finder faces the door itself.
-            after = steps[r.step + 1] if r.step + 1 < len(steps) else {}
-            if after.get("pass"):
-                return self.next_step(r, s)
-            if r.turn_goal is None:
-                angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
-                    str(step["turn"])
-                ]
-                base = r.heading if r.heading is not None else s.pose.theta
-                r.turn_goal = wrap(base + angle)
-            off = wrap(r.turn_goal - s.pose.theta)
-            if abs(off) > 0.05 and r.stage != "into":
-                return Action(("turn",), {("turn", "angle"): off}, key=("route turn", r.step))
-            r.heading = r.turn_goal
-            if step.get("until") == "junction" and str(step["turn"]) != "back":
-                # Into the side corridor's mouth, straight on, before following it: in the
-                # crossing the hallway follower could take either corridor.
-                if r.stage != "into":
-                    r.stage, r.start = "into", s.pose
-                assert r.start is not None
-                gx = r.start.x + INTO_MOUTH_M * math.cos(r.heading)
-                gy = r.start.y + INTO_MOUTH_M * math.sin(r.heading)
-                if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
-                    return goto(gx, gy, ("into mouth", r.step))
-        return self.next_step(r, s)
-
-    def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
-        """Whether a follow step's `until` holds (counting openings as they pass)."""
-        assert r.start is not None
-        went = math.hypot(s.pose.x - r.start.x, s.pose.y - r.start.y)
-        until = step.get("until")
-        first = float(step.get("distance", 0.0))
-        if until == "distance":
-            return went >= first
-        if went < first:
-            return False
-        if until == "wall":
-            return s.sonar[0] < WALL_AHEAD_M
-        if until == "barcode":
-            return s.sees(int(step["barcode"]))
-        if until in ("junction", "door"):
-            seen = s.junction if until == "junction" else s.door
-            side = step.get("side")
-            sides = [str(side)] if side in ("left", "right") else ["left", "right"]
-            # The detector's flag, or (junctions) the side sonars reading far into a mouth
-            # abeam: the detector counts an opening only once well past its near edge.
-            now = any(bool(seen.get(x)) for x in sides)
-            if until == "junction":
-                now = now or any(s.open_abeam(x) for x in sides)
-            fresh = went - (r.counted_at if r.counted_at is not None else first) > 1.0
-            if now and not r.last_side and fresh:
-                r.count += 1
-                r.counted_at = went
-                if self.debug:
-                    print(f"[{s.t:7.1f} s]   {until} {side or ''} {r.count} at {went:.1f} m")
-            r.last_side = now
-            if r.count >= int(step.get("count", 1)) and r.counted_at is not None:
-                # On into the junction's middle (about half a corridor) before turning.
-                return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
-        return False
-
-    def next_step(self, r: RouteState, s: Senses) -> Action:
-        """Moves on to the route's next step."""
-        r.step += 1
-        r.start, r.stage, r.turn_goal = None, "start", None
-        return Action(("runaway",), key=("route step", r.leg, r.step))
 
     # ----- memory updates from what was sensed -------------------------------------------------
 
