@@ -27,6 +27,11 @@ HOMED_M = 1.1
 PUSH_M = 0.5
 #: Counted a junction abeam, the robot goes this much farther before turning into it, m.
 JUNCTION_ON_M = 0.7
+#: The first opening of a step is counted only this far past its blind distance, m. The
+#: side sonars see a mouth about 0.6-0.8 m before its near edge.
+FIRST_COUNT_M = 0.3
+#: Following to a wall, the robot counts a wall ahead only facing this near the way, rad.
+ALONG_WAY_RAD = 0.6
 #: Turned into a junction, the robot drives this far into the side corridor, m.
 INTO_MOUTH_M = 1.5
 #: In front of a door, this far from it, before passing it, m.
@@ -226,7 +231,7 @@ class RouteFollower:
             if abs(off) > 0.05 and r.stage != "into":
                 return Action(("turn",), {("turn", "angle"): off}, key=("route turn", r.step))
             r.heading = r.turn_goal
-            if step.get("until") == "junction" and str(step["turn"]) != "back":
+            if step.get("until") in ("junction", "wall") and str(step["turn"]) != "back":
                 # Into the side corridor's mouth, straight on, before following it: in the
                 # crossing the hallway follower could take either corridor.
                 if r.stage != "into":
@@ -249,7 +254,7 @@ class RouteFollower:
         if went < first:
             return False
         if until == "wall":
-            return s.sonar[0] < WALL_AHEAD_M
+            return self.wall_across(r, s)
         if until == "barcode":
             return s.sees(int(step["barcode"]))
         if until in ("junction", "door"):
@@ -261,7 +266,12 @@ class RouteFollower:
             now = any(bool(seen.get(x)) for x in sides)
             if until == "junction":
                 now = now or any(s.open_abeam(x) for x in sides)
-            fresh = went - (r.counted_at if r.counted_at is not None else first) > 1.0
+            # Openings are counted from FIRST_COUNT_M past the blind distance (generated maps
+            # put the junction's near edge 1.5 m past it), then 1 m apart at least.
+            if r.counted_at is None:
+                fresh = went - first > FIRST_COUNT_M
+            else:
+                fresh = went - r.counted_at > 1.0
             if now and not r.last_side and fresh:
                 r.count += 1
                 r.counted_at = went
@@ -272,6 +282,16 @@ class RouteFollower:
                 # On into the junction's middle (about half a corridor) before turning.
                 return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
         return False
+
+    def wall_across(self, r: RouteState, s: Senses) -> bool:
+        """A wall across the way ahead (not clutter, nor a side wall avoidance turned to).
+
+        The front sonar and both its neighbours read near, and the robot faces along the way.
+        """
+        if r.heading is not None and abs(wrap(s.pose.theta - r.heading)) > ALONG_WAY_RAD:
+            return False
+        front = (s.sonar[-1], s.sonar[0], s.sonar[1])
+        return s.sonar[0] < WALL_AHEAD_M and max(front) < WALL_AHEAD_M + 0.3
 
     def next_step(self, r: RouteState, s: Senses) -> Action:
         """Moves on to the route's next step."""
