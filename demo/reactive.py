@@ -97,6 +97,16 @@ MOUTH_M = 2.6
 DOOR_WAIT_S = 30.0
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
+#: Rules that move the robot about in the lab: under one of them, not 1 m from where it was
+#: this long ago, the robot is stuck (clutter, a corner), s. (Homing on the call button and
+#: the routes may take as long legitimately: slowly up to the button, waiting at a door.)
+MOVING_RULES = ("search", "home on lab door", "to lab door")
+STUCK_S = 60.0
+#: Unsticking: towards the freest way, at most this far, for at most this long (m, s).
+UNSTICK_M = 2.0
+UNSTICK_S = 15.0
+#: Back to where the lab door's barcode was seen: up to this far short of it, m.
+LAB_DOOR_SHORT_M = 1.5
 
 
 @dataclass
@@ -173,6 +183,14 @@ class Memory:
     button_seen_from: dict[int, Pose] = field(default_factory=dict)
     #: Where the call button was pushed from (odometry), to wait for a car a step back.
     called_from: Pose | None = None
+    #: Where the robot was when it last got 1 m away from the place before, and when
+    #: (odometry, simulated time); unsticking: where to, and since when.
+    moved_from: tuple[float, float, float] | None = None
+    unstick_to: tuple[float, float] | None = None
+    unstick_since: float = 0.0
+    #: Where the lab door's barcode was last seen (odometry), and from where.
+    lab_door_at: tuple[float, float] | None = None
+    lab_door_from: tuple[float, float] = (0.0, 0.0)
 
 
 class Reactive(RouteFollower, Sequencer):
@@ -201,12 +219,14 @@ class Reactive(RouteFollower, Sequencer):
             ("enter car", self.car_opened, self.enter_car),
             ("wait for car", self.waiting_for_car, self.wait_for_car),
             ("push call", self.at_call_button, self.push_call),
+            ("unstick", self.stuck, self.get_unstuck),
             ("home on button", self.button_in_view, self.home_on_button),
             ("to office", self.office_route_applies, self.route_action),
             ("to lobby", self.lobby_route_applies, self.route_action),
             ("look for button", self.off_start_floor, self.look_for_button),
             ("pass lab door", self.at_lab_door, self.pass_door_action),
             ("home on lab door", self.lab_door_in_view, self.home_on_lab_door),
+            ("to lab door", self.lab_door_known, self.to_lab_door),
             ("search", lambda s: True, self.wander_about),
         ]
 
@@ -342,6 +362,17 @@ class Reactive(RouteFollower, Sequencer):
             )
         return True
 
+    def stuck(self, s: Senses) -> bool:
+        """Unsticking: not 1 m from one place for long while moving about (see `remember`)."""
+        m = self.mem
+        if m.unstick_to is None or m.in_car:
+            return False
+        gx, gy = m.unstick_to
+        if s.t - m.unstick_since > UNSTICK_S or math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.2:
+            m.unstick_to, m.moved_from = None, None
+            return False
+        return True
+
     def office_route_applies(self, s: Senses) -> bool:
         """On the office's floor, on the route to the office (or at its start)."""
         kind, floor = self.stop()
@@ -384,6 +415,12 @@ class Reactive(RouteFollower, Sequencer):
         return not self.mem.out_of_lab and (
             self.mem.door_goal is not None or s.sees(self.m.lab_door_barcode, HOMED_M)
         )
+
+    def lab_door_known(self, s: Senses) -> bool:
+        """In the lab, the lab door's barcode seen before (out of view now)."""
+        if s.t - self.mem.door_given_up_at < DOOR_AGAIN_S:
+            return False
+        return not self.mem.out_of_lab and self.mem.lab_door_at is not None
 
     def lab_door_in_view(self, s: Senses) -> bool:
         """In the lab, the lab door's barcode in view."""
@@ -492,6 +529,12 @@ class Reactive(RouteFollower, Sequencer):
             key=("push call", code),
         )
 
+    def get_unstuck(self, s: Senses) -> Action:
+        """Drives towards where the sonars read farthest (out of a corner, off clutter)."""
+        assert self.mem.unstick_to is not None
+        gx, gy = self.mem.unstick_to
+        return goto(gx, gy, ("unstick", self.mem.unstick_since), reverse_within=1.5)
+
     def home_on_button(self, s: Senses) -> Action:
         """Homes on this floor's call button (to push it, or to stand 1 m from it)."""
         code = self.button(s.floor)
@@ -513,6 +556,23 @@ class Reactive(RouteFollower, Sequencer):
             key = ("back to button", s.floor, seen_from.x, seen_from.y)
             return goto(seen_from.x, seen_from.y, key, avoid=True)
         return self.wander_about(s)
+
+    def to_lab_door(self, s: Senses) -> Action:
+        """Back towards where the lab door's barcode was seen, short of it, then faces it."""
+        m = self.mem
+        assert m.lab_door_at is not None
+        (bx, by), (fx, fy) = m.lab_door_at, m.lab_door_from
+        far = math.hypot(bx - fx, by - fy)
+        short = min(LAB_DOOR_SHORT_M, far)
+        gx, gy = bx - short * (bx - fx) / max(far, 1e-6), by - short * (by - fy) / max(far, 1e-6)
+        if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.3 and s.t - self.rule_since < 60.0:
+            return goto(gx, gy, ("to lab door", bx, by), avoid=True)
+        off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
+        if abs(off) > 0.1:
+            return Action(("turn",), {("turn", "angle"): off}, key=("face lab door", bx, by))
+        # There, facing it, and not in view: forget it (the search takes over).
+        m.lab_door_at = None
+        return Action(("runaway",), key="lab door not here")
 
     def home_on_lab_door(self, s: Senses) -> Action:
         """Homes on the lab door's barcode."""
@@ -610,6 +670,12 @@ class Reactive(RouteFollower, Sequencer):
         b = s.barcodes.get(self.button(s.floor))
         if b is not None and b[1] < 1.6 and abs(b[0]) < 0.3 and not m.in_car:
             m.button_seen_from[s.floor] = s.pose
+        self.watch_progress(s)
+        d = s.barcodes.get(self.m.lab_door_barcode)
+        if d is not None and not m.out_of_lab:
+            a = s.pose.theta + d[0]
+            m.lab_door_at = (s.pose.x + d[1] * math.cos(a), s.pose.y + d[1] * math.sin(a))
+            m.lab_door_from = (s.pose.x, s.pose.y)
         made = s.said - m.said_at_start
         if made > m.made:
             m.made = made
@@ -652,6 +718,28 @@ class Reactive(RouteFollower, Sequencer):
             m.passed_heading, m.out_of_lab = s.pose.theta, True
         if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
             m.called_at = None
+
+    def watch_progress(self, s: Senses) -> None:
+        """Notes where the robot got to; stuck for long under a moving rule, where to go."""
+        m, p = self.mem, s.pose
+        moving = self.rule_name in MOVING_RULES and not m.in_car
+        if (
+            not moving
+            or m.moved_from is None
+            or math.hypot(p.x - m.moved_from[1], p.y - m.moved_from[2]) > 1.0
+        ):
+            if m.unstick_to is None:
+                m.moved_from = (s.t, p.x, p.y)
+            return
+        if m.unstick_to is None and s.t - m.moved_from[0] > STUCK_S:
+            # The freest way: the sonar whose own and neighbours' nearest echo is farthest.
+            free = [min(s.sonar[(i + k) % SONARS] for k in (-1, 0, 1)) for i in range(SONARS)]
+            i = max(range(SONARS), key=lambda j: free[j])
+            go = max(0.3, min(UNSTICK_M, free[i] - 0.6))
+            a = p.theta + 2 * math.pi * i / SONARS
+            m.unstick_to, m.unstick_since = (p.x + go * math.cos(a), p.y + go * math.sin(a)), s.t
+            if self.debug:
+                print(f"[{s.t:7.1f} s]   stuck: {go:.1f} m towards {math.degrees(a):.0f} deg")
 
     def place_car_door(
         self, pose: Pose, bearing: float, before: float
