@@ -12,7 +12,9 @@ A condition reads the senses and a little state the robot keeps:
 - the stops said so far;
 - whether it is out of the lab, or in a car;
 - whether it has called a car on this floor, and pushed the floor's button in the car;
-- where it is on a route leg.
+- where it is on a route leg;
+- where the lab door's barcode was seen, and where it last got a metre away from (to tell
+  it is stuck in the lab's clutter).
 
 There is no phase counter: if a wheel slips, a person pushes the robot about, or a door
 closes, the rule that fits the new situation takes over. Perception is always on:
