@@ -12,7 +12,9 @@ A condition reads the senses and a little state the robot keeps:
 - the stops said so far;
 - whether it is out of the lab, or in a car;
 - whether it has called a car on this floor, and pushed the floor's button in the car;
-- where it is on a route leg.
+- where it is on a route leg;
+- where the lab door's barcode was seen, and where it last got a metre away from (to tell
+  it is stuck in the lab's clutter).
 
 There is no phase counter: if a wheel slips, a person pushes the robot about, or a door
 closes, the rule that fits the new situation takes over. Perception is always on:
@@ -31,7 +33,16 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deliver import NORMAL, SKILLS, Mission, Stop
-from sequencing import SONARS, WALL_AHEAD_M, OutOfTime, Pose, Sequencer, wrap
+from reactive_route import (
+    DOOR_STANDOFF,
+    HOMED_M,
+    PUSH_M,
+    Action,
+    RouteFollower,
+    RouteState,
+    goto,
+)
+from sequencing import SONARS, OutOfTime, Pose, Sequencer, wrap
 
 import situate
 
@@ -69,12 +80,6 @@ SETTINGS = {
     # Cars stay open 10 s or so: in before the door closes.
     ("enter_car", "speed"): 0.35,
 }
-#: The office route starts this far square in front of the goal floor's button, m.
-BUTTON_STANDOFF_M = 1.0
-#: Within this of a barcode, the robot has homed on it, m.
-HOMED_M = 1.1
-#: The call button is pushed from this near (its centre to the barcode), m.
-PUSH_M = 0.5
 #: Waiting for a car longer than this after calling, the robot calls again, s.
 CALL_AGAIN_S = 45.0
 #: A car door seen opening this recently is still worth going to, s.
@@ -90,16 +95,20 @@ PATROL_LEG_S = 14.0
 CAR_ENTER_S = 25.0
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
 MOUTH_M = 2.6
-#: Counted a junction abeam, the robot goes this much farther before turning into it, m.
-JUNCTION_ON_M = 0.7
 #: In front of a barcode, the robot waits this long for the door beside it to show, s.
 DOOR_WAIT_S = 30.0
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
-#: Turned into a junction, the robot drives this far into the side corridor, m.
-INTO_MOUTH_M = 1.5
-#: In front of a door, this far from it, before passing it, m.
-DOOR_STANDOFF = 0.9
+#: Rules that move the robot about in the lab: under one of them, not 1 m from where it was
+#: this long ago, the robot is stuck (clutter, a corner), s. (Homing on the call button and
+#: the routes may take as long legitimately: slowly up to the button, waiting at a door.)
+MOVING_RULES = ("search", "home on lab door", "to lab door")
+STUCK_S = 60.0
+#: Unsticking: towards the freest way, at most this far, for at most this long (m, s).
+UNSTICK_M = 2.0
+UNSTICK_S = 15.0
+#: Back to where the lab door's barcode was seen: up to this far short of it, m.
+LAB_DOOR_SHORT_M = 1.5
 
 
 @dataclass
@@ -136,35 +145,6 @@ class Senses:
     def sees(self, barcode: int, within: float = 5.0) -> bool:
         """Whether ``barcode`` is in view within ``within`` m."""
         return barcode in self.barcodes and self.barcodes[barcode][1] <= within
-
-
-@dataclass
-class Action:
-    """A rule's action: skills on, their parameters, and a key that restarts it when new."""
-
-    skills: tuple[str, ...]
-    params: dict[tuple[str, str], Any] = field(default_factory=dict)
-    key: Any = None
-
-
-def goto(
-    x: float,
-    y: float,
-    key: Any,
-    *,
-    speed: float = 0.3,
-    reverse_within: float = 0.0,
-    avoid: bool = False,
-) -> Action:
-    """Drives to (x, y) of the odometry frame (`std.home_position`), runaway on."""
-    skills = ("runaway", "avoid", "home_position") if avoid else ("runaway", "home_position")
-    params = {
-        ("home_position", "x"): x,
-        ("home_position", "y"): y,
-        ("home_position", "speed"): speed,
-        ("home_position", "reverse_within"): reverse_within,
-    }
-    return Action(skills, params, key=key)
 
 
 @dataclass
@@ -205,29 +185,17 @@ class Memory:
     button_seen_from: dict[int, Pose] = field(default_factory=dict)
     #: Where the call button was pushed from (odometry), to wait for a car a step back.
     called_from: Pose | None = None
+    #: Where the robot was when it last got 1 m away from the place before, and when
+    #: (odometry, simulated time); unsticking: where to, and since when.
+    moved_from: tuple[float, float, float] | None = None
+    unstick_to: tuple[float, float] | None = None
+    unstick_since: float = 0.0
+    #: Where the lab door's barcode was last seen (odometry), and from where.
+    lab_door_at: tuple[float, float] | None = None
+    lab_door_from: tuple[float, float] = (0.0, 0.0)
 
 
-@dataclass
-class RouteState:
-    """Where the robot is on a route leg (docs/maps.md, route steps)."""
-
-    leg: str
-    step: int = 0
-    stage: str = "start"
-    start: Pose | None = None
-    count: int = 0
-    last_side: bool = False
-    heading: float | None = None
-    turn_goal: float | None = None
-    #: Before the leg: the point square in front of where it starts (odometry).
-    square_at: tuple[float, float] | None = None
-    #: The step squared up at last (-1: none).
-    squared: int = -1
-    #: How far along the step the last opening was counted, m.
-    counted_at: float | None = None
-
-
-class Reactive(Sequencer):
+class Reactive(RouteFollower, Sequencer):
     """The teleo-reactive controller: every cycle, the first applicable rule acts."""
 
     def __init__(
@@ -253,12 +221,14 @@ class Reactive(Sequencer):
             ("enter car", self.car_opened, self.enter_car),
             ("wait for car", self.waiting_for_car, self.wait_for_car),
             ("push call", self.at_call_button, self.push_call),
+            ("unstick", self.stuck, self.get_unstuck),
             ("home on button", self.button_in_view, self.home_on_button),
             ("to office", self.office_route_applies, self.route_action),
             ("to lobby", self.lobby_route_applies, self.route_action),
             ("look for button", self.off_start_floor, self.look_for_button),
             ("pass lab door", self.at_lab_door, self.pass_door_action),
             ("home on lab door", self.lab_door_in_view, self.home_on_lab_door),
+            ("to lab door", self.lab_door_known, self.to_lab_door),
             ("search", lambda s: True, self.wander_about),
         ]
 
@@ -394,6 +364,17 @@ class Reactive(Sequencer):
             )
         return True
 
+    def stuck(self, s: Senses) -> bool:
+        """Unsticking: not 1 m from one place for long while moving about (see `remember`)."""
+        m = self.mem
+        if m.unstick_to is None or m.in_car:
+            return False
+        gx, gy = m.unstick_to
+        if s.t - m.unstick_since > UNSTICK_S or math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.2:
+            m.unstick_to, m.moved_from = None, None
+            return False
+        return True
+
     def office_route_applies(self, s: Senses) -> bool:
         """On the office's floor, on the route to the office (or at its start)."""
         kind, floor = self.stop()
@@ -436,6 +417,12 @@ class Reactive(Sequencer):
         return not self.mem.out_of_lab and (
             self.mem.door_goal is not None or s.sees(self.m.lab_door_barcode, HOMED_M)
         )
+
+    def lab_door_known(self, s: Senses) -> bool:
+        """In the lab, the lab door's barcode seen before (out of view now)."""
+        if s.t - self.mem.door_given_up_at < DOOR_AGAIN_S:
+            return False
+        return not self.mem.out_of_lab and self.mem.lab_door_at is not None
 
     def lab_door_in_view(self, s: Senses) -> bool:
         """In the lab, the lab door's barcode in view."""
@@ -544,6 +531,12 @@ class Reactive(Sequencer):
             key=("push call", code),
         )
 
+    def get_unstuck(self, s: Senses) -> Action:
+        """Drives towards where the sonars read farthest (out of a corner, off clutter)."""
+        assert self.mem.unstick_to is not None
+        gx, gy = self.mem.unstick_to
+        return goto(gx, gy, ("unstick", self.mem.unstick_since), reverse_within=1.5)
+
     def home_on_button(self, s: Senses) -> Action:
         """Homes on this floor's call button (to push it, or to stand 1 m from it)."""
         code = self.button(s.floor)
@@ -565,6 +558,23 @@ class Reactive(Sequencer):
             key = ("back to button", s.floor, seen_from.x, seen_from.y)
             return goto(seen_from.x, seen_from.y, key, avoid=True)
         return self.wander_about(s)
+
+    def to_lab_door(self, s: Senses) -> Action:
+        """Back towards where the lab door's barcode was seen, short of it, then faces it."""
+        m = self.mem
+        assert m.lab_door_at is not None
+        (bx, by), (fx, fy) = m.lab_door_at, m.lab_door_from
+        far = math.hypot(bx - fx, by - fy)
+        short = min(LAB_DOOR_SHORT_M, far)
+        gx, gy = bx - short * (bx - fx) / max(far, 1e-6), by - short * (by - fy) / max(far, 1e-6)
+        if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.3 and s.t - self.rule_since < 60.0:
+            return goto(gx, gy, ("to lab door", bx, by), avoid=True)
+        off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
+        if abs(off) > 0.1:
+            return Action(("turn",), {("turn", "angle"): off}, key=("face lab door", bx, by))
+        # There, facing it, and not in view: forget it (the search takes over).
+        m.lab_door_at = None
+        return Action(("runaway",), key="lab door not here")
 
     def home_on_lab_door(self, s: Senses) -> Action:
         """Homes on the lab door's barcode."""
@@ -654,172 +664,6 @@ class Reactive(Sequencer):
         m.door_goal, m.door_stage = None, ""
         return False
 
-    def route_action(self, s: Senses) -> Action:
-        """The route leg's current step (docs/maps.md)."""
-        r = self.mem.route
-        assert r is not None
-        steps = self.m.route.get(r.leg, [])
-        if r.step >= len(steps):
-            return Action(("runaway",), key=("route end", r.leg))
-        step = steps[r.step]
-        if r.stage == "approach":
-            code = self.button(s.floor)
-            b = s.barcodes.get(code)
-            normal = float(s.wall.get("normal", 0.0))
-            if b is not None and b[1] < PUSH_M + 0.15 and abs(b[0]) < 0.25:
-                if s.wall.get("seen") and abs(normal) < 0.7:
-                    h = wrap(s.pose.theta + normal)
-                    at = s.pose.theta + b[0]
-                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
-                    r.heading, r.stage = h, "square"
-                    r.square_at = (
-                        cx - BUTTON_STANDOFF_M * math.cos(h),
-                        cy - BUTTON_STANDOFF_M * math.sin(h),
-                    )
-                    return Action(("runaway",), key=("squaring", r.leg))
-                return Action(("runaway",), key=("fitting the wall", r.leg, s.t // 3))
-            if b is None:
-                return self.wander_about(s)
-            return Action(
-                ("track_barcode", "home"),
-                {("track_barcode", "id"): code, ("home", "stop_distance"): PUSH_M},
-                key=("approach", r.leg),
-            )
-        if r.stage == "square" and r.square_at is not None and r.heading is not None:
-            gx, gy = r.square_at
-            if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
-                return goto(gx, gy, ("square", r.leg, r.step), reverse_within=1.5)
-            off = wrap(r.heading - s.pose.theta)
-            if abs(off) > 0.06:
-                return Action(
-                    ("turn",), {("turn", "angle"): off}, key=("square turn", r.leg, r.step)
-                )
-            r.stage, r.squared = "start", r.step
-            if step.get("home") is not None:
-                return self.next_step(r, s)
-        if r.start is None:
-            r.start, r.count, r.stage = s.pose, 0, "follow"
-            r.last_side, r.counted_at = False, None
-            if r.heading is None:
-                r.heading = s.pose.theta
-        if step.get("home") is not None:
-            code = int(step["home"])
-            if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
-                door_next = any(x.get("pass") for x in steps[r.step + 1 :])
-                b = s.barcodes[code]
-                at = s.pose.theta + b[0]
-                if door_next and r.squared != r.step and r.heading is not None:
-                    # A door beside the barcode: square in front of it first, so that the
-                    # door finder looks along its wall. The barcode is on a wall of the
-                    # corridor the route followed: its normal is square to the route's
-                    # heading, on the barcode's side.
-                    side = math.pi / 2 if wrap(at - r.heading) > 0 else -math.pi / 2
-                    h = wrap(r.heading + side)
-                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
-                    r.heading, r.stage = h, "square"
-                    r.square_at = (
-                        cx - DOOR_STANDOFF * math.cos(h),
-                        cy - DOOR_STANDOFF * math.sin(h),
-                    )
-                    return Action(("runaway",), key=("squaring", r.step))
-                return self.next_step(r, s)
-            if s.sees(code):
-                return Action(
-                    ("runaway", "track_barcode", "home"),
-                    {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
-                    key=("route home", code),
-                )
-            return self.wander_about(s)
-        if step.get("pass"):
-            if self.through_door(s):
-                if r.leg == self.office_leg():
-                    self.mem.in_office = True
-                return self.next_step(r, s)
-            if self.mem.door_given_up_at > s.t - 1.0:
-                # No door showed here: back to the barcode's step, to home and square again.
-                homes = [n for n in range(r.step) if steps[n].get("home") is not None]
-                if homes:
-                    r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
-                    self.mem.door_goal, self.mem.door_stage = None, ""
-                    return Action(("runaway",), key=("door again", s.t))
-            return self.pass_door_action(s)
-        if r.stage == "follow" and step.get("follow"):
-            if self.step_until_met(step, r, s):
-                r.stage = "turn" if step.get("turn") else "done"
-            else:
-                # The step's detectors start afresh with it (as the sequenced robot's do).
-                return Action(
-                    ("runaway", "avoid", "follow_hallway", "detect_intersection", "detect_door"),
-                    key=("follow", r.leg, r.step),
-                )
-        if step.get("turn") and r.stage in ("follow", "turn"):
-            # A turn after the next step's door finder faces the door itself.
-            after = steps[r.step + 1] if r.step + 1 < len(steps) else {}
-            if after.get("pass"):
-                return self.next_step(r, s)
-            if r.turn_goal is None:
-                angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
-                    str(step["turn"])
-                ]
-                base = r.heading if r.heading is not None else s.pose.theta
-                r.turn_goal = wrap(base + angle)
-            off = wrap(r.turn_goal - s.pose.theta)
-            if abs(off) > 0.05 and r.stage != "into":
-                return Action(("turn",), {("turn", "angle"): off}, key=("route turn", r.step))
-            r.heading = r.turn_goal
-            if step.get("until") == "junction" and str(step["turn"]) != "back":
-                # Into the side corridor's mouth, straight on, before following it: in the
-                # crossing the hallway follower could take either corridor.
-                if r.stage != "into":
-                    r.stage, r.start = "into", s.pose
-                assert r.start is not None
-                gx = r.start.x + INTO_MOUTH_M * math.cos(r.heading)
-                gy = r.start.y + INTO_MOUTH_M * math.sin(r.heading)
-                if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
-                    return goto(gx, gy, ("into mouth", r.step))
-        return self.next_step(r, s)
-
-    def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
-        """Whether a follow step's `until` holds (counting openings as they pass)."""
-        assert r.start is not None
-        went = math.hypot(s.pose.x - r.start.x, s.pose.y - r.start.y)
-        until = step.get("until")
-        first = float(step.get("distance", 0.0))
-        if until == "distance":
-            return went >= first
-        if went < first:
-            return False
-        if until == "wall":
-            return s.sonar[0] < WALL_AHEAD_M
-        if until == "barcode":
-            return s.sees(int(step["barcode"]))
-        if until in ("junction", "door"):
-            seen = s.junction if until == "junction" else s.door
-            side = step.get("side")
-            sides = [str(side)] if side in ("left", "right") else ["left", "right"]
-            # The detector's flag, or (junctions) the side sonars reading far into a mouth
-            # abeam: the detector counts an opening only once well past its near edge.
-            now = any(bool(seen.get(x)) for x in sides)
-            if until == "junction":
-                now = now or any(s.open_abeam(x) for x in sides)
-            fresh = went - (r.counted_at if r.counted_at is not None else first) > 1.0
-            if now and not r.last_side and fresh:
-                r.count += 1
-                r.counted_at = went
-                if self.debug:
-                    print(f"[{s.t:7.1f} s]   {until} {side or ''} {r.count} at {went:.1f} m")
-            r.last_side = now
-            if r.count >= int(step.get("count", 1)) and r.counted_at is not None:
-                # On into the junction's middle (about half a corridor) before turning.
-                return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
-        return False
-
-    def next_step(self, r: RouteState, s: Senses) -> Action:
-        """Moves on to the route's next step."""
-        r.step += 1
-        r.start, r.stage, r.turn_goal = None, "start", None
-        return Action(("runaway",), key=("route step", r.leg, r.step))
-
     # ----- memory updates from what was sensed -------------------------------------------------
 
     def remember(self, s: Senses) -> None:
@@ -828,6 +672,12 @@ class Reactive(Sequencer):
         b = s.barcodes.get(self.button(s.floor))
         if b is not None and b[1] < 1.6 and abs(b[0]) < 0.3 and not m.in_car:
             m.button_seen_from[s.floor] = s.pose
+        self.watch_progress(s)
+        d = s.barcodes.get(self.m.lab_door_barcode)
+        if d is not None and not m.out_of_lab:
+            a = s.pose.theta + d[0]
+            m.lab_door_at = (s.pose.x + d[1] * math.cos(a), s.pose.y + d[1] * math.sin(a))
+            m.lab_door_from = (s.pose.x, s.pose.y)
         made = s.said - m.said_at_start
         if made > m.made:
             m.made = made
@@ -870,6 +720,28 @@ class Reactive(Sequencer):
             m.passed_heading, m.out_of_lab = s.pose.theta, True
         if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
             m.called_at = None
+
+    def watch_progress(self, s: Senses) -> None:
+        """Notes where the robot got to; stuck for long under a moving rule, where to go."""
+        m, p = self.mem, s.pose
+        moving = self.rule_name in MOVING_RULES and not m.in_car
+        if (
+            not moving
+            or m.moved_from is None
+            or math.hypot(p.x - m.moved_from[1], p.y - m.moved_from[2]) > 1.0
+        ):
+            if m.unstick_to is None:
+                m.moved_from = (s.t, p.x, p.y)
+            return
+        if m.unstick_to is None and s.t - m.moved_from[0] > STUCK_S:
+            # The freest way: the sonar whose own and neighbours' nearest echo is farthest.
+            free = [min(s.sonar[(i + k) % SONARS] for k in (-1, 0, 1)) for i in range(SONARS)]
+            i = max(range(SONARS), key=lambda j: free[j])
+            go = max(0.3, min(UNSTICK_M, free[i] - 0.6))
+            a = p.theta + 2 * math.pi * i / SONARS
+            m.unstick_to, m.unstick_since = (p.x + go * math.cos(a), p.y + go * math.sin(a)), s.t
+            if self.debug:
+                print(f"[{s.t:7.1f} s]   stuck: {go:.1f} m towards {math.degrees(a):.0f} deg")
 
     def place_car_door(
         self, pose: Pose, bearing: float, before: float

@@ -229,6 +229,22 @@ def test_the_reactive_robot_delivers_where_it_once_failed(seed: int, tmp_path: P
 
 
 @needs_bin
+@pytest.mark.parametrize(
+    ("seed", "task"),
+    [
+        # `until: wall` met at a bin beside the way, turned by avoidance: a wall across only
+        (20008, "lobby:0,office"),
+        # the junction's mouth seen just before counting began: counted from nearer the start
+        (20022, "lobby:0,office"),
+    ],
+)
+def test_the_reactive_robot_follows_the_office_route(seed: int, task: str, tmp_path: Path) -> None:
+    building = str(_generated(seed, tmp_path))
+    out = demo(seed, map_file=building, extra=["--mode", "reactive", "--task", task])
+    assert out["task_done"], out
+
+
+@needs_bin
 def test_a_seed_replays_exactly() -> None:
     a = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
     b = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)

@@ -1,0 +1,300 @@
+"""The reactive robot's route-leg follower, and the actions its rules and it return.
+
+`demo/reactive.py` holds the rule list; the rules "to office" and "to lobby" act through
+`RouteFollower.route_action`, which follows one leg of the map's route (docs/maps.md, route
+steps) a step at a time. What it keeps is a `RouteState` in the robot's memory: the leg and
+the step it is at (decision 0008 allows a route step counter), and where along the step it
+is. It does not know what phase the robot is in: the rules decide when a leg applies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from sequencing import WALL_AHEAD_M, Pose, wrap
+
+if TYPE_CHECKING:
+    from deliver import Mission
+    from reactive import Memory, Senses
+
+#: The office route starts this far square in front of the goal floor's button, m.
+BUTTON_STANDOFF_M = 1.0
+#: Within this of a barcode, the robot has homed on it, m.
+HOMED_M = 1.1
+#: The call button is pushed from this near (its centre to the barcode), m.
+PUSH_M = 0.5
+#: Counted a junction abeam, the robot goes this much farther before turning into it, m.
+JUNCTION_ON_M = 0.7
+#: The first opening of a step is counted only this far past its blind distance, m. The
+#: side sonars see a mouth about 0.6-0.8 m before its near edge.
+FIRST_COUNT_M = 0.3
+#: Following to a wall, the robot counts a wall ahead only facing this near the way, rad.
+ALONG_WAY_RAD = 0.6
+#: Turned into a junction, the robot drives this far into the side corridor, m.
+INTO_MOUTH_M = 1.5
+#: In front of a door, this far from it, before passing it, m.
+DOOR_STANDOFF = 0.9
+
+
+@dataclass
+class Action:
+    """A rule's action: skills on, their parameters, and a key that restarts it when new."""
+
+    skills: tuple[str, ...]
+    params: dict[tuple[str, str], Any] = field(default_factory=dict)
+    key: Any = None
+
+
+def goto(
+    x: float,
+    y: float,
+    key: Any,
+    *,
+    speed: float = 0.3,
+    reverse_within: float = 0.0,
+    avoid: bool = False,
+) -> Action:
+    """Drives to (x, y) of the odometry frame (`std.home_position`), runaway on."""
+    skills = ("runaway", "avoid", "home_position") if avoid else ("runaway", "home_position")
+    params = {
+        ("home_position", "x"): x,
+        ("home_position", "y"): y,
+        ("home_position", "speed"): speed,
+        ("home_position", "reverse_within"): reverse_within,
+    }
+    return Action(skills, params, key=key)
+
+
+@dataclass
+class RouteState:
+    """Where the robot is on a route leg (docs/maps.md, route steps)."""
+
+    leg: str
+    step: int = 0
+    stage: str = "start"
+    start: Pose | None = None
+    count: int = 0
+    last_side: bool = False
+    heading: float | None = None
+    turn_goal: float | None = None
+    #: Before the leg: the point square in front of where it starts (odometry).
+    square_at: tuple[float, float] | None = None
+    #: The step squared up at last (-1: none).
+    squared: int = -1
+    #: How far along the step the last opening was counted, m.
+    counted_at: float | None = None
+
+
+class RouteFollower:
+    """Follows the current route leg (`Memory.route`); mixed into the reactive controller.
+
+    It uses the controller's memory, mission and a few of its actions (declared below, defined
+    by `reactive.Reactive`).
+    """
+
+    mem: Memory
+    m: Mission
+    debug: bool
+
+    def button(self, floor: int) -> int:
+        """The call button's barcode on ``floor``."""
+        raise NotImplementedError
+
+    def office_leg(self) -> str:
+        """The name of the route leg that ends in the office."""
+        raise NotImplementedError
+
+    def wander_about(self, s: Senses) -> Action:
+        """Looks round and wanders (a barcode not in view)."""
+        raise NotImplementedError
+
+    def pass_door_action(self, s: Senses) -> Action:
+        """Passes the door beside the barcode in front."""
+        raise NotImplementedError
+
+    def through_door(self, s: Senses) -> bool:
+        """Whether the door being passed is passed."""
+        raise NotImplementedError
+
+    def route_action(self, s: Senses) -> Action:
+        """The route leg's current step (docs/maps.md)."""
+        r = self.mem.route
+        assert r is not None
+        steps = self.m.route.get(r.leg, [])
+        if r.step >= len(steps):
+            return Action(("runaway",), key=("route end", r.leg))
+        step = steps[r.step]
+        if r.stage == "approach":
+            code = self.button(s.floor)
+            b = s.barcodes.get(code)
+            normal = float(s.wall.get("normal", 0.0))
+            if b is not None and b[1] < PUSH_M + 0.15 and abs(b[0]) < 0.25:
+                if s.wall.get("seen") and abs(normal) < 0.7:
+                    h = wrap(s.pose.theta + normal)
+                    at = s.pose.theta + b[0]
+                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
+                    r.heading, r.stage = h, "square"
+                    r.square_at = (
+                        cx - BUTTON_STANDOFF_M * math.cos(h),
+                        cy - BUTTON_STANDOFF_M * math.sin(h),
+                    )
+                    return Action(("runaway",), key=("squaring", r.leg))
+                return Action(("runaway",), key=("fitting the wall", r.leg, s.t // 3))
+            if b is None:
+                return self.wander_about(s)
+            return Action(
+                ("track_barcode", "home"),
+                {("track_barcode", "id"): code, ("home", "stop_distance"): PUSH_M},
+                key=("approach", r.leg),
+            )
+        if r.stage == "square" and r.square_at is not None and r.heading is not None:
+            gx, gy = r.square_at
+            if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
+                return goto(gx, gy, ("square", r.leg, r.step), reverse_within=1.5)
+            off = wrap(r.heading - s.pose.theta)
+            if abs(off) > 0.06:
+                return Action(
+                    ("turn",), {("turn", "angle"): off}, key=("square turn", r.leg, r.step)
+                )
+            r.stage, r.squared = "start", r.step
+            if step.get("home") is not None:
+                return self.next_step(r, s)
+        if r.start is None:
+            r.start, r.count, r.stage = s.pose, 0, "follow"
+            r.last_side, r.counted_at = False, None
+            if r.heading is None:
+                r.heading = s.pose.theta
+        if step.get("home") is not None:
+            code = int(step["home"])
+            if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
+                door_next = any(x.get("pass") for x in steps[r.step + 1 :])
+                b = s.barcodes[code]
+                at = s.pose.theta + b[0]
+                if door_next and r.squared != r.step and r.heading is not None:
+                    # A door beside the barcode: square in front of it first, so that the
+                    # door finder looks along its wall. The barcode is on a wall of the
+                    # corridor the route followed: its normal is square to the route's
+                    # heading, on the barcode's side.
+                    side = math.pi / 2 if wrap(at - r.heading) > 0 else -math.pi / 2
+                    h = wrap(r.heading + side)
+                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
+                    r.heading, r.stage = h, "square"
+                    r.square_at = (
+                        cx - DOOR_STANDOFF * math.cos(h),
+                        cy - DOOR_STANDOFF * math.sin(h),
+                    )
+                    return Action(("runaway",), key=("squaring", r.step))
+                return self.next_step(r, s)
+            if s.sees(code):
+                return Action(
+                    ("runaway", "track_barcode", "home"),
+                    {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
+                    key=("route home", code),
+                )
+            return self.wander_about(s)
+        if step.get("pass"):
+            if self.through_door(s):
+                if r.leg == self.office_leg():
+                    self.mem.in_office = True
+                return self.next_step(r, s)
+            if self.mem.door_given_up_at > s.t - 1.0:
+                # No door showed here: back to the barcode's step, to home and square again.
+                homes = [n for n in range(r.step) if steps[n].get("home") is not None]
+                if homes:
+                    r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
+                    self.mem.door_goal, self.mem.door_stage = None, ""
+                    return Action(("runaway",), key=("door again", s.t))
+            return self.pass_door_action(s)
+        if r.stage == "follow" and step.get("follow"):
+            if self.step_until_met(step, r, s):
+                r.stage = "turn" if step.get("turn") else "done"
+            else:
+                # The step's detectors start afresh with it (as the sequenced robot's do).
+                return Action(
+                    ("runaway", "avoid", "follow_hallway", "detect_intersection", "detect_door"),
+                    key=("follow", r.leg, r.step),
+                )
+        if step.get("turn") and r.stage in ("follow", "turn"):
+            # A turn after the next step's door finder faces the door itself.
+            after = steps[r.step + 1] if r.step + 1 < len(steps) else {}
+            if after.get("pass"):
+                return self.next_step(r, s)
+            if r.turn_goal is None:
+                angle = {"left": math.pi / 2, "right": -math.pi / 2, "back": math.pi}[
+                    str(step["turn"])
+                ]
+                base = r.heading if r.heading is not None else s.pose.theta
+                r.turn_goal = wrap(base + angle)
+            off = wrap(r.turn_goal - s.pose.theta)
+            if abs(off) > 0.05 and r.stage != "into":
+                return Action(("turn",), {("turn", "angle"): off}, key=("route turn", r.step))
+            r.heading = r.turn_goal
+            if step.get("until") in ("junction", "wall") and str(step["turn"]) != "back":
+                # Into the side corridor's mouth, straight on, before following it: in the
+                # crossing the hallway follower could take either corridor.
+                if r.stage != "into":
+                    r.stage, r.start = "into", s.pose
+                assert r.start is not None
+                gx = r.start.x + INTO_MOUTH_M * math.cos(r.heading)
+                gy = r.start.y + INTO_MOUTH_M * math.sin(r.heading)
+                if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
+                    return goto(gx, gy, ("into mouth", r.step))
+        return self.next_step(r, s)
+
+    def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
+        """Whether a follow step's `until` holds (counting openings as they pass)."""
+        assert r.start is not None
+        went = math.hypot(s.pose.x - r.start.x, s.pose.y - r.start.y)
+        until = step.get("until")
+        first = float(step.get("distance", 0.0))
+        if until == "distance":
+            return went >= first
+        if went < first:
+            return False
+        if until == "wall":
+            return self.wall_across(r, s)
+        if until == "barcode":
+            return s.sees(int(step["barcode"]))
+        if until in ("junction", "door"):
+            seen = s.junction if until == "junction" else s.door
+            side = step.get("side")
+            sides = [str(side)] if side in ("left", "right") else ["left", "right"]
+            # The detector's flag, or (junctions) the side sonars reading far into a mouth
+            # abeam: the detector counts an opening only once well past its near edge.
+            now = any(bool(seen.get(x)) for x in sides)
+            if until == "junction":
+                now = now or any(s.open_abeam(x) for x in sides)
+            # Openings are counted from FIRST_COUNT_M past the blind distance (generated maps
+            # put the junction's near edge 1.5 m past it), then 1 m apart at least.
+            if r.counted_at is None:
+                fresh = went - first > FIRST_COUNT_M
+            else:
+                fresh = went - r.counted_at > 1.0
+            if now and not r.last_side and fresh:
+                r.count += 1
+                r.counted_at = went
+                if self.debug:
+                    print(f"[{s.t:7.1f} s]   {until} {side or ''} {r.count} at {went:.1f} m")
+            r.last_side = now
+            if r.count >= int(step.get("count", 1)) and r.counted_at is not None:
+                # On into the junction's middle (about half a corridor) before turning.
+                return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
+        return False
+
+    def wall_across(self, r: RouteState, s: Senses) -> bool:
+        """A wall across the way ahead (not clutter, nor a side wall avoidance turned to).
+
+        The front sonar and both its neighbours read near, and the robot faces along the way.
+        """
+        if r.heading is not None and abs(wrap(s.pose.theta - r.heading)) > ALONG_WAY_RAD:
+            return False
+        front = (s.sonar[-1], s.sonar[0], s.sonar[1])
+        return s.sonar[0] < WALL_AHEAD_M and max(front) < WALL_AHEAD_M + 0.3
+
+    def next_step(self, r: RouteState, s: Senses) -> Action:
+        """Moves on to the route's next step."""
+        r.step += 1
+        r.start, r.stage, r.turn_goal = None, "start", None
+        return Action(("runaway",), key=("route step", r.leg, r.step))
