@@ -567,7 +567,10 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
             out.result(&json, || {
                 let mut text = summary_text(&stats, &skills);
                 if let Some(r) = &recording {
-                    text.push_str(&recording_text(r));
+                    if !text.is_empty() && !text.ends_with('\n') {
+                        text.push('\n');
+                    }
+                    text.push_str(recording_text(r).trim_end());
                 }
                 text
             });
@@ -675,12 +678,16 @@ pub(crate) fn recording_json(r: &situate_record::Summary) -> Json {
 
 /// A finished recording, one line.
 pub(crate) fn recording_text(r: &situate_record::Summary) -> String {
+    let size = if r.bytes >= 1_000_000 {
+        format!("{:.1} MB", r.bytes as f64 / 1e6)
+    } else {
+        format!("{:.1} kB", r.bytes as f64 / 1e3)
+    };
     format!(
-        "recorded {} cycles ({} messages on {} channels, {:.1} MB{}) to {}\n",
+        "recorded {} cycles ({} messages on {} channels, {size}{}) to {}\n",
         r.frames,
         r.messages,
         r.channels,
-        r.bytes as f64 / 1e6,
         if r.dropped > 0 { format!("; {} cycles dropped: the disk did not keep up", r.dropped) } else { String::new() },
         r.path.display()
     )
