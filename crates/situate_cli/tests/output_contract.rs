@@ -74,6 +74,32 @@ fn run_gives_its_summary_as_json() {
 }
 
 #[test]
+fn run_records_to_mcap_and_says_what_the_file_holds() {
+    let path = std::env::temp_dir().join(format!("situate-cli-record-{}.mcap", std::process::id()));
+    let file = path.to_str().unwrap();
+    let out =
+        situate(["run", TOYBOT, "--no-link", "--cycles", "30", "--clock", "simulated", "--json", "--record", file]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j = json_of(&out);
+    let rec = &j["recording"];
+    assert_eq!(rec["cycles"], 30, "{j}");
+    assert_eq!((rec["first_cycle"].as_u64(), rec["last_cycle"].as_u64()), (Some(1), Some(30)), "{j}");
+    assert_eq!(rec["dropped_cycles"], 0, "{j}");
+    let bytes = std::fs::metadata(&path).unwrap().len();
+    assert_eq!(rec["bytes"], bytes, "{j}");
+    // An MCAP file: its magic at both ends.
+    let data = std::fs::read(&path).unwrap();
+    assert!(data.starts_with(b"\x89MCAP0\r\n") && data.ends_with(b"\x89MCAP0\r\n"), "not an MCAP file");
+    std::fs::remove_file(&path).ok();
+    // A file that cannot be made: refused as bad usage, naming it, before the robot starts.
+    let bad = situate(["run", TOYBOT, "--no-link", "--cycles", "3", "--json", "--record", "/nonexistent-dir/x.mcap"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stdout(&bad));
+    let e = json_of(&bad);
+    assert_eq!(e["error"]["kind"], "usage", "{e}");
+    assert!(e["error"]["message"].as_str().unwrap().contains("/nonexistent-dir/x.mcap"), "{e}");
+}
+
+#[test]
 fn quiet_drops_the_notes_and_verbose_logs_without_colour_off_a_terminal() {
     let listen = free_endpoint();
     let args = ["run", TOYBOT, "--cycles", "2", "--clock", "simulated", "--listen", &listen];
