@@ -86,6 +86,19 @@ class RouteState:
     #: How far along the step the last opening was counted, m.
     counted_at: float | None = None
 
+    def square_before(
+        self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
+    ) -> None:
+        """Squares up next: facing `heading`, `standoff` in front of a barcode.
+
+        `barcode` is where it is seen: (bearing, distance).
+        """
+        at = s.pose.theta + barcode[0]
+        cx = s.pose.x + barcode[1] * math.cos(at)
+        cy = s.pose.y + barcode[1] * math.sin(at)
+        self.heading, self.stage = heading, "square"
+        self.square_at = (cx - standoff * math.cos(heading), cy - standoff * math.sin(heading))
+
 
 class RouteFollower:
     """Follows the current route leg (`Memory.route`); mixed into the reactive controller.
@@ -132,14 +145,7 @@ class RouteFollower:
             normal = float(s.wall.get("normal", 0.0))
             if b is not None and b[1] < PUSH_M + 0.15 and abs(b[0]) < 0.25:
                 if s.wall.get("seen") and abs(normal) < 0.7:
-                    h = wrap(s.pose.theta + normal)
-                    at = s.pose.theta + b[0]
-                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
-                    r.heading, r.stage = h, "square"
-                    r.square_at = (
-                        cx - BUTTON_STANDOFF_M * math.cos(h),
-                        cy - BUTTON_STANDOFF_M * math.sin(h),
-                    )
+                    r.square_before(s, b, wrap(s.pose.theta + normal), BUTTON_STANDOFF_M)
                     return Action(("runaway",), key=("squaring", r.leg))
                 return Action(("runaway",), key=("fitting the wall", r.leg, s.t // 3))
             if b is None:
@@ -178,13 +184,7 @@ class RouteFollower:
                     # corridor the route followed: its normal is square to the route's
                     # heading, on the barcode's side.
                     side = math.pi / 2 if wrap(at - r.heading) > 0 else -math.pi / 2
-                    h = wrap(r.heading + side)
-                    cx, cy = s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at)
-                    r.heading, r.stage = h, "square"
-                    r.square_at = (
-                        cx - DOOR_STANDOFF * math.cos(h),
-                        cy - DOOR_STANDOFF * math.sin(h),
-                    )
+                    r.square_before(s, b, wrap(r.heading + side), DOOR_STANDOFF)
                     return Action(("runaway",), key=("squaring", r.step))
                 return self.next_step(r, s)
             if s.sees(code):
