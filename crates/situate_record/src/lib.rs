@@ -120,6 +120,8 @@ impl Recorder {
             holders: HashMap::new(),
             leaf_channels: HashMap::new(),
             event_channels: HashMap::new(),
+            print_channel: None,
+            winner_channel: None,
             sequence: HashMap::new(),
             period_s,
             times: std::collections::VecDeque::new(),
@@ -159,6 +161,8 @@ struct Writing {
     holders: HashMap<usize, usize>,
     leaf_channels: HashMap<usize, u16>,
     event_channels: HashMap<&'static str, u16>,
+    print_channel: Option<u16>,
+    winner_channel: Option<u16>,
     sequence: HashMap<u16, u32>,
     period_s: f64,
     /// The recent frames' cycles and times, for the time of events (an
@@ -199,7 +203,10 @@ impl Writing {
         }
         self.summary.dropped = tap.dropped();
         self.writer.finish().map_err(|source| mcap_error(&self.path, source))?;
-        self.summary.channels = self.leaf_channels.len() + self.event_channels.len();
+        self.summary.channels = self.leaf_channels.len()
+            + self.event_channels.len()
+            + usize::from(self.print_channel.is_some())
+            + usize::from(self.winner_channel.is_some());
         self.summary.bytes = std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
         Ok(self.summary)
     }
@@ -222,7 +229,7 @@ impl Writing {
             self.write(channel, time, &data)?;
         }
         for (i, line) in &frame.prints {
-            let channel = self.fixed_channel("print")?;
+            let channel = self.print_channel()?;
             let skill = self.skills.get(*i).cloned().unwrap_or_default();
             self.write(channel, time, &json!({"cycle": frame.cycle, "skill": skill, "line": line}))?;
         }
@@ -230,7 +237,7 @@ impl Writing {
             if self.holders.insert(leaf, i) == Some(i) {
                 continue;
             }
-            let channel = self.fixed_channel("winner")?;
+            let channel = self.winner_channel()?;
             let resource = self.leaves.get(leaf).map(|(p, _)| p.clone()).unwrap_or_default();
             let skill = self.skills.get(i).cloned().unwrap_or_default();
             self.write(channel, time, &json!({"cycle": frame.cycle, "resource": resource, "skill": skill}))?;
@@ -286,20 +293,25 @@ impl Writing {
         (t + (cycle as f64 - c as f64) * self.period_s).max(0.0)
     }
 
-    /// The channel of the prints (`"print"`) or of the winners (`"winner"`).
-    fn fixed_channel(&mut self, what: &'static str) -> Result<u16, RecordError> {
-        let key = if what == "print" { "\0print" } else { "\0winner" };
-        if let Some(&c) = self.event_channels.get(key) {
+    /// The channel of the prints, made on first use.
+    fn print_channel(&mut self) -> Result<u16, RecordError> {
+        if let Some(c) = self.print_channel {
             return Ok(c);
         }
-        let (topic, schema) = if what == "print" {
-            ("situate/prints", schema::print_schema())
-        } else {
-            ("situate/winners", schema::winner_schema())
-        };
-        let schema = serde_json::to_vec(&schema).unwrap_or_default();
-        let c = self.channel(&format!("situate.{what}"), &schema, topic, &[])?;
-        self.event_channels.insert(key, c);
+        let schema = serde_json::to_vec(&schema::print_schema()).unwrap_or_default();
+        let c = self.channel("situate.print", &schema, "situate/prints", &[])?;
+        self.print_channel = Some(c);
+        Ok(c)
+    }
+
+    /// The channel of the resources' holders, made on first use.
+    fn winner_channel(&mut self) -> Result<u16, RecordError> {
+        if let Some(c) = self.winner_channel {
+            return Ok(c);
+        }
+        let schema = serde_json::to_vec(&schema::winner_schema()).unwrap_or_default();
+        let c = self.channel("situate.winner", &schema, "situate/winners", &[])?;
+        self.winner_channel = Some(c);
         Ok(c)
     }
 
