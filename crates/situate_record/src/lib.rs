@@ -19,12 +19,20 @@
 //!   (`{"cycle", "skill", "line"}`);
 //! - `situate/winners`: who holds each resource, when that changes
 //!   (`{"cycle", "resource", "skill"}`);
-//! - a metadata record `situate` (robot, period, clock, leaves).
+//! - `situate/cycles`: one message per cycle, `{"cycle", "hash", "leaves"}`,
+//!   the cycle's fingerprint ([`hash::cycle_hash`], 16 hex digits) and how
+//!   many leaves were written: two runs are the same where these are;
+//! - a metadata record `situate` (robot, period, leaves, and what the caller
+//!   adds: the robot file and its `--set`s, so `situate replay` can rebuild
+//!   the robot).
 //!
 //! A message's `log_time` and `publish_time` are the manager's clock at the
 //! cycle (simulated or wall) in nanoseconds; the cycle is in every message.
 //! The file is chunked (zstd) and indexed, so a reader can seek by time.
 
+pub mod hash;
+pub mod read;
+pub mod replay;
 mod schema;
 
 use std::collections::{BTreeMap, HashMap};
@@ -84,6 +92,16 @@ impl Recorder {
     /// emptied). Call it before the manager is spawned or run. The file is
     /// opened here, so a path that cannot be written is an error now.
     pub fn start(path: &Path, manager: &mut Manager) -> Result<Recorder, RecordError> {
+        Recorder::start_with(path, manager, BTreeMap::new())
+    }
+
+    /// [`Recorder::start`], with more entries for the metadata record
+    /// (`situate replay` reads `robot_file` and `sets`, a JSON list).
+    pub fn start_with(
+        path: &Path,
+        manager: &mut Manager,
+        metadata: BTreeMap<String, String>,
+    ) -> Result<Recorder, RecordError> {
         let io = |source| RecordError::Io { path: path.to_path_buf(), source };
         let file = File::create(path).map_err(io)?;
         let mut writer = mcap::Writer::new(BufWriter::new(file)).map_err(|source| mcap_error(path, source))?;
@@ -92,7 +110,7 @@ impl Recorder {
         let robot = graph.robot.clone();
         let skills: Vec<String> = graph.instances.iter().map(|d| d.name.clone()).collect();
         let stats = manager.stats().ok();
-        let mut meta = BTreeMap::new();
+        let mut meta = metadata;
         meta.insert("robot".to_string(), robot);
         if let Some(stats) = &stats {
             meta.insert("period_s".to_string(), stats.period_s.to_string());
@@ -122,6 +140,7 @@ impl Recorder {
             event_channels: HashMap::new(),
             print_channel: None,
             winner_channel: None,
+            cycle_channel: None,
             sequence: HashMap::new(),
             period_s,
             times: std::collections::VecDeque::new(),
@@ -163,6 +182,7 @@ struct Writing {
     event_channels: HashMap<&'static str, u16>,
     print_channel: Option<u16>,
     winner_channel: Option<u16>,
+    cycle_channel: Option<u16>,
     sequence: HashMap<u16, u32>,
     period_s: f64,
     /// The recent frames' cycles and times, for the time of events (an
@@ -206,7 +226,8 @@ impl Writing {
         self.summary.channels = self.leaf_channels.len()
             + self.event_channels.len()
             + usize::from(self.print_channel.is_some())
-            + usize::from(self.winner_channel.is_some());
+            + usize::from(self.winner_channel.is_some())
+            + usize::from(self.cycle_channel.is_some());
         self.summary.bytes = std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
         Ok(self.summary)
     }
@@ -233,6 +254,16 @@ impl Writing {
             let skill = self.skills.get(*i).cloned().unwrap_or_default();
             self.write(channel, time, &json!({"cycle": frame.cycle, "skill": skill, "line": line}))?;
         }
+        let hash = hash::cycle_hash(
+            frame.values.iter().filter_map(|(leaf, v)| Some((self.leaves.get(*leaf)?.0.as_str(), v))),
+            frame
+                .winners
+                .iter()
+                .filter_map(|&(leaf, i)| Some((self.leaves.get(leaf)?.0.as_str(), self.skills.get(i)?.as_str()))),
+        );
+        let channel = self.cycle_channel()?;
+        let data = json!({"cycle": frame.cycle, "hash": hash::hex(hash), "leaves": frame.values.len()});
+        self.write(channel, time, &data)?;
         for &(leaf, i) in &frame.winners {
             if self.holders.insert(leaf, i) == Some(i) {
                 continue;
@@ -301,6 +332,17 @@ impl Writing {
         let schema = serde_json::to_vec(&schema::print_schema()).unwrap_or_default();
         let c = self.channel("situate.print", &schema, "situate/prints", &[])?;
         self.print_channel = Some(c);
+        Ok(c)
+    }
+
+    /// The channel of the cycles' hashes, made on first use.
+    fn cycle_channel(&mut self) -> Result<u16, RecordError> {
+        if let Some(c) = self.cycle_channel {
+            return Ok(c);
+        }
+        let schema = serde_json::to_vec(&schema::cycle_schema()).unwrap_or_default();
+        let c = self.channel("situate.cycle", &schema, "situate/cycles", &[])?;
+        self.cycle_channel = Some(c);
         Ok(c)
     }
 

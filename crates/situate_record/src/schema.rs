@@ -99,3 +99,18 @@ pub fn winner_schema() -> Json {
         "required": ["cycle", "resource", "skill"]
     })
 }
+
+/// The schema of a cycle's fingerprint: `{"cycle", "hash", "leaves"}`.
+pub fn cycle_schema() -> Json {
+    json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "situate cycle",
+        "type": "object",
+        "properties": {
+            "cycle": {"type": "integer", "minimum": 0},
+            "hash": {"type": "string", "pattern": "^[0-9a-f]{16}$", "description": "FNV-1a 64 of the leaves written and the resources' winners (docs/recording.md)"},
+            "leaves": {"type": "integer", "minimum": 0, "description": "leaves written in the cycle"}
+        },
+        "required": ["cycle", "hash", "leaves"]
+    })
+}

@@ -1,0 +1,180 @@
+//! Deterministic replay: two recordings of one run are the same cycle by
+//! cycle; a replay with every skill live reproduces its recording exactly;
+//! a skill changed since names the first cycle and signal that differ.
+
+use std::path::PathBuf;
+
+use situate::manager::{ClockKind, Manager, Registry, Request, RobotSpec, SkillSpec};
+use situate::prelude::*;
+use situate_record::read::Recording;
+use situate_record::replay::{build_tape, cast, run, Outcome};
+use situate_record::Recorder;
+
+/// A device whose readings follow a seeded pseudo-random walk.
+#[derive(Skill, Default)]
+#[skill(name = "rep.sensor", kind = "device")]
+struct Sensor {
+    #[output(signal = "range")]
+    range: f64,
+    #[output(signal = "ring")]
+    ring: [f32; 4],
+    state: u64,
+}
+
+impl Body for Sensor {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        self.state = self.state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.range = (self.state >> 11) as f64 / (1u64 << 53) as f64;
+        self.ring = [self.range as f32, 0.5, -0.0, self.range as f32 * 3.1];
+        Ok(())
+    }
+}
+
+/// A computation with a parameter and some memory.
+#[derive(Skill, Default)]
+#[skill(name = "rep.filter")]
+struct Filter {
+    #[input(signal = "range")]
+    range: f64,
+    #[output(signal = "smooth")]
+    smooth: f64,
+    #[param(default = 0.5, min = 0.0, max = 1.0)]
+    alpha: f64,
+}
+
+impl Body for Filter {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        self.smooth += self.alpha * (self.range - self.smooth);
+        Ok(())
+    }
+}
+
+/// Writes the resource `cmd` from `smooth`.
+#[derive(Skill, Default)]
+#[skill(name = "rep.command")]
+struct Command {
+    #[input(signal = "smooth")]
+    smooth: f64,
+    #[output(signal = "cmd")]
+    cmd: f64,
+    #[param(default = 1.0, min = -10.0, max = 10.0)]
+    gain: f64,
+}
+
+impl Body for Command {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.cmd = self.gain * self.smooth;
+        if cx.cycle() % 7 == 0 {
+            cx.print(format!("cmd {}", self.cmd));
+        }
+        Ok(())
+    }
+}
+
+fn registry() -> Registry {
+    let mut r = Registry::new();
+    r.register::<Sensor>();
+    r.register::<Filter>();
+    r.register::<Command>();
+    r
+}
+
+fn spec(alpha: f64) -> RobotSpec {
+    RobotSpec::new("rep")
+        .clock(ClockKind::Simulated)
+        .period_s(0.01)
+        .skill(SkillSpec::new("sensor", "rep.sensor"))
+        .skill(SkillSpec::new("filter", "rep.filter").param("alpha", Value::F64(alpha)))
+        .skill(SkillSpec::new("low", "rep.command").priority(1))
+        // A second writer of `cmd`, of higher priority, switched on mid-run.
+        .skill(SkillSpec::new("high", "rep.command").priority(5).param("gain", Value::F64(-2.0)).active(false))
+}
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("situate-replay-{}-{name}.mcap", std::process::id()))
+}
+
+/// Records the run: 30 cycles, `high` on, its gain changed, 30 more, `high` off, 20 more.
+fn record(name: &str) -> Recording {
+    let path = temp(name);
+    let mut m = Manager::build(&spec(0.5), &registry()).unwrap_or_else(|e| panic!("{e}"));
+    let recorder = Recorder::start(&path, &mut m).unwrap_or_else(|e| panic!("{e}"));
+    m.run_cycles(30);
+    m.request(Request::Activate { skills: vec!["high".into()], with_providers: false }).unwrap();
+    m.run_cycles(10);
+    m.request(Request::SetParam { skill: "high".into(), param: "gain".into(), value: Value::F64(3.0) }).unwrap();
+    m.run_cycles(20);
+    m.request(Request::Deactivate { skills: vec!["high".into()] }).unwrap();
+    m.run_cycles(20);
+    drop(m);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(summary.dropped, 0);
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    rec
+}
+
+fn replay(rec: &Recording, alpha: f64, live: Option<&[String]>) -> Outcome {
+    let mut spec = spec(alpha);
+    let mut registry = registry();
+    let cast = cast(&mut spec, &mut registry, &[], live).unwrap_or_else(|e| panic!("{e}"));
+    let mut m = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
+    let tape = build_tape(rec, m.graph(), &cast.players).unwrap_or_else(|e| panic!("{e}"));
+    assert!(cast.tape.set(tape).is_ok());
+    run(rec, &mut m, &cast.live, |_, _| {})
+}
+
+#[test]
+fn two_recordings_of_one_run_have_the_same_fingerprint_every_cycle() {
+    let (a, b) = (record("a"), record("b"));
+    assert_eq!(a.span(), Some((1, 80)));
+    let hashes = |r: &Recording| r.cycles.iter().map(|(c, x)| (*c, x.hash)).collect::<Vec<_>>();
+    assert!(hashes(&a).iter().all(|(_, h)| h.is_some()), "every cycle has a fingerprint");
+    assert_eq!(hashes(&a), hashes(&b));
+    // The fingerprint sees the run: cycles differ from each other.
+    let distinct: std::collections::HashSet<_> = hashes(&a).into_iter().map(|(_, h)| h).collect();
+    assert!(distinct.len() > 70, "{} distinct fingerprints", distinct.len());
+}
+
+#[test]
+fn a_replay_with_every_skill_live_reproduces_the_recording_exactly() {
+    let rec = record("live");
+    let outcome = replay(&rec, 0.5, None);
+    assert_eq!(outcome.first, None);
+    assert_eq!((outcome.cycles, outcome.matched), (80, 80));
+}
+
+#[test]
+fn a_replay_with_one_skill_live_and_the_others_from_the_log_reproduces_it() {
+    let rec = record("one");
+    for live in [vec!["high".to_string()], vec!["filter".to_string()], vec![]] {
+        let outcome = replay(&rec, 0.5, Some(&live));
+        assert_eq!(outcome.first, None, "live: {live:?}");
+        assert_eq!(outcome.matched, 80, "live: {live:?}");
+    }
+}
+
+#[test]
+fn a_changed_skill_names_the_first_cycle_and_signal_that_differ() {
+    let rec = record("changed");
+    // `filter` changed: its output differs from the first cycle it runs in.
+    let outcome = replay(&rec, 0.25, None);
+    let first = outcome.first.expect("a difference");
+    assert_eq!(first.signal, "smooth");
+    assert_eq!(first.what, "value");
+    assert_eq!(first.others, vec!["cmd".to_string()], "downstream of it");
+    let first_smooth = rec.cycles.iter().find(|(_, c)| c.leaves.iter().any(|(p, _)| p == "smooth")).map(|(c, _)| *c);
+    assert_eq!(Some(first.cycle), first_smooth);
+    // With `filter` played from the log, the change does not matter.
+    let outcome = replay(&rec, 0.25, Some(&["low".to_string(), "high".to_string()]));
+    assert_eq!(outcome.first, None);
+}
+
+#[test]
+fn a_dskill_or_an_unknown_skill_cannot_be_live() {
+    let mut registry = registry();
+    let err = cast(&mut spec(0.5), &mut registry, &[], Some(&["sensor".to_string()])).unwrap_err();
+    assert!(err.contains("dskill"), "{err}");
+    let err = cast(&mut spec(0.5), &mut registry, &[], Some(&["filtre".to_string()])).unwrap_err();
+    assert!(err.contains("no skill `filtre`") && err.contains("filter"), "{err}");
+}
