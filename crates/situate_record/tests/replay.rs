@@ -64,7 +64,7 @@ struct Command {
 impl Body for Command {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         self.cmd = self.gain * self.smooth;
-        if cx.cycle() % 7 == 0 {
+        if cx.cycle().is_multiple_of(7) {
             cx.print(format!("cmd {}", self.cmd));
         }
         Ok(())
