@@ -54,6 +54,11 @@ pub(crate) enum Command {
     /// The delivery demo: the simulated robot, the skill manager and the Python sequencer of
     /// demo/deliver.py (and the GUI unless --headless). Prints one line per phase and the outcome.
     Demo(DemoOptions),
+    /// Replay a recording through the robot rebuilt from its robot file: devices (and skills
+    /// not given with --live) play from the recording, the live skills run their code now, and
+    /// every cycle is compared with the recording; the first difference is named
+    /// (docs/recording.md). Exit 0: identical; 1: it differs.
+    Replay(crate::replay::ReplayArgs),
     /// Generate a C or C++ skill's typed I/O (structs and the glue) from its YAML manifest
     /// (docs/manifests.md).
     Gen {

@@ -27,6 +27,7 @@ mod demo;
 mod gen;
 mod map;
 mod output;
+mod replay;
 mod robot;
 mod schema;
 mod signals;
@@ -179,6 +180,7 @@ fn run(command: Command, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
         Command::Check { file, compose } => robot::check(&file, &compose, ext, out)?,
         Command::Run(args) => robot::run_robot(args, ext, out)?,
         Command::Demo(demo) => return demo::run_demo(&demo, ext, out),
+        Command::Replay(args) => return replay::replay_command(args, ext, out),
         Command::Gen { lang, manifest, out: dir } => gen::generate(&lang, &manifest, &dir, out)?,
         Command::CmakeDir => gen::print_cmake_dir(ext, out)?,
         Command::Types { library, python } => gen::types(&skill_types::registry_with(&library, &python, ext)?, out),

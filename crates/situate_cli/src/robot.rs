@@ -389,8 +389,12 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     let events = manager.events();
     let recorder = match &opts.record {
         Some(path) => Some(
-            situate_record::Recorder::start(path, &mut manager)
-                .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
+            situate_record::Recorder::start_with(
+                path,
+                &mut manager,
+                recording_metadata(file, &opts.compose.set, spec.clock),
+            )
+            .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
         ),
         None => None,
     };
@@ -660,6 +664,25 @@ fn summary_json(stats: &ManagerStats, skills: &[SkillInfo]) -> Json {
         "stats": situate_link::json::stats_to_json(stats),
         "skills": skills.iter().map(situate_link::json::skill_to_json).collect::<Vec<_>>(),
     })
+}
+
+/// What a recording keeps of how the robot was built, for `situate replay`:
+/// the robot file (absolute) and the `--set`s given.
+pub(crate) fn recording_metadata(
+    file: &Path,
+    sets: &[String],
+    clock: ClockKind,
+) -> std::collections::BTreeMap<String, String> {
+    let file = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
+    let mut meta = std::collections::BTreeMap::new();
+    meta.insert("robot_file".to_string(), file.display().to_string());
+    meta.insert("sets".to_string(), serde_json::to_string(sets).unwrap_or_default());
+    let clock = match clock {
+        ClockKind::Simulated => "simulated",
+        ClockKind::Wall => "wall",
+    };
+    meta.insert("clock".to_string(), clock.to_string());
+    meta
 }
 
 /// A finished recording in JSON (`"recording"` of `run` and `demo`).

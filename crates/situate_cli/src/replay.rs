@@ -1,0 +1,141 @@
+//! `situate replay FILE`: a recording fed back through the robot rebuilt
+//! from its robot file (`situate_record::replay`): devices, and skills not
+//! chosen to run live, played from the recording; the live skills' code run
+//! now; every cycle compared with the recording.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde_json::json;
+use situate::manager::{ClockKind, ExecutorKind, Manager};
+use situate_record::read::Recording;
+use situate_record::replay;
+
+use crate::args::Compose;
+use crate::output::{problem, Exit, Out};
+use crate::robot::{bad_file, load, Loaded};
+use crate::sim::SimOverrides;
+use crate::skill_types::{program_registry, registry_for};
+use crate::Extensions;
+
+/// `situate replay`'s arguments.
+#[derive(clap::Args)]
+pub(crate) struct ReplayArgs {
+    /// The recording (`situate run --record` or `situate demo --record`).
+    pub(crate) file: PathBuf,
+    /// Run this skill's code now (repeatable); every other skill plays its outputs from the
+    /// recording. Default: every skill that can run here runs live. Devices always play.
+    #[arg(long, value_name = "SKILL")]
+    pub(crate) live: Vec<String>,
+    /// The robot file (default: the one the recording names), e.g. one with a skill changed.
+    #[arg(long)]
+    pub(crate) robot: Option<PathBuf>,
+    /// Record the replay to this MCAP file.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) record: Option<PathBuf>,
+    /// Parameters over the recording's own `--set`s.
+    #[command(flatten)]
+    pub(crate) compose: Compose,
+}
+
+pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
+    let started = Instant::now();
+    let rec = Recording::open(&args.file).map_err(|e| problem(Exit::BadFile, e.to_string()))?;
+    let robot = match (&args.robot, rec.metadata.get("robot_file")) {
+        (Some(r), _) => r.clone(),
+        (None, Some(r)) => PathBuf::from(r),
+        (None, None) => {
+            return Err(problem(
+                Exit::Usage,
+                format!("{}: the recording names no robot file; give one with --robot", args.file.display()),
+            ))
+        }
+    };
+    if rec.metadata.get("clock").is_some_and(|c| c == "wall") {
+        out.warn(format_args!(
+            "warning: {} was recorded on the wall clock: skills that read the time will differ (docs/recording.md, \"Replay\")",
+            args.file.display()
+        ));
+    }
+    let recorded_sets: Vec<String> =
+        rec.metadata.get("sets").and_then(|s| serde_json::from_str(s).ok()).unwrap_or_default();
+    let compose = Compose { set: recorded_sets.into_iter().chain(args.compose.set.iter().cloned()).collect() };
+    let Loaded { mut spec, remote, file: robot_file, .. } = load(&robot, &compose)?;
+    let (mut registry, _world) = registry_for(&robot_file, program_registry(ext)?, ext, &SimOverrides::default())
+        .map_err(|errors| bad_file(&robot, &errors))?;
+    // What makes a run repeatable (docs/recording.md, "Replay").
+    spec.clock = ClockKind::Simulated;
+    spec.executor = ExecutorKind::Serial;
+    if let Some(p) = rec.period_s() {
+        spec.period_s = p;
+    }
+    let live = (!args.live.is_empty()).then_some(args.live.as_slice());
+    let cast = replay::cast(&mut spec, &mut registry, &remote, live).map_err(|e| problem(Exit::Usage, e))?;
+    let mut manager =
+        Manager::build(&spec, &registry).map_err(|e| problem(Exit::BadFile, format!("{}: {e}", robot.display())))?;
+    let tape = replay::build_tape(&rec, manager.graph(), &cast.players)
+        .map_err(|e| problem(Exit::BadFile, format!("{}: {e}", args.file.display())))?;
+    let _ = cast.tape.set(tape);
+    let recorder = match &args.record {
+        Some(path) => {
+            let meta = crate::robot::recording_metadata(&robot, &compose.set, ClockKind::Simulated);
+            Some(
+                situate_record::Recorder::start_with(path, &mut manager, meta)
+                    .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
+            )
+        }
+        None => None,
+    };
+    let outcome = replay::run(&rec, &mut manager, &cast.live, |_, _| {});
+    drop(manager);
+    let recording = match recorder.map(situate_record::Recorder::finish).transpose() {
+        Ok(r) => r,
+        Err(e) => return Err(problem(Exit::Failure, format!("--record: {e}"))),
+    };
+    let identical = outcome.first.is_none() && outcome.cycles > 0;
+    let span = rec.span();
+    if out.json {
+        println!(
+            "{}",
+            json!({
+                "recording": args.file,
+                "robot_file": robot,
+                "cycles": outcome.cycles,
+                "first_cycle": span.map(|s| s.0),
+                "last_cycle": span.map(|s| s.1),
+                "matched": outcome.matched,
+                "identical": identical,
+                "first_difference": outcome.first.as_ref().map(replay::Divergence::to_json),
+                "live": cast.live,
+                "played": cast.players,
+                "wall_s": started.elapsed().as_secs_f64(),
+                "replay_recording": recording.as_ref().map(crate::robot::recording_json),
+            })
+        );
+    } else {
+        println!(
+            "replayed {} cycles of {} in {:.2} s: {} live ({}), {} played from the recording",
+            outcome.cycles,
+            args.file.display(),
+            started.elapsed().as_secs_f64(),
+            cast.live.len(),
+            cast.live.join(", "),
+            cast.players.len()
+        );
+        match &outcome.first {
+            None if identical => println!("identical: every cycle matches the recording"),
+            None => println!("nothing to compare: the recording has no cycles"),
+            Some(d) => {
+                println!("differs from {d}");
+                if !d.others.is_empty() {
+                    println!("  also differing in that cycle: {}", d.others.join(", "));
+                }
+                println!("{} of {} cycles match", outcome.matched, outcome.cycles);
+            }
+        }
+        if let Some(r) = &recording {
+            print!("{}", crate::robot::recording_text(r));
+        }
+    }
+    Ok(if identical { Exit::Ok.code() } else { Exit::Failure.code() })
+}
