@@ -129,14 +129,16 @@ def test_a_recorded_delivery_replays_identically_and_a_changed_skill_names_where
     assert code == 0, result
     assert result["identical"] is True, result
     assert result["cycles"] == result["matched"] == out["cycles"], result
-    assert "follow_hallway" in result["live"] and "base" in result["played"], result
+    assert "follow_hallway" in result["live"], result
+    assert "base" in result["played"], result
 
     # A skill changed (here through a parameter): the replay names the first cycle and the
     # leaf where it starts, and exits 1.
     code, changed = _replay(path, "--set", "follow_hallway.max_turn=0.3")
     assert code == 1, changed
     first = changed["first_difference"]
-    assert first is not None and changed["identical"] is False, changed
+    assert first is not None, changed
+    assert changed["identical"] is False, changed
     assert first["signal"].startswith("drive."), first
     assert first["what"] == "value", first
     assert changed["matched"] < changed["cycles"], changed
