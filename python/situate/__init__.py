@@ -70,6 +70,7 @@ from .events import (
     OtherEvent,
     ParamChanged,
     Print,
+    PriorityChanged,
     SkillFaulted,
     Telemetry,
 )
@@ -162,6 +163,7 @@ __all__ = [
     "Port",
     "PortInfo",
     "Print",
+    "PriorityChanged",
     "ProtocolMismatch",
     "Reading",
     "RemoteSkill",

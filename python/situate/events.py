@@ -32,6 +32,7 @@ __all__ = [
     "OtherEvent",
     "ParamChanged",
     "Print",
+    "PriorityChanged",
     "SkillFaulted",
     "Telemetry",
     "parse_event",
@@ -89,6 +90,15 @@ class ParamChanged:
 
 
 @dataclass(frozen=True)
+class PriorityChanged:
+    """A skill's priority changed (``set_priority``), in force from ``cycle``."""
+
+    skill: str
+    priority: int
+    cycle: int
+
+
+@dataclass(frozen=True)
 class SkillFaulted:
     """A skill's body failed (error, panic, wrongly typed output): it was deactivated."""
 
@@ -132,6 +142,7 @@ Event = Union[
     MonitorFired,
     ActivationApplied,
     ParamChanged,
+    PriorityChanged,
     SkillFaulted,
     Print,
     ManagerStarted,
@@ -175,6 +186,10 @@ def parse_event(data: dict[str, Any]) -> Event:
                 param=str(data["param"]),
                 value=decode_untyped(data.get("value")),
                 cycle=int(data["cycle"]),
+            )
+        if kind == "priority_changed":
+            return PriorityChanged(
+                skill=str(data["skill"]), priority=int(data["priority"]), cycle=int(data["cycle"])
             )
         if kind == "skill_faulted":
             return SkillFaulted(

@@ -28,6 +28,9 @@ def test_every_event_kind_parses_to_its_dataclass() -> None:
         {"kind": "param_changed", "skill": "s", "param": "p", "value": "-inf", "cycle": 4}
     ) == situate.ParamChanged("s", "p", -math.inf, 4)
     assert parse_event(
+        {"kind": "priority_changed", "skill": "s", "priority": -3, "cycle": 5}
+    ) == situate.PriorityChanged("s", -3, 5)
+    assert parse_event(
         {"kind": "skill_faulted", "skill": "s", "cause": "panicked: boom", "cycle": 9}
     ) == situate.SkillFaulted("s", "panicked: boom", 9)
     assert parse_event({"kind": "print", "skill": "s", "line": "hi", "cycle": 1}) == situate.Print(

@@ -816,6 +816,10 @@ pub fn event_to_json(e: &Event) -> (&'static str, Json) {
             "activation_applied",
             json!({"kind": "activation_applied", "activated": activated, "deactivated": deactivated, "cycle": cycle}),
         ),
+        Event::PriorityChanged { skill, priority, cycle } => (
+            "priority_changed",
+            json!({"kind": "priority_changed", "skill": skill, "priority": priority, "cycle": cycle}),
+        ),
         Event::ParamChanged { skill, param, value, cycle } => (
             "param_changed",
             json!({"kind": "param_changed", "skill": skill, "param": param, "value": value_to_json(value), "cycle": cycle}),

@@ -179,6 +179,12 @@ pub enum Event {
         value: Value,
         cycle: u64,
     },
+    /// A skill's priority changed (`set_priority`), in force from `cycle`.
+    PriorityChanged {
+        skill: String,
+        priority: i32,
+        cycle: u64,
+    },
     SkillFaulted {
         skill: String,
         cause: String,

@@ -392,6 +392,15 @@ pub fn requests(rec: &Recording, live: &[String]) -> BTreeMap<u64, Vec<Request>>
                     out.entry(cycle).or_default().push(Request::Deactivate { skills: off });
                 }
             }
+            "priority_changed" => {
+                let skill = j.get("skill").and_then(Json::as_str).unwrap_or_default().to_string();
+                let priority = j.get("priority").and_then(Json::as_i64).and_then(|p| i32::try_from(p).ok());
+                // A player's priority is the recorded one too: it may win or
+                // lose against a live skill.
+                if let Some(priority) = priority {
+                    out.entry(cycle).or_default().push(Request::SetPriority { skill, priority });
+                }
+            }
             "param_changed" => {
                 let field = |k: &str| j.get(k).and_then(Json::as_str).unwrap_or_default().to_string();
                 let skill = field("skill");

@@ -94,7 +94,8 @@ fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("situate-replay-{}-{name}.mcap", std::process::id()))
 }
 
-/// Records the run: 30 cycles, `high` on, its gain changed, 30 more, `high` off, 20 more.
+/// Records the run: 30 cycles, `high` on, its gain changed, `low`'s priority raised over
+/// `high`'s, `high` off, 80 cycles in all.
 fn record(name: &str) -> Recording {
     let path = temp(name);
     let mut m = Manager::build(&spec(0.5), &registry()).unwrap_or_else(|e| panic!("{e}"));
@@ -103,7 +104,10 @@ fn record(name: &str) -> Recording {
     m.request(Request::Activate { skills: vec!["high".into()], with_providers: false }).unwrap();
     m.run_cycles(10);
     m.request(Request::SetParam { skill: "high".into(), param: "gain".into(), value: Value::F64(3.0) }).unwrap();
-    m.run_cycles(20);
+    m.run_cycles(5);
+    // `low` overtakes `high`: the winner of `cmd` changes hands by priority.
+    m.request(Request::SetPriority { skill: "low".into(), priority: 10 }).unwrap();
+    m.run_cycles(15);
     m.request(Request::Deactivate { skills: vec!["high".into()] }).unwrap();
     m.run_cycles(20);
     drop(m);
@@ -147,6 +151,9 @@ fn a_replay_with_every_skill_live_reproduces_the_recording_exactly() {
 #[test]
 fn a_replay_with_one_skill_live_and_the_others_from_the_log_reproduces_it() {
     let rec = record("one");
+    // The holder of `cmd` changed three times: `high` on, `low` raised over it, `high` off.
+    let holders: Vec<&str> = rec.winners.iter().map(|(_, _, s)| s.as_str()).collect();
+    assert_eq!(holders, ["low", "high", "low"], "{:?}", rec.winners);
     for live in [vec!["high".to_string()], vec!["filter".to_string()], vec![]] {
         let outcome = replay(&rec, 0.5, Some(&live));
         assert_eq!(outcome.first, None, "live: {live:?}");

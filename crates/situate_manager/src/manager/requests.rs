@@ -354,6 +354,7 @@ impl Manager {
                 self.insts[i].priority = priority;
                 // The plan holds each step's rank.
                 self.schedule_dirty = true;
+                self.bus.send(Event::PriorityChanged { skill, priority, cycle: self.cycle + 1 });
                 Ok(Reply::Done)
             }
             Request::SetVerbose { skill, verbose } => {
