@@ -30,6 +30,13 @@ pub(crate) struct ReplayArgs {
     /// The robot file (default: the one the recording names), e.g. one with a skill changed.
     #[arg(long)]
     pub(crate) robot: Option<PathBuf>,
+    /// Compare from this cycle on (the cycles before it run too: a skill's memory is not in
+    /// the recording, so a replay always starts at the recording's start).
+    #[arg(long, value_name = "CYCLE")]
+    pub(crate) from: Option<u64>,
+    /// Stop after this cycle.
+    #[arg(long, value_name = "CYCLE")]
+    pub(crate) to: Option<u64>,
     /// Record the replay to this MCAP file.
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
@@ -86,7 +93,11 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
         }
         None => None,
     };
-    let outcome = replay::run(&rec, &mut manager, &cast.live, |_, _| {});
+    let (from, to) = (args.from.unwrap_or(0), args.to.unwrap_or(u64::MAX));
+    if from > to {
+        return Err(problem(Exit::Usage, format!("--from {from} is after --to {to}")));
+    }
+    let outcome = replay::run_window(&rec, &mut manager, &cast.live, from, to, |_, _| {});
     drop(manager);
     let recording = match recorder.map(situate_record::Recorder::finish).transpose() {
         Ok(r) => r,
@@ -101,8 +112,8 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                 "recording": args.file,
                 "robot_file": robot,
                 "cycles": outcome.cycles,
-                "first_cycle": span.map(|s| s.0),
-                "last_cycle": span.map(|s| s.1),
+                "first_cycle": span.map(|s| s.0.max(from)),
+                "last_cycle": span.map(|s| s.1.min(to)),
                 "matched": outcome.matched,
                 "identical": identical,
                 "first_difference": outcome.first.as_ref().map(replay::Divergence::to_json),

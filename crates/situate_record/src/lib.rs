@@ -19,6 +19,9 @@
 //!   (`{"cycle", "skill", "line"}`);
 //! - `situate/winners`: who holds each resource, when that changes
 //!   (`{"cycle", "resource", "skill"}`);
+//! - `situate/keyframes`: every [`KEYFRAME_CYCLES`] cycles, every leaf's
+//!   latest value and the cycle it was written in,
+//!   `{"cycle", "leaves": {path: {"cycle", "value"}}}`;
 //! - `situate/cycles`: one message per cycle, `{"cycle", "hash", "leaves"}`,
 //!   the cycle's fingerprint ([`hash::cycle_hash`], 16 hex digits) and how
 //!   many leaves were written: two runs are the same where these are;
@@ -51,6 +54,11 @@ pub use schema::{leaf_schema, message_schema};
 
 /// Frames the cycle may get ahead of the file by (at 100 Hz, 40 s).
 pub const QUEUE_FRAMES: usize = 4096;
+
+/// A keyframe (`situate/keyframes`: every leaf's latest value) every this
+/// many cycles, so a reader can have the state at any cycle from the
+/// keyframe before it and at most this many cycles of messages.
+pub const KEYFRAME_CYCLES: u64 = 100;
 
 /// What went wrong with a recording.
 #[derive(Debug, thiserror::Error)]
@@ -141,6 +149,8 @@ impl Recorder {
             print_channel: None,
             winner_channel: None,
             cycle_channel: None,
+            keyframe_channel: None,
+            latest: BTreeMap::new(),
             sequence: HashMap::new(),
             period_s,
             times: std::collections::VecDeque::new(),
@@ -183,6 +193,9 @@ struct Writing {
     print_channel: Option<u16>,
     winner_channel: Option<u16>,
     cycle_channel: Option<u16>,
+    keyframe_channel: Option<u16>,
+    /// Every leaf's latest value and its cycle, for keyframes.
+    latest: BTreeMap<usize, (u64, situate_core::Value)>,
     sequence: HashMap<u16, u32>,
     period_s: f64,
     /// The recent frames' cycles and times, for the time of events (an
@@ -227,7 +240,8 @@ impl Writing {
             + self.event_channels.len()
             + usize::from(self.print_channel.is_some())
             + usize::from(self.winner_channel.is_some())
-            + usize::from(self.cycle_channel.is_some());
+            + usize::from(self.cycle_channel.is_some())
+            + usize::from(self.keyframe_channel.is_some());
         self.summary.bytes = std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
         Ok(self.summary)
     }
@@ -264,6 +278,20 @@ impl Writing {
         let channel = self.cycle_channel()?;
         let data = json!({"cycle": frame.cycle, "hash": hash::hex(hash), "leaves": frame.values.len()});
         self.write(channel, time, &data)?;
+        for (leaf, value) in &frame.values {
+            self.latest.insert(*leaf, (frame.cycle, value.clone()));
+        }
+        if frame.cycle.is_multiple_of(KEYFRAME_CYCLES) {
+            let leaves: serde_json::Map<String, Json> = self
+                .latest
+                .iter()
+                .filter_map(|(leaf, (c, v))| {
+                    Some((self.leaves.get(*leaf)?.0.clone(), json!({"cycle": c, "value": value_to_json(v)})))
+                })
+                .collect();
+            let channel = self.keyframe_channel()?;
+            self.write(channel, time, &json!({"cycle": frame.cycle, "leaves": leaves}))?;
+        }
         for &(leaf, i) in &frame.winners {
             if self.holders.insert(leaf, i) == Some(i) {
                 continue;
@@ -332,6 +360,17 @@ impl Writing {
         let schema = serde_json::to_vec(&schema::print_schema()).unwrap_or_default();
         let c = self.channel("situate.print", &schema, "situate/prints", &[])?;
         self.print_channel = Some(c);
+        Ok(c)
+    }
+
+    /// The channel of the keyframes, made on first use.
+    fn keyframe_channel(&mut self) -> Result<u16, RecordError> {
+        if let Some(c) = self.keyframe_channel {
+            return Ok(c);
+        }
+        let schema = serde_json::to_vec(&schema::keyframe_schema()).unwrap_or_default();
+        let c = self.channel("situate.keyframe", &schema, "situate/keyframes", &[])?;
+        self.keyframe_channel = Some(c);
         Ok(c)
     }
 

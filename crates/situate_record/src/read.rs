@@ -45,9 +45,15 @@ pub struct Recording {
     pub winners: Vec<(u64, String, String)>,
     /// The events in the order they were recorded: (kind, the event's JSON).
     pub events: Vec<(String, Json)>,
+    /// Keyframes by cycle: every leaf's latest (cycle written, value) then.
+    pub keyframes: BTreeMap<u64, State>,
     /// Messages read, all channels.
     pub messages: u64,
 }
+
+/// Every leaf's latest value at a cycle: path → (the cycle it was written
+/// in, the value as recorded).
+pub type State = BTreeMap<String, (u64, Json)>;
 
 impl Recording {
     /// Reads the recording at `path`.
@@ -100,6 +106,21 @@ impl Recording {
                     rec.winners.push((c, field("resource"), field("skill")));
                 }
                 "situate/prints" => {}
+                "situate/keyframes" => {
+                    let c = cycle()?;
+                    let leaves = data
+                        .get("leaves")
+                        .and_then(Json::as_object)
+                        .ok_or_else(|| bad(format!("keyframe {c} has no leaves")))?;
+                    let state = leaves
+                        .iter()
+                        .map(|(path, l)| {
+                            let at = l.get("cycle").and_then(Json::as_u64).unwrap_or(0);
+                            (path.clone(), (at, l.get("value").cloned().unwrap_or(Json::Null)))
+                        })
+                        .collect();
+                    rec.keyframes.insert(c, state);
+                }
                 t if t.starts_with("situate/events/") => {
                     rec.events.push((t["situate/events/".len()..].to_string(), data));
                 }
@@ -124,6 +145,25 @@ impl Recording {
     /// The first and last cycle recorded.
     pub fn span(&self) -> Option<(u64, u64)> {
         Some((*self.cycles.keys().next()?, *self.cycles.keys().next_back()?))
+    }
+
+    /// Every leaf's latest value at the end of `cycle`: from the keyframe at
+    /// or before it, then the cycles after that one (at most
+    /// [`crate::KEYFRAME_CYCLES`] of them).
+    pub fn state_at(&self, cycle: u64) -> State {
+        let (mut state, from) = match self.keyframes.range(..=cycle).next_back() {
+            Some((&k, s)) => (s.clone(), k + 1),
+            None => (State::new(), 0),
+        };
+        if from > cycle {
+            return state;
+        }
+        for (&c, rec) in self.cycles.range(from..=cycle) {
+            for (path, value) in &rec.leaves {
+                state.insert(path.clone(), (c, value.clone()));
+            }
+        }
+        state
     }
 
     /// Who held `resource` in `cycle` (the last change at or before it).

@@ -114,3 +114,25 @@ pub fn cycle_schema() -> Json {
         "required": ["cycle", "hash", "leaves"]
     })
 }
+
+/// The schema of a keyframe: `{"cycle", "leaves": {path: {"cycle", "value"}}}`.
+pub fn keyframe_schema() -> Json {
+    json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "situate keyframe",
+        "type": "object",
+        "properties": {
+            "cycle": {"type": "integer", "minimum": 0},
+            "leaves": {
+                "type": "object",
+                "description": "every leaf written so far: its latest value and the cycle it was written in",
+                "additionalProperties": {
+                    "type": "object",
+                    "properties": {"cycle": {"type": "integer", "minimum": 0}, "value": {}},
+                    "required": ["cycle", "value"]
+                }
+            }
+        },
+        "required": ["cycle", "leaves"]
+    })
+}

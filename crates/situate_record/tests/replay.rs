@@ -185,3 +185,46 @@ fn a_dskill_or_an_unknown_skill_cannot_be_live() {
     let err = cast(&mut spec(0.5), &mut registry, &[], Some(&["filtre".to_string()])).unwrap_err();
     assert!(err.contains("no skill `filtre`") && err.contains("filter"), "{err}");
 }
+
+#[test]
+fn the_state_at_any_cycle_from_a_keyframe_is_the_state_built_from_the_start() {
+    // 250 cycles: keyframes at 100 and 200.
+    let path = temp("keyframes");
+    let mut m = Manager::build(&spec(0.5), &registry()).unwrap_or_else(|e| panic!("{e}"));
+    let recorder = Recorder::start(&path, &mut m).unwrap_or_else(|e| panic!("{e}"));
+    m.run_cycles(120);
+    m.request(Request::Activate { skills: vec!["high".into()], with_providers: false }).unwrap();
+    m.run_cycles(130);
+    drop(m);
+    recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(rec.keyframes.keys().copied().collect::<Vec<_>>(), [100, 200]);
+    let mut from_start = situate_record::read::State::new();
+    for (&c, cycle) in &rec.cycles {
+        for (p, v) in &cycle.leaves {
+            from_start.insert(p.clone(), (c, v.clone()));
+        }
+        if [1, 99, 100, 101, 150, 200, 249, 250].contains(&c) {
+            assert_eq!(rec.state_at(c), from_start, "cycle {c}");
+        }
+    }
+    assert_eq!(rec.keyframes[&100], rec.state_at(100));
+    assert!(rec.state_at(150).contains_key("cmd"));
+}
+
+#[test]
+fn a_window_of_cycles_is_compared_after_running_from_the_start() {
+    let rec = record("window");
+    let mut spec = spec(0.5);
+    let mut registry = registry();
+    let cast = cast(&mut spec, &mut registry, &[], None).unwrap_or_else(|e| panic!("{e}"));
+    let mut m = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
+    let tape = build_tape(&rec, m.graph(), &cast.players).unwrap_or_else(|e| panic!("{e}"));
+    assert!(cast.tape.set(tape).is_ok());
+    let mut seen = Vec::new();
+    let outcome = situate_record::replay::run_window(&rec, &mut m, &cast.live, 41, 50, |f, _| seen.push(f.cycle));
+    assert_eq!(seen, (41..=50).collect::<Vec<_>>());
+    assert_eq!((outcome.cycles, outcome.matched, outcome.first), (10, 10, None));
+    assert_eq!(m.cycle_count(), 50);
+}
