@@ -527,6 +527,26 @@ pub fn decode_batch(payload: &[u8]) -> Result<Vec<(String, Vec<u8>)>, WireError>
         .collect()
 }
 
+/// The arguments of a request the program answers itself
+/// ([`crate::server::Verbs`]): a JSON object no larger than
+/// [`MAX_PAYLOAD_BYTES`], `{}` for an empty payload.
+pub fn decode_args(verb: &str, payload: &[u8]) -> Result<Json, WireError> {
+    if payload.len() > MAX_PAYLOAD_BYTES {
+        return Err(WireError::bad_request(format!(
+            "`{verb}`: the request is {} bytes, more than {MAX_PAYLOAD_BYTES}",
+            payload.len()
+        )));
+    }
+    if payload.iter().all(u8::is_ascii_whitespace) {
+        return Ok(Json::Object(serde_json::Map::new()));
+    }
+    match serde_json::from_slice::<Json>(payload) {
+        Ok(j @ Json::Object(_)) => Ok(j),
+        Ok(_) => Err(WireError::bad_request(format!("`{verb}`: the arguments must be a JSON object"))),
+        Err(e) => Err(WireError::bad_request(format!("`{verb}`: the arguments are not JSON: {e}"))),
+    }
+}
+
 pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> {
     if !VERBS.contains(&verb) {
         return Err(WireError {

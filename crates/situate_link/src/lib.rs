@@ -11,7 +11,7 @@ pub mod session;
 
 pub use client::{Client, ClientError, RemoteError};
 pub use remote::{serve_skill, HostError, HostStats, RemoteSkill};
-pub use server::Link;
+pub use server::{Link, VerbFn, Verbs};
 pub use session::{LinkConfig, DEFAULT_ENDPOINT};
 
 /// Why the link could not be set up.

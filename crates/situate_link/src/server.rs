@@ -82,6 +82,18 @@ impl Link {
 
     /// Serves `handle` for robot `robot` on `session`.
     pub fn serve(robot: &str, handle: Handle, session: Session, config: &LinkConfig) -> Result<Link, LinkError> {
+        Link::serve_with(robot, handle, session, config, Verbs::default())
+    }
+
+    /// [`Link::serve`], answering `verbs` besides the protocol's (the
+    /// program's own requests, such as `record`).
+    pub fn serve_with(
+        robot: &str,
+        handle: Handle,
+        session: Session,
+        config: &LinkConfig,
+        verbs: Verbs,
+    ) -> Result<Link, LinkError> {
         let stop = Arc::new(AtomicBool::new(false));
         let telemetry = Arc::new(Mutex::new(Telemetry { signals: Vec::new(), rate_hz: config.telemetry_hz }));
         let (tx, rx) = crossbeam_channel::bounded::<Query>(1024);
@@ -110,8 +122,9 @@ impl Link {
         {
             let (handle, telemetry, robot) = (handle.clone(), Arc::clone(&telemetry), robot.to_string());
             let (prefix, injected, reporter) = (prefix.clone(), Arc::clone(&injected), handle.clone());
+            let verbs = Arc::new(verbs);
             threads.push(spawn(REQ_THREAD, reporter, move || {
-                bridge(&rx, &handle, &telemetry, &robot, &prefix, &injected)
+                bridge(&rx, &handle, &telemetry, &robot, &prefix, &injected, &verbs)
             })?);
         }
         {
@@ -214,6 +227,7 @@ fn bridge(
     robot: &str,
     prefix: &str,
     injected: &Injected,
+    verbs: &Verbs,
 ) {
     let mut burst: Vec<InFlight> = Vec::with_capacity(BURST);
     while let Ok(first) = rx.recv() {
@@ -222,7 +236,7 @@ fn bridge(
         // awaited; the order of the requests is kept.
         let mut next = Some(first);
         while let Some(query) = next {
-            let answer = answer(&query, handle, telemetry, robot);
+            let answer = answer(&query, handle, telemetry, robot, verbs);
             burst.push(InFlight { reply_key: reply_key(&query, prefix), query, answer });
             next = if burst.len() < BURST { rx.try_recv().ok() } else { None };
         }
@@ -242,22 +256,38 @@ fn reply_key(query: &Query, prefix: &str) -> String {
 
 /// Decodes a query and answers it, or submits it to the manager (a `batch`: each of its
 /// requests in order, as if each came alone).
-fn answer(query: &Query, handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str) -> Answer {
+fn answer(query: &Query, handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str, verbs: &Verbs) -> Answer {
     let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("");
     let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
     if verb == json::BATCH {
         return match json::decode_batch(&payload) {
             Err(e) => Answer::Ready(json::wire_error(&e)),
             Ok(requests) => Answer::Batch(
-                requests.iter().map(|(verb, args)| answer_one(verb, args, handle, telemetry, robot)).collect(),
+                requests.iter().map(|(verb, args)| answer_one(verb, args, handle, telemetry, robot, verbs)).collect(),
             ),
         };
     }
-    answer_one(verb, &payload, handle, telemetry, robot)
+    answer_one(verb, &payload, handle, telemetry, robot, verbs)
 }
 
 /// One request: answered here, or submitted to the manager.
-fn answer_one(verb: &str, payload: &[u8], handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str) -> Answer {
+fn answer_one(
+    verb: &str,
+    payload: &[u8],
+    handle: &Handle,
+    telemetry: &Mutex<Telemetry>,
+    robot: &str,
+    verbs: &Verbs,
+) -> Answer {
+    if let Some(f) = verbs.0.get(verb) {
+        return Answer::Ready(match json::decode_args(verb, payload) {
+            Err(e) => json::wire_error(&e),
+            Ok(args) => match f(&args) {
+                Ok(result) => json::ok(result),
+                Err(e) => json::wire_error(&e),
+            },
+        });
+    }
     Answer::Ready(match json::decode_request(verb, payload) {
         Err(e) => json::wire_error(&e),
         Ok(Decoded::Hello) => {
@@ -280,6 +310,15 @@ fn answer_one(verb: &str, payload: &[u8], handle: &Handle, telemetry: &Mutex<Tel
         },
     })
 }
+
+/// A request of the program's own (see [`Link::serve_with`]): its arguments
+/// (a JSON object, `{}` when none came) to its result, or an error whose
+/// kind the client sees (`bad_request`, `refused`, …).
+pub type VerbFn = Arc<dyn Fn(&Json) -> Result<Json, json::WireError> + Send + Sync>;
+
+/// The program's own requests, by verb.
+#[derive(Clone, Default)]
+pub struct Verbs(pub std::collections::BTreeMap<String, VerbFn>);
 
 fn publish_events(
     session: &Session,

@@ -492,6 +492,9 @@ pub(crate) struct Envelope {
     pub request: Request,
     /// An `AddMonitor`'s conditions, compiled by the sender.
     pub monitor: Option<crate::manager::PreparedMonitorBox>,
+    /// [`Handle::tap`]: install a tap of this capacity (the request is then
+    /// ignored) and send its receiver here.
+    pub tap: Option<(usize, Sender<crate::TapReceiver>)>,
     pub reply: Sender<Result<Reply, ControlError>>,
 }
 
@@ -515,6 +518,24 @@ impl Handle {
         self.bus.subscribe()
     }
 
+    /// The robot's wiring.
+    pub fn graph(&self) -> &crate::graph::Graph {
+        &self.graph
+    }
+
+    /// Taps the running manager's cycle from its next cycle on, as
+    /// [`Manager::tap`](crate::Manager::tap) does before it is spawned (and
+    /// replacing any tap it has). Gives up after `timeout`.
+    pub fn tap(&self, capacity: usize, timeout: Duration) -> Result<crate::TapReceiver, ControlError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        let (tap_tx, tap_rx) = crossbeam_channel::bounded(1);
+        let envelope =
+            Envelope { request: Request::QueryStats, monitor: None, tap: Some((capacity, tap_tx)), reply: tx };
+        self.tx.send(envelope).map_err(|_| ControlError::Disconnected)?;
+        rx.recv_timeout(timeout).map_err(|_| ControlError::Disconnected)??;
+        tap_rx.try_recv().map_err(|_| ControlError::Disconnected)
+    }
+
     /// Sends `event` to every subscriber, as the manager would (a worker
     /// thread's failure, see [`crate::supervise`]); a `WorkerFailed` is
     /// counted in the stats.
@@ -536,9 +557,10 @@ impl Handle {
     pub fn submit(&self, mut request: Request) -> Result<Pending, ControlError> {
         let (tx, rx) = crossbeam_channel::bounded(1);
         match crate::manager::prepare(&self.graph, &mut request) {
-            Ok(monitor) => {
-                self.tx.send(Envelope { request, monitor, reply: tx }).map_err(|_| ControlError::Disconnected)?
-            }
+            Ok(monitor) => self
+                .tx
+                .send(Envelope { request, monitor, tap: None, reply: tx })
+                .map_err(|_| ControlError::Disconnected)?,
             Err(e) => {
                 let _ = tx.send(Err(e));
             }

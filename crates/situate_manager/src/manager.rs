@@ -227,8 +227,10 @@ pub struct Manager {
     sampled: bool,
     /// The ready steps of a level (kept to reuse its allocation).
     ready: Vec<usize>,
-    /// Where every cycle's written values go, when something records them.
-    tap: Option<Tap>,
+    /// Where every cycle's written values go, when something records them
+    /// (a recording, the GUI's history): empty, the usual case, costs one
+    /// test per cycle.
+    taps: Vec<Tap>,
     /// This cycle's prints, for the tap.
     tap_prints: Vec<(usize, String)>,
     /// The lockstep dskills whose device exchange runs this cycle.
@@ -348,7 +350,7 @@ impl Manager {
             sampled: true,
             ready: Vec::new(),
             exchanging: Vec::new(),
-            tap: None,
+            taps: Vec::new(),
             tap_prints: Vec::new(),
             parts: Vec::new(),
             clocks,
@@ -386,12 +388,13 @@ impl Manager {
     /// written in it (leaf by leaf, as [`Frame`]s) go to the returned
     /// receiver, which holds up to `capacity` frames. The cycle never waits
     /// for it: a frame that finds it full is dropped and counted (see
-    /// [`TapReceiver::dropped`]). One tap at a time; a new one replaces the
-    /// last. The leaves are those of [`Manager::graph`] (`leaves[i]`).
+    /// [`TapReceiver::dropped`]). Several taps get the same frames; one
+    /// goes when its receiver is dropped. The leaves are those of
+    /// [`Manager::graph`] (`leaves[i]`).
     pub fn tap(&mut self, capacity: usize) -> TapReceiver {
         let (tx, rx) = crossbeam_channel::bounded(capacity.max(1));
         let dropped = Arc::new(std::sync::atomic::AtomicU64::new(0));
-        self.tap = Some(Tap { tx, dropped: Arc::clone(&dropped) });
+        self.taps.push(Tap { tx, dropped: Arc::clone(&dropped) });
         TapReceiver { frames: rx, dropped }
     }
 
@@ -497,7 +500,7 @@ impl Manager {
     fn record_prints(&mut self, i: usize, prints: Vec<String>) {
         let inst = &mut self.insts[i];
         for line in prints {
-            if self.tap.is_some() {
+            if !self.taps.is_empty() {
                 self.tap_prints.push((i, line.clone()));
             }
             if inst.verbose {

@@ -48,7 +48,9 @@ use crossbeam_channel::{select, Receiver, Sender};
 use serde_json::{json, Value as Json};
 use situate_core::SignalType;
 use situate_link::json::{event_to_json, value_to_json};
-use situate_manager::{Control, Event, Frame, Manager, TapReceiver};
+use std::time::Duration;
+
+use situate_manager::{Control, Event, Frame, Handle, Manager, Reply, Request, TapReceiver};
 
 pub use schema::{leaf_schema, message_schema};
 
@@ -69,6 +71,8 @@ pub enum RecordError {
     Mcap { path: PathBuf, source: mcap::McapError },
     #[error("{}: the recorder's thread ended without finishing the file", path.display())]
     Lost { path: PathBuf },
+    #[error("{}: the robot did not start the recording: {message}", path.display())]
+    Robot { path: PathBuf, message: String },
 }
 
 /// What a finished recording holds.
@@ -86,6 +90,14 @@ pub struct Summary {
     pub bytes: u64,
     /// The first and last cycle recorded.
     pub cycles: Option<(u64, u64)>,
+}
+
+/// Where a recording's cycles come from.
+enum Source<'a> {
+    /// A manager not spawned yet.
+    Manager(&'a mut Manager),
+    /// A running manager, and how long to wait for it.
+    Handle(&'a Handle, Duration),
 }
 
 /// A recording under way (see the module).
@@ -110,14 +122,43 @@ impl Recorder {
         manager: &mut Manager,
         metadata: BTreeMap<String, String>,
     ) -> Result<Recorder, RecordError> {
+        Recorder::start_from(path, Source::Manager(manager), metadata)
+    }
+
+    /// Starts recording a manager that is running (spawned), from its next
+    /// cycle on: the `record` request of the link. The file is created new;
+    /// a robot that does not answer within `timeout` is an error.
+    pub fn start_running(
+        path: &Path,
+        handle: &Handle,
+        metadata: BTreeMap<String, String>,
+        timeout: Duration,
+    ) -> Result<Recorder, RecordError> {
+        Recorder::start_from(path, Source::Handle(handle, timeout), metadata)
+    }
+
+    fn start_from(
+        path: &Path,
+        mut source: Source<'_>,
+        metadata: BTreeMap<String, String>,
+    ) -> Result<Recorder, RecordError> {
         let io = |source| RecordError::Io { path: path.to_path_buf(), source };
         let file = File::create(path).map_err(io)?;
         let mut writer = mcap::Writer::new(BufWriter::new(file)).map_err(|source| mcap_error(path, source))?;
-        let graph = manager.graph();
+        let graph = match &source {
+            Source::Manager(m) => m.graph(),
+            Source::Handle(h, _) => h.graph(),
+        };
         let leaves: Vec<(String, SignalType)> = graph.leaves.iter().map(|l| (l.path.clone(), l.ty.clone())).collect();
         let robot = graph.robot.clone();
         let skills: Vec<String> = graph.instances.iter().map(|d| d.name.clone()).collect();
-        let stats = manager.stats().ok();
+        let stats = match &mut source {
+            Source::Manager(m) => m.stats().ok(),
+            Source::Handle(h, timeout) => match h.request_timeout(Request::QueryStats, *timeout) {
+                Ok(Reply::Stats(s)) => Some(s),
+                _ => None,
+            },
+        };
         let mut meta = metadata;
         meta.insert("robot".to_string(), robot);
         if let Some(stats) = &stats {
@@ -135,8 +176,17 @@ impl Recorder {
             .write_metadata(&mcap::records::Metadata { name: "situate".to_string(), metadata: meta })
             .map_err(|source| mcap_error(path, source))?;
         let period_s = stats.map(|s| s.period_s).unwrap_or(0.0);
-        let tap = manager.tap(QUEUE_FRAMES);
-        let events = manager.events();
+        let (tap, events) = match source {
+            Source::Manager(m) => (m.tap(QUEUE_FRAMES), m.events()),
+            Source::Handle(h, timeout) => {
+                // Events first: none of the tapped cycles' is missed.
+                let events = h.events();
+                let tap = h
+                    .tap(QUEUE_FRAMES, timeout)
+                    .map_err(|e| RecordError::Robot { path: path.to_path_buf(), message: e.to_string() })?;
+                (tap, events)
+            }
+        };
         let (stop, stopped) = crossbeam_channel::bounded(1);
         let file = Writing {
             path: path.to_path_buf(),

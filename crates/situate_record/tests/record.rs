@@ -129,3 +129,45 @@ fn a_path_that_cannot_be_written_is_an_error_naming_it_and_nothing_is_tapped() {
     // The robot runs on.
     m.run_cycles(3);
 }
+
+#[test]
+fn several_taps_get_every_frame_and_a_dropped_one_leaves_the_others() {
+    let mut m = manager();
+    let a = m.tap(64);
+    let b = m.tap(64);
+    m.run_cycles(3);
+    drop(b);
+    m.run_cycles(3);
+    let cycles: Vec<u64> = a.frames.try_iter().map(|f| f.cycle).collect();
+    assert_eq!(cycles, [1, 2, 3, 4, 5, 6]);
+    assert_eq!(a.dropped(), 0);
+}
+
+#[test]
+fn a_running_robot_is_recorded_from_its_next_cycle_through_its_handle() {
+    use situate::manager::{Control as _, Reply};
+    use std::time::{Duration, Instant};
+    let path = temp("running");
+    // Paced (100 cycles a second), so the writer never falls 4,096 cycles behind.
+    let mut m = manager();
+    m.set_speed(Some(10.0));
+    let (mut handle, join) = m.spawn(true);
+    let recorder = Recorder::start_running(&path, &handle, BTreeMap::new(), Duration::from_secs(30))
+        .unwrap_or_else(|e| panic!("{e}"));
+    // Wait (generously) until cycles have gone by: no timing is asserted.
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while Instant::now() < deadline {
+        match handle.request(Request::QueryStats) {
+            Ok(Reply::Stats(s)) if s.cycle > 50 => break,
+            _ => std::thread::sleep(Duration::from_millis(10)),
+        }
+    }
+    let _ = handle.request(Request::Shutdown);
+    let _ = join.join();
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    assert!(summary.frames > 0, "{summary:?}");
+    let (first, last) = summary.cycles.expect("cycles");
+    assert_eq!(last - first + 1, summary.frames, "no cycle missing: {summary:?}");
+    assert_eq!(summary.dropped, 0);
+}

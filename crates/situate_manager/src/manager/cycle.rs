@@ -179,7 +179,7 @@ impl Manager {
     pub(super) fn end_cycle(&mut self) {
         self.evaluate_monitors();
         self.tally_winners();
-        if self.tap.is_some() {
+        if !self.taps.is_empty() {
             self.send_frame();
         }
         if !self.cycle_timed {
@@ -202,7 +202,6 @@ impl Manager {
     /// tap loses the frame, counted; a closed one is removed).
     #[cold]
     fn send_frame(&mut self) {
-        let Some(tap) = &self.tap else { return };
         let cycle = self.cycle;
         let values = self
             .slots
@@ -218,12 +217,29 @@ impl Manager {
             .map(|t| (t.leaf, self.slots[t.leaf].writer as usize))
             .collect();
         let prints = std::mem::take(&mut self.tap_prints);
-        match tap.tx.try_send(Frame { cycle, time_s: self.time_s, values, prints, winners }) {
-            Ok(()) => {}
+        let frame = Frame { cycle, time_s: self.time_s, values, prints, winners };
+        let send = |tap: &super::Tap, frame: Frame| match tap.tx.try_send(frame) {
+            Ok(()) => true,
             Err(crossbeam_channel::TrySendError::Full(_)) => {
                 tap.dropped.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                true
             }
-            Err(crossbeam_channel::TrySendError::Disconnected(_)) => self.tap = None,
+            Err(crossbeam_channel::TrySendError::Disconnected(_)) => false,
+        };
+        // Each tap but the last gets a copy (its values by reference count).
+        let Some((last, others)) = self.taps.split_last() else { return };
+        // Taps whose receiver is gone (`Vec::new` allocates nothing).
+        let mut gone = Vec::new();
+        for (k, tap) in others.iter().enumerate() {
+            if !send(tap, frame.clone()) {
+                gone.push(k);
+            }
+        }
+        if !send(last, frame) {
+            gone.push(others.len());
+        }
+        for k in gone.into_iter().rev() {
+            self.taps.remove(k);
         }
     }
 

@@ -314,7 +314,7 @@ enum Served<'a> {
 /// Answers one request. `Step` runs its cycles here, so a body that gets
 /// stuck in one is left behind like in a running cycle.
 fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: Envelope) -> Served<'a> {
-    let Envelope { request, monitor, reply } = envelope;
+    let Envelope { request, monitor, tap, reply } = envelope;
     let Some(m) = current(&mut g, generation) else {
         // Not the cycle any more: the request goes back to the queue's
         // new owner only if we could; answer that the manager moved on.
@@ -323,6 +323,11 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
         )));
         return Served::End;
     };
+    if let Some((capacity, to)) = tap {
+        let _ = to.send(m.tap(capacity));
+        let _ = reply.send(Ok(Reply::Done));
+        return Served::Go(g);
+    }
     match request {
         Request::Shutdown => {
             let _ = reply.send(Ok(Reply::Done));
