@@ -5,9 +5,20 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import pytest
-from support import EVENT_S, TOYBOT, Manager, free_port, program_env, situate, situate_program
+from support import (
+    EVENT_S,
+    TOYBOT,
+    Manager,
+    free_port,
+    program_env,
+    situate,
+    situate_program,
+    start_manager,
+)
 
 import situate as situate_pkg
 
@@ -121,6 +132,61 @@ def _wait_or_nudge(process: subprocess.Popen[str], toybot: Manager) -> tuple[str
         except subprocess.TimeoutExpired:
             situate("param", "set", "wander", "seed", str(value), *toybot.connect_args)
     pytest.fail("`situate events --count 3` saw fewer than 3 events")
+
+
+def test_record_over_the_link_writes_into_the_record_dir_only(tmp_path: Path) -> None:
+    from mcap.reader import make_reader
+
+    robot = start_manager(TOYBOT, "toybot", "--record-dir", str(tmp_path))
+    try:
+        args = robot.connect_args
+        status = json.loads(situate("record", "status", "--json", *args).stdout)
+        assert status == {"recording": None, "dir": str(tmp_path)}, status
+        # A client names a file, never a path.
+        for bad in ["../escape.mcap", "/tmp/x.mcap", "x.txt"]:
+            refused = situate("record", "start", bad, *args)
+            assert refused.returncode == 5, (bad, refused.stderr)
+            assert "file name" in refused.stderr or ".mcap" in refused.stderr, refused.stderr
+        assert not (tmp_path.parent / "escape.mcap").exists()
+
+        started = situate("record", "start", "run.mcap", *args)
+        assert started.returncode == 0, started.stderr
+        assert started.stdout.strip() == f"recording to {tmp_path / 'run.mcap'}"
+        again = situate("record", "start", "other.mcap", *args)
+        assert again.returncode == 5
+        assert "already recording" in again.stderr
+
+        def cycle() -> int:
+            out = json.loads(situate("stats", "--json", *args).stdout)
+            return int(out["cycle"])
+
+        # Some cycles go by (a condition, generously bounded).
+        first = cycle()
+        deadline = time.monotonic() + 60
+        while cycle() < first + 10 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        stopped = json.loads(situate("record", "stop", "--json", *args).stdout)
+        assert stopped["path"] == str(tmp_path / "run.mcap"), stopped
+        assert stopped["cycles"] >= 10, stopped
+        assert stopped["dropped_cycles"] == 0, stopped
+        nothing = situate("record", "stop", *args)
+        assert nothing.returncode == 5
+        assert "nothing is being recorded" in nothing.stderr
+        # An existing file is never overwritten.
+        exists = situate("record", "start", "run.mcap", *args)
+        assert exists.returncode == 5
+        assert "exists" in exists.stderr
+    finally:
+        robot.stop()
+
+    with (tmp_path / "run.mcap").open("rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None
+        assert summary.statistics is not None
+        assert summary.statistics.message_count == stopped["messages"]
+        topics = {c.topic for c in summary.channels.values()}
+    assert {"sonar.range", "situate/cycles"} <= topics, topics
 
 
 def test_stats_and_cycle(toybot: Manager) -> None:

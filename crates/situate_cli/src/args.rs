@@ -190,6 +190,10 @@ pub(crate) struct RunArgs {
     /// (docs/recording.md).
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
+    /// Where a recording started over the link (the `record` request, `situate record start
+    /// NAME`) is written (default: the directory the robot was started in).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) record_dir: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) compose: Compose,
 }

@@ -86,6 +86,12 @@ pub(crate) enum ClientCommand {
     },
     /// Which skill won each resource (a signal several skills write) in the last cycle.
     Winners(#[command(flatten)] Remote),
+    /// Record a running robot to MCAP: `record start NAME.mcap` (into the robot's
+    /// --record-dir), `record stop` (prints what the file holds), `record status`.
+    Record {
+        #[command(subcommand)]
+        action: RecordAction,
+    },
     /// The monitors registered on a running robot.
     Monitors(#[command(flatten)] Remote),
     /// The current value of a signal (`sonar.range`, or a whole record such as `odom`).
@@ -163,6 +169,28 @@ pub(crate) enum ClientCommand {
     },
 }
 
+/// `situate record …`.
+#[derive(Subcommand)]
+pub(crate) enum RecordAction {
+    /// Start recording, from the robot's next cycle, to NAME (a file name ending .mcap,
+    /// written into the robot's --record-dir; an existing file is refused).
+    Start {
+        name: String,
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Stop the recording and print what it holds.
+    Stop {
+        #[command(flatten)]
+        remote: Remote,
+    },
+    /// Whether the robot is recording, and where.
+    Status {
+        #[command(flatten)]
+        remote: Remote,
+    },
+}
+
 /// `situate param …`.
 #[derive(Subcommand)]
 pub(crate) enum ParamAction {
@@ -233,6 +261,32 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             Ok(())
         }),
         ClientCommand::Param { action } => param(action, out),
+        ClientCommand::Record { action } => {
+            let (remote, args) = match &action {
+                RecordAction::Start { name, remote } => (remote, json!({"start": name})),
+                RecordAction::Stop { remote } => (remote, json!({"stop": true})),
+                RecordAction::Status { remote } => (remote, json!({})),
+            };
+            client_verb(remote, |c, robot| {
+                let r = c.request(robot, "record", &args)?;
+                out.result(&r, || match &action {
+                    RecordAction::Start { .. } => format!("recording to {}", r["recording"].as_str().unwrap_or("?")),
+                    RecordAction::Stop { .. } => format!(
+                        "recorded {} cycles ({} messages on {} channels, {} bytes) to {}",
+                        r["cycles"],
+                        r["messages"],
+                        r["channels"],
+                        r["bytes"],
+                        r["path"].as_str().unwrap_or("?")
+                    ),
+                    RecordAction::Status { .. } => match r["recording"].as_str() {
+                        Some(p) => format!("recording to {p}"),
+                        None => format!("not recording (recordings go into {})", r["dir"].as_str().unwrap_or("?")),
+                    },
+                });
+                Ok(())
+            })
+        }
         ClientCommand::Query { signal, remote } => client_verb(&remote, |c, robot| {
             let r = c.request(robot, "query", &json!({"signal": signal}))?;
             out.result(&r, || {

@@ -25,6 +25,7 @@ mod args;
 mod client;
 mod demo;
 mod gen;
+mod link_record;
 mod map;
 mod output;
 mod replay;

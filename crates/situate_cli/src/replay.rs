@@ -48,6 +48,29 @@ pub(crate) struct ReplayArgs {
 pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
     let started = Instant::now();
     let rec = Recording::open(&args.file).map_err(|e| problem(Exit::BadFile, e.to_string()))?;
+    match rec.span() {
+        None => {}
+        Some((first, _)) if first > 1 => {
+            return Err(problem(
+                Exit::BadFile,
+                format!(
+                    "{}: the recording starts at cycle {first} (started on a running robot); a replay needs the run \
+                     from its first cycle, since the skills' memory is not in the recording",
+                    args.file.display()
+                ),
+            ))
+        }
+        Some((first, last)) => {
+            let missing = (last - first + 1).saturating_sub(rec.cycles.len() as u64);
+            if missing > 0 {
+                let gap = (first..=last).find(|c| !rec.cycles.contains_key(c)).unwrap_or(first);
+                out.warn(format_args!(
+                    "warning: {} lacks {missing} cycles (the first: {gap}), dropped while recording; the replay differs there",
+                    args.file.display()
+                ));
+            }
+        }
+    }
     let robot = match (&args.robot, rec.metadata.get("robot_file")) {
         (Some(r), _) => r.clone(),
         (None, Some(r)) => PathBuf::from(r),

@@ -217,6 +217,9 @@ pub(crate) struct RunOptions {
     pub(crate) compose: Compose,
     /// `--record`: the MCAP file.
     pub(crate) record: Option<PathBuf>,
+    /// `--record-dir`: where the link's `record` request writes (default: the
+    /// working directory).
+    pub(crate) record_dir: Option<PathBuf>,
 }
 
 /// A robot running on its own threads, serving the link.
@@ -232,6 +235,9 @@ pub(crate) struct Running {
     pub(crate) robot: String,
     /// `--record`: ended after the manager, with what it holds.
     pub(crate) recorder: Option<situate_record::Recorder>,
+    /// The link's `record` request: a recording it started is ended after
+    /// the manager too.
+    pub(crate) link_recorder: Option<Arc<crate::link_record::LinkRecorder>>,
 }
 
 /// What [`Running::finish`] leaves: the final statistics, the skills, and
@@ -244,7 +250,7 @@ impl Running {
     /// [`signals::stop_bound`]: a cycle stuck in a skill's body (or a part
     /// that does not stop) is left behind, and the error says which.
     pub(crate) fn finish(self) -> Result<Finished, Stuck> {
-        let Running { mut handle, join, served, ros2, gui, recorder, .. } = self;
+        let Running { mut handle, join, served, ros2, gui, recorder, link_recorder, .. } = self;
         let stage = Arc::new(std::sync::atomic::AtomicU8::new(Stage::Stats as u8));
         let (tx, rx) = crossbeam_channel::bounded(1);
         let at = Arc::clone(&stage);
@@ -264,6 +270,11 @@ impl Running {
             let _ = join.join();
             // After the manager: every cycle it ran is in the file.
             let recorded = recorder.map(situate_record::Recorder::finish);
+            match link_recorder.and_then(|l| l.finish()) {
+                Some(Ok(s)) => tracing::info!("{}", recording_text(&s).trim_end()),
+                Some(Err(e)) => tracing::error!("the recording started over the link: {e}"),
+                None => {}
+            }
             let _ = tx.send((stats, skills, recorded));
         };
         if let Err(e) = std::thread::Builder::new().name("situate-teardown".into()).spawn(teardown) {
@@ -399,10 +410,32 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
         None => None,
     };
     let (handle, join) = manager.spawn(!opts.stopped);
-    let mut running =
-        Running { handle, join, events, served: None, ros2: None, gui: None, sim, robot: spec.robot.clone(), recorder };
+    let mut running = Running {
+        handle,
+        join,
+        events,
+        served: None,
+        ros2: None,
+        gui: None,
+        sim,
+        robot: spec.robot.clone(),
+        recorder,
+        link_recorder: None,
+    };
     if let Some(session) = session {
-        match Link::serve(&spec.robot, running.handle.clone(), session, &link).context("serving the link") {
+        let dir = match &opts.record_dir {
+            Some(d) => d.clone(),
+            None => std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")),
+        };
+        let link_recorder = crate::link_record::LinkRecorder::new(
+            dir,
+            running.handle.clone(),
+            recording_metadata(file, &opts.compose.set, spec.clock),
+        );
+        let mut verbs = situate_link::Verbs::default();
+        verbs.0.insert("record".to_string(), link_recorder.verb());
+        running.link_recorder = Some(link_recorder);
+        match Link::serve_with(&spec.robot, running.handle.clone(), session, &link, verbs).context("serving the link") {
             Ok(l) => {
                 out.note(format_args!(
                     "robot `{}` serving situate/{}/** on {}",
@@ -514,6 +547,7 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         gui,
         no_gui,
         record,
+        record_dir,
         compose,
     } = args;
     let opts = RunOptions {
@@ -529,6 +563,7 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         no_gui,
         compose,
         record,
+        record_dir,
     };
     // Before starting: a signal during the start stops the robot once started.
     let interrupted = signals::Stop::install()?;

@@ -208,9 +208,17 @@ impl Recorder {
         };
         let thread = std::thread::Builder::new()
             .name("situate-record".into())
-            .spawn(move || file.run(tap, events, stopped))
+            .spawn(move || {
+                lower_thread_priority();
+                file.run(tap, events, stopped)
+            })
             .map_err(io)?;
         Ok(Recorder { stop, thread, path: path.to_path_buf() })
+    }
+
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
     }
 
     /// Writes what is still queued, ends the file (its summary and index)
@@ -474,6 +482,26 @@ impl Writing {
         self.writer.write_to_known_channel(&header, &bytes).map_err(|source| mcap_error(&self.path, source))?;
         self.summary.messages += 1;
         Ok(())
+    }
+}
+
+/// The writer yields the CPU to the cycle and to the sequencer: its work
+/// (encoding JSON, compressing) can wait, within the queue's 4,096 cycles,
+/// theirs cannot. On Linux it runs at nice +10; elsewhere, or if refused, as
+/// it is.
+fn lower_thread_priority() {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: gettid has no preconditions; setpriority on our own thread
+        // id only changes its scheduling weight and reports failure by its
+        // result. Lowering a priority needs no privilege.
+        let result = unsafe {
+            let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+            libc::setpriority(libc::PRIO_PROCESS, tid, 10)
+        };
+        if result != 0 {
+            tracing::debug!("could not lower the recorder thread's priority");
+        }
     }
 }
 
