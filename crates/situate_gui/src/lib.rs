@@ -17,7 +17,8 @@
 //! ## Messages (JSON text frames)
 //! Browser → server: `{"id": 7, "verb": "activate", "args": {"skills": ["wander"]}}` with any verb of
 //! the link's protocol except `telemetry`, plus the GUI's own `{"id": 8, "verb": "watch", "args":
-//! {"signals": ["odom", "sonar.range"]}}` (the signals this tab plots).
+//! {"signals": ["odom", "sonar.range"]}}` (the signals this tab plots), `history` and
+//! `history_frame` (the timeline, below).
 //! Server → browser: `{"type": "hello", …}` once, `{"type": "reply", "id": 7, "ok": …}` or
 //! `{"type": "reply", "id": 7, "error": {"kind", "message"}}`, `{"type": "telemetry", …}` at the
 //! sampling rate, `{"type": "event", "event": {…}}` as they happen and `{"type": "outcome", …}`
