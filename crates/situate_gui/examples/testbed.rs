@@ -156,6 +156,7 @@ fn main() -> anyhow::Result<()> {
             world,
             sample_hz: o.sample_hz,
             history_frames: o.history_frames.unwrap_or(situate_gui::history::DEFAULT_FRAMES),
+            ..GuiConfig::default()
         },
         tap,
     )?;

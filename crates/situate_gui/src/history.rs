@@ -22,6 +22,11 @@ use situate_manager::{Event, Frame, Graph, Manager, TapReceiver};
 pub const DEFAULT_FRAMES: usize = 6000;
 /// The most frames a history may keep.
 pub const MAX_FRAMES: usize = 1_000_000;
+/// The memory a history may take by default (values, prints and bookkeeping, as estimated by
+/// [`History::bytes`]): a robot writing large values (images, point clouds) keeps fewer cycles.
+pub const DEFAULT_BYTES: usize = 256 << 20;
+/// What one held value or print costs besides its own data (its place in a track, its cycle).
+const ENTRY_BYTES: usize = 32;
 /// Frames the cycle may get ahead of the history's thread by before they are dropped.
 pub const TAP_QUEUE: usize = 1024;
 /// The most marks kept (a storm of events cannot grow the history past it).
@@ -169,6 +174,22 @@ struct FrameMeta {
     cycle: u64,
     time_s: f64,
     prints: Vec<(usize, String)>,
+    /// What the frame holds, estimated (see [`History::bytes`]).
+    bytes: usize,
+}
+
+/// The memory a value takes, estimated from above (shared data counted at every use).
+fn value_bytes(v: &Value) -> usize {
+    std::mem::size_of::<Value>()
+        + match v {
+            Value::Bool(_) | Value::I64(_) | Value::F64(_) => 0,
+            Value::Str(s) => s.len(),
+            Value::Bytes(b) => b.len(),
+            Value::F32s(a) => 4 * a.len(),
+            Value::F64s(a) => 8 * a.len(),
+            Value::I64s(a) => 8 * a.len(),
+            Value::Record(r) => r.fields.iter().map(|(n, v)| n.len() + value_bytes(v)).sum(),
+        }
 }
 
 /// An event on the timeline.
@@ -195,6 +216,9 @@ pub struct Span {
 pub struct History {
     layout: Layout,
     capacity: usize,
+    /// The memory it may take (estimated); the oldest frames go first when over it.
+    byte_budget: usize,
+    bytes: usize,
     /// The cycle the history began at: the skills' state as built holds from it.
     observed_from: u64,
     frames: VecDeque<FrameMeta>,
@@ -218,6 +242,8 @@ impl History {
         let skills = &layout.skills;
         History {
             capacity,
+            byte_budget: DEFAULT_BYTES,
+            bytes: 0,
             observed_from,
             frames: VecDeque::new(),
             leaves: layout.leaves.iter().map(|_| Track::new(None)).collect(),
@@ -237,6 +263,24 @@ impl History {
 
     pub fn capacity(&self) -> usize {
         self.capacity
+    }
+
+    /// Limits the memory the frames held may take (estimated, at least one frame is kept);
+    /// [`DEFAULT_BYTES`] unless set.
+    pub fn set_byte_budget(&mut self, bytes: usize) {
+        self.byte_budget = bytes;
+        self.evict();
+    }
+
+    /// The memory the frames held take, estimated from above: their values, prints and winner
+    /// changes with their bookkeeping (one value per signal kept from before the window is not
+    /// counted).
+    pub fn bytes(&self) -> usize {
+        self.bytes
+    }
+
+    pub fn byte_budget(&self) -> usize {
+        self.byte_budget
     }
 
     pub fn layout(&self) -> &Layout {
@@ -289,21 +333,35 @@ impl History {
             }
         }
         let cycle = frame.cycle;
+        let mut bytes = std::mem::size_of::<FrameMeta>();
         for (leaf, value) in frame.values {
             if let Some(track) = self.leaves.get_mut(leaf) {
+                bytes += ENTRY_BYTES + value_bytes(&value);
                 track.push(cycle, value);
             }
         }
         for (leaf, inst) in frame.winners {
             if let Some(track) = self.winners.get_mut(leaf) {
+                bytes += ENTRY_BYTES;
                 track.push_if_changed(cycle, inst);
             }
         }
-        self.frames.push_back(FrameMeta { cycle, time_s: frame.time_s, prints: frame.prints });
-        if self.frames.len() > self.capacity {
-            while self.frames.len() > self.capacity {
-                self.frames.pop_front();
-            }
+        bytes += frame.prints.iter().map(|(_, line)| ENTRY_BYTES + line.len()).sum::<usize>();
+        self.bytes += bytes;
+        self.frames.push_back(FrameMeta { cycle, time_s: frame.time_s, prints: frame.prints, bytes });
+        self.evict();
+    }
+
+    /// Drops the oldest frames while more are held than the capacity, or than the byte budget
+    /// allows (the newest frame stays, whatever its size).
+    fn evict(&mut self) {
+        let mut evicted = false;
+        while self.frames.len() > self.capacity || (self.bytes > self.byte_budget && self.frames.len() > 1) {
+            let Some(old) = self.frames.pop_front() else { break };
+            self.bytes -= old.bytes;
+            evicted = true;
+        }
+        if evicted {
             self.trim();
         }
     }
@@ -414,6 +472,8 @@ impl History {
             "last_time_s": span.map(|s| s.last_time_s),
             "frames": self.frames.len(),
             "capacity": self.capacity,
+            "bytes": self.bytes,
+            "byte_budget": self.byte_budget,
             "dropped": self.dropped,
             "marks": self.marks.iter().map(|m| json!({"cycle": m.cycle, "kind": m.kind, "text": m.text})).collect::<Vec<_>>(),
         })
@@ -732,6 +792,28 @@ mod tests {
             small.push_frame(frame(c, vec![]));
         }
         assert_eq!(small.marks().count(), 0, "the mark of cycle 1 left with its frame");
+    }
+
+    #[test]
+    fn large_values_keep_fewer_frames_within_the_byte_budget() {
+        let mut h = History::new(layout(), 1000, 0);
+        h.set_byte_budget(100_000);
+        let image = |c: u64| Value::Bytes(vec![c as u8; 10_000].into());
+        for c in 0..100 {
+            h.push_frame(frame(c, vec![(2, image(c)), (0, Value::F64(c as f64))]));
+            assert!(h.bytes() <= 100_000, "over budget at cycle {c}: {} bytes", h.bytes());
+        }
+        let span = h.span().expect("frames");
+        assert!(span.frames >= 5 && span.frames < 10, "about 100 kB of 10 kB frames: {span:?}");
+        assert_eq!(span.last_cycle, 99);
+        assert_eq!(h.value_at(2, 99), Some((99, &image(99))));
+        // Tracks hold the window only (and one value from before it).
+        assert_eq!(h.leaves[2].changes.len(), span.frames);
+        // A frame larger than the whole budget is kept alone.
+        h.push_frame(frame(100, vec![(2, Value::Bytes(vec![0; 200_000].into()))]));
+        assert_eq!(h.len(), 1);
+        assert_eq!(h.span().map(|s| s.first_cycle), Some(100));
+        assert_eq!(h.value_at(0, 100), Some((99, &Value::F64(99.0))), "the value before the window stays");
     }
 
     #[test]

@@ -92,6 +92,9 @@ pub struct GuiConfig {
     /// The cycles the timeline keeps (default [`history::DEFAULT_FRAMES`]), when the server is
     /// given a [`HistoryTap`].
     pub history_frames: usize,
+    /// The memory the timeline may take (default [`history::DEFAULT_BYTES`]): when the values
+    /// are large, it keeps fewer cycles.
+    pub history_bytes: usize,
 }
 
 impl Default for GuiConfig {
@@ -101,6 +104,7 @@ impl Default for GuiConfig {
             world: None,
             sample_hz: 10.0,
             history_frames: history::DEFAULT_FRAMES,
+            history_bytes: history::DEFAULT_BYTES,
         }
     }
 }
@@ -314,7 +318,8 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
     };
     let (history, tap) = match tap {
         Some(tap) => {
-            let h = History::new(tap.layout.clone(), config.history_frames, tap.observed_from);
+            let mut h = History::new(tap.layout.clone(), config.history_frames, tap.observed_from);
+            h.set_byte_budget(config.history_bytes);
             (Some(Arc::new(Mutex::new(h))), Some(tap))
         }
         None => (None, None),
@@ -597,7 +602,10 @@ fn hello_message(shared: &Shared, client: u64) -> Json {
         "sample_hz": shared.sample_hz,
         "world": shared.world,
         "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(GUI_VERBS.iter()).collect::<Vec<_>>(),
-        "history": shared.history.as_ref().map(|h| json!({"frames": h.lock().unwrap_or_else(|p| p.into_inner()).capacity()})),
+        "history": shared.history.as_ref().map(|h| {
+            let h = h.lock().unwrap_or_else(|p| p.into_inner());
+            json!({"frames": h.capacity(), "bytes": h.byte_budget()})
+        }),
         "outcome": shared.outcome.lock().unwrap_or_else(|p| p.into_inner()).clone(),
     })
 }
