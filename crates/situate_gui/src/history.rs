@@ -30,7 +30,7 @@ const ENTRY_BYTES: usize = 32;
 /// Frames the cycle may get ahead of the history's thread by before they are dropped.
 pub const TAP_QUEUE: usize = 1024;
 /// The most marks kept (a storm of events cannot grow the history past it).
-pub const MAX_MARKS: usize = 10_000;
+pub const MAX_MARKS: usize = 2_000;
 /// A mark's text is cut to this many characters.
 const MARK_TEXT: usize = 200;
 
@@ -621,8 +621,11 @@ impl History {
 /// A live manager's tap for a history: its frames and events from before it was spawned, and its
 /// layout. Make it with [`HistoryTap::new`] before [`Manager::spawn`] and give it to
 /// [`crate::serve_with_history`].
+/// [`HistoryTap::from_channels`] feeds a history from any source (a recording's reader, a test).
 pub struct HistoryTap {
-    pub(crate) frames: TapReceiver,
+    pub(crate) frames: crossbeam_channel::Receiver<Frame>,
+    /// The manager's tap, for the count of frames it dropped.
+    pub(crate) tap: Option<TapReceiver>,
     pub(crate) events: crossbeam_channel::Receiver<Event>,
     pub(crate) layout: Layout,
     pub(crate) observed_from: u64,
@@ -633,9 +636,32 @@ impl HistoryTap {
     /// finds the queue full is dropped and counted) and subscribes to its events. The manager
     /// has one tap: tapping it again (e.g. to record it) takes this one's place.
     pub fn new(manager: &mut Manager) -> HistoryTap {
-        let frames = manager.tap(TAP_QUEUE);
+        let tap = manager.tap(TAP_QUEUE);
         let events = manager.events();
-        HistoryTap { frames, events, layout: Layout::of(manager.graph()), observed_from: manager.cycle_count() }
+        HistoryTap {
+            frames: tap.frames.clone(),
+            tap: Some(tap),
+            events,
+            layout: Layout::of(manager.graph()),
+            observed_from: manager.cycle_count(),
+        }
+    }
+
+    /// Frames and events from any source, in cycle order, named by `layout`; the skills' state
+    /// as in `layout` from cycle `observed_from` on. The history takes them as they come until
+    /// both channels close (a source may block on a full bounded channel: nothing waits on it).
+    pub fn from_channels(
+        layout: Layout,
+        frames: crossbeam_channel::Receiver<Frame>,
+        events: crossbeam_channel::Receiver<Event>,
+        observed_from: u64,
+    ) -> HistoryTap {
+        HistoryTap { frames, tap: None, events, layout, observed_from }
+    }
+
+    /// Frames lost before they reached the history (a live tap's full queue).
+    pub(crate) fn dropped(&self) -> u64 {
+        self.tap.as_ref().map(TapReceiver::dropped).unwrap_or(0)
     }
 }
 

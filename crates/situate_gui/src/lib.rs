@@ -400,23 +400,22 @@ fn forward_events(shared: &Shared, events: &Receiver<situate_manager::Event>, st
 /// Drains the manager's tap and events into the history until the server stops. When the manager
 /// ends, the history stays (a finished run can still be looked back on).
 fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &AtomicBool) {
-    let HistoryTap { frames, events, .. } = tap;
     let lock = || history.lock().unwrap_or_else(|p| p.into_inner());
     let (mut frames_open, mut events_open) = (true, true);
     let (no_frames, no_events) = (crossbeam_channel::never(), crossbeam_channel::never());
     while !stop.load(Ordering::SeqCst) && (frames_open || events_open) {
-        let f = if frames_open { &frames.frames } else { &no_frames };
-        let e = if events_open { &events } else { &no_events };
+        let f = if frames_open { &tap.frames } else { &no_frames };
+        let e = if events_open { &tap.events } else { &no_events };
         crossbeam_channel::select! {
             recv(f) -> frame => match frame {
                 Ok(frame) => {
                     let mut h = lock();
                     h.push_frame(frame);
                     // What else is queued goes in under the same lock.
-                    while let Ok(frame) = frames.frames.try_recv() {
+                    while let Ok(frame) = tap.frames.try_recv() {
                         h.push_frame(frame);
                     }
-                    h.set_dropped(frames.dropped());
+                    h.set_dropped(tap.dropped());
                 }
                 Err(_) => frames_open = false,
             },
@@ -428,7 +427,7 @@ fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &AtomicBool) {
         }
     }
     if !stop.load(Ordering::SeqCst) {
-        tracing::debug!("the manager ended: the GUI's history keeps what it holds");
+        tracing::debug!("the history's sources ended: the GUI's history keeps what it holds");
     }
 }
 
@@ -1129,6 +1128,44 @@ mod tests {
         let plain = shared(handle.clone());
         let r = handle_message(&plain, 1, r#"{"id": 5, "verb": "history"}"#);
         assert_eq!(r["error"]["kind"], "unavailable", "{r}");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_history_can_be_fed_from_any_source() {
+        let (mut handle, join) = robot();
+        let layout =
+            Layout { leaves: vec![history::LeafLayout { path: "recorded.x".into(), writers: vec![] }], skills: vec![] };
+        let (frames_tx, frames) = crossbeam_channel::bounded(4);
+        let (events_tx, events) = crossbeam_channel::bounded(4);
+        let tap = HistoryTap::from_channels(layout, frames, events, 0);
+        let gui = serve_with_history(handle.clone(), GuiConfig::default(), Some(tap)).expect("serve");
+        for cycle in 1..=20u64 {
+            let frame = situate_manager::Frame {
+                cycle,
+                time_s: cycle as f64 / 10.0,
+                values: vec![(0, situate_core::Value::F64(cycle as f64 * 2.0))],
+                prints: vec![],
+                winners: vec![],
+            };
+            frames_tx.send(frame).expect("the history takes frames");
+        }
+        events_tx.send(situate_manager::Event::ManagerStopped { cycle: 20 }).expect("and events");
+        drop((frames_tx, events_tx));
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
+            if r["ok"]["last_cycle"] == 20 && r["ok"]["marks"].as_array().is_some_and(|m| m.len() == 1) {
+                break;
+            }
+            assert!(Instant::now() < deadline, "the frames never arrived: {r}");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let r = handle_message(&gui.shared, 1, r#"{"id": 2, "verb": "history_frame", "args": {"cycle": 7}}"#);
+        assert_eq!(r["ok"]["signals"]["recorded.x"]["value"], 14.0, "{r}");
+        assert_eq!(r["ok"]["time_s"], 0.7, "{r}");
+        gui.stop();
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();
     }
