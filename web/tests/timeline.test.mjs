@@ -27,7 +27,10 @@ describe("the timeline", () => {
       await page.getByTestId("show-output-circle").check();
       await page.getByTestId("output-table-circle").waitFor({ timeout: 60_000 });
       // Some history to look back on.
-      await until(async () => /holds cycles \d+–\d+/.test(await text(page.getByTestId("tl-span"))), "the timeline's span");
+      await until(async () => {
+        const m = /holds cycles (\d+)–(\d+)/.exec(await text(page.getByTestId("tl-span")));
+        return m && Number(m[2]) - Number(m[1]) >= 60;
+      }, "sixty cycles on the timeline");
     } catch (e) {
       await stopBrowser(browser).catch(() => undefined);
       await stopTestbed(tb).catch(() => undefined);
