@@ -181,6 +181,51 @@ describe("the timeline", () => {
   });
 });
 
+describe("a paused page when the robot restarts", () => {
+  let tb;
+  let browser;
+  let page;
+
+  before(async () => {
+    try {
+      tb = await startTestbed();
+      browser = await startBrowser();
+      page = await browser.context.newPage();
+      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
+      await page.goto(tb.url);
+      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
+      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
+    } catch (e) {
+      await stopBrowser(browser).catch(() => undefined);
+      await stopTestbed(tb).catch(() => undefined);
+      throw e;
+    }
+  });
+
+  after(async () => {
+    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
+    await stopTestbed(tb);
+  });
+
+  test("goes live on the new run: the old run's past is not shown as the new one's", async () => {
+    const bar = page.getByTestId("timeline");
+    await until(async () => /holds cycles \d+–\d+/.test(await text(page.getByTestId("tl-span"))), "the timeline's span");
+    await page.getByTestId("tl-live").click();
+    await until(async () => (await bar.getAttribute("data-mode")) === "paused" && (await bar.getAttribute("data-shown")) !== null, "paused");
+    const oldRun = await page.evaluate(() => document.body.dataset.run);
+    await stopTestbed(tb);
+    tb = await startTestbed([], { guiPort: tb.guiPort });
+    await until(async () => {
+      const run = await page.evaluate(() => document.body.dataset.run);
+      return run && run !== oldRun;
+    }, "the page sees the new run");
+    await until(async () => (await bar.getAttribute("data-mode")) === "live", "live on the new run");
+    assert.equal(await bar.getAttribute("data-shown"), null);
+    await until(async () => (await text(page.getByTestId("skills-past"))) === "", "the skills panel shows the live robot");
+    assert.equal(await text(page.getByTestId("world-past")), "");
+  });
+});
+
 describe("a GUI without a timeline", () => {
   let tb;
   let browser;
