@@ -71,9 +71,9 @@ export class Timeline {
   ) {
     this.liveBtn = linkControl(h("button", { class: "tl-live", "data-testid": "tl-live", title: "pause: look back at the robot's recent past" }, "● Live"));
     this.liveBtn.addEventListener("click", () => void (this.paused ? this.goLive() : this.pause()));
-    this.back = linkControl(h("button", { "data-testid": "tl-back", title: "one cycle back" }, "◀ 1"));
+    this.back = linkControl(h("button", { "data-testid": "tl-back", title: "one cycle back (key ←)" }, "◀ 1"));
     this.back.addEventListener("click", () => void this.step(-1));
-    this.forward = linkControl(h("button", { "data-testid": "tl-forward", title: "one cycle forward" }, "1 ▶"));
+    this.forward = linkControl(h("button", { "data-testid": "tl-forward", title: "one cycle forward (key →)" }, "1 ▶"));
     this.forward.addEventListener("click", () => void this.step(1));
     this.play = linkControl(h("button", { "data-testid": "tl-play", title: "play the past at the chosen speed" }, "▶ Play"));
     this.play.addEventListener("click", () => void (this.playTimer === null ? this.startPlaying() : this.stopPlaying()));
@@ -95,6 +95,23 @@ export class Timeline {
       this.prints,
     );
     this.setButtons();
+    document.addEventListener("keydown", (e) => this.onKey(e));
+  }
+
+  /** Keys, outside form fields: P pauses or goes live, ← and → step one cycle. */
+  private onKey(e: KeyboardEvent): void {
+    if (e.ctrlKey || e.metaKey || e.altKey || e.defaultPrevented) return;
+    const t = e.target;
+    if (t instanceof HTMLInputElement || t instanceof HTMLTextAreaElement || t instanceof HTMLSelectElement) return;
+    if (t instanceof HTMLElement && t.isContentEditable) return;
+    if (!this.available || this.liveBtn.disabled) return;
+    if (e.key === "p" || e.key === "P") {
+      e.preventDefault();
+      void (this.paused ? this.goLive() : this.pause());
+    } else if (e.key === "ArrowLeft" || e.key === "ArrowRight") {
+      e.preventDefault();
+      void this.step(e.key === "ArrowLeft" ? -1 : 1);
+    }
   }
 
   /** The connection is (again) up: follow the server's history. */
@@ -131,7 +148,7 @@ export class Timeline {
   private setButtons(): void {
     this.el.dataset["mode"] = this.paused ? "paused" : "live";
     setText(this.liveBtn, this.paused ? "❚❚ Paused" : "● Live");
-    this.liveBtn.title = this.paused ? "go live: back to the robot's telemetry" : "pause: look back at the robot's recent past";
+    this.liveBtn.title = this.paused ? "go live: back to the robot's telemetry (key P)" : "pause: look back at the robot's recent past (key P)";
     this.liveBtn.classList.toggle("paused", this.paused);
     document.body.classList.toggle("past", this.paused);
     setText(this.play, this.playTimer === null ? "▶ Play" : "■ Stop");

@@ -166,6 +166,28 @@ describe("the timeline", () => {
     await cli(tb.linkPort, "activate", "wander");
   });
 
+  test("keys: P pauses and goes live, the arrows step one cycle", async () => {
+    await goLive();
+    await page.locator("body").click({ position: { x: 5, y: 5 } });
+    await page.keyboard.press("p");
+    await until(async () => (await mode()) === "paused" && (await shown()) !== null, "paused by the key P");
+    const at = await shown();
+    await page.keyboard.press("ArrowLeft");
+    await until(async () => (await shown()) === at - 1, "one cycle back by ←");
+    await page.keyboard.press("ArrowRight");
+    await until(async () => (await shown()) === at, "one cycle forward by →");
+    // In a form field the keys are the field's.
+    await page.getByTestId("step-count").focus();
+    await page.keyboard.press("p");
+    await page.keyboard.press("ArrowLeft");
+    // (The handlers change the mode and the slider at once, before any reply.)
+    assert.equal(await mode(), "paused", "P typed in a field went live");
+    assert.equal(await page.getByTestId("tl-slider").inputValue(), String(at), "← typed in a field moved the timeline");
+    await page.locator("body").click({ position: { x: 5, y: 5 } });
+    await page.keyboard.press("p");
+    await until(async () => (await mode()) === "live", "live again by the key P");
+  });
+
   test("going live shows the live robot again", async () => {
     await pause();
     const paused = await pose();
