@@ -7,7 +7,7 @@
 //! and events ([`History::push_frame`], [`History::push_event`]).
 //!
 //! Every leaf, every resource's winner, every skill's activation, fault and parameter is a
-//! [`Track`]: the changes inside the window, in cycle order, plus the last change before it. The
+//! track: the changes inside the window, in cycle order, plus the last change before it. The
 //! state at cycle k is each track's latest change at or before k, found by a binary search: a
 //! seek costs O(tracks × log N) whatever N, with no keyframes to keep.
 
