@@ -6,12 +6,13 @@
 // and monitors and separates its events.
 
 import "./style.css";
-import { Connection, isObject, type Json } from "./conn";
+import { Connection, isObject, type Json, type JsonObject } from "./conn";
 import { errorText, h, num, setLinkUp, setText, staleNote, str } from "./dom";
 import { GraphView } from "./graph";
 import { EventLog, Monitors } from "./monitors";
 import { Plots } from "./plots";
 import { ManagerPanel, SkillPanels } from "./skills";
+import { skillsAt, Timeline } from "./timeline";
 import { WorldView } from "./world";
 
 function clock(unixS: number): string {
@@ -32,6 +33,9 @@ function start(): void {
   /** The last telemetry: its cycle, and when it came (performance.now(), ms). */
   let lastSeen: { cycle: number; at: number } | null = null;
   let staleTimer: number | null = null;
+  /** The last telemetry's skills, activity, winners and signals (the timeline's past is shown
+   *  over them, and going live shows them again at once). */
+  let live: { skills: JsonObject[]; cycle: number; activity: Json | undefined; winners: Json | undefined; signals: Json | undefined; wall: number } | null = null;
 
   const showStale = () => {
     const text = lastSeen ? `last seen at cycle ${lastSeen.cycle}, ${Math.round((performance.now() - lastSeen.at) / 1000)} s ago` : "never seen";
@@ -79,6 +83,8 @@ function start(): void {
         manager.reset();
         events.newRun(`── new run ${id}, started ${clock(started)}; the events below are of the previous run (${runId}) ──`);
         lastSeen = null;
+        live = null;
+        timeline.reset();
       }
       runId = id;
       document.body.dataset["run"] = id;
@@ -108,10 +114,18 @@ function start(): void {
       }
       setStale(false);
       manager.update(stats, skills, wall);
-      panels.update(skills, isObject(stats) ? num(stats["cycle"]) : 0, msg["activity"], msg["winners"]);
+      const cycle = isObject(stats) ? num(stats["cycle"]) : 0;
+      live = { skills, cycle, activity: msg["activity"], winners: msg["winners"], signals: msg["signals"], wall };
+      if (isObject(stats)) timeline.liveAt(cycle, num(stats["time_s"]), num(stats["period_s"]));
+      // Paused, the skills and the world show the timeline's cycle; the rest stays live.
+      if (!timeline.isPaused()) {
+        panels.update(skills, cycle, msg["activity"], msg["winners"]);
+        world.update(msg["signals"], wall);
+      } else {
+        world.keepTrail(msg["signals"], wall);
+      }
       if (graphAsked) graph.update(skills, msg["winners"]);
       plots.update(wall, msg["signals"]);
-      world.update(msg["signals"], wall);
       document.body.dataset["samples"] = String(Number(document.body.dataset["samples"] ?? "0") + 1);
     },
     event: (e) => {
@@ -137,12 +151,29 @@ function start(): void {
   const world = new WorldView(staleNote());
   const monitors = new Monitors(conn, staleNote());
   const events = new EventLog();
-  conn.onOpen = () => void plots.watch().catch(() => undefined);
+  const timeline = new Timeline(conn, {
+    show: (frame) => {
+      const cycle = num(frame["cycle"]);
+      const note = `at cycle ${cycle} (paused: not live)`;
+      panels.update(skillsAt(live?.skills ?? [], frame), cycle, frame["activity"], frame["winners"], note);
+      world.showPast(frame["signals"], note);
+    },
+    live: () => {
+      if (!live) return;
+      panels.update(live.skills, live.cycle, live.activity, live.winners);
+      world.update(live.signals, live.wall);
+    },
+  });
+  conn.onOpen = () => {
+    void plots.watch().catch(() => undefined);
+    timeline.start();
+  };
   root.append(
     h("header", {}, h("h1", {}, "situate"), robot, runInfo, status),
     staleBanner,
     outcome,
     h("main", {}, h("div", { class: "col" }, manager.el, panels.el, monitors.el), h("div", { class: "col" }, world.el, plots.el, graph.el, events.el)),
+    timeline.el,
   );
 }
 

@@ -498,6 +498,8 @@ export class SkillPanels {
   private readonly panels = new Map<string, SkillPanel>();
   private readonly list: HTMLElement;
   private readonly resources: HTMLTableElement;
+  private readonly resourcesTitle: HTMLElement;
+  private readonly pastNote: HTMLElement;
   private resourcesKey = "";
 
   constructor(
@@ -506,11 +508,13 @@ export class SkillPanels {
   ) {
     this.list = h("div", {});
     this.resources = h("table", { class: "resources", "data-testid": "resources" });
+    this.resourcesTitle = h("h3", {}, "Resources: who wins now");
+    this.pastNote = h("span", { class: "past-note", "data-testid": "skills-past" });
     this.el = h(
       "section",
       { class: "panel live", id: "skills" },
-      h("h2", {}, "Skills", stale),
-      h("h3", {}, "Resources: who wins now"),
+      h("h2", {}, "Skills", stale, this.pastNote),
+      this.resourcesTitle,
       this.resources,
       this.list,
     );
@@ -524,7 +528,11 @@ export class SkillPanels {
     this.resourcesKey = "";
   }
 
-  update(skills: JsonObject[], cycle: number, activity?: Json, winners?: Json): void {
+  /** `past`: the skills as of a past cycle (the timeline, paused), said in the panel's title;
+   *  null: live. */
+  update(skills: JsonObject[], cycle: number, activity?: Json, winners?: Json, past: string | null = null): void {
+    setText(this.pastNote, past ?? "");
+    setText(this.resourcesTitle, past === null ? "Resources: who wins now" : `Resources: who won at cycle ${cycle}`);
     for (const s of skills) {
       const name = str(s["name"]);
       const since = s["active"] === true ? null : inactiveSince(activity, name);
@@ -537,18 +545,18 @@ export class SkillPanels {
         panel.update(s, cycle, since);
       }
     }
-    this.showResources(winners);
+    this.showResources(winners, past !== null);
   }
 
   /** Every resource (a signal leaf with several writers), its writers and who wins it now. */
-  private showResources(winners: Json | undefined): void {
+  private showResources(winners: Json | undefined, past: boolean): void {
     const rows = (Array.isArray(winners) ? winners : []).filter(isObject).map((w) => ({
       signal: str(w["signal"]),
       writers: (Array.isArray(w["writers"]) ? w["writers"] : []).filter((x): x is string => typeof x === "string"),
       winner: typeof w["winner"] === "string" ? w["winner"] : null,
       cycle: num(w["cycle"]),
     }));
-    const key = JSON.stringify(rows);
+    const key = JSON.stringify([past, rows]);
     if (key === this.resourcesKey) return;
     this.resourcesKey = key;
     if (rows.length === 0) {
@@ -556,7 +564,7 @@ export class SkillPanels {
       return;
     }
     this.resources.replaceChildren(
-      h("tr", {}, h("th", {}, "resource"), h("th", {}, "writers"), h("th", {}, "winner now")),
+      h("tr", {}, h("th", {}, "resource"), h("th", {}, "writers"), h("th", {}, past ? "winner then" : "winner now")),
       ...rows.map((r) =>
         h(
           "tr",

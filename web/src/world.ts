@@ -41,6 +41,7 @@ export class WorldView {
   private readonly floorSel: HTMLSelectElement;
   private readonly follow: HTMLInputElement;
   private readonly info: HTMLElement;
+  private readonly pastNote: HTMLElement;
   private map: JsonObject | null = null;
   private draws = 0;
   /** The robot's trail on each floor (metres), and when this run's first point came (wall s). */
@@ -66,10 +67,11 @@ export class WorldView {
     const reset = h("button", { "data-testid": "world-reset", title: "fit the whole floor, follow the robot" }, "Reset view");
     reset.addEventListener("click", () => this.resetView());
     this.info = h("span", { class: "mono", "data-testid": "world-info" }, "no truth.pose signal yet");
+    this.pastNote = h("span", { class: "past-note", "data-testid": "world-past" });
     this.el = h(
       "section",
       { class: "panel live", id: "world" },
-      h("h2", {}, "World", stale),
+      h("h2", {}, "World", stale, this.pastNote),
       h("div", { class: "row" }, "floor ", this.floorSel, h("label", {}, this.follow, " follow the robot"), reset),
       h("div", { class: "row" }, this.info),
       this.canvas,
@@ -177,22 +179,43 @@ export class WorldView {
     return [x0 - m, y0 - m, x1 + m, y1 + m];
   }
 
-  update(signals: Json | undefined, wall: number): void {
+  private setSignals(signals: Json | undefined): void {
     const sig = isObject(signals) ? signals : {};
     const pose = values(sig["truth.pose"]);
     this.robot = isObject(pose) ? { x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) } : null;
     this.signals = signals;
-    if (this.robot) {
-      const trail = this.trails.get(this.robot.floor) ?? [];
-      const last = trail[trail.length - 1];
-      if (!last || Math.hypot(last[0] - this.robot.x, last[1] - this.robot.y) >= 0.01) {
-        trail.push([this.robot.x, this.robot.y]);
-        if (trail.length > TRAIL_POINTS) trail.shift();
-      }
-      this.trails.set(this.robot.floor, trail);
-      this.trailSince ??= wall;
-    }
+  }
+
+  /** A past cycle (the timeline, paused): the robot, sonar, cars and people as they were then;
+   *  the trails are left as they are. `note`: which cycle, in the panel's title. */
+  showPast(signals: Json | undefined, note: string): void {
+    setText(this.pastNote, note);
+    this.setSignals(signals);
     this.draw();
+  }
+
+  update(signals: Json | undefined, wall: number): void {
+    setText(this.pastNote, "");
+    this.setSignals(signals);
+    if (this.robot) this.addTrail(this.robot, wall);
+    this.draw();
+  }
+
+  /** A live sample while the view shows the past: the trail grows, nothing else changes. */
+  keepTrail(signals: Json | undefined, wall: number): void {
+    const pose = values(isObject(signals) ? signals["truth.pose"] : undefined);
+    if (isObject(pose)) this.addTrail({ x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) }, wall);
+  }
+
+  private addTrail(robot: Robot, wall: number): void {
+    const trail = this.trails.get(robot.floor) ?? [];
+    const last = trail[trail.length - 1];
+    if (!last || Math.hypot(last[0] - robot.x, last[1] - robot.y) >= 0.01) {
+      trail.push([robot.x, robot.y]);
+      if (trail.length > TRAIL_POINTS) trail.shift();
+    }
+    this.trails.set(robot.floor, trail);
+    this.trailSince ??= wall;
   }
 
   private draw(): void {

@@ -409,6 +409,8 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
         ),
         None => None,
     };
+    // The GUI's timeline taps the cycle too; the manager has one tap, which a recording keeps.
+    let gui_tap = gui_listen.filter(|_| opts.record.is_none()).map(|_| situate_gui::HistoryTap::new(&mut manager));
     let (handle, join) = manager.spawn(!opts.stopped);
     let mut running = Running {
         handle,
@@ -468,7 +470,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     if let Some(listen) = gui_listen {
         let world = running.sim.as_ref().map(|s| s.map.world_json());
         let config = situate_gui::GuiConfig { listen, world, ..situate_gui::GuiConfig::default() };
-        match situate_gui::serve(running.handle.clone(), config) {
+        match situate_gui::serve_with_history(running.handle.clone(), config, gui_tap) {
             Ok(g) => {
                 out.note(format_args!("GUI on {}", g.url()));
                 running.gui = Some(g);

@@ -5,6 +5,7 @@
 //! ```text
 //! cargo run -p situate_gui --example testbed -- [--gui-port N] [--link-port N] [--no-link]
 //!     [--robot FILE] [--map FILE] [--sample-hz HZ] [--no-circle] [--rate-hz HZ]
+//!     [--history-frames N] [--no-history]
 //! ```
 //! Prints `GUI http://…/`, `LINK tcp/…` and then `READY` when both serve; runs until killed or
 //! until its standard input closes when `--stdin` is given.
@@ -69,6 +70,8 @@ struct Options {
     circle: bool,
     rate_hz: Option<f64>,
     stdin: bool,
+    /// Frames the timeline keeps; `None`: no timeline.
+    history_frames: Option<usize>,
 }
 
 fn parse() -> anyhow::Result<Options> {
@@ -82,6 +85,7 @@ fn parse() -> anyhow::Result<Options> {
         circle: true,
         rate_hz: None,
         stdin: false,
+        history_frames: Some(situate_gui::history::DEFAULT_FRAMES),
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -97,6 +101,8 @@ fn parse() -> anyhow::Result<Options> {
             "--no-circle" => o.circle = false,
             "--rate-hz" => o.rate_hz = Some(value()?.parse().context("--rate-hz")?),
             "--stdin" => o.stdin = true,
+            "--history-frames" => o.history_frames = Some(value()?.parse().context("--history-frames")?),
+            "--no-history" => o.history_frames = None,
             other => bail!("unknown option {other}"),
         }
     }
@@ -129,7 +135,9 @@ fn main() -> anyhow::Result<()> {
             Some(serde_json::from_str(&text).with_context(|| format!("{} is not JSON", p.display()))?)
         }
     };
-    let manager = Manager::build(&spec, &registry).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut manager = Manager::build(&spec, &registry).map_err(|e| anyhow::anyhow!("{e}"))?;
+    // The timeline's tap, before the manager runs.
+    let tap = o.history_frames.map(|_| situate_gui::HistoryTap::new(&mut manager));
     let (mut handle, join) = manager.spawn(true);
     let link = match o.link_port {
         None => None,
@@ -141,9 +149,16 @@ fn main() -> anyhow::Result<()> {
             Some(served)
         }
     };
-    let gui = situate_gui::serve(
+    let gui = situate_gui::serve_with_history(
         handle.clone(),
-        GuiConfig { listen: SocketAddr::from(([127, 0, 0, 1], o.gui_port)), world, sample_hz: o.sample_hz },
+        GuiConfig {
+            listen: SocketAddr::from(([127, 0, 0, 1], o.gui_port)),
+            world,
+            sample_hz: o.sample_hz,
+            history_frames: o.history_frames.unwrap_or(situate_gui::history::DEFAULT_FRAMES),
+            ..GuiConfig::default()
+        },
+        tap,
     )?;
     println!("GUI {}", gui.url());
     if !situate_gui::has_web_app() {

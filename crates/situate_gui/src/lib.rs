@@ -17,7 +17,8 @@
 //! ## Messages (JSON text frames)
 //! Browser → server: `{"id": 7, "verb": "activate", "args": {"skills": ["wander"]}}` with any verb of
 //! the link's protocol except `telemetry`, plus the GUI's own `{"id": 8, "verb": "watch", "args":
-//! {"signals": ["odom", "sonar.range"]}}` (the signals this tab plots).
+//! {"signals": ["odom", "sonar.range"]}}` (the signals this tab plots), `history` and
+//! `history_frame` (the timeline, below).
 //! Server → browser: `{"type": "hello", …}` once, `{"type": "reply", "id": 7, "ok": …}` or
 //! `{"type": "reply", "id": 7, "error": {"kind", "message"}}`, `{"type": "telemetry", …}` at the
 //! sampling rate, `{"type": "event", "event": {…}}` as they happen and `{"type": "outcome", …}`
@@ -30,6 +31,12 @@
 //! `activity`: per skill, the cycle of the last activation change the server saw
 //! (`activation_applied`, `skill_faulted`), and `observed_from`, the cycle the server started
 //! watching at, so an inactive skill's outputs can be shown as "inactive since cycle N".
+//!
+//! ## Timeline
+//! Given a [`HistoryTap`] ([`serve_with_history`]), the server keeps the robot's last
+//! [`GuiConfig::history_frames`] cycles and its events in a [`History`], drained from the manager's
+//! tap on a thread of its own (the cycle never waits for it), and answers the GUI's verbs
+//! `history` (the span held and the events as marks) and `history_frame` (the state at a cycle).
 //!
 //! ## Metrics
 //! `GET /metrics` answers in Prometheus' text format: cycle time, overruns, per-skill time and
@@ -54,7 +61,10 @@ use situate_link::json as wire;
 use situate_manager::{ControlError, Handle, Reply, Request};
 use tokio::sync::{broadcast, watch};
 
+pub mod history;
 pub mod metrics;
+
+pub use history::{History, HistoryError, HistoryTap, Layout};
 
 mod assets {
     include!(concat!(env!("OUT_DIR"), "/assets.rs"));
@@ -64,6 +74,8 @@ mod assets {
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 /// The largest message a browser may send.
 const MAX_MESSAGE: usize = 64 * 1024;
+/// The GUI's own verbs, besides the link's.
+const GUI_VERBS: [&str; 3] = ["watch", "history", "history_frame"];
 /// The signals the world view draws, when they exist.
 const WORLD_SIGNALS: [&str; 4] = ["truth.pose", "sonar.range", "truth.cars", "truth.people"];
 
@@ -77,11 +89,23 @@ pub struct GuiConfig {
     pub world: Option<Json>,
     /// Telemetry samples per second while a browser is connected (default 10).
     pub sample_hz: f64,
+    /// The cycles the timeline keeps (default [`history::DEFAULT_FRAMES`]), when the server is
+    /// given a [`HistoryTap`].
+    pub history_frames: usize,
+    /// The memory the timeline may take (default [`history::DEFAULT_BYTES`]): when the values
+    /// are large, it keeps fewer cycles.
+    pub history_bytes: usize,
 }
 
 impl Default for GuiConfig {
     fn default() -> Self {
-        GuiConfig { listen: SocketAddr::from(([127, 0, 0, 1], 0)), world: None, sample_hz: 10.0 }
+        GuiConfig {
+            listen: SocketAddr::from(([127, 0, 0, 1], 0)),
+            world: None,
+            sample_hz: 10.0,
+            history_frames: history::DEFAULT_FRAMES,
+            history_bytes: history::DEFAULT_BYTES,
+        }
     }
 }
 
@@ -239,6 +263,8 @@ struct Shared {
     next_client: AtomicU64,
     /// Per connected tab, the signals it watches.
     watched: Mutex<HashMap<u64, Vec<String>>>,
+    /// The robot's recent past, when the server was given a tap.
+    history: Option<Arc<Mutex<History>>>,
     telemetry: broadcast::Sender<Utf8Bytes>,
     events: broadcast::Sender<Utf8Bytes>,
     wake: Sender<()>,
@@ -246,10 +272,25 @@ struct Shared {
 }
 
 /// Serves the GUI for the manager behind `handle`: binds `config.listen` now (so a busy port is
-/// reported here), then serves on its own threads until [`GuiServer::stop`].
+/// reported here), then serves on its own threads until [`GuiServer::stop`]. Without a timeline:
+/// see [`serve_with_history`].
 pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
+    serve_with_history(handle, config, None)
+}
+
+/// Like [`serve`], keeping the robot's recent past for the timeline from `tap` (made with
+/// [`HistoryTap::new`] before the manager was spawned); `None`: no timeline (the `history` verbs
+/// answer `unavailable`).
+pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<HistoryTap>) -> Result<GuiServer, GuiError> {
     if !(config.sample_hz.is_finite() && config.sample_hz > 0.0 && config.sample_hz <= 100.0) {
         return Err(GuiError::Config(format!("sample_hz must be in (0, 100], got {}", config.sample_hz)));
+    }
+    if config.history_frames == 0 || config.history_frames > history::MAX_FRAMES {
+        return Err(GuiError::Config(format!(
+            "history_frames must be in [1, {}], got {}",
+            history::MAX_FRAMES,
+            config.history_frames
+        )));
     }
     let std_listener =
         std::net::TcpListener::bind(config.listen).map_err(|source| GuiError::Bind { addr: config.listen, source })?;
@@ -275,6 +316,14 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
         Ok(Reply::Stats(s)) => s.cycle,
         _ => 0,
     };
+    let (history, tap) = match tap {
+        Some(tap) => {
+            let mut h = History::new(tap.layout.clone(), config.history_frames, tap.observed_from);
+            h.set_byte_budget(config.history_bytes);
+            (Some(Arc::new(Mutex::new(h))), Some(tap))
+        }
+        None => (None, None),
+    };
     let shared = Arc::new(Shared {
         handle: handle.clone(),
         run: RunInfo::new(),
@@ -285,6 +334,7 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
         clients: AtomicUsize::new(0),
         next_client: AtomicU64::new(1),
         watched: Mutex::new(HashMap::new()),
+        history: history.clone(),
         telemetry: broadcast::channel(16).0,
         events: broadcast::channel(1024).0,
         wake: wake_tx.clone(),
@@ -299,6 +349,10 @@ pub fn serve(handle: Handle, config: GuiConfig) -> Result<GuiServer, GuiError> {
     threads.push(spawn("situate-gui-events", Box::new(move || forward_events(&s, &events, &st)))?);
     let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
     threads.push(spawn("situate-gui-sampler", Box::new(move || sample_loop(&s, &wake_rx, &st)))?);
+    if let (Some(history), Some(tap)) = (history, tap) {
+        let st = Arc::clone(&stop);
+        threads.push(spawn("situate-gui-history", Box::new(move || keep_history(&history, tap, &st)))?);
+    }
     let app = Router::new()
         .route("/ws", get(ws_upgrade))
         .route("/api/world", get(world))
@@ -340,6 +394,40 @@ fn forward_events(shared: &Shared, events: &Receiver<situate_manager::Event>, st
             Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
             Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
         }
+    }
+}
+
+/// Drains the manager's tap and events into the history until the server stops. When the manager
+/// ends, the history stays (a finished run can still be looked back on).
+fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &AtomicBool) {
+    let lock = || history.lock().unwrap_or_else(|p| p.into_inner());
+    let (mut frames_open, mut events_open) = (true, true);
+    let (no_frames, no_events) = (crossbeam_channel::never(), crossbeam_channel::never());
+    while !stop.load(Ordering::SeqCst) && (frames_open || events_open) {
+        let f = if frames_open { &tap.frames } else { &no_frames };
+        let e = if events_open { &tap.events } else { &no_events };
+        crossbeam_channel::select! {
+            recv(f) -> frame => match frame {
+                Ok(frame) => {
+                    let mut h = lock();
+                    h.push_frame(frame);
+                    // What else is queued goes in under the same lock.
+                    while let Ok(frame) = tap.frames.try_recv() {
+                        h.push_frame(frame);
+                    }
+                    h.set_dropped(tap.dropped());
+                }
+                Err(_) => frames_open = false,
+            },
+            recv(e) -> event => match event {
+                Ok(event) => lock().push_event(&event),
+                Err(_) => events_open = false,
+            },
+            default(Duration::from_millis(100)) => {}
+        }
+    }
+    if !stop.load(Ordering::SeqCst) {
+        tracing::debug!("the history's sources ended: the GUI's history keeps what it holds");
     }
 }
 
@@ -512,7 +600,11 @@ fn hello_message(shared: &Shared, client: u64) -> Json {
         "run": {"id": shared.run.id, "started_unix_s": shared.run.started_unix_s},
         "sample_hz": shared.sample_hz,
         "world": shared.world,
-        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(["watch"].iter()).collect::<Vec<_>>(),
+        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(GUI_VERBS.iter()).collect::<Vec<_>>(),
+        "history": shared.history.as_ref().map(|h| {
+            let h = h.lock().unwrap_or_else(|p| p.into_inner());
+            json!({"frames": h.capacity(), "bytes": h.byte_budget()})
+        }),
         "outcome": shared.outcome.lock().unwrap_or_else(|p| p.into_inner()).clone(),
     })
 }
@@ -616,6 +708,9 @@ fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
     if verb == "watch" {
         return watch_signals(shared, client, &id, &args);
     }
+    if verb == "history" || verb == "history_frame" {
+        return history_request(shared, verb, &id, &args);
+    }
     if verb == "telemetry" {
         return error_reply(&id, "bad_request", "the GUI samples telemetry itself: use `watch` to choose signals");
     }
@@ -647,6 +742,30 @@ fn with_id(mut body: Json, id: &Json) -> Json {
 
 fn error_reply(id: &Json, kind: &str, message: &str) -> Json {
     json!({"type": "reply", "id": id, "error": {"kind": kind, "message": message}})
+}
+
+/// `history` and `history_frame {cycle}`: the timeline's span and marks, and the state at a cycle.
+fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json {
+    let Some(history) = &shared.history else {
+        return error_reply(
+            id,
+            "unavailable",
+            "this GUI keeps no history (the program did not give it the manager's tap: with --record, the recording has it)",
+        );
+    };
+    if verb == "history" {
+        let summary = history.lock().unwrap_or_else(|p| p.into_inner()).summary_json();
+        return json!({"type": "reply", "id": id, "ok": summary});
+    }
+    let Some(cycle) = args.get("cycle").and_then(Json::as_u64) else {
+        return error_reply(id, "bad_request", "`history_frame`: argument `cycle` must be a whole number ≥ 0");
+    };
+    let frame = history.lock().unwrap_or_else(|p| p.into_inner()).frame_json(cycle, &WORLD_SIGNALS);
+    match frame {
+        Ok(frame) => json!({"type": "reply", "id": id, "ok": frame}),
+        Err(e @ HistoryError::Empty) => error_reply(id, "unavailable", &e.to_string()),
+        Err(e @ HistoryError::NotHeld { .. }) => error_reply(id, "bad_request", &e.to_string()),
+    }
 }
 
 /// `watch`: the signals this tab plots (a list of signal names, at most 32).
@@ -719,6 +838,7 @@ mod tests {
             clients: AtomicUsize::new(0),
             next_client: AtomicU64::new(1),
             watched: Mutex::new(HashMap::new()),
+            history: None,
             telemetry: broadcast::channel(4).0,
             events: broadcast::channel(4).0,
             wake,
@@ -932,6 +1052,125 @@ mod tests {
     }
 
     #[test]
+    fn the_timeline_holds_the_robots_last_cycles_and_its_events() {
+        let spec = RobotSpec::new("guitest")
+            .skill(SkillSpec::new("sonar", "toy.sonar"))
+            .skill(SkillSpec::new("wheels", "toy.wheels"))
+            .skill(SkillSpec::new("runaway", "toy.runaway"))
+            .skill(SkillSpec::new("wander", "toy.wander").active(false));
+        let mut manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
+        let tap = HistoryTap::new(&mut manager);
+        let (mut handle, join) = manager.spawn(false);
+        let gui =
+            serve_with_history(handle.clone(), GuiConfig { history_frames: 50, ..GuiConfig::default() }, Some(tap))
+                .expect("serve");
+        assert_eq!(hello_message(&gui.shared, 1)["history"]["frames"], 50);
+        handle.step(10).expect("step");
+        handle.request(Request::Activate { skills: vec!["wander".into()], with_providers: false }).expect("activate");
+        handle.step(20).expect("step");
+        let history_until = |ok: &dyn Fn(&Json) -> bool| {
+            let deadline = Instant::now() + Duration::from_secs(60);
+            loop {
+                let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
+                if ok(&r["ok"]) {
+                    return r["ok"].clone();
+                }
+                assert!(Instant::now() < deadline, "the history never caught up: {r}");
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        };
+        let summary = history_until(&|ok| {
+            ok["last_cycle"].as_u64() >= Some(30) && ok["marks"].as_array().is_some_and(|m| !m.is_empty())
+        });
+        assert_eq!(summary["marks"][0]["kind"], "activation", "{summary}");
+        assert_eq!(summary["marks"][0]["text"], "activated wander", "{summary}");
+        let activated = summary["marks"][0]["cycle"].as_u64().unwrap_or(0);
+        assert!((10..=12).contains(&activated), "activated between the steps: {summary}");
+        let at = |cycle: u64| {
+            let r = handle_message(
+                &gui.shared,
+                1,
+                &format!(r#"{{"id": 2, "verb": "history_frame", "args": {{"cycle": {cycle}}}}}"#),
+            );
+            let wander = r["ok"]["skills"].as_array().and_then(|s| s.iter().find(|s| s["name"] == "wander")).cloned();
+            (r, wander.map(|w| w["active"].clone()))
+        };
+        assert_eq!(at(activated).1, Some(json!(true)), "{}", at(activated).0);
+        assert_eq!(at(activated - 1).1, Some(json!(false)), "{}", at(activated - 1).0);
+        handle.step(100).expect("step");
+        let summary = history_until(&|ok| ok["last_cycle"].as_u64() >= Some(130));
+        assert_eq!(summary["frames"], 50, "bounded: {summary}");
+        assert_eq!(summary["marks"], json!([]), "the mark left with its cycle: {summary}");
+        let (first, last) = (summary["first_cycle"].as_u64().unwrap_or(0), summary["last_cycle"].as_u64().unwrap_or(0));
+        assert_eq!(last - first + 1, 50);
+        // The activation fell out of the window: wander's state as of the window is its last change.
+        let r = handle_message(
+            &gui.shared,
+            1,
+            &format!(r#"{{"id": 2, "verb": "history_frame", "args": {{"cycle": {last}}}}}"#),
+        );
+        let frame = &r["ok"];
+        assert_eq!(frame["cycle"], last, "{r}");
+        let wander = frame["skills"].as_array().and_then(|s| s.iter().find(|s| s["name"] == "wander")).expect("wander");
+        assert_eq!(wander["active"], true, "{frame}");
+        assert_eq!(frame["activity"]["changed"]["wander"], activated);
+        assert!(
+            frame["signals"]["odom"]["value"].is_object() || frame["signals"]["odom.x"]["value"].is_number(),
+            "{frame}"
+        );
+        let r = handle_message(&gui.shared, 1, r#"{"id": 3, "verb": "history_frame", "args": {"cycle": 0}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("not in the history"), "{r}");
+        let r = handle_message(&gui.shared, 1, r#"{"id": 4, "verb": "history_frame", "args": {"cycle": -1}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
+        gui.stop();
+        // Without a tap, the verbs say why there is no timeline.
+        let plain = shared(handle.clone());
+        let r = handle_message(&plain, 1, r#"{"id": 5, "verb": "history"}"#);
+        assert_eq!(r["error"]["kind"], "unavailable", "{r}");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_history_can_be_fed_from_any_source() {
+        let (mut handle, join) = robot();
+        let layout =
+            Layout { leaves: vec![history::LeafLayout { path: "recorded.x".into(), writers: vec![] }], skills: vec![] };
+        let (frames_tx, frames) = crossbeam_channel::bounded(4);
+        let (events_tx, events) = crossbeam_channel::bounded(4);
+        let tap = HistoryTap::from_channels(layout, frames, events, 0);
+        let gui = serve_with_history(handle.clone(), GuiConfig::default(), Some(tap)).expect("serve");
+        for cycle in 1..=20u64 {
+            let frame = situate_manager::Frame {
+                cycle,
+                time_s: cycle as f64 / 10.0,
+                values: vec![(0, situate_core::Value::F64(cycle as f64 * 2.0))],
+                prints: vec![],
+                winners: vec![],
+            };
+            frames_tx.send(frame).expect("the history takes frames");
+        }
+        events_tx.send(situate_manager::Event::ManagerStopped { cycle: 20 }).expect("and events");
+        drop((frames_tx, events_tx));
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
+            if r["ok"]["last_cycle"] == 20 && r["ok"]["marks"].as_array().is_some_and(|m| m.len() == 1) {
+                break;
+            }
+            assert!(Instant::now() < deadline, "the frames never arrived: {r}");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let r = handle_message(&gui.shared, 1, r#"{"id": 2, "verb": "history_frame", "args": {"cycle": 7}}"#);
+        assert_eq!(r["ok"]["signals"]["recorded.x"]["value"], 14.0, "{r}");
+        assert_eq!(r["ok"]["time_s"], 0.7, "{r}");
+        gui.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
     fn a_busy_port_and_a_bad_rate_are_clear_errors() {
         let (mut handle, join) = robot();
         let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
@@ -943,6 +1182,11 @@ mod tests {
         }
         match serve(handle.clone(), GuiConfig { sample_hz: 0.0, ..GuiConfig::default() }) {
             Err(GuiError::Config(m)) => assert!(m.contains("sample_hz"), "{m}"),
+            Err(other) => panic!("expected a config error, got {other}"),
+            Ok(_) => panic!("expected a config error"),
+        }
+        match serve(handle.clone(), GuiConfig { history_frames: 0, ..GuiConfig::default() }) {
+            Err(GuiError::Config(m)) => assert!(m.contains("history_frames"), "{m}"),
             Err(other) => panic!("expected a config error, got {other}"),
             Ok(_) => panic!("expected a config error"),
         }
