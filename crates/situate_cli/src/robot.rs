@@ -409,8 +409,8 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
         ),
         None => None,
     };
-    // The GUI's timeline taps the cycle too; the manager has one tap, which a recording keeps.
-    let gui_tap = gui_listen.filter(|_| opts.record.is_none()).map(|_| situate_gui::HistoryTap::new(&mut manager));
+    // The GUI's timeline taps the cycle too (beside a recording: each tap gets every cycle).
+    let gui_tap = gui_listen.map(|_| situate_gui::HistoryTap::new(&mut manager));
     let (handle, join) = manager.spawn(!opts.stopped);
     let mut running = Running {
         handle,

@@ -413,6 +413,9 @@ impl History {
                 }
                 (*cycle, "param", format!("{skill}.{param} = {}", value_to_json(value)))
             }
+            Event::PriorityChanged { skill, priority, cycle } => {
+                (*cycle, "priority", format!("{skill} priority = {priority}"))
+            }
             Event::SkillFaulted { skill, cause, cycle } => {
                 if let Some(&i) = self.skill_index.get(skill) {
                     self.active[i].push(*cycle, false);
@@ -633,8 +636,8 @@ pub struct HistoryTap {
 
 impl HistoryTap {
     /// Taps `manager`'s cycle ([`Manager::tap`], which never makes the cycle wait: a frame that
-    /// finds the queue full is dropped and counted) and subscribes to its events. The manager
-    /// has one tap: tapping it again (e.g. to record it) takes this one's place.
+    /// finds the queue full is dropped and counted) and subscribes to its events. Beside a
+    /// recording's tap: each tap gets every cycle.
     pub fn new(manager: &mut Manager) -> HistoryTap {
         let tap = manager.tap(TAP_QUEUE);
         let events = manager.events();

@@ -750,7 +750,7 @@ fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json 
         return error_reply(
             id,
             "unavailable",
-            "this GUI keeps no history (the program did not give it the manager's tap: with --record, the recording has it)",
+            "this GUI keeps no history (the program that serves it did not tap the manager's cycle for it)",
         );
     };
     if verb == "history" {
