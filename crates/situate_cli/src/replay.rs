@@ -4,7 +4,7 @@
 //! now; every cycle compared with the recording.
 
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use serde_json::json;
 use situate::manager::{ClockKind, ExecutorKind, Manager};
@@ -37,6 +37,10 @@ pub(crate) struct ReplayArgs {
     /// Stop after this cycle.
     #[arg(long, value_name = "CYCLE")]
     pub(crate) to: Option<u64>,
+    /// Then serve the GUI here (an address, or a port on 127.0.0.1; default 127.0.0.1:8080) until
+    /// Ctrl-C: its timeline holds every replayed cycle, to step, seek and play.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    pub(crate) gui: Option<String>,
     /// Record the replay to this MCAP file.
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
@@ -108,7 +112,12 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     let _ = cast.tape.set(tape);
     let recorder = match &args.record {
         Some(path) => {
-            let meta = crate::robot::recording_metadata(&robot, &compose.set, ClockKind::Simulated);
+            let mut meta = crate::robot::recording_metadata(&robot, &compose.set, ClockKind::Simulated, None);
+            for key in ["world", "seed", "map_file"] {
+                if let Some(v) = rec.metadata.get(key) {
+                    meta.insert(key.to_string(), v.clone());
+                }
+            }
             Some(
                 situate_record::Recorder::start_with(path, &mut manager, meta)
                     .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
@@ -120,8 +129,29 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     if from > to {
         return Err(problem(Exit::Usage, format!("--from {from} is after --to {to}")));
     }
-    let outcome = replay::run_window(&rec, &mut manager, &cast.live, from, to, |_, _| {});
-    drop(manager);
+    let gui_listen = match &args.gui {
+        Some(text) => {
+            Some(crate::robot::parse_gui_address(text).map_err(|e| problem(Exit::Usage, format!("--gui: {e}")))?)
+        }
+        None => None,
+    };
+    // For the GUI: every replayed cycle, and the replay's events, into its timeline.
+    let (frames_tx, frames_rx) = crossbeam_channel::unbounded();
+    let layout = gui_listen.map(|_| situate_gui::Layout::of(manager.graph()));
+    let events = manager.events();
+    let outcome = replay::run_window(&rec, &mut manager, &cast.live, from, to, |frame, _| {
+        if layout.is_some() {
+            let _ = frames_tx.send(frame.clone());
+        }
+    });
+    drop(frames_tx);
+    let gui_manager = match (gui_listen, layout) {
+        (Some(listen), Some(layout)) => Some((listen, layout, manager)),
+        _ => {
+            drop(manager);
+            None
+        }
+    };
     let recording = match recorder.map(situate_record::Recorder::finish).transpose() {
         Ok(r) => r,
         Err(e) => return Err(problem(Exit::Failure, format!("--record: {e}"))),
@@ -171,5 +201,44 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             print!("{}", crate::robot::recording_text(r));
         }
     }
-    Ok(if identical { Exit::Ok.code() } else { Exit::Failure.code() })
+    let code = if identical { Exit::Ok.code() } else { Exit::Failure.code() };
+    if let Some((listen, layout, manager)) = gui_manager {
+        serve_gui(&rec, manager, listen, layout, frames_rx, events, outcome.cycles, out)?;
+    }
+    Ok(code)
+}
+
+/// Serves the GUI on the replayed robot, stopped after its last cycle, its
+/// timeline holding the replay, until Ctrl-C.
+#[allow(clippy::too_many_arguments)]
+fn serve_gui(
+    rec: &Recording,
+    manager: Manager,
+    listen: std::net::SocketAddr,
+    layout: situate_gui::Layout,
+    frames: crossbeam_channel::Receiver<situate::manager::Frame>,
+    events: crossbeam_channel::Receiver<situate::manager::Event>,
+    cycles: u64,
+    out: Out,
+) -> anyhow::Result<()> {
+    let stop = crate::signals::Stop::install()?;
+    let (handle, join) = manager.spawn(false);
+    let world = rec.metadata.get("world").and_then(|w| serde_json::from_str(w).ok());
+    let history_frames = usize::try_from(cycles)
+        .unwrap_or(usize::MAX)
+        .saturating_add(16)
+        .clamp(situate_gui::history::DEFAULT_FRAMES, situate_gui::history::MAX_FRAMES);
+    let config = situate_gui::GuiConfig { listen, world, history_frames, ..situate_gui::GuiConfig::default() };
+    let tap = situate_gui::HistoryTap::from_channels(layout, frames, events, 0);
+    let gui = situate_gui::serve_with_history(handle.clone(), config, Some(tap))
+        .map_err(|e| problem(Exit::Failure, format!("starting the GUI on {listen}: {e}")))?;
+    out.note(format_args!("GUI on {}: the replay's cycles are on its timeline; Ctrl-C to end", gui.url()));
+    while stop.signal().is_none() {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    gui.stop();
+    let mut handle = handle;
+    let _ = situate::manager::Control::request(&mut handle, situate::manager::Request::Shutdown);
+    let _ = join.join_timeout(Duration::from_secs(10));
+    Ok(())
 }

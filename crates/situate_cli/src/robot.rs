@@ -398,14 +398,11 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     manager.stop_after(opts.cycles);
     manager.set_speed(opts.speed);
     let events = manager.events();
+    let metadata = recording_metadata(file, &opts.compose.set, spec.clock, sim.as_ref());
     let recorder = match &opts.record {
         Some(path) => Some(
-            situate_record::Recorder::start_with(
-                path,
-                &mut manager,
-                recording_metadata(file, &opts.compose.set, spec.clock),
-            )
-            .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
+            situate_record::Recorder::start_with(path, &mut manager, metadata.clone())
+                .map_err(|e| problem(Exit::Usage, format!("--record: {e}")))?,
         ),
         None => None,
     };
@@ -429,11 +426,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
             Some(d) => d.clone(),
             None => std::env::current_dir().unwrap_or_else(|_| PathBuf::from(".")),
         };
-        let link_recorder = crate::link_record::LinkRecorder::new(
-            dir,
-            running.handle.clone(),
-            recording_metadata(file, &opts.compose.set, spec.clock),
-        );
+        let link_recorder = crate::link_record::LinkRecorder::new(dir, running.handle.clone(), metadata);
         let mut verbs = situate_link::Verbs::default();
         verbs.0.insert("record".to_string(), link_recorder.verb());
         running.link_recorder = Some(link_recorder);
@@ -484,19 +477,22 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     Ok(running)
 }
 
+/// A GUI address as written: `127.0.0.1:8080`, or a port on 127.0.0.1.
+pub(crate) fn parse_gui_address(text: &str) -> Result<std::net::SocketAddr, String> {
+    text.parse().or_else(|_| {
+        text.parse::<u16>()
+            .map(|port| std::net::SocketAddr::from(([127, 0, 0, 1], port)))
+            .map_err(|_| format!("`{text}` is not an address like 127.0.0.1:8080 or a port number"))
+    })
+}
+
 /// Where to serve the GUI: `--gui ADDR`, else the file's `gui: {listen: ADDR}`
 /// (or `gui: {port: N}` on 127.0.0.1), else nowhere.
 pub(crate) fn gui_address(robot_file: &RobotFile, opts: &RunOptions) -> Result<Option<std::net::SocketAddr>, String> {
     if opts.no_gui {
         return Ok(None);
     }
-    let parse = |text: &str| -> Result<std::net::SocketAddr, String> {
-        text.parse().or_else(|_| {
-            text.parse::<u16>()
-                .map(|port| std::net::SocketAddr::from(([127, 0, 0, 1], port)))
-                .map_err(|_| format!("`{text}` is not an address like 127.0.0.1:8080 or a port number"))
-        })
-    };
+    let parse = parse_gui_address;
     if let Some(text) = &opts.gui {
         return parse(text).map(Some).map_err(|e| format!("--gui: {e}"));
     }
@@ -704,11 +700,13 @@ fn summary_json(stats: &ManagerStats, skills: &[SkillInfo]) -> Json {
 }
 
 /// What a recording keeps of how the robot was built, for `situate replay`:
-/// the robot file (absolute) and the `--set`s given.
+/// the robot file (absolute), the `--set`s given, the clock, and the
+/// simulator's building and seed (for the GUI's world view of a replay).
 pub(crate) fn recording_metadata(
     file: &Path,
     sets: &[String],
     clock: ClockKind,
+    sim: Option<&Simulation>,
 ) -> std::collections::BTreeMap<String, String> {
     let file = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
     let mut meta = std::collections::BTreeMap::new();
@@ -719,6 +717,11 @@ pub(crate) fn recording_metadata(
         ClockKind::Wall => "wall",
     };
     meta.insert("clock".to_string(), clock.to_string());
+    if let Some(sim) = sim {
+        meta.insert("world".to_string(), sim.map.world_json().to_string());
+        meta.insert("seed".to_string(), sim.seed.to_string());
+        meta.insert("map_file".to_string(), sim.map_path.display().to_string());
+    }
     meta
 }
 
