@@ -150,7 +150,7 @@ export class GraphView {
     const svg = s("svg", { viewBox: `0 0 ${gw} ${gh}`, preserveAspectRatio: "xMidYMin meet", "data-width": gw, "data-height": gh });
     svg.style.maxWidth = `${gw}px`;
     const defs = s("defs", {});
-    const marker = s("marker", { id: "arrow", viewBox: "0 0 10 10", refX: 10, refY: 5, markerWidth: 6, markerHeight: 6, orient: "auto" });
+    const marker = s("marker", { id: "arrow", viewBox: "0 0 10 10", refX: 10, refY: 5, markerWidth: 7, markerHeight: 7, markerUnits: "userSpaceOnUse", orient: "auto" });
     marker.append(s("path", { d: "M0,0 L10,5 L0,10 z", fill: "#666" }));
     defs.append(marker);
     svg.append(defs);

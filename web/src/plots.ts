@@ -251,8 +251,8 @@ class Plot {
         setScale: [
           (u, key) => {
             if (key !== "x") return;
-            this.chartBox.dataset["xMin"] = String(u.scales.x?.min ?? "");
-            this.chartBox.dataset["xMax"] = String(u.scales.x?.max ?? "");
+            // One attribute, so that a reader never sees the ends of two different views.
+            this.chartBox.dataset["xRange"] = JSON.stringify([u.scales["x"]?.min ?? null, u.scales["x"]?.max ?? null]);
           },
         ],
       },
@@ -273,6 +273,9 @@ class Plot {
       u.setData(data, false);
       u.setScale("x", { min, max });
     });
+    // Not hovered, the legend shows each line's newest drawn value.
+    const n = data[0].length;
+    if ((u.cursor.left ?? -1) < 0 && n > 0) u.setLegend({ idx: n - 1 });
     this.draws++;
     this.chartBox.dataset["draws"] = String(this.draws);
     // Per line, how many of the drawn points have a value (what the tests read).
