@@ -1,10 +1,10 @@
 // The graph view: skills and signals as the manager wired them (`graph`), laid out as a layered
-// graph by dagre (top to bottom, so it fits a page column), active skills highlighted, each
+// graph by dagre (left to right, as the data flows), active skills highlighted, each
 // resource's winner (`winners`) marked. The SVG scales to its panel with a viewBox.
 
 import { isObject, type Json, type JsonObject } from "./conn";
 import dagre, { type EdgeLabel, type GraphLabel, type NodeLabel } from "@dagrejs/dagre";
-import { h, str } from "./dom";
+import { h, setText, str } from "./dom";
 
 const SVG = "http://www.w3.org/2000/svg";
 
@@ -46,16 +46,36 @@ export class GraphView {
   /** The drawn nodes (`k:skill`, `s:signal`) and edges, marked on every update without a new layout. */
   private readonly nodes = new Map<string, SVGGElement>();
   private edges: { from: string; to: string; el: SVGPathElement }[] = [];
+  private readonly sizeButton: HTMLButtonElement;
+  private full = false;
 
   constructor(stale: HTMLElement) {
     this.svgBox = h("div", { class: "graph", "data-testid": "graph" });
+    // Fit (the default) scales the graph to the panel; full size draws it at its own size, the
+    // panel scrolling sideways when it is wider (the page never does).
+    this.sizeButton = h("button", { "data-testid": "graph-size", title: "fit the graph to the panel, or draw it at full size (the panel scrolls)" }, "Full size");
+    this.sizeButton.addEventListener("click", () => {
+      this.full = !this.full;
+      this.applySize();
+    });
     this.el = h(
       "section",
       { class: "panel live", id: "graph" },
       h("h2", {}, "Graph", stale),
-      h("p", { class: "dim" }, "skills (boxes, green: active) → signals (ovals; double: a resource, ★ its winner this cycle)"),
+      h("div", { class: "row" }, h("span", { class: "dim graph-help" }, "skills (boxes; rounded: devices; green: active) → signals (ovals; double: a resource, ★ its winner this cycle)"), this.sizeButton),
       this.svgBox,
     );
+  }
+
+  /** Fit to the panel (viewBox, never wider than the panel nor than the graph), or full size. */
+  private applySize(): void {
+    setText(this.sizeButton, this.full ? "Fit" : "Full size");
+    this.svgBox.classList.toggle("full", this.full);
+    const svg = this.svgBox.querySelector("svg");
+    if (!svg) return;
+    const w = svg.dataset["width"] ?? "0";
+    svg.style.width = this.full ? `${w}px` : "";
+    svg.style.maxWidth = this.full ? "none" : `${w}px`;
   }
 
   /** The reply of `graph`. */
@@ -116,7 +136,7 @@ export class GraphView {
     this.render();
   }
 
-  /** Lays the graph out (dagre, top to bottom) when its shape changed; then marks activity and winners. */
+  /** Lays the graph out (dagre, left to right) when its shape changed; then marks activity and winners. */
   private render(): void {
     const key = JSON.stringify([this.skills.map((x) => [x.name, x.kind, x.inputs, x.outputs]), this.signals.map((x) => [x.signal, x.writers, x.readers])]);
     if (key !== this.shape) {
@@ -128,10 +148,11 @@ export class GraphView {
 
   private layout(): void {
     const g = new dagre.graphlib.Graph<GraphLabel, NodeLabel, EdgeLabel>({ multigraph: false });
-    g.setGraph({ rankdir: "TB", nodesep: 14, ranksep: 34, edgesep: 8, marginx: 4, marginy: 4 });
+    g.setGraph({ rankdir: "LR", nodesep: 10, ranksep: 34, edgesep: 6, marginx: 4, marginy: 4 });
     g.setDefaultEdgeLabel(() => ({}));
     const H = 26;
-    for (const sk of this.skills) g.setNode(`k:${sk.name}`, { width: textWidth(`${sk.name} (${sk.kind})`) + 14, height: H });
+    // A skill's kind is in its tooltip and its shape, not its label: narrower ranks.
+    for (const sk of this.skills) g.setNode(`k:${sk.name}`, { width: textWidth(sk.name) + 14, height: H });
     for (const sig of this.signals) {
       // A resource's label grows by "★winner": room for its longest writer.
       const longest = Math.max(0, ...sig.writers.map((w) => w.length));
@@ -144,11 +165,18 @@ export class GraphView {
       for (const r of sig.readers) if (known(`k:${r}`)) g.setEdge(`s:${sig.signal}`, `k:${r}`);
     }
     dagre.layout(g);
-    const gw = Math.ceil(g.graph().width ?? 0);
-    const gh = Math.ceil(g.graph().height ?? 0);
+    // The drawing's box: nodes and edge points (an edge turned back by a cycle can bend outside
+    // the box dagre reports).
+    let [x0, y0, x1, y1] = [0, 0, g.graph().width ?? 0, g.graph().height ?? 0];
+    const grow = (x: number, y: number) => {
+      [x0, y0, x1, y1] = [Math.min(x0, x), Math.min(y0, y), Math.max(x1, x), Math.max(y1, y)];
+    };
+    for (const e of g.edges()) for (const p of g.edge(e).points ?? []) grow(p.x - 4, p.y - 4), grow(p.x + 4, p.y + 4);
+    [x0, y0] = [Math.floor(x0), Math.floor(y0)];
+    const gw = Math.ceil(x1) - x0;
+    const gh = Math.ceil(y1) - y0;
     // The SVG scales to its panel (viewBox), never wider than its natural size.
-    const svg = s("svg", { viewBox: `0 0 ${gw} ${gh}`, preserveAspectRatio: "xMidYMin meet", "data-width": gw, "data-height": gh });
-    svg.style.maxWidth = `${gw}px`;
+    const svg = s("svg", { viewBox: `${x0} ${y0} ${gw} ${gh}`, preserveAspectRatio: "xMidYMin meet", "data-width": gw, "data-height": gh });
     const defs = s("defs", {});
     const marker = s("marker", { id: "arrow", viewBox: "0 0 10 10", refX: 10, refY: 5, markerWidth: 7, markerHeight: 7, markerUnits: "userSpaceOnUse", orient: "auto" });
     marker.append(s("path", { d: "M0,0 L10,5 L0,10 z", fill: "#666" }));
@@ -167,9 +195,10 @@ export class GraphView {
     for (const sk of this.skills) {
       const n = g.node(`k:${sk.name}`);
       if (n.x === undefined || n.y === undefined) continue;
-      const grp = s("g", { class: "node skill", "data-node": sk.name });
-      grp.append(s("rect", { x: n.x - n.width / 2, y: n.y - n.height / 2, width: n.width, height: n.height, rx: 3 }));
-      grp.append(s("text", { x: n.x, y: n.y + 4, "text-anchor": "middle" }, `${sk.name} (${sk.kind})`));
+      const grp = s("g", { class: "node skill", "data-node": sk.name, "data-kind": sk.kind });
+      grp.append(s("rect", { x: n.x - n.width / 2, y: n.y - n.height / 2, width: n.width, height: n.height, rx: sk.kind === "device" ? 9 : 2 }));
+      grp.append(s("text", { x: n.x, y: n.y + 4, "text-anchor": "middle" }, sk.name));
+      grp.append(s("title", {}, `${sk.name} (${sk.kind})\nreads: ${sk.inputs.join(", ") || "—"}\nwrites: ${sk.outputs.join(", ") || "—"}`));
       svg.append(grp);
       this.nodes.set(`k:${sk.name}`, grp);
     }
@@ -186,6 +215,7 @@ export class GraphView {
       this.nodes.set(`s:${sig.signal}`, grp);
     }
     this.svgBox.replaceChildren(svg);
+    this.applySize();
   }
 
   /** Active skills and each resource's winner (and its edge), on the laid-out graph. */

@@ -127,6 +127,28 @@ describe("graph", () => {
     }
   });
 
+  test("full size draws the graph at its own size, scrolling inside its panel only; fit scales it back", async () => {
+    const narrow = await openPage(browser, tb.url, { width: 390, height: 844 });
+    try {
+      for (const [name, p, width] of [["wide", page, 1400], ["narrow", narrow, 390]]) {
+        const natural = Number(await p.locator("[data-testid=graph] svg").getAttribute("data-width"));
+        assert.ok(natural > 0, `${name}: the layout's width`);
+        await p.getByTestId("graph-size").click();
+        await until(async () => (await p.getByTestId("graph-size").textContent()) === "Fit", `${name}: full size`);
+        let g = await drawnGraph(p);
+        assert.ok(Math.abs(g.svg.right - g.svg.left - natural) < 1, `${name}: drawn at its own width ${natural}: ${g.svg.right - g.svg.left}`);
+        assert.ok(g.page.scrollWidth <= width, `${name}: the page does not scroll sideways (${g.page.scrollWidth} px)`);
+        await p.getByTestId("graph-size").click();
+        await until(async () => (await p.getByTestId("graph-size").textContent()) === "Full size", `${name}: fit`);
+        g = await drawnGraph(p);
+        assert.ok(g.svg.right - g.svg.left <= Math.min(natural, g.panel.clientWidth) + 0.5, `${name}: fitted again`);
+        assert.ok(g.panel.scrollWidth <= g.panel.clientWidth, `${name}: the panel does not scroll sideways`);
+      }
+    } finally {
+      await narrow.close();
+    }
+  });
+
   test("active skills are highlighted; each resource's winner is marked, node and edge", async () => {
     const node = (name) => page.locator(`[data-testid=graph] g.skill[data-node="${name}"]`);
     await cli(tb.linkPort, "deactivate", "wander");
