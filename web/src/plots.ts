@@ -34,6 +34,10 @@ class Plot {
   private readonly title: HTMLElement;
   private readonly pauseButton: HTMLButtonElement;
   private readonly addInput: HTMLInputElement;
+  private readonly yMin: HTMLInputElement;
+  private readonly yMax: HTMLInputElement;
+  /** The y axis' fixed range, or null: autoscale. */
+  private yFixed: [number, number] | null = null;
   private chart: uPlot | null = null;
   /** The buffer: one time column and one column per line, aligned (null: no value at that time). */
   private times: number[] = [];
@@ -74,6 +78,14 @@ class Plot {
     const live = h("button", { "data-testid": "plot-reset", title: "back to the live window (after a zoom or a pause)" }, "Live");
     live.addEventListener("click", () => this.goLive());
     const csv = h("button", { "data-testid": "plot-csv", title: "download every buffered point as CSV" }, "CSV");
+    // The y axis fits the lines drawn (autoscale) unless both ends are given.
+    const yEnd = (which: string) => {
+      const el = h("input", { type: "number", step: "any", placeholder: `y ${which}`, title: `y axis ${which} (empty: autoscale)`, "data-testid": `plot-y-${which}`, class: "plot-y" });
+      el.addEventListener("change", () => this.setY());
+      return el;
+    };
+    this.yMin = yEnd("min");
+    this.yMax = yEnd("max");
     csv.addEventListener("click", () => this.download());
     this.addInput = h("input", { type: "text", list: "signal-names", placeholder: "add signal", "data-testid": "plot-add-signal", class: "plot-more" });
     const addButton = linkControl(h("button", { "data-testid": "plot-add-signal-button" }, "+"));
@@ -93,7 +105,7 @@ class Plot {
       { class: "plot", "data-testid": "plot", "data-expr": first.expr },
       h("div", { class: "row" }, this.title, win, this.pauseButton, live, csv, remove),
       this.chartBox,
-      h("div", { class: "row" }, this.addInput, addButton),
+      h("div", { class: "row" }, this.addInput, addButton, this.yMin, this.yMax),
     );
     this.resizer.observe(this.chartBox);
     this.scheme.addEventListener("change", this.onScheme);
@@ -211,6 +223,20 @@ class Plot {
     this.redraw();
   }
 
+  /** Both ends given (min < max): a fixed y range; otherwise autoscale. */
+  private setY(): void {
+    const lo = this.yMin.value.trim() === "" ? NaN : Number(this.yMin.value);
+    const hi = this.yMax.value.trim() === "" ? NaN : Number(this.yMax.value);
+    const fixed: [number, number] | null = Number.isFinite(lo) && Number.isFinite(hi) && lo < hi ? [lo, hi] : null;
+    const bad = (this.yMin.value.trim() !== "" || this.yMax.value.trim() !== "") && fixed === null;
+    this.yMin.classList.toggle("refused", bad);
+    this.yMax.classList.toggle("refused", bad);
+    this.chartBox.dataset["yFixed"] = fixed ? JSON.stringify(fixed) : "";
+    if (JSON.stringify(fixed) === JSON.stringify(this.yFixed)) return;
+    this.yFixed = fixed;
+    this.rebuild();
+  }
+
   private resize(): void {
     const w = Math.floor(this.chartBox.clientWidth);
     if (w <= 0) return;
@@ -230,7 +256,7 @@ class Plot {
     const opts: uPlot.Options = {
       width,
       height: HEIGHT,
-      scales: { x: { time: true } },
+      scales: { x: { time: true }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
       axes: [axis(), { ...axis(), size: 60 }],
       series: [{ label: "t" }, ...this.names.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length] ?? "#000", width: 1.5 }))],
       cursor: {
@@ -250,9 +276,8 @@ class Plot {
         ],
         setScale: [
           (u, key) => {
-            if (key !== "x") return;
-            // One attribute, so that a reader never sees the ends of two different views.
-            this.chartBox.dataset["xRange"] = JSON.stringify([u.scales["x"]?.min ?? null, u.scales["x"]?.max ?? null]);
+            // One attribute per axis, so that a reader never sees the ends of two different views.
+            if (key === "x" || key === "y") this.chartBox.dataset[`${key}Range`] = JSON.stringify([u.scales[key]?.min ?? null, u.scales[key]?.max ?? null]);
           },
         ],
       },

@@ -134,6 +134,36 @@ describe("plots", () => {
     assert.ok(sameSpan(hi - lo, await windowS()), `the whole window again: ${hi - lo}`);
   });
 
+  test("the y axis fits the lines unless fixed: a fixed range holds, emptied it fits again", async () => {
+    const yRange = async () => JSON.parse((await attr("data-y-range")) || "[0, 0]");
+    // gui.circle's pose stays within its 2 m radius: autoscale keeps the axis near that.
+    const fitted = async () => {
+      const [lo, hi] = await yRange();
+      return lo >= -3 && hi <= 3 && hi - lo > 0.1;
+    };
+    await until(fitted, "an autoscaled y axis");
+    const setEnds = async (min, max) => {
+      await plot().getByTestId("plot-y-min").fill(min);
+      await plot().getByTestId("plot-y-min").press("Tab");
+      await plot().getByTestId("plot-y-max").fill(max);
+      await plot().getByTestId("plot-y-max").press("Tab");
+    };
+    await setEnds("-10", "10");
+    await until(async () => JSON.stringify(await yRange()) === "[-10,10]", "y fixed at [-10, 10]");
+    const p0 = await points();
+    await until(async () => (await points()) >= p0 + 10 && JSON.stringify(await drawn()) !== "{}", "points while fixed");
+    assert.deepEqual(await yRange(), [-10, 10], "the fixed range holds while points arrive");
+
+    // Ends the wrong way round are refused (and the axis fits the lines).
+    await setEnds("5", "1");
+    await until(async () => ((await plot().getByTestId("plot-y-max").getAttribute("class")) ?? "").includes("refused"), "min >= max refused");
+    await until(fitted, "autoscale while the ends are refused");
+
+    await setEnds("", "");
+    await until(async () => !((await plot().getByTestId("plot-y-max").getAttribute("class")) ?? "").includes("refused"), "no longer refused");
+    await until(fitted, "autoscale again");
+  });
+
   test("CSV export: a header, then a row per sample whose values are the signal's", async () => {
     // Stopped, the pose holds still: the last rows must be the robot's own value.
     await cliDo(tb.linkPort, "cycle", "stop");
