@@ -200,6 +200,34 @@ describe("plots", () => {
     await until(async () => (await cli(tb.linkPort, "stats")).running === true, "running again over the link");
   });
 
+  test("at 390 px wide a plot with two lines is usable and the page does not scroll sideways", async () => {
+    const narrow = await browser.context.newPage();
+    try {
+      await narrow.setViewportSize({ width: 390, height: 844 });
+      await narrow.goto(tb.url);
+      await narrow.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
+      await narrow.getByTestId("plot-signal").fill("truth.pose.x");
+      await narrow.getByTestId("plot-add").click();
+      await narrow.getByTestId("plot-add-signal").fill("truth.pose.y");
+      await narrow.getByTestId("plot-add-signal-button").click();
+      const chart = narrow.getByTestId("plot-canvas");
+      await until(async () => {
+        const d = JSON.parse((await chart.getAttribute("data-drawn")) || "{}");
+        return d["truth.pose.x"] >= 3 && d["truth.pose.y"] >= 3;
+      }, "both lines drawn");
+      const widths = await narrow.evaluate(() => ({
+        page: document.scrollingElement.scrollWidth,
+        chart: document.querySelector("[data-testid=plot-canvas] canvas").getBoundingClientRect().right,
+        panel: document.querySelector("#plots").getBoundingClientRect().right,
+      }));
+      assert.ok(widths.page <= 390, `no horizontal page scroll at 390 px: the page is ${widths.page} px wide`);
+      assert.ok(widths.chart <= widths.panel, `the chart (to ${widths.chart} px) inside its panel (to ${widths.panel} px)`);
+      await narrow.locator("#plots").screenshot({ path: screenshotPath("plots-narrow-390") });
+    } finally {
+      await narrow.close();
+    }
+  });
+
   test("removing the plot removes it", async () => {
     await plot().getByTestId("plot-remove").click();
     await until(async () => (await page.getByTestId("plot").count()) === 0, "no plot left");
