@@ -180,10 +180,11 @@ class Plot {
 
   /** Bounded memory: at most MAX_ROWS points per line, none older than MAX_AGE_S. */
   private trim(now: number): void {
-    let drop = Math.max(0, this.times.length - MAX_ROWS);
+    // Dropped in batches (64 samples at least): splicing every sample would copy the whole buffer
+    // at the sample rate.
+    let drop = this.times.length > MAX_ROWS ? this.times.length - MAX_ROWS + 64 : 0;
     while (drop < this.times.length && (this.times[drop] ?? now) < now - MAX_AGE_S) drop++;
-    // Dropped in batches: splicing every sample would copy the whole buffer at the sample rate.
-    if (drop === 0 || (drop < 64 && this.times.length <= MAX_ROWS)) return;
+    if (drop < 64) return;
     this.times.splice(0, drop);
     for (const c of this.columns.values()) c.splice(0, drop);
   }
