@@ -1,8 +1,10 @@
-// The graph view: skills and signals as the manager wired them (`graph`), active skills
-// highlighted, each resource's winner (`winners`) marked.
+// The graph view: skills and signals as the manager wired them (`graph`), laid out as a layered
+// graph by dagre (left to right, as the data flows), active skills highlighted, each
+// resource's winner (`winners`) marked. The SVG scales to its panel with a viewBox.
 
 import { isObject, type Json, type JsonObject } from "./conn";
-import { h, str } from "./dom";
+import dagre, { type EdgeLabel, type GraphLabel, type NodeLabel } from "@dagrejs/dagre";
+import { h, setText, str } from "./dom";
 
 const SVG = "http://www.w3.org/2000/svg";
 
@@ -41,16 +43,39 @@ export class GraphView {
   private winners = new Map<string, string | null>();
   private shape = "";
   private leafNames: string[] = [];
+  /** The drawn nodes (`k:skill`, `s:signal`) and edges, marked on every update without a new layout. */
+  private readonly nodes = new Map<string, SVGGElement>();
+  private edges: { from: string; to: string; el: SVGPathElement }[] = [];
+  private readonly sizeButton: HTMLButtonElement;
+  private full = false;
 
   constructor(stale: HTMLElement) {
     this.svgBox = h("div", { class: "graph", "data-testid": "graph" });
+    // Fit (the default) scales the graph to the panel; full size draws it at its own size, the
+    // panel scrolling sideways when it is wider (the page never does).
+    this.sizeButton = h("button", { "data-testid": "graph-size", title: "fit the graph to the panel, or draw it at full size (the panel scrolls)" }, "Full size");
+    this.sizeButton.addEventListener("click", () => {
+      this.full = !this.full;
+      this.applySize();
+    });
     this.el = h(
       "section",
       { class: "panel live", id: "graph" },
       h("h2", {}, "Graph", stale),
-      h("p", { class: "dim" }, "skills (boxes, green: active) → signals (ovals; double: a resource, ★ its winner this cycle)"),
+      h("div", { class: "row" }, h("span", { class: "dim graph-help" }, "skills (boxes; rounded: devices; green: active) → signals (ovals; double: a resource, ★ its winner this cycle)"), this.sizeButton),
       this.svgBox,
     );
+  }
+
+  /** Fit to the panel (viewBox, never wider than the panel nor than the graph), or full size. */
+  private applySize(): void {
+    setText(this.sizeButton, this.full ? "Fit" : "Full size");
+    this.svgBox.classList.toggle("full", this.full);
+    const svg = this.svgBox.querySelector("svg");
+    if (!svg) return;
+    const w = svg.dataset["width"] ?? "0";
+    svg.style.width = this.full ? `${w}px` : "";
+    svg.style.maxWidth = this.full ? "none" : `${w}px`;
   }
 
   /** The reply of `graph`. */
@@ -111,94 +136,113 @@ export class GraphView {
     this.render();
   }
 
+  /** Lays the graph out (dagre, left to right) when its shape changed; then marks activity and winners. */
   private render(): void {
-    const key = JSON.stringify([this.skills.map((x) => [x.name, x.active]), [...this.winners]]);
-    if (key === this.shape) return;
-    this.shape = key;
-    // Layers: a skill sits one layer after the skills writing what it reads (cycles cut at a bound).
-    const layer = new Map<string, number>(this.skills.map((x) => [x.name, 0]));
-    const writers = new Map(this.signals.map((x) => [x.signal, x.writers]));
-    for (let pass = 0; pass < this.skills.length; pass++) {
-      let changed = false;
-      for (const sk of this.skills) {
-        if (sk.kind === "device") continue;
-        for (const input of sk.inputs) {
-          for (const w of writers.get(input) ?? []) {
-            const want = (layer.get(w) ?? 0) + 1;
-            if (want > (layer.get(sk.name) ?? 0) && want <= this.skills.length) {
-              layer.set(sk.name, want);
-              changed = true;
-            }
-          }
-        }
-      }
-      if (!changed) break;
+    const key = JSON.stringify([this.skills.map((x) => [x.name, x.kind, x.inputs, x.outputs]), this.signals.map((x) => [x.signal, x.writers, x.readers])]);
+    if (key !== this.shape) {
+      this.shape = key;
+      this.layout();
     }
-    const colW = 150;
-    const rowH = 46;
-    const cols = new Map<number, number>();
-    const pos = new Map<string, [number, number]>();
-    for (const sk of this.skills) {
-      const col = 2 * (layer.get(sk.name) ?? 0);
-      const row = cols.get(col) ?? 0;
-      cols.set(col, row + 1);
-      pos.set(`k:${sk.name}`, [20 + col * colW, 20 + row * rowH]);
-    }
+    this.mark();
+  }
+
+  private layout(): void {
+    const g = new dagre.graphlib.Graph<GraphLabel, NodeLabel, EdgeLabel>({ multigraph: false });
+    g.setGraph({ rankdir: "LR", nodesep: 10, ranksep: 34, edgesep: 6, marginx: 4, marginy: 4 });
+    g.setDefaultEdgeLabel(() => ({}));
+    const H = 26;
+    // A skill's kind is in its tooltip and its shape, not its label: narrower ranks.
+    for (const sk of this.skills) g.setNode(`k:${sk.name}`, { width: textWidth(sk.name) + 14, height: H });
     for (const sig of this.signals) {
-      const wl = Math.max(-1, ...sig.writers.map((w) => layer.get(w) ?? 0));
-      const col = 2 * wl + 1;
-      const row = cols.get(col) ?? 0;
-      cols.set(col, row + 1);
-      pos.set(`s:${sig.signal}`, [20 + Math.max(0, col) * colW, 20 + row * rowH]);
+      // A resource's label grows by "★winner": room for its longest writer.
+      const longest = Math.max(0, ...sig.writers.map((w) => w.length));
+      const label = sig.writers.length > 1 ? `${sig.signal} ★${"m".repeat(longest)}` : sig.signal;
+      g.setNode(`s:${sig.signal}`, { width: textWidth(label) + 28, height: H });
     }
-    const width = 40 + (Math.max(0, ...cols.keys()) + 1) * colW;
-    const height = 40 + Math.max(1, ...cols.values()) * rowH;
-    const svg = s("svg", { width, height, viewBox: `0 0 ${width} ${height}` });
+    const known = (id: string) => g.hasNode(id);
+    for (const sig of this.signals) {
+      for (const w of sig.writers) if (known(`k:${w}`)) g.setEdge(`k:${w}`, `s:${sig.signal}`);
+      for (const r of sig.readers) if (known(`k:${r}`)) g.setEdge(`s:${sig.signal}`, `k:${r}`);
+    }
+    dagre.layout(g);
+    // The drawing's box: nodes and edge points (an edge turned back by a cycle can bend outside
+    // the box dagre reports).
+    let [x0, y0, x1, y1] = [0, 0, g.graph().width ?? 0, g.graph().height ?? 0];
+    const grow = (x: number, y: number) => {
+      [x0, y0, x1, y1] = [Math.min(x0, x), Math.min(y0, y), Math.max(x1, x), Math.max(y1, y)];
+    };
+    for (const e of g.edges()) for (const p of g.edge(e).points ?? []) grow(p.x - 4, p.y - 4), grow(p.x + 4, p.y + 4);
+    [x0, y0] = [Math.floor(x0), Math.floor(y0)];
+    const gw = Math.ceil(x1) - x0;
+    const gh = Math.ceil(y1) - y0;
+    // The SVG scales to its panel (viewBox), never wider than its natural size.
+    const svg = s("svg", { viewBox: `${x0} ${y0} ${gw} ${gh}`, preserveAspectRatio: "xMidYMin meet", "data-width": gw, "data-height": gh });
     const defs = s("defs", {});
-    const marker = s("marker", { id: "arrow", viewBox: "0 0 10 10", refX: 10, refY: 5, markerWidth: 6, markerHeight: 6, orient: "auto" });
+    const marker = s("marker", { id: "arrow", viewBox: "0 0 10 10", refX: 10, refY: 5, markerWidth: 7, markerHeight: 7, markerUnits: "userSpaceOnUse", orient: "auto" });
     marker.append(s("path", { d: "M0,0 L10,5 L0,10 z", fill: "#666" }));
     defs.append(marker);
     svg.append(defs);
-    const boxW = 124;
-    const boxH = 28;
-    const edge = (from: string, to: string, cls: string) => {
-      const a = pos.get(from);
-      const b = pos.get(to);
-      if (!a || !b) return;
-      const [x1, y1, x2, y2] = [a[0] + boxW, a[1] + boxH / 2, b[0], b[1] + boxH / 2];
-      // Forward edges bend gently; an edge back to an earlier column (a device reading a command) loops below.
-      const d =
-        x2 > x1
-          ? `M${x1},${y1} C${x1 + 30},${y1} ${x2 - 30},${y2} ${x2},${y2}`
-          : `M${x1},${y1} C${x1 + 60},${y1 + 60} ${x2 - 60},${y2 + 60} ${x2},${y2}`;
-      svg.append(s("path", { d, class: cls, fill: "none", "marker-end": "url(#arrow)" }));
-    };
-    for (const sig of this.signals) {
-      const winner = this.winners.get(sig.signal);
-      for (const w of sig.writers) edge(`k:${w}`, `s:${sig.signal}`, w === winner ? "edge winner" : "edge");
-      for (const r of sig.readers) edge(`s:${sig.signal}`, `k:${r}`, "edge");
+    this.edges = [];
+    for (const e of g.edges()) {
+      const pts = g.edge(e).points ?? [];
+      if (pts.length === 0) continue;
+      const d = pts.map((p, i) => `${i === 0 ? "M" : "L"}${p.x.toFixed(1)},${p.y.toFixed(1)}`).join(" ");
+      const path = s("path", { d, class: "edge", fill: "none", "marker-end": "url(#arrow)", "data-from": e.v.slice(2), "data-to": e.w.slice(2) });
+      svg.append(path);
+      this.edges.push({ from: e.v, to: e.w, el: path });
     }
+    this.nodes.clear();
     for (const sk of this.skills) {
-      const p = pos.get(`k:${sk.name}`);
-      if (!p) continue;
-      const g = s("g", { class: `node skill ${sk.active ? "active" : "inactive"}`, "data-node": sk.name, "data-active": String(sk.active) });
-      g.append(s("rect", { x: p[0], y: p[1], width: boxW, height: boxH, rx: 3 }));
-      g.append(s("text", { x: p[0] + 6, y: p[1] + 18 }, `${sk.name} (${sk.kind})`));
-      svg.append(g);
+      const n = g.node(`k:${sk.name}`);
+      if (n.x === undefined || n.y === undefined) continue;
+      const grp = s("g", { class: "node skill", "data-node": sk.name, "data-kind": sk.kind });
+      grp.append(s("rect", { x: n.x - n.width / 2, y: n.y - n.height / 2, width: n.width, height: n.height, rx: sk.kind === "device" ? 9 : 2 }));
+      grp.append(s("text", { x: n.x, y: n.y + 4, "text-anchor": "middle" }, sk.name));
+      grp.append(s("title", {}, `${sk.name} (${sk.kind})\nreads: ${sk.inputs.join(", ") || "—"}\nwrites: ${sk.outputs.join(", ") || "—"}`));
+      svg.append(grp);
+      this.nodes.set(`k:${sk.name}`, grp);
     }
     for (const sig of this.signals) {
-      const p = pos.get(`s:${sig.signal}`);
-      if (!p) continue;
+      const n = g.node(`s:${sig.signal}`);
+      if (n.x === undefined || n.y === undefined) continue;
       const resource = sig.writers.length > 1;
-      const winner = this.winners.get(sig.signal);
-      const g = s("g", { class: `node signal${resource ? " resource" : ""}`, "data-signal": sig.signal, "data-winner": winner ?? "" });
-      g.append(s("ellipse", { cx: p[0] + boxW / 2, cy: p[1] + boxH / 2, rx: boxW / 2, ry: boxH / 2 }));
-      if (resource) g.append(s("ellipse", { cx: p[0] + boxW / 2, cy: p[1] + boxH / 2, rx: boxW / 2 - 3, ry: boxH / 2 - 3 }));
-      const label = resource && winner ? `${sig.signal} ★${winner}` : sig.signal;
-      g.append(s("text", { x: p[0] + boxW / 2, y: p[1] + 18, "text-anchor": "middle" }, label));
-      g.append(s("title", {}, `${sig.signal}: ${sig.type}\nwriters: ${sig.writers.join(", ")}\nreaders: ${sig.readers.join(", ")}`));
-      svg.append(g);
+      const grp = s("g", { class: `node signal${resource ? " resource" : ""}`, "data-signal": sig.signal, "data-winner": "" });
+      grp.append(s("ellipse", { cx: n.x, cy: n.y, rx: n.width / 2, ry: n.height / 2 }));
+      if (resource) grp.append(s("ellipse", { cx: n.x, cy: n.y, rx: n.width / 2 - 3, ry: n.height / 2 - 3 }));
+      grp.append(s("text", { x: n.x, y: n.y + 4, "text-anchor": "middle" }, sig.signal));
+      grp.append(s("title", {}, `${sig.signal}: ${sig.type}\nwriters: ${sig.writers.join(", ")}\nreaders: ${sig.readers.join(", ")}`));
+      svg.append(grp);
+      this.nodes.set(`s:${sig.signal}`, grp);
     }
     this.svgBox.replaceChildren(svg);
+    this.applySize();
   }
+
+  /** Active skills and each resource's winner (and its edge), on the laid-out graph. */
+  private mark(): void {
+    for (const sk of this.skills) {
+      const grp = this.nodes.get(`k:${sk.name}`);
+      if (!grp) continue;
+      grp.setAttribute("class", `node skill ${sk.active ? "active" : "inactive"}`);
+      grp.setAttribute("data-active", String(sk.active));
+    }
+    for (const sig of this.signals) {
+      const grp = this.nodes.get(`s:${sig.signal}`);
+      if (!grp) continue;
+      const winner = this.winners.get(sig.signal) ?? null;
+      grp.setAttribute("data-winner", winner ?? "");
+      const text = grp.querySelector("text");
+      const label = sig.writers.length > 1 && winner ? `${sig.signal} ★${winner}` : sig.signal;
+      if (text && text.textContent !== label) text.textContent = label;
+    }
+    for (const e of this.edges) {
+      const win = e.from.startsWith("k:") && this.winners.get(e.to.slice(2)) === e.from.slice(2);
+      e.el.setAttribute("class", win ? "edge winner" : "edge");
+    }
+  }
+}
+
+/** About how wide a label is at the graph's 11 px font (the layout needs node sizes before drawing). */
+function textWidth(text: string): number {
+  return Math.ceil(text.length * 6.4);
 }

@@ -1,143 +1,357 @@
 // Live plots of signals the user chooses: a signal, a record field (`odom.x`) or an array element
-// (`sonar.range[3]`); every numeric leaf of the chosen value gets a line, over a time window.
+// (`sonar.range[3]`); every numeric leaf of the chosen values gets a line, over a time window.
+// Drawn by uPlot. A plot can hold several signals ("add signal"), be paused (the view freezes,
+// points keep being buffered; resuming jumps to live), zoomed (drag across the plot; double-click
+// or "Live" returns to the live window), and exported as CSV (every buffered point).
 
+import uPlot from "uplot";
+import "uplot/dist/uPlot.min.css";
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
 import { cssVar, errorText, h, linkControl, numericLeaves, pick, setText } from "./dom";
 
 const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+/** Lines per plot, at most. */
 const MAX_SERIES = 24;
+/** Buffered points per line, at most (and never older than the longest window). */
+const MAX_ROWS = 6000;
+const MAX_AGE_S = 300;
+const HEIGHT = 200;
+const PATH_RE = /^[A-Za-z_][A-Za-z0-9_.]*(\[\d+\]|\.[A-Za-z_][A-Za-z0-9_]*)*$/;
 
-interface Series {
-  name: string;
-  points: [number, number][];
+/** A chosen expression and the signal queried for it (`odom.x` reads `.x` of `odom`). */
+export interface Source {
+  expr: string;
+  base: string;
+  path: string;
 }
+
+type Mode = "live" | "paused" | "zoomed";
 
 class Plot {
   readonly el: HTMLElement;
-  readonly base: string;
-  readonly path: string;
-  private readonly canvas: HTMLCanvasElement;
-  private readonly legend: HTMLElement;
-  private readonly series = new Map<string, Series>();
+  readonly sources: Source[] = [];
+  private readonly chartBox: HTMLElement;
+  private readonly title: HTMLElement;
+  private readonly pauseButton: HTMLButtonElement;
+  private readonly addInput: HTMLInputElement;
+  private readonly yMin: HTMLInputElement;
+  private readonly yMax: HTMLInputElement;
+  /** The y axis' fixed range, or null: autoscale. */
+  private yFixed: [number, number] | null = null;
+  private chart: uPlot | null = null;
+  /** The buffer: one time column and one column per line, aligned (null: no value at that time). */
+  private times: number[] = [];
+  private readonly names: string[] = [];
+  private readonly columns = new Map<string, (number | null)[]>();
   private received = 0;
   /** When this run's first point came (wall s). */
   private since: number | null = null;
-  private last = 0;
+  private mode: Mode = "live";
+  /** The paused view's end (wall s), or the zoomed view. */
+  private frozenEnd = 0;
+  private zoom: { min: number; max: number } = { min: 0, max: 0 };
+  private draws = 0;
+  private readonly resizer = new ResizeObserver(() => this.resize());
+  private readonly scheme = window.matchMedia("(prefers-color-scheme: dark)");
+  private readonly onScheme = () => this.rebuild();
   windowS = 30;
 
   constructor(
-    readonly expr: string,
-    base: string,
+    first: Source,
     onRemove: (p: Plot) => void,
+    onAddSignal: (p: Plot, expr: string) => Promise<void>,
   ) {
-    this.base = base;
-    this.path = expr.slice(base.length);
-    this.canvas = h("canvas", { width: 560, height: 180, "data-testid": "plot-canvas", "data-points": 0 });
-    this.legend = h("div", { class: "legend" });
-    const remove = h("button", { "data-testid": "plot-remove" }, "✕");
+    this.sources.push(first);
+    this.chartBox = h("div", { class: "plot-chart", "data-testid": "plot-canvas", "data-points": 0, "data-state": "live" });
+    this.title = h("strong", { "data-testid": "plot-title" }, first.expr);
+    const remove = h("button", { "data-testid": "plot-remove", title: "remove this plot" }, "✕");
     remove.addEventListener("click", () => onRemove(this));
-    const win = h("select", { "data-testid": "plot-window" });
+    const win = h("select", { "data-testid": "plot-window", title: "time window" });
     for (const w of [10, 30, 60, 300]) win.append(h("option", { value: w, selected: w === this.windowS }, `${w} s`));
     win.addEventListener("change", () => {
       this.windowS = Number(win.value);
-      this.draw(this.last || Date.now() / 1000);
+      if (this.mode === "zoomed") this.mode = "live";
+      this.redraw();
     });
-    this.el = h("div", { class: "plot", "data-testid": "plot", "data-expr": expr }, h("div", { class: "row" }, h("strong", {}, expr), win, remove), this.canvas, this.legend);
+    this.pauseButton = h("button", { "data-testid": "plot-pause", title: "freeze the view (points are still buffered)" }, "Pause");
+    this.pauseButton.addEventListener("click", () => (this.mode === "live" ? this.pause() : this.goLive()));
+    const live = h("button", { "data-testid": "plot-reset", title: "back to the live window (after a zoom or a pause)" }, "Live");
+    live.addEventListener("click", () => this.goLive());
+    const csv = h("button", { "data-testid": "plot-csv", title: "download every buffered point as CSV" }, "CSV");
+    // The y axis fits the lines drawn (autoscale) unless both ends are given.
+    const yEnd = (which: string) => {
+      const el = h("input", { type: "number", step: "any", placeholder: `y ${which}`, title: `y axis ${which} (empty: autoscale)`, "data-testid": `plot-y-${which}`, class: "plot-y" });
+      el.addEventListener("change", () => this.setY());
+      return el;
+    };
+    this.yMin = yEnd("min");
+    this.yMax = yEnd("max");
+    csv.addEventListener("click", () => this.download());
+    this.addInput = h("input", { type: "text", list: "signal-names", placeholder: "add signal", "data-testid": "plot-add-signal", class: "plot-more" });
+    const addButton = linkControl(h("button", { "data-testid": "plot-add-signal-button" }, "+"));
+    const addSignal = () => {
+      const expr = this.addInput.value.trim();
+      if (expr === "") return;
+      void onAddSignal(this, expr).then(() => {
+        if (this.addInput.value.trim() === expr && this.has(expr)) this.addInput.value = "";
+      });
+    };
+    addButton.addEventListener("click", addSignal);
+    this.addInput.addEventListener("keydown", (e) => {
+      if (e.key === "Enter") addSignal();
+    });
+    this.el = h(
+      "div",
+      { class: "plot", "data-testid": "plot", "data-expr": first.expr },
+      h("div", { class: "row" }, this.title, win, this.pauseButton, live, csv, remove),
+      this.chartBox,
+      h("div", { class: "row" }, this.addInput, addButton, this.yMin, this.yMax),
+    );
+    this.resizer.observe(this.chartBox);
+    this.scheme.addEventListener("change", this.onScheme);
   }
 
-  /** A new run: the old run's points go. */
+  has(expr: string): boolean {
+    return this.sources.some((s) => s.expr === expr);
+  }
+
+  addSource(src: Source): void {
+    if (this.has(src.expr)) return;
+    this.sources.push(src);
+    setText(this.title, this.sources.map((s) => s.expr).join(", "));
+    this.el.dataset["expr"] = this.sources.map((s) => s.expr).join(",");
+  }
+
+  removeSource(expr: string): void {
+    const i = this.sources.findIndex((s) => s.expr === expr);
+    if (i < 0 || this.sources.length === 1) return;
+    this.sources.splice(i, 1);
+    setText(this.title, this.sources.map((s) => s.expr).join(", "));
+    this.el.dataset["expr"] = this.sources.map((s) => s.expr).join(",");
+  }
+
+  /** A new run: the old run's points go, and the view is live again. */
   clear(): void {
-    this.series.clear();
+    this.times = [];
+    this.names.length = 0;
+    this.columns.clear();
     this.received = 0;
     this.since = null;
-    this.canvas.dataset["points"] = "0";
-    this.canvas.dataset["since"] = "";
-    this.draw(this.last || Date.now() / 1000);
+    this.chartBox.dataset["points"] = "0";
+    this.chartBox.dataset["since"] = "";
+    this.setMode("live");
+    this.rebuild();
   }
 
-  add(wall: number, value: Json | undefined): void {
-    const v = pick(value, this.path);
-    if (v === undefined) return;
-    this.last = wall;
+  /** One telemetry sample: a point per numeric leaf of every source present in it. */
+  add(wall: number, signals: JsonObject): void {
+    const row: [string, number][] = [];
+    for (const src of this.sources) {
+      const r = signals[src.base];
+      if (!isObject(r) || !("value" in r)) continue;
+      const v = pick((r as JsonObject)["value"], src.path);
+      if (v === undefined) continue;
+      for (const [leaf, x] of numericLeaves(v)) if (Number.isFinite(x)) row.push([src.expr + leaf, x]);
+    }
+    if (row.length === 0) return;
     if (this.since === null) {
       this.since = wall;
-      this.canvas.dataset["since"] = String(wall);
+      this.chartBox.dataset["since"] = String(wall);
     }
-    for (const [leaf, x] of numericLeaves(v).slice(0, MAX_SERIES)) {
-      if (!Number.isFinite(x)) continue;
-      const name = this.expr + leaf;
-      let s = this.series.get(name);
-      if (!s) {
-        s = { name, points: [] };
-        this.series.set(name, s);
-      }
-      s.points.push([wall, x]);
-      this.received++;
+    let newLines = false;
+    for (const [name] of row) {
+      if (this.columns.has(name) || this.names.length >= MAX_SERIES) continue;
+      this.names.push(name);
+      this.columns.set(name, new Array<number | null>(this.times.length).fill(null));
+      newLines = true;
     }
-    const cutoff = wall - 300;
-    for (const s of this.series.values()) {
-      while (s.points.length > 0 && (s.points[0]?.[0] ?? wall) < cutoff) s.points.shift();
+    this.times.push(wall);
+    const values = new Map(row);
+    for (const name of this.names) {
+      const x = values.get(name);
+      this.columns.get(name)?.push(x ?? null);
+      if (x !== undefined) this.received++;
     }
-    this.canvas.dataset["points"] = String(this.received);
-    this.draw(wall);
+    this.trim(wall);
+    this.chartBox.dataset["points"] = String(this.received);
+    if (newLines) this.rebuild();
+    else if (this.mode === "live") this.redraw();
   }
 
-  private draw(now: number): void {
-    const c = this.canvas.getContext("2d");
-    if (!c) return;
-    const W = this.canvas.width;
-    const H = this.canvas.height;
-    const pad = { l: 50, r: 8, t: 8, b: 18 };
-    c.fillStyle = cssVar("--canvas-bg", "#fff");
-    c.fillRect(0, 0, W, H);
-    const t0 = now - this.windowS;
-    let lo = Infinity;
-    let hi = -Infinity;
-    for (const s of this.series.values()) {
-      for (const [t, y] of s.points) {
-        if (t < t0) continue;
-        lo = Math.min(lo, y);
-        hi = Math.max(hi, y);
-      }
-    }
-    if (!Number.isFinite(lo)) {
-      lo = 0;
-      hi = 1;
-    }
-    if (hi - lo < 1e-9) {
-      hi += 0.5;
-      lo -= 0.5;
-    }
-    const X = (t: number) => pad.l + ((t - t0) / this.windowS) * (W - pad.l - pad.r);
-    const Y = (y: number) => H - pad.b - ((y - lo) / (hi - lo)) * (H - pad.t - pad.b);
-    c.strokeStyle = cssVar("--canvas-grid", "#ccc");
-    c.lineWidth = 1;
-    c.strokeRect(pad.l, pad.t, W - pad.l - pad.r, H - pad.t - pad.b);
-    c.fillStyle = cssVar("--canvas-fg", "#333");
-    c.font = "11px sans-serif";
-    c.fillText(hi.toPrecision(4), 2, pad.t + 10);
-    c.fillText(lo.toPrecision(4), 2, H - pad.b);
-    c.fillText(`−${this.windowS} s`, pad.l, H - 4);
-    c.fillText("now", W - pad.r - 22, H - 4);
-    let i = 0;
-    this.legend.replaceChildren();
-    for (const s of this.series.values()) {
-      const color = COLORS[i++ % COLORS.length] ?? "#000";
-      c.strokeStyle = color;
-      c.lineWidth = 1.5;
-      c.beginPath();
-      let started = false;
-      for (const [t, y] of s.points) {
-        if (t < t0) continue;
-        if (started) c.lineTo(X(t), Y(y));
-        else c.moveTo(X(t), Y(y));
-        started = true;
-      }
-      c.stroke();
-      const last = s.points[s.points.length - 1];
-      this.legend.append(h("span", { style: `color:${color}` }, `■ ${s.name} = ${last ? last[1].toPrecision(5) : "—"}  `));
-    }
+  /** Bounded memory: at most MAX_ROWS points per line, none older than MAX_AGE_S. */
+  private trim(now: number): void {
+    // Dropped in batches (64 samples at least): splicing every sample would copy the whole buffer
+    // at the sample rate.
+    let drop = this.times.length > MAX_ROWS ? this.times.length - MAX_ROWS + 64 : 0;
+    while (drop < this.times.length && (this.times[drop] ?? now) < now - MAX_AGE_S) drop++;
+    if (drop < 64) return;
+    this.times.splice(0, drop);
+    for (const c of this.columns.values()) c.splice(0, drop);
   }
+
+  private last(): number {
+    return this.times[this.times.length - 1] ?? Date.now() / 1000;
+  }
+
+  /** The x range to show. */
+  private view(): { min: number; max: number } {
+    if (this.mode === "zoomed") return this.zoom;
+    const end = this.mode === "paused" ? this.frozenEnd : this.last();
+    return { min: end - this.windowS, max: end };
+  }
+
+  private setMode(mode: Mode): void {
+    this.mode = mode;
+    this.chartBox.dataset["state"] = mode;
+    setText(this.pauseButton, mode === "live" ? "Pause" : "Resume");
+  }
+
+  pause(): void {
+    this.frozenEnd = this.last();
+    this.setMode("paused");
+    this.redraw();
+  }
+
+  goLive(): void {
+    this.setMode("live");
+    this.redraw();
+  }
+
+  private zoomTo(min: number, max: number): void {
+    if (!(max > min)) return;
+    this.zoom = { min, max };
+    this.setMode("zoomed");
+    this.redraw();
+  }
+
+  /** Both ends given (min < max): a fixed y range; otherwise autoscale. */
+  private setY(): void {
+    const lo = this.yMin.value.trim() === "" ? NaN : Number(this.yMin.value);
+    const hi = this.yMax.value.trim() === "" ? NaN : Number(this.yMax.value);
+    const fixed: [number, number] | null = Number.isFinite(lo) && Number.isFinite(hi) && lo < hi ? [lo, hi] : null;
+    const bad = (this.yMin.value.trim() !== "" || this.yMax.value.trim() !== "") && fixed === null;
+    this.yMin.classList.toggle("refused", bad);
+    this.yMax.classList.toggle("refused", bad);
+    this.chartBox.dataset["yFixed"] = fixed ? JSON.stringify(fixed) : "";
+    if (JSON.stringify(fixed) === JSON.stringify(this.yFixed)) return;
+    this.yFixed = fixed;
+    this.rebuild();
+  }
+
+  private resize(): void {
+    const w = Math.floor(this.chartBox.clientWidth);
+    if (w <= 0) return;
+    if (!this.chart) this.rebuild();
+    else if (this.chart.width !== w) this.chart.setSize({ width: w, height: HEIGHT });
+  }
+
+  /** A new chart (its lines changed, or the colour scheme). */
+  private rebuild(): void {
+    this.chart?.destroy();
+    this.chart = null;
+    const width = Math.floor(this.chartBox.clientWidth);
+    if (width <= 0) return;
+    const fg = cssVar("--canvas-fg", "#333");
+    const grid = cssVar("--canvas-grid", "#ccc");
+    const axis = (): uPlot.Axis => ({ stroke: fg, grid: { stroke: grid, width: 1 }, ticks: { stroke: grid, width: 1 } });
+    const opts: uPlot.Options = {
+      width,
+      height: HEIGHT,
+      scales: { x: { time: true }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
+      axes: [axis(), { ...axis(), size: 60 }],
+      series: [{ label: "t" }, ...this.names.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length] ?? "#000", width: 1.5 }))],
+      cursor: {
+        drag: { x: true, y: false, setScale: false },
+        // Double-click: back to the live window (uPlot's own would show all the buffer).
+        bind: { dblclick: () => () => (this.goLive(), null) },
+      },
+      hooks: {
+        setSelect: [
+          (u) => {
+            if (u.select.width < 3) return;
+            const min = u.posToVal(u.select.left, "x");
+            const max = u.posToVal(u.select.left + u.select.width, "x");
+            u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
+            this.zoomTo(min, max);
+          },
+        ],
+        setScale: [
+          (u, key) => {
+            // One attribute per axis, so that a reader never sees the ends of two different views.
+            if (key === "x" || key === "y") this.chartBox.dataset[`${key}Range`] = JSON.stringify([u.scales[key]?.min ?? null, u.scales[key]?.max ?? null]);
+          },
+        ],
+      },
+    };
+    this.chart = new uPlot(opts, [[]], this.chartBox);
+    this.redraw();
+  }
+
+  /** Draws the view: the buffered points inside it (copied: the buffer keeps growing). */
+  private redraw(): void {
+    const u = this.chart;
+    if (!u) return;
+    const { min, max } = this.view();
+    const i0 = lowerBound(this.times, min);
+    const i1 = lowerBound(this.times, max + 1e-9);
+    const data: uPlot.AlignedData = [this.times.slice(i0, i1), ...this.names.map((n) => (this.columns.get(n) ?? []).slice(i0, i1))];
+    u.batch(() => {
+      u.setData(data, false);
+      u.setScale("x", { min, max });
+    });
+    // Not hovered, the legend shows each line's newest drawn value.
+    const n = data[0].length;
+    if ((u.cursor.left ?? -1) < 0 && n > 0) u.setLegend({ idx: n - 1 });
+    this.draws++;
+    this.chartBox.dataset["draws"] = String(this.draws);
+    // Per line, how many of the drawn points have a value (what the tests read).
+    const drawn: Record<string, number> = {};
+    this.names.forEach((n, i) => (drawn[n] = (data[i + 1] ?? []).filter((x) => x !== null && x !== undefined).length));
+    this.chartBox.dataset["drawn"] = JSON.stringify(drawn);
+  }
+
+  /** The buffer as CSV: `t_s` (wall clock, Unix seconds) and a column per line, a row per sample. */
+  csv(): string {
+    const quote = (s: string) => (/[",\n]/.test(s) ? `"${s.replace(/"/g, '""')}"` : s);
+    const lines = [["t_s", ...this.names].map(quote).join(",")];
+    this.times.forEach((t, i) => {
+      lines.push([String(t), ...this.names.map((n) => {
+        const v = this.columns.get(n)?.[i];
+        return v === null || v === undefined ? "" : String(v);
+      })].join(","));
+    });
+    return lines.join("\n") + "\n";
+  }
+
+  private download(): void {
+    const url = URL.createObjectURL(new Blob([this.csv()], { type: "text/csv" }));
+    const stamp = new Date().toISOString().replace(/[:.]/g, "-");
+    const name = `plot-${this.sources.map((s) => s.expr).join("+").replace(/[^A-Za-z0-9_.+-]+/g, "_")}-${stamp}.csv`;
+    const a = h("a", { href: url, download: name });
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 60_000);
+  }
+
+  destroy(): void {
+    this.resizer.disconnect();
+    this.scheme.removeEventListener("change", this.onScheme);
+    this.chart?.destroy();
+    this.chart = null;
+  }
+}
+
+/** The first index whose time is at least `t` (times ascending). */
+function lowerBound(times: number[], t: number): number {
+  let lo = 0;
+  let hi = times.length;
+  while (lo < hi) {
+    const mid = (lo + hi) >> 1;
+    if ((times[mid] ?? Infinity) < t) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
 }
 
 export class Plots {
@@ -162,7 +376,15 @@ export class Plots {
     });
     this.error = h("div", { class: "error", "data-testid": "plot-error" });
     this.list = h("div", { class: "plots" });
-    this.el = h("section", { class: "panel live", id: "plots" }, h("h2", {}, "Plots", stale), h("div", { class: "row" }, this.input, this.options, add), this.error, this.list);
+    this.el = h(
+      "section",
+      { class: "panel live", id: "plots" },
+      h("h2", {}, "Plots", stale),
+      h("div", { class: "row" }, this.input, this.options, add),
+      h("p", { class: "dim plot-help" }, "drag across a plot: zoom; double-click or Live: back to live"),
+      this.error,
+      this.list,
+    );
   }
 
   setSignals(names: string[]): void {
@@ -182,14 +404,20 @@ export class Plots {
     }
   }
 
-  async add(expr: string): Promise<void> {
-    if (expr === "") return;
-    if (!/^[A-Za-z_][A-Za-z0-9_.]*(\[\d+\]|\.[A-Za-z_][A-Za-z0-9_]*)*$/.test(expr)) {
+  private source(expr: string): Source | null {
+    if (!PATH_RE.test(expr)) {
       setText(this.error, `"${expr}" is not a signal path (like odom.x or sonar.range[3])`);
-      return;
+      return null;
     }
     const base = this.baseOf(expr);
-    const plot = new Plot(expr, base, (p) => void this.remove(p));
+    return { expr, base, path: expr.slice(base.length) };
+  }
+
+  async add(expr: string): Promise<void> {
+    if (expr === "") return;
+    const src = this.source(expr);
+    if (!src) return;
+    const plot = new Plot(src, (p) => void this.remove(p), (p, e) => this.addTo(p, e));
     this.plots.push(plot);
     try {
       await this.watch();
@@ -201,6 +429,23 @@ export class Plots {
       // Other adds may have been pushed meanwhile: remove this one, not the last.
       const i = this.plots.indexOf(plot);
       if (i >= 0) this.plots.splice(i, 1);
+      plot.destroy();
+      await this.watch().catch(() => undefined);
+      setText(this.error, errorText(e));
+    }
+  }
+
+  /** Another signal on an existing plot (refused like a new plot's when the server does not know it). */
+  private async addTo(plot: Plot, expr: string): Promise<void> {
+    if (plot.has(expr)) return;
+    const src = this.source(expr);
+    if (!src) return;
+    plot.addSource(src);
+    try {
+      await this.watch();
+      setText(this.error, "");
+    } catch (e) {
+      plot.removeSource(expr);
       await this.watch().catch(() => undefined);
       setText(this.error, errorText(e));
     }
@@ -210,12 +455,13 @@ export class Plots {
     const i = this.plots.indexOf(p);
     if (i >= 0) this.plots.splice(i, 1);
     p.el.remove();
+    p.destroy();
     await this.watch().catch(() => undefined);
   }
 
   /** Tells the server which signals this tab needs (after a reconnection too). */
   async watch(): Promise<void> {
-    const signals = [...new Set(this.plots.map((p) => p.base))];
+    const signals = [...new Set(this.plots.flatMap((p) => p.sources.map((s) => s.base)))];
     await this.conn.request("watch", { signals });
   }
 
@@ -226,9 +472,6 @@ export class Plots {
 
   update(wall: number, signals: Json | undefined): void {
     if (!isObject(signals)) return;
-    for (const p of this.plots) {
-      const r = signals[p.base];
-      if (isObject(r) && "value" in r) p.add(wall, (r as JsonObject)["value"]);
-    }
+    for (const p of this.plots) p.add(wall, signals);
   }
 }

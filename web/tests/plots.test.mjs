@@ -1,0 +1,235 @@
+// The plots panel (uPlot) in a real browser against the testbed: several signals in one plot,
+// pause and resume, zoom and back to live, CSV export checked against the robot's own value (the
+// `situate` CLI over the link).
+
+import assert from "node:assert/strict";
+import { readFile } from "node:fs/promises";
+import { after, afterEach, before, describe, test } from "node:test";
+import { cli, cliDo, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+
+/** Numbers equal within 1e-9 (relative). */
+const close = (a, b) => Math.abs(a - b) <= 1e-9 * Math.max(1, Math.abs(a), Math.abs(b));
+/** Durations computed from wall-clock seconds (~1.8e9, so about 2e-7 s apart at most) equal within 1 ms. */
+const sameSpan = (a, b) => Math.abs(a - b) < 1e-3;
+
+describe("plots", () => {
+  let tb;
+  let browser;
+  let page;
+
+  before(async () => {
+    try {
+      tb = await startTestbed();
+      browser = await startBrowser();
+      page = await browser.context.newPage();
+      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
+      await page.goto(tb.url);
+      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
+      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
+    } catch (e) {
+      await stopBrowser(browser).catch(() => undefined);
+      await stopTestbed(tb).catch(() => undefined);
+      throw e;
+    }
+  });
+
+  after(async () => {
+    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
+    await stopTestbed(tb);
+  });
+
+  afterEach(async (t) => {
+    if (page) await page.screenshot({ path: screenshotPath(`plots-${t.name.replace(/[^a-z0-9]+/gi, "-")}`), fullPage: true }).catch(() => undefined);
+  });
+
+  // The plot of the tests: gui.circle's pose, which moves all the time.
+  const plot = () => page.getByTestId("plot").first();
+  const chart = () => page.getByTestId("plot-canvas").first();
+  const attr = async (name) => (await chart().getAttribute(name)) ?? "";
+  const points = async () => Number(await attr("data-points"));
+  /** The drawn x range [min, max] (wall s). */
+  const xRange = async () => JSON.parse((await attr("data-x-range")) || "[0, 0]");
+  const drawn = async () => JSON.parse((await attr("data-drawn")) || "{}");
+  const windowS = async () => Number(await plot().getByTestId("plot-window").inputValue());
+
+  test("several signals share one plot, each drawn as a line", async () => {
+    await page.getByTestId("plot-signal").fill("truth.pose.x");
+    await page.getByTestId("plot-add").click();
+    await until(async () => (await page.getByTestId("plot").count()) === 1, "the plot");
+    await plot().getByTestId("plot-add-signal").fill("truth.pose.y");
+    await plot().getByTestId("plot-add-signal-button").click();
+    await until(async () => {
+      const d = await drawn();
+      return d["truth.pose.x"] >= 5 && d["truth.pose.y"] >= 5;
+    }, "both lines drawn with points");
+    assert.equal(await page.getByTestId("plot").count(), 1, "one plot holds both");
+    assert.deepEqual(Object.keys(await drawn()), ["truth.pose.x", "truth.pose.y"]);
+    assert.equal(await plot().getByTestId("plot-title").textContent(), "truth.pose.x, truth.pose.y");
+    const legend = (await plot().locator(".u-legend").textContent()) ?? "";
+    assert.ok(legend.includes("truth.pose.x") && legend.includes("truth.pose.y"), `both in the legend: ${legend}`);
+    assert.equal(await plot().getByTestId("plot-add-signal").inputValue(), "", "the field is emptied once added");
+
+    // A signal the manager does not know is refused with its message, and the plot keeps its lines.
+    await plot().getByTestId("plot-add-signal").fill("no.such.signal");
+    await plot().getByTestId("plot-add-signal-button").click();
+    await until(async () => ((await page.getByTestId("plot-error").textContent()) ?? "").includes("unknown signal"), "unknown signal refused");
+    assert.equal(await plot().getByTestId("plot-title").textContent(), "truth.pose.x, truth.pose.y");
+    const before = (await drawn())["truth.pose.x"];
+    await until(async () => (await drawn())["truth.pose.x"] > before, "still drawing");
+    assert.deepEqual(Object.keys(await drawn()), ["truth.pose.x", "truth.pose.y"]);
+  });
+
+  test("pause freezes the drawn time range while points keep arriving; resume jumps to live", async () => {
+    await until(async () => (await attr("data-state")) === "live" && (await xRange())[1] > 0, "a live plot");
+    await plot().getByTestId("plot-pause").click();
+    await until(async () => (await attr("data-state")) === "paused", "paused");
+    const frozen = await xRange();
+    const p0 = await points();
+    await until(async () => (await points()) >= p0 + 20, "points keep arriving while paused");
+    assert.deepEqual(await xRange(), frozen, "the drawn range did not move while paused");
+    assert.equal(await plot().getByTestId("plot-pause").textContent(), "Resume");
+
+    await plot().getByTestId("plot-pause").click();
+    await until(async () => (await attr("data-state")) === "live", "live again");
+    await until(async () => (await xRange())[1] > frozen[1], "the range moved on at once");
+    const [lo, hi] = await xRange();
+    assert.ok(sameSpan(hi - lo, await windowS()), `the live window is ${await windowS()} s: ${hi - lo}`);
+    const later = (await xRange())[1];
+    await until(async () => (await xRange())[1] > later, "and keeps moving");
+  });
+
+  test("dragging across the plot zooms in; double-click and Live return to the live window", async () => {
+    const over = plot().locator(".u-over");
+    const zoomIn = async () => {
+      const box = await over.boundingBox();
+      assert.ok(box && box.width > 100, `the plot area is laid out: ${JSON.stringify(box)}`);
+      const y = box.y + box.height / 2;
+      await page.mouse.move(box.x + box.width * 0.3, y);
+      await page.mouse.down();
+      await page.mouse.move(box.x + box.width * 0.5, y, { steps: 4 });
+      await page.mouse.move(box.x + box.width * 0.7, y, { steps: 4 });
+      await page.mouse.up();
+      await until(async () => (await attr("data-state")) === "zoomed", "zoomed");
+      const [lo, hi] = await xRange();
+      const w = await windowS();
+      assert.ok(hi - lo > 0.2 * w && hi - lo < 0.6 * w, `about 40 % of the ${w} s window: ${hi - lo} s`);
+      return [lo, hi];
+    };
+    const zoomed = await zoomIn();
+    const p0 = await points();
+    await until(async () => (await points()) >= p0 + 10, "points keep arriving while zoomed");
+    assert.deepEqual(await xRange(), zoomed, "a zoomed view holds still");
+
+    await over.dblclick();
+    await until(async () => (await attr("data-state")) === "live", "double-click: live");
+    await until(async () => (await xRange())[1] > zoomed[1], "the live range");
+    let [lo, hi] = await xRange();
+    assert.ok(sameSpan(hi - lo, await windowS()), `the whole window again: ${hi - lo}`);
+
+    const again = await zoomIn();
+    await plot().getByTestId("plot-reset").click();
+    await until(async () => (await attr("data-state")) === "live", "Live: live");
+    await until(async () => (await xRange())[1] > again[1], "the live range");
+    [lo, hi] = await xRange();
+    assert.ok(sameSpan(hi - lo, await windowS()), `the whole window again: ${hi - lo}`);
+  });
+
+  test("the y axis fits the lines unless fixed: a fixed range holds, emptied it fits again", async () => {
+    const yRange = async () => JSON.parse((await attr("data-y-range")) || "[0, 0]");
+    // gui.circle's pose stays within its 2 m radius: autoscale keeps the axis near that.
+    const fitted = async () => {
+      const [lo, hi] = await yRange();
+      return lo >= -3 && hi <= 3 && hi - lo > 0.1;
+    };
+    await until(fitted, "an autoscaled y axis");
+    const setEnds = async (min, max) => {
+      await plot().getByTestId("plot-y-min").fill(min);
+      await plot().getByTestId("plot-y-min").press("Tab");
+      await plot().getByTestId("plot-y-max").fill(max);
+      await plot().getByTestId("plot-y-max").press("Tab");
+    };
+    await setEnds("-10", "10");
+    await until(async () => JSON.stringify(await yRange()) === "[-10,10]", "y fixed at [-10, 10]");
+    const p0 = await points();
+    await until(async () => (await points()) >= p0 + 10 && JSON.stringify(await drawn()) !== "{}", "points while fixed");
+    assert.deepEqual(await yRange(), [-10, 10], "the fixed range holds while points arrive");
+
+    // Ends the wrong way round are refused (and the axis fits the lines).
+    await setEnds("5", "1");
+    await until(async () => ((await plot().getByTestId("plot-y-max").getAttribute("class")) ?? "").includes("refused"), "min >= max refused");
+    await until(fitted, "autoscale while the ends are refused");
+
+    await setEnds("", "");
+    await until(async () => !((await plot().getByTestId("plot-y-max").getAttribute("class")) ?? "").includes("refused"), "no longer refused");
+    await until(fitted, "autoscale again");
+  });
+
+  test("CSV export: a header, then a row per sample whose values are the signal's", async () => {
+    // Stopped, the pose holds still: the last rows must be the robot's own value.
+    await cliDo(tb.linkPort, "cycle", "stop");
+    try {
+      await until(async () => (await cli(tb.linkPort, "stats")).running === false, "the manager stopped over the link");
+      const reading = await cli(tb.linkPort, "query", "truth.pose");
+      const p0 = await points();
+      // Three samples (two points each) taken after the stop.
+      await until(async () => (await points()) >= p0 + 6, "samples of the stopped robot");
+      const [download] = await Promise.all([page.waitForEvent("download", { timeout: 60_000 }), plot().getByTestId("plot-csv").click()]);
+      assert.match(download.suggestedFilename(), /^plot-truth\.pose\.x\+truth\.pose\.y-.*\.csv$/);
+      const text = await readFile(await download.path(), "utf8");
+      const [header, ...rows] = text.trimEnd().split("\n");
+      assert.equal(header, "t_s,truth.pose.x,truth.pose.y");
+      assert.ok(rows.length >= 20, `rows for every sample so far: ${rows.length}`);
+      // An empty cell: no value at that time (y was added to the plot after x).
+      const parsed = rows.map((r) => r.split(",").map((c) => (c === "" ? null : Number(c))));
+      for (const [i, r] of parsed.entries()) {
+        assert.equal(r.length, 3, `row ${i}: ${rows[i]}`);
+        assert.ok(Number.isFinite(r[0]) && Number.isFinite(r[1]), `row ${i} has a time and an x: ${rows[i]}`);
+        assert.ok(r[2] === null ? i === 0 || parsed[i - 1][2] === null : Number.isFinite(r[2]), `row ${i}: y is a number, or missing only before its first value: ${rows[i]}`);
+        if (i > 0) assert.ok(r[0] > parsed[i - 1][0], `times increase at row ${i}`);
+      }
+      assert.ok(parsed.filter((r) => r[2] !== null).length >= 10, "y has values");
+      const last = parsed[parsed.length - 1];
+      assert.ok(close(last[1], reading.value.x) && close(last[2], reading.value.y), `the last row ${rows[rows.length - 1]} is the pose over the link ${JSON.stringify(reading.value)}`);
+      // The pose moved before the stop: the rows are samples, not one value repeated.
+      assert.ok(new Set(parsed.map((r) => r[1])).size > 3, "x varies over the rows");
+      // t_s is the wall clock (Unix seconds) of each sample, as on the plot's x axis.
+      assert.ok(Math.abs(last[0] - Date.now() / 1000) < 120, `t_s is wall-clock time: ${last[0]}`);
+    } finally {
+      await cliDo(tb.linkPort, "cycle", "run");
+    }
+    await until(async () => (await cli(tb.linkPort, "stats")).running === true, "running again over the link");
+  });
+
+  test("at 390 px wide a plot with two lines is usable and the page does not scroll sideways", async () => {
+    const narrow = await browser.context.newPage();
+    try {
+      await narrow.setViewportSize({ width: 390, height: 844 });
+      await narrow.goto(tb.url);
+      await narrow.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
+      await narrow.getByTestId("plot-signal").fill("truth.pose.x");
+      await narrow.getByTestId("plot-add").click();
+      await narrow.getByTestId("plot-add-signal").fill("truth.pose.y");
+      await narrow.getByTestId("plot-add-signal-button").click();
+      const chart = narrow.getByTestId("plot-canvas");
+      await until(async () => {
+        const d = JSON.parse((await chart.getAttribute("data-drawn")) || "{}");
+        return d["truth.pose.x"] >= 3 && d["truth.pose.y"] >= 3;
+      }, "both lines drawn");
+      const widths = await narrow.evaluate(() => ({
+        page: document.scrollingElement.scrollWidth,
+        chart: document.querySelector("[data-testid=plot-canvas] canvas").getBoundingClientRect().right,
+        panel: document.querySelector("#plots").getBoundingClientRect().right,
+      }));
+      assert.ok(widths.page <= 390, `no horizontal page scroll at 390 px: the page is ${widths.page} px wide`);
+      assert.ok(widths.chart <= widths.panel, `the chart (to ${widths.chart} px) inside its panel (to ${widths.panel} px)`);
+      await narrow.locator("#plots").screenshot({ path: screenshotPath("plots-narrow-390") });
+    } finally {
+      await narrow.close();
+    }
+  });
+
+  test("removing the plot removes it", async () => {
+    await plot().getByTestId("plot-remove").click();
+    await until(async () => (await page.getByTestId("plot").count()) === 0, "no plot left");
+  });
+});
