@@ -15,3 +15,4 @@ cargo build --release -p situate_cli --bin situate
 export TESTBED_BIN="$TARGET/release/examples/testbed"
 export SITUATE_BIN="$TARGET/release/situate"
 node bench/gui/bench.mjs --json "$TARGET/bench-results/gui.json" "$@"
+node bench/gui/seek.mjs

@@ -165,6 +165,53 @@ def test_two_recordings_of_one_robot_and_seed_are_the_same_every_cycle(tmp_path:
     assert (code, result["identical"], result["matched"]) == (0, True, 400), result
 
 
+@needs_bin
+def test_a_recording_keeps_the_mcap_format_rules_foxglove_reads_by(tmp_path: Path) -> None:
+    # What `mcap doctor` checks, as far as the reference reader shows it (the `mcap` CLI could
+    # not be installed here): CRCs, a summary whose statistics and chunk indexes agree with the
+    # messages, every channel's schema present, and JSON messages under JSON Schema, the
+    # encodings Foxglove reads without a plug-in.
+    assert BIN is not None
+    path = tmp_path / "toy.mcap"
+    cmd = [str(BIN), "run", "examples/toybot.yaml", "--clock", "simulated", "--cycles", "300"]
+    cmd += ["--no-link", "--record", str(path)]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    with path.open("rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        assert reader.get_header().profile == ""
+        summary = reader.get_summary()
+        assert summary is not None
+        stats = summary.statistics
+        assert stats is not None
+        counts: dict[int, int] = defaultdict(int)
+        times: list[int] = []
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            assert schema is not None
+            assert schema.id == channel.schema_id
+            counts[channel.id] += 1
+            times.append(message.log_time)
+            json.loads(message.data)
+        assert dict(counts) == dict(stats.channel_message_counts)
+        assert sum(counts.values()) == stats.message_count
+        assert (stats.message_start_time, stats.message_end_time) == (min(times), max(times))
+        assert stats.channel_count == len(summary.channels)
+        assert stats.schema_count == len(summary.schemas)
+        assert summary.chunk_indexes, "chunked and indexed"
+        assert stats.chunk_count == len(summary.chunk_indexes)
+        for chunk in summary.chunk_indexes:
+            assert chunk.compression in ("zstd", "")
+            assert chunk.message_start_time <= chunk.message_end_time
+        for channel in summary.channels.values():
+            assert channel.topic, channel
+            assert channel.message_encoding == "json"
+            assert channel.schema_id in summary.schemas
+            schema = summary.schemas[channel.schema_id]
+            assert schema.encoding == "jsonschema"
+            assert json.loads(schema.data)["type"] == "object"
+        assert [m.name for m in reader.iter_metadata()] == ["situate"]
+
+
 def test_the_reader_is_the_reference_one() -> None:
     # The `mcap` package comes from scripts/python.sh; say so if it is missing.
     import mcap
