@@ -20,7 +20,7 @@ use situate_bench::measure::{interleaved, paired, ratio, Settings, Summary};
 use situate_bench::report::{results_path, CpuTimes, Machine, Report, Target};
 use situate_bench::skills::{self, Flavor};
 
-const BENCHES: &[&str] = &["chain", "spawned", "inactive", "parallel", "request", "monitor", "parts"];
+const BENCHES: &[&str] = &["chain", "spawned", "inactive", "parallel", "request", "monitor", "parts", "record"];
 
 type Bench = fn(&Settings, &mut Report);
 
@@ -91,7 +91,7 @@ fn main() {
     );
     let started = Instant::now();
     let mut report = Report::default();
-    let benches: [(&str, Bench); 7] = [
+    let benches: [(&str, Bench); 8] = [
         ("chain", chain),
         ("spawned", spawned),
         ("inactive", inactive),
@@ -99,6 +99,7 @@ fn main() {
         ("request", request),
         ("monitor", monitors),
         ("parts", parts),
+        ("record", record),
     ];
     let all = CpuTimes::now();
     for (name, bench) in benches {
@@ -625,4 +626,92 @@ fn parts(settings: &Settings, report: &mut Report) {
     report.figure(bench, "derived Add::step via dyn Skill (glue + body)", "ns", &out[4]);
     report.figure(bench, "derive glue = step − direct call", "ns", &paired(&out[0], &out[4], |a, b| b - a));
     report.print_table(bench, "6. pieces of one skill run, measured alone (no target; explains benchmark 1)");
+}
+
+// ----- record: the cost of recording -------------------------------------------
+
+/// The delivery robot (demo/robot.yaml on the default building, its
+/// corridor skills switched on), cycled back to back: alone, and with a
+/// recording to MCAP (`situate_record`, its writer on a thread of its own
+/// as in `situate run --record`). Issue 14's target: recorded ≤ 1.10×.
+fn record(settings: &Settings, report: &mut Report) {
+    use std::sync::Mutex;
+    let bench = "record";
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let make = || -> Manager {
+        let path = repo.join("demo/robot.yaml");
+        let file = situate::manager::RobotFile::load(&path).unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
+        let spec = situate::manager::RobotSpec::from_file(&file);
+        let map = situate_sim::load_map(repo.join("maps/default.yaml")).unwrap_or_else(|e| panic!("{e}"));
+        let world = Arc::new(Mutex::new(situate_sim::World::new(map, 1)));
+        let mut registry = situate_toys::registry();
+        situate_skills::register(&mut registry);
+        situate_sim::register(&mut registry, world);
+        let mut m = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
+        let skills = ["follow_hallway", "avoid", "runaway", "detect_door", "watch_openings", "detect_intersection"];
+        m.request(Request::Activate { skills: skills.iter().map(|s| s.to_string()).collect(), with_providers: true })
+            .unwrap_or_else(|e| panic!("{e}"));
+        m
+    };
+    let mut plain = make();
+    let mut recorded = make();
+    let mut tapped = make();
+    let path = results_path("record-bench.mcap");
+    let recorder = situate_record::Recorder::start(&path, &mut recorded).unwrap_or_else(|e| panic!("{e}"));
+    // The cycle's side alone: a tap whose reader only gives the frames back,
+    // polling as the recorder's writer does.
+    let tap = tapped.tap(situate_record::QUEUE_FRAMES);
+    let reader = std::thread::spawn(move || loop {
+        loop {
+            match tap.frames.try_recv() {
+                Ok(frame) => tap.give_back(frame),
+                Err(crossbeam_channel::TryRecvError::Empty) => break,
+                Err(crossbeam_channel::TryRecvError::Disconnected) => return,
+            }
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    });
+    let out = interleaved(settings, 3, &mut |s, iters| {
+        let m = match s {
+            0 => &mut plain,
+            1 => &mut recorded,
+            _ => &mut tapped,
+        };
+        for _ in 0..iters {
+            m.cycle();
+        }
+    });
+    drop(tapped);
+    let _ = reader.join();
+    drop(recorded);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    report.figure(bench, "delivery robot cycle, not recorded", "ns", &out[0]);
+    report.figure(bench, "delivery robot cycle, recorded", "ns", &out[1]);
+    report.figure(bench, "delivery robot cycle, tapped (frames only given back)", "ns", &out[2]);
+    let r = ratio(&out[0], &out[1]);
+    report.figure(bench, "recorded / not recorded", "×", &r);
+    report.figure(bench, "tapped / not recorded (the cycle's own share)", "×", &ratio(&out[0], &out[2]));
+    report.print_table(bench, "8. recording to MCAP vs not (the delivery robot, cycles back to back)");
+    report.note(format!(
+        "record: {} cycles written, {} messages, {} dropped, {:.1} MB",
+        summary.frames,
+        summary.messages,
+        summary.dropped,
+        summary.bytes as f64 / 1e6
+    ));
+    report.target(Target {
+        bench: bench.into(),
+        name: "cycle time with recording on vs off (delivery robot)".into(),
+        unit: "×",
+        value: r.median,
+        target: "≤ 1.10×".into(),
+        met: r.median <= 1.10,
+        note: format!(
+            "{} of {} cycles dropped (the writer fell 4,096 behind)",
+            summary.dropped,
+            summary.frames + summary.dropped
+        ),
+        inconclusive: None,
+    });
 }

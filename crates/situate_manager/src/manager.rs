@@ -77,19 +77,35 @@ pub struct Frame {
 struct Tap {
     tx: crossbeam_channel::Sender<Frame>,
     dropped: Arc<std::sync::atomic::AtomicU64>,
+    /// Frames the reader is done with ([`TapReceiver::give_back`]).
+    returns: Receiver<Frame>,
 }
+
+/// Frames a reader may have given back and not yet taken by the cycle.
+const RETURNS: usize = 256;
 
 /// The reader's end of a tap ([`Manager::tap`]): the frames, and how many
 /// were dropped because it was full. It ends when the manager does.
 pub struct TapReceiver {
     pub frames: Receiver<Frame>,
     dropped: Arc<std::sync::atomic::AtomicU64>,
+    returns: crossbeam_channel::Sender<Frame>,
 }
 
 impl TapReceiver {
     /// Frames dropped so far because the receiver was full.
     pub fn dropped(&self) -> u64 {
         self.dropped.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Hands a frame the reader is done with back to the cycle (never
+    /// waits: when the cycle has not taken the last ones yet, it is just
+    /// dropped). The cycle then lets go of its values on its own thread, so
+    /// an array's buffer is reused by the skill that writes it next cycle,
+    /// and the frame's lists are reused for the next frame: a reader that
+    /// gives every frame back makes a tapped cycle allocate nothing more.
+    pub fn give_back(&self, frame: Frame) {
+        let _ = self.returns.try_send(frame);
     }
 }
 
@@ -233,6 +249,8 @@ pub struct Manager {
     taps: Vec<Tap>,
     /// This cycle's prints, for the tap.
     tap_prints: Vec<(usize, String)>,
+    /// A frame given back by a tap's reader, its lists reused for the next.
+    spare_frame: Option<Frame>,
     /// The lockstep dskills whose device exchange runs this cycle.
     exchanging: Vec<usize>,
     /// Record outputs decomposed into leaves before a commit (reused).
@@ -352,6 +370,7 @@ impl Manager {
             exchanging: Vec::new(),
             taps: Vec::new(),
             tap_prints: Vec::new(),
+            spare_frame: None,
             parts: Vec::new(),
             clocks,
             generation: 0,
@@ -393,9 +412,10 @@ impl Manager {
     /// [`Manager::graph`] (`leaves[i]`).
     pub fn tap(&mut self, capacity: usize) -> TapReceiver {
         let (tx, rx) = crossbeam_channel::bounded(capacity.max(1));
+        let (returns_tx, returns) = crossbeam_channel::bounded(RETURNS);
         let dropped = Arc::new(std::sync::atomic::AtomicU64::new(0));
-        self.taps.push(Tap { tx, dropped: Arc::clone(&dropped) });
-        TapReceiver { frames: rx, dropped }
+        self.taps.push(Tap { tx, dropped: Arc::clone(&dropped), returns });
+        TapReceiver { frames: rx, dropped, returns: returns_tx }
     }
 
     pub fn events(&self) -> Receiver<Event> {

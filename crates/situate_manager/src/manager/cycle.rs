@@ -202,20 +202,26 @@ impl Manager {
     /// tap loses the frame, counted; a closed one is removed).
     #[cold]
     fn send_frame(&mut self) {
+        self.take_back_frames();
         let cycle = self.cycle;
-        let values = self
-            .slots
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.stamp == cycle)
-            .filter_map(|(l, s)| s.value.clone().map(|v| (l, v)))
-            .collect();
-        let winners = self
-            .tallies
-            .iter()
-            .filter(|t| self.slots[t.leaf].stamp == cycle)
-            .map(|t| (t.leaf, self.slots[t.leaf].writer as usize))
-            .collect();
+        let (mut values, mut winners) = match self.spare_frame.take() {
+            Some(f) => (f.values, f.winners),
+            None => (Vec::new(), Vec::new()),
+        };
+        values.reserve(self.slots.len());
+        for (l, s) in self.slots.iter().enumerate() {
+            if s.stamp == cycle {
+                if let Some(v) = &s.value {
+                    values.push((l, v.clone()));
+                }
+            }
+        }
+        winners.extend(
+            self.tallies
+                .iter()
+                .filter(|t| self.slots[t.leaf].stamp == cycle)
+                .map(|t| (t.leaf, self.slots[t.leaf].writer as usize)),
+        );
         let prints = std::mem::take(&mut self.tap_prints);
         let frame = Frame { cycle, time_s: self.time_s, values, prints, winners };
         let send = |tap: &super::Tap, frame: Frame| match tap.tx.try_send(frame) {
@@ -240,6 +246,28 @@ impl Manager {
         }
         for k in gone.into_iter().rev() {
             self.taps.remove(k);
+        }
+    }
+
+    /// Takes back the frames the taps' readers are done with
+    /// ([`TapReceiver::give_back`](super::TapReceiver::give_back)): their
+    /// values are let go of here, on the cycle's thread, where an array's
+    /// buffer can be kept for the skill that writes it next; one frame's
+    /// lists are kept, emptied, for the next frame.
+    fn take_back_frames(&mut self) {
+        for tap in &self.taps {
+            // A few per cycle: the work is bounded whatever the reader does.
+            for _ in 0..4 {
+                let Ok(mut frame) = tap.returns.try_recv() else { break };
+                for (_, value) in frame.values.drain(..) {
+                    recycle(value);
+                }
+                frame.winners.clear();
+                frame.prints.clear();
+                if self.spare_frame.is_none() {
+                    self.spare_frame = Some(frame);
+                }
+            }
         }
     }
 
