@@ -397,34 +397,46 @@ fn forward_events(shared: &Shared, events: &Receiver<situate_manager::Event>, st
     }
 }
 
+/// How often the history takes what the tap has queued (the tap holds
+/// [`history::TAP_QUEUE`] frames: 10 s at 100 Hz).
+const HISTORY_POLL: Duration = Duration::from_millis(20);
+
 /// Drains the manager's tap and events into the history until the server stops. When the manager
 /// ends, the history stays (a finished run can still be looked back on).
 fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &AtomicBool) {
+    use crossbeam_channel::TryRecvError;
     let lock = || history.lock().unwrap_or_else(|p| p.into_inner());
     let (mut frames_open, mut events_open) = (true, true);
-    let (no_frames, no_events) = (crossbeam_channel::never(), crossbeam_channel::never());
+    // Polled, not waited on: a reader blocked on the tap would be woken by
+    // every cycle's send, a system call on the cycle's thread.
     while !stop.load(Ordering::SeqCst) && (frames_open || events_open) {
-        let f = if frames_open { &tap.frames } else { &no_frames };
-        let e = if events_open { &tap.events } else { &no_events };
-        crossbeam_channel::select! {
-            recv(f) -> frame => match frame {
-                Ok(frame) => {
-                    let mut h = lock();
-                    h.push_frame(frame);
-                    // What else is queued goes in under the same lock.
-                    while let Ok(frame) = tap.frames.try_recv() {
-                        h.push_frame(frame);
+        if frames_open {
+            let mut h = lock();
+            loop {
+                match tap.frames.try_recv() {
+                    Ok(frame) => h.push_frame(frame),
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => {
+                        frames_open = false;
+                        break;
                     }
-                    h.set_dropped(tap.dropped());
                 }
-                Err(_) => frames_open = false,
-            },
-            recv(e) -> event => match event {
-                Ok(event) => lock().push_event(&event),
-                Err(_) => events_open = false,
-            },
-            default(Duration::from_millis(100)) => {}
+            }
+            h.set_dropped(tap.dropped());
         }
+        if events_open {
+            loop {
+                match tap.events.try_recv() {
+                    Ok(event) => lock().push_event(&event),
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => {
+                        events_open = false;
+                        break;
+                    }
+                }
+            }
+        }
+        std::thread::sleep(HISTORY_POLL);
     }
     if !stop.load(Ordering::SeqCst) {
         tracing::debug!("the history's sources ended: the GUI's history keeps what it holds");
