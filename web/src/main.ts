@@ -124,7 +124,7 @@ function start(): void {
       } else {
         world.keepTrail(msg["signals"], wall);
       }
-      if (graphAsked) graph.update(skills, msg["winners"]);
+      if (graphAsked && !timeline.isPaused()) graph.update(skills, msg["winners"]);
       plots.update(wall, msg["signals"]);
       document.body.dataset["samples"] = String(Number(document.body.dataset["samples"] ?? "0") + 1);
     },
@@ -155,13 +155,16 @@ function start(): void {
     show: (frame) => {
       const cycle = num(frame["cycle"]);
       const note = `at cycle ${cycle} (paused: not live)`;
-      panels.update(skillsAt(live?.skills ?? [], frame), cycle, frame["activity"], frame["winners"], note);
+      const past = skillsAt(live?.skills ?? [], frame);
+      panels.update(past, cycle, frame["activity"], frame["winners"], note);
       world.showPast(frame["signals"], note);
+      if (graphAsked) graph.update(past, frame["winners"]);
     },
     live: () => {
       if (!live) return;
       panels.update(live.skills, live.cycle, live.activity, live.winners);
       world.update(live.signals, live.wall);
+      if (graphAsked) graph.update(live.skills, live.winners);
     },
   });
   conn.onOpen = () => {

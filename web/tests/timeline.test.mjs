@@ -158,9 +158,13 @@ describe("the timeline", () => {
     await until(async () => (await mode()) === "paused" && (await shown()) === cycle, `paused at the mark's cycle ${cycle}`);
     await until(async () => (await text(page.getByTestId("state-wander"))) === "inactive", "wander inactive at its deactivation's cycle");
     assert.match(await text(page.getByTestId("since-wander")), new RegExp(`since cycle ${cycle}\\b`));
+    // The graph follows the timeline too.
+    const graphWander = page.locator('[data-testid="graph"] g.node.skill[data-node="wander"]');
+    await until(async () => (await graphWander.getAttribute("data-active")) === "false", "wander inactive in the graph at the mark");
     await page.getByTestId("tl-back").click();
     await until(async () => (await shown()) === cycle - 1, "the cycle before");
     await until(async () => (await text(page.getByTestId("state-wander"))) === "active", "wander still active the cycle before");
+    await until(async () => (await graphWander.getAttribute("data-active")) === "true", "wander active in the graph the cycle before");
     // The robot itself was not touched by looking back.
     assert.equal(Object.fromEntries((await cli(tb.linkPort, "skills")).map((s) => [s.name, s])).wander.active, false);
     await cli(tb.linkPort, "activate", "wander");
