@@ -4,9 +4,12 @@
 # python/situate/_data/, where the wheel and the sdist pick them up: `situate demo` finds the demo
 # once installed, `situate cmake-dir` prints _data/cmake (whose ../include holds the headers). The originals stay where they are; the copy is
 # not tracked (.gitignore) and is made again on every build.
+#
+#   scripts/package-data.sh [DEST]     DEST defaults to python/situate/_data
+#                                      (scripts/publish-crates.sh gives crates/situate_cli/data)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-DEST=python/situate/_data
+DEST=${1:-python/situate/_data}
 DIRS=(demo maps examples cmake include)
 rm -rf "$DEST"
 mkdir -p "$DEST"

@@ -1,5 +1,7 @@
-//! Embeds the built web app (`web/dist`) when it exists; otherwise the server
-//! serves a placeholder page. Never fails the build for a missing `web/dist`.
+//! Embeds the built web app: the checkout's `web/dist` when it exists, else the
+//! copy a published crate carries (`web-dist/`, made by
+//! scripts/publish-crates.sh); otherwise the server serves a placeholder
+//! page. Never fails the build for a missing web app.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -19,7 +21,13 @@ fn collect(dir: &Path, root: &Path, out: &mut Vec<(String, PathBuf)>) {
 
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| ".".into()));
-    let dist = manifest.join("../../web/dist");
+    let checkout = manifest.join("../../web/dist");
+    let packaged = manifest.join("web-dist");
+    let dist = if checkout.join("index.html").is_file() || !packaged.join("index.html").is_file() {
+        checkout
+    } else {
+        packaged
+    };
     println!("cargo:rerun-if-changed={}", dist.display());
     println!("cargo:rerun-if-changed={}", dist.join("index.html").display());
     println!("cargo:rerun-if-changed={}", dist.join("assets").display());

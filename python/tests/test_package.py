@@ -154,3 +154,25 @@ def test_the_sbom_names_local_crates_by_relative_paths(tmp_path: Path) -> None:
     assert "/build/here" not in text
     assert "path+file:crates/x#0.1.0" in text
     assert "x-0.1.dist-info/sboms/x.cyclonedx.json,sha256=" in record
+
+
+def test_the_published_crates_carry_the_web_app_demo_and_cmake_package() -> None:
+    # A published crate cannot reach ../../web/dist or ../../demo: the script copies them in
+    # and checks each package's file list (`cargo package --list`, no build).
+    from support import REPO
+
+    if shutil.which("cargo") is None:
+        pytest.skip("cargo is not installed here")
+    result = subprocess.run(
+        ["scripts/publish-crates.sh", "--check"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=600,
+        check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "situate_gui:" in result.stdout
+    assert "web-dist/index.html" in result.stdout
+    assert "data/demo/robot.yaml" in result.stdout
+    assert "data/cmake/situateConfig.cmake" in result.stdout

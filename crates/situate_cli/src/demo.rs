@@ -79,10 +79,15 @@ fn free_port() -> anyhow::Result<u16> {
 
 /// Where the demo's files may be: `demo/` in the current directory (a
 /// checkout), then the host's package data (the wheel ships `demo/`,
-/// `maps/` and `examples/`).
+/// `maps/` and `examples/`), then the data of the published crate this
+/// program was built from (`cargo install situate_cli`).
 fn demo_dirs(ext: &Extensions) -> Vec<PathBuf> {
     let mut dirs = vec![PathBuf::from(".")];
     dirs.extend(ext.data_dir.clone());
+    let packaged = crate::packaged_data();
+    if packaged.join("demo").is_dir() {
+        dirs.push(packaged);
+    }
     dirs
 }
 

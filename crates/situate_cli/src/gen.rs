@@ -42,6 +42,7 @@ pub(crate) fn cmake_dir(ext: &Extensions) -> Option<PathBuf> {
         .iter()
         .map(|d| d.join("cmake"))
         .chain(std::iter::once(checkout))
+        .chain(std::iter::once(crate::packaged_data().join("cmake")))
         .find(|d| d.join("situateConfig.cmake").is_file() && d.join("../include/situate.h").is_file())
         .map(|d| d.canonicalize().unwrap_or(d))
 }

@@ -176,6 +176,12 @@ fn init_logging(global: &Global) {
         .try_init();
 }
 
+/// The data a published `situate_cli` crate carries (`data/`: demo, maps,
+/// examples, the CMake package), where `cargo install` left its sources.
+pub(crate) fn packaged_data() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
+}
+
 fn run(command: Command, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
     match command {
         Command::Check { file, compose } => robot::check(&file, &compose, ext, out)?,
