@@ -45,6 +45,8 @@ pub const MAX_CLIENTS: usize = 8;
 pub const MAX_SUBSCRIPTIONS: usize = 1024;
 /// Messages queued for one client before new ones are dropped.
 pub const QUEUE: usize = 4096;
+/// Bytes queued for one client before new messages are dropped (large values fill it first).
+pub const QUEUE_BYTES: usize = 16 << 20;
 /// How often the history is polled for new cycles.
 pub const POLL: Duration = Duration::from_millis(20);
 /// Parameter requests one client may have waiting for the manager.
@@ -130,6 +132,15 @@ fn advertise(history: &History) -> Json {
     json!({"op": "advertise", "channels": channels})
 }
 
+/// The bytes a message takes in a queue.
+fn size(m: &Message) -> usize {
+    match m {
+        Message::Text(t) => t.as_str().len(),
+        Message::Binary(b) => b.len(),
+        _ => 0,
+    }
+}
+
 /// One connected client, as the poller sees it.
 pub struct Client {
     tx: mpsc::Sender<Message>,
@@ -137,6 +148,8 @@ pub struct Client {
     subs: Mutex<HashMap<u32, u32>>,
     /// Messages dropped because its queue was full.
     dropped: AtomicU64,
+    /// The bytes of the messages queued.
+    queued_bytes: AtomicUsize,
     /// `dropped` when last told to the client, and when.
     reported: Mutex<(u64, Option<Instant>)>,
     param_requests: AtomicUsize,
@@ -149,22 +162,39 @@ impl Client {
             tx,
             subs: Mutex::new(HashMap::new()),
             dropped: AtomicU64::new(0),
+            queued_bytes: AtomicUsize::new(0),
             reported: Mutex::new((0, None)),
             param_requests: AtomicUsize::new(0),
         };
         (Arc::new(client), rx)
     }
 
+    /// Queues a message without waiting, when there is room (in messages and in bytes).
+    fn try_queue(&self, m: Message) -> bool {
+        let n = size(&m);
+        if self.queued_bytes.fetch_add(n, Ordering::SeqCst) + n > QUEUE_BYTES {
+            self.queued_bytes.fetch_sub(n, Ordering::SeqCst);
+            return false;
+        }
+        if self.tx.try_send(m).is_err() {
+            self.queued_bytes.fetch_sub(n, Ordering::SeqCst);
+            return false;
+        }
+        true
+    }
+
     /// Queues a message without waiting: when the queue is full it is dropped and counted.
     fn offer(&self, m: Message) -> bool {
-        match self.tx.try_send(m) {
-            Ok(()) => true,
-            Err(mpsc::error::TrySendError::Full(_)) => {
-                self.dropped.fetch_add(1, Ordering::Relaxed);
-                false
-            }
-            Err(mpsc::error::TrySendError::Closed(_)) => false,
+        let queued = self.try_queue(m);
+        if !queued && !self.tx.is_closed() {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
         }
+        queued
+    }
+
+    /// A queued message is being sent: its bytes leave the queue.
+    fn taken(&self, m: &Message) {
+        self.queued_bytes.fetch_sub(size(m), Ordering::SeqCst);
     }
 
     fn offer_json(&self, j: &Json) -> bool {
@@ -185,7 +215,7 @@ impl Client {
         }
         let m = format!("{} messages dropped in all: this client reads too slowly for the robot", dropped);
         // Not counted when it finds no room either: it is tried again at the next poll.
-        if self.tx.try_send(Message::Text(status(WARNING, &m).to_string().into())).is_ok() {
+        if self.try_queue(Message::Text(status(WARNING, &m).to_string().into())) {
             *r = (dropped, Some(Instant::now()));
         }
     }
@@ -280,21 +310,42 @@ pub struct Cursor {
     pub marks_at: usize,
 }
 
+/// A message taken from the history, encoded once the history's lock is released (values are
+/// shared, so taking them is cheap).
+enum Pending {
+    Value { channel: u32, cycle: u64, time_s: f64, value: Value },
+    Mark { channel: u32, cycle: u64, time_s: f64, kind: &'static str, text: String },
+}
+
+impl Pending {
+    /// The channel, the timestamp and the JSON payload.
+    fn encode(self) -> (u32, u64, Bytes) {
+        let (channel, time_s, body) = match self {
+            Pending::Value { channel, cycle, time_s, value } => {
+                (channel, time_s, json!({"cycle": cycle, "value": wire::value_to_json(&value)}))
+            }
+            Pending::Mark { channel, cycle, time_s, kind, text } => {
+                (channel, time_s, json!({"cycle": cycle, "value": {"kind": kind, "text": text}}))
+            }
+        };
+        (channel, nanos(time_s), Bytes::from(body.to_string()))
+    }
+}
+
 /// Takes from the history what is new since `cursor` on the channels wanted, and moves the
 /// cursor past it (past everything held, wanted or not).
-fn collect(history: &History, cursor: &mut Cursor, wanted: &[u32]) -> Vec<(u32, u64, Bytes)> {
+fn collect(history: &History, cursor: &mut Cursor, wanted: &[u32]) -> Vec<Pending> {
     let Some(span) = history.span() else { return Vec::new() };
     let leaves = history.layout().leaves.len() as u32;
     let events = leaves + 1;
+    let time_of = |cycle| history.time_s_of(cycle).unwrap_or(span.last_time_s);
     let mut out = Vec::new();
     for &channel in wanted {
         if channel == 0 || channel > leaves {
             continue;
         }
         for (cycle, v) in history.values_after(channel as usize - 1, cursor.cycle) {
-            let time = history.time_s_of(cycle).unwrap_or(span.last_time_s);
-            let payload = json!({"cycle": cycle, "value": wire::value_to_json(v)}).to_string();
-            out.push((channel, nanos(time), Bytes::from(payload)));
+            out.push(Pending::Value { channel, cycle, time_s: time_of(cycle), value: v.clone() });
         }
     }
     // Marks: those after the last mark cycle sent, and the late ones at it.
@@ -311,9 +362,8 @@ fn collect(history: &History, cursor: &mut Cursor, wanted: &[u32]) -> Vec<(u32, 
             }
         }
         if wanted.contains(&events) {
-            let time = history.time_s_of(m.cycle).unwrap_or(span.last_time_s);
-            let payload = json!({"cycle": m.cycle, "value": {"kind": m.kind, "text": m.text}}).to_string();
-            out.push((events, nanos(time), Bytes::from(payload)));
+            let (kind, text) = (m.kind, m.text.clone());
+            out.push(Pending::Mark { channel: events, cycle: m.cycle, time_s: time_of(m.cycle), kind, text });
         }
         if m.cycle == mark_cycle {
             marks_at += 1;
@@ -362,10 +412,11 @@ pub(crate) fn publish(shared: &Shared, stop: &AtomicBool) {
             wanted.clear();
             first = false;
         }
-        let out = {
+        let pending = {
             let h = history.lock().unwrap_or_else(|p| p.into_inner());
             collect(&h, &mut cursor, &wanted)
         };
+        let out: Vec<(u32, u64, Bytes)> = pending.into_iter().map(Pending::encode).collect();
         if !out.is_empty() || !clients.is_empty() {
             deliver(&clients, &out);
         }
@@ -439,6 +490,7 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
                 Some(Ok(_)) => {}
             },
             Some(m) = rx.recv() => {
+                client.taken(&m);
                 if socket.send(m).await.is_err() {
                     break;
                 }
@@ -619,7 +671,7 @@ mod tests {
         for c in 1..=3 {
             h.push_frame(frame(c, vec![(0, Value::F64(c as f64)), (1, Value::F64(0.5))]));
         }
-        let out = collect(&h, &mut cursor, &[1]);
+        let out: Vec<_> = collect(&h, &mut cursor, &[1]).into_iter().map(Pending::encode).collect();
         let cycles: Vec<Json> = out
             .iter()
             .map(|(ch, _, p)| {
@@ -639,7 +691,7 @@ mod tests {
         assert!(collect(&h, &mut cursor, &[1]).is_empty(), "nothing new");
         h.push_frame(frame(4, vec![(0, Value::F64(4.0))]));
         h.push_event(&Event::ManagerStopped { cycle: 4 });
-        let out = collect(&h, &mut cursor, &[1, 2, 3]);
+        let out: Vec<_> = collect(&h, &mut cursor, &[1, 2, 3]).into_iter().map(Pending::encode).collect();
         let topics: Vec<u32> = out.iter().map(|(c, _, _)| *c).collect();
         assert_eq!(topics, vec![1, 3], "x at cycle 4 and the event (sonar.range was not written): {out:?}");
         let event: Json = serde_json::from_slice(&out[1].2).expect("JSON");
@@ -682,6 +734,7 @@ mod tests {
         assert_eq!(client.dropped(), 6, "4 queued, 6 dropped");
         let mut frames = Vec::new();
         while let Ok(m) = rx.try_recv() {
+            client.taken(&m);
             frames.push(m);
         }
         assert_eq!(frames.len(), 4);
@@ -689,6 +742,15 @@ mod tests {
             Message::Binary(b) => assert_eq!(&b[..], &message_data(5, 0, b"{}")[..]),
             other => panic!("a binary frame, got {other:?}"),
         }
+        assert_eq!(client.queued_bytes.load(Ordering::SeqCst), 0, "all taken");
+        frames.iter().for_each(|m| assert!(size(m) > 0));
+        // The bytes are bounded too: one message of more than half the budget leaves no room for a second.
+        let big = Bytes::from(vec![b'x'; QUEUE_BYTES / 2 + 1]);
+        let before = client.dropped();
+        deliver(&[Arc::clone(&client)], &[(2, 0, big.clone()), (2, 1, big)]);
+        assert_eq!(client.dropped(), before + 1, "the second big message is dropped");
+        let m = rx.try_recv().expect("the first is queued");
+        client.taken(&m);
         // Room again: the client is told of its losses.
         client.report_drops();
         match rx.try_recv() {
@@ -696,7 +758,7 @@ mod tests {
                 let s: Json = serde_json::from_str(t.as_str()).expect("JSON");
                 assert_eq!(s["op"], "status");
                 assert_eq!(s["level"], WARNING);
-                assert!(s["message"].as_str().unwrap_or("").starts_with("6 messages dropped"), "{s}");
+                assert!(s["message"].as_str().unwrap_or("").starts_with("7 messages dropped"), "{s}");
             }
             other => panic!("a status, got {other:?}"),
         }
