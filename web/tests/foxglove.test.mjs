@@ -150,4 +150,33 @@ describe("Foxglove live", () => {
     const p = await until(() => got.params.find((m) => m.id === "after"), "an answer after the bad messages");
     assert.deepEqual(p.parameters.map((q) => q.name), ["circle.radius"]);
   });
+
+  test("at most 8 clients: a ninth is told so and closed, and a place frees when one leaves", async () => {
+    const WS = await webSocketClass();
+    const url = `ws://127.0.0.1:${tb.guiPort}/foxglove`;
+    const connect = () => {
+      const c = { ws: new WS(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]), msgs: [], closed: false };
+      c.ws.onmessage = (e) => typeof e.data === "string" && c.msgs.push(JSON.parse(e.data));
+      c.ws.onclose = () => (c.closed = true);
+      return c;
+    };
+    const others = Array.from({ length: 7 }, connect);
+    try {
+      await until(() => others.every((o) => o.msgs.some((m) => m.op === "serverInfo")), "seven more clients admitted");
+      const ninth = connect();
+      await until(() => ninth.closed, "the ninth closed by the server");
+      assert.ok(!ninth.msgs.some((m) => m.op === "serverInfo"), "the ninth was not served");
+      assert.ok(ninth.msgs.some((m) => m.op === "status" && m.level === 2 && /too many Foxglove clients \(at most 8\)/.test(m.message)), JSON.stringify(ninth.msgs));
+      others.pop().ws.close();
+      await until(async () => {
+        const c = connect();
+        await until(() => c.closed || c.msgs.length > 0, "an answer");
+        const served = c.msgs.some((m) => m.op === "serverInfo");
+        c.ws.close();
+        return served;
+      }, "a client admitted once one left");
+    } finally {
+      for (const o of others) o.ws.close();
+    }
+  });
 });
