@@ -13,9 +13,9 @@
 //! a `status` error naming the parameter.
 //!
 //! Bounded: at most [`MAX_CLIENTS`] clients, [`MAX_SUBSCRIPTIONS`] subscriptions each, a send
-//! queue of [`QUEUE`] messages per client (a slow client loses messages, counted and told in a
+//! queue of [`QUEUE`] messages and [`QUEUE_BYTES`] per client (a slow client loses messages, counted and told in a
 //! `status` warning: neither the poller nor the server ever waits for it), client messages of
-//! at most [`crate::MAX_MESSAGE`] bytes; a bad client message is answered by a `status` error.
+//! at most 64 KiB; a bad client message is answered by a `status` error.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};

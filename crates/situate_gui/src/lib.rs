@@ -38,6 +38,10 @@
 //! tap on a thread of its own (the cycle never waits for it), and answers the GUI's verbs
 //! `history` (the span held and the events as marks) and `history_frame` (the state at a cycle).
 //!
+//! ## Foxglove
+//! `/foxglove` speaks the Foxglove WebSocket protocol: the history's signals live and the skills'
+//! parameters ([`foxglove`], docs/foxglove.md).
+//!
 //! ## Metrics
 //! `GET /metrics` answers in Prometheus' text format: cycle time, overruns, per-skill time and
 //! faults ([`metrics`]).
