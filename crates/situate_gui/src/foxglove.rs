@@ -10,14 +10,15 @@
 //!
 //! Parameters (`skill.param`) are read with `QuerySkills` and set with `SetParam` through the
 //! manager's handle, so Foxglove can do only what the link allows; a refused value comes back as
-//! a `status` error naming the parameter.
+//! a `status` error naming the parameter. A client following parameters
+//! (`subscribeParameterUpdates`) is sent every change the history sees.
 //!
 //! Bounded: at most [`MAX_CLIENTS`] clients, [`MAX_SUBSCRIPTIONS`] subscriptions each, a send
 //! queue of [`QUEUE`] messages and [`QUEUE_BYTES`] per client (a slow client loses messages, counted and told in a
 //! `status` warning: neither the poller nor the server ever waits for it), client messages of
 //! at most 64 KiB; a bad client message is answered by a `status` error.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -49,6 +50,8 @@ pub const QUEUE: usize = 4096;
 pub const QUEUE_BYTES: usize = 16 << 20;
 /// How often the history is polled for new cycles.
 pub const POLL: Duration = Duration::from_millis(20);
+/// Parameter names one client may follow (`subscribeParameterUpdates`), besides "all".
+pub const MAX_PARAM_NAMES: usize = 4096;
 /// Parameter requests one client may have waiting for the manager.
 const MAX_PARAM_REQUESTS: usize = 2;
 /// The web apps of Foxglove, allowed besides pages of this server and clients sending no origin.
@@ -153,6 +156,26 @@ pub struct Client {
     /// `dropped` when last told to the client, and when.
     reported: Mutex<(u64, Option<Instant>)>,
     param_requests: AtomicUsize,
+    /// The parameters it follows.
+    params: Mutex<ParamSubs>,
+}
+
+/// The parameters a client follows: all of them, or those named.
+#[derive(Debug, Default)]
+struct ParamSubs {
+    all: bool,
+    names: HashSet<String>,
+}
+
+/// `parameterNames`: an array of strings (missing: none, which means all).
+fn parameter_names(msg: &Json) -> Result<Vec<String>, String> {
+    match msg.get("parameterNames") {
+        None | Some(Json::Null) => Ok(vec![]),
+        Some(Json::Array(a)) if a.iter().all(Json::is_string) => {
+            Ok(a.iter().filter_map(Json::as_str).map(String::from).collect())
+        }
+        Some(_) => Err("`parameterNames` must be an array of strings".into()),
+    }
 }
 
 impl Client {
@@ -165,6 +188,7 @@ impl Client {
             queued_bytes: AtomicUsize::new(0),
             reported: Mutex::new((0, None)),
             param_requests: AtomicUsize::new(0),
+            params: Mutex::new(ParamSubs::default()),
         };
         (Arc::new(client), rx)
     }
@@ -247,6 +271,65 @@ impl Client {
             }
         }
         errors
+    }
+
+    /// `subscribeParameterUpdates`: the names given (none: all of them) are added.
+    fn subscribe_params(&self, msg: &Json) -> Vec<String> {
+        let names = match parameter_names(msg) {
+            Ok(n) => n,
+            Err(e) => return vec![format!("subscribeParameterUpdates: {e}")],
+        };
+        let mut p = self.params.lock().unwrap_or_else(|p| p.into_inner());
+        if names.is_empty() {
+            p.all = true;
+            return vec![];
+        }
+        for n in names {
+            if p.names.len() >= MAX_PARAM_NAMES {
+                return vec![format!("subscribeParameterUpdates: at most {MAX_PARAM_NAMES} names per client")];
+            }
+            p.names.insert(n);
+        }
+        vec![]
+    }
+
+    /// `unsubscribeParameterUpdates`: the names given (none: all) are no longer followed; `known`
+    /// are every parameter's name (following all, then some are left).
+    fn unsubscribe_params(&self, msg: &Json, known: &[String]) -> Vec<String> {
+        let names = match parameter_names(msg) {
+            Ok(n) => n,
+            Err(e) => return vec![format!("unsubscribeParameterUpdates: {e}")],
+        };
+        let mut p = self.params.lock().unwrap_or_else(|p| p.into_inner());
+        if names.is_empty() {
+            *p = ParamSubs::default();
+            return vec![];
+        }
+        if p.all {
+            p.all = false;
+            p.names = known.iter().cloned().collect();
+        }
+        for n in &names {
+            p.names.remove(n);
+        }
+        vec![]
+    }
+
+    /// Whether it follows any parameter.
+    fn follows_params(&self) -> bool {
+        let p = self.params.lock().unwrap_or_else(|p| p.into_inner());
+        p.all || !p.names.is_empty()
+    }
+
+    /// The `parameterValues` of the changes it follows, if any.
+    fn param_update(&self, changed: &[(&str, &Value)]) -> Option<Json> {
+        let p = self.params.lock().unwrap_or_else(|p| p.into_inner());
+        let list: Vec<Json> = changed
+            .iter()
+            .filter(|(n, _)| p.all || p.names.contains(*n))
+            .map(|(n, v)| parameter(n.to_string(), v))
+            .collect();
+        (!list.is_empty()).then(|| json!({"op": "parameterValues", "parameters": list}))
     }
 
     fn unsubscribe(&self, msg: &Json) -> Vec<String> {
@@ -399,6 +482,8 @@ pub(crate) fn publish(shared: &Shared, stop: &AtomicBool) {
     let Some(history) = shared.history.as_ref() else { return };
     let mut cursor = Cursor::default();
     let mut first = true;
+    // Every parameter's value at the last poll, while a client follows any.
+    let mut params: Option<Vec<(String, Value)>> = None;
     while !stop.load(Ordering::SeqCst) {
         let clients = shared.foxglove.snapshot();
         let mut wanted: Vec<u32> = clients
@@ -420,8 +505,39 @@ pub(crate) fn publish(shared: &Shared, stop: &AtomicBool) {
         if !out.is_empty() || !clients.is_empty() {
             deliver(&clients, &out);
         }
+        if clients.iter().any(|c| c.follows_params()) {
+            let now = parameter_values(&history.lock().unwrap_or_else(|p| p.into_inner()));
+            if let Some(before) = &params {
+                let changed: Vec<(&str, &Value)> =
+                    now.iter().zip(before).filter(|(a, b)| a.1 != b.1).map(|(a, _)| (a.0.as_str(), &a.1)).collect();
+                if !changed.is_empty() {
+                    for c in &clients {
+                        if let Some(m) = c.param_update(&changed) {
+                            c.offer_json(&m);
+                        }
+                    }
+                }
+            }
+            params = Some(now);
+        } else {
+            params = None;
+        }
         std::thread::sleep(POLL);
     }
+}
+
+/// Every parameter (`skill.param`) and its latest value as the history holds it (changes come
+/// with the manager's events).
+fn parameter_values(history: &History) -> Vec<(String, Value)> {
+    let mut out = Vec::new();
+    for (i, skill) in history.layout().skills.iter().enumerate() {
+        for (j, (name, _)) in skill.params.iter().enumerate() {
+            if let Some(v) = history.param_at(i, j, u64::MAX) {
+                out.push((format!("{}.{}", skill.name, name), v.clone()));
+            }
+        }
+    }
+    out
 }
 
 /// A Foxglove client's origin: none (Foxglove's desktop app, a script), a page of this server,
@@ -450,28 +566,40 @@ pub(crate) async fn upgrade(State(shared): State<Arc<Shared>>, headers: HeaderMa
 }
 
 fn server_info(shared: &Shared) -> Json {
-    json!({"op": "serverInfo", "name": "situate", "capabilities": ["parameters"], "supportedEncodings": ["json"],
+    json!({"op": "serverInfo", "name": "situate", "capabilities": ["parameters", "parametersSubscribe"], "supportedEncodings": ["json"],
         "metadata": {"robot_run": shared.run.id}, "sessionId": shared.run.id})
 }
 
+/// A client's place in the hub, given back however its session ends.
+struct Member<'a> {
+    hub: &'a Hub,
+    client: Arc<Client>,
+}
+
+impl Drop for Member<'_> {
+    fn drop(&mut self) {
+        self.hub.leave(&self.client);
+    }
+}
+
 async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
+    let Some(history) = shared.history.as_ref() else { return };
+    let (advertised, channel_count, known) = {
+        let h = history.lock().unwrap_or_else(|p| p.into_inner());
+        let known: Vec<String> = parameter_values(&h).into_iter().map(|(n, _)| n).collect();
+        (advertise(&h), h.layout().leaves.len() as u32 + 1, known)
+    };
     let Some((client, mut rx)) = shared.foxglove.join(QUEUE) else {
         let m = status(ERROR, &format!("too many Foxglove clients (at most {MAX_CLIENTS})"));
         let _ = socket.send(Message::Text(m.to_string().into())).await;
         let _ = socket.send(Message::Close(None)).await;
         return;
     };
-    let channels = {
-        let Some(history) = shared.history.as_ref() else { return };
-        let h = history.lock().unwrap_or_else(|p| p.into_inner());
-        (advertise(&h), h.layout().leaves.len() as u32 + 1)
-    };
-    let (advertised, channel_count) = channels;
+    let _member = Member { hub: &shared.foxglove, client: Arc::clone(&client) };
     let mut shutdown = shared.shutdown.clone();
     tracing::debug!("Foxglove client connected");
     for m in [server_info(&shared), advertised] {
         if socket.send(Message::Text(m.to_string().into())).await.is_err() {
-            shared.foxglove.leave(&client);
             return;
         }
     }
@@ -482,7 +610,9 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
                 break;
             }
             incoming = socket.recv() => match incoming {
-                Some(Ok(Message::Text(text))) => handle_text(&shared, &client, text.as_str(), channel_count),
+                Some(Ok(Message::Text(text))) => {
+                    handle_text(&shared, &client, text.as_str(), channel_count, &known)
+                }
                 Some(Ok(Message::Binary(_))) => {
                     client.offer_json(&status(ERROR, "this server takes no client messages in binary (no clientPublish)"));
                 }
@@ -497,13 +627,13 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
             }
         }
     }
-    shared.foxglove.leave(&client);
     tracing::debug!(dropped = client.dropped(), "Foxglove client disconnected");
 }
 
-/// One client text message: `subscribe`, `unsubscribe`, `getParameters`, `setParameters`.
+/// One client text message: `subscribe`, `unsubscribe`, `getParameters`, `setParameters`,
+/// `subscribeParameterUpdates`, `unsubscribeParameterUpdates`.
 /// Anything else is answered by a `status` error.
-fn handle_text(shared: &Arc<Shared>, client: &Arc<Client>, text: &str, channels: u32) {
+fn handle_text(shared: &Arc<Shared>, client: &Arc<Client>, text: &str, channels: u32, known: &[String]) {
     let msg: Json = match serde_json::from_str(text) {
         Ok(j @ Json::Object(_)) => j,
         Ok(_) => {
@@ -519,6 +649,8 @@ fn handle_text(shared: &Arc<Shared>, client: &Arc<Client>, text: &str, channels:
     let errors = match op {
         "subscribe" => client.subscribe(&msg, channels),
         "unsubscribe" => client.unsubscribe(&msg),
+        "subscribeParameterUpdates" => client.subscribe_params(&msg),
+        "unsubscribeParameterUpdates" => client.unsubscribe_params(&msg, known),
         "getParameters" | "setParameters" => {
             if client.param_requests.fetch_add(1, Ordering::SeqCst) >= MAX_PARAM_REQUESTS {
                 client.param_requests.fetch_sub(1, Ordering::SeqCst);
@@ -573,12 +705,9 @@ fn parameters(shared: &Shared, msg: &Json) -> Vec<Json> {
     let id = msg.get("id").cloned().filter(|i| !i.is_null());
     let mut out = Vec::new();
     let names: Vec<String> = if op == "getParameters" {
-        match msg.get("parameterNames") {
-            None | Some(Json::Null) => vec![],
-            Some(Json::Array(a)) if a.iter().all(Json::is_string) => {
-                a.iter().filter_map(Json::as_str).map(String::from).collect()
-            }
-            Some(_) => return vec![status(ERROR, "getParameters: `parameterNames` must be an array of strings")],
+        match parameter_names(msg) {
+            Ok(n) => n,
+            Err(e) => return vec![status(ERROR, &format!("getParameters: {e}"))],
         }
     } else {
         let Some(list) = msg.get("parameters").and_then(Json::as_array) else {
@@ -762,6 +891,28 @@ mod tests {
             }
             other => panic!("a status, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn a_client_follows_the_parameters_it_names_or_all() {
+        let (client, _rx) = Client::new(4);
+        let (r, p) = ("circle.radius", "circle.period_s");
+        let (v, w) = (Value::F64(3.0), Value::F64(9.0));
+        let changed = [(r, &v), (p, &w)];
+        assert!(!client.follows_params());
+        assert_eq!(client.param_update(&changed), None);
+        assert!(client.subscribe_params(&json!({"parameterNames": [r]})).is_empty());
+        let m = client.param_update(&changed).expect("an update");
+        assert_eq!(m["op"], "parameterValues");
+        assert_eq!(m["parameters"], json!([{"name": r, "value": 3.0, "type": "float64"}]));
+        assert!(client.subscribe_params(&json!({"parameterNames": []})).is_empty(), "all");
+        assert_eq!(client.param_update(&changed).expect("an update")["parameters"].as_array().map(Vec::len), Some(2));
+        let known = [r.to_string(), p.to_string()];
+        assert!(client.unsubscribe_params(&json!({"parameterNames": [r]}), &known).is_empty());
+        assert_eq!(client.param_update(&changed).expect("an update")["parameters"][0]["name"], p);
+        assert!(client.unsubscribe_params(&json!({}), &known).is_empty());
+        assert!(!client.follows_params());
+        assert_eq!(client.subscribe_params(&json!({"parameterNames": "x"})).len(), 1, "a bad list is an error");
     }
 
     #[test]
