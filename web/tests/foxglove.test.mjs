@@ -136,6 +136,28 @@ describe("Foxglove live", () => {
     await until(async () => (await cli(tb.linkPort, "param", "get", "circle", "radius")) === 2, "radius back to 2");
   });
 
+  test("parametersSubscribe: a change made over the link is pushed to a client following it", async () => {
+    assert.ok(got.serverInfo.capabilities.includes("parametersSubscribe"), JSON.stringify(got.serverInfo));
+    client.subscribeParameterUpdates(["circle.floor"]);
+    // The subscription is in once a later request is answered (the server reads in order).
+    client.getParameters(["circle.floor"], "floor0");
+    const floor0 = await until(() => got.params.find((p) => p.id === "floor0"), "circle.floor");
+    assert.equal(floor0.parameters[0].value, 0);
+    const pushed = () => got.params.filter((p) => p.id === undefined).flatMap((p) => p.parameters);
+    try {
+      await cliDo(tb.linkPort, "param", "set", "circle", "floor", "1");
+      await until(() => pushed().some((p) => p.name === "circle.floor" && p.value === 1), "the update to 1");
+      await cliDo(tb.linkPort, "param", "set", "circle", "period_s", "30");
+      await cliDo(tb.linkPort, "param", "set", "circle", "floor", "0");
+      await until(() => pushed().some((p) => p.name === "circle.floor" && p.value === 0), "the update to 0");
+      assert.ok(!pushed().some((p) => p.name === "circle.period_s"), "only what the client follows");
+    } finally {
+      client.unsubscribeParameterUpdates([]);
+      await cliDo(tb.linkPort, "param", "set", "circle", "floor", "0");
+      await cliDo(tb.linkPort, "param", "set", "circle", "period_s", "20");
+    }
+  });
+
   test("a bad client message is answered by a status error, and the session goes on", async () => {
     const before = got.statuses.length;
     ws.send("this is not JSON");
