@@ -915,6 +915,50 @@ mod tests {
         assert_eq!(client.subscribe_params(&json!({"parameterNames": "x"})).len(), 1, "a bad list is an error");
     }
 
+    /// The head of the server's answer to an upgrade request to `/foxglove`.
+    fn upgrade_head(addr: std::net::SocketAddr, extra: &str) -> String {
+        use std::io::{Read, Write};
+        let mut s = std::net::TcpStream::connect(addr).expect("connect");
+        s.set_read_timeout(Some(Duration::from_secs(10))).expect("timeout");
+        let request = format!(
+            "GET /foxglove HTTP/1.1\r\nHost: {addr}\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n\
+             Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n{extra}\r\n"
+        );
+        s.write_all(request.as_bytes()).expect("write");
+        let (mut buf, mut chunk) = (Vec::new(), [0u8; 4096]);
+        while !String::from_utf8_lossy(&buf).contains("\r\n\r\n") {
+            match s.read(&mut chunk) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => buf.extend_from_slice(&chunk[..n]),
+            }
+        }
+        String::from_utf8_lossy(&buf).to_ascii_lowercase()
+    }
+
+    #[test]
+    fn the_route_selects_the_subprotocol_refuses_other_sites_and_needs_a_history() {
+        use situate::manager::{Control, Manager, RobotSpec, SkillSpec};
+        let spec = RobotSpec::new("foxtest").skill(SkillSpec::new("sonar", "toy.sonar"));
+        let mut manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
+        let tap = crate::HistoryTap::new(&mut manager);
+        let (mut handle, join) = manager.spawn(true);
+        let gui = crate::serve_with_history(handle.clone(), crate::GuiConfig::default(), Some(tap)).expect("serve");
+        let ok = upgrade_head(gui.local_addr(), "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n");
+        assert!(ok.starts_with("http/1.1 101"), "{ok}");
+        assert!(ok.contains("sec-websocket-protocol: foxglove.websocket.v1"), "{ok}");
+        let foxglove_app = upgrade_head(gui.local_addr(), "Origin: https://app.foxglove.dev\r\n");
+        assert!(foxglove_app.starts_with("http/1.1 101"), "{foxglove_app}");
+        let evil = upgrade_head(gui.local_addr(), "Origin: https://evil.example\r\n");
+        assert!(evil.starts_with("http/1.1 403"), "{evil}");
+        gui.stop();
+        let plain = crate::serve(handle.clone(), crate::GuiConfig::default()).expect("serve");
+        let none = upgrade_head(plain.local_addr(), "");
+        assert!(none.starts_with("http/1.1 503"), "no history, no Foxglove: {none}");
+        plain.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
     #[test]
     fn only_foxglove_this_server_or_no_origin_may_connect() {
         let headers = |origin: Option<&str>| {
