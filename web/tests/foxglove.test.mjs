@@ -74,11 +74,14 @@ describe("Foxglove live", () => {
     const x = client.subscribe(channel("truth.pose.x").id);
     await until(() => on(x).length >= 10, "ten messages of truth.pose.x");
     const first = on(x);
+    // gui.circle is a device (it runs on its own thread, on the wall clock): under load a cycle may
+    // pass without its write, so the cycles increase, mostly by one (each write is a message).
     for (let i = 1; i < first.length; i++) {
-      assert.equal(first[i].body.cycle, first[i - 1].body.cycle + 1, `every cycle, in order: ${JSON.stringify(first.slice(i - 1, i + 1).map((m) => m.body))}`);
+      assert.ok(first[i].body.cycle > first[i - 1].body.cycle, `in cycle order: ${JSON.stringify(first.slice(i - 1, i + 1).map((m) => m.body))}`);
       assert.ok(first[i].timestamp > first[i - 1].timestamp, "the manager's clock advances");
       assert.equal(typeof first[i].body.value, "number");
     }
+    assert.ok(first.some((m, i) => i > 0 && m.body.cycle === first[i - 1].body.cycle + 1), "consecutive cycles: every write, not samples");
     assert.ok(new Set(first.map((m) => m.body.value)).size > 3, "the pose moves");
     // Stopped, the last value written is the one the link reads.
     await cliDo(tb.linkPort, "cycle", "stop");
