@@ -450,6 +450,21 @@ impl History {
         self.leaves.get(leaf)?.at(cycle).map(|(c, v)| (*c, v))
     }
 
+    /// The values written to a leaf in the cycles after `after` that the window holds, oldest
+    /// first (the live feeds' source: every cycle past the last one sent).
+    pub fn values_after(&self, leaf: usize, after: u64) -> impl Iterator<Item = (u64, &Value)> {
+        self.leaves.get(leaf).into_iter().flat_map(move |t| {
+            let from = t.changes.partition_point(|(c, _)| *c <= after);
+            t.changes.range(from..).map(|(c, v)| (*c, v))
+        })
+    }
+
+    /// The manager's clock (seconds) at a cycle the window holds.
+    pub fn time_s_of(&self, cycle: u64) -> Option<f64> {
+        let at = self.frames.partition_point(|f| f.cycle < cycle);
+        self.frames.get(at).filter(|f| f.cycle == cycle).map(|f| f.time_s)
+    }
+
     /// Whether a skill was active at `cycle` (its state as built before any change).
     pub fn active_at(&self, skill: usize, cycle: u64) -> Option<bool> {
         self.active.get(skill)?.at(cycle).map(|(_, a)| *a)

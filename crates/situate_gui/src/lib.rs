@@ -38,6 +38,10 @@
 //! tap on a thread of its own (the cycle never waits for it), and answers the GUI's verbs
 //! `history` (the span held and the events as marks) and `history_frame` (the state at a cycle).
 //!
+//! ## Foxglove
+//! `/foxglove` speaks the Foxglove WebSocket protocol: the history's signals live and the skills'
+//! parameters ([`foxglove`], docs/foxglove.md).
+//!
 //! ## Metrics
 //! `GET /metrics` answers in Prometheus' text format: cycle time, overruns, per-skill time and
 //! faults ([`metrics`]).
@@ -61,6 +65,7 @@ use situate_link::json as wire;
 use situate_manager::{ControlError, Handle, Reply, Request};
 use tokio::sync::{broadcast, watch};
 
+pub mod foxglove;
 pub mod history;
 pub mod metrics;
 
@@ -265,6 +270,8 @@ struct Shared {
     watched: Mutex<HashMap<u64, Vec<String>>>,
     /// The robot's recent past, when the server was given a tap.
     history: Option<Arc<Mutex<History>>>,
+    /// The Foxglove clients (`/foxglove`).
+    foxglove: foxglove::Hub,
     telemetry: broadcast::Sender<Utf8Bytes>,
     events: broadcast::Sender<Utf8Bytes>,
     wake: Sender<()>,
@@ -335,6 +342,7 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
         next_client: AtomicU64::new(1),
         watched: Mutex::new(HashMap::new()),
         history: history.clone(),
+        foxglove: foxglove::Hub::default(),
         telemetry: broadcast::channel(16).0,
         events: broadcast::channel(1024).0,
         wake: wake_tx.clone(),
@@ -352,9 +360,12 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
     if let (Some(history), Some(tap)) = (history, tap) {
         let st = Arc::clone(&stop);
         threads.push(spawn("situate-gui-history", Box::new(move || keep_history(&history, tap, &st)))?);
+        let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
+        threads.push(spawn("situate-gui-foxglove", Box::new(move || foxglove::publish(&s, &st)))?);
     }
     let app = Router::new()
         .route("/ws", get(ws_upgrade))
+        .route("/foxglove", get(foxglove::upgrade))
         .route("/api/world", get(world))
         .route("/metrics", get(metrics_page))
         .fallback(static_file)
@@ -851,6 +862,7 @@ mod tests {
             next_client: AtomicU64::new(1),
             watched: Mutex::new(HashMap::new()),
             history: None,
+            foxglove: foxglove::Hub::default(),
             telemetry: broadcast::channel(4).0,
             events: broadcast::channel(4).0,
             wake,
