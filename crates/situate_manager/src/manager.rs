@@ -251,8 +251,6 @@ pub struct Manager {
     tap_prints: Vec<(usize, String)>,
     /// A frame given back by a tap's reader, its lists reused for the next.
     spare_frame: Option<Frame>,
-    /// Arrays given back by the taps' readers, for frames' copies.
-    frame_arrays: Vec<Value>,
     /// The lockstep dskills whose device exchange runs this cycle.
     exchanging: Vec<usize>,
     /// Record outputs decomposed into leaves before a commit (reused).
@@ -373,7 +371,6 @@ impl Manager {
             taps: Vec::new(),
             tap_prints: Vec::new(),
             spare_frame: None,
-            frame_arrays: Vec::new(),
             parts: Vec::new(),
             clocks,
             generation: 0,

@@ -209,15 +209,13 @@ impl Manager {
             None => (Vec::new(), Vec::new()),
         };
         values.reserve(self.slots.len());
-        let mut arrays = std::mem::take(&mut self.frame_arrays);
         for (l, s) in self.slots.iter().enumerate() {
             if s.stamp == cycle {
                 if let Some(v) = &s.value {
-                    values.push((l, frame_value(v, &mut arrays)));
+                    values.push((l, v.clone()));
                 }
             }
         }
-        self.frame_arrays = arrays;
         winners.extend(
             self.tallies
                 .iter()
@@ -262,13 +260,7 @@ impl Manager {
             for _ in 0..4 {
                 let Ok(mut frame) = tap.returns.try_recv() else { break };
                 for (_, value) in frame.values.drain(..) {
-                    // An array nobody else holds now is kept for a later
-                    // frame's copy (see `frame_value`).
-                    if self.frame_arrays.len() < FRAME_ARRAYS && is_unique_array(&value) {
-                        self.frame_arrays.push(value);
-                    } else {
-                        recycle(value);
-                    }
+                    recycle(value);
                 }
                 frame.winners.clear();
                 frame.prints.clear();
@@ -650,86 +642,5 @@ impl Lookup for Env<'_> {
             RefTarget::Time => Some(&self.clock[0]),
             RefTarget::Cycle => Some(&self.clock[1]),
         }
-    }
-}
-
-/// Arrays kept for frames' copies, at most.
-const FRAME_ARRAYS: usize = 64;
-
-/// What a frame holds of a slot's value. An array is copied into one of
-/// `spares` (arrays the taps' readers gave back) when one of its kind and
-/// length is there: the slot's own buffer then stays its skill's alone, to
-/// be rewritten in place next cycle, instead of being shared with the tap
-/// (which made the skill write into a new buffer every cycle). Anything else
-/// is shared by reference count.
-fn frame_value(v: &Value, spares: &mut Vec<Value>) -> Value {
-    fn copy<T: Copy>(src: &[T], spare: &mut Value, get: fn(&mut Value) -> Option<&mut Arc<[T]>>) -> bool {
-        match get(spare).and_then(Arc::get_mut) {
-            Some(dst) if dst.len() == src.len() => {
-                dst.copy_from_slice(src);
-                true
-            }
-            _ => false,
-        }
-    }
-    let fits = |s: &Value| match (v, s) {
-        (Value::F32s(a), Value::F32s(b)) => a.len() == b.len(),
-        (Value::F64s(a), Value::F64s(b)) => a.len() == b.len(),
-        (Value::I64s(a), Value::I64s(b)) => a.len() == b.len(),
-        _ => false,
-    };
-    if !matches!(v, Value::F32s(_) | Value::F64s(_) | Value::I64s(_)) {
-        return v.clone();
-    }
-    let Some(k) = spares.iter().position(fits) else { return v.clone() };
-    let mut spare = spares.swap_remove(k);
-    let copied = match v {
-        Value::F32s(a) => copy(a, &mut spare, |s| if let Value::F32s(x) = s { Some(x) } else { None }),
-        Value::F64s(a) => copy(a, &mut spare, |s| if let Value::F64s(x) = s { Some(x) } else { None }),
-        Value::I64s(a) => copy(a, &mut spare, |s| if let Value::I64s(x) = s { Some(x) } else { None }),
-        _ => false,
-    };
-    if copied {
-        spare
-    } else {
-        v.clone()
-    }
-}
-
-/// An array value whose buffer nobody else holds.
-fn is_unique_array(v: &Value) -> bool {
-    match v {
-        Value::F32s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
-        Value::F64s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
-        Value::I64s(a) => Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0,
-        _ => false,
-    }
-}
-
-#[cfg(test)]
-mod frame_tests {
-    use super::*;
-
-    #[test]
-    fn a_frame_copies_an_array_into_a_spare_of_its_length_and_shares_the_rest() {
-        let slot = Value::F32s(vec![1.0, 2.0, 3.0].into());
-        let mut spares = vec![Value::F64s(vec![0.0; 3].into()), Value::F32s(vec![0.0; 2].into())];
-        // No spare of its kind and length: shared.
-        let shared = frame_value(&slot, &mut spares);
-        let (Value::F32s(a), Value::F32s(b)) = (&slot, &shared) else { panic!("not arrays") };
-        assert!(Arc::ptr_eq(a, b));
-        assert_eq!(spares.len(), 2);
-        // A spare that fits: a copy, the slot's buffer left to its skill alone.
-        spares.push(Value::F32s(vec![0.0; 3].into()));
-        drop(shared);
-        let copied = frame_value(&slot, &mut spares);
-        let (Value::F32s(a), Value::F32s(b)) = (&slot, &copied) else { panic!("not arrays") };
-        assert!(!Arc::ptr_eq(a, b));
-        assert_eq!(&a[..], &b[..]);
-        assert_eq!(Arc::strong_count(a), 1);
-        assert_eq!(spares.len(), 2);
-        // Not an array: shared as it is.
-        let text = Value::Str("x".into());
-        assert_eq!(frame_value(&text, &mut spares), text);
     }
 }
