@@ -133,6 +133,11 @@ impl Manager {
     /// once. [`Joiner::join`] gives the manager back after a shutdown.
     pub fn spawn(mut self, running: bool) -> (Handle, Joiner) {
         let (tx, rx) = crossbeam_channel::unbounded::<Envelope>();
+        // A first wait on the requests, now: the channel grows its list of
+        // waiting receivers the first time one waits, and that must not be
+        // the running cycle thread. Nothing can be queued yet (the handle is
+        // not out), so nothing is taken.
+        let _ = rx.recv_timeout(Duration::from_millis(1));
         let (done_tx, done_rx) = crossbeam_channel::bounded(1);
         let handle = Handle { tx, bus: self.bus.clone(), graph: Arc::clone(&self.graph) };
         if running {
@@ -168,11 +173,28 @@ fn start_cycle_thread(core: &Arc<Core>, generation: u64) {
     } else {
         format!("situate-{}-{generation}", core.robot)
     };
-    if let Err(e) = thread::Builder::new().name(name).spawn(move || serve(&c, generation)) {
+    let body = move || {
+        warm_channel_waits();
+        serve(&c, generation)
+    };
+    if let Err(e) = thread::Builder::new().name(name).spawn(body) {
         // Without a cycle thread nothing can go on: hand the manager back.
         tracing::error!(error = %e, "could not start a cycle thread");
         core.finish(&mut core.lock());
     }
+}
+
+/// Makes this thread's first wait on a channel now. `crossbeam-channel`
+/// allocates a thread's wait context the first time that thread blocks (a
+/// wait long enough to block, not only spin), and the cycle thread may first
+/// block on its requests at any moment of a run (whenever a request is late
+/// for the first time): then the running robot would allocate.
+/// The wait is the kind the cycle thread makes (`recv_timeout` on a channel
+/// of requests): a wait of another kind was seen to leave the later one to
+/// set up its context again.
+fn warm_channel_waits() {
+    let (_tx, rx) = crossbeam_channel::unbounded::<Envelope>();
+    let _ = rx.recv_timeout(Duration::from_millis(1));
 }
 
 /// What serving one request has taken lately: a maximum that decays by a
@@ -215,7 +237,14 @@ fn serve(core: &Core, generation: u64) {
         if !m.running {
             // Stopped: wait for a request without holding the lock.
             drop(g);
-            let received = core.requests.recv();
+            // `recv_timeout`, as `warm_channel_waits` does (see there).
+            let received = loop {
+                match core.requests.recv_timeout(Duration::from_secs(3600)) {
+                    Ok(e) => break Ok(e),
+                    Err(crossbeam_channel::RecvTimeoutError::Timeout) => continue,
+                    Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break Err(crossbeam_channel::RecvError),
+                }
+            };
             g = core.lock();
             match received {
                 Ok(envelope) => match serve_one(core, g, generation, envelope) {
@@ -529,7 +558,10 @@ fn run_batches<'a>(
 fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
     let shortest = deadlines.iter().min().copied().unwrap_or(Duration::from_secs(1));
     let tick = (shortest / 4).clamp(Duration::from_millis(1), Duration::from_millis(25));
-    let mut stale: Vec<(usize, u64)> = Vec::new();
+    // Room for every body up front: a body seen past its deadline for a
+    // moment (its thread preempted on a loaded machine) must not make the
+    // watchdog allocate while the robot runs.
+    let mut stale: Vec<(usize, u64)> = Vec::with_capacity(core.clocks.len());
     loop {
         thread::park_timeout(tick);
         if core.stop.load(Ordering::Acquire) {
