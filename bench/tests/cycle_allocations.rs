@@ -51,6 +51,14 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// The tests of this file run one at a time: the spawned manager's test
+/// counts every thread's allocations, and a test building its robot beside it
+/// allocated into its count (5 failures in 30 runs of this file).
+fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 fn allocations() -> u64 {
     ALLOCATIONS.with(Cell::get)
 }
@@ -73,6 +81,7 @@ fn allocations_per_steady_cycles(m: &mut Manager, cycles: u64) -> u64 {
 
 #[test]
 fn a_steady_cycle_of_a_spawned_manager_allocates_nothing() {
+    let _serial = one_at_a_time();
     use situate::manager::control::Control;
     let mut spec = robot();
     spec.skills.extend(skills::chain("c", 50, Flavor::Derive, true));
@@ -139,6 +148,7 @@ fn robot() -> RobotSpec {
 
 #[test]
 fn a_steady_cycle_of_derived_array_skills_allocates_nothing() {
+    let _serial = one_at_a_time();
     let mut spec = robot();
     spec.skills.extend(skills::chain("c", 50, Flavor::Derive, true));
     let mut m = skills::build(&spec);
@@ -148,6 +158,7 @@ fn a_steady_cycle_of_derived_array_skills_allocates_nothing() {
 
 #[test]
 fn a_steady_cycle_of_derived_and_hand_written_scalar_skills_allocates_nothing() {
+    let _serial = one_at_a_time();
     let mut registry = skills::registry();
     registry.register::<Scale>().register::<Source>();
     registry.add(plus_one());
@@ -231,7 +242,9 @@ fn compile_c(dir: &Path) -> Option<PathBuf> {
 
 #[test]
 fn a_steady_cycle_of_c_skills_allocates_nothing() {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("allocations");
+    let _serial = one_at_a_time();
+    // Per process: two runs of this file at once must not share its files.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("allocations-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("a scratch directory");
     let Some(lib) = compile_c(&dir) else { return };
     let mut registry = Registry::new();
@@ -254,5 +267,8 @@ fn a_steady_cycle_of_c_skills_allocates_nothing() {
     };
     m.cycle();
     assert!(written(&mut m, "s20"), "the C chain did not run");
-    assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0);
+    let allocated = allocations_per_steady_cycles(&mut m, 1000);
+    drop(m);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(allocated, 0);
 }
