@@ -2,8 +2,9 @@
 //! of this thread's allocations, not a time, so it cannot flake), for
 //! derived skills (`#[derive(Skill)]` with `[f32; 24]` and `f64` ports),
 //! hand-written Rust skills (`FnSkill`, the path bindings use) and C skills
-//! through the C ABI; and on a spawned manager (its own cycle thread, the path
-//! a running robot takes), counted over every thread.
+//! through the C ABI; with a tap whose reader gives its frames back; and on a
+//! spawned manager (its own cycle thread, the path a running robot takes),
+//! counted over every thread.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -13,7 +14,7 @@ use std::process::Command;
 use situate::manager::{ClockKind, ExecutorKind, Manager, Registry, RobotSpec, SkillSpec};
 use situate::manager::{Reply, Request};
 use situate::prelude::*;
-use situate::{FnSkill, Io, PortSpec, SignalType, SkillDecl, SkillType};
+use situate::{FnSkill, Io, PortSpec, SignalType, SkillDecl, SkillType, ValueRef};
 use situate_bench::skills::{self, Flavor};
 
 struct Counting;
@@ -154,6 +155,34 @@ fn a_steady_cycle_of_derived_array_skills_allocates_nothing() {
     let mut m = skills::build(&spec);
     skills::check_chain(&mut m, "c", 50);
     assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0);
+}
+
+#[test]
+fn a_tapped_cycle_whose_reader_gives_frames_back_allocates_nothing() {
+    let _serial = one_at_a_time();
+    // A recording or the GUI's history taps every cycle. The frame copies
+    // the arrays' numbers: it must not hold the skills' own buffers, or each
+    // skill would allocate a new array every cycle while a frame is out.
+    let mut spec = robot();
+    spec.skills.extend(skills::chain("c", 50, Flavor::Derive, true));
+    let mut m = skills::build(&spec);
+    skills::check_chain(&mut m, "c", 50);
+    let tap = m.tap(16);
+    let cycle_and_read = |m: &mut Manager| {
+        m.cycle();
+        let frame = tap.frames.try_recv().unwrap_or_else(|e| panic!("no frame: {e}"));
+        assert!(frame.values.iter().any(|(_, v)| matches!(v, ValueRef::F32s(a) if a.len() == 24)));
+        tap.give_back(frame);
+    };
+    for _ in 0..200 {
+        cycle_and_read(&mut m);
+    }
+    let before = allocations();
+    for _ in 0..1000 {
+        cycle_and_read(&mut m);
+    }
+    assert_eq!(allocations() - before, 0, "1000 tapped cycles allocated");
+    assert_eq!(tap.dropped(), 0);
 }
 
 #[test]

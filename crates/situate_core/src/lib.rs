@@ -14,4 +14,4 @@ pub use decl::{ParamSpec, ParamType, ParamValue, ParamValueError, PortSpec, Skil
 pub use names::{did_you_mean, suggestion};
 pub use skill::{Body, Context, Declare, FnSkill, Io, Skill, SkillError, SkillMaker, SkillType};
 pub use types::{ElemType, RecordType, SignalType, TypeParseError};
-pub use value::{record_type, record_value, RecordValue, SignalValue, Value};
+pub use value::{record_type, record_value, RecordValue, SignalValue, Value, ValueRef};

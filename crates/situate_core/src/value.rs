@@ -26,6 +26,56 @@ pub enum Value {
     Record(Arc<RecordValue>),
 }
 
+/// A value borrowed from where it is kept: a [`Value`] (`ValueRef::from`),
+/// or a store that packs values without their `Arc`s, such as the frames a
+/// manager hands to its taps. [`to_value`](Self::to_value) makes it owned.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ValueRef<'a> {
+    Bool(bool),
+    I64(i64),
+    F64(f64),
+    Str(&'a str),
+    Bytes(&'a [u8]),
+    F32s(&'a [f32]),
+    F64s(&'a [f64]),
+    I64s(&'a [i64]),
+    Record(&'a RecordValue),
+}
+
+impl<'a> From<&'a Value> for ValueRef<'a> {
+    fn from(v: &'a Value) -> Self {
+        match v {
+            Value::Bool(b) => ValueRef::Bool(*b),
+            Value::I64(x) => ValueRef::I64(*x),
+            Value::F64(x) => ValueRef::F64(*x),
+            Value::Str(s) => ValueRef::Str(s),
+            Value::Bytes(b) => ValueRef::Bytes(b),
+            Value::F32s(a) => ValueRef::F32s(a),
+            Value::F64s(a) => ValueRef::F64s(a),
+            Value::I64s(a) => ValueRef::I64s(a),
+            Value::Record(r) => ValueRef::Record(r),
+        }
+    }
+}
+
+impl ValueRef<'_> {
+    /// The value, owned (arrays and strings copied; a record cloned, its
+    /// fields' arrays by reference count).
+    pub fn to_value(self) -> Value {
+        match self {
+            ValueRef::Bool(b) => Value::Bool(b),
+            ValueRef::I64(x) => Value::I64(x),
+            ValueRef::F64(x) => Value::F64(x),
+            ValueRef::Str(s) => Value::Str(s.into()),
+            ValueRef::Bytes(b) => Value::Bytes(b.into()),
+            ValueRef::F32s(a) => Value::F32s(a.into()),
+            ValueRef::F64s(a) => Value::F64s(a.into()),
+            ValueRef::I64s(a) => Value::I64s(a.into()),
+            ValueRef::Record(r) => Value::Record(Arc::new(r.clone())),
+        }
+    }
+}
+
 /// The field values of a record, in the order of its type's fields.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RecordValue {

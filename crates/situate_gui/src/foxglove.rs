@@ -778,7 +778,7 @@ mod tests {
     }
 
     fn frame(cycle: u64, values: Vec<(usize, Value)>) -> Frame {
-        Frame { cycle, time_s: cycle as f64 * 0.05, values, prints: vec![], winners: vec![] }
+        Frame { cycle, time_s: cycle as f64 * 0.05, values: values.into(), prints: vec![], winners: vec![] }
     }
 
     #[test]

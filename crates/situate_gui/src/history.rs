@@ -334,8 +334,9 @@ impl History {
         }
         let cycle = frame.cycle;
         let mut bytes = std::mem::size_of::<FrameMeta>();
-        for (leaf, value) in frame.values {
+        for (leaf, value) in frame.values.iter() {
             if let Some(track) = self.leaves.get_mut(leaf) {
+                let value = value.to_value();
                 bytes += ENTRY_BYTES + value_bytes(&value);
                 track.push(cycle, value);
             }
@@ -721,7 +722,7 @@ mod tests {
     }
 
     fn frame(cycle: u64, values: Vec<(usize, Value)>) -> Frame {
-        Frame { cycle, time_s: cycle as f64 * 0.01, values, prints: vec![], winners: vec![] }
+        Frame { cycle, time_s: cycle as f64 * 0.01, values: values.into(), prints: vec![], winners: vec![] }
     }
 
     #[test]
@@ -788,7 +789,7 @@ mod tests {
             h.push_frame(Frame {
                 cycle: c,
                 time_s: c as f64,
-                values: vec![(2, Value::F64(c as f64))],
+                values: vec![(2, Value::F64(c as f64))].into(),
                 prints: if c == 3 { vec![(0, "hello".into())] } else { vec![] },
                 winners: vec![(2, 0)],
             });
@@ -802,7 +803,13 @@ mod tests {
         });
         h.push_event(&Event::Print { skill: "a".into(), line: "not a mark".into(), cycle: 7 });
         for c in 6..=10 {
-            h.push_frame(Frame { cycle: c, time_s: c as f64, values: vec![], prints: vec![], winners: vec![(2, 1)] });
+            h.push_frame(Frame {
+                cycle: c,
+                time_s: c as f64,
+                values: Default::default(),
+                prints: vec![],
+                winners: vec![(2, 1)],
+            });
         }
         h.push_event(&Event::SkillFaulted { skill: "b".into(), cause: "panicked".into(), cycle: 9 });
         let marks: Vec<_> = h.marks().map(|m| (m.cycle, m.kind)).collect();

@@ -1169,7 +1169,7 @@ mod tests {
             let frame = situate_manager::Frame {
                 cycle,
                 time_s: cycle as f64 / 10.0,
-                values: vec![(0, situate_core::Value::F64(cycle as f64 * 2.0))],
+                values: vec![(0, situate_core::Value::F64(cycle as f64 * 2.0))].into(),
                 prints: vec![],
                 winners: vec![],
             };

@@ -12,6 +12,7 @@
 pub mod config;
 pub mod control;
 pub mod expr;
+pub mod frame;
 pub mod graph;
 pub mod include;
 pub mod manager;
@@ -28,8 +29,9 @@ pub use control::{
     Control, ControlError, Event, Handle, ManagerStats, Pending, PortInfo, Reply, Request, ResourceWinner,
     SignalReading, SkillInfo, SkillTiming,
 };
+pub use frame::{Frame, FrameValues};
 pub use graph::Graph;
-pub use manager::{Frame, Joiner, Manager, TapReceiver, MAX_MONITORS, MAX_MONITORS_PER_CLIENT};
+pub use manager::{Joiner, Manager, TapReceiver, MAX_MONITORS, MAX_MONITORS_PER_CLIENT};
 pub use monitor::{MonitorCondition, MonitorMode, MAX_ANY_CONDITIONS};
 pub use registry::Registry;
 pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

@@ -35,6 +35,7 @@ use situate_core::{Skill, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
+pub use crate::frame::Frame;
 use crate::graph::{Graph, InstanceDef};
 use crate::monitor::Monitors;
 use crate::registry::Registry;
@@ -58,20 +59,6 @@ pub use crate::control::EventBus;
 use plan::Plan;
 use slots::Slot;
 pub use spawned::Joiner;
-
-/// The values written in one cycle, leaf by leaf (see [`Manager::tap`]).
-#[derive(Debug, Clone)]
-pub struct Frame {
-    pub cycle: u64,
-    /// The manager's clock at the cycle, in seconds.
-    pub time_s: f64,
-    /// (leaf index in the graph, value), in leaf order.
-    pub values: Vec<(usize, Value)>,
-    /// (instance index, line): the skills' prints of this cycle, verbose or not.
-    pub prints: Vec<(usize, String)>,
-    /// (leaf index, instance index): who won each resource written this cycle.
-    pub winners: Vec<(usize, usize)>,
-}
 
 /// The cycle's end of a tap.
 struct Tap {
@@ -100,10 +87,10 @@ impl TapReceiver {
 
     /// Hands a frame the reader is done with back to the cycle (never
     /// waits: when the cycle has not taken the last ones yet, it is just
-    /// dropped). The cycle then lets go of its values on its own thread, so
-    /// an array's buffer is reused by the skill that writes it next cycle,
-    /// and the frame's lists are reused for the next frame: a reader that
-    /// gives every frame back makes a tapped cycle allocate nothing more.
+    /// dropped). The cycle reuses the frame's buffers for a next frame, and
+    /// lets go of its shared values (strings, records) on its own thread: a
+    /// reader that gives every frame back makes a tapped cycle allocate
+    /// nothing more.
     pub fn give_back(&self, frame: Frame) {
         let _ = self.returns.try_send(frame);
     }

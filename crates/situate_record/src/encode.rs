@@ -5,12 +5,12 @@
 
 use std::io::Write as _;
 
-use situate_core::Value;
+use situate_core::ValueRef;
 use situate_link::json::value_to_json;
 
 /// Appends `{"cycle":cycle,"value":…}` to `buf`; returns where the value's
 /// JSON is in it.
-pub(crate) fn leaf_message(buf: &mut Vec<u8>, cycle: u64, value: &Value) -> std::ops::Range<usize> {
+pub(crate) fn leaf_message(buf: &mut Vec<u8>, cycle: u64, value: ValueRef<'_>) -> std::ops::Range<usize> {
     let _ = write!(buf, "{{\"cycle\":{cycle},\"value\":");
     let start = buf.len();
     write_value(buf, value);
@@ -36,21 +36,21 @@ pub(crate) fn keyframe<'a>(buf: &mut Vec<u8>, cycle: u64, leaves: impl Iterator<
 }
 
 /// Appends `value` as JSON, as [`value_to_json`] would write it.
-pub(crate) fn write_value(buf: &mut Vec<u8>, value: &Value) {
+pub(crate) fn write_value(buf: &mut Vec<u8>, value: ValueRef<'_>) {
     match value {
-        Value::Bool(b) => buf.extend_from_slice(if *b { b"true" } else { b"false" }),
-        Value::I64(x) => {
+        ValueRef::Bool(b) => buf.extend_from_slice(if b { b"true" } else { b"false" }),
+        ValueRef::I64(x) => {
             let _ = write!(buf, "{x}");
         }
-        Value::F64(x) => float(buf, *x),
-        Value::F32s(a) => list(buf, a.iter(), |buf, x| float(buf, f64::from(*x))),
-        Value::F64s(a) => list(buf, a.iter(), |buf, x| float(buf, *x)),
-        Value::I64s(a) => list(buf, a.iter(), |buf, x| {
+        ValueRef::F64(x) => float(buf, x),
+        ValueRef::F32s(a) => list(buf, a.iter(), |buf, x| float(buf, f64::from(*x))),
+        ValueRef::F64s(a) => list(buf, a.iter(), |buf, x| float(buf, *x)),
+        ValueRef::I64s(a) => list(buf, a.iter(), |buf, x| {
             let _ = write!(buf, "{x}");
         }),
         // Text, bytes and records are rare as leaves: through the tree.
         other => {
-            let _ = serde_json::to_writer(&mut *buf, &value_to_json(other));
+            let _ = serde_json::to_writer(&mut *buf, &value_to_json(&other.to_value()));
         }
     }
 }
@@ -109,9 +109,9 @@ mod tests {
         ];
         for v in values {
             let mut buf = Vec::new();
-            let at = leaf_message(&mut buf, 7, &v);
+            let at = leaf_message(&mut buf, 7, (&v).into());
             buf.clear();
-            assert_eq!(leaf_message(&mut buf, 7, &v), at);
+            assert_eq!(leaf_message(&mut buf, 7, (&v).into()), at);
             let got: Json = serde_json::from_slice(&buf).unwrap_or_else(|e| panic!("{v:?}: {e}"));
             assert_eq!(serde_json::from_slice::<Json>(&buf[at]).ok(), Some(value_to_json(&v)));
             assert_eq!(got, json!({"cycle": 7, "value": value_to_json(&v)}), "{v:?}");

@@ -9,7 +9,7 @@
 //! (`std`'s hasher is not promised to be) and small enough to own; it is not
 //! meant to resist anyone forging a collision.
 
-use situate_core::Value;
+use situate_core::{Value, ValueRef};
 
 const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 const PRIME: u64 = 0x0100_0000_01b3;
@@ -42,7 +42,7 @@ impl CycleHasher {
     }
 
     /// A leaf written this cycle.
-    pub fn leaf(&mut self, path: &str, value: &Value) {
+    pub fn leaf(&mut self, path: &str, value: ValueRef<'_>) {
         self.bytes(b"L");
         self.str(path);
         self.value(value);
@@ -55,53 +55,53 @@ impl CycleHasher {
         self.str(skill);
     }
 
-    fn value(&mut self, value: &Value) {
+    fn value(&mut self, value: ValueRef<'_>) {
         match value {
-            Value::Bool(b) => self.bytes(&[0, u8::from(*b)]),
-            Value::I64(x) => {
+            ValueRef::Bool(b) => self.bytes(&[0, u8::from(b)]),
+            ValueRef::I64(x) => {
                 self.bytes(&[1]);
                 self.bytes(&x.to_le_bytes());
             }
-            Value::F64(x) => {
+            ValueRef::F64(x) => {
                 self.bytes(&[2]);
                 self.bytes(&x.to_bits().to_le_bytes());
             }
-            Value::Str(s) => {
+            ValueRef::Str(s) => {
                 self.bytes(&[3]);
                 self.str(s);
             }
-            Value::Bytes(b) => {
+            ValueRef::Bytes(b) => {
                 self.bytes(&[4]);
                 self.len(b.len());
                 self.bytes(b);
             }
-            Value::F32s(a) => {
+            ValueRef::F32s(a) => {
                 self.bytes(&[5]);
                 self.len(a.len());
                 for x in a.iter() {
                     self.bytes(&x.to_bits().to_le_bytes());
                 }
             }
-            Value::F64s(a) => {
+            ValueRef::F64s(a) => {
                 self.bytes(&[6]);
                 self.len(a.len());
                 for x in a.iter() {
                     self.bytes(&x.to_bits().to_le_bytes());
                 }
             }
-            Value::I64s(a) => {
+            ValueRef::I64s(a) => {
                 self.bytes(&[7]);
                 self.len(a.len());
                 for x in a.iter() {
                     self.bytes(&x.to_le_bytes());
                 }
             }
-            Value::Record(r) => {
+            ValueRef::Record(r) => {
                 self.bytes(&[8]);
                 self.len(r.fields.len());
                 for (name, v) in &r.fields {
                     self.str(name);
-                    self.value(v);
+                    self.value(v.into());
                 }
             }
         }
@@ -116,7 +116,7 @@ impl CycleHasher {
 /// the order of their paths (so the order a graph lists them in does not
 /// matter).
 pub fn cycle_hash<'a>(
-    leaves: impl IntoIterator<Item = (&'a str, &'a Value)>,
+    leaves: impl IntoIterator<Item = (&'a str, ValueRef<'a>)>,
     winners: impl IntoIterator<Item = (&'a str, &'a str)>,
 ) -> u64 {
     let mut leaves: Vec<_> = leaves.into_iter().collect();
@@ -137,8 +137,8 @@ pub fn cycle_hash<'a>(
 /// `NaN`; `-0.0` is not `0.0`), as the hash sees them.
 pub fn same(a: &Value, b: &Value) -> bool {
     let (mut x, mut y) = (CycleHasher::default(), CycleHasher::default());
-    x.value(a);
-    y.value(b);
+    x.value(a.into());
+    y.value(b.into());
     // Equal hashes of different values are possible but would need a
     // collision of FNV-1a on two values of one leaf: compare exactly too.
     x.finish() == y.finish() && exact(a, b)
@@ -173,7 +173,7 @@ mod tests {
     fn of(leaves: &[(&str, Value)]) -> u64 {
         let mut h = CycleHasher::default();
         for (p, v) in leaves {
-            h.leaf(p, v);
+            h.leaf(p, v.into());
         }
         h.finish()
     }
@@ -195,8 +195,14 @@ mod tests {
     #[test]
     fn a_cycle_hash_does_not_depend_on_the_order_of_leaves() {
         let (a, b) = (Value::F64(1.0), Value::I64(2));
-        assert_eq!(cycle_hash([("a", &a), ("b", &b)], []), cycle_hash([("b", &b), ("a", &a)], []));
-        assert_ne!(cycle_hash([("a", &a)], [("drive", "x")]), cycle_hash([("a", &a)], [("drive", "y")]));
+        assert_eq!(
+            cycle_hash([("a", (&a).into()), ("b", (&b).into())], []),
+            cycle_hash([("b", (&b).into()), ("a", (&a).into())], [])
+        );
+        assert_ne!(
+            cycle_hash([("a", (&a).into())], [("drive", "x")]),
+            cycle_hash([("a", (&a).into())], [("drive", "y")])
+        );
     }
 
     #[test]

@@ -333,15 +333,15 @@ impl Writing {
 
     fn frame(&mut self, frame: &Frame) -> Result<(), RecordError> {
         let time = nanos(frame.time_s);
-        for (leaf, value) in &frame.values {
-            let channel = match self.leaf_channels.get(leaf) {
+        for (leaf, value) in frame.values.iter() {
+            let channel = match self.leaf_channels.get(&leaf) {
                 Some(&c) => c,
                 None => {
-                    let Some((path, ty)) = self.leaves.get(*leaf) else { continue };
+                    let Some((path, ty)) = self.leaves.get(leaf) else { continue };
                     let schema = serde_json::to_vec(&message_schema(ty)).unwrap_or_default();
                     let (path, ty) = (path.clone(), ty.to_string());
                     let c = self.channel(&format!("situate.{ty}"), &schema, &path, &[("type", ty.as_str())])?;
-                    self.leaf_channels.insert(*leaf, c);
+                    self.leaf_channels.insert(leaf, c);
                     c
                 }
             };
@@ -351,7 +351,7 @@ impl Writing {
             let written = self.write_bytes(channel, time, &bytes);
             // Kept as its JSON, not the value: a value kept would stop its
             // array's buffer from going back to the skill that writes it.
-            let latest = self.latest.entry(*leaf).or_default();
+            let latest = self.latest.entry(leaf).or_default();
             latest.0 = frame.cycle;
             latest.1.clear();
             latest.1.extend_from_slice(&bytes[at]);
@@ -364,7 +364,7 @@ impl Writing {
             self.write(channel, time, &json!({"cycle": frame.cycle, "skill": skill, "line": line}))?;
         }
         let hash = hash::cycle_hash(
-            frame.values.iter().filter_map(|(leaf, v)| Some((self.leaves.get(*leaf)?.0.as_str(), v))),
+            frame.values.iter().filter_map(|(leaf, v)| Some((self.leaves.get(leaf)?.0.as_str(), v))),
             frame
                 .winners
                 .iter()

@@ -280,7 +280,7 @@ pub fn compare(rec: &Recording, graph: &Graph, frame: &Frame) -> Option<Divergen
     let name = |leaf: usize| graph.leaves.get(leaf).map_or("?", |l| l.path.as_str());
     let skill = |i: usize| graph.instances.get(i).map_or("?", |d| d.name.as_str());
     let hash = cycle_hash(
-        frame.values.iter().map(|(l, v)| (name(*l), v)),
+        frame.values.iter().map(|(l, v)| (name(l), v)),
         frame.winners.iter().map(|&(l, i)| (name(l), skill(i))),
     );
     let Some(recorded) = rec.cycles.get(&frame.cycle) else {
@@ -302,7 +302,9 @@ pub fn compare(rec: &Recording, graph: &Graph, frame: &Frame) -> Option<Divergen
     for (path, j) in &recorded.leaves {
         by_path.entry(path.as_str()).or_default().0 = Some(j);
     }
-    for (l, v) in &frame.values {
+    // A cycle that differs is rare: its values are made owned to compare.
+    let replayed: Vec<(usize, Value)> = frame.values.iter().map(|(l, v)| (l, v.to_value())).collect();
+    for (l, v) in &replayed {
         by_path.entry(name(*l)).or_default().1 = Some(v);
     }
     let mut diffs: Vec<Divergence> = Vec::new();

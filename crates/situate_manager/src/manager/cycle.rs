@@ -206,13 +206,13 @@ impl Manager {
         let cycle = self.cycle;
         let (mut values, mut winners) = match self.spare_frame.take() {
             Some(f) => (f.values, f.winners),
-            None => (Vec::new(), Vec::new()),
+            None => (crate::FrameValues::default(), Vec::new()),
         };
         values.reserve(self.slots.len());
         for (l, s) in self.slots.iter().enumerate() {
             if s.stamp == cycle {
                 if let Some(v) = &s.value {
-                    values.push((l, v.clone()));
+                    values.push(l, v);
                 }
             }
         }
@@ -232,7 +232,7 @@ impl Manager {
             }
             Err(crossbeam_channel::TrySendError::Disconnected(_)) => false,
         };
-        // Each tap but the last gets a copy (its values by reference count).
+        // Each tap but the last gets a copy.
         let Some((last, others)) = self.taps.split_last() else { return };
         // Taps whose receiver is gone (`Vec::new` allocates nothing).
         let mut gone = Vec::new();
@@ -251,17 +251,14 @@ impl Manager {
 
     /// Takes back the frames the taps' readers are done with
     /// ([`TapReceiver::give_back`](super::TapReceiver::give_back)): their
-    /// values are let go of here, on the cycle's thread, where an array's
-    /// buffer can be kept for the skill that writes it next; one frame's
-    /// lists are kept, emptied, for the next frame.
+    /// shared values are let go of here, on the cycle's thread; one frame's
+    /// buffers are kept, emptied, for the next frame.
     fn take_back_frames(&mut self) {
         for tap in &self.taps {
             // A few per cycle: the work is bounded whatever the reader does.
             for _ in 0..4 {
                 let Ok(mut frame) = tap.returns.try_recv() else { break };
-                for (_, value) in frame.values.drain(..) {
-                    recycle(value);
-                }
+                frame.values.clear(recycle);
                 frame.winners.clear();
                 frame.prints.clear();
                 if self.spare_frame.is_none() {
