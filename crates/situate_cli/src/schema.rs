@@ -253,10 +253,10 @@ pub(crate) fn robot() -> Json {
 fn ros2() -> Json {
     json!({
         "type": "object",
-        "description": "Publish signals as ROS 2 topics over the link's Zenoh session (docs/ros2.md).",
+        "description": "Publish signals as ROS 2 topics, and offer activation and parameters as ROS 2 services, over the link's Zenoh session (docs/ros2.md).",
         "additionalProperties": false,
-        "required": ["topics"],
         "properties": {
+            "services": {"type": "boolean", "description": "Activation (<node>/<skill>/set_active) and the skills' parameters as ROS 2 services (default false)."},
             "domain_id": {"type": "integer", "minimum": 0, "maximum": 232},
             "namespace": {"type": "string", "description": "Empty (the root) or absolute, e.g. /robot1."},
             "node": {"type": "string", "description": "The node's name (default: the robot's)."},

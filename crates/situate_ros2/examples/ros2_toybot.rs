@@ -4,8 +4,9 @@
 //! real CDR library.
 //!
 //! `cargo run -p situate_ros2 --example ros2_toybot -- [--listen tcp/127.0.0.1:7447] [--ros2 FILE]`
-//! where FILE holds a `ros2:` mapping (default: drive, odom and the sonar ring). Prints
-//! `ready <node token>` once the bridge publishes, and runs until its standard input closes.
+//! where FILE holds a `ros2:` mapping (default: drive, odom and the sonar ring, and the
+//! services). Prints `ready <node token>` once the bridge publishes, and runs until its standard
+//! input closes.
 
 use std::io::Read;
 use std::time::Duration;
@@ -19,7 +20,8 @@ const ROBOT: &str = "robot: toybot\ncycle: {rate_hz: 50}\ndevices:\n  - {name: s
     - {name: wheels, type: toy.wheels}\nskills:\n  - {name: runaway, type: toy.runaway}\n  \
     - {name: wander, type: toy.wander}\n";
 
-const ROS2: &str = "ros2:\n  topics:\n    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}\n    \
+const ROS2: &str =
+    "ros2:\n  services: true\n  topics:\n    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}\n    \
     - {signal: odom, topic: odom, type: nav_msgs/msg/Odometry}\n    \
     - {signal: sonar.range, topic: sonar, type: sensor_msgs/msg/LaserScan, range_max: 4.0}\n";
 

@@ -3,6 +3,7 @@
 //! ```yaml
 //! ros2:
 //!   domain_id: 0          # ROS_DOMAIN_ID (default 0)
+//!   services: true        # activation and parameters as ROS 2 services (default false)
 //!   namespace: /robot1    # the node's namespace (default: none)
 //!   node: situate         # the node's name (default: the robot's name)
 //!   rate_hz: 20           # how often signals are sampled (default 20, at most 100)
@@ -37,7 +38,12 @@ pub struct Ros2Config {
     #[serde(default = "default_rate_hz")]
     pub rate_hz: f64,
     /// The signals to publish.
+    #[serde(default)]
     pub topics: Vec<TopicConfig>,
+    /// Offer activation (`<node>/<skill>/set_active`, `std_srvs/srv/SetBool`) and the skills'
+    /// parameters (the node's parameter services) as ROS 2 services (default: no).
+    #[serde(default)]
+    pub services: bool,
 }
 
 fn default_rate_hz() -> f64 {
@@ -114,8 +120,11 @@ impl Ros2Config {
                 return Err(format!("`node` is no ROS 2 node name: {node:?} (letters, digits, underscores)"));
             }
         }
-        if self.topics.is_empty() {
-            return Err("`topics` is empty: name at least one signal to publish".into());
+        if self.topics.is_empty() && !self.services {
+            return Err(
+                "`topics` is empty and `services` is off: name at least one signal to publish, or set `services: true`"
+                    .into(),
+            );
         }
         let mut seen = std::collections::HashSet::new();
         for (i, t) in self.topics.iter().enumerate() {
@@ -232,5 +241,15 @@ ros2:
         ))
         .expect_err("twice");
         assert!(e.message.contains("`/x` is published twice"), "{e}");
+    }
+
+    #[test]
+    fn services_alone_are_enough_and_nothing_at_all_is_refused() {
+        let c = Ros2Config::from_node(&section("ros2:\n  services: true\n")).expect("services alone");
+        assert!(c.services && c.topics.is_empty());
+        let e = Ros2Config::from_node(&section("ros2:\n  domain_id: 1\n")).expect_err("nothing to do");
+        assert!(e.message.contains("`services: true`"), "{e}");
+        let e = Ros2Config::from_node(&section("ros2:\n  services: yes please\n")).expect_err("not a bool");
+        assert!(e.message.contains("bool"), "{e}");
     }
 }

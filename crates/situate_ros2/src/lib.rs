@@ -20,12 +20,13 @@
 //! # Ok(()) }
 //! ```
 //!
-//! Only publishing is done: services (activation, parameters) are not offered — see
-//! `docs/ros2.md`.
+//! With `services: true`, activation and the skills' parameters are ROS 2 services too
+//! ([`services`]): `ros2 service call …/set_active std_srvs/srv/SetBool`, `ros2 param set`.
 
 pub mod config;
 pub mod msgs;
 pub mod rmw;
+pub mod services;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -85,6 +86,7 @@ pub struct Bridge {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
     topics: Vec<(String, String)>,
+    servers: Option<services::Servers>,
     node_token: String,
 }
 
@@ -139,6 +141,16 @@ impl Bridge {
                 warned: false,
             });
         }
+        let servers = if config.services {
+            let first = config.topics.len() as u64 + 1;
+            let servers = services::Servers::start(&handle, &session, &node, node_id, first)?;
+            for (name, key) in &servers.names {
+                tracing::info!(service = %name, %key, "ROS 2 service offered");
+            }
+            Some(servers)
+        } else {
+            None
+        };
         let names = topics.iter().map(|t| (t.fq_name.clone(), t.publisher.key_expr().to_string())).collect();
         let stop = Arc::new(AtomicBool::new(false));
         let period = Duration::from_secs_f64(1.0 / config.rate_hz);
@@ -150,12 +162,17 @@ impl Bridge {
                 sample_loop(&handle, &mut topics, period, &st);
             })
             .map_err(Ros2Error::Thread)?;
-        Ok(Bridge { stop, thread: Some(thread), topics: names, node_token })
+        Ok(Bridge { stop, thread: Some(thread), topics: names, servers, node_token })
     }
 
     /// Each topic's fully qualified name and the Zenoh key its messages are put on.
     pub fn topics(&self) -> &[(String, String)] {
         &self.topics
+    }
+
+    /// Each service's fully qualified name and its key expression (none without `services`).
+    pub fn services(&self) -> &[(String, String)] {
+        self.servers.as_ref().map_or(&[], |s| s.names.as_slice())
     }
 
     /// The node's liveliness token.
@@ -169,6 +186,9 @@ impl Bridge {
     }
 
     fn stop_inner(&mut self) {
+        if let Some(mut servers) = self.servers.take() {
+            servers.stop();
+        }
         self.stop.store(true, Ordering::SeqCst);
         if let Some(t) = self.thread.take() {
             if t.join().is_err() {

@@ -10,8 +10,11 @@
 //! - **Discovery:** liveliness tokens, held while the entity lives, under `@ros2_lv`:
 //!   `@ros2_lv/<domain>/<zid>/<node_id>/<node_id>/NN/<enclave>/<namespace>/<node>` for the node,
 //!   `@ros2_lv/<domain>/<zid>/<node_id>/<entity_id>/MP/<enclave>/<namespace>/<node>/<topic>/<type>/<type_hash>/<qos>`
-//!   for a publisher, with every `/` inside a name written `%` and an empty name as `%`. That is
-//!   what `ros2 topic list` and `ros2 node list` read.
+//!   for a publisher (`SS` for a service server), with every `/` inside a name written `%` and an
+//!   empty name as `%`. That is what `ros2 topic list`, `ros2 service list` and `ros2 node list`
+//!   read.
+//! - **Services:** a queryable on `<domain_id>/<service>/<pkg>::srv::dds_::<Name>_/<type_hash>`;
+//!   the reply carries the request's sequence number and the client's GID (see `services`).
 
 use zenoh::bytes::ZBytes;
 use zenoh_ext::ZSerializer;
@@ -60,22 +63,42 @@ impl NodeName {
 
     /// A publisher's liveliness token.
     pub fn publisher_token(&self, zid: &str, node_id: u64, entity_id: u64, fq_topic: &str, ty: MsgType) -> String {
+        self.entity_token(zid, node_id, entity_id, "MP", fq_topic, &ty.dds_name(), ty.type_hash())
+    }
+
+    /// An entity's liveliness token: `kind` is `MP` (publisher), `SS` (service server), …; the
+    /// services' default QoS is the topics' (reliable, volatile, keep last 10).
+    #[allow(clippy::too_many_arguments)]
+    pub fn entity_token(
+        &self,
+        zid: &str,
+        node_id: u64,
+        entity_id: u64,
+        kind: &str,
+        fq_name: &str,
+        dds_type: &str,
+        type_hash: &str,
+    ) -> String {
         let ns = if self.namespace == "/" { "" } else { &self.namespace };
         format!(
-            "@ros2_lv/{}/{zid}/{node_id}/{entity_id}/MP/%/{}/{}/{}/{}/{}/{QOS_DEFAULT_DEPTH_10}",
+            "@ros2_lv/{}/{zid}/{node_id}/{entity_id}/{kind}/%/{}/{}/{}/{}/{type_hash}/{QOS_DEFAULT_DEPTH_10}",
             self.domain_id,
             mangle(ns),
             mangle(&self.name),
-            mangle(fq_topic),
-            mangle(&ty.dds_name()),
-            ty.type_hash(),
+            mangle(fq_name),
+            mangle(dds_type),
         )
     }
 
     /// The key expression a topic's messages are put on.
     pub fn topic_key(&self, fq_topic: &str, ty: MsgType) -> String {
-        let topic = fq_topic.trim_start_matches('/').trim_end_matches('/');
-        format!("{}/{topic}/{}/{}", self.domain_id, ty.dds_name(), ty.type_hash())
+        self.service_key(fq_topic, &ty.dds_name(), ty.type_hash())
+    }
+
+    /// The key expression of a topic or a service: `<domain>/<name>/<type>/<hash>`.
+    pub fn service_key(&self, fq_name: &str, dds_type: &str, type_hash: &str) -> String {
+        let name = fq_name.trim_start_matches('/').trim_end_matches('/');
+        format!("{}/{name}/{dds_type}/{type_hash}", self.domain_id)
     }
 }
 
