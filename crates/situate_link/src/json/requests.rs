@@ -263,32 +263,53 @@ fn untyped_value(j: &Json) -> Option<Value> {
     }
 }
 
+/// Why a payload is not a JSON object of arguments (each caller words it).
+enum NotAnObject {
+    /// Larger than [`MAX_PAYLOAD_BYTES`]: its size (refused before parsing).
+    TooLarge(usize),
+    /// JSON, but not an object.
+    Other(Json),
+    /// Not JSON, as `serde_json` reads it.
+    NotJson(serde_json::Error),
+}
+
+/// The payload as a JSON object, `{}` when empty (or only whitespace).
+fn payload_object(payload: &[u8]) -> Result<Map<String, Json>, NotAnObject> {
+    if payload.len() > MAX_PAYLOAD_BYTES {
+        // Refused before parsing: no request, however large, may cost the robot more than this.
+        return Err(NotAnObject::TooLarge(payload.len()));
+    }
+    if payload.iter().all(u8::is_ascii_whitespace) {
+        return Ok(Map::new());
+    }
+    match serde_json::from_slice::<Json>(payload) {
+        Ok(Json::Object(obj)) => Ok(obj),
+        Ok(other) => Err(NotAnObject::Other(other)),
+        Err(e) => Err(NotAnObject::NotJson(e)),
+    }
+}
+
 /// The payload's members as arguments. A member JSON allows but this decoder
 /// cannot hold (a number beyond a 64-bit float) is kept aside as its text, so
 /// that its refusal names the argument.
 fn payload_args<'a>(verb: &'a str, payload: &[u8]) -> Result<Args<'a>, WireError> {
-    if payload.len() > MAX_PAYLOAD_BYTES {
-        // Refused before parsing: no request, however large, may cost the robot more than this.
-        return Err(WireError::bad_request(format!(
-            "`{verb}`: the request is {} bytes, at most {MAX_PAYLOAD_BYTES} are taken",
-            payload.len()
-        )));
-    }
-    let mut args = Args { verb, obj: Map::new(), huge: BTreeMap::new() };
-    if payload.iter().all(u8::is_ascii_whitespace) {
-        return Ok(args);
-    }
-    let first = match serde_json::from_slice::<Json>(payload) {
-        Ok(Json::Object(obj)) => return Ok(Args { obj, ..args }),
-        Ok(other) => {
+    let first = match payload_object(payload) {
+        Ok(obj) => return Ok(Args { verb, obj, huge: BTreeMap::new() }),
+        Err(NotAnObject::TooLarge(n)) => {
+            return Err(WireError::bad_request(format!(
+                "`{verb}`: the request is {n} bytes, at most {MAX_PAYLOAD_BYTES} are taken"
+            )))
+        }
+        Err(NotAnObject::Other(other)) => {
             return Err(WireError::bad_request(format!(
                 "`{verb}`: the payload must be a JSON object, got {}",
                 describe(&other)
             )))
         }
-        Err(e) => e,
+        Err(NotAnObject::NotJson(e)) => e,
     };
     let not_json = || WireError::bad_request(format!("`{verb}`: the payload is not JSON: {first}"));
+    let mut args = Args { verb, obj: Map::new(), huge: BTreeMap::new() };
     let raw = serde_json::from_slice::<BTreeMap<String, Box<RawValue>>>(payload).map_err(|_| not_json())?;
     for (name, member) in raw {
         match serde_json::from_str::<Json>(member.get()) {
@@ -356,20 +377,13 @@ pub fn decode_batch(payload: &[u8]) -> Result<Vec<(String, Vec<u8>)>, WireError>
 /// ([`crate::server::Verbs`]): a JSON object no larger than
 /// [`MAX_PAYLOAD_BYTES`], `{}` for an empty payload.
 pub fn decode_args(verb: &str, payload: &[u8]) -> Result<Json, WireError> {
-    if payload.len() > MAX_PAYLOAD_BYTES {
-        return Err(WireError::bad_request(format!(
-            "`{verb}`: the request is {} bytes, more than {MAX_PAYLOAD_BYTES}",
-            payload.len()
-        )));
-    }
-    if payload.iter().all(u8::is_ascii_whitespace) {
-        return Ok(Json::Object(serde_json::Map::new()));
-    }
-    match serde_json::from_slice::<Json>(payload) {
-        Ok(j @ Json::Object(_)) => Ok(j),
-        Ok(_) => Err(WireError::bad_request(format!("`{verb}`: the arguments must be a JSON object"))),
-        Err(e) => Err(WireError::bad_request(format!("`{verb}`: the arguments are not JSON: {e}"))),
-    }
+    payload_object(payload).map(Json::Object).map_err(|why| {
+        WireError::bad_request(match why {
+            NotAnObject::TooLarge(n) => format!("`{verb}`: the request is {n} bytes, more than {MAX_PAYLOAD_BYTES}"),
+            NotAnObject::Other(_) => format!("`{verb}`: the arguments must be a JSON object"),
+            NotAnObject::NotJson(e) => format!("`{verb}`: the arguments are not JSON: {e}"),
+        })
+    })
 }
 
 pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> {
@@ -755,6 +769,38 @@ mod tests {
         let big = "a".repeat(MAX_CONDITION_CHARS - 4) + " > 1";
         let e = refused("monitor_add", &json!({"any": vec![big; 16]}).to_string());
         assert!(e.message.contains("at most 65536 are taken"), "{}", e.message);
+    }
+
+    #[test]
+    fn a_program_verbs_arguments_are_an_object_or_refused_saying_why() {
+        let args = |payload: &[u8]| decode_args("mission", payload);
+        assert_eq!(args(b"").unwrap(), json!({}));
+        assert_eq!(args(b" \n\t").unwrap(), json!({}));
+        assert_eq!(args(br#"{"goal": "dock", "speed": 0.5}"#).unwrap(), json!({"goal": "dock", "speed": 0.5}));
+        // Every refusal is a `bad_request` naming the verb.
+        let refused = |payload: &[u8]| {
+            let e = args(payload).unwrap_err();
+            assert_eq!(e.kind, "bad_request", "{}", e.message);
+            e.message
+        };
+        // The size is checked before parsing, whatever the bytes.
+        for filler in [b' ', b'x'] {
+            let mut big = vec![filler; MAX_PAYLOAD_BYTES + 1];
+            if filler == b' ' {
+                big[..2].copy_from_slice(b"{}");
+            }
+            assert_eq!(refused(&big), "`mission`: the request is 65537 bytes, more than 65536");
+        }
+        let edge = format!(r#"{{"goal": "{}"}}"#, "x".repeat(MAX_PAYLOAD_BYTES - 12));
+        assert_eq!(edge.len(), MAX_PAYLOAD_BYTES);
+        assert!(args(edge.as_bytes()).is_ok());
+        for payload in [&b"[1]"[..], b"3", b"\"dock\"", b"null"] {
+            assert_eq!(refused(payload), "`mission`: the arguments must be a JSON object");
+        }
+        for payload in [&b"{"[..], b"{\"goal\": }", b"goal=dock", b"{\"speed\": 1e400}"] {
+            let serde = serde_json::from_slice::<Json>(payload).unwrap_err();
+            assert_eq!(refused(payload), format!("`mission`: the arguments are not JSON: {serde}"));
+        }
     }
 
     #[test]
