@@ -41,7 +41,9 @@ pub struct Recording {
     /// The `situate` metadata record (robot, period_s, robot_file, sets, …).
     pub metadata: BTreeMap<String, String>,
     pub cycles: BTreeMap<u64, Cycle>,
-    /// Changes of a resource's holder: (cycle, resource leaf, skill).
+    /// Changes of a resource's holder: (cycle, resource leaf, skill), in
+    /// the order recorded ([`Recording::holder`] looks them up in an index
+    /// made when the recording is read).
     pub winners: Vec<(u64, String, String)>,
     /// The events in the order they were recorded: (kind, the event's JSON).
     pub events: Vec<(String, Json)>,
@@ -49,6 +51,8 @@ pub struct Recording {
     pub keyframes: BTreeMap<u64, State>,
     /// Messages read, all channels.
     pub messages: u64,
+    /// `winners` by resource: (cycle, skill), by cycle.
+    holders: BTreeMap<String, Vec<(u64, String)>>,
 }
 
 /// Every leaf's latest value at a cycle: path → (the cycle it was written
@@ -134,6 +138,7 @@ impl Recording {
                 }
             }
         }
+        rec.holders = by_resource(&rec.winners);
         Ok(rec)
     }
 
@@ -168,6 +173,88 @@ impl Recording {
 
     /// Who held `resource` in `cycle` (the last change at or before it).
     pub fn holder(&self, resource: &str, cycle: u64) -> Option<&str> {
-        self.winners.iter().rfind(|(c, r, _)| *c <= cycle && r == resource).map(|(_, _, s)| s.as_str())
+        let changes = self.holders.get(resource)?;
+        let k = changes.partition_point(|&(c, _)| c <= cycle);
+        k.checked_sub(1).map(|j| changes[j].1.as_str())
+    }
+}
+
+/// Each resource's changes of holder, (cycle, skill), by cycle (those of
+/// one cycle in the order recorded).
+fn by_resource(winners: &[(u64, String, String)]) -> BTreeMap<String, Vec<(u64, String)>> {
+    let mut holders: BTreeMap<String, Vec<(u64, String)>> = BTreeMap::new();
+    for (c, resource, skill) in winners {
+        holders.entry(resource.clone()).or_default().push((*c, skill.clone()));
+    }
+    for changes in holders.values_mut() {
+        changes.sort_by_key(|&(c, _)| c);
+    }
+    holders
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A recording holding only these changes of holder, (cycle, resource,
+    /// skill), in this order.
+    fn with_winners(winners: &[(u64, &str, &str)]) -> Recording {
+        let mut w = mcap::WriteOptions::new().create(std::io::Cursor::new(Vec::new())).unwrap();
+        let metadata = BTreeMap::from([("robot".to_string(), "test".to_string())]);
+        w.write_metadata(&mcap::records::Metadata { name: "situate".into(), metadata }).unwrap();
+        let schema = w.add_schema("situate.winner", "jsonschema", b"{}").unwrap();
+        let channel = w.add_channel(schema, "situate/winners", "json", &BTreeMap::new()).unwrap();
+        for (k, &(cycle, resource, skill)) in winners.iter().enumerate() {
+            let header = mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: k as u32,
+                log_time: cycle,
+                publish_time: cycle,
+            };
+            let data = serde_json::json!({"cycle": cycle, "resource": resource, "skill": skill});
+            w.write_to_known_channel(&header, &serde_json::to_vec(&data).unwrap()).unwrap();
+        }
+        w.finish().unwrap();
+        let bytes = w.into_inner().into_inner();
+        Recording::from_bytes(Path::new("winners.mcap"), &bytes).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn holder_is_the_last_change_at_or_before_the_cycle() {
+        let rec = with_winners(&[
+            (10, "arm.cmd", "low"),
+            (12, "wheels.cmd", "nav"),
+            (20, "arm.cmd", "high"),
+            (35, "arm.cmd", "low"),
+            (35, "wheels.cmd", "dock"),
+            (35, "wheels.cmd", "stop"),
+        ]);
+        assert_eq!(rec.winners.len(), 6);
+        // Before the resource's first change: no one.
+        assert_eq!(rec.holder("arm.cmd", 0), None);
+        assert_eq!(rec.holder("arm.cmd", 9), None);
+        assert_eq!(rec.holder("wheels.cmd", 11), None);
+        // At a change's cycle: that change.
+        assert_eq!(rec.holder("arm.cmd", 10), Some("low"));
+        assert_eq!(rec.holder("arm.cmd", 20), Some("high"));
+        assert_eq!(rec.holder("wheels.cmd", 12), Some("nav"));
+        // Two changes in one cycle: the later one recorded.
+        assert_eq!(rec.holder("wheels.cmd", 35), Some("stop"));
+        // Between changes, and after the last: the one before.
+        assert_eq!(rec.holder("arm.cmd", 11), Some("low"));
+        assert_eq!(rec.holder("arm.cmd", 34), Some("high"));
+        assert_eq!(rec.holder("arm.cmd", u64::MAX), Some("low"));
+        assert_eq!(rec.holder("wheels.cmd", 34), Some("nav"));
+        // Another resource's changes are not this one's.
+        assert_eq!(rec.holder("gripper.cmd", 20), None);
+        assert_eq!(rec.holder("arm", 20), None);
+        // The same answers as a scan of every change, at every cycle.
+        for resource in ["arm.cmd", "wheels.cmd", "gripper.cmd"] {
+            for cycle in 0..40 {
+                let scan =
+                    rec.winners.iter().rfind(|(c, r, _)| *c <= cycle && r == resource).map(|(_, _, s)| s.as_str());
+                assert_eq!(rec.holder(resource, cycle), scan, "{resource} at {cycle}");
+            }
+        }
     }
 }

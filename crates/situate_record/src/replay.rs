@@ -142,19 +142,6 @@ impl Skill for Player {
 /// recording, with the types of `graph`'s leaves. A recorded value that does
 /// not fit its leaf's type is an error naming the cycle and the leaf.
 pub fn build_tape(rec: &Recording, graph: &Graph, players: &[String]) -> Result<Tape, String> {
-    // Each resource's holders, by cycle.
-    let mut holders: HashMap<&str, Vec<(u64, &str)>> = HashMap::new();
-    for (c, resource, skill) in &rec.winners {
-        holders.entry(resource.as_str()).or_default().push((*c, skill.as_str()));
-    }
-    for list in holders.values_mut() {
-        list.sort_by_key(|&(c, _)| c);
-    }
-    let holder = |resource: &str, cycle: u64| -> Option<&str> {
-        let list = holders.get(resource)?;
-        let k = list.partition_point(|&(c, _)| c <= cycle);
-        k.checked_sub(1).map(|j| list[j].1)
-    };
     let index: HashMap<&str, usize> = graph.instances.iter().enumerate().map(|(i, d)| (d.name.as_str(), i)).collect();
     let wanted: Vec<usize> = players.iter().filter_map(|p| index.get(p.as_str()).copied()).collect();
     let mut tape = Tape::default();
@@ -167,7 +154,7 @@ pub fn build_tape(rec: &Recording, graph: &Graph, players: &[String]) -> Result<
             let def = &graph.leaves[leaf];
             let value = value_from_json(j, &def.ty).map_err(|e| format!("cycle {cycle}, `{path}`: {e}"))?;
             let writer = if def.is_resource() {
-                holder(path, cycle).and_then(|s| index.get(s).copied())
+                rec.holder(path, cycle).and_then(|s| index.get(s).copied())
             } else {
                 def.writers.first().map(|&(i, _)| i)
             };

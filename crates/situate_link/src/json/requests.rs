@@ -1,190 +1,17 @@
-//! The protocol's JSON forms (docs/protocol.md): values by type, requests,
-//! replies, errors and events.
+//! Requests: a verb's payload decoded into what the manager or the link
+//! answers, with the limits a request is held to.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use base64::Engine as _;
 use serde_json::value::RawValue;
-use serde_json::{json, Map, Value as Json};
-use situate_core::{ElemType, ParamType, SignalType, Value};
-use situate_manager::control::{GraphInfo, MonitorInfo};
-use situate_manager::{
-    ControlError, Event, ManagerStats, MonitorCondition, MonitorMode, Reply, Request, SignalReading, SkillInfo,
-    MAX_ANY_CONDITIONS,
-};
+use serde_json::{Map, Value as Json};
+use situate_core::Value;
+use situate_manager::{MonitorCondition, MonitorMode, Request, MAX_ANY_CONDITIONS};
 
-/// The protocol version this crate speaks.
-pub const PROTOCOL: i64 = 1;
-
-/// Every request verb, in the order of docs/protocol.md.
-pub const VERBS: &[&str] = &[
-    "hello",
-    "activate",
-    "deactivate",
-    "set_param",
-    "get_param",
-    "set_priority",
-    "set_verbose",
-    "query",
-    "skill",
-    "skills",
-    "winners",
-    "graph",
-    "stats",
-    "monitor_add",
-    "monitor_cancel",
-    "monitor_list",
-    "telemetry",
-    "run",
-    "stop",
-    "step",
-];
-
-/// A request the link could not even hand to the manager.
-#[derive(Debug, Clone, PartialEq)]
-pub struct WireError {
-    pub kind: &'static str,
-    pub message: String,
-}
-
-impl WireError {
-    pub fn bad_request(message: impl Into<String>) -> Self {
-        WireError { kind: "bad_request", message: message.into() }
-    }
-}
-
-// ----- values -------------------------------------------------------------
-
-fn float_to_json(x: f64) -> Json {
-    if x.is_finite() {
-        json!(x)
-    } else if x.is_nan() {
-        json!("nan")
-    } else if x > 0.0 {
-        json!("inf")
-    } else {
-        json!("-inf")
-    }
-}
-
-fn json_to_float(j: &Json) -> Option<f64> {
-    match j {
-        Json::Number(n) => n.as_f64(),
-        Json::String(s) => match s.as_str() {
-            "nan" => Some(f64::NAN),
-            "inf" => Some(f64::INFINITY),
-            "-inf" => Some(f64::NEG_INFINITY),
-            _ => None,
-        },
-        _ => None,
-    }
-}
-
-/// A value's JSON form (self-describing enough for any client; the type
-/// travels beside it where it matters).
-pub fn value_to_json(v: &Value) -> Json {
-    match v {
-        Value::Bool(b) => json!(b),
-        Value::I64(x) => json!(x),
-        Value::F64(x) => float_to_json(*x),
-        Value::Str(s) => json!(&**s),
-        Value::Bytes(b) => json!({"$bytes": base64::engine::general_purpose::STANDARD.encode(b)}),
-        Value::F32s(a) => Json::Array(a.iter().map(|x| float_to_json(f64::from(*x))).collect()),
-        Value::F64s(a) => Json::Array(a.iter().map(|x| float_to_json(*x)).collect()),
-        Value::I64s(a) => Json::Array(a.iter().map(|x| json!(x)).collect()),
-        Value::Record(r) => Json::Object(r.fields.iter().map(|(n, v)| (n.to_string(), value_to_json(v))).collect()),
-    }
-}
-
-pub fn opt_value_to_json(v: &Option<Value>) -> Json {
-    v.as_ref().map(value_to_json).unwrap_or(Json::Null)
-}
-
-/// Reads a value of type `ty`; the error says what was expected.
-pub fn value_from_json(j: &Json, ty: &SignalType) -> Result<Value, String> {
-    let fail = || format!("expected {ty}, got {}", describe(j));
-    match ty {
-        SignalType::Bool => j.as_bool().map(Value::Bool).ok_or_else(fail),
-        SignalType::I64 => j.as_i64().map(Value::I64).ok_or_else(fail),
-        SignalType::F64 => json_to_float(j).map(Value::F64).ok_or_else(fail),
-        SignalType::Str => j.as_str().map(|s| Value::Str(Arc::from(s))).ok_or_else(fail),
-        SignalType::Bytes => j
-            .get("$bytes")
-            .and_then(Json::as_str)
-            .and_then(|b| base64::engine::general_purpose::STANDARD.decode(b).ok())
-            .map(|b| Value::Bytes(Arc::from(b)))
-            .ok_or_else(fail),
-        SignalType::Array { elem, len } => {
-            let items = j.as_array().ok_or_else(fail)?;
-            if len.is_some_and(|n| n != items.len()) {
-                return Err(format!("expected {ty}, got an array of {} elements", items.len()));
-            }
-            let v = match elem {
-                ElemType::F32 => Value::F32s(
-                    items
-                        .iter()
-                        .map(|x| json_to_float(x).map(|f| f as f32))
-                        .collect::<Option<Vec<_>>>()
-                        .ok_or_else(fail)?
-                        .into(),
-                ),
-                ElemType::F64 => {
-                    Value::F64s(items.iter().map(json_to_float).collect::<Option<Vec<_>>>().ok_or_else(fail)?.into())
-                }
-                ElemType::I64 => {
-                    Value::I64s(items.iter().map(Json::as_i64).collect::<Option<Vec<_>>>().ok_or_else(fail)?.into())
-                }
-            };
-            Ok(v)
-        }
-        SignalType::Record(rt) => {
-            let obj = j.as_object().ok_or_else(fail)?;
-            if let Some(extra) = obj.keys().find(|k| rt.field(k).is_none()) {
-                return Err(format!("expected {ty}, got an unknown field `{extra}`"));
-            }
-            let mut fields = Vec::with_capacity(rt.fields.len());
-            for (name, fty) in &rt.fields {
-                let fj = obj.get(name).ok_or_else(|| format!("expected {ty}, field `{name}` is missing"))?;
-                let fv = value_from_json(fj, fty).map_err(|e| format!("field `{name}`: {e}"))?;
-                fields.push((Arc::from(name.as_str()), fv));
-            }
-            Ok(Value::Record(Arc::new(situate_core::RecordValue { fields })))
-        }
-    }
-}
-
-/// A parameter value as the manager sends it to a remote skill, before the
-/// declaration's check (which maps an integer to a float where one is due).
-pub fn param_from_json(j: &Json) -> Result<Value, String> {
-    match j {
-        Json::Bool(b) => Ok(Value::Bool(*b)),
-        Json::Number(n) => match n.as_i64() {
-            Some(i) => Ok(Value::I64(i)),
-            None => n.as_f64().map(Value::F64).ok_or_else(|| "a number out of range".to_string()),
-        },
-        Json::String(s) => Ok(Value::Str(Arc::from(s.as_str()))),
-        other => Err(format!("a parameter value is a bool, number or string, got {}", describe(other))),
-    }
-}
-
-fn describe(j: &Json) -> String {
-    match j {
-        Json::Null => "null".into(),
-        Json::Bool(b) => b.to_string(),
-        Json::Number(n) => n.to_string(),
-        Json::String(s) => {
-            let short: String = s.chars().take(40).collect();
-            format!("{short:?}")
-        }
-        Json::Array(_) => "an array".into(),
-        Json::Object(_) => "an object".into(),
-    }
-}
-
-pub fn param_type_name(t: ParamType) -> &'static str {
-    t.name()
-}
+use super::values::{describe, json_to_float};
+use super::{WireError, PROTOCOL, VERBS};
 
 /// The largest request payload taken, in bytes (larger: `bad_request`, before parsing).
 pub const MAX_PAYLOAD_BYTES: usize = 64 * 1024;
@@ -201,8 +28,6 @@ pub const MAX_LIST_ITEMS: usize = 1024;
 pub const MIN_TELEMETRY_HZ: f64 = 0.01;
 /// The fastest: 100 samples a second.
 pub const MAX_TELEMETRY_HZ: f64 = 100.0;
-
-// ----- requests -----------------------------------------------------------
 
 /// What a verb turns into: a manager request, or something the link itself
 /// answers.
@@ -438,32 +263,53 @@ fn untyped_value(j: &Json) -> Option<Value> {
     }
 }
 
+/// Why a payload is not a JSON object of arguments (each caller words it).
+enum NotAnObject {
+    /// Larger than [`MAX_PAYLOAD_BYTES`]: its size (refused before parsing).
+    TooLarge(usize),
+    /// JSON, but not an object.
+    Other(Json),
+    /// Not JSON, as `serde_json` reads it.
+    NotJson(serde_json::Error),
+}
+
+/// The payload as a JSON object, `{}` when empty (or only whitespace).
+fn payload_object(payload: &[u8]) -> Result<Map<String, Json>, NotAnObject> {
+    if payload.len() > MAX_PAYLOAD_BYTES {
+        // Refused before parsing: no request, however large, may cost the robot more than this.
+        return Err(NotAnObject::TooLarge(payload.len()));
+    }
+    if payload.iter().all(u8::is_ascii_whitespace) {
+        return Ok(Map::new());
+    }
+    match serde_json::from_slice::<Json>(payload) {
+        Ok(Json::Object(obj)) => Ok(obj),
+        Ok(other) => Err(NotAnObject::Other(other)),
+        Err(e) => Err(NotAnObject::NotJson(e)),
+    }
+}
+
 /// The payload's members as arguments. A member JSON allows but this decoder
 /// cannot hold (a number beyond a 64-bit float) is kept aside as its text, so
 /// that its refusal names the argument.
 fn payload_args<'a>(verb: &'a str, payload: &[u8]) -> Result<Args<'a>, WireError> {
-    if payload.len() > MAX_PAYLOAD_BYTES {
-        // Refused before parsing: no request, however large, may cost the robot more than this.
-        return Err(WireError::bad_request(format!(
-            "`{verb}`: the request is {} bytes, at most {MAX_PAYLOAD_BYTES} are taken",
-            payload.len()
-        )));
-    }
-    let mut args = Args { verb, obj: Map::new(), huge: BTreeMap::new() };
-    if payload.iter().all(u8::is_ascii_whitespace) {
-        return Ok(args);
-    }
-    let first = match serde_json::from_slice::<Json>(payload) {
-        Ok(Json::Object(obj)) => return Ok(Args { obj, ..args }),
-        Ok(other) => {
+    let first = match payload_object(payload) {
+        Ok(obj) => return Ok(Args { verb, obj, huge: BTreeMap::new() }),
+        Err(NotAnObject::TooLarge(n)) => {
+            return Err(WireError::bad_request(format!(
+                "`{verb}`: the request is {n} bytes, at most {MAX_PAYLOAD_BYTES} are taken"
+            )))
+        }
+        Err(NotAnObject::Other(other)) => {
             return Err(WireError::bad_request(format!(
                 "`{verb}`: the payload must be a JSON object, got {}",
                 describe(&other)
             )))
         }
-        Err(e) => e,
+        Err(NotAnObject::NotJson(e)) => e,
     };
     let not_json = || WireError::bad_request(format!("`{verb}`: the payload is not JSON: {first}"));
+    let mut args = Args { verb, obj: Map::new(), huge: BTreeMap::new() };
     let raw = serde_json::from_slice::<BTreeMap<String, Box<RawValue>>>(payload).map_err(|_| not_json())?;
     for (name, member) in raw {
         match serde_json::from_str::<Json>(member.get()) {
@@ -531,20 +377,13 @@ pub fn decode_batch(payload: &[u8]) -> Result<Vec<(String, Vec<u8>)>, WireError>
 /// ([`crate::server::Verbs`]): a JSON object no larger than
 /// [`MAX_PAYLOAD_BYTES`], `{}` for an empty payload.
 pub fn decode_args(verb: &str, payload: &[u8]) -> Result<Json, WireError> {
-    if payload.len() > MAX_PAYLOAD_BYTES {
-        return Err(WireError::bad_request(format!(
-            "`{verb}`: the request is {} bytes, more than {MAX_PAYLOAD_BYTES}",
-            payload.len()
-        )));
-    }
-    if payload.iter().all(u8::is_ascii_whitespace) {
-        return Ok(Json::Object(serde_json::Map::new()));
-    }
-    match serde_json::from_slice::<Json>(payload) {
-        Ok(j @ Json::Object(_)) => Ok(j),
-        Ok(_) => Err(WireError::bad_request(format!("`{verb}`: the arguments must be a JSON object"))),
-        Err(e) => Err(WireError::bad_request(format!("`{verb}`: the arguments are not JSON: {e}"))),
-    }
+    payload_object(payload).map(Json::Object).map_err(|why| {
+        WireError::bad_request(match why {
+            NotAnObject::TooLarge(n) => format!("`{verb}`: the request is {n} bytes, more than {MAX_PAYLOAD_BYTES}"),
+            NotAnObject::Other(_) => format!("`{verb}`: the arguments must be a JSON object"),
+            NotAnObject::NotJson(e) => format!("`{verb}`: the arguments are not JSON: {e}"),
+        })
+    })
 }
 
 pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> {
@@ -675,225 +514,10 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
     Ok(decoded)
 }
 
-// ----- replies, errors, events ----------------------------------------------
-
-pub fn ok(result: Json) -> Json {
-    json!({ "ok": result })
-}
-
-pub fn wire_error(e: &WireError) -> Json {
-    json!({"error": {"kind": e.kind, "message": e.message}})
-}
-
-pub fn control_error(e: &ControlError) -> Json {
-    let kind = match e {
-        ControlError::UnknownSkill { .. } => "unknown_skill",
-        ControlError::UnknownParam { .. } => "unknown_param",
-        ControlError::BadParam { .. } => "bad_param",
-        ControlError::MissingProviders { .. } => "missing_providers",
-        ControlError::UnknownSignal { .. } => "unknown_signal",
-        ControlError::BadCondition { .. } => "bad_condition",
-        ControlError::BadReport(_) => "unknown_signal",
-        ControlError::UnknownMonitor(_) => "unknown_monitor",
-        ControlError::Invalid(_) => "invalid",
-        ControlError::Disconnected => "unavailable",
-    };
-    let mut err = json!({"kind": kind, "message": e.to_string()});
-    match e {
-        ControlError::MissingProviders { signals, providers, .. } => {
-            err["signals"] = json!(signals);
-            err["providers"] = json!(providers);
-        }
-        ControlError::BadCondition { index, column, pointer, message } => {
-            err["column"] = json!(column);
-            err["pointer"] = json!(pointer);
-            match index {
-                Some(i) => {
-                    err["index"] = json!(i);
-                    err["message"] = json!(format!("any[{i}]: column {column}: {message}"));
-                }
-                None => err["message"] = json!(format!("column {column}: {message}")),
-            }
-        }
-        _ => {}
-    }
-    json!({ "error": err })
-}
-
-pub fn reading_to_json(r: &SignalReading) -> Json {
-    json!({
-        "signal": r.signal,
-        "type": r.ty.to_string(),
-        "value": opt_value_to_json(&r.value),
-        "cycle": r.cycle,
-        "writer": r.writer,
-    })
-}
-
-pub fn skill_to_json(s: &SkillInfo) -> Json {
-    let port = |p: &situate_manager::PortInfo| json!({"name": p.name, "signal": p.signal, "type": p.ty.to_string(), "optional": p.optional, "value": opt_value_to_json(&p.value)});
-    json!({
-        "name": s.name,
-        "type_name": s.type_name,
-        "kind": s.kind.name(),
-        "doc": s.doc,
-        "active": s.active,
-        "faulted": s.faulted,
-        "verbose": s.verbose,
-        "priority": s.priority,
-        "params": s.params.iter().map(|(spec, v)| json!({
-            "name": spec.name,
-            "type": spec.ty.name(),
-            "value": value_to_json(v),
-            "default": value_to_json(&spec.default),
-            "min": spec.min,
-            "max": spec.max,
-            "unit": spec.unit,
-            "doc": spec.doc,
-        })).collect::<Vec<_>>(),
-        "inputs": s.inputs.iter().map(port).collect::<Vec<_>>(),
-        "outputs": s.outputs.iter().map(port).collect::<Vec<_>>(),
-        "timing": {"runs": s.timing.runs, "last_ns": s.timing.last_ns, "max_ns": s.timing.max_ns, "total_ns": s.timing.total_ns},
-        "prints": s.prints.iter().map(|(c, l)| json!([c, l])).collect::<Vec<_>>(),
-    })
-}
-
-pub fn stats_to_json(s: &ManagerStats) -> Json {
-    json!({
-        "robot": s.robot,
-        "cycle": s.cycle,
-        "time_s": s.time_s,
-        "running": s.running,
-        "period_s": s.period_s,
-        "last_cycle_ns": s.last_cycle_ns,
-        "mean_cycle_ns": s.mean_cycle_ns,
-        "max_cycle_ns": s.max_cycle_ns,
-        "overruns": s.overruns,
-        "late_starts": s.late_starts,
-        "request_hold_ns": s.request_hold_ns,
-        "lost_ns": s.lost_ns,
-        "worker_failures": s.worker_failures,
-        "rate_hz": s.rate_hz,
-        "active": s.active,
-    })
-}
-
-fn graph_to_json(g: &GraphInfo) -> Json {
-    json!({
-        "skills": g.skills.iter().map(|s| json!({
-            "name": s.name, "kind": s.kind.name(), "active": s.active, "priority": s.priority,
-            "inputs": s.inputs, "outputs": s.outputs,
-        })).collect::<Vec<_>>(),
-        "signals": g.signals.iter().map(|s| json!({
-            "signal": s.signal, "type": s.ty.to_string(), "writers": s.writers, "readers": s.readers,
-        })).collect::<Vec<_>>(),
-    })
-}
-
-fn monitor_to_json(m: &MonitorInfo) -> Json {
-    json!({
-        "monitor": m.monitor, "condition": m.condition, "any": m.any, "mode": m.mode.name(), "fired": m.fired,
-        "holds": m.holds, "pause": m.pause, "report": m.report, "client": m.client,
-    })
-}
-
-/// A manager reply's `ok` result.
-pub fn reply_to_json(reply: &Reply) -> Json {
-    match reply {
-        Reply::Done => Json::Null,
-        Reply::Activation { changed, at_cycle } => json!({"changed": changed, "at_cycle": at_cycle}),
-        Reply::Param(v) => value_to_json(v),
-        Reply::Signal(r) => reading_to_json(r),
-        Reply::Skill(s) => skill_to_json(s),
-        Reply::Skills(list) => Json::Array(list.iter().map(skill_to_json).collect()),
-        Reply::Winners(w) => Json::Array(
-            w.iter()
-                .map(|w| {
-                    json!({"signal": w.signal, "writers": w.writers, "winner": w.winner, "cycle": w.cycle,
-                        "switches": w.switches, "held_cycles": w.held_cycles})
-                })
-                .collect(),
-        ),
-        Reply::Graph(g) => graph_to_json(g),
-        Reply::Stats(s) => stats_to_json(s),
-        Reply::MonitorAdded(id) => json!({ "monitor": id }),
-        Reply::Monitors(list) => Json::Array(list.iter().map(monitor_to_json).collect()),
-    }
-}
-
-/// An event's key suffix and JSON form.
-pub fn event_to_json(e: &Event) -> (&'static str, Json) {
-    match e {
-        Event::MonitorFired { monitor, condition, cycle, time_s, values, held } => (
-            "monitor_fired",
-            json!({
-                "kind": "monitor_fired", "monitor": monitor, "condition": condition, "cycle": cycle, "time_s": time_s,
-                "values": values.iter().map(|(n, v)| (n.clone(), opt_value_to_json(v))).collect::<Map<_, _>>(),
-                "held": held,
-            }),
-        ),
-        Event::ActivationApplied { activated, deactivated, cycle } => (
-            "activation_applied",
-            json!({"kind": "activation_applied", "activated": activated, "deactivated": deactivated, "cycle": cycle}),
-        ),
-        Event::PriorityChanged { skill, priority, cycle } => (
-            "priority_changed",
-            json!({"kind": "priority_changed", "skill": skill, "priority": priority, "cycle": cycle}),
-        ),
-        Event::ParamChanged { skill, param, value, cycle } => (
-            "param_changed",
-            json!({"kind": "param_changed", "skill": skill, "param": param, "value": value_to_json(value), "cycle": cycle}),
-        ),
-        Event::SkillFaulted { skill, cause, cycle } => {
-            ("skill_faulted", json!({"kind": "skill_faulted", "skill": skill, "cause": cause, "cycle": cycle}))
-        }
-        Event::Print { skill, line, cycle } => {
-            ("print", json!({"kind": "print", "skill": skill, "line": line, "cycle": cycle}))
-        }
-        Event::ManagerStarted { cycle } => ("manager_started", json!({"kind": "manager_started", "cycle": cycle})),
-        Event::ManagerStopped { cycle } => ("manager_stopped", json!({"kind": "manager_stopped", "cycle": cycle})),
-        Event::WorkerFailed { thread, cause, action } => {
-            ("worker_failed", json!({"kind": "worker_failed", "thread": thread, "cause": cause, "action": action}))
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn values_round_trip_by_type() {
-        let t = SignalType::parse("{range: f32[3], id: i64, name: string, raw: bytes, ok: bool, x: f64}").unwrap();
-        let v = situate_core::record_value(vec![
-            ("range", Value::F32s(vec![0.5, f32::INFINITY, 2.0].into())),
-            ("id", Value::I64(3)),
-            ("name", Value::Str("door".into())),
-            ("raw", Value::Bytes(vec![0u8, 255, 7].into())),
-            ("ok", Value::Bool(true)),
-            ("x", Value::F64(-1.25)),
-        ]);
-        let j = value_to_json(&v);
-        assert_eq!(j["range"], json!([0.5, "inf", 2.0]));
-        assert_eq!(j["raw"], json!({"$bytes": "AP8H"}));
-        assert_eq!(value_from_json(&j, &t).unwrap(), v);
-    }
-
-    #[test]
-    fn wrongly_typed_values_name_the_expectation() {
-        let t = SignalType::parse("{v: f64, w: f64}").unwrap();
-        assert_eq!(
-            value_from_json(&json!({"v": 1}), &t).unwrap_err(),
-            "expected {v: f64, w: f64}, field `w` is missing"
-        );
-        assert_eq!(value_from_json(&json!({"v": 1, "w": "x"}), &t).unwrap_err(), "field `w`: expected f64, got \"x\"");
-        assert_eq!(
-            value_from_json(&json!([1, 2]), &SignalType::parse("f32[3]").unwrap()).unwrap_err(),
-            "expected f32[3], got an array of 2 elements"
-        );
-        // An integer is fine where a float is expected.
-        assert_eq!(value_from_json(&json!(2), &SignalType::F64).unwrap(), Value::F64(2.0));
-    }
+    use serde_json::json;
 
     #[test]
     fn requests_decode_and_bad_ones_say_why() {
@@ -1148,44 +772,35 @@ mod tests {
     }
 
     #[test]
-    fn events_errors_and_the_list_say_which_condition_of_an_any() {
-        let (key, j) = event_to_json(&Event::MonitorFired {
-            monitor: 4,
-            condition: "(a) || (b)".into(),
-            cycle: 9,
-            time_s: 0.9,
-            values: vec![("a".into(), Some(Value::Bool(false))), ("b".into(), Some(Value::Bool(true)))],
-            held: vec![1],
-        });
-        assert_eq!(key, "monitor_fired");
-        assert_eq!(
-            j,
-            json!({"kind": "monitor_fired", "monitor": 4, "condition": "(a) || (b)", "cycle": 9, "time_s": 0.9,
-                   "values": {"a": false, "b": true}, "held": [1]})
-        );
-        let bad = ControlError::BadCondition { index: Some(2), column: 5, message: "m".into(), pointer: "p".into() };
-        assert_eq!(
-            control_error(&bad),
-            json!({"error": {"kind": "bad_condition", "message": "any[2]: column 5: m", "column": 5, "pointer": "p", "index": 2}})
-        );
-        let bad = ControlError::BadCondition { index: None, column: 5, message: "m".into(), pointer: "p".into() };
-        assert_eq!(
-            control_error(&bad),
-            json!({"error": {"kind": "bad_condition", "message": "column 5: m", "column": 5, "pointer": "p"}})
-        );
-        let info = MonitorInfo {
-            monitor: 1,
-            condition: "(a) || (b)".into(),
-            any: Some(vec!["a".into(), "b".into()]),
-            mode: MonitorMode::Once,
-            fired: 0,
-            holds: false,
-            pause: false,
-            report: vec![],
-            client: None,
+    fn a_program_verbs_arguments_are_an_object_or_refused_saying_why() {
+        let args = |payload: &[u8]| decode_args("mission", payload);
+        assert_eq!(args(b"").unwrap(), json!({}));
+        assert_eq!(args(b" \n\t").unwrap(), json!({}));
+        assert_eq!(args(br#"{"goal": "dock", "speed": 0.5}"#).unwrap(), json!({"goal": "dock", "speed": 0.5}));
+        // Every refusal is a `bad_request` naming the verb.
+        let refused = |payload: &[u8]| {
+            let e = args(payload).unwrap_err();
+            assert_eq!(e.kind, "bad_request", "{}", e.message);
+            e.message
         };
-        assert_eq!(monitor_to_json(&info)["any"], json!(["a", "b"]));
-        assert_eq!(monitor_to_json(&MonitorInfo { any: None, ..info })["any"], Json::Null);
+        // The size is checked before parsing, whatever the bytes.
+        for filler in [b' ', b'x'] {
+            let mut big = vec![filler; MAX_PAYLOAD_BYTES + 1];
+            if filler == b' ' {
+                big[..2].copy_from_slice(b"{}");
+            }
+            assert_eq!(refused(&big), "`mission`: the request is 65537 bytes, more than 65536");
+        }
+        let edge = format!(r#"{{"goal": "{}"}}"#, "x".repeat(MAX_PAYLOAD_BYTES - 12));
+        assert_eq!(edge.len(), MAX_PAYLOAD_BYTES);
+        assert!(args(edge.as_bytes()).is_ok());
+        for payload in [&b"[1]"[..], b"3", b"\"dock\"", b"null"] {
+            assert_eq!(refused(payload), "`mission`: the arguments must be a JSON object");
+        }
+        for payload in [&b"{"[..], b"{\"goal\": }", b"goal=dock", b"{\"speed\": 1e400}"] {
+            let serde = serde_json::from_slice::<Json>(payload).unwrap_err();
+            assert_eq!(refused(payload), format!("`mission`: the arguments are not JSON: {serde}"));
+        }
     }
 
     #[test]
