@@ -325,7 +325,6 @@ fn payload_args<'a>(verb: &'a str, payload: &[u8]) -> Result<Args<'a>, WireError
     Ok(args)
 }
 
-/// Decodes a request payload for `verb`. Never panics, whatever the bytes.
 /// The link's envelope for several requests in one query (not a manager request: no GUI verb).
 pub const BATCH: &str = "batch";
 /// Most requests one `batch` carries.
@@ -386,6 +385,7 @@ pub fn decode_args(verb: &str, payload: &[u8]) -> Result<Json, WireError> {
     })
 }
 
+/// Decodes a request payload for `verb`. Never panics, whatever the bytes.
 pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> {
     if !VERBS.contains(&verb) {
         return Err(WireError {
