@@ -273,3 +273,34 @@ def test_load_cache_keys_runs_and_skips_broken_lines(tmp_path: Path) -> None:
     cache.write_text('{"design": "a", "building": 1, "task_id": "T2"}\n{"trunc\n[]\n')
     assert list(exp.load_cache(cache)) == [exp.run_key("a", 1, "T2")]
     assert exp.load_cache(tmp_path / "none.jsonl") == {}
+
+
+def test_a_hard_run_has_a_key_of_its_own_and_a_plain_one_keeps_the_old_key(tmp_path: Path) -> None:
+    assert exp.run_key("a", 1, "T2") == "a/1/T2" == exp.run_key("a", 1, "T2", "plain")
+    assert exp.run_key("a", 1, "T2", "hard") == "a/1/T2/hard"
+    cache = tmp_path / "runs.jsonl"
+    cache.write_text(
+        '{"design": "a", "building": 1, "task_id": "T2"}\n'
+        '{"design": "a", "building": 1, "task_id": "T2", "condition": "hard"}\n'
+    )
+    assert sorted(exp.load_cache(cache)) == ["a/1/T2", "a/1/T2/hard"]
+    assert exp.hard_args(50025) == ["--people", "3", "--door-closures", "--dead-sonar", "9"]
+
+
+def test_the_report_has_a_hard_set_section_only_with_hard_runs() -> None:
+    plain = exp.render_report(_results(), exp.reading_section(None))
+    assert "### On the hard set" not in plain
+    results = _results()
+    designs = results["config"]["designs"]
+    hard_rows = [_run(d, i, d == "sequenced") for d in designs for i in range(2)]
+    results["hard"] = {
+        "by_k": {
+            d: {str(k): s for k, s in ks.items()}
+            for d, ks in exp.by_k(hard_rows, designs, 2).items()
+        },
+        "by_task": exp.by_task(hard_rows, designs, 2),
+    }
+    report = exp.render_report(results, exp.reading_section(None))
+    hard = report[report.index("### On the hard set") :]
+    assert "| sequenced | 2 | 2/2 | 100% |" in hard
+    assert "| reactive | 2 | 0/2 | 0% |" in hard
