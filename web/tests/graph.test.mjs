@@ -4,16 +4,14 @@
 
 import assert from "node:assert/strict";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, cliDo, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+import { cli, cliDo, closeGui, openGui, openPage, screenshotPath, until } from "./harness.mjs";
 
-async function openPage(browser, url, viewport) {
-  const page = await browser.context.newPage();
-  page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-  if (viewport) await page.setViewportSize(viewport);
-  await page.goto(url);
-  await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-  await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
-  await until(async () => (await page.locator("[data-testid=graph] svg g.node").count()) > 0, "the graph drawn");
+const graphDrawn = (page) => until(async () => (await page.locator("[data-testid=graph] svg g.node").count()) > 0, "the graph drawn");
+
+/** A second, narrow tab with its graph drawn. */
+async function openNarrow(browser, url) {
+  const page = await openPage(browser, url, { viewport: { width: 390, height: 844 } });
+  await graphDrawn(page);
   return page;
 }
 
@@ -65,21 +63,10 @@ describe("graph", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await openPage(browser, tb.url);
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    ({ tb, browser, page } = await openGui([], { ready: graphDrawn }));
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   afterEach(async (t) => {
     if (page) await page.screenshot({ path: screenshotPath(`graph-${t.name.replace(/[^a-z0-9]+/gi, "-")}`), fullPage: true }).catch(() => undefined);
@@ -108,7 +95,7 @@ describe("graph", () => {
   });
 
   test("laid out without overlaps, inside its panel: no sideways scrolling, at 1400 px and at 390 px", async () => {
-    const narrow = await openPage(browser, tb.url, { width: 390, height: 844 });
+    const narrow = await openNarrow(browser, tb.url);
     try {
       for (const [name, p, width] of [["wide", page, 1400], ["narrow", narrow, 390]]) {
         const g = await drawnGraph(p);
@@ -128,7 +115,7 @@ describe("graph", () => {
   });
 
   test("full size draws the graph at its own size, scrolling inside its panel only; fit scales it back", async () => {
-    const narrow = await openPage(browser, tb.url, { width: 390, height: 844 });
+    const narrow = await openNarrow(browser, tb.url);
     try {
       for (const [name, p, width] of [["wide", page, 1400], ["narrow", narrow, 390]]) {
         const natural = Number(await p.locator("[data-testid=graph] svg").getAttribute("data-width"));

@@ -3,7 +3,7 @@
 
 import assert from "node:assert/strict";
 import { after, before, afterEach, describe, test } from "node:test";
-import { cli, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+import { cli, closeGui, openGui, screenshotPath, until } from "./harness.mjs";
 
 /** Deep equality of two JSON values, whatever the key order, numbers within 1e-9 (relative). */
 function same(a, b) {
@@ -23,26 +23,11 @@ describe("situate GUI", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await browser.context.newPage();
-      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-      await page.goto(tb.url);
-      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-      // The first telemetry sample has built the panels.
-      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    // Connected, and the first telemetry sample has built the panels.
+    ({ tb, browser, page } = await openGui());
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   afterEach(async (t) => {
     if (page) await page.screenshot({ path: screenshotPath(t.name.replace(/[^a-z0-9]+/gi, "-")), fullPage: true }).catch(() => undefined);

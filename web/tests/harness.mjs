@@ -114,6 +114,49 @@ export async function stopBrowser(b) {
   }
 }
 
+/**
+ * A new tab at `url` that shows "connected" (page errors are logged). `viewport`: its size, when
+ * not the browser's. `panels` (default true): also wait for the first telemetry sample to have
+ * built the skills' panels (wander's switch).
+ */
+export async function openPage(browser, url, { viewport, panels = true } = {}) {
+  const page = await browser.context.newPage();
+  page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
+  if (viewport) await page.setViewportSize(viewport);
+  await page.goto(url);
+  await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
+  if (panels) await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
+  return page;
+}
+
+/**
+ * The set-up of a browser test: a testbed (with `extraArgs`), a browser, and a tab on its GUI
+ * (`openPage`, with `panels`), then `ready(page, tb)` for the file's own preparations, if given.
+ * When any step fails, what was started is stopped before the error is thrown. Resolves to
+ * `{ tb, browser, page }`; pass `{ tb, browser }` to `closeGui` in an `after` hook.
+ */
+export async function openGui(extraArgs = [], { panels = true, ready } = {}) {
+  let tb;
+  let browser;
+  try {
+    tb = await startTestbed(extraArgs);
+    browser = await startBrowser();
+    const page = await openPage(browser, tb.url, { panels });
+    if (ready) await ready(page, tb);
+    return { tb, browser, page };
+  } catch (e) {
+    await stopBrowser(browser).catch(() => undefined);
+    await stopTestbed(tb).catch(() => undefined);
+    throw e;
+  }
+}
+
+/** Closes what `openGui` opened (either may be missing: a set-up that failed stopped its own). */
+export async function closeGui({ tb, browser } = {}) {
+  await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
+  await stopTestbed(tb);
+}
+
 /** Runs `situate ARGS --connect tcp/127.0.0.1:PORT --json`; returns its stdout parsed as JSON. */
 export function cli(linkPort, ...args) {
   return new Promise((resolve, reject) => {

@@ -5,7 +5,7 @@
 import assert from "node:assert/strict";
 import { readFile } from "node:fs/promises";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, cliDo, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+import { cli, cliDo, closeGui, openGui, screenshotPath, until } from "./harness.mjs";
 
 /** Numbers equal within 1e-9 (relative). */
 const close = (a, b) => Math.abs(a - b) <= 1e-9 * Math.max(1, Math.abs(a), Math.abs(b));
@@ -18,25 +18,10 @@ describe("plots", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await browser.context.newPage();
-      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-      await page.goto(tb.url);
-      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    ({ tb, browser, page } = await openGui());
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   afterEach(async (t) => {
     if (page) await page.screenshot({ path: screenshotPath(`plots-${t.name.replace(/[^a-z0-9]+/gi, "-")}`), fullPage: true }).catch(() => undefined);

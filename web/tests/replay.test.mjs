@@ -8,7 +8,7 @@ import { mkdtempSync, rmSync } from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { after, before, describe, test } from "node:test";
-import { freePort, repo, screenshotPath, situateBin, startBrowser, stopBrowser, until } from "./harness.mjs";
+import { freePort, openPage, repo, screenshotPath, situateBin, startBrowser, stopBrowser, until } from "./harness.mjs";
 
 const CYCLES = 400;
 const text = async (locator) => (await locator.textContent()) ?? "";
@@ -41,10 +41,7 @@ describe("a recording replayed into the GUI", () => {
     await until(async () => err.includes("GUI on http") || child.exitCode !== null, "the replay's GUI to start");
     assert.equal(child.exitCode, null, `situate replay exited: ${out}\n${err}`);
     browser = await startBrowser();
-    page = await browser.context.newPage();
-    page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-    await page.goto(`http://127.0.0.1:${port}/`);
-    await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
+    page = await openPage(browser, `http://127.0.0.1:${port}/`, { panels: false });
   });
 
   after(async () => {

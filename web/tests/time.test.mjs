@@ -4,18 +4,9 @@
 
 import assert from "node:assert/strict";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, cliDo, killTestbed, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+import { cli, cliDo, closeGui, killTestbed, openGui, screenshotPath, startTestbed, until } from "./harness.mjs";
 
 const text = async (locator) => (await locator.textContent()) ?? "";
-
-async function openPage(browser, url) {
-  const page = await browser.context.newPage();
-  page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-  await page.goto(url);
-  await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-  await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
-  return page;
-}
 
 describe("a robot that goes away and comes back", () => {
   let tb;
@@ -24,21 +15,10 @@ describe("a robot that goes away and comes back", () => {
   let oldRun;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await openPage(browser, tb.url);
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    ({ tb, browser, page } = await openGui());
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   afterEach(async (t) => {
     if (page) await page.screenshot({ path: screenshotPath(t.name.replace(/[^a-z0-9]+/gi, "-")), fullPage: true }).catch(() => undefined);
@@ -137,21 +117,10 @@ describe("skills, monitors, the world view and the layout", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await openPage(browser, tb.url);
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    ({ tb, browser, page } = await openGui());
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   afterEach(async (t) => {
     if (page) await page.screenshot({ path: screenshotPath(t.name.replace(/[^a-z0-9]+/gi, "-")), fullPage: true }).catch(() => undefined);

@@ -4,7 +4,7 @@
 
 import assert from "node:assert/strict";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, screenshotPath, startBrowser, startTestbed, stopBrowser, stopTestbed, until } from "./harness.mjs";
+import { cli, closeGui, openGui, screenshotPath, startTestbed, stopTestbed, until } from "./harness.mjs";
 
 const text = async (locator) => (await locator.textContent()) ?? "";
 
@@ -14,14 +14,7 @@ describe("the timeline", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await browser.context.newPage();
-      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-      await page.goto(tb.url);
-      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
+    const ready = async (page) => {
       // The circle's outputs (its pose, which changes every cycle) in its panel.
       await page.getByTestId("skill-circle").locator("summary").click();
       await page.getByTestId("show-output-circle").check();
@@ -31,17 +24,11 @@ describe("the timeline", () => {
         const m = /holds cycles (\d+)–(\d+)/.exec(await text(page.getByTestId("tl-span")));
         return m && Number(m[2]) - Number(m[1]) >= 60;
       }, "sixty cycles on the timeline");
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    };
+    ({ tb, browser, page } = await openGui([], { ready }));
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   afterEach(async (t) => {
     if (page) await page.screenshot({ path: screenshotPath(`timeline-${t.name.replace(/[^a-z0-9]+/gi, "-")}`), fullPage: true }).catch(() => undefined);
@@ -213,25 +200,10 @@ describe("a paused page when the robot restarts", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed();
-      browser = await startBrowser();
-      page = await browser.context.newPage();
-      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-      await page.goto(tb.url);
-      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-      await page.getByTestId("switch-wander").waitFor({ timeout: 60_000 });
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    ({ tb, browser, page } = await openGui());
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   test("goes live on the new run: the old run's past is not shown as the new one's", async () => {
     const bar = page.getByTestId("timeline");
@@ -258,24 +230,10 @@ describe("a GUI without a timeline", () => {
   let page;
 
   before(async () => {
-    try {
-      tb = await startTestbed(["--no-history"]);
-      browser = await startBrowser();
-      page = await browser.context.newPage();
-      page.on("pageerror", (e) => console.error(`page error: ${e.message}`));
-      await page.goto(tb.url);
-      await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
-    } catch (e) {
-      await stopBrowser(browser).catch(() => undefined);
-      await stopTestbed(tb).catch(() => undefined);
-      throw e;
-    }
+    ({ tb, browser, page } = await openGui(["--no-history"], { panels: false }));
   });
 
-  after(async () => {
-    await stopBrowser(browser).catch((e) => console.error(`closing the browser: ${e.message}`));
-    await stopTestbed(tb);
-  });
+  after(() => closeGui({ tb, browser }));
 
   test("says there is none, and offers no pause", async () => {
     await until(async () => /keeps no history/.test(await text(page.getByTestId("tl-note"))), "the bar says why there is no timeline");

@@ -546,7 +546,7 @@ fn parameter_values(history: &History) -> Vec<(String, Value)> {
 fn origin_allowed(headers: &HeaderMap) -> bool {
     let Some(origin) = headers.get(header::ORIGIN) else { return true };
     let Ok(origin) = origin.to_str() else { return false };
-    crate::same_origin(headers) || FOXGLOVE_ORIGINS.contains(&origin.trim_end_matches('/'))
+    crate::session::same_origin(headers) || FOXGLOVE_ORIGINS.contains(&origin.trim_end_matches('/'))
 }
 
 /// `GET /foxglove`: the WebSocket upgrade (selecting `foxglove.websocket.v1` when asked).

@@ -46,28 +46,29 @@
 //! `GET /metrics` answers in Prometheus' text format: cycle time, overruns, per-skill time and
 //! faults ([`metrics`]).
 
-use std::collections::{BTreeSet, HashMap, HashSet};
+use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::ws::Utf8Bytes;
 use axum::extract::State;
-use axum::http::{header, HeaderMap, StatusCode, Uri};
+use axum::http::{header, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
-use crossbeam_channel::{Receiver, Sender};
+use crossbeam_channel::Sender;
 use serde_json::{json, Value as Json};
-use situate_link::json as wire;
 use situate_manager::{ControlError, Handle, Reply, Request};
 use tokio::sync::{broadcast, watch};
 
 pub mod foxglove;
 pub mod history;
 pub mod metrics;
+mod sample;
+mod session;
 
 pub use history::{History, HistoryError, HistoryTap, Layout};
 
@@ -79,8 +80,6 @@ mod assets {
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 /// The largest message a browser may send.
 const MAX_MESSAGE: usize = 64 * 1024;
-/// The GUI's own verbs, besides the link's.
-const GUI_VERBS: [&str; 3] = ["watch", "history", "history_frame"];
 /// The signals the world view draws, when they exist.
 const WORLD_SIGNALS: [&str; 4] = ["truth.pose", "sonar.range", "truth.cars", "truth.people"];
 
@@ -354,17 +353,17 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
     };
     // Events: subscribed above, forwarded to every tab as they come.
     let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
-    threads.push(spawn("situate-gui-events", Box::new(move || forward_events(&s, &events, &st)))?);
+    threads.push(spawn("situate-gui-events", Box::new(move || sample::forward_events(&s, &events, &st)))?);
     let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
-    threads.push(spawn("situate-gui-sampler", Box::new(move || sample_loop(&s, &wake_rx, &st)))?);
+    threads.push(spawn("situate-gui-sampler", Box::new(move || sample::sample_loop(&s, &wake_rx, &st)))?);
     if let (Some(history), Some(tap)) = (history, tap) {
         let st = Arc::clone(&stop);
-        threads.push(spawn("situate-gui-history", Box::new(move || keep_history(&history, tap, &st)))?);
+        threads.push(spawn("situate-gui-history", Box::new(move || sample::keep_history(&history, tap, &st)))?);
         let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
         threads.push(spawn("situate-gui-foxglove", Box::new(move || foxglove::publish(&s, &st)))?);
     }
     let app = Router::new()
-        .route("/ws", get(ws_upgrade))
+        .route("/ws", get(session::ws_upgrade))
         .route("/foxglove", get(foxglove::upgrade))
         .route("/api/world", get(world))
         .route("/metrics", get(metrics_page))
@@ -389,140 +388,8 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
     Ok(GuiServer { addr, shutdown: shutdown_tx, stop, wake: wake_tx, threads, shared })
 }
 
-// ----- events and telemetry -------------------------------------------------------------------
-
-fn forward_events(shared: &Shared, events: &Receiver<situate_manager::Event>, stop: &AtomicBool) {
-    while !stop.load(Ordering::SeqCst) {
-        match events.recv_timeout(Duration::from_millis(100)) {
-            Ok(e) => {
-                shared.activity.lock().unwrap_or_else(|p| p.into_inner()).note(&e);
-                if shared.clients.load(Ordering::SeqCst) == 0 {
-                    continue;
-                }
-                let (_, body) = wire::event_to_json(&e);
-                let _ = shared.events.send(json!({"type": "event", "event": body}).to_string().into());
-            }
-            Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
-            Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
-        }
-    }
-}
-
-/// How often the history takes what the tap has queued (the tap holds
-/// [`history::TAP_QUEUE`] frames: 10 s at 100 Hz).
-const HISTORY_POLL: Duration = Duration::from_millis(20);
-
-/// Drains the manager's tap and events into the history until the server stops. When the manager
-/// ends, the history stays (a finished run can still be looked back on).
-fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &AtomicBool) {
-    use crossbeam_channel::TryRecvError;
-    let lock = || history.lock().unwrap_or_else(|p| p.into_inner());
-    let (mut frames_open, mut events_open) = (true, true);
-    // Polled, not waited on: a reader blocked on the tap would be woken by
-    // every cycle's send, a system call on the cycle's thread.
-    while !stop.load(Ordering::SeqCst) && (frames_open || events_open) {
-        if frames_open {
-            let mut h = lock();
-            loop {
-                match tap.frames.try_recv() {
-                    Ok(frame) => h.push_frame(frame),
-                    Err(TryRecvError::Empty) => break,
-                    Err(TryRecvError::Disconnected) => {
-                        frames_open = false;
-                        break;
-                    }
-                }
-            }
-            h.set_dropped(tap.dropped());
-        }
-        if events_open {
-            loop {
-                match tap.events.try_recv() {
-                    Ok(event) => lock().push_event(&event),
-                    Err(TryRecvError::Empty) => break,
-                    Err(TryRecvError::Disconnected) => {
-                        events_open = false;
-                        break;
-                    }
-                }
-            }
-        }
-        std::thread::sleep(HISTORY_POLL);
-    }
-    if !stop.load(Ordering::SeqCst) {
-        tracing::debug!("the history's sources ended: the GUI's history keeps what it holds");
-    }
-}
-
-/// One sampler for every tab: samples only while someone is connected.
-fn sample_loop(shared: &Shared, wake: &Receiver<()>, stop: &AtomicBool) {
-    let period = Duration::from_secs_f64(1.0 / shared.sample_hz);
-    let mut absent: HashSet<String> = HashSet::new();
-    let mut next = Instant::now();
-    while !stop.load(Ordering::SeqCst) {
-        if shared.clients.load(Ordering::SeqCst) == 0 {
-            // Idle: no request reaches the manager until a browser connects.
-            let _ = wake.recv_timeout(Duration::from_millis(500));
-            next = Instant::now();
-            continue;
-        }
-        let sample = take_sample(shared, &mut absent);
-        let _ = shared.telemetry.send(sample.to_string().into());
-        next += period;
-        let now = Instant::now();
-        if next < now {
-            // Too slow for the rate: skip ahead rather than piling up requests.
-            next = now + period;
-        }
-        let _ = wake.recv_timeout(next - now);
-        while wake.try_recv().is_ok() {}
-    }
-}
-
 fn ask(handle: &Handle, request: Request) -> Result<Reply, ControlError> {
     handle.request_timeout(request, REQUEST_TIMEOUT)
-}
-
-fn reply_json(r: Result<Reply, ControlError>) -> Json {
-    match r {
-        Ok(reply) => wire::reply_to_json(&reply),
-        Err(e) => wire::control_error(&e),
-    }
-}
-
-fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
-    let h = &shared.handle;
-    let stats = reply_json(ask(h, Request::QueryStats));
-    let skills = reply_json(ask(h, Request::QuerySkills));
-    let winners = reply_json(ask(h, Request::QueryWinners));
-    let mut wanted: BTreeSet<String> =
-        shared.watched.lock().unwrap_or_else(|p| p.into_inner()).values().flat_map(|v| v.iter().cloned()).collect();
-    wanted.extend(WORLD_SIGNALS.iter().map(|s| s.to_string()));
-    let mut signals = serde_json::Map::new();
-    for name in wanted {
-        if absent.contains(&name) {
-            continue;
-        }
-        match ask(h, Request::QuerySignal { signal: name.clone() }) {
-            Ok(reply) => {
-                signals.insert(name, wire::reply_to_json(&reply));
-            }
-            Err(e @ ControlError::UnknownSignal { .. }) => {
-                // The wiring never changes while running: don't ask again.
-                if !WORLD_SIGNALS.contains(&name.as_str()) {
-                    signals.insert(name.clone(), wire::control_error(&e));
-                }
-                absent.insert(name);
-            }
-            Err(e) => {
-                signals.insert(name, wire::control_error(&e));
-            }
-        }
-    }
-    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default().as_secs_f64();
-    let activity = shared.activity.lock().unwrap_or_else(|p| p.into_inner()).to_json();
-    json!({"type": "telemetry", "wall_s": now, "run": shared.run.id, "stats": stats, "skills": skills,
-        "winners": winners, "signals": signals, "activity": activity})
 }
 
 // ----- HTTP -----------------------------------------------------------------------------------
@@ -595,236 +462,17 @@ async fn static_file(uri: Uri) -> Response {
     (StatusCode::NOT_FOUND, format!("no such file: /{path}")).into_response()
 }
 
-/// A browser's WebSocket must come from a page of this server (no cross-site WebSocket): a
-/// request with an `Origin` header is accepted only when its host is the request's `Host`.
-fn same_origin(headers: &HeaderMap) -> bool {
-    let Some(origin) = headers.get(header::ORIGIN) else { return true };
-    let (Ok(origin), Some(Ok(host))) = (origin.to_str(), headers.get(header::HOST).map(|h| h.to_str())) else {
-        return false;
-    };
-    origin.strip_prefix("http://").or_else(|| origin.strip_prefix("https://")) == Some(host)
-}
-
-async fn ws_upgrade(State(shared): State<Arc<Shared>>, headers: HeaderMap, ws: WebSocketUpgrade) -> Response {
-    if !same_origin(&headers) {
-        tracing::warn!("refused a WebSocket from another origin");
-        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
-    }
-    ws.max_message_size(MAX_MESSAGE).on_upgrade(move |socket| session(shared, socket))
-}
-
-/// The first message of every connection: the run, the world's map, the verbs, and the run's
-/// outcome when it is known already.
-fn hello_message(shared: &Shared, client: u64) -> Json {
-    json!({
-        "type": "hello",
-        "client": client,
-        "protocol": wire::PROTOCOL,
-        "run": {"id": shared.run.id, "started_unix_s": shared.run.started_unix_s},
-        "sample_hz": shared.sample_hz,
-        "world": shared.world,
-        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(GUI_VERBS.iter()).collect::<Vec<_>>(),
-        "history": shared.history.as_ref().map(|h| {
-            let h = h.lock().unwrap_or_else(|p| p.into_inner());
-            json!({"frames": h.capacity(), "bytes": h.byte_budget()})
-        }),
-        "outcome": shared.outcome.lock().unwrap_or_else(|p| p.into_inner()).clone(),
-    })
-}
-
-/// Counts a connected tab for as long as it lives.
-struct ClientGuard {
-    shared: Arc<Shared>,
-    id: u64,
-}
-
-impl Drop for ClientGuard {
-    fn drop(&mut self) {
-        self.shared.watched.lock().unwrap_or_else(|p| p.into_inner()).remove(&self.id);
-        self.shared.clients.fetch_sub(1, Ordering::SeqCst);
-    }
-}
-
-async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
-    let id = shared.next_client.fetch_add(1, Ordering::SeqCst);
-    let mut telemetry = shared.telemetry.subscribe();
-    let mut events = shared.events.subscribe();
-    let mut shutdown = shared.shutdown.clone();
-    shared.clients.fetch_add(1, Ordering::SeqCst);
-    let _guard = ClientGuard { shared: Arc::clone(&shared), id };
-    let _ = shared.wake.send(());
-    tracing::debug!(client = id, "GUI tab connected");
-    let hello = hello_message(&shared, id);
-    if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
-        return;
-    }
-    let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Utf8Bytes>();
-    loop {
-        tokio::select! {
-            _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
-                let _ = socket.send(Message::Close(None)).await;
-                break;
-            }
-            incoming = socket.recv() => match incoming {
-                Some(Ok(Message::Text(text))) => {
-                    let shared = Arc::clone(&shared);
-                    let tx = reply_tx.clone();
-                    tokio::task::spawn_blocking(move || {
-                        let reply = handle_message(&shared, id, text.as_str());
-                        let _ = tx.send(reply.to_string().into());
-                    });
-                }
-                Some(Ok(Message::Binary(_))) => {
-                    let e = json!({"type": "reply", "id": null,
-                        "error": {"kind": "bad_request", "message": "send JSON text frames, not binary"}});
-                    if socket.send(Message::Text(e.to_string().into())).await.is_err() {
-                        break;
-                    }
-                }
-                Some(Ok(_)) => {}
-                Some(Err(_)) | None => break,
-            },
-            Some(reply) = reply_rx.recv() => {
-                if socket.send(Message::Text(reply)).await.is_err() {
-                    break;
-                }
-            }
-            t = telemetry.recv() => match t {
-                Ok(text) => {
-                    if socket.send(Message::Text(text)).await.is_err() {
-                        break;
-                    }
-                }
-                Err(broadcast::error::RecvError::Lagged(_)) => {}
-                Err(broadcast::error::RecvError::Closed) => break,
-            },
-            e = events.recv() => match e {
-                Ok(text) => {
-                    if socket.send(Message::Text(text)).await.is_err() {
-                        break;
-                    }
-                }
-                Err(broadcast::error::RecvError::Lagged(n)) => {
-                    let note = json!({"type": "lagged", "missed": n});
-                    if socket.send(Message::Text(note.to_string().into())).await.is_err() {
-                        break;
-                    }
-                }
-                Err(broadcast::error::RecvError::Closed) => break,
-            },
-        }
-    }
-    tracing::debug!(client = id, "GUI tab disconnected");
-}
-
-/// Answers one browser message (blocking: it may wait for the manager).
-fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
-    let parsed: Json = match serde_json::from_str(text) {
-        Ok(j) => j,
-        Err(e) => return error_reply(&Json::Null, "bad_request", &format!("the message is not JSON: {e}")),
-    };
-    let id = parsed.get("id").cloned().unwrap_or(Json::Null);
-    let Some(verb) = parsed.get("verb").and_then(Json::as_str) else {
-        return error_reply(&id, "bad_request", "the message needs a `verb` (a string)");
-    };
-    let args = parsed.get("args").cloned().unwrap_or_else(|| json!({}));
-    if verb == "watch" {
-        return watch_signals(shared, client, &id, &args);
-    }
-    if verb == "history" || verb == "history_frame" {
-        return history_request(shared, verb, &id, &args);
-    }
-    if verb == "telemetry" {
-        return error_reply(&id, "bad_request", "the GUI samples telemetry itself: use `watch` to choose signals");
-    }
-    let payload = args.to_string();
-    match wire::decode_request(verb, payload.as_bytes()) {
-        Err(e) => json!({"type": "reply", "id": id, "error": {"kind": e.kind, "message": e.message}}),
-        Ok(wire::Decoded::Hello) => match ask(&shared.handle, Request::QueryStats) {
-            Ok(Reply::Stats(s)) => json!({"type": "reply", "id": id, "ok": {
-                "robot": s.robot, "protocol": wire::PROTOCOL, "verbs": wire::VERBS}}),
-            Ok(other) => error_reply(&id, "invalid", &format!("unexpected reply {other:?}")),
-            Err(e) => with_id(wire::control_error(&e), &id),
-        },
-        Ok(wire::Decoded::Telemetry { .. }) => error_reply(&id, "bad_request", "use `watch`"),
-        Ok(wire::Decoded::Manager(request)) => {
-            tracing::debug!(?request, client, "GUI request");
-            match ask(&shared.handle, request) {
-                Ok(reply) => json!({"type": "reply", "id": id, "ok": wire::reply_to_json(&reply)}),
-                Err(e) => with_id(wire::control_error(&e), &id),
-            }
-        }
-    }
-}
-
-fn with_id(mut body: Json, id: &Json) -> Json {
-    body["type"] = json!("reply");
-    body["id"] = id.clone();
-    body
-}
-
-fn error_reply(id: &Json, kind: &str, message: &str) -> Json {
-    json!({"type": "reply", "id": id, "error": {"kind": kind, "message": message}})
-}
-
-/// `history` and `history_frame {cycle}`: the timeline's span and marks, and the state at a cycle.
-fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json {
-    let Some(history) = &shared.history else {
-        return error_reply(
-            id,
-            "unavailable",
-            "this GUI keeps no history (the program that serves it did not tap the manager's cycle for it)",
-        );
-    };
-    if verb == "history" {
-        let summary = history.lock().unwrap_or_else(|p| p.into_inner()).summary_json();
-        return json!({"type": "reply", "id": id, "ok": summary});
-    }
-    let Some(cycle) = args.get("cycle").and_then(Json::as_u64) else {
-        return error_reply(id, "bad_request", "`history_frame`: argument `cycle` must be a whole number ≥ 0");
-    };
-    let frame = history.lock().unwrap_or_else(|p| p.into_inner()).frame_json(cycle, &WORLD_SIGNALS);
-    match frame {
-        Ok(frame) => json!({"type": "reply", "id": id, "ok": frame}),
-        Err(e @ HistoryError::Empty) => error_reply(id, "unavailable", &e.to_string()),
-        Err(e @ HistoryError::NotHeld { .. }) => error_reply(id, "bad_request", &e.to_string()),
-    }
-}
-
-/// `watch`: the signals this tab plots (a list of signal names, at most 32).
-fn watch_signals(shared: &Shared, client: u64, id: &Json, args: &Json) -> Json {
-    let Some(list) = args.get("signals").and_then(Json::as_array) else {
-        return error_reply(id, "bad_request", "`watch`: argument `signals` must be a list of strings");
-    };
-    let mut signals = Vec::new();
-    for s in list {
-        match s.as_str() {
-            Some(name) if !name.is_empty() && name.len() <= 200 => signals.push(name.to_string()),
-            _ => return error_reply(id, "bad_request", "`watch`: every signal must be a non-empty string"),
-        }
-    }
-    if signals.len() > 32 {
-        return error_reply(id, "bad_request", "`watch`: at most 32 signals per tab");
-    }
-    for name in &signals {
-        if let Err(e) = ask(&shared.handle, Request::QuerySignal { signal: name.clone() }) {
-            return with_id(wire::control_error(&e), id);
-        }
-    }
-    shared.watched.lock().unwrap_or_else(|p| p.into_inner()).insert(client, signals.clone());
-    json!({"type": "reply", "id": id, "ok": {"signals": signals}})
-}
-
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::io::{Read, Write};
     use std::net::TcpStream;
 
     use situate::manager::{Control, Manager, RobotSpec, SkillSpec};
 
     use super::*;
+    use crate::session::hello_message;
 
-    fn robot() -> (Handle, situate_manager::Joiner) {
+    pub(crate) fn robot() -> (Handle, situate_manager::Joiner) {
         let spec = RobotSpec::new("guitest")
             .skill(SkillSpec::new("sonar", "toy.sonar"))
             .skill(SkillSpec::new("wheels", "toy.wheels"))
@@ -834,22 +482,7 @@ mod tests {
         manager.spawn(true)
     }
 
-    /// Steps the robot one cycle at a time until a sample passes `ok`; a
-    /// minute without one fails the test (a hang, not a slow machine).
-    fn step_until(handle: &mut Handle, s: &Shared, ok: impl Fn(&Json) -> bool) -> Json {
-        let deadline = Instant::now() + Duration::from_secs(60);
-        loop {
-            handle.step(1).expect("step");
-            let sample = take_sample(s, &mut HashSet::new());
-            if ok(&sample) {
-                return sample;
-            }
-            assert!(Instant::now() < deadline, "no such sample within a minute; the last: {sample}");
-            std::thread::sleep(Duration::from_millis(5));
-        }
-    }
-
-    fn shared(handle: Handle) -> Shared {
+    pub(crate) fn shared(handle: Handle) -> Shared {
         let (wake, _) = crossbeam_channel::unbounded();
         Shared {
             handle,
@@ -889,57 +522,6 @@ mod tests {
             }
         }
         String::from_utf8_lossy(&buf).into_owned()
-    }
-
-    #[test]
-    fn requests_go_through_the_links_decoder_and_the_control_api() {
-        let (mut handle, join) = robot();
-        let s = shared(handle.clone());
-        let r = handle_message(&s, 1, r#"{"id": 1, "verb": "activate", "args": {"skills": ["wander"]}}"#);
-        assert_eq!(r["id"], 1);
-        assert_eq!(r["ok"]["changed"], json!(["wander"]));
-        let r = handle_message(
-            &s,
-            1,
-            r#"{"id": 2, "verb": "set_param", "args": {"skill": "runaway", "param": "safe_distance", "value": 9}}"#,
-        );
-        assert_eq!(r["error"]["kind"], "bad_param");
-        assert!(r["error"]["message"].as_str().unwrap_or("").contains("[0.1, 3.0]"), "{r}");
-        assert_eq!(handle.get_param("runaway", "safe_distance"), Ok(situate_core::Value::F64(0.5)));
-        let r = handle_message(&s, 1, r#"{"id": 3, "verb": "shutdown"}"#);
-        assert_eq!(r["error"]["kind"], "unknown_verb", "{r}");
-        let r = handle_message(&s, 1, r#"{"id": 4, "verb": "telemetry", "args": {"signals": ["odom"]}}"#);
-        assert_eq!(r["error"]["kind"], "bad_request");
-        let r = handle_message(&s, 1, "not json");
-        assert_eq!(r["error"]["kind"], "bad_request");
-        assert_eq!(r["id"], Json::Null);
-        let r = handle_message(&s, 1, r#"{"id": 5, "verb": "step", "args": {"cycles": "x"}}"#);
-        assert!(r["error"]["message"].as_str().unwrap_or("").contains("cycles"), "{r}");
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
-    fn watch_checks_signals_and_the_sample_carries_them() {
-        let (mut handle, join) = robot();
-        let s = shared(handle.clone());
-        let r = handle_message(&s, 7, r#"{"id": 1, "verb": "watch", "args": {"signals": ["odom", "sonar.rang"]}}"#);
-        assert_eq!(r["error"]["kind"], "unknown_signal", "{r}");
-        assert!(r["error"]["message"].as_str().unwrap_or("").contains("sonar.range"), "suggests the name: {r}");
-        let r = handle_message(&s, 7, r#"{"id": 2, "verb": "watch", "args": {"signals": ["odom"]}}"#);
-        assert_eq!(r["ok"]["signals"], json!(["odom"]));
-        // The toy sonar reads on its own thread (wall clock): how many cycles
-        // its first reading takes depends on the machine's load, so step
-        // until it is there (a minute at most) rather than a fixed count.
-        let sample = step_until(&mut handle, &s, |sample| sample["signals"]["sonar.range"]["value"].is_array());
-        assert_eq!(sample["type"], "telemetry");
-        assert_eq!(sample["stats"]["robot"], "guitest");
-        assert_eq!(sample["skills"].as_array().map(Vec::len), Some(4));
-        assert_eq!(sample["signals"]["odom"]["signal"], "odom");
-        assert!(sample["signals"]["sonar.range"]["value"].is_array(), "the world view's sonar: {sample}");
-        assert!(sample["signals"].get("truth.pose").is_none(), "absent world signals are left out");
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
     }
 
     #[test]
@@ -1004,41 +586,6 @@ mod tests {
     }
 
     #[test]
-    fn a_sample_says_since_which_cycle_a_skill_is_inactive() {
-        let (mut handle, join) = robot();
-        let events = handle.events();
-        let gui = serve(handle.clone(), GuiConfig::default()).expect("serve");
-        let sample = take_sample(&gui.shared, &mut HashSet::new());
-        assert!(sample["activity"]["observed_from"].is_u64(), "{sample}");
-        assert_eq!(sample["activity"]["changed"], json!({}), "no change seen yet: {sample}");
-        assert_eq!(sample["run"], gui.run_id());
-        handle.request(Request::Deactivate { skills: vec!["runaway".into()] }).expect("deactivate");
-        let deadline = Instant::now() + Duration::from_secs(60);
-        let applied_at = loop {
-            match events.recv_timeout(Duration::from_secs(1)) {
-                Ok(situate_manager::Event::ActivationApplied { deactivated, cycle, .. })
-                    if deactivated.contains(&"runaway".to_string()) =>
-                {
-                    break cycle
-                }
-                _ => assert!(Instant::now() < deadline, "no activation_applied for runaway within a minute"),
-            }
-        };
-        let sample = loop {
-            let sample = take_sample(&gui.shared, &mut HashSet::new());
-            if sample["activity"]["changed"]["runaway"].is_u64() {
-                break sample;
-            }
-            assert!(Instant::now() < deadline, "the change never reached the sample: {sample}");
-            std::thread::sleep(Duration::from_millis(10));
-        };
-        assert_eq!(sample["activity"]["changed"]["runaway"], applied_at, "{sample}");
-        gui.stop();
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
     fn metrics_count_cycles_skill_time_and_faults_in_prometheus_text_format() {
         let (mut handle, join) = robot();
         let gui = serve(handle.clone(), GuiConfig::default()).expect("serve");
@@ -1070,125 +617,6 @@ mod tests {
         let faulted = scrape(gui.local_addr());
         assert_eq!(faulted["situate_skill_faults_total{robot=\"guitest\",skill=\"runaway\"}"], 1.0);
         assert_eq!(faulted["situate_skill_faults_total{robot=\"guitest\",skill=\"wander\"}"], 0.0);
-        gui.stop();
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
-    fn the_timeline_holds_the_robots_last_cycles_and_its_events() {
-        let spec = RobotSpec::new("guitest")
-            .skill(SkillSpec::new("sonar", "toy.sonar"))
-            .skill(SkillSpec::new("wheels", "toy.wheels"))
-            .skill(SkillSpec::new("runaway", "toy.runaway"))
-            .skill(SkillSpec::new("wander", "toy.wander").active(false));
-        let mut manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
-        let tap = HistoryTap::new(&mut manager);
-        let (mut handle, join) = manager.spawn(false);
-        let gui =
-            serve_with_history(handle.clone(), GuiConfig { history_frames: 50, ..GuiConfig::default() }, Some(tap))
-                .expect("serve");
-        assert_eq!(hello_message(&gui.shared, 1)["history"]["frames"], 50);
-        handle.step(10).expect("step");
-        handle.request(Request::Activate { skills: vec!["wander".into()], with_providers: false }).expect("activate");
-        handle.step(20).expect("step");
-        let history_until = |ok: &dyn Fn(&Json) -> bool| {
-            let deadline = Instant::now() + Duration::from_secs(60);
-            loop {
-                let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
-                if ok(&r["ok"]) {
-                    return r["ok"].clone();
-                }
-                assert!(Instant::now() < deadline, "the history never caught up: {r}");
-                std::thread::sleep(Duration::from_millis(20));
-            }
-        };
-        let summary = history_until(&|ok| {
-            ok["last_cycle"].as_u64() >= Some(30) && ok["marks"].as_array().is_some_and(|m| !m.is_empty())
-        });
-        assert_eq!(summary["marks"][0]["kind"], "activation", "{summary}");
-        assert_eq!(summary["marks"][0]["text"], "activated wander", "{summary}");
-        let activated = summary["marks"][0]["cycle"].as_u64().unwrap_or(0);
-        assert!((10..=12).contains(&activated), "activated between the steps: {summary}");
-        let at = |cycle: u64| {
-            let r = handle_message(
-                &gui.shared,
-                1,
-                &format!(r#"{{"id": 2, "verb": "history_frame", "args": {{"cycle": {cycle}}}}}"#),
-            );
-            let wander = r["ok"]["skills"].as_array().and_then(|s| s.iter().find(|s| s["name"] == "wander")).cloned();
-            (r, wander.map(|w| w["active"].clone()))
-        };
-        assert_eq!(at(activated).1, Some(json!(true)), "{}", at(activated).0);
-        assert_eq!(at(activated - 1).1, Some(json!(false)), "{}", at(activated - 1).0);
-        handle.step(100).expect("step");
-        let summary = history_until(&|ok| ok["last_cycle"].as_u64() >= Some(130));
-        assert_eq!(summary["frames"], 50, "bounded: {summary}");
-        assert_eq!(summary["marks"], json!([]), "the mark left with its cycle: {summary}");
-        let (first, last) = (summary["first_cycle"].as_u64().unwrap_or(0), summary["last_cycle"].as_u64().unwrap_or(0));
-        assert_eq!(last - first + 1, 50);
-        // The activation fell out of the window: wander's state as of the window is its last change.
-        let r = handle_message(
-            &gui.shared,
-            1,
-            &format!(r#"{{"id": 2, "verb": "history_frame", "args": {{"cycle": {last}}}}}"#),
-        );
-        let frame = &r["ok"];
-        assert_eq!(frame["cycle"], last, "{r}");
-        let wander = frame["skills"].as_array().and_then(|s| s.iter().find(|s| s["name"] == "wander")).expect("wander");
-        assert_eq!(wander["active"], true, "{frame}");
-        assert_eq!(frame["activity"]["changed"]["wander"], activated);
-        assert!(
-            frame["signals"]["odom"]["value"].is_object() || frame["signals"]["odom.x"]["value"].is_number(),
-            "{frame}"
-        );
-        let r = handle_message(&gui.shared, 1, r#"{"id": 3, "verb": "history_frame", "args": {"cycle": 0}}"#);
-        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
-        assert!(r["error"]["message"].as_str().unwrap_or("").contains("not in the history"), "{r}");
-        let r = handle_message(&gui.shared, 1, r#"{"id": 4, "verb": "history_frame", "args": {"cycle": -1}}"#);
-        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
-        gui.stop();
-        // Without a tap, the verbs say why there is no timeline.
-        let plain = shared(handle.clone());
-        let r = handle_message(&plain, 1, r#"{"id": 5, "verb": "history"}"#);
-        assert_eq!(r["error"]["kind"], "unavailable", "{r}");
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
-    fn a_history_can_be_fed_from_any_source() {
-        let (mut handle, join) = robot();
-        let layout =
-            Layout { leaves: vec![history::LeafLayout { path: "recorded.x".into(), writers: vec![] }], skills: vec![] };
-        let (frames_tx, frames) = crossbeam_channel::bounded(4);
-        let (events_tx, events) = crossbeam_channel::bounded(4);
-        let tap = HistoryTap::from_channels(layout, frames, events, 0);
-        let gui = serve_with_history(handle.clone(), GuiConfig::default(), Some(tap)).expect("serve");
-        for cycle in 1..=20u64 {
-            let frame = situate_manager::Frame {
-                cycle,
-                time_s: cycle as f64 / 10.0,
-                values: vec![(0, situate_core::Value::F64(cycle as f64 * 2.0))].into(),
-                prints: vec![],
-                winners: vec![],
-            };
-            frames_tx.send(frame).expect("the history takes frames");
-        }
-        events_tx.send(situate_manager::Event::ManagerStopped { cycle: 20 }).expect("and events");
-        drop((frames_tx, events_tx));
-        let deadline = Instant::now() + Duration::from_secs(60);
-        loop {
-            let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
-            if r["ok"]["last_cycle"] == 20 && r["ok"]["marks"].as_array().is_some_and(|m| m.len() == 1) {
-                break;
-            }
-            assert!(Instant::now() < deadline, "the frames never arrived: {r}");
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        let r = handle_message(&gui.shared, 1, r#"{"id": 2, "verb": "history_frame", "args": {"cycle": 7}}"#);
-        assert_eq!(r["ok"]["signals"]["recorded.x"]["value"], 14.0, "{r}");
-        assert_eq!(r["ok"]["time_s"], 0.7, "{r}");
         gui.stop();
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();

@@ -1,0 +1,366 @@
+//! One browser tab's WebSocket (`/ws`): the hello, the tab's requests and what it is sent
+//! (replies, telemetry, events). A request is one of the link's verbs, decoded by the link's own
+//! decoder and forwarded to the manager, or one of the GUI's own: `watch` (the signals the tab
+//! plots), `history` and `history_frame` (the timeline).
+
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+
+use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::http::{header, HeaderMap, StatusCode};
+use axum::response::{IntoResponse, Response};
+use serde_json::{json, Value as Json};
+use situate_link::json as wire;
+use situate_manager::{Reply, Request};
+use tokio::sync::broadcast;
+
+use crate::{ask, HistoryError, Shared, MAX_MESSAGE, WORLD_SIGNALS};
+
+/// The GUI's own verbs, besides the link's.
+const GUI_VERBS: [&str; 3] = ["watch", "history", "history_frame"];
+
+/// A browser's WebSocket must come from a page of this server (no cross-site WebSocket): a
+/// request with an `Origin` header is accepted only when its host is the request's `Host`.
+pub(crate) fn same_origin(headers: &HeaderMap) -> bool {
+    let Some(origin) = headers.get(header::ORIGIN) else { return true };
+    let (Ok(origin), Some(Ok(host))) = (origin.to_str(), headers.get(header::HOST).map(|h| h.to_str())) else {
+        return false;
+    };
+    origin.strip_prefix("http://").or_else(|| origin.strip_prefix("https://")) == Some(host)
+}
+
+pub(crate) async fn ws_upgrade(
+    State(shared): State<Arc<Shared>>,
+    headers: HeaderMap,
+    ws: WebSocketUpgrade,
+) -> Response {
+    if !same_origin(&headers) {
+        tracing::warn!("refused a WebSocket from another origin");
+        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
+    }
+    ws.max_message_size(MAX_MESSAGE).on_upgrade(move |socket| session(shared, socket))
+}
+
+/// The first message of every connection: the run, the world's map, the verbs, and the run's
+/// outcome when it is known already.
+pub(crate) fn hello_message(shared: &Shared, client: u64) -> Json {
+    json!({
+        "type": "hello",
+        "client": client,
+        "protocol": wire::PROTOCOL,
+        "run": {"id": shared.run.id, "started_unix_s": shared.run.started_unix_s},
+        "sample_hz": shared.sample_hz,
+        "world": shared.world,
+        "verbs": wire::VERBS.iter().filter(|v| **v != "telemetry").chain(GUI_VERBS.iter()).collect::<Vec<_>>(),
+        "history": shared.history.as_ref().map(|h| {
+            let h = h.lock().unwrap_or_else(|p| p.into_inner());
+            json!({"frames": h.capacity(), "bytes": h.byte_budget()})
+        }),
+        "outcome": shared.outcome.lock().unwrap_or_else(|p| p.into_inner()).clone(),
+    })
+}
+
+/// Counts a connected tab for as long as it lives.
+struct ClientGuard {
+    shared: Arc<Shared>,
+    id: u64,
+}
+
+impl Drop for ClientGuard {
+    fn drop(&mut self) {
+        self.shared.watched.lock().unwrap_or_else(|p| p.into_inner()).remove(&self.id);
+        self.shared.clients.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
+    let id = shared.next_client.fetch_add(1, Ordering::SeqCst);
+    let mut telemetry = shared.telemetry.subscribe();
+    let mut events = shared.events.subscribe();
+    let mut shutdown = shared.shutdown.clone();
+    shared.clients.fetch_add(1, Ordering::SeqCst);
+    let _guard = ClientGuard { shared: Arc::clone(&shared), id };
+    let _ = shared.wake.send(());
+    tracing::debug!(client = id, "GUI tab connected");
+    let hello = hello_message(&shared, id);
+    if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
+        return;
+    }
+    let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Utf8Bytes>();
+    loop {
+        tokio::select! {
+            _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
+                let _ = socket.send(Message::Close(None)).await;
+                break;
+            }
+            incoming = socket.recv() => match incoming {
+                Some(Ok(Message::Text(text))) => {
+                    let shared = Arc::clone(&shared);
+                    let tx = reply_tx.clone();
+                    tokio::task::spawn_blocking(move || {
+                        let reply = handle_message(&shared, id, text.as_str());
+                        let _ = tx.send(reply.to_string().into());
+                    });
+                }
+                Some(Ok(Message::Binary(_))) => {
+                    let e = json!({"type": "reply", "id": null,
+                        "error": {"kind": "bad_request", "message": "send JSON text frames, not binary"}});
+                    if socket.send(Message::Text(e.to_string().into())).await.is_err() {
+                        break;
+                    }
+                }
+                Some(Ok(_)) => {}
+                Some(Err(_)) | None => break,
+            },
+            Some(reply) = reply_rx.recv() => {
+                if socket.send(Message::Text(reply)).await.is_err() {
+                    break;
+                }
+            }
+            t = telemetry.recv() => match t {
+                Ok(text) => {
+                    if socket.send(Message::Text(text)).await.is_err() {
+                        break;
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => break,
+            },
+            e = events.recv() => match e {
+                Ok(text) => {
+                    if socket.send(Message::Text(text)).await.is_err() {
+                        break;
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(n)) => {
+                    let note = json!({"type": "lagged", "missed": n});
+                    if socket.send(Message::Text(note.to_string().into())).await.is_err() {
+                        break;
+                    }
+                }
+                Err(broadcast::error::RecvError::Closed) => break,
+            },
+        }
+    }
+    tracing::debug!(client = id, "GUI tab disconnected");
+}
+
+/// Answers one browser message (blocking: it may wait for the manager).
+pub(crate) fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
+    let parsed: Json = match serde_json::from_str(text) {
+        Ok(j) => j,
+        Err(e) => return error_reply(&Json::Null, "bad_request", &format!("the message is not JSON: {e}")),
+    };
+    let id = parsed.get("id").cloned().unwrap_or(Json::Null);
+    let Some(verb) = parsed.get("verb").and_then(Json::as_str) else {
+        return error_reply(&id, "bad_request", "the message needs a `verb` (a string)");
+    };
+    let args = parsed.get("args").cloned().unwrap_or_else(|| json!({}));
+    if verb == "watch" {
+        return watch_signals(shared, client, &id, &args);
+    }
+    if verb == "history" || verb == "history_frame" {
+        return history_request(shared, verb, &id, &args);
+    }
+    if verb == "telemetry" {
+        return error_reply(&id, "bad_request", "the GUI samples telemetry itself: use `watch` to choose signals");
+    }
+    let payload = args.to_string();
+    match wire::decode_request(verb, payload.as_bytes()) {
+        Err(e) => json!({"type": "reply", "id": id, "error": {"kind": e.kind, "message": e.message}}),
+        Ok(wire::Decoded::Hello) => match ask(&shared.handle, Request::QueryStats) {
+            Ok(Reply::Stats(s)) => json!({"type": "reply", "id": id, "ok": {
+                "robot": s.robot, "protocol": wire::PROTOCOL, "verbs": wire::VERBS}}),
+            Ok(other) => error_reply(&id, "invalid", &format!("unexpected reply {other:?}")),
+            Err(e) => with_id(wire::control_error(&e), &id),
+        },
+        Ok(wire::Decoded::Telemetry { .. }) => error_reply(&id, "bad_request", "use `watch`"),
+        Ok(wire::Decoded::Manager(request)) => {
+            tracing::debug!(?request, client, "GUI request");
+            match ask(&shared.handle, request) {
+                Ok(reply) => json!({"type": "reply", "id": id, "ok": wire::reply_to_json(&reply)}),
+                Err(e) => with_id(wire::control_error(&e), &id),
+            }
+        }
+    }
+}
+
+fn with_id(mut body: Json, id: &Json) -> Json {
+    body["type"] = json!("reply");
+    body["id"] = id.clone();
+    body
+}
+
+fn error_reply(id: &Json, kind: &str, message: &str) -> Json {
+    json!({"type": "reply", "id": id, "error": {"kind": kind, "message": message}})
+}
+
+/// `history` and `history_frame {cycle}`: the timeline's span and marks, and the state at a cycle.
+fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json {
+    let Some(history) = &shared.history else {
+        return error_reply(
+            id,
+            "unavailable",
+            "this GUI keeps no history (the program that serves it did not tap the manager's cycle for it)",
+        );
+    };
+    if verb == "history" {
+        let summary = history.lock().unwrap_or_else(|p| p.into_inner()).summary_json();
+        return json!({"type": "reply", "id": id, "ok": summary});
+    }
+    let Some(cycle) = args.get("cycle").and_then(Json::as_u64) else {
+        return error_reply(id, "bad_request", "`history_frame`: argument `cycle` must be a whole number ≥ 0");
+    };
+    let frame = history.lock().unwrap_or_else(|p| p.into_inner()).frame_json(cycle, &WORLD_SIGNALS);
+    match frame {
+        Ok(frame) => json!({"type": "reply", "id": id, "ok": frame}),
+        Err(e @ HistoryError::Empty) => error_reply(id, "unavailable", &e.to_string()),
+        Err(e @ HistoryError::NotHeld { .. }) => error_reply(id, "bad_request", &e.to_string()),
+    }
+}
+
+/// `watch`: the signals this tab plots (a list of signal names, at most 32).
+fn watch_signals(shared: &Shared, client: u64, id: &Json, args: &Json) -> Json {
+    let Some(list) = args.get("signals").and_then(Json::as_array) else {
+        return error_reply(id, "bad_request", "`watch`: argument `signals` must be a list of strings");
+    };
+    let mut signals = Vec::new();
+    for s in list {
+        match s.as_str() {
+            Some(name) if !name.is_empty() && name.len() <= 200 => signals.push(name.to_string()),
+            _ => return error_reply(id, "bad_request", "`watch`: every signal must be a non-empty string"),
+        }
+    }
+    if signals.len() > 32 {
+        return error_reply(id, "bad_request", "`watch`: at most 32 signals per tab");
+    }
+    for name in &signals {
+        if let Err(e) = ask(&shared.handle, Request::QuerySignal { signal: name.clone() }) {
+            return with_id(wire::control_error(&e), id);
+        }
+    }
+    shared.watched.lock().unwrap_or_else(|p| p.into_inner()).insert(client, signals.clone());
+    json!({"type": "reply", "id": id, "ok": {"signals": signals}})
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::{Duration, Instant};
+
+    use situate::manager::{Control, Manager, RobotSpec, SkillSpec};
+    use situate_manager::Request;
+
+    use super::*;
+    use crate::tests::{robot, shared};
+    use crate::{serve_with_history, GuiConfig, HistoryTap};
+
+    #[test]
+    fn requests_go_through_the_links_decoder_and_the_control_api() {
+        let (mut handle, join) = robot();
+        let s = shared(handle.clone());
+        let r = handle_message(&s, 1, r#"{"id": 1, "verb": "activate", "args": {"skills": ["wander"]}}"#);
+        assert_eq!(r["id"], 1);
+        assert_eq!(r["ok"]["changed"], json!(["wander"]));
+        let r = handle_message(
+            &s,
+            1,
+            r#"{"id": 2, "verb": "set_param", "args": {"skill": "runaway", "param": "safe_distance", "value": 9}}"#,
+        );
+        assert_eq!(r["error"]["kind"], "bad_param");
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("[0.1, 3.0]"), "{r}");
+        assert_eq!(handle.get_param("runaway", "safe_distance"), Ok(situate_core::Value::F64(0.5)));
+        let r = handle_message(&s, 1, r#"{"id": 3, "verb": "shutdown"}"#);
+        assert_eq!(r["error"]["kind"], "unknown_verb", "{r}");
+        let r = handle_message(&s, 1, r#"{"id": 4, "verb": "telemetry", "args": {"signals": ["odom"]}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request");
+        let r = handle_message(&s, 1, "not json");
+        assert_eq!(r["error"]["kind"], "bad_request");
+        assert_eq!(r["id"], Json::Null);
+        let r = handle_message(&s, 1, r#"{"id": 5, "verb": "step", "args": {"cycles": "x"}}"#);
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("cycles"), "{r}");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn the_timeline_holds_the_robots_last_cycles_and_its_events() {
+        let spec = RobotSpec::new("guitest")
+            .skill(SkillSpec::new("sonar", "toy.sonar"))
+            .skill(SkillSpec::new("wheels", "toy.wheels"))
+            .skill(SkillSpec::new("runaway", "toy.runaway"))
+            .skill(SkillSpec::new("wander", "toy.wander").active(false));
+        let mut manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
+        let tap = HistoryTap::new(&mut manager);
+        let (mut handle, join) = manager.spawn(false);
+        let gui =
+            serve_with_history(handle.clone(), GuiConfig { history_frames: 50, ..GuiConfig::default() }, Some(tap))
+                .expect("serve");
+        assert_eq!(hello_message(&gui.shared, 1)["history"]["frames"], 50);
+        handle.step(10).expect("step");
+        handle.request(Request::Activate { skills: vec!["wander".into()], with_providers: false }).expect("activate");
+        handle.step(20).expect("step");
+        let history_until = |ok: &dyn Fn(&Json) -> bool| {
+            let deadline = Instant::now() + Duration::from_secs(60);
+            loop {
+                let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
+                if ok(&r["ok"]) {
+                    return r["ok"].clone();
+                }
+                assert!(Instant::now() < deadline, "the history never caught up: {r}");
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        };
+        let summary = history_until(&|ok| {
+            ok["last_cycle"].as_u64() >= Some(30) && ok["marks"].as_array().is_some_and(|m| !m.is_empty())
+        });
+        assert_eq!(summary["marks"][0]["kind"], "activation", "{summary}");
+        assert_eq!(summary["marks"][0]["text"], "activated wander", "{summary}");
+        let activated = summary["marks"][0]["cycle"].as_u64().unwrap_or(0);
+        assert!((10..=12).contains(&activated), "activated between the steps: {summary}");
+        let at = |cycle: u64| {
+            let r = handle_message(
+                &gui.shared,
+                1,
+                &format!(r#"{{"id": 2, "verb": "history_frame", "args": {{"cycle": {cycle}}}}}"#),
+            );
+            let wander = r["ok"]["skills"].as_array().and_then(|s| s.iter().find(|s| s["name"] == "wander")).cloned();
+            (r, wander.map(|w| w["active"].clone()))
+        };
+        assert_eq!(at(activated).1, Some(json!(true)), "{}", at(activated).0);
+        assert_eq!(at(activated - 1).1, Some(json!(false)), "{}", at(activated - 1).0);
+        handle.step(100).expect("step");
+        let summary = history_until(&|ok| ok["last_cycle"].as_u64() >= Some(130));
+        assert_eq!(summary["frames"], 50, "bounded: {summary}");
+        assert_eq!(summary["marks"], json!([]), "the mark left with its cycle: {summary}");
+        let (first, last) = (summary["first_cycle"].as_u64().unwrap_or(0), summary["last_cycle"].as_u64().unwrap_or(0));
+        assert_eq!(last - first + 1, 50);
+        // The activation fell out of the window: wander's state as of the window is its last change.
+        let r = handle_message(
+            &gui.shared,
+            1,
+            &format!(r#"{{"id": 2, "verb": "history_frame", "args": {{"cycle": {last}}}}}"#),
+        );
+        let frame = &r["ok"];
+        assert_eq!(frame["cycle"], last, "{r}");
+        let wander = frame["skills"].as_array().and_then(|s| s.iter().find(|s| s["name"] == "wander")).expect("wander");
+        assert_eq!(wander["active"], true, "{frame}");
+        assert_eq!(frame["activity"]["changed"]["wander"], activated);
+        assert!(
+            frame["signals"]["odom"]["value"].is_object() || frame["signals"]["odom.x"]["value"].is_number(),
+            "{frame}"
+        );
+        let r = handle_message(&gui.shared, 1, r#"{"id": 3, "verb": "history_frame", "args": {"cycle": 0}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
+        assert!(r["error"]["message"].as_str().unwrap_or("").contains("not in the history"), "{r}");
+        let r = handle_message(&gui.shared, 1, r#"{"id": 4, "verb": "history_frame", "args": {"cycle": -1}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
+        gui.stop();
+        // Without a tap, the verbs say why there is no timeline.
+        let plain = shared(handle.clone());
+        let r = handle_message(&plain, 1, r#"{"id": 5, "verb": "history"}"#);
+        assert_eq!(r["error"]["kind"], "unavailable", "{r}");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+}
