@@ -13,6 +13,7 @@ import json
 import os
 import re
 import threading
+import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Union
 
@@ -229,8 +230,26 @@ def send(
         raise NotRunning(f"could not send `{key}`: {zenoh_error(e)}") from e
 
 
+#: How often a ``hello`` is asked again while no manager has answered yet.
+HELLO_RETRY_S = 0.05
+
+
 def robots(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:
-    """The ``hello`` results of every manager answering ``situate/*/req/hello``, by robot name."""
+    """The ``hello`` results of every manager answering ``situate/*/req/hello``, by robot name.
+
+    Asks again until one answers or ``timeout`` is over: a session can connect to a program
+    that has opened its endpoint but not yet declared its requests, and a Zenoh get that finds
+    nobody to ask ends at once, with no answer.
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        found = _robots_once(session, timeout=max(0.001, deadline - time.monotonic()))
+        if found or time.monotonic() >= deadline:
+            return found
+        time.sleep(min(HELLO_RETRY_S, max(0.0, deadline - time.monotonic())))
+
+
+def _robots_once(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:
     found: dict[str, dict[str, Any]] = {}
     for reply in session.get("situate/*/req/hello", timeout=timeout):
         if reply.ok is None:
@@ -250,7 +269,22 @@ def hello(
 ) -> dict[str, Any]:
     """The ``hello`` of robot ``robot``, or of the only robot answering when ``None``."""
     if robot is not None:
-        result = request(session, robot, "hello", {}, timeout=timeout, endpoints=endpoints)
+        # Asked again while nobody is there to answer, for the reason `robots` gives.
+        key = f"situate/{robot}/req/hello"
+        deadline = time.monotonic() + timeout
+        while True:
+            left = max(0.001, deadline - time.monotonic())
+            try:
+                replies = session.get(key, payload="{}", timeout=left)
+            except zenoh.ZError as e:
+                raise NotRunning(f"could not send `{key}`: {zenoh_error(e)}") from e
+            reply = next(iter(replies), None)
+            if reply is not None:
+                result = _result(key, reply, timeout, endpoints)
+                break
+            if time.monotonic() >= deadline:
+                raise _no_answer(key, timeout, endpoints)
+            time.sleep(min(HELLO_RETRY_S, max(0.0, deadline - time.monotonic())))
         if not isinstance(result, dict):
             raise BadReply(f"`hello`: expected an object, got {result!r}")
         return result
