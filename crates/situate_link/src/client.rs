@@ -1,13 +1,16 @@
 //! A blocking client of the link, for the `situate` program's client verbs
 //! and for Rust sequencers.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serde_json::Value as Json;
 use zenoh::{Session, Wait};
 
 use crate::session::client_config;
 use crate::LinkError;
+
+/// How often a request that found nobody to ask is sent again (see [`Client::request`]).
+const RETRY: Duration = Duration::from_millis(50);
 
 /// An error reply from the manager: its `kind` and message.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -116,14 +119,26 @@ impl Client {
                 obj.insert("client".into(), Json::String(self.client_id.clone()));
             }
         }
-        let replies = self
-            .session
-            .get(&key)
-            .payload(args.to_string())
-            .timeout(self.timeout)
-            .wait()
-            .map_err(|e| ClientError::Send { key: key.clone(), detail: e.to_string() })?;
-        let reply = replies.recv().map_err(|_| self.no_answer(&key))?;
+        // A get that finds nobody to ask ends at once with no reply (a robot that has opened its
+        // endpoint but not yet declared its requests, just after it started): nothing was
+        // delivered, so it is asked again until the timeout. A robot that took the request and
+        // did not answer ends it with a `Timeout` reply instead, never asked again.
+        let deadline = Instant::now() + self.timeout;
+        let (replies, reply) = loop {
+            let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1));
+            let replies = self
+                .session
+                .get(&key)
+                .payload(args.to_string())
+                .timeout(left)
+                .wait()
+                .map_err(|e| ClientError::Send { key: key.clone(), detail: e.to_string() })?;
+            match replies.recv() {
+                Ok(reply) => break (replies, reply),
+                Err(_) if Instant::now() < deadline => std::thread::sleep(RETRY.min(left)),
+                Err(_) => return Err(self.no_answer(&key)),
+            }
+        };
         // Hold the channel until Zenoh ends the query (at once after an answer, at the timeout
         // at the latest): dropped earlier, Zenoh logs an error for what it still delivers, a
         // stray line on the client's stderr.
@@ -150,26 +165,35 @@ impl Client {
     }
 
     /// The robots whose managers answer `hello`.
+    /// Asks until one answers or the timeout (at most 2 s) is over, as [`Client::request`]
+    /// asks again a robot that is still starting.
     pub fn robots(&self) -> Result<Vec<String>, ClientError> {
-        let replies = self
-            .session
-            .get("situate/*/req/hello")
-            .timeout(self.timeout.min(Duration::from_secs(2)))
-            .wait()
-            .map_err(|e| ClientError::Send { key: "situate/*/req/hello".into(), detail: e.to_string() })?;
-        let mut robots = Vec::new();
-        while let Ok(reply) = replies.recv() {
-            if let Ok(sample) = reply.result() {
-                if let Ok(body) = serde_json::from_slice::<Json>(&sample.payload().to_bytes()) {
-                    if let Some(r) = body.pointer("/ok/robot").and_then(Json::as_str) {
-                        robots.push(r.to_string());
+        let deadline = Instant::now() + self.timeout.min(Duration::from_secs(2));
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1));
+            let replies = self
+                .session
+                .get("situate/*/req/hello")
+                .timeout(left)
+                .wait()
+                .map_err(|e| ClientError::Send { key: "situate/*/req/hello".into(), detail: e.to_string() })?;
+            let mut robots = Vec::new();
+            while let Ok(reply) = replies.recv() {
+                if let Ok(sample) = reply.result() {
+                    if let Ok(body) = serde_json::from_slice::<Json>(&sample.payload().to_bytes()) {
+                        if let Some(r) = body.pointer("/ok/robot").and_then(Json::as_str) {
+                            robots.push(r.to_string());
+                        }
                     }
                 }
             }
+            if !robots.is_empty() || Instant::now() >= deadline {
+                robots.sort();
+                robots.dedup();
+                return Ok(robots);
+            }
+            std::thread::sleep(RETRY.min(left));
         }
-        robots.sort();
-        robots.dedup();
-        Ok(robots)
     }
 
     /// The robot to talk to: `name` if given, else the only one answering.
