@@ -17,6 +17,10 @@ say() { printf 'publish-crates.sh: %s\n' "$*"; }
 die() { printf 'publish-crates.sh: %s\n' "$*" >&2; exit 1; }
 
 [ -f web/dist/index.html ] || scripts/gui.sh build
+# The copies are for the packages only: gone again when the script ends, however it ends. Left
+# in the checkout, the program built from it would find the demo in them, where a test expects
+# it to find none.
+trap 'rm -rf crates/situate_gui/web-dist crates/situate_cli/data' EXIT
 rm -rf crates/situate_gui/web-dist
 cp -rp web/dist crates/situate_gui/web-dist
 scripts/package-data.sh crates/situate_cli/data
