@@ -192,6 +192,39 @@ fn the_default_session_listens_on_loopback_tcp_only() {
     drop(session);
 }
 
+/// A client that connects while the program is still starting: the session is open (it
+/// accepts connections) but the link is served only later, as `situate run` does. The client
+/// must wait for it within its timeout, not give up. (With this Zenoh configuration the get
+/// itself waits; a get that finds nobody can also end at once, as the Python client's test
+/// `test_hello_race.py` shows, and then the client asks again.)
+#[test]
+fn a_client_finds_a_robot_whose_link_is_served_after_it_connected() {
+    let file = RobotFile::parse("linkbot.yaml", ROBOT).unwrap();
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+    let session = Link::open(&config).unwrap();
+    let mut c = Client::connect(std::slice::from_ref(&endpoint)).unwrap();
+    c.timeout = Duration::from_secs(60);
+    // The named request first: it may wait the whole timeout; `robots` is capped at 2 s.
+    let asked = std::thread::spawn(move || {
+        let hello = c.request("linkbot", "hello", &json!({}));
+        (c.robots(), hello)
+    });
+    std::thread::sleep(Duration::from_millis(300));
+    let mut registry = situate_toys::registry();
+    for (name, decl) in file.remote_decls().unwrap() {
+        registry.add(RemoteSkill::skill_type(&session, "linkbot", &name, decl));
+    }
+    let manager = Manager::build(&RobotSpec::from_file(&file), &registry).unwrap();
+    let (handle, join) = manager.spawn(true);
+    let link = Link::serve("linkbot", handle.clone(), session, &config).unwrap();
+    let running = Running { handle, link: Some(link), join: Some(join), endpoint };
+    let (robots, hello) = asked.join().expect("the client's thread");
+    assert_eq!(hello.expect("hello")["robot"], "linkbot");
+    assert_eq!(robots.expect("robots"), vec!["linkbot".to_string()]);
+    drop(running);
+}
+
 /// A remote skill, as another process would serve it: subscribe to its
 /// inputs, publish outputs. The manager never waits for it.
 #[test]
