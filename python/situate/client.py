@@ -607,7 +607,8 @@ def connect(
             (:class:`~situate.AmbiguousRobot` if several do).
         endpoint: The manager's endpoint, e.g. ``"tcp/127.0.0.1:7447"``, or a
             list of them; default ``$SITUATE_CONNECT`` or ``tcp/127.0.0.1:7447``.
-        timeout: Seconds to wait for each reply.
+        timeout: Seconds to wait for each reply. ``hello``, the first, is asked again while
+            nothing answers it, until then: a robot still starting is waited for.
         zenoh_config: Further Zenoh configuration, merged last, for a manager
             that is not on loopback: TLS (``{"transport": {"link": {"tls":
             {...}}}}``) or credentials (``{"transport": {"auth": {"usrpwd":
