@@ -349,8 +349,8 @@ impl Writing {
             bytes.clear();
             let at = encode::leaf_message(&mut bytes, frame.cycle, value);
             let written = self.write_bytes(channel, time, &bytes);
-            // Kept as its JSON, not the value: a value kept would stop its
-            // array's buffer from going back to the skill that writes it.
+            // Kept as its JSON (for the keyframes): the value is borrowed from
+            // the frame, which goes back to the cycle.
             let latest = self.latest.entry(leaf).or_default();
             latest.0 = frame.cycle;
             latest.1.clear();
