@@ -377,7 +377,8 @@ fn reply_error(query: &Query, message: &str) {
 }
 
 /// Decodes a request, does it, and encodes the response; `Err` for a request that cannot be
-/// decoded (the client gets a Zenoh error reply naming the type).
+/// decoded, or when the manager does not answer (the client gets a Zenoh error reply saying
+/// which).
 fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>, String> {
     fn req<'a, T: Deserialize<'a>>(payload: &'a [u8], ty: SrvType) -> Result<T, String> {
         decode(payload).map_err(|e| format!("cannot decode a {} request: {e}", ty.ros_name))
@@ -392,7 +393,7 @@ fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>
         }
         Service::GetParameters => {
             let r: Names = req(payload, GET_PARAMETERS)?;
-            let params = parameters(handle);
+            let params = parameters(handle)?;
             let values = r
                 .names
                 .iter()
@@ -402,17 +403,17 @@ fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>
         }
         Service::SetParameters => {
             let r: SetParametersRequest = req(payload, SET_PARAMETERS)?;
-            let params = parameters(handle);
+            let params = parameters(handle)?;
             let results = r.parameters.iter().map(|p| set_parameter(handle, &params, p)).collect();
             out(&SetParametersResponse { results })
         }
         Service::ListParameters => {
             let r: ListParametersRequest = req(payload, LIST_PARAMETERS)?;
-            out(&ListParametersResponse { result: list(&parameters(handle), &r) })
+            out(&ListParametersResponse { result: list(&parameters(handle)?, &r) })
         }
         Service::DescribeParameters => {
             let r: Names = req(payload, DESCRIBE_PARAMETERS)?;
-            let params = parameters(handle);
+            let params = parameters(handle)?;
             let descriptors = r
                 .names
                 .iter()
@@ -434,7 +435,7 @@ fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>
         }
         Service::GetParameterTypes => {
             let r: Names = req(payload, GET_PARAMETER_TYPES)?;
-            let params = parameters(handle);
+            let params = parameters(handle)?;
             let types = r
                 .names
                 .iter()
@@ -460,19 +461,21 @@ fn set_active(handle: &Handle, skill: &str, on: bool) -> SetBoolResponse {
     }
 }
 
-/// Every skill's parameters as the node's: (`skill.param`, its spec, its value).
-fn parameters(handle: &Handle) -> Vec<(String, ParamSpec, Value)> {
+/// Every skill's parameters as the node's: (`skill.param`, its spec, its value); `Err` when
+/// the manager does not answer (the call gets an error reply, not an empty list).
+fn parameters(handle: &Handle) -> Result<Vec<(String, ParamSpec, Value)>, String> {
     let skills: Vec<SkillInfo> = match handle.request_timeout(Request::QuerySkills, REQUEST_TIMEOUT) {
         Ok(Reply::Skills(s)) => s,
-        _ => return Vec::new(),
+        Ok(other) => return Err(format!("the skill manager gave an unexpected reply: {other:?}")),
+        Err(e) => return Err(format!("the skill manager did not answer: {e}")),
     };
-    skills
+    Ok(skills
         .into_iter()
         .flat_map(|s| {
             let skill = s.name;
             s.params.into_iter().map(move |(spec, v)| (format!("{skill}.{}", spec.name), spec, v))
         })
-        .collect()
+        .collect())
 }
 
 fn type_of(t: ParamType) -> u8 {

@@ -223,3 +223,71 @@ fn signals_that_do_not_exist_or_do_not_fit_their_message_are_refused_by_name() {
 fn flume_like() -> zenoh::handlers::FifoChannel {
     zenoh::handlers::FifoChannel::new(1024)
 }
+
+/// Calls a service of the bridge as an rmw_zenoh client does; the reply's payload and its
+/// attachment's sequence number and GID, or the error reply's text.
+fn call(
+    observer: &zenoh::Session,
+    key: &str,
+    request: &[u8],
+    sequence: i64,
+) -> Result<(Vec<u8>, i64, [u8; 16]), String> {
+    let gid = [7u8; 16];
+    let replies = observer
+        .get(key)
+        .payload(request.to_vec())
+        .attachment(situate_ros2::rmw::attachment(sequence, 0, &gid))
+        .timeout(WAIT)
+        .wait()
+        .expect("get");
+    let reply = replies.recv().map_err(|_| "no reply".to_string())?;
+    match reply.result() {
+        Ok(sample) => {
+            let mut d = zenoh_ext::ZDeserializer::new(sample.attachment().expect("the reply's attachment"));
+            let seq: i64 = d.deserialize().expect("sequence number");
+            let _stamp: i64 = d.deserialize().expect("timestamp");
+            let client: [u8; 16] = d.deserialize().expect("GID");
+            assert_eq!(client, gid, "the reply names the client");
+            Ok((sample.payload().to_bytes().into_owned(), seq, client))
+        }
+        Err(e) => Err(e.payload().try_to_string().map(|s| s.into_owned()).unwrap_or_default()),
+    }
+}
+
+#[test]
+fn the_parameter_services_answer_and_say_so_when_the_manager_is_gone() {
+    use situate_ros2::services::{ListParametersRequest, ListParametersResponse, LIST_PARAMETERS};
+    let robot = toy_robot("srvbot");
+    let session = robot.link.as_ref().expect("link").session().clone();
+    let bridge =
+        Bridge::start("srvbot", robot.handle.clone(), session, &config("ros2:\n  services: true\n")).expect("starts");
+    let key = bridge
+        .services()
+        .iter()
+        .find(|(name, _)| name == "/srvbot/list_parameters")
+        .map(|(_, key)| key.clone())
+        .expect("list_parameters offered");
+    assert!(key.ends_with(&format!("/rcl_interfaces::srv::dds_::ListParameters_/{}", LIST_PARAMETERS.hash)), "{key}");
+    let observer = observer(&robot.endpoint);
+    let request = msgs::encode(&ListParametersRequest { prefixes: vec!["wander".into()], depth: 0 }).expect("encode");
+    let deadline = Instant::now() + WAIT;
+    let (payload, seq, _) = loop {
+        // The observer may ask before it has heard of the queryable: asked again, bounded.
+        match call(&observer, &key, &request, 1) {
+            Ok(r) => break r,
+            Err(e) => {
+                assert!(Instant::now() < deadline, "no answer from list_parameters: {e}");
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+    };
+    assert_eq!(seq, 1, "the reply carries the request's sequence number");
+    let listed: ListParametersResponse = msgs::decode(&payload).expect("a ListParameters response");
+    assert_eq!(listed.result.names, vec!["wander.speed".to_string(), "wander.seed".to_string()]);
+
+    // The manager stops; the bridge still serves, and says why it cannot answer.
+    robot.handle.request_timeout(Request::Shutdown, Duration::from_secs(5)).expect("shutdown");
+    let err = call(&observer, &key, &request, 2).expect_err("an error reply");
+    assert!(err.contains("did not answer"), "{err}");
+    drop(bridge);
+}
