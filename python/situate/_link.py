@@ -15,7 +15,7 @@ import re
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, Union
+from typing import Any, TypeVar, Union
 
 import zenoh
 
@@ -166,13 +166,21 @@ def request(
     Blocks for at most ``timeout`` seconds; no answer at all is :class:`NotRunning`.
     """
     key = f"situate/{robot}/req/{verb}"
+    reply = _first_reply(session, key, json.dumps(args), timeout)
+    if reply is None:
+        raise _no_answer(key, timeout, endpoints)
+    return _result(key, reply, timeout, endpoints)
+
+
+def _first_reply(
+    session: zenoh.Session, key: str, payload: str, timeout: float
+) -> zenoh.Reply | None:
+    """The first reply to a get on ``key``, or None when none came."""
     try:
-        replies = session.get(key, payload=json.dumps(args), timeout=timeout)
+        replies = session.get(key, payload=payload, timeout=timeout)
     except zenoh.ZError as e:
         raise NotRunning(f"could not send `{key}`: {zenoh_error(e)}") from e
-    for reply in replies:
-        return _result(key, reply, timeout, endpoints)
-    raise _no_answer(key, timeout, endpoints)
+    return next(iter(replies), None)
 
 
 Done = Callable[[Any, Union[BaseException, None]], None]
@@ -233,20 +241,31 @@ def send(
 #: How often a ``hello`` is asked again while no manager has answered yet.
 HELLO_RETRY_S = 0.05
 
+_T = TypeVar("_T")
+
+
+def _until_answered(timeout: float, ask: Callable[[float], _T | None]) -> _T | None:
+    """Calls ``ask(seconds left)`` until it gives something (not None) or ``timeout`` is over.
+
+    A session can connect to a program that has opened its endpoint but not yet declared its
+    requests, and a Zenoh get that finds nobody to ask ends at once, with nothing delivered:
+    so it is asked again every ``HELLO_RETRY_S``.
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        got = ask(max(0.001, deadline - time.monotonic()))
+        if got is not None or time.monotonic() >= deadline:
+            return got
+        time.sleep(min(HELLO_RETRY_S, max(0.0, deadline - time.monotonic())))
+
 
 def robots(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:
     """The ``hello`` results of every manager answering ``situate/*/req/hello``, by robot name.
 
-    Asks again until one answers or ``timeout`` is over: a session can connect to a program
-    that has opened its endpoint but not yet declared its requests, and a Zenoh get that finds
-    nobody to ask ends at once, with no answer.
+    Asks again until one answers or ``timeout`` is over (see `_until_answered`).
     """
-    deadline = time.monotonic() + timeout
-    while True:
-        found = _robots_once(session, timeout=max(0.001, deadline - time.monotonic()))
-        if found or time.monotonic() >= deadline:
-            return found
-        time.sleep(min(HELLO_RETRY_S, max(0.0, deadline - time.monotonic())))
+    found = _until_answered(timeout, lambda left: _robots_once(session, timeout=left) or None)
+    return found or []
 
 
 def _robots_once(session: zenoh.Session, *, timeout: float) -> list[dict[str, Any]]:
@@ -269,22 +288,12 @@ def hello(
 ) -> dict[str, Any]:
     """The ``hello`` of robot ``robot``, or of the only robot answering when ``None``."""
     if robot is not None:
-        # Asked again while nobody is there to answer, for the reason `robots` gives.
+        # Asked again while nobody is there to answer (see `_until_answered`).
         key = f"situate/{robot}/req/hello"
-        deadline = time.monotonic() + timeout
-        while True:
-            left = max(0.001, deadline - time.monotonic())
-            try:
-                replies = session.get(key, payload="{}", timeout=left)
-            except zenoh.ZError as e:
-                raise NotRunning(f"could not send `{key}`: {zenoh_error(e)}") from e
-            reply = next(iter(replies), None)
-            if reply is not None:
-                result = _result(key, reply, timeout, endpoints)
-                break
-            if time.monotonic() >= deadline:
-                raise _no_answer(key, timeout, endpoints)
-            time.sleep(min(HELLO_RETRY_S, max(0.0, deadline - time.monotonic())))
+        reply = _until_answered(timeout, lambda left: _first_reply(session, key, "{}", left))
+        if reply is None:
+            raise _no_answer(key, timeout, endpoints)
+        result = _result(key, reply, timeout, endpoints)
         if not isinstance(result, dict):
             raise BadReply(f"`hello`: expected an object, got {result!r}")
         return result
