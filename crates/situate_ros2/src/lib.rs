@@ -62,6 +62,9 @@ pub enum Ros2Error {
     /// Zenoh refused a declaration (a publisher or a liveliness token).
     #[error("`ros2`: could not declare {what} on Zenoh: {message}")]
     Zenoh { what: String, message: String },
+    /// The skill manager did not list its skills, which the services are made from.
+    #[error("`ros2`: `services`: the skill manager did not list its skills: {0}")]
+    Skills(String),
     /// The bridge's thread could not start.
     #[error("`ros2`: could not start the bridge's thread: {0}")]
     Thread(#[source] std::io::Error),

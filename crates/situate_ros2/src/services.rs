@@ -242,13 +242,8 @@ impl Servers {
     ) -> Result<Servers, Ros2Error> {
         let skills = match handle.request_timeout(Request::QuerySkills, REQUEST_TIMEOUT) {
             Ok(Reply::Skills(s)) => s,
-            Ok(other) => {
-                return Err(Ros2Error::Zenoh {
-                    what: "the services".into(),
-                    message: format!("unexpected reply to a skills query: {other:?}"),
-                })
-            }
-            Err(e) => return Err(Ros2Error::Zenoh { what: "the services".into(), message: e.to_string() }),
+            Ok(other) => return Err(Ros2Error::Skills(format!("an unexpected reply: {other:?}"))),
+            Err(e) => return Err(Ros2Error::Skills(e.to_string())),
         };
         let node_fq = node.resolve(&node.name);
         let mut services: Vec<(String, SrvType, Service)> = Vec::new();
