@@ -35,6 +35,7 @@ from typing import Any
 
 from routes import RouteSequencer
 from sequencing import (
+    EVENT_KINDS,
     SONARS,
     OutOfTime,
     PhaseFailed,
@@ -765,8 +766,10 @@ async def run_reactive(
 
     seq = Reactive(robot, mission, stops, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
     try:
-        await seq.run_task()
-    except OutOfTime as e:
+        async with robot.events(*EVENT_KINDS) as stream:
+            seq.stream = stream  # read for faults only (`Sequencer.take_faults`)
+            await seq.run_task()
+    except (OutOfTime, PhaseFailed) as e:
         await seq.say(f"mission failed: {e}")
         with contextlib.suppress(situate.SituateError):
             await robot.stop()

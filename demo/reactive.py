@@ -235,7 +235,12 @@ class Reactive(RouteFollower, Sequencer):
     # ----- the senses --------------------------------------------------------------------
 
     async def sense(self) -> Senses:
-        """Runs one cycle and reads every percept, in one round trip."""
+        """Runs one cycle and reads every percept, in one round trip.
+
+        A skill that faulted since the last look is switched on again (`Sequencer.on_fault`).
+        """
+        for fault in self.take_faults():
+            await self.on_fault(fault)
         self.send("step", cycles=1)
         self.prefetch(*PERCEPTS)
         await self.flush()

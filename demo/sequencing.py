@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import situate
-from situate.events import MonitorFired
+from situate.events import MonitorFired, SkillFaulted
 
 SONARS = 24
 ROBOT_RADIUS = 0.25
@@ -52,6 +52,12 @@ BEYOND_WALL_M = 0.4
 SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
 HOME_PROGRESS_S = 8.0
+#: A skill that faults (a body over its budget on a loaded machine, say) is switched on again,
+#: unless it faulted this many times within FAULT_WINDOW_S (simulated): then the mission fails.
+FAULTS_IN_WINDOW = 5
+FAULT_WINDOW_S = 60.0
+#: The events a sequencer's stream carries.
+EVENT_KINDS = ("monitor_fired", "skill_faulted")
 
 #: Records the sequencer reads after most waits: each wait's monitor asks for them (``report``),
 #: so their values as of the cycle it fired in come with its event instead of a query each.
@@ -145,6 +151,8 @@ class Sequencer:
         self.round_trips = 0
         #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
         self.carried: dict[str, dict[str, Any]] = {}
+        #: Skills that faulted: (cycle, skill, cause), oldest first.
+        self.faults: list[tuple[float, str, str]] = []
 
     # ----- the link: waiting, switching skills, parameters ------------------------------
 
@@ -237,7 +245,9 @@ class Sequencer:
         monitor = int((await self.flush())[-2]["monitor"])
         fired: MonitorFired | None = None
         async for event in stream:
-            if isinstance(event, MonitorFired) and event.monitor == monitor:
+            if isinstance(event, SkillFaulted):
+                await self.on_fault(event)
+            elif isinstance(event, MonitorFired) and event.monitor == monitor:
                 fired = event
                 break
         if fired is None:
@@ -253,6 +263,36 @@ class Sequencer:
         if not fired.held:
             raise RuntimeError(f"monitor {monitor} fired with none of {conds} holding")
         return min(fired.held)
+
+    async def on_fault(self, event: SkillFaulted) -> None:
+        """A skill faulted: the manager switched it off. One in use is switched on again.
+
+        A fault is the manager's guard against a body that overran its deadline or raised; on
+        a busy machine a healthy body can overrun once. The skill is reactivated at once (a
+        fresh body), so a wait that needs its output is not left waiting for good. A skill that
+        keeps faulting (`FAULTS_IN_WINDOW` within `FAULT_WINDOW_S`) fails the mission instead.
+        """
+        self.faults.append((event.cycle, event.skill, event.cause))
+        await self.say(f"    skill {event.skill!r} faulted: {event.cause}")
+        if event.skill not in self.active:
+            return
+        # Counted in cycles: while a wait runs, `t` is the time it began.
+        window = FAULT_WINDOW_S / (self.period_s or 0.1)
+        recent = [f for f in self.faults if f[1] == event.skill and f[0] >= event.cycle - window]
+        if len(recent) >= FAULTS_IN_WINDOW:
+            raise PhaseFailed(
+                f"skill {event.skill!r} faulted {len(recent)} times within"
+                f" {FAULT_WINDOW_S:.0f} s: {event.cause}"
+            )
+        self.send("activate", skills=[event.skill], with_providers=False)
+        await self.say(f"    skill {event.skill!r} switched on again")
+
+    def take_faults(self) -> list[SkillFaulted]:
+        """The faults that arrived on the stream since the last look (a polling loop's)."""
+        stream = self.stream
+        if stream is None:
+            return []
+        return [e for e in stream.drain() if isinstance(e, SkillFaulted)]
 
     async def use(self, *skills: str, restart: Sequence[str] = ()) -> None:
         """Makes ``skills`` the active set (sequenced mode); ``restart`` ones start afresh.

@@ -139,6 +139,24 @@ class Stream(Generic[T]):
         """The next message, waiting at most ``timeout`` seconds (``TimeoutError``)."""
         return await asyncio.wait_for(self.__anext__(), timeout)
 
+    def drain(self) -> list[T]:
+        """The messages that have arrived and were not read yet, oldest first, without waiting.
+
+        For a loop that polls (steps the cycle, then looks at what happened) rather than
+        awaits. Empty when none is there; after :meth:`close`, what had arrived, then nothing.
+        """
+        items: list[T] = []
+        while not self._ended:
+            try:
+                item = self._queue.get_nowait()
+            except asyncio.QueueEmpty:
+                break
+            if item is None:
+                self._ended = True
+                break
+            items.append(item)
+        return items
+
     async def __aenter__(self) -> Stream[T]:
         return self
 

@@ -192,6 +192,28 @@ def test_activation_and_parameter_changes_are_events(toybot: Manager) -> None:
     run(main())
 
 
+def test_drain_takes_what_has_arrived_without_waiting(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            stream = robot.events("activation_applied")
+            assert stream.drain() == []  # nothing yet: returns at once
+            await robot.deactivate("wander")
+            await robot.step(1)
+            got: list[Event] = []
+            deadline = asyncio.get_running_loop().time() + EVENT_S
+            while not got and asyncio.get_running_loop().time() < deadline:
+                got = stream.drain()
+                await asyncio.sleep(0.01)
+            assert [type(e) for e in got] == [situate.ActivationApplied]
+            assert stream.drain() == []  # taken: not handed out twice
+            stream.close()
+            assert stream.drain() == []
+            assert [e async for e in stream] == []  # ended
+
+    run(main())
+
+
 def test_prints_of_a_verbose_skill_are_events(toybot: Manager) -> None:
     async def main() -> None:
         async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:

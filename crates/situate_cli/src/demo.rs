@@ -170,6 +170,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             return Err(problem(Exit::Usage, format!("--task: {e}")));
         }
     };
+    let faults = FaultLog::start(&running.handle);
     let python = interpreter(demo, ext);
     let started = Instant::now();
     let mut command = std::process::Command::new(&python);
@@ -214,6 +215,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     // With the GUI staying up, the recording goes on until it closes (said then).
     let recording = recorded.transpose().map_err(|e| problem(Exit::Failure, format!("--record: {e}")))?;
     let run = run?;
+    let faulted = faults.finish();
     let runs: u64 = skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.runs).sum();
     let cpu_ns: u64 =
         skills.iter().filter(|s| s.kind != situate_core::SkillKind::Device).map(|s| s.timing.total_ns).sum();
@@ -238,6 +240,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         "interrupted": run.interrupted.map(signals::name),
         "phase": run.phase,
         "recording": recording.as_ref().map(crate::robot::recording_json),
+        "skills_faulted": faulted.iter().map(|(skill, cause, cycle)| json!({"skill": skill, "cause": cause, "cycle": cycle})).collect::<Vec<_>>(),
     });
     if out.json {
         println!("{outcome}");
@@ -273,6 +276,9 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             cpu_ns as f64 / 1e6,
             if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
         );
+        for (skill, cause, cycle) in &faulted {
+            println!("demo: skill `{skill}` faulted at cycle {cycle}: {}", cause.lines().last().unwrap_or(cause));
+        }
         if let Some(r) = &recording {
             print!("demo: {}", crate::robot::recording_text(r));
         }
@@ -320,6 +326,48 @@ fn outcome_for_page(delivered_at: Option<f64>, sim_time: f64, run: &SequencerRun
         why.push_str(&format!(" (in phase {p})"));
     }
     situate_gui::Outcome { ok: false, summary: format!("failed at t = {sim_time:.1} s: {why}") }
+}
+
+/// The skills that faulted during the mission (a body over its budget on a busy machine, say),
+/// collected from the manager's events by a thread of its own, so that the event queue is
+/// always read: the outcome says which faulted, and when.
+struct FaultLog {
+    stop: Arc<std::sync::atomic::AtomicBool>,
+    thread: std::thread::JoinHandle<Vec<(String, String, u64)>>,
+}
+
+impl FaultLog {
+    fn start(handle: &situate::manager::Handle) -> FaultLog {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let events = handle.events();
+        let stop = Arc::new(AtomicBool::new(false));
+        let stopped = Arc::clone(&stop);
+        let thread = std::thread::spawn(move || {
+            let mut faulted = Vec::new();
+            while !stopped.load(Ordering::Relaxed) {
+                match events.recv_timeout(Duration::from_millis(50)) {
+                    Ok(situate::manager::Event::SkillFaulted { skill, cause, cycle }) => {
+                        faulted.push((skill, cause, cycle))
+                    }
+                    Ok(_) | Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                    Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
+                }
+            }
+            // What arrived before the stop still counts.
+            faulted.extend(events.try_iter().filter_map(|e| match e {
+                situate::manager::Event::SkillFaulted { skill, cause, cycle } => Some((skill, cause, cycle)),
+                _ => None,
+            }));
+            faulted
+        });
+        FaultLog { stop, thread }
+    }
+
+    /// The faults so far, oldest first (and the thread ended).
+    fn finish(self) -> Vec<(String, String, u64)> {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        self.thread.join().unwrap_or_default()
+    }
 }
 
 /// How long the sequencer has to end after it is told to stop, before it is killed.

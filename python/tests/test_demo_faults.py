@@ -1,0 +1,107 @@
+"""The demo's sequencing layer (demo/sequencing.py) against a skill that faults, over the link.
+
+A fault switches a skill off (the manager's guard against a body over its budget, which a busy
+machine can cause in a healthy skill). A sequencer that waits for that skill's output must not
+wait for good: it switches the skill on again, and fails the mission, saying why, when the skill
+keeps faulting.
+"""
+
+from __future__ import annotations
+
+import sys
+import textwrap
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from support import Manager, run
+
+import situate
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "demo"))  # the demo's modules import each other by name
+
+from sequencing import EVENT_KINDS, PhaseFailed, Sequencer  # noqa: E402
+
+SKILLS = """
+import situate
+
+#: Faults so far.
+FAULTS = [0]
+
+
+@situate.skill(name="flaky", outputs={"n": "i64"})
+class Flaky:
+    \"\"\"Counts its runs; from the 2nd on, raises while it has raised fewer than `faults` times.\"\"\"
+
+    def __init__(self) -> None:
+        self.n = 0
+
+    def step(self, faults: int = situate.param(1, min=0)) -> dict[str, int]:
+        self.n += 1
+        if self.n >= 2 and FAULTS[0] < faults:
+            FAULTS[0] += 1
+            raise RuntimeError("a hiccup")
+        return {"n": self.n}
+
+
+@situate.skill(name="still", outputs={"odom": "{x: f64, y: f64, theta: f64}", "target": "f64"})
+def still() -> dict[str, object]:
+    \"\"\"The records every wait of the sequencer reports (`sequencing.CARRIED`).\"\"\"
+    return {"odom": {"x": 0.0, "y": 0.0, "theta": 0.0}, "target": 0.0}
+"""
+
+ROBOT = """
+robot: faultbot
+cycle: {{rate_hz: 50, clock: wall, executor: serial}}
+python: [{skills}]
+skills:
+  - {{name: flaky, type: flaky, active: false, params: {{faults: {faults}}}, remap: {{n: flaky.n}}}}
+  - {{name: still, type: still}}
+"""
+
+
+@pytest.fixture
+def faultbot(
+    tmp_path: Path, manager_for: Callable[[str, str], Manager]
+) -> Callable[[int], Manager]:
+    """A robot whose one skill faults ``faults`` times (on the wall clock: the cycle does not
+    race ahead of the sequencer's answers, so the faults come within a few cycles)."""
+    skills = tmp_path / "flaky.py"
+    skills.write_text(textwrap.dedent(SKILLS))
+
+    def start(faults: int) -> Manager:
+        return manager_for(ROBOT.format(skills=skills, faults=faults), "faultbot")
+
+    return start
+
+
+async def waited(manager: Manager) -> tuple[int, Sequencer]:
+    """Switches `flaky` on and waits (at most 60 s) until it counted to 20."""
+    async with situate.connect(manager.robot, endpoint=manager.endpoint) as robot:
+        seq = Sequencer(robot, normal={}, quiet=True)
+        async with robot.events(*EVENT_KINDS) as stream:
+            seq.stream = stream
+            await robot.stop()
+            seq.t_stale = True
+            await seq.use("flaky")
+            index = await seq.wait("flaky.n >= 20", within=60.0)
+        return index, seq
+
+
+def test_a_sequencer_switches_a_skill_that_faulted_on_again(
+    faultbot: Callable[[int], Manager],
+) -> None:
+    index, seq = run(waited(faultbot(1)))
+    # Without the switch back on, the wait ran to its time-out (index 1): n stopped at 4.
+    assert index == 0
+    assert [(skill, "RuntimeError: a hiccup" in cause) for _, skill, cause in seq.faults] == [
+        ("flaky", True)
+    ]
+
+
+def test_a_skill_that_keeps_faulting_fails_the_mission_naming_it(
+    faultbot: Callable[[int], Manager],
+) -> None:
+    with pytest.raises(PhaseFailed, match=r"skill 'flaky' faulted 5 times within 60 s"):
+        run(waited(faultbot(100)))
