@@ -185,6 +185,8 @@ class Memory:
     button_seen_from: dict[int, Pose] = field(default_factory=dict)
     #: Where the call button was pushed from (odometry), to wait for a car a step back.
     called_from: Pose | None = None
+    #: The floor a car was called on (until the robot leaves a car): only there can it be in one.
+    called_on: int | None = None
     #: Where the robot was when it last got 1 m away from the place before, and when
     #: (odometry, simulated time); unsticking: where to, and since when.
     moved_from: tuple[float, float, float] | None = None
@@ -501,7 +503,9 @@ class Reactive(RouteFollower, Sequencer):
         if m.enter_stage == "face":
             off = wrap(m.opened[1] - s.pose.theta)
             if abs(off) > 0.08:
-                return Action(("turn",), {("turn", "angle"): off}, key=("face car", m.opened))
+                return Action(
+                    ("turn",), {("turn", "angle"): off}, key=("face car", m.opened, s.t // 8)
+                )
             if s.sonar[0] < 1.6:
                 # No open door ahead: it closed meanwhile, or it was no car's door.
                 m.opened, m.enter_stage = None, ""
@@ -576,7 +580,9 @@ class Reactive(RouteFollower, Sequencer):
             return goto(gx, gy, ("to lab door", bx, by), avoid=True)
         off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
         if abs(off) > 0.1:
-            return Action(("turn",), {("turn", "angle"): off}, key=("face lab door", bx, by))
+            return Action(
+                ("turn",), {("turn", "angle"): off}, key=("face lab door", bx, by, s.t // 8)
+            )
         # There, facing it, and not in view: forget it (the search takes over).
         m.lab_door_at = None
         return Action(("runaway",), key="lab door not here")
@@ -650,7 +656,9 @@ class Reactive(RouteFollower, Sequencer):
         if m.door_stage == "face":
             off = wrap(heading - s.pose.theta)
             if abs(off) > 0.06:
-                return Action(("turn",), {("turn", "angle"): off}, key=("door face", m.door_goal))
+                return Action(
+                    ("turn",), {("turn", "angle"): off}, key=("door face", m.door_goal, s.t // 8)
+                )
             m.door_stage = "check"
             return Action(("runaway",), key=("door check", m.door_goal))
         return Action(("runaway", "pass_door"), key=("door pass", m.door_goal))
@@ -693,6 +701,7 @@ class Reactive(RouteFollower, Sequencer):
                 normal = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
                 p = s.pose
                 m.called_at, m.called_from = s.t, Pose(p.x, p.y, wrap(p.theta + normal))
+                m.called_on = s.floor
             elif self.rule_name == "push floor":
                 m.pressed_floor = self.stop_floor()
                 m.turned_in_car, m.door_heading = False, None
@@ -707,8 +716,9 @@ class Reactive(RouteFollower, Sequencer):
                 door[1] - FACE_DOOR_M * math.sin(normal),
             )
             m.opened, m.enter_stage = (s.t, normal), "goto"
-        if not m.in_car and m.out_of_lab and s.enclosed(tight=True):
-            # Walls all round, nearer than a car is wide: inside a car (its door shut).
+        if not m.in_car and m.out_of_lab and m.called_on == s.floor and s.enclosed(tight=True):
+            # Walls all round, nearer than a car is wide, where a car was called: inside a car
+            # (its door shut). Elsewhere it is a closet, or people round the robot.
             m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
         if s.car_entered and self.rule_name == "enter car" and m.enter_stage == "in":
             if s.enclosed():
@@ -719,7 +729,7 @@ class Reactive(RouteFollower, Sequencer):
             if s.enclosed():  # stopped in the doorway (someone outside): out again
                 m.exits_tried += 1
             else:
-                m.in_car, m.lobby_seen_on, m.route = False, None, None
+                m.in_car, m.lobby_seen_on, m.route, m.called_on = False, None, None, None
         if self.rule_name == "pass lab door" and m.door_goal is not None and self.through_door(s):
             # The leg to the lobby begins facing out through the door, as now.
             m.passed_heading, m.out_of_lab = s.pose.theta, True

@@ -36,6 +36,10 @@ ALONG_WAY_RAD = 0.6
 INTO_MOUTH_M = 1.5
 #: In front of a door, this far from it, before passing it, m.
 DOOR_STANDOFF = 0.9
+#: Following a step, facing farther than this off the way (going round people, say), the
+#: robot turns back to the way, until it faces within `BACK_ON_WAY_RAD` of it, rad.
+WRONG_WAY_RAD = 1.75
+BACK_ON_WAY_RAD = 0.3
 
 
 @dataclass
@@ -85,6 +89,8 @@ class RouteState:
     squared: int = -1
     #: How far along the step the last opening was counted, m.
     counted_at: float | None = None
+    #: Turning back to the way (it faced the wrong way along the corridor).
+    turning_back: bool = False
 
     def square_before(
         self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
@@ -162,7 +168,9 @@ class RouteFollower:
             off = wrap(r.heading - s.pose.theta)
             if abs(off) > 0.06:
                 return Action(
-                    ("turn",), {("turn", "angle"): off}, key=("square turn", r.leg, r.step)
+                    ("turn",),
+                    {("turn", "angle"): off},
+                    key=("square turn", r.leg, r.step, s.t // 8),
                 )
             r.stage, r.squared = "start", r.step
             if step.get("home") is not None:
@@ -208,6 +216,20 @@ class RouteFollower:
                     return Action(("runaway",), key=("door again", s.t))
             return self.pass_door_action(s)
         if r.stage == "follow" and step.get("follow"):
+            if r.heading is not None:
+                # Facing back along the corridor (avoidance turned the robot round someone):
+                # the hallway follower would take it back the way it came. Turn to the way.
+                off = wrap(r.heading - s.pose.theta)
+                if abs(off) > WRONG_WAY_RAD:
+                    r.turning_back = True
+                elif abs(off) < BACK_ON_WAY_RAD:
+                    r.turning_back = False
+                if r.turning_back:
+                    return Action(
+                        ("runaway", "turn"),
+                        {("turn", "angle"): off},
+                        key=("back to the way", r.leg, r.step, s.t // 10),
+                    )
             if self.step_until_met(step, r, s):
                 r.stage = "turn" if step.get("turn") else "done"
             else:
@@ -229,7 +251,9 @@ class RouteFollower:
                 r.turn_goal = wrap(base + angle)
             off = wrap(r.turn_goal - s.pose.theta)
             if abs(off) > 0.05 and r.stage != "into":
-                return Action(("turn",), {("turn", "angle"): off}, key=("route turn", r.step))
+                return Action(
+                    ("turn",), {("turn", "angle"): off}, key=("route turn", r.step, s.t // 8)
+                )
             r.heading = r.turn_goal
             if step.get("until") in ("junction", "wall") and str(step["turn"]) != "back":
                 # Into the side corridor's mouth, straight on, before following it: in the
@@ -246,7 +270,12 @@ class RouteFollower:
     def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
         """Whether a follow step's `until` holds (counting openings as they pass)."""
         assert r.start is not None
-        went = math.hypot(s.pose.x - r.start.x, s.pose.y - r.start.y)
+        # The way made along the step's heading (round someone and back is no way made).
+        dx, dy = s.pose.x - r.start.x, s.pose.y - r.start.y
+        if r.heading is None:
+            went = math.hypot(dx, dy)
+        else:
+            went = dx * math.cos(r.heading) + dy * math.sin(r.heading)
         until = step.get("until")
         first = float(step.get("distance", 0.0))
         if until == "distance":
