@@ -32,7 +32,7 @@ FAULTS = [0]
 
 @situate.skill(name="flaky", outputs={"n": "i64"})
 class Flaky:
-    \"\"\"Counts its runs; from the 2nd on, raises while it has raised fewer than `faults` times.\"\"\"
+    \"\"\"Counts its runs; from the 2nd on, raises until it raised `faults` times.\"\"\"
 
     def __init__(self) -> None:
         self.n = 0

@@ -304,3 +304,17 @@ def test_the_report_has_a_hard_set_section_only_with_hard_runs() -> None:
     hard = report[report.index("### On the hard set") :]
     assert "| sequenced | 2 | 2/2 | 100% |" in hard
     assert "| reactive | 2 | 0/2 | 0% |" in hard
+
+
+def test_fault_line_counts_runs_with_faults_and_says_what_it_cannot_count() -> None:
+    rows = [
+        {"design": "a", "skills_faulted": []},
+        {"design": "a", "skills_faulted": [{"skill": "x"}, {"skill": "y"}]},
+        {"design": "b", "skills_faulted": []},
+        {"design": "b"},  # made before the demo reported faults
+    ]
+    assert exp.fault_line(rows, ["a", "b"]) == (
+        "a 1 of 2 runs (2 fault(s)); b 0 of 1 runs (0 fault(s));"
+        " 1 runs made before faults were reported are not counted"
+    )
+    assert "not reported" in exp.fault_line([{"design": "a"}], ["a"])
