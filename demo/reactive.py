@@ -42,6 +42,7 @@ from reactive_route import (
     RouteState,
     goto,
 )
+from sequencing import DOOR_WAIT_S as SEQUENCED_DOOR_WAIT_S
 from sequencing import SONARS, OutOfTime, Pose, Sequencer, wrap
 
 import situate
@@ -95,8 +96,9 @@ PATROL_LEG_S = 14.0
 CAR_ENTER_S = 25.0
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
 MOUTH_M = 2.6
-#: In front of a barcode, the robot waits this long for the door beside it to show, s.
-DOOR_WAIT_S = 30.0
+#: In front of a barcode, the robot waits this long for the door beside it to show, s: as
+#: long as the sequenced robot (a door closed now and then stays closed up to a minute).
+DOOR_WAIT_S = SEQUENCED_DOOR_WAIT_S
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
 #: Rules that move the robot about in the lab: under one of them, not 1 m from where it was
