@@ -36,9 +36,12 @@ ALONG_WAY_RAD = 0.6
 INTO_MOUTH_M = 1.5
 #: In front of a door, this far from it, before passing it, m.
 DOOR_STANDOFF = 0.9
-#: Following a step, facing farther than this off the way (going round people, say), the
-#: robot turns back to the way, until it faces within `BACK_ON_WAY_RAD` of it, rad.
-WRONG_WAY_RAD = 1.75
+#: Following a step, having lost this much of the way made (m), facing more than
+#: `WRONG_WAY_RAD` off the way (turned round by going round people, say), the robot turns back
+#: to the way, until it faces within `BACK_ON_WAY_RAD` of it, rad. (Facing off the way alone
+#: does not count: a step's heading, from odometry, may be a corridor's width off.)
+LOST_WAY_M = 1.0
+WRONG_WAY_RAD = math.pi / 2
 BACK_ON_WAY_RAD = 0.3
 
 
@@ -91,6 +94,8 @@ class RouteState:
     counted_at: float | None = None
     #: Turning back to the way (it faced the wrong way along the corridor).
     turning_back: bool = False
+    #: The most way made on this step so far, m.
+    best_went: float = 0.0
 
     def square_before(
         self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
@@ -178,6 +183,7 @@ class RouteFollower:
         if r.start is None:
             r.start, r.count, r.stage = s.pose, 0, "follow"
             r.last_side, r.counted_at = False, None
+            r.turning_back, r.best_went = False, 0.0
             if r.heading is None:
                 r.heading = s.pose.theta
         if step.get("home") is not None:
@@ -217,13 +223,15 @@ class RouteFollower:
             return self.pass_door_action(s)
         if r.stage == "follow" and step.get("follow"):
             if r.heading is not None:
-                # Facing back along the corridor (avoidance turned the robot round someone):
+                # Going back along the corridor (avoidance turned the robot round someone):
                 # the hallway follower would take it back the way it came. Turn to the way.
                 off = wrap(r.heading - s.pose.theta)
-                if abs(off) > WRONG_WAY_RAD:
+                went = self.way_made(r, s)
+                r.best_went = max(r.best_went, went)
+                if went < r.best_went - LOST_WAY_M and abs(off) > WRONG_WAY_RAD:
                     r.turning_back = True
-                elif abs(off) < BACK_ON_WAY_RAD:
-                    r.turning_back = False
+                elif r.turning_back and abs(off) < BACK_ON_WAY_RAD:
+                    r.turning_back, r.best_went = False, went
                 if r.turning_back:
                     return Action(
                         ("runaway", "turn"),
@@ -269,13 +277,7 @@ class RouteFollower:
 
     def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
         """Whether a follow step's `until` holds (counting openings as they pass)."""
-        assert r.start is not None
-        # The way made along the step's heading (round someone and back is no way made).
-        dx, dy = s.pose.x - r.start.x, s.pose.y - r.start.y
-        if r.heading is None:
-            went = math.hypot(dx, dy)
-        else:
-            went = dx * math.cos(r.heading) + dy * math.sin(r.heading)
+        went = self.way_made(r, s)
         until = step.get("until")
         first = float(step.get("distance", 0.0))
         if until == "distance":
@@ -311,6 +313,14 @@ class RouteFollower:
                 # On into the junction's middle (about half a corridor) before turning.
                 return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
         return False
+
+    def way_made(self, r: RouteState, s: Senses) -> float:
+        """How far along the step's heading the robot got (round someone and back: none), m."""
+        assert r.start is not None
+        dx, dy = s.pose.x - r.start.x, s.pose.y - r.start.y
+        if r.heading is None:
+            return math.hypot(dx, dy)
+        return dx * math.cos(r.heading) + dy * math.sin(r.heading)
 
     def wall_across(self, r: RouteState, s: Senses) -> bool:
         """A wall across the way ahead (not clutter, nor a side wall avoidance turned to).
