@@ -94,6 +94,8 @@ PATROL_OFF_M = 1.0
 PATROL_LEG_S = 14.0
 #: Going into a car that opened takes at most this long, s.
 CAR_ENTER_S = 25.0
+#: Homing on a car's panel through its open door, the robot stops this far from it, m.
+CAR_PANEL_M = 0.45
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
 MOUTH_M = 2.6
 #: In front of a barcode, the robot waits this long for the door beside it to show, s: as
@@ -493,10 +495,21 @@ class Reactive(RouteFollower, Sequencer):
         )
 
     def enter_car(self, s: Senses) -> Action:
-        """Faces the car door seen opening, then drives in."""
+        """Faces the car door seen opening, then drives in; or homes on its panel, in view.
+
+        A car's panel (its barcode, on the car's back wall) in view is seen through the open
+        door: the robot homes on it, through the door, wherever the door was placed.
+        """
         m = self.mem
         assert m.opened is not None
         assert m.car_goal is not None
+        if s.car and m.enter_stage != "in":
+            code = self.m.car_barcode_first + s.car - 1
+            return Action(
+                ("runaway", "track_barcode", "home"),
+                {("track_barcode", "id"): code, ("home", "stop_distance"): CAR_PANEL_M},
+                key=("home on car", code, m.opened),
+            )
         gx, gy = m.car_goal
         if m.enter_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15:
@@ -808,6 +821,8 @@ class Reactive(RouteFollower, Sequencer):
         """Runs the rule list every cycle until every stop is made (or the time is up)."""
         for (skill, param), value in SETTINGS.items():
             await self.set(skill, param, value)
+        await self.set("identify_car", "first_id", self.m.car_barcode_first)
+        await self.set("identify_car", "cars", self.m.cars)
         self.send("deactivate", skills=sorted(SKILLS))
         await self.use(*PERCEPTION)
         self.t_stale = True

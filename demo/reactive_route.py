@@ -30,8 +30,11 @@ JUNCTION_ON_M = 0.7
 #: The first opening of a step is counted only this far past its blind distance, m. The
 #: side sonars see a mouth about 0.6-0.8 m before its near edge.
 FIRST_COUNT_M = 0.3
-#: Following to a wall, the robot counts a wall ahead only facing this near the way, rad.
+#: Following to a wall, the robot counts a wall ahead only facing this near the way, rad,
+#: and once it has been there this long (s), with no gap longer than `WALL_GAP_S` (s).
 ALONG_WAY_RAD = 0.6
+WALL_STEADY_S = 3.0
+WALL_GAP_S = 1.0
 #: Turned into a junction, the robot drives this far into the side corridor, m.
 INTO_MOUTH_M = 1.5
 #: In front of a door, this far from it, before passing it, m.
@@ -96,6 +99,9 @@ class RouteState:
     turning_back: bool = False
     #: The most way made on this step so far, m.
     best_went: float = 0.0
+    #: Since when a wall has been across the way (None: none now), and when it last was.
+    wall_since: float | None = None
+    wall_seen: float = 0.0
 
     def square_before(
         self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
@@ -183,7 +189,7 @@ class RouteFollower:
         if r.start is None:
             r.start, r.count, r.stage = s.pose, 0, "follow"
             r.last_side, r.counted_at = False, None
-            r.turning_back, r.best_went = False, 0.0
+            r.turning_back, r.best_went, r.wall_since = False, 0.0, None
             if r.heading is None:
                 r.heading = s.pose.theta
         if step.get("home") is not None:
@@ -285,7 +291,17 @@ class RouteFollower:
         if went < first:
             return False
         if until == "wall":
-            return self.wall_across(r, s)
+            # A wall stays put; people across the way walk on. The robot keeps moving (the
+            # sequenced one stands and looks), so a wall seen with gaps shorter than
+            # `WALL_GAP_S` counts as one.
+            if not self.wall_across(r, s):
+                if r.wall_since is not None and s.t - r.wall_seen > WALL_GAP_S:
+                    r.wall_since = None
+                return False
+            r.wall_seen = s.t
+            if r.wall_since is None:
+                r.wall_since = s.t
+            return s.t - r.wall_since >= WALL_STEADY_S
         if until == "barcode":
             return s.sees(int(step["barcode"]))
         if until in ("junction", "door"):
