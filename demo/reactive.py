@@ -94,6 +94,8 @@ PATROL_OFF_M = 1.0
 PATROL_LEG_S = 14.0
 #: Going into a car that opened takes at most this long, s.
 CAR_ENTER_S = 25.0
+#: Pushing a call button, the robot faces its wall within this, rad.
+BUTTON_WALL_RAD = 0.5
 #: Homing on a car's panel through its open door, the robot stops this far from it, m.
 CAR_PANEL_M = 0.45
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
@@ -141,9 +143,14 @@ class Senses:
         return sum(1 for r in self.sonar if r < 1.9) >= SONARS - (1 if tight else 6)
 
     def open_abeam(self, side: str) -> bool:
-        """Whether two neighbouring sonars about abeam on ``side`` read far: a mouth."""
+        """Whether two neighbouring sonars abeam on ``side``, or ahead of it, read far: a mouth.
+
+        The sonars from 30 degrees ahead of abeam to abeam (not those behind it: they see an
+        opening already passed, an alcove say, after the step's blind distance).
+        """
         mid = SONARS // 4 if side == "left" else 3 * SONARS // 4
-        far = [self.sonar[(mid + k) % SONARS] > MOUTH_M for k in range(-2, 3)]
+        ahead = range(-2, 1) if side == "left" else range(0, 3)
+        far = [self.sonar[(mid + k) % SONARS] > MOUTH_M for k in ahead]
         return any(a and b for a, b in zip(far, far[1:], strict=False))
 
     def sees(self, barcode: int, within: float = 5.0) -> bool:
@@ -712,8 +719,11 @@ class Reactive(RouteFollower, Sequencer):
         if s.presses > m.presses_seen:
             m.presses_seen = s.presses
             if self.rule_name == "push call":
-                # The button's wall: its normal from the wall ahead, if fitted.
-                normal = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
+                # The button's wall: its normal from the wall ahead, if fitted. The robot
+                # homed on the button, so it about faces that wall: a fit farther off is
+                # another wall (a side wall near the corner), and the heading is the best guess.
+                fitted = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
+                normal = fitted if abs(fitted) < BUTTON_WALL_RAD else 0.0
                 p = s.pose
                 m.called_at, m.called_from = s.t, Pose(p.x, p.y, wrap(p.theta + normal))
                 m.called_on = s.floor
