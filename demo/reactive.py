@@ -257,7 +257,19 @@ class Reactive(RouteFollower, Sequencer):
         self.send("step", cycles=1)
         self.prefetch(*PERCEPTS)
         await self.flush()
-        v = {k: situate.Reading.from_json(await self.readings[k]).value for k in PERCEPTS}
+        for attempt in range(3):
+            try:
+                v = {k: situate.Reading.from_json(await self.readings[k]).value for k in PERCEPTS}
+            except situate.Interrupted:  # asked while the cycle restarted: ask again
+                if attempt == 2:
+                    raise
+                self.t_stale = True
+            if not self.t_stale:
+                break
+            # The step was cut short by a stuck body (`flush`): read afresh, and the time.
+            self.readings.clear()
+            self.prefetch(*PERCEPTS)
+            await self.now()
         o = v["odom"] or {"x": 0.0, "y": 0.0, "theta": 0.0}
         b = v["barcodes"] or {"ids": [], "bearing": [], "distance": []}
         codes = {
@@ -511,12 +523,16 @@ class Reactive(RouteFollower, Sequencer):
         assert m.opened is not None
         assert m.car_goal is not None
         if s.car and m.enter_stage != "in":
+            m.enter_stage = "panel"
             code = self.m.car_barcode_first + s.car - 1
             return Action(
                 ("runaway", "track_barcode", "home"),
                 {("track_barcode", "id"): code, ("home", "stop_distance"): CAR_PANEL_M},
                 key=("home on car", code, m.opened),
             )
+        if m.enter_stage == "panel":
+            # The panel out of view again (a jamb, the angle): on through the opening ahead.
+            m.enter_stage = "in"
         gx, gy = m.car_goal
         if m.enter_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15:

@@ -186,12 +186,19 @@ class Sequencer:
                 self.pending.append(self.readings[signal])
 
     async def flush(self) -> list[Any]:
-        """Awaits the replies to every pending request; raises the first refusal."""
+        """Awaits the replies to every pending request; raises the first refusal.
+
+        A request cut short because a body got stuck (`situate.Interrupted`: a `step` that
+        ended early) is no refusal: the cycle went on, and the fault comes as an event
+        (`on_fault`). Its place in the list holds the exception; the time is read anew.
+        """
         pending, self.pending = self.pending, []
         self.round_trips += 1
         results = await asyncio.gather(*pending, return_exceptions=True)
         for r in results:
-            if isinstance(r, BaseException):
+            if isinstance(r, situate.Interrupted):
+                self.t_stale = True
+            elif isinstance(r, BaseException):
                 raise r
         return results
 
@@ -242,7 +249,10 @@ class Sequencer:
         assert stream is not None
         self.send("monitor_add", any=list(conds), mode="once", pause=True, report=list(CARRIED))
         self.send("run")
-        monitor = int((await self.flush())[-2]["monitor"])
+        added = (await self.flush())[-2]
+        if isinstance(added, BaseException):
+            raise added
+        monitor = int(added["monitor"])
         fired: MonitorFired | None = None
         async for event in stream:
             if isinstance(event, SkillFaulted):

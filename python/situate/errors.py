@@ -30,6 +30,7 @@ __all__ = [
     "BadParam",
     "BadReply",
     "BadRequest",
+    "Interrupted",
     "Invalid",
     "MissingProviders",
     "NotRunning",
@@ -176,6 +177,16 @@ class Invalid(SituateError):
     KIND = "invalid"
 
 
+class Interrupted(SituateError):
+    """A request cut short because a skill's body got stuck and was left behind.
+
+    A ``step`` that ended early, or a request that arrived while the cycle restarted. The
+    ``skill_faulted`` event names the skill; the cycle goes on, and the request may be sent again.
+    """
+
+    KIND = "interrupted"
+
+
 class Unavailable(SituateError):
     """The manager is shutting down or too busy to answer; try again later."""
 
@@ -214,6 +225,7 @@ _BY_KIND: dict[str, type[SituateError]] = {
         BadCondition,
         UnknownMonitor,
         Invalid,
+        Interrupted,
         Unavailable,
     )
 }

@@ -8,10 +8,12 @@ keeps faulting.
 
 from __future__ import annotations
 
+import asyncio
 import sys
 import textwrap
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from support import Manager, run
@@ -105,3 +107,61 @@ def test_a_skill_that_keeps_faulting_fails_the_mission_naming_it(
 ) -> None:
     with pytest.raises(PhaseFailed, match=r"skill 'flaky' faulted 5 times within 60 s"):
         run(waited(faultbot(100)))
+
+
+STUCK = """
+import time
+import situate
+
+SLEPT = []
+
+
+@situate.skill(name="stuck", outputs={"y": "f64"})
+def stuck() -> dict[str, float]:
+    \"\"\"Gets stuck once (2 s, over its 100 ms budget), then runs at once.\"\"\"
+    if not SLEPT:
+        SLEPT.append(1)
+        time.sleep(2.0)
+    return {"y": 1.0}
+"""
+
+
+def test_a_step_cut_short_by_a_stuck_body_is_no_refusal_and_its_fault_is_reported(
+    tmp_path: Path, manager_for: Callable[[str, str], Manager]
+) -> None:
+    skills = tmp_path / "stuck.py"
+    skills.write_text(textwrap.dedent(STUCK))
+    manager = manager_for(
+        f"""
+        robot: stuckbot
+        cycle: {{rate_hz: 50, clock: simulated, executor: serial}}
+        python: [{skills}]
+        skills:
+          - {{name: stuck, type: stuck, budget_ms: 100, active: false}}
+        """,
+        "stuckbot",
+    )
+
+    async def main() -> tuple[list[Any], bool, list[str]]:
+        async with situate.connect(manager.robot, endpoint=manager.endpoint) as robot:
+            seq = Sequencer(robot, normal={}, quiet=True)
+            async with robot.events(*EVENT_KINDS) as stream:
+                seq.stream = stream
+                await robot.stop()
+                await robot.activate("stuck")
+                seq.send("step", cycles=3)
+                results = await seq.flush()  # the watchdog cuts the step short: no raise
+                stale = seq.t_stale
+                faulted: list[str] = []
+                for _ in range(500):  # the event follows the reply (bounded: 5 s)
+                    faulted += [f.skill for f in seq.take_faults()]
+                    if faulted:
+                        break
+                    await asyncio.sleep(0.01)
+                return results, stale, faulted
+
+    results, stale, faulted = run(main())
+    assert isinstance(results[0], situate.Interrupted), results
+    assert "left behind" in str(results[0])
+    assert stale  # the time is read anew: fewer cycles ran than were asked for
+    assert faulted == ["stuck"]

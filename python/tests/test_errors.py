@@ -22,6 +22,7 @@ from situate.errors import from_reply
         ("bad_condition", situate.BadCondition),
         ("unknown_monitor", situate.UnknownMonitor),
         ("invalid", situate.Invalid),
+        ("interrupted", situate.Interrupted),
         ("unavailable", situate.Unavailable),
     ],
 )

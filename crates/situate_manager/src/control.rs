@@ -132,6 +132,12 @@ pub enum ControlError {
     UnknownMonitor(u64),
     #[error("{0}")]
     Invalid(String),
+    /// A request cut short because a skill's body got stuck and was left
+    /// behind (its `skill_faulted` event names it): a `step` that ended
+    /// early, or a request that arrived while the cycle restarted. The
+    /// cycle goes on; the request may be sent again.
+    #[error("{0}")]
+    Interrupted(String),
     #[error("the skill manager is not running (its thread has ended)")]
     Disconnected,
 }

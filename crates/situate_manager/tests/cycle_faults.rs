@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use common::*;
 use crossbeam_channel::Receiver;
 use situate_core::{FnSkill, Io, SkillKind, SkillType, Value};
-use situate_manager::{ClockKind, Control, Event, Registry, Request, RobotSpec};
+use situate_manager::{ClockKind, Control, ControlError, Event, Registry, Request, RobotSpec};
 
 /// The cause of the first `SkillFaulted` event for `skill`.
 fn fault_of(events: &Receiver<Event>, skill: &str) -> String {
@@ -159,6 +159,7 @@ fn a_step_that_gets_stuck_is_answered_and_the_cycle_goes_on() {
     let (mut handle, join) = build(&spec, &reg).spawn(false);
     handle.set_param("b", "mode", Value::F64(1.0)).unwrap();
     let err = handle.step(5).unwrap_err();
+    assert!(matches!(err, ControlError::Interrupted(_)), "{err:?}");
     assert!(err.to_string().contains("left behind"), "{err}");
     assert!(!handle.skill("b").unwrap().active);
     handle.step(5).unwrap();

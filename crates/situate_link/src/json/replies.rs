@@ -26,6 +26,7 @@ pub fn control_error(e: &ControlError) -> Json {
         ControlError::BadReport(_) => "unknown_signal",
         ControlError::UnknownMonitor(_) => "unknown_monitor",
         ControlError::Invalid(_) => "invalid",
+        ControlError::Interrupted(_) => "interrupted",
         ControlError::Disconnected => "unavailable",
     };
     let mut err = json!({"kind": kind, "message": e.to_string()});

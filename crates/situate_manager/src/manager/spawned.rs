@@ -347,7 +347,7 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
     let Some(m) = current(&mut g, generation) else {
         // Not the cycle any more: the request goes back to the queue's
         // new owner only if we could; answer that the manager moved on.
-        let _ = reply.send(Err(ControlError::Invalid(
+        let _ = reply.send(Err(ControlError::Interrupted(
             "the request arrived while the cycle was restarting; send it again".into(),
         )));
         return Served::End;
@@ -599,7 +599,7 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
             m.generation += 1;
             let generation = m.generation;
             if let Some(reply) = core.step_reply().take() {
-                let _ = reply.send(Err(ControlError::Invalid(
+                let _ = reply.send(Err(ControlError::Interrupted(
                     "a body got stuck during the step and was left behind; the cycle goes on".into(),
                 )));
             }
