@@ -96,8 +96,6 @@ PATROL_LEG_S = 14.0
 CAR_ENTER_S = 25.0
 #: Pushing a call button, the robot faces its wall within this, rad.
 BUTTON_WALL_RAD = 0.5
-#: Homing on a car's panel through its open door, the robot stops this far from it, m.
-CAR_PANEL_M = 0.45
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
 MOUTH_M = 2.6
 #: In front of a barcode, the robot waits this long for the door beside it to show, s: as
@@ -514,25 +512,10 @@ class Reactive(RouteFollower, Sequencer):
         )
 
     def enter_car(self, s: Senses) -> Action:
-        """Faces the car door seen opening, then drives in; or homes on its panel, in view.
-
-        A car's panel (its barcode, on the car's back wall) in view is seen through the open
-        door: the robot homes on it, through the door, wherever the door was placed.
-        """
+        """Faces the car door seen opening, then drives in."""
         m = self.mem
         assert m.opened is not None
         assert m.car_goal is not None
-        if s.car and m.enter_stage != "in":
-            m.enter_stage = "panel"
-            code = self.m.car_barcode_first + s.car - 1
-            return Action(
-                ("runaway", "track_barcode", "home"),
-                {("track_barcode", "id"): code, ("home", "stop_distance"): CAR_PANEL_M},
-                key=("home on car", code, m.opened),
-            )
-        if m.enter_stage == "panel":
-            # The panel out of view again (a jamb, the angle): on through the opening ahead.
-            m.enter_stage = "in"
         gx, gy = m.car_goal
         if m.enter_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15:
