@@ -124,6 +124,7 @@ impl Client {
         // delivered, so it is asked again until the timeout. A robot that took the request and
         // did not answer ends it with a `Timeout` reply instead, never asked again.
         let deadline = Instant::now() + self.timeout;
+        let mut retried = false;
         let (replies, reply) = loop {
             let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1));
             let replies = self
@@ -135,7 +136,10 @@ impl Client {
                 .map_err(|e| ClientError::Send { key: key.clone(), detail: e.to_string() })?;
             match replies.recv() {
                 Ok(reply) => break (replies, reply),
-                Err(_) if Instant::now() < deadline => std::thread::sleep(RETRY.min(left)),
+                Err(_) if Instant::now() < deadline => {
+                    retried = true;
+                    std::thread::sleep(RETRY.min(left))
+                }
                 Err(_) => return Err(self.no_answer(&key)),
             }
         };
@@ -144,7 +148,10 @@ impl Client {
         // stray line on the client's stderr.
         while replies.recv().is_ok() {}
         let sample = reply.result().map_err(|e| match reply_error_text(e).as_str() {
-            // Zenoh ends a query its timeout cut short with this error.
+            // Zenoh ends a query its timeout cut short with this error. After gets that found
+            // nobody, it is the last one's short remainder running out (on a busy machine,
+            // before Zenoh found nobody again): still nobody answered.
+            "Timeout" if retried => self.no_answer(&key),
             "Timeout" => ClientError::TimedOut { robot: robot.into(), verb: verb.into(), timeout: self.timeout },
             detail => ClientError::Failed { key: key.clone(), detail: detail.into() },
         })?;
