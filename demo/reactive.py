@@ -41,6 +41,7 @@ from reactive_route import (
     RouteFollower,
     RouteState,
     goto,
+    turn,
 )
 from sequencing import DOOR_WAIT_S as SEQUENCED_DOOR_WAIT_S
 from sequencing import SONARS, OutOfTime, Pose, Sequencer, wrap
@@ -487,9 +488,7 @@ class Reactive(RouteFollower, Sequencer):
             m.door_heading = wrap(s.pose.theta + normal + math.pi)
         off = wrap(m.door_heading - s.pose.theta)
         if not m.turned_in_car and abs(off) > 0.08:
-            return Action(
-                ("runaway", "turn"), {("turn", "angle"): off}, key=("turn in car", s.t // 8)
-            )
+            return turn(off, "turn in car", s.t, runaway=True)
         m.turned_in_car = True
         return Action(("runaway",), key="ride")
 
@@ -524,9 +523,7 @@ class Reactive(RouteFollower, Sequencer):
         if m.enter_stage == "face":
             off = wrap(m.opened[1] - s.pose.theta)
             if abs(off) > 0.08:
-                return Action(
-                    ("turn",), {("turn", "angle"): off}, key=("face car", m.opened, s.t // 8)
-                )
+                return turn(off, ("face car", m.opened), s.t)
             if s.sonar[0] < 1.6:
                 # No open door ahead: it closed meanwhile, or it was no car's door.
                 m.opened, m.enter_stage = None, ""
@@ -601,9 +598,7 @@ class Reactive(RouteFollower, Sequencer):
             return goto(gx, gy, ("to lab door", bx, by), avoid=True)
         off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
         if abs(off) > 0.1:
-            return Action(
-                ("turn",), {("turn", "angle"): off}, key=("face lab door", bx, by, s.t // 8)
-            )
+            return turn(off, ("face lab door", bx, by), s.t)
         # There, facing it, and not in view: forget it (the search takes over).
         m.lab_door_at = None
         return Action(("runaway",), key="lab door not here")
@@ -677,9 +672,7 @@ class Reactive(RouteFollower, Sequencer):
         if m.door_stage == "face":
             off = wrap(heading - s.pose.theta)
             if abs(off) > 0.06:
-                return Action(
-                    ("turn",), {("turn", "angle"): off}, key=("door face", m.door_goal, s.t // 8)
-                )
+                return turn(off, ("door face", m.door_goal), s.t)
             m.door_stage = "check"
             return Action(("runaway",), key=("door check", m.door_goal))
         return Action(("runaway", "pass_door"), key=("door pass", m.door_goal))

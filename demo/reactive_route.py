@@ -77,6 +77,16 @@ def goto(
     return Action(skills, params, key=key)
 
 
+#: A turn still off is issued again this often (one that ended short, say), s.
+TURN_AGAIN_S = 8.0
+
+
+def turn(off: float, key: Any, t: float, *, runaway: bool = False) -> Action:
+    """Turns in place by ``off`` (rad), issued again every `TURN_AGAIN_S` while still asked."""
+    skills = ("runaway", "turn") if runaway else ("turn",)
+    return Action(skills, {("turn", "angle"): off}, key=(key, t // TURN_AGAIN_S))
+
+
 @dataclass
 class RouteState:
     """Where the robot is on a route leg (docs/maps.md, route steps)."""
@@ -178,11 +188,7 @@ class RouteFollower:
                 return goto(gx, gy, ("square", r.leg, r.step), reverse_within=1.5)
             off = wrap(r.heading - s.pose.theta)
             if abs(off) > 0.06:
-                return Action(
-                    ("turn",),
-                    {("turn", "angle"): off},
-                    key=("square turn", r.leg, r.step, s.t // 8),
-                )
+                return turn(off, ("square turn", r.leg, r.step), s.t)
             r.stage, r.squared = "start", r.step
             if step.get("home") is not None:
                 return self.next_step(r, s)
@@ -265,9 +271,7 @@ class RouteFollower:
                 r.turn_goal = wrap(base + angle)
             off = wrap(r.turn_goal - s.pose.theta)
             if abs(off) > 0.05 and r.stage != "into":
-                return Action(
-                    ("turn",), {("turn", "angle"): off}, key=("route turn", r.step, s.t // 8)
-                )
+                return turn(off, ("route turn", r.step), s.t)
             r.heading = r.turn_goal
             if step.get("until") in ("junction", "wall") and str(step["turn"]) != "back":
                 # Into the side corridor's mouth, straight on, before following it: in the

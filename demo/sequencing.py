@@ -152,7 +152,7 @@ class Sequencer:
         #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
         self.carried: dict[str, dict[str, Any]] = {}
         #: Skills that faulted: (cycle, skill, cause), oldest first.
-        self.faults: list[tuple[float, str, str]] = []
+        self.faults: list[tuple[int, str, str]] = []
 
     # ----- the link: waiting, switching skills, parameters ------------------------------
 
