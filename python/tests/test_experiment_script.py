@@ -1,7 +1,8 @@
-"""scripts/experiment.py: its pure parts (tasks, aggregation, report, design cost), no runs."""
+"""scripts/experiment.py and experiment_report.py: tasks, aggregation, report, cost; no runs."""
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _load() -> ModuleType:
+    sys.path.insert(0, str(ROOT / "scripts"))  # experiment.py imports experiment_report beside it
     spec = importlib.util.spec_from_file_location(
         "experiment_script", ROOT / "scripts" / "experiment.py"
     )
@@ -26,6 +28,8 @@ def _load() -> ModuleType:
 
 
 exp = _load()
+rep = importlib.import_module("experiment_report")  # the report, as experiment.py imported it
+TASK_CLASS = exp.symbolic_task_class()
 
 
 # ----- buildings and tasks ----------------------------------------------------------------------
@@ -75,7 +79,7 @@ def test_task_class_from_the_floors() -> None:
         "lobby:-1,lobby:0,office",
     ]
     assert exp.symbolic_task_class()[7] == "lobby:S,lobby:M,office"
-    assert len(exp.TASK_NAMES) == 8
+    assert len(rep.TASK_NAMES) == len(exp.symbolic_task_class()) == 8
 
 
 # ----- aggregation ------------------------------------------------------------------------------
@@ -137,7 +141,7 @@ def test_by_task_counts_successes_per_task_and_design() -> None:
     rows = [_run("a", 0, True), _run("a", 0, False), _run("b", 0, True), _run("b", 1, False)]
     table = exp.by_task(rows, ["a", "b"], 2)
     assert table == {"T1": {"a": (1, 2), "b": (1, 1)}, "T2": {"a": (0, 0), "b": (0, 1)}}
-    md = exp.task_table(table, ["a", "b"])
+    md = rep.task_table(table, ["a", "b"])
     assert "| T1 | deliver to the office | 1/2 | 1/1 |" in md
 
 
@@ -146,10 +150,10 @@ def test_by_task_counts_successes_per_task_and_design() -> None:
 
 def test_reading_section_is_kept_between_the_markers() -> None:
     old = "# x\n\n## Reading\n\n<!-- reading -->\nIt holds.\n\nMostly.\n<!-- /reading -->\n"
-    assert exp.reading_section(old) == "It holds.\n\nMostly."
-    assert exp.reading_section(None) == exp.READING_PLACEHOLDER
-    assert exp.reading_section("# no markers") == exp.READING_PLACEHOLDER
-    assert exp.reading_section("<!-- /reading --> <!-- reading -->") == exp.READING_PLACEHOLDER
+    assert rep.reading_section(old) == "It holds.\n\nMostly."
+    assert rep.reading_section(None) == rep.READING_PLACEHOLDER
+    assert rep.reading_section("# no markers") == rep.READING_PLACEHOLDER
+    assert rep.reading_section("<!-- /reading --> <!-- reading -->") == rep.READING_PLACEHOLDER
 
 
 def _results() -> dict[str, Any]:
@@ -190,23 +194,23 @@ def _results() -> dict[str, Any]:
 
 
 def test_render_report_keeps_the_reading_and_regenerates_the_rest() -> None:
-    first = exp.render_report(_results(), exp.reading_section(None))
+    first = rep.render_report(_results(), rep.reading_section(None), TASK_CLASS)
     assert first.startswith("# Experiment")
-    assert f"{exp.READING_OPEN}\n{exp.READING_PLACEHOLDER}\n{exp.READING_CLOSE}" in first
+    assert f"{rep.READING_OPEN}\n{rep.READING_PLACEHOLDER}\n{rep.READING_CLOSE}" in first
     assert "1 because fewer than 3 floors" in first
     assert "| sequenced | 2 | 2/2 | 100% |" in first
     assert "| reactive | `demo/reactive.py` 5" in first
     assert "| 3 | 2 (+1 inline) |" in first
-    hand = first.replace(exp.READING_PLACEHOLDER, "Sequencing wins at k = 8.")
-    second = exp.render_report(_results(), exp.reading_section(hand))
+    hand = first.replace(rep.READING_PLACEHOLDER, "Sequencing wins at k = 8.")
+    second = rep.render_report(_results(), rep.reading_section(hand), TASK_CLASS)
     assert "Sequencing wins at k = 8." in second
-    assert exp.READING_PLACEHOLDER not in second
+    assert rep.READING_PLACEHOLDER not in second
     assert "rule switches" not in second  # absent from every outcome
 
 
 def test_k_table_shows_switches_when_an_outcome_has_them() -> None:
     rows = [_run("a", 0, True, drive_winner_changes=10)]
-    md = exp.k_table(exp.by_k(rows, ["a"], 1))
+    md = rep.k_table(exp.by_k(rows, ["a"], 1))
     assert "drive winner changes / sim min" in md
     assert "| 6.0 |" in md  # 10 changes in 100 s
 
@@ -288,7 +292,7 @@ def test_a_hard_run_has_a_key_of_its_own_and_a_plain_one_keeps_the_old_key(tmp_p
 
 
 def test_the_report_has_a_hard_set_section_only_with_hard_runs() -> None:
-    plain = exp.render_report(_results(), exp.reading_section(None))
+    plain = rep.render_report(_results(), rep.reading_section(None), TASK_CLASS)
     assert "### On the hard set" not in plain
     results = _results()
     designs = results["config"]["designs"]
@@ -300,7 +304,7 @@ def test_the_report_has_a_hard_set_section_only_with_hard_runs() -> None:
         },
         "by_task": exp.by_task(hard_rows, designs, 2),
     }
-    report = exp.render_report(results, exp.reading_section(None))
+    report = rep.render_report(results, rep.reading_section(None), TASK_CLASS)
     hard = report[report.index("### On the hard set") :]
     assert "| sequenced | 2 | 2/2 | 100% |" in hard
     assert "| reactive | 2 | 0/2 | 0% |" in hard
@@ -313,8 +317,8 @@ def test_fault_line_counts_runs_with_faults_and_says_what_it_cannot_count() -> N
         {"design": "b", "skills_faulted": []},
         {"design": "b"},  # made before the demo reported faults
     ]
-    assert exp.fault_line(rows, ["a", "b"]) == (
+    assert rep.fault_line(rows, ["a", "b"]) == (
         "a 1 of 2 runs (2 fault(s)); b 0 of 1 runs (0 fault(s));"
         " 1 runs made before faults were reported are not counted"
     )
-    assert "not reported" in exp.fault_line([{"design": "a"}], ["a"])
+    assert "not reported" in rep.fault_line([{"design": "a"}], ["a"])
