@@ -505,7 +505,7 @@ pub struct HomePosition {
     max_turn: f64,
     /// A goal behind the robot (more than 90° off its heading) and at most this far is
     /// driven to backwards, without turning round first (0: never), m.
-    #[param(default = 0.0, min = 0.0, max = 3.0, unit = "m")]
+    #[param(default = 0.0, min = 0.0, max = 10.0, unit = "m")]
     reverse_within: f64,
     approach: Approach,
     arrived: bool,
