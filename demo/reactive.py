@@ -93,6 +93,12 @@ FACE_DOOR_M = 0.85
 PATROL_HALF_M = 2.5
 PATROL_OFF_M = 1.0
 PATROL_LEG_S = 14.0
+#: In a car and no panel seen for this long (s; a turn takes 8 s), the robot is not in one.
+PANEL_LOST_S = 30.0
+#: Facing a car's door, the opening in the wall ahead is this near straight ahead (m), seen
+#: within this long (s).
+CAR_DOOR_OFF_M = 0.6
+CAR_DOOR_LOOK_S = 1.0
 #: Going into a car that opened takes at most this long, s.
 CAR_ENTER_S = 25.0
 #: Pushing a call button, the robot faces its wall within this, rad.
@@ -102,11 +108,16 @@ MOUTH_M = 2.6
 #: In front of a barcode, the robot waits this long for the door beside it to show, s: as
 #: long as the sequenced robot (a door closed now and then stays closed up to a minute).
 DOOR_WAIT_S = SEQUENCED_DOOR_WAIT_S
+#: A door placed anew is the same door only this near where it was first placed (m), and
+#: facing this near the same way (rad).
+DOOR_MOVED_M = 1.0
+DOOR_TURNED_RAD = 0.8
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
-#: Rules that move the robot about in the lab: under one of them, not 1 m from where it was
-#: this long ago, the robot is stuck (clutter, a corner), s. (Homing on the call button and
-#: the routes may take as long legitimately: slowly up to the button, waiting at a door.)
+#: Rules that move the robot about in the lab: under one of them, or following a corridor on
+#: a route leg, not 1 m from where it was this long ago, the robot is stuck (clutter, a corner,
+#: wedged in a doorway), s. (Homing on the call button and the route's other steps may take as
+#: long legitimately: slowly up to the button, waiting at a door.)
 MOVING_RULES = ("search", "home on lab door", "to lab door")
 STUCK_S = 60.0
 #: Unsticking: towards the freest way, at most this far, for at most this long (m, s).
@@ -165,6 +176,8 @@ class Memory:
     said_at_start: int = 0
     out_of_lab: bool = False
     in_car: bool = False
+    #: In a car, when its panel was last seen (or the car entered), simulated time.
+    panel_seen_at: float = 0.0
     pressed_floor: int | None = None
     #: The simulated time the call button was pushed on this floor (None: not called).
     called_at: float | None = None
@@ -177,6 +190,8 @@ class Memory:
     #: The point in front of that door (odometry), and how far the robot has got with it.
     car_goal: tuple[float, float] | None = None
     enter_stage: str = ""
+    #: When the robot faced the car's door it went to (None: not yet), simulated time.
+    faced_at: float | None = None
     #: Route legs done, and the step the current one is at.
     legs_done: set[str] = field(default_factory=set)
     route: RouteState | None = None
@@ -184,6 +199,8 @@ class Memory:
     door_goal: tuple[float, float, float] | None = None
     door_stage: str = ""
     door_fixes: int = 0
+    #: Where that door was first placed (the point in front of it and the heading through).
+    door_first: tuple[float, float, float] | None = None
     door_waiting_since: float | None = None
     door_given_up_at: float = -1e9
     passed_heading: float | None = None
@@ -524,8 +541,16 @@ class Reactive(RouteFollower, Sequencer):
             off = wrap(m.opened[1] - s.pose.theta)
             if abs(off) > 0.08:
                 return turn(off, ("face car", m.opened), s.t)
-            if s.sonar[0] < 1.6:
-                # No open door ahead: it closed meanwhile, or it was no car's door.
+            o = s.opening
+            door_ahead = o.get("seen") and abs(float(o.get("y", 0.0))) < CAR_DOOR_OFF_M
+            if m.faced_at is None:
+                m.faced_at = s.t
+            if not door_ahead and s.t - m.faced_at < CAR_DOOR_LOOK_S:
+                return Action(("runaway",), key=("look for car door", m.opened))
+            if s.sonar[0] < 1.6 or not door_ahead:
+                # No open door ahead: it closed meanwhile, or it was no car's door (someone
+                # who stood still and walked off reads as a way opening too, but into the
+                # lobby, with no wall ahead for a door to be in).
                 m.opened, m.enter_stage = None, ""
                 return Action(("runaway",), key="no door ahead")
             m.enter_stage = "in"
@@ -543,7 +568,9 @@ class Reactive(RouteFollower, Sequencer):
         n = (math.cos(b.theta), math.sin(b.theta))
         x = b.x - PATROL_OFF_M * n[0] - along * n[1]
         y = b.y - PATROL_OFF_M * n[1] + along * n[0]
-        return goto(x, y, ("wait for car", leg), reverse_within=1.5)
+        # Back the way it came without turning round: turning starts the door watcher
+        # afresh, and a car already on this floor opens while the robot would be turning.
+        return goto(x, y, ("wait for car", leg), reverse_within=2 * PATROL_HALF_M + 0.5)
 
     def push_call(self, s: Senses) -> Action:
         """Homes the last bit to the call button and pushes it."""
@@ -646,23 +673,25 @@ class Reactive(RouteFollower, Sequencer):
                 if s.wall.get("seen") and abs(float(s.wall["normal"])) > 0.1:
                     off = float(s.wall["normal"])
                     return Action(("turn",), {("turn", "angle"): off}, key=("square", s.t // 5))
-                if m.door_waiting_since is None:
-                    m.door_waiting_since = s.t
-                elif s.t - m.door_waiting_since > DOOR_WAIT_S:
-                    # No door here after all (or shut for long): leave it, look again later.
-                    m.door_given_up_at, m.door_waiting_since = s.t, None
-                return Action(("runaway",), key="wait for opening")
-            m.door_waiting_since = None
-            m.door_fixes += 1
+                return self.wait_for_opening(s)
             normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
             ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)
             c, sn = math.cos(s.pose.theta), math.sin(s.pose.theta)
-            m.door_goal = (
-                s.pose.x + c * ax - sn * ay,
-                s.pose.y + sn * ax + c * ay,
-                s.pose.theta + normal,
-            )
-            m.door_stage = "goto"
+            goal = (s.pose.x + c * ax - sn * ay, s.pose.y + sn * ax + c * ay, s.pose.theta + normal)
+            first = m.door_first
+            if first is not None and (
+                math.hypot(goal[0] - first[0], goal[1] - first[1]) > DOOR_MOVED_M
+                or abs(wrap(goal[2] - first[2])) > DOOR_TURNED_RAD
+            ):
+                # Placed anew (stopped short, or off to one side), the door is where it was
+                # first found: an opening elsewhere is another (the corridor seen from the
+                # doorway, a door across it), and going through it is no way into the room.
+                return self.wait_for_opening(s)
+            m.door_waiting_since = None
+            m.door_fixes += 1
+            m.door_goal, m.door_stage = goal, "goto"
+            if first is None:
+                m.door_first = goal
         gx, gy, heading = m.door_goal
         if m.door_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.12:
@@ -677,6 +706,16 @@ class Reactive(RouteFollower, Sequencer):
             return Action(("runaway",), key=("door check", m.door_goal))
         return Action(("runaway", "pass_door"), key=("door pass", m.door_goal))
 
+    def wait_for_opening(self, s: Senses) -> Action:
+        """Stands in front of the door until it opens; gives up after `DOOR_WAIT_S`."""
+        m = self.mem
+        if m.door_waiting_since is None:
+            m.door_waiting_since = s.t
+        elif s.t - m.door_waiting_since > DOOR_WAIT_S:
+            # No door here after all (or shut for long): leave it, look again later.
+            m.door_given_up_at, m.door_waiting_since, m.door_first = s.t, None, None
+        return Action(("runaway",), key="wait for opening")
+
     def through_door(self, s: Senses) -> bool:
         """Passed (`door_passed`) and truly beyond the door's line (not stopped in it)."""
         m = self.mem
@@ -685,7 +724,7 @@ class Reactive(RouteFollower, Sequencer):
         gx, gy, heading = m.door_goal
         went = (s.pose.x - gx) * math.cos(heading) + (s.pose.y - gy) * math.sin(heading)
         if went >= DOOR_STANDOFF + 0.4:
-            m.door_goal, m.door_stage, m.door_fixes = None, "", 0
+            m.door_goal, m.door_stage, m.door_fixes, m.door_first = None, "", 0, None
             return True
         # Stopped short (someone in the way, a jamb): place the door anew and go again.
         m.door_goal, m.door_stage = None, ""
@@ -732,16 +771,27 @@ class Reactive(RouteFollower, Sequencer):
                 door[0] - FACE_DOOR_M * math.cos(normal),
                 door[1] - FACE_DOOR_M * math.sin(normal),
             )
-            m.opened, m.enter_stage = (s.t, normal), "goto"
+            m.opened, m.enter_stage, m.faced_at = (s.t, normal), "goto", None
         if not m.in_car and m.out_of_lab and m.called_on == s.floor and s.enclosed(tight=True):
             # Walls all round, nearer than a car is wide, where a car was called: inside a car
             # (its door shut). Elsewhere it is a closet, or people round the robot.
             m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
+            m.panel_seen_at = s.t
         if s.car_entered and self.rule_name == "enter car" and m.enter_stage == "in":
             if s.enclosed():
                 m.in_car, m.called_at, m.opened, m.pressed_floor = True, None, None, None
+                m.panel_seen_at = s.t
             else:  # stopped short (the door closed, someone in the way): wait for the next
                 m.opened, m.enter_stage = None, ""
+        if m.in_car and m.pressed_floor is None:
+            # In a car, the panel is in view within a turn or two. Not seen for long: this is
+            # no car (a corner, people round the robot) or not the robot's any more.
+            if s.car:
+                m.panel_seen_at = s.t
+            elif s.t - m.panel_seen_at > PANEL_LOST_S:
+                if self.debug:
+                    print(f"[{s.t:7.1f} s]   no car's panel in {PANEL_LOST_S:.0f} s: not in a car")
+                m.in_car, m.called_on = False, None
         if s.car_exited and self.rule_name == "leave car":
             if s.enclosed():  # stopped in the doorway (someone outside): out again
                 m.exits_tried += 1
@@ -756,7 +806,7 @@ class Reactive(RouteFollower, Sequencer):
     def watch_progress(self, s: Senses) -> None:
         """Notes where the robot got to; stuck for long under a moving rule, where to go."""
         m, p = self.mem, s.pose
-        moving = self.rule_name in MOVING_RULES and not m.in_car
+        moving = (self.rule_name in MOVING_RULES or self.following(s)) and not m.in_car
         if (
             not moving
             or m.moved_from is None
@@ -774,6 +824,14 @@ class Reactive(RouteFollower, Sequencer):
             m.unstick_to, m.unstick_since = (p.x + go * math.cos(a), p.y + go * math.sin(a)), s.t
             if self.debug:
                 print(f"[{s.t:7.1f} s]   stuck: {go:.1f} m towards {math.degrees(a):.0f} deg")
+
+    def following(self, s: Senses) -> bool:
+        """On a route leg, following a corridor (not homing on a barcode, nor at a door)."""
+        r = self.mem.route
+        if r is None or self.rule_name not in ("to office", "to lobby") or r.stage != "follow":
+            return False
+        steps = self.m.route.get(r.leg, [])
+        return r.step < len(steps) and bool(steps[r.step].get("follow"))
 
     def place_car_door(
         self, pose: Pose, bearing: float, before: float

@@ -231,6 +231,7 @@ class RouteFollower:
                 if homes:
                     r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
                     self.mem.door_goal, self.mem.door_stage = None, ""
+                    self.mem.door_first = None
                     return Action(("runaway",), key=("door again", s.t))
             return self.pass_door_action(s)
         if r.stage == "follow" and step.get("follow"):
@@ -330,8 +331,13 @@ class RouteFollower:
                     print(f"[{s.t:7.1f} s]   {until} {side or ''} {r.count} at {went:.1f} m")
             r.last_side = now
             if r.count >= int(step.get("count", 1)) and r.counted_at is not None:
-                # On into the junction's middle (about half a corridor) before turning.
-                return not step.get("turn") or went - r.counted_at >= JUNCTION_ON_M
+                # On into the junction's middle (about half a corridor) before turning; at a
+                # corner (the corridor ends in a wall across) the wall comes first.
+                return (
+                    not step.get("turn")
+                    or went - r.counted_at >= JUNCTION_ON_M
+                    or self.wall_across(r, s)
+                )
         return False
 
     def way_made(self, r: RouteState, s: Senses) -> float:
