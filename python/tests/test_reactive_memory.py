@@ -19,15 +19,14 @@ from deliver import Mission  # noqa: E402
 from reactive import (  # noqa: E402
     PANEL_LOST_S,
     PATROL_HALF_M,
-    SONARS,
     STUCK_S,
     Reactive,
     Senses,
 )
 from reactive_route import RouteState  # noqa: E402
-from sequencing import Pose  # noqa: E402
+from sequencing import SONARS, Pose  # noqa: E402
 
-ROUTE = {
+ROUTE: dict[str, list[dict[str, Any]]] = {
     "button_to_office": [
         {"turn": "back"},
         {"follow": "hallway", "until": "wall", "turn": "left"},
