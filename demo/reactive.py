@@ -513,9 +513,7 @@ class Reactive(RouteFollower, Sequencer):
         """Homes on the car's panel and pushes the stop's floor."""
         if not s.car:
             # The panel (its barcode says which car) not in view: look round for it.
-            return Action(
-                ("turn",), {("turn", "angle"): 2 * math.pi}, key=("look for panel", s.t // 10)
-            )
+            return turn(2 * math.pi, "look for panel", s.t, every=10)
         code = self.m.car_barcode_first + s.car - 1
         return Action(
             ("runaway", "track_barcode", "home", "push_button"),
@@ -672,7 +670,7 @@ class Reactive(RouteFollower, Sequencer):
                 # Square to the wall the barcode is on: the door finder looks along it.
                 if s.wall.get("seen") and abs(float(s.wall["normal"])) > 0.1:
                     off = float(s.wall["normal"])
-                    return Action(("turn",), {("turn", "angle"): off}, key=("square", s.t // 5))
+                    return turn(off, "square", s.t, every=5)
                 return self.wait_for_opening(s)
             normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
             ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)

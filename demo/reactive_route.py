@@ -81,10 +81,12 @@ def goto(
 TURN_AGAIN_S = 8.0
 
 
-def turn(off: float, key: Any, t: float, *, runaway: bool = False) -> Action:
-    """Turns in place by ``off`` (rad), issued again every `TURN_AGAIN_S` while still asked."""
+def turn(
+    off: float, key: Any, t: float, *, runaway: bool = False, every: float = TURN_AGAIN_S
+) -> Action:
+    """Turns in place by ``off`` (rad), issued again every ``every`` s while still asked."""
     skills = ("runaway", "turn") if runaway else ("turn",)
-    return Action(skills, {("turn", "angle"): off}, key=(key, t // TURN_AGAIN_S))
+    return Action(skills, {("turn", "angle"): off}, key=(key, t // every))
 
 
 @dataclass
@@ -246,11 +248,8 @@ class RouteFollower:
                 elif r.turning_back and abs(off) < BACK_ON_WAY_RAD:
                     r.turning_back, r.best_went = False, went
                 if r.turning_back:
-                    return Action(
-                        ("runaway", "turn"),
-                        {("turn", "angle"): off},
-                        key=("back to the way", r.leg, r.step, s.t // 10),
-                    )
+                    back = ("back to the way", r.leg, r.step)
+                    return turn(off, back, s.t, runaway=True, every=10)
             if self.step_until_met(step, r, s):
                 r.stage = "turn" if step.get("turn") else "done"
             else:
