@@ -7,10 +7,11 @@ interpreter), pushes the call button, patrols the lobby until a car's door opens
 car it is, enters, pushes the goal floor, waits for it, leaves, follows the corridor to the
 office's barcode and says its message inside the office.
 
-The means are beside this file: the link, skill switching, waits and the behaviours shared by
-phases in ``sequencing.py``, the route interpreter in ``routes.py``; the perceiving is done by
-skills (`std.locate_door`, `std.fit_wall`, the detectors and trackers). Every wait has a
-time-out on the robot's clock, and failed phases are retried a bounded number of times.
+The means are beside this file: the link, skill switching and waits in ``link.py``, the
+behaviours shared by phases in ``sequencing.py``, the route interpreter in ``routes.py``; the
+perceiving is done by skills (`std.locate_door`, `std.fit_wall`, the detectors and trackers).
+Every wait has a time-out on the robot's clock, and failed phases are retried a bounded number
+of times.
 
 ``--mode all-active`` is the experiment's baseline: every skill is switched on at the start and
 never off; the sequencer sets the same parameters and waits on the same monitors, and the
@@ -33,8 +34,7 @@ from dataclasses import dataclass, field
 from signal import SIGHUP, SIGINT, SIGTERM, Signals
 from typing import Any
 
-from routes import RouteSequencer
-from sequencing import (
+from link import (
     EVENT_KINDS,
     SONARS,
     OutOfTime,
@@ -43,6 +43,7 @@ from sequencing import (
     bearing_of,
     wrap,
 )
+from routes import RouteSequencer
 
 import situate
 
@@ -767,7 +768,7 @@ async def run_reactive(
     seq = Reactive(robot, mission, stops, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
     try:
         async with robot.events(*EVENT_KINDS) as stream:
-            seq.stream = stream  # read for faults only (`Sequencer.take_faults`)
+            seq.stream = stream  # read for faults only (`Link.take_faults`)
             await seq.run_task()
     except (OutOfTime, PhaseFailed) as e:
         await seq.say(f"mission failed: {e}")

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deliver import NORMAL, SKILLS, Mission, Stop
+from link import SONARS, Link, OutOfTime, Pose, wrap
 from reactive_route import (
     DOOR_STANDOFF,
     HOMED_M,
@@ -44,7 +45,6 @@ from reactive_route import (
     turn,
 )
 from sequencing import DOOR_WAIT_S as SEQUENCED_DOOR_WAIT_S
-from sequencing import SONARS, OutOfTime, Pose, Sequencer, wrap
 
 import situate
 
@@ -224,7 +224,7 @@ class Memory:
     lab_door_from: tuple[float, float] = (0.0, 0.0)
 
 
-class Reactive(RouteFollower, Sequencer):
+class Reactive(RouteFollower, Link):
     """The teleo-reactive controller: every cycle, the first applicable rule acts."""
 
     def __init__(

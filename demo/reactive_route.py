@@ -13,7 +13,8 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from sequencing import WALL_AHEAD_M, Pose, wrap
+from link import Pose, wrap
+from sequencing import WALL_AHEAD_M
 
 if TYPE_CHECKING:
     from deliver import Mission

@@ -1,16 +1,12 @@
-"""Sequencing a situated robot over the situate link: a reusable layer under a mission.
+"""The sequenced robot's shared behaviours, on top of the link (`link.Link`).
 
-A mission (such as `deliver.py`) is a short narrative of phases; this module gives it the means:
-
-- the link, used so that a run on the simulated clock replays exactly: the sequencer acts only
-  at the cycle a monitor fired (monitors registered with ``pause``), requests that change
-  something are sent without waiting and collected by the next one that needs an answer
-  (`Sequencer.send`, `flush`), and every wait has a time-out on the robot's clock (`wait`);
-- switching skills (`use`: the active set), parameters (`set`, `restore`), reading values;
-- behaviours built of the standard skills (`std.*`, see crates/situate_skills) that any mission
-  of the mobile robot needs: turning, homing on a barcode, driving to a point of the odometry
-  frame, lining up with a barcode on a wall, passing the door ahead, searching for a barcode,
-  getting unstuck. The interpreter of route hints (docs/maps.md) is `routes.py`, over this.
+A mission (such as `deliver.py`) is a short narrative of phases. `link.Link` gives it the
+means to drive the robot: waits on the robot's clock, switching skills, parameters, reading
+values. `Sequencer` adds the behaviours built of the standard skills (`std.*`, see
+crates/situate_skills) that any mission of the mobile robot needs: turning, homing on a
+barcode, driving to a point of the odometry frame, lining up with a barcode on a wall,
+passing the door ahead, searching for a barcode, getting unstuck. The interpreter of route
+hints (docs/maps.md) is `routes.py`, over this.
 
 Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the door in it
 `std.locate_door`'s `opening`; the sequencer activates them and reads their outputs.
@@ -18,19 +14,14 @@ Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the do
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
-import json
 import math
-import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
-import situate
-from situate.events import MonitorFired, SkillFaulted
+from link import SONARS, Link, bearing_of, wrap
 
-SONARS = 24
+import situate
+
 ROBOT_RADIUS = 0.25
 #: How far in front of a door the robot lines up before passing it, m.
 DOOR_STANDOFF = 0.9
@@ -52,87 +43,17 @@ BEYOND_WALL_M = 0.4
 SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
 HOME_PROGRESS_S = 8.0
-#: A skill that faults (a body over its budget on a loaded machine, say) is switched on again,
-#: unless it faulted this many times within FAULT_WINDOW_S (simulated): then the mission fails.
-FAULTS_IN_WINDOW = 5
-FAULT_WINDOW_S = 60.0
-#: The events a sequencer's stream carries.
-EVENT_KINDS = ("monitor_fired", "skill_faulted")
-
-#: Records the sequencer reads after most waits: each wait's monitor asks for them (``report``),
-#: so their values as of the cycle it fired in come with its event instead of a query each.
-CARRIED = ("odom", "target")
 
 
-class PhaseFailed(Exception):
-    """A phase could not be completed (after its retries)."""
+class Sequencer(Link):
+    """A `Link` with the behaviours the phases of a mission share.
 
-
-class OutOfTime(Exception):
-    """The mission's time limit passed."""
-
-
-@dataclass
-class Pose:
-    """An odometry pose."""
-
-    x: float
-    y: float
-    theta: float
-
-
-def wrap(a: float) -> float:
-    """``a`` wrapped into (-pi, pi]."""
-    a = math.fmod(a, 2 * math.pi)
-    if a > math.pi:
-        a -= 2 * math.pi
-    elif a <= -math.pi:
-        a += 2 * math.pi
-    return a
-
-
-def bearing_of(i: int) -> float:
-    """Bearing of sonar ``i`` in the robot frame (sonar 0 ahead, counter-clockwise)."""
-    return wrap(i * 2 * math.pi / SONARS)
-
-
-class Sequencer:
-    """Drives a robot over the link: waits, skill switching, parameters, shared behaviours.
-
-    ``normal`` holds the value of every parameter the sequencer changes in some phase, as it
-    is elsewhere (`restore`). In ``all-active`` mode (the experiment's baseline) `use` changes
-    nothing: every skill stays on and priorities alone decide. ``seed`` seeds every random
-    choice of the behaviours (the wander paths), so a run is a function of its seed.
+    It keeps what they leave behind for each other: the searches so far, the corridor's
+    heading, the last barcode lined up with and the heading the last door was passed at.
     """
 
-    def __init__(
-        self,
-        robot: situate.Robot,
-        *,
-        normal: Mapping[tuple[str, str], Any],
-        mode: str = "sequenced",
-        limit_s: float = 1800.0,
-        quiet: bool = False,
-        seed: int = 1,
-    ) -> None:
-        self.r = robot
-        self.normal = dict(normal)
-        self.sequenced = mode == "sequenced"
-        self.limit_s = limit_s
-        self.quiet = quiet
-        self.seed = seed
-        self.debug = bool(os.environ.get("DELIVER_DEBUG"))
-        #: DELIVER_TRACE=FILE: the true pose every 0.25 s, one JSON line each (for debugging).
-        trace = os.environ.get("DELIVER_TRACE")
-        self.trace = open(trace, "w") if trace else None  # noqa: SIM115 (open for the run)
-        self.active: set[str] = set()
-        #: The simulated time at the last pause (a monitor fired); `step` makes it stale.
-        self.t = 0.0
-        self.t_stale = False
-        #: The cycle's period on the simulated clock (stepping N cycles adds N of them).
-        self.period_s: float | None = None
-        self.phase_no = 0
-        self.phase_text = ""
+    def __init__(self, robot: situate.Robot, **kw: Any) -> None:
+        super().__init__(robot, **kw)
         #: Searches so far: each wanders along a path of its own (seeded by ``seed`` and this).
         self.searches = 0
         #: The odometry heading a route planned the robot to be following (see `run_route`).
@@ -141,251 +62,6 @@ class Sequencer:
         self.wall_fix: tuple[float, float, float] | None = None
         #: The odometry heading the last door was passed at (out through it).
         self.passed_heading: float | None = None
-        self.stream: situate.Stream[Any] | None = None
-        self.params: dict[tuple[str, str], Any] = {}
-        #: Replies to requests sent but not yet awaited (see `send`).
-        self.pending: list[asyncio.Future[Any]] = []
-        #: Queries sent since the cycle last ran, by signal: their answers stand until it runs.
-        self.readings: dict[str, asyncio.Future[Any]] = {}
-        #: Round trips to the robot so far (each `flush`; DELIVER_DEBUG prints them at the end).
-        self.round_trips = 0
-        #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
-        self.carried: dict[str, dict[str, Any]] = {}
-        #: Skills that faulted: (cycle, skill, cause), oldest first.
-        self.faults: list[tuple[int, str, str]] = []
-
-    # ----- the link: waiting, switching skills, parameters ------------------------------
-
-    def send(self, verb: str, **args: Any) -> None:
-        """Sends a request now; its reply is awaited with the next one that needs an answer.
-
-        The manager handles requests in the order they are sent, so a query (or a wait) sent
-        after changes costs one round trip for them all (see `flush`).
-        """
-        if verb in ("run", "step"):
-            self.readings.clear()  # the cycle runs: every signal may change
-            self.carried.clear()
-        if verb == "step":
-            # The time moves on by the cycles stepped: on the simulated clock exactly that
-            # many periods (known after the first look at the robot's stats).
-            if self.period_s is not None:
-                self.t += int(args.get("cycles", 1)) * self.period_s
-            else:
-                self.t_stale = True
-        self.pending.append(self.r.send(verb, **args))
-
-    def prefetch(self, *signals: str) -> None:
-        """Sends a query for each of ``signals`` not asked for since the cycle last ran.
-
-        Queries only read, so asking for what the next steps will read, all at once, saves
-        round trips without changing anything on the robot.
-        """
-        for signal in signals:
-            if signal not in self.readings and signal not in self.carried:
-                self.readings[signal] = self.r.send("query", signal=signal)
-                self.pending.append(self.readings[signal])
-
-    async def flush(self) -> list[Any]:
-        """Awaits the replies to every pending request; raises the first refusal.
-
-        A request cut short because a body got stuck (`situate.Interrupted`: a `step` that
-        ended early) is no refusal: the cycle went on, and the fault comes as an event
-        (`on_fault`). Its place in the list holds the exception; the time is read anew.
-        """
-        pending, self.pending = self.pending, []
-        self.round_trips += 1
-        results = await asyncio.gather(*pending, return_exceptions=True)
-        for r in results:
-            if isinstance(r, situate.Interrupted):
-                self.t_stale = True
-            elif isinstance(r, BaseException):
-                raise r
-        return results
-
-    async def now(self) -> float:
-        """The simulated time now (``t``, asked of the robot when cycles were stepped since)."""
-        if self.t_stale:
-            stats = self.r.send("stats")
-            self.pending.append(stats)
-            await self.flush()
-            result = await stats
-            self.t = float(result["time_s"])
-            period = float(result.get("period_s") or 0.0)
-            self.period_s = period if period > 0 else None
-            self.t_stale = False
-        return self.t
-
-    async def wait(self, *conditions: str, within: float | None = None) -> int:
-        """Runs the cycle until one of ``conditions`` holds; returns its index.
-
-        With ``within`` (simulated seconds from now), returns ``len(conditions)`` when that
-        time passed first. The cycle is paused at the cycle the condition held.
-        """
-        # From the time now: after stepping (a look at a wall for 6 s, say) a deadline
-        # from the last pause's time could be over before the wait began.
-        await self.now()
-        deadline = min(self.t + within, self.limit_s) if within is not None else self.limit_s
-        # The deadline exactly (repr: the shortest text that reads back as the same float).
-        watched = [*conditions, f"time >= {deadline!r}"]
-        if self.trace is not None:  # stops every 0.25 s to write where the robot truly is
-            while (index := await self._first([*watched, f"time >= {self.t + 0.25!r}"])) == len(
-                watched
-            ):
-                await self._trace()
-        else:
-            index = await self._first(watched)
-        if index == len(conditions) and self.t >= self.limit_s:
-            raise OutOfTime(f"the mission's {self.limit_s:.0f} s are up")
-        return index
-
-    async def _first(self, conds: list[str]) -> int:
-        """Runs until one of ``conds`` holds (pausing there); returns the first that does.
-
-        One pausing monitor watches them all (``any``), registered and the cycle run in one
-        round trip with the pending changes (the link's round trips are most of a headless
-        run's wall time); its event says which of them held in the cycle it fired (``held``).
-        """
-        stream = self.stream
-        assert stream is not None
-        self.send("monitor_add", any=list(conds), mode="once", pause=True, report=list(CARRIED))
-        self.send("run")
-        added = (await self.flush())[-2]
-        if isinstance(added, BaseException):
-            raise added
-        monitor = int(added["monitor"])
-        fired: MonitorFired | None = None
-        async for event in stream:
-            if isinstance(event, SkillFaulted):
-                await self.on_fault(event)
-            elif isinstance(event, MonitorFired) and event.monitor == monitor:
-                fired = event
-                break
-        if fired is None:
-            raise situate.NotRunning("the link closed while waiting")
-        self.t = fired.time_s
-        for record in CARRIED:
-            prefix = f"{record}."
-            values = {
-                k.removeprefix(prefix): v for k, v in fired.values.items() if k.startswith(prefix)
-            }
-            if values and all(v is not None for v in values.values()):  # else never written
-                self.carried[record] = values
-        if not fired.held:
-            raise RuntimeError(f"monitor {monitor} fired with none of {conds} holding")
-        return min(fired.held)
-
-    async def on_fault(self, event: SkillFaulted) -> None:
-        """A skill faulted: the manager switched it off. One in use is switched on again.
-
-        A fault is the manager's guard against a body that overran its deadline or raised; on
-        a busy machine a healthy body can overrun once. The skill is reactivated at once (a
-        fresh body), so a wait that needs its output is not left waiting for good. A skill that
-        keeps faulting (`FAULTS_IN_WINDOW` within `FAULT_WINDOW_S`) fails the mission instead.
-        """
-        self.faults.append((event.cycle, event.skill, event.cause))
-        await self.say(f"    skill {event.skill!r} faulted: {event.cause}")
-        if event.skill not in self.active:
-            return
-        # Counted in cycles: while a wait runs, `t` is the time it began.
-        window = FAULT_WINDOW_S / (self.period_s or 0.1)
-        recent = [f for f in self.faults if f[1] == event.skill and f[0] >= event.cycle - window]
-        if len(recent) >= FAULTS_IN_WINDOW:
-            raise PhaseFailed(
-                f"skill {event.skill!r} faulted {len(recent)} times within"
-                f" {FAULT_WINDOW_S:.0f} s: {event.cause}"
-            )
-        self.send("activate", skills=[event.skill], with_providers=False)
-        await self.say(f"    skill {event.skill!r} switched on again")
-
-    def take_faults(self) -> list[SkillFaulted]:
-        """The faults that arrived on the stream since the last look (a polling loop's)."""
-        stream = self.stream
-        if stream is None:
-            return []
-        return [e for e in stream.drain() if isinstance(e, SkillFaulted)]
-
-    async def use(self, *skills: str, restart: Sequence[str] = ()) -> None:
-        """Makes ``skills`` the active set (sequenced mode); ``restart`` ones start afresh.
-
-        In all-active mode every skill is already on and stays on: nothing changes.
-        """
-        if not self.sequenced:
-            return
-        want = set(skills)
-        again = [s for s in restart if s in self.active and s in want]
-        off = sorted((self.active - want) | set(again))
-        if off:
-            self.send("deactivate", skills=off)
-            self.active -= set(off)
-        if again:
-            # A skill notices a re-activation as a gap of more than one cycle.
-            self.send("step", cycles=1)
-        on = sorted(want - self.active)
-        if on:
-            self.send("activate", skills=on, with_providers=False)
-            self.active |= set(on)
-
-    async def set(self, skill: str, param: str, value: Any) -> None:
-        """Sets a skill parameter (no request when it has that value already)."""
-        if self.params.get((skill, param)) == value:
-            return
-        self.send("set_param", skill=skill, param=param, value=value)
-        self.params[(skill, param)] = value
-
-    async def restore(self, skill: str, param: str) -> None:
-        """Sets a parameter back to its value outside special phases (``normal``)."""
-        await self.set(skill, param, self.normal[(skill, param)])
-
-    async def value(self, signal: str) -> Any:
-        """The value of ``signal`` at the end of the last cycle (None if never written)."""
-        if signal in self.carried:
-            return dict(self.carried[signal])
-        self.prefetch(signal)
-        reading = self.readings[signal]
-        await self.flush()
-        return situate.Reading.from_json(await reading).value
-
-    async def odom(self) -> Pose:
-        """The odometry pose."""
-        o = await self.value("odom")
-        return Pose(float(o["x"]), float(o["y"]), float(o["theta"]))
-
-    async def sonar(self) -> list[float]:
-        """The sonar ranges, m."""
-        return [float(v) for v in await self.value("sonar.range")]
-
-    async def _trace(self) -> None:
-        assert self.trace is not None
-        with contextlib.suppress(situate.SituateError):
-            self.prefetch("truth.pose", "truth.cars", "truth.people")
-            p = await self.value("truth.pose")
-            if p is not None:
-                cars = await self.value("truth.cars")
-                people = await self.value("truth.people")
-                line = {"t": self.t, **p, "cars": cars, "people": people}
-                self.trace.write(json.dumps(line) + "\n")
-                self.trace.flush()
-
-    async def say(self, text: str) -> None:
-        """One progress line, stamped with the simulated time."""
-        if self.quiet:
-            return
-        extra = ""
-        if self.debug:
-            with contextlib.suppress(situate.SituateError):
-                p = await self.value("truth.pose")
-                if p is not None:
-                    extra = (
-                        f"   (truth: floor {p['floor']} x {p['x']:.2f} y {p['y']:.2f}"
-                        f" heading {math.degrees(p['theta']):.0f}°)"
-                    )
-        print(f"[{await self.now():7.1f} s] {text}{extra}", flush=True)
-
-    async def phase(self, number: int, text: str) -> None:
-        """The progress line of phase ``number`` of the narrative."""
-        self.phase_no = number
-        self.phase_text = text
-        await self.say(f"phase {number}: {text}")
 
     # ----- behaviours the phases share -------------------------------------------------
 

@@ -117,8 +117,8 @@ def cost_table(cost: dict[str, dict[str, Any]]) -> str:
         files = ", ".join(f"`{f}` {n}" for f, n in c["files"].items())
         if d == "reactive":
             files += (
-                " (reuses the link layer of `demo/sequencing.py` and the entry point of"
-                " `demo/deliver.py`)"
+                " (reuses the entry point of `demo/deliver.py`; the link layer, `demo/link.py`,"
+                " is shared by both designs and counted for neither)"
             )
         rules = str(c.get("rules", "—"))
         conds = str(c.get("condition_methods", "—"))

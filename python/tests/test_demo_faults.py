@@ -1,4 +1,4 @@
-"""The demo's sequencing layer (demo/sequencing.py) against a skill that faults, over the link.
+"""The demo's link layer (demo/link.py) against a skill that faults.
 
 A fault switches a skill off (the manager's guard against a body over its budget, which a busy
 machine can cause in a healthy skill). A sequencer that waits for that skill's output must not
@@ -23,7 +23,7 @@ import situate
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "demo"))  # the demo's modules import each other by name
 
-from sequencing import EVENT_KINDS, PhaseFailed, Sequencer  # noqa: E402
+from link import EVENT_KINDS, Link, PhaseFailed  # noqa: E402
 
 SKILLS = """
 import situate
@@ -49,7 +49,7 @@ class Flaky:
 
 @situate.skill(name="still", outputs={"odom": "{x: f64, y: f64, theta: f64}", "target": "f64"})
 def still() -> dict[str, object]:
-    \"\"\"The records every wait of the sequencer reports (`sequencing.CARRIED`).\"\"\"
+    \"\"\"The records every wait of the sequencer reports (`link.CARRIED`).\"\"\"
     return {"odom": {"x": 0.0, "y": 0.0, "theta": 0.0}, "target": 0.0}
 """
 
@@ -78,10 +78,10 @@ def faultbot(
     return start
 
 
-async def waited(manager: Manager) -> tuple[int, Sequencer]:
+async def waited(manager: Manager) -> tuple[int, Link]:
     """Switches `flaky` on and waits (at most 60 s) until it counted to 20."""
     async with situate.connect(manager.robot, endpoint=manager.endpoint) as robot:
-        seq = Sequencer(robot, normal={}, quiet=True)
+        seq = Link(robot, normal={}, quiet=True)
         async with robot.events(*EVENT_KINDS) as stream:
             seq.stream = stream
             await robot.stop()
@@ -144,7 +144,7 @@ def test_a_step_cut_short_by_a_stuck_body_is_no_refusal_and_its_fault_is_reporte
 
     async def main() -> tuple[list[Any], bool, list[str]]:
         async with situate.connect(manager.robot, endpoint=manager.endpoint) as robot:
-            seq = Sequencer(robot, normal={}, quiet=True)
+            seq = Link(robot, normal={}, quiet=True)
             async with robot.events(*EVENT_KINDS) as stream:
                 seq.stream = stream
                 await robot.stop()

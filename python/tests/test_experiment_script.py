@@ -200,6 +200,7 @@ def test_render_report_keeps_the_reading_and_regenerates_the_rest() -> None:
     assert "1 because fewer than 3 floors" in first
     assert "| sequenced | 2 | 2/2 | 100% |" in first
     assert "| reactive | `demo/reactive.py` 5" in first
+    assert "the link layer, `demo/link.py`, is shared by both designs" in first
     assert "| 3 | 2 (+1 inline) |" in first
     hand = first.replace(rep.READING_PLACEHOLDER, "Sequencing wins at k = 8.")
     second = rep.render_report(_results(), rep.reading_section(hand), TASK_CLASS)
@@ -253,6 +254,8 @@ def test_design_cost_of_the_repositorys_designs() -> None:
     cost = exp.design_cost(ROOT, ["sequenced", "reactive"])
     assert set(cost["sequenced"]["files"]) == set(exp.DESIGN_SOURCES["sequenced"])
     assert cost["sequenced"]["loc"] == sum(cost["sequenced"]["files"].values())
+    # The link layer both run on is counted for neither.
+    assert all("demo/link.py" not in c["files"] for c in cost.values())
     assert cost["reactive"]["rules"] >= 5
     assert cost["reactive"]["condition_methods"] >= 5
 

@@ -16,6 +16,7 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "demo"))  # the demo's modules import each other by name
 
 from deliver import Mission  # noqa: E402
+from link import SONARS, Pose  # noqa: E402
 from reactive import (  # noqa: E402
     PANEL_LOST_S,
     PATROL_HALF_M,
@@ -24,7 +25,6 @@ from reactive import (  # noqa: E402
     Senses,
 )
 from reactive_route import RouteState  # noqa: E402
-from sequencing import SONARS, Pose  # noqa: E402
 
 ROUTE: dict[str, list[dict[str, Any]]] = {
     "button_to_office": [
