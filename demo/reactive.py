@@ -81,6 +81,9 @@ SETTINGS = {
     ("leave_car", "distance"): 3.0,
     # Cars stay open 10 s or so: in before the door closes.
     ("enter_car", "speed"): 0.35,
+    # Through a door to about the middle of the corridor beyond (as far as the sequenced robot
+    # goes): stopped in the door's mouth, the hallway follower may take the door for the way.
+    ("pass_door", "distance"): DOOR_STANDOFF + 1.1,
 }
 #: Waiting for a car longer than this after calling, the robot calls again, s.
 CALL_AGAIN_S = 45.0
@@ -112,6 +115,16 @@ DOOR_WAIT_S = SEQUENCED_DOOR_WAIT_S
 #: facing this near the same way (rad).
 DOOR_MOVED_M = 1.0
 DOOR_TURNED_RAD = 0.8
+#: A door is placed from the opening seen in every cycle of the last `DOOR_FIX_S` (s), all
+#: within `DOOR_FIX_M` (m) of their mean: one cycle's estimate may be a sonar's lost echo, or a
+#: dead sonar not yet found (the sonar filter needs a second or so of moving to tell).
+DOOR_FIX_S = 0.5
+DOOR_FIX_M = 0.25
+#: Stopped in a doorway, the robot goes on once the way ahead is clear this far (m; its
+#: radius and 0.9 m), or after this long (s), at most this many times.
+DOOR_CLEAR_M = 1.15
+DOOR_BLOCKED_S = 10.0
+DOOR_PUSHES = 3
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
 #: Rules that move the robot about in the lab: under one of them, or following a corridor on
@@ -123,8 +136,14 @@ STUCK_S = 60.0
 #: Unsticking: towards the freest way, at most this far, for at most this long (m, s).
 UNSTICK_M = 2.0
 UNSTICK_S = 15.0
-#: Back to where the lab door's barcode was seen: up to this far short of it, m.
-LAB_DOOR_SHORT_M = 1.5
+#: Following a corridor and no new way made for `STUCK_S`, the robot goes back to where it was
+#: when it had made this much less way (m), for at most this long (s), then follows on.
+TRAIL_BACK_M = 1.0
+TRAIL_UNSTICK_S = 30.0
+#: Back to where a barcode was seen (the lab door's, a call button's): up to this far short of
+#: it, m, for at most this long, s.
+SIGHTING_SHORT_M = 1.5
+SIGHTING_S = 60.0
 
 
 @dataclass
@@ -199,8 +218,16 @@ class Memory:
     door_goal: tuple[float, float, float] | None = None
     door_stage: str = ""
     door_fixes: int = 0
-    #: Where that door was first placed (the point in front of it and the heading through).
+    #: Where that door was last placed from in front of it (the point in front of it and the
+    #: heading through); after stopping short in it, a new placement must be near this one.
     door_first: tuple[float, float, float] | None = None
+    door_after_pass: bool = False
+    #: Stopped in the doorway: how often it went on since the door was placed, and when it
+    #: stopped last (simulated time).
+    door_pushes: int = 0
+    door_blocked_at: float = 0.0
+    #: The door's placements of the last cycles: (time, the point in front, the heading through).
+    door_seen: list[tuple[float, tuple[float, float, float]]] = field(default_factory=list)
     door_waiting_since: float | None = None
     door_given_up_at: float = -1e9
     passed_heading: float | None = None
@@ -210,6 +237,10 @@ class Memory:
     exits_tried: int = 0
     #: Per floor, where the call button was last seen from near (odometry).
     button_seen_from: dict[int, Pose] = field(default_factory=dict)
+    #: Per floor, where the call button was last seen, and from where (odometry).
+    button_at: dict[int, tuple[tuple[float, float], tuple[float, float]]] = field(
+        default_factory=dict
+    )
     #: Where the call button was pushed from (odometry), to wait for a car a step back.
     called_from: Pose | None = None
     #: The floor a car was called on (until the robot leaves a car): only there can it be in one.
@@ -219,6 +250,9 @@ class Memory:
     moved_from: tuple[float, float, float] | None = None
     unstick_to: tuple[float, float] | None = None
     unstick_since: float = 0.0
+    #: How long unsticking may take, s; back along a route leg (avoiding what is in the way).
+    unstick_for: float = UNSTICK_S
+    unstick_back: bool = False
     #: Where the lab door's barcode was last seen (odometry), and from where.
     lab_door_at: tuple[float, float] | None = None
     lab_door_from: tuple[float, float] = (0.0, 0.0)
@@ -266,7 +300,7 @@ class Reactive(RouteFollower, Link):
     async def sense(self) -> Senses:
         """Runs one cycle and reads every percept, in one round trip.
 
-        A skill that faulted since the last look is switched on again (`Sequencer.on_fault`).
+        A skill that faulted since the last look is switched on again (`Link.on_fault`).
         """
         for fault in self.take_faults():
             await self.on_fault(fault)
@@ -416,7 +450,7 @@ class Reactive(RouteFollower, Link):
         if m.unstick_to is None or m.in_car:
             return False
         gx, gy = m.unstick_to
-        if s.t - m.unstick_since > UNSTICK_S or math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.2:
+        if s.t - m.unstick_since > m.unstick_for or math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.2:
             m.unstick_to, m.moved_from = None, None
             return False
         return True
@@ -584,10 +618,18 @@ class Reactive(RouteFollower, Link):
         )
 
     def get_unstuck(self, s: Senses) -> Action:
-        """Drives towards where the sonars read farthest (out of a corner, off clutter)."""
-        assert self.mem.unstick_to is not None
-        gx, gy = self.mem.unstick_to
-        return goto(gx, gy, ("unstick", self.mem.unstick_since), reverse_within=1.5)
+        """Drives to where unsticking goes (`watch_progress`).
+
+        Towards where the sonars read farthest (out of a corner, off clutter), or back along
+        a route leg's way, round what is in the way.
+        """
+        m = self.mem
+        assert m.unstick_to is not None
+        gx, gy = m.unstick_to
+        key = ("unstick", m.unstick_since)
+        if m.unstick_back:
+            return goto(gx, gy, key, avoid=True)
+        return goto(gx, gy, key, reverse_within=1.5)
 
     def home_on_button(self, s: Senses) -> Action:
         """Homes on this floor's call button (to push it, or to stand 1 m from it)."""
@@ -609,21 +651,42 @@ class Reactive(RouteFollower, Link):
         ):
             key = ("back to button", s.floor, seen_from.x, seen_from.y)
             return goto(seen_from.x, seen_from.y, key, avoid=True)
+        at = self.mem.button_at.get(s.floor)
+        if at is not None:
+            # Seen from farther only (someone stepped in front of it since, say): towards it.
+            back = self.to_sighting(s, *at, "button")
+            if back is not None:
+                return back
+            del self.mem.button_at[s.floor]
         return self.wander_about(s)
+
+    def to_sighting(
+        self, s: Senses, at: tuple[float, float], seen_from: tuple[float, float], what: str
+    ) -> Action | None:
+        """Back towards where a barcode was seen (``at``, from ``seen_from``), then faces it.
+
+        Up to `SIGHTING_SHORT_M` short of it along the line it was seen on, for at most
+        `SIGHTING_S` (since the rule in charge took over). None once there and facing it:
+        not in view from there, it is not where it was seen (or hidden); the caller forgets it.
+        """
+        (bx, by), (fx, fy) = at, seen_from
+        far = math.hypot(bx - fx, by - fy)
+        short = min(SIGHTING_SHORT_M, far)
+        gx, gy = bx - short * (bx - fx) / max(far, 1e-6), by - short * (by - fy) / max(far, 1e-6)
+        if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.3 and s.t - self.rule_since < SIGHTING_S:
+            return goto(gx, gy, (f"to {what}", bx, by), avoid=True)
+        off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
+        if abs(off) > 0.1:
+            return turn(off, (f"face {what}", bx, by), s.t)
+        return None
 
     def to_lab_door(self, s: Senses) -> Action:
         """Back towards where the lab door's barcode was seen, short of it, then faces it."""
         m = self.mem
         assert m.lab_door_at is not None
-        (bx, by), (fx, fy) = m.lab_door_at, m.lab_door_from
-        far = math.hypot(bx - fx, by - fy)
-        short = min(LAB_DOOR_SHORT_M, far)
-        gx, gy = bx - short * (bx - fx) / max(far, 1e-6), by - short * (by - fy) / max(far, 1e-6)
-        if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.3 and s.t - self.rule_since < 60.0:
-            return goto(gx, gy, ("to lab door", bx, by), avoid=True)
-        off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
-        if abs(off) > 0.1:
-            return turn(off, ("face lab door", bx, by), s.t)
+        back = self.to_sighting(s, m.lab_door_at, m.lab_door_from, "lab door")
+        if back is not None:
+            return back
         # There, facing it, and not in view: forget it (the search takes over).
         m.lab_door_at = None
         return Action(("runaway",), key="lab door not here")
@@ -655,6 +718,10 @@ class Reactive(RouteFollower, Link):
     def pass_door_action(self, s: Senses) -> Action:
         """In front of a door beside a barcode: to the opening, face it, through."""
         m = self.mem
+        if m.door_stage == "blocked":
+            if s.sonar[0] < DOOR_CLEAR_M and s.t - m.door_blocked_at < DOOR_BLOCKED_S:
+                return Action(("runaway",), key=("door blocked", m.door_pushes))
+            m.door_stage = "pass"
         if m.door_stage == "check":
             # In front of it and facing it: the opening straight ahead, else placed anew
             # from here (seen from aside, the first fix is rough).
@@ -672,24 +739,29 @@ class Reactive(RouteFollower, Link):
                     off = float(s.wall["normal"])
                     return turn(off, "square", s.t, every=5)
                 return self.wait_for_opening(s)
-            normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
-            ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)
-            c, sn = math.cos(s.pose.theta), math.sin(s.pose.theta)
-            goal = (s.pose.x + c * ax - sn * ay, s.pose.y + sn * ax + c * ay, s.pose.theta + normal)
+            goal = self.steady_door(s)
+            if goal is None:
+                return self.wait_for_opening(s)
             first = m.door_first
-            if first is not None and (
-                math.hypot(goal[0] - first[0], goal[1] - first[1]) > DOOR_MOVED_M
-                or abs(wrap(goal[2] - first[2])) > DOOR_TURNED_RAD
+            if (
+                m.door_after_pass
+                and first is not None
+                and (
+                    math.hypot(goal[0] - first[0], goal[1] - first[1]) > DOOR_MOVED_M
+                    or abs(wrap(goal[2] - first[2])) > DOOR_TURNED_RAD
+                )
             ):
-                # Placed anew (stopped short, or off to one side), the door is where it was
-                # first found: an opening elsewhere is another (the corridor seen from the
-                # doorway, a door across it), and going through it is no way into the room.
+                # Placed anew from the doorway (stopped short in it), the door is where it was
+                # placed from in front: an opening elsewhere is another (the corridor seen
+                # from the doorway, a door across it), and going through it is no way in.
                 return self.wait_for_opening(s)
             m.door_waiting_since = None
             m.door_fixes += 1
+            m.door_pushes = 0
             m.door_goal, m.door_stage = goal, "goto"
-            if first is None:
+            if not m.door_after_pass:
                 m.door_first = goal
+            m.door_after_pass = False
         gx, gy, heading = m.door_goal
         if m.door_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.12:
@@ -702,7 +774,40 @@ class Reactive(RouteFollower, Link):
                 return turn(off, ("door face", m.door_goal), s.t)
             m.door_stage = "check"
             return Action(("runaway",), key=("door check", m.door_goal))
-        return Action(("runaway", "pass_door"), key=("door pass", m.door_goal))
+        return Action(("runaway", "pass_door"), key=("door pass", m.door_goal, m.door_pushes))
+
+    def steady_door(self, s: Senses) -> tuple[float, float, float] | None:
+        """The door from the opening seen now, if seen steadily (`DOOR_FIX_S`, `DOOR_FIX_M`).
+
+        The point `DOOR_STANDOFF` in front of the opening and the heading through it, in the
+        odometry frame: their mean over the last cycles, each of which saw the opening near
+        it. None while the last cycles disagree (a lost echo, a dead sonar not yet found,
+        someone walking by), or have not seen it long enough.
+        """
+        m, o = self.mem, s.opening
+        normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
+        ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)
+        c, sn = math.cos(s.pose.theta), math.sin(s.pose.theta)
+        now = (s.pose.x + c * ax - sn * ay, s.pose.y + sn * ax + c * ay, s.pose.theta + normal)
+        m.door_seen = [(t, g) for t, g in m.door_seen if s.t - t < DOOR_FIX_S + 0.05]
+        m.door_seen.append((s.t, now))
+        # A cycle without the opening breaks the run (`pass_door_action` calls this only
+        # when it sees one): the time of each seen must follow the one before.
+        times = [t for t, _ in m.door_seen]
+        if times[-1] - times[0] < DOOR_FIX_S - 0.05 or any(
+            b - a > 0.15 for a, b in zip(times, times[1:], strict=False)
+        ):
+            return None
+        n = len(m.door_seen)
+        gx = sum(g[0] for _, g in m.door_seen) / n
+        gy = sum(g[1] for _, g in m.door_seen) / n
+        gh = math.atan2(
+            sum(math.sin(g[2]) for _, g in m.door_seen), sum(math.cos(g[2]) for _, g in m.door_seen)
+        )
+        if any(math.hypot(g[0] - gx, g[1] - gy) > DOOR_FIX_M for _, g in m.door_seen):
+            return None
+        m.door_seen = []
+        return (gx, gy, gh)
 
     def wait_for_opening(self, s: Senses) -> Action:
         """Stands in front of the door until it opens; gives up after `DOOR_WAIT_S`."""
@@ -712,6 +817,7 @@ class Reactive(RouteFollower, Link):
         elif s.t - m.door_waiting_since > DOOR_WAIT_S:
             # No door here after all (or shut for long): leave it, look again later.
             m.door_given_up_at, m.door_waiting_since, m.door_first = s.t, None, None
+            m.door_after_pass = False
         return Action(("runaway",), key="wait for opening")
 
     def through_door(self, s: Senses) -> bool:
@@ -723,9 +829,17 @@ class Reactive(RouteFollower, Link):
         went = (s.pose.x - gx) * math.cos(heading) + (s.pose.y - gy) * math.sin(heading)
         if went >= DOOR_STANDOFF + 0.4:
             m.door_goal, m.door_stage, m.door_fixes, m.door_first = None, "", 0, None
+            m.door_after_pass = False
             return True
+        if went >= DOOR_STANDOFF - 0.3 and m.door_pushes < DOOR_PUSHES:
+            # Stopped in the doorway: someone beyond, not the jambs (as the sequenced robot
+            # reads it). Placed anew from in there, the door would be anything; so the robot
+            # waits for the way ahead to clear, and goes on.
+            m.door_pushes += 1
+            m.door_stage, m.door_blocked_at = "blocked", s.t
+            return False
         # Stopped short (someone in the way, a jamb): place the door anew and go again.
-        m.door_goal, m.door_stage = None, ""
+        m.door_goal, m.door_stage, m.door_after_pass = None, "", True
         return False
 
     # ----- memory updates from what was sensed -------------------------------------------------
@@ -734,8 +848,12 @@ class Reactive(RouteFollower, Link):
         """Updates the little state from this cycle's senses (events the skills report)."""
         m = self.mem
         b = s.barcodes.get(self.button(s.floor))
-        if b is not None and b[1] < 1.6 and abs(b[0]) < 0.3 and not m.in_car:
-            m.button_seen_from[s.floor] = s.pose
+        if b is not None and not m.in_car:
+            if b[1] < 1.6 and abs(b[0]) < 0.3:
+                m.button_seen_from[s.floor] = s.pose
+            a = s.pose.theta + b[0]
+            at = (s.pose.x + b[1] * math.cos(a), s.pose.y + b[1] * math.sin(a))
+            m.button_at[s.floor] = (at, (s.pose.x, s.pose.y))
         self.watch_progress(s)
         d = s.barcodes.get(self.m.lab_door_barcode)
         if d is not None and not m.out_of_lab:
@@ -795,16 +913,30 @@ class Reactive(RouteFollower, Link):
                 m.exits_tried += 1
             else:
                 m.in_car, m.lobby_seen_on, m.route, m.called_on = False, None, None, None
-        if self.rule_name == "pass lab door" and m.door_goal is not None and self.through_door(s):
-            # The leg to the lobby begins facing out through the door, as now.
-            m.passed_heading, m.out_of_lab = s.pose.theta, True
+        door = m.door_goal
+        if self.rule_name == "pass lab door" and door is not None and self.through_door(s):
+            # The leg to the lobby begins facing out through the door: the heading the robot
+            # faced to pass it (as the sequenced robot), not the one it ended with (centring
+            # between the jambs, or avoiding someone beyond, turns it).
+            m.passed_heading, m.out_of_lab = door[2], True
         if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
             m.called_at = None
 
     def watch_progress(self, s: Senses) -> None:
-        """Notes where the robot got to; stuck for long under a moving rule, where to go."""
+        """Notes where the robot got to; stuck for long under a moving rule, where to go.
+
+        Following a corridor on a route leg, what counts is the way made along it: no new way
+        for `STUCK_S` (people in the way; or, pushed round them, into a room's doorway, where
+        the hallway follower goes round the room), the robot goes back along its trail.
+        """
         m, p = self.mem, s.pose
-        moving = (self.rule_name in MOVING_RULES or self.following(s)) and not m.in_car
+        r = m.route
+        following = self.following(s) and not m.in_car
+        if following and r is not None and r.trail:
+            if m.unstick_to is None and s.t - r.progress_at > STUCK_S:
+                self.unstick_back_along(s, r)
+            return
+        moving = (self.rule_name in MOVING_RULES or following) and not m.in_car
         if (
             not moving
             or m.moved_from is None
@@ -814,14 +946,40 @@ class Reactive(RouteFollower, Link):
                 m.moved_from = (s.t, p.x, p.y)
             return
         if m.unstick_to is None and s.t - m.moved_from[0] > STUCK_S:
-            # The freest way: the sonar whose own and neighbours' nearest echo is farthest.
-            free = [min(s.sonar[(i + k) % SONARS] for k in (-1, 0, 1)) for i in range(SONARS)]
-            i = max(range(SONARS), key=lambda j: free[j])
-            go = max(0.3, min(UNSTICK_M, free[i] - 0.6))
-            a = p.theta + 2 * math.pi * i / SONARS
-            m.unstick_to, m.unstick_since = (p.x + go * math.cos(a), p.y + go * math.sin(a)), s.t
-            if self.debug:
-                print(f"[{s.t:7.1f} s]   stuck: {go:.1f} m towards {math.degrees(a):.0f} deg")
+            self.unstick_freest(s)
+
+    def unstick_freest(self, s: Senses) -> None:
+        """Unsticks towards the freest way, up to `UNSTICK_M`.
+
+        The freest way: the sonar whose own and neighbours' nearest echo is farthest.
+        """
+        m, p = self.mem, s.pose
+        free = [min(s.sonar[(i + k) % SONARS] for k in (-1, 0, 1)) for i in range(SONARS)]
+        i = max(range(SONARS), key=lambda j: free[j])
+        go = max(0.3, min(UNSTICK_M, free[i] - 0.6))
+        a = p.theta + 2 * math.pi * i / SONARS
+        m.unstick_to, m.unstick_since = (p.x + go * math.cos(a), p.y + go * math.sin(a)), s.t
+        m.unstick_for, m.unstick_back = UNSTICK_S, False
+        if self.debug:
+            print(f"[{s.t:7.1f} s]   stuck: {go:.1f} m towards {math.degrees(a):.0f} deg")
+
+    def unstick_back_along(self, s: Senses, r: RouteState) -> None:
+        """Unsticks back along the leg's trail, to where the way made was `TRAIL_BACK_M` less.
+
+        That is a place the robot stood in the corridor, on the way: not the freest way,
+        which in a corridor blocked by people is often a room's door.
+        """
+        m, p = self.mem, s.pose
+        r.progress_at = s.t  # the way gets another `STUCK_S` after this
+        back = [(x, y) for went, x, y in r.trail if went <= r.trail[-1][0] - TRAIL_BACK_M]
+        gx, gy = back[-1] if back else r.trail[0][1:]
+        if math.hypot(p.x - gx, p.y - gy) < 0.3:  # stuck where the leg began: the freest way
+            self.unstick_freest(s)
+            return
+        m.unstick_to, m.unstick_since = (gx, gy), s.t
+        m.unstick_for, m.unstick_back = TRAIL_UNSTICK_S, True
+        if self.debug:
+            print(f"[{s.t:7.1f} s]   no way made: back along the way to ({gx:.1f}, {gy:.1f})")
 
     def following(self, s: Senses) -> bool:
         """On a route leg, following a corridor (not homing on a barcode, nor at a door)."""

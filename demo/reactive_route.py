@@ -31,9 +31,8 @@ JUNCTION_ON_M = 0.7
 #: The first opening of a step is counted only this far past its blind distance, m. The
 #: side sonars see a mouth about 0.6-0.8 m before its near edge.
 FIRST_COUNT_M = 0.3
-#: Following to a wall, the robot counts a wall ahead only facing this near the way, rad,
-#: and once it has been there this long (s), with no gap longer than `WALL_GAP_S` (s).
-ALONG_WAY_RAD = 0.6
+#: Following to a wall, the robot counts a wall across the way (`wall_across`) once it has
+#: been there this long (s), with no gap longer than `WALL_GAP_S` (s).
 WALL_STEADY_S = 3.0
 WALL_GAP_S = 1.0
 #: Turned into a junction, the robot drives this far into the side corridor, m.
@@ -47,6 +46,8 @@ DOOR_STANDOFF = 0.9
 LOST_WAY_M = 1.0
 WRONG_WAY_RAD = math.pi / 2
 BACK_ON_WAY_RAD = 0.3
+#: A step's trail (`RouteState.trail`) notes where the robot is every this much new way, m.
+TRAIL_STEP_M = 0.25
 
 
 @dataclass
@@ -112,6 +113,10 @@ class RouteState:
     turning_back: bool = False
     #: The most way made on this step so far, m.
     best_went: float = 0.0
+    #: Where the robot was each time it had made `TRAIL_STEP_M` more way on this step than ever
+    #: before (way made, x, y; odometry), and when it last did: unsticking goes back along it.
+    trail: list[tuple[float, float, float]] = field(default_factory=list)
+    progress_at: float = 0.0
     #: Since when a wall has been across the way (None: none now), and when it last was.
     wall_since: float | None = None
     wall_seen: float = 0.0
@@ -199,6 +204,7 @@ class RouteFollower:
             r.start, r.count, r.stage = s.pose, 0, "follow"
             r.last_side, r.counted_at = False, None
             r.turning_back, r.best_went, r.wall_since = False, 0.0, None
+            r.trail, r.progress_at = [(0.0, s.pose.x, s.pose.y)], s.t
             if r.heading is None:
                 r.heading = s.pose.theta
         if step.get("home") is not None:
@@ -234,10 +240,14 @@ class RouteFollower:
                 if homes:
                     r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
                     self.mem.door_goal, self.mem.door_stage = None, ""
-                    self.mem.door_first = None
+                    self.mem.door_first, self.mem.door_after_pass = None, False
                     return Action(("runaway",), key=("door again", s.t))
             return self.pass_door_action(s)
         if r.stage == "follow" and step.get("follow"):
+            went = self.way_made(r, s)
+            if r.trail and went > r.trail[-1][0] + TRAIL_STEP_M:
+                r.trail.append((went, s.pose.x, s.pose.y))
+                r.progress_at = s.t
             if r.heading is not None:
                 # Going back along the corridor (avoidance turned the robot round someone):
                 # the hallway follower would take it back the way it came. Turn to the way.
@@ -351,12 +361,17 @@ class RouteFollower:
     def wall_across(self, r: RouteState, s: Senses) -> bool:
         """A wall across the way ahead (not clutter, nor a side wall avoidance turned to).
 
-        The front sonar and both its neighbours read near, and the robot faces along the way.
+        The sonar pointing along the way (the step's heading, wherever the robot faces) and
+        two either side of it read near. At a corridor's end the hallway follower turns the
+        robot into one of the ways off it, and the wall across is then beside it. Along a
+        corridor the sonars 15 and 30 degrees off the way see down it; someone standing in
+        the way is too narrow to reach the sonars 30 degrees off it.
         """
-        if r.heading is not None and abs(wrap(s.pose.theta - r.heading)) > ALONG_WAY_RAD:
-            return False
-        front = (s.sonar[-1], s.sonar[0], s.sonar[1])
-        return s.sonar[0] < WALL_AHEAD_M and max(front) < WALL_AHEAD_M + 0.3
+        rel = wrap(r.heading - s.pose.theta) if r.heading is not None else 0.0
+        n = len(s.sonar)
+        i = round(rel / (2 * math.pi / n)) % n
+        way = [s.sonar[(i + k) % n] for k in range(-2, 3)]
+        return s.sonar[i] < WALL_AHEAD_M and max(way) < WALL_AHEAD_M + 0.4
 
     def next_step(self, r: RouteState, s: Senses) -> Action:
         """Moves on to the route's next step."""
