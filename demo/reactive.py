@@ -913,12 +913,12 @@ class Reactive(RouteFollower, Link):
                 m.exits_tried += 1
             else:
                 m.in_car, m.lobby_seen_on, m.route, m.called_on = False, None, None, None
-        door = m.door_goal
-        if self.rule_name == "pass lab door" and door is not None and self.through_door(s):
+        lab_door = m.door_goal
+        if self.rule_name == "pass lab door" and lab_door is not None and self.through_door(s):
             # The leg to the lobby begins facing out through the door: the heading the robot
             # faced to pass it (as the sequenced robot), not the one it ended with (centring
             # between the jambs, or avoiding someone beyond, turns it).
-            m.passed_heading, m.out_of_lab = door[2], True
+            m.passed_heading, m.out_of_lab = lab_door[2], True
         if m.called_at is not None and s.t - m.called_at >= CALL_AGAIN_S and not m.in_car:
             m.called_at = None
 
