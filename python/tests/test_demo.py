@@ -254,6 +254,9 @@ def test_the_reactive_robot_follows_the_office_route(seed: int, task: str, tmp_p
         20000,
         # a person across the way ended `until: wall` (a wall now counts once it stayed 3 s)
         20012,
+        # a dead sonar not yet found placed the lab door 1.5 m off, and every later placement
+        # was held to that first one: the robot waited at the lab's wall for the half hour
+        22010,
     ],
 )
 def test_the_reactive_robot_delivers_on_the_hard_set_where_it_once_failed(
