@@ -47,7 +47,7 @@ KS = (1, 2, 4, 8)
 #: The link layer both designs run on (demo/link.py) is counted for neither.
 DESIGN_SOURCES: dict[str, tuple[str, ...]] = {
     "sequenced": ("demo/deliver.py", "demo/sequencing.py", "demo/routes.py"),
-    "reactive": ("demo/reactive.py", "demo/reactive_route.py"),
+    "reactive": ("demo/reactive.py", "demo/reactive_route.py", "demo/reactive_car.py"),
 }
 RUNS_FILE = "experiment-runs.jsonl"
 

@@ -56,7 +56,7 @@ if [[ ${1:-} == test ]]; then
     ruff check python demo scripts examples bench/python
     ruff format --check python demo scripts examples bench/python
     say "mypy --strict"
-    mypy python/situate demo/deliver.py demo/link.py demo/sequencing.py demo/routes.py demo/reactive.py demo/reactive_route.py scripts/experiment.py scripts/experiment_report.py scripts/delivery.py
+    mypy python/situate demo/deliver.py demo/link.py demo/sequencing.py demo/routes.py demo/reactive.py demo/reactive_route.py demo/reactive_car.py scripts/experiment.py scripts/experiment_report.py scripts/delivery.py
     say "pytest"
     pytest -q python/tests
 fi

@@ -19,13 +19,12 @@ from deliver import Mission  # noqa: E402
 from link import SONARS, Pose  # noqa: E402
 from reactive import (  # noqa: E402
     DOOR_PUSHES,
-    PANEL_LOST_S,
-    PATROL_HALF_M,
     SIGHTING_SHORT_M,
     STUCK_S,
     Reactive,
     Senses,
 )
+from reactive_car import PANEL_LOST_S, PATROL_HALF_M  # noqa: E402
 from reactive_route import RouteState  # noqa: E402
 
 ROUTE: dict[str, list[dict[str, Any]]] = {
