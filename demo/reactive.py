@@ -86,6 +86,8 @@ SETTINGS = {
     # goes): stopped in the door's mouth, the hallway follower may take the door for the way.
     ("pass_door", "distance"): DOOR_STANDOFF + 1.1,
 }
+#: Homing to push a call button, the robot goes this last bit without runaway, m.
+BUTTON_LAST_M = 1.0
 #: Side sonars reading farther than this see a corridor's mouth abeam, m.
 MOUTH_M = 2.6
 #: In front of a barcode, the robot waits this long for the door beside it to show, s: as
@@ -214,7 +216,11 @@ class Memory:
     turned_in_car: bool = False
     #: In a car, the heading out through its door (odometry).
     door_heading: float | None = None
-    exits_tried: int = 0
+    #: Riding, facing the car's door: how far ahead it is (its reading while shut), m; where
+    #: the robot began to leave the car (odometry), and whether `std.leave_car` stopped short.
+    car_door_ahead: float = 1.2
+    leave_from: tuple[float, float] | None = None
+    exit_stopped: bool = False
     #: Per floor, where the call button was last seen from near (odometry).
     button_seen_from: dict[int, Pose] = field(default_factory=dict)
     #: Per floor, where the call button was last seen, and from where (odometry).
@@ -225,6 +231,16 @@ class Memory:
     called_from: Pose | None = None
     #: The floor a car was called on (until the robot leaves a car): only there can it be in one.
     called_on: int | None = None
+    #: The lobby's walls a car's door may be in, found on the floor called on: the button's
+    #: (key 0) and the walls at its ends (1: to the left facing the button's wall, -1: to the
+    #: right); each a point on it and the heading towards it (odometry).
+    lobby_walls: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    #: The patrol waiting for a car: its leg (even: to the left facing the button's wall), and
+    #: since when (simulated time).
+    patrol_leg: int = 0
+    patrol_since: float = 0.0
+    #: The call button's wall as fitted in the last few seconds: (time, its normal's heading).
+    button_walls: list[tuple[float, float]] = field(default_factory=list)
     #: Where the robot was when it last got 1 m away from the place before, and when
     #: (odometry, simulated time); unsticking: where to, and since when.
     moved_from: tuple[float, float, float] | None = None
@@ -472,10 +488,15 @@ class Reactive(CarRider, RouteFollower, Link):
         code = self.button(s.floor)
         calling = s.floor != self.stop_floor()
         stop = PUSH_M - 0.05 if calling else 1.0
+        # The last metre to push it, without runaway, as the sequenced robot: it keeps the
+        # robot 0.3 m off the wall, which it must come within 0.2 m of (come aslant, say from
+        # a car that did not open, it held the robot short for a minute at a time).
+        b = s.barcodes.get(code)
+        last = calling and b is not None and b[1] < BUTTON_LAST_M
         return Action(
-            ("runaway", "track_barcode", "home"),
+            ("track_barcode", "home") if last else ("runaway", "track_barcode", "home"),
             {("track_barcode", "id"): code, ("home", "stop_distance"): stop},
-            key=("home", code, stop),
+            key=("home", code, stop, last),
         )
 
     def look_for_button(self, s: Senses) -> Action:

@@ -8,74 +8,15 @@ behaviour in the simulator is covered by `test_demo.py`'s reactive runs.
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 from typing import Any
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "demo"))  # the demo's modules import each other by name
-
-from deliver import Mission  # noqa: E402
-from link import SONARS, Pose  # noqa: E402
-from reactive import (  # noqa: E402
-    DOOR_PUSHES,
-    SIGHTING_SHORT_M,
-    STUCK_S,
-    Reactive,
-    Senses,
-)
-from reactive_car import PANEL_LOST_S, PATROL_HALF_M  # noqa: E402
-from reactive_route import RouteState  # noqa: E402
-
-ROUTE: dict[str, list[dict[str, Any]]] = {
-    "button_to_office": [
-        {"turn": "back"},
-        {"follow": "hallway", "until": "wall", "turn": "left"},
-        {"follow": "hallway", "until": "barcode", "barcode": 40},
-        {"home": 40},
-        {"pass": "door"},
-    ]
-}
-
-
-def _robot() -> Reactive:
-    mission = Mission(
-        goal_floor=2,
-        start_floor=0,
-        lab_door_barcode=10,
-        call_button_barcode=30,
-        office_barcode=50,
-        car_barcode_first=201,
-        cars=2,
-        message="hello",
-        route=ROUTE,
-        goal_button_barcode=32,
-        lobbies={0: 30, 1: 31, 2: 32},
-    )
-    return Reactive(None, mission, [("office", 2)], quiet=True)  # type: ignore[arg-type]
-
-
-def _senses(t: float, **kw: Any) -> Senses:
-    s: dict[str, Any] = {
-        "t": t,
-        "pose": Pose(0.0, 0.0, 0.0),
-        "sonar": [4.0] * SONARS,
-        "barcodes": {},
-        "floor": 0,
-        "presses": 0,
-        "said": 0,
-        "junction": {},
-        "door": {},
-        "opened": {},
-        "car": 0,
-        "opening": {},
-        "wall": {},
-        "door_passed": False,
-        "car_entered": False,
-        "car_exited": False,
-    }
-    s.update(kw)
-    return Senses(**s)
+import reactive_support  # noqa: F401  (first: puts demo/ on the path)
+from link import SONARS, Pose
+from reactive import DOOR_PUSHES, SIGHTING_SHORT_M, STUCK_S, Reactive
+from reactive_car import PANEL_LOST_S, PATROL_MAX_M
+from reactive_route import RouteState
+from reactive_support import robot as _robot
+from reactive_support import senses as _senses
 
 
 def test_a_car_whose_panel_never_shows_is_no_car() -> None:
@@ -167,7 +108,7 @@ def test_waiting_for_a_car_walks_back_without_turning_round() -> None:
     r.mem.called_from = Pose(0.0, 0.0, math.pi / 2)
     r.rule_since = 0.0
     action = r.wait_for_car(_senses(20.0))
-    assert action.params[("home_position", "reverse_within")] >= 2 * PATROL_HALF_M
+    assert action.params[("home_position", "reverse_within")] >= 2 * PATROL_MAX_M
 
 
 def _place(r: Reactive, t0: float, opening: dict[str, Any], cycles: int = 6) -> float:
