@@ -388,9 +388,9 @@ class CarRider:
         """The call button's wall, having pushed it: its normal's heading (odometry).
 
         The mean of its last fits (`note_button_wall`): the robot may have come to the button
-        aslant, and pushed it from up to 25 degrees off. None: the wall fitted ahead if
-        within `BUTTON_WALL_RAD` of ahead (a fit farther off is another wall, a side wall
-        near the corner), else straight ahead, the best guess.
+        aslant, and pushed it from up to 25 degrees off. With no fit noted, the wall fitted
+        ahead if within `BUTTON_WALL_RAD` of ahead (a fit farther off is another wall, a side
+        wall near the corner), else straight ahead, the best guess.
         """
         seen = self.mem.button_walls
         if seen:
@@ -405,7 +405,7 @@ class CarRider:
 
         Waiting for a car, the robot walks along the button's wall: the sonar nearest each way
         along it reads the wall at that end, square across its axis (`seen_wall_ends_at`: not
-        someone standing there), from up to 3.6 m.
+        someone standing there), from `END_WALL_FROM_M` to 3.6 m.
         """
         m, p = self.mem, s.pose
         b = m.called_from
