@@ -22,7 +22,7 @@ import contextlib
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -73,6 +73,17 @@ def wrap(a: float) -> float:
 def bearing_of(i: int) -> float:
     """Bearing of sonar ``i`` in the robot frame (sonar 0 ahead, counter-clockwise)."""
     return wrap(i * 2 * math.pi / SONARS)
+
+
+def sonar_toward(bearing: float) -> int:
+    """The sonar whose axis is nearest ``bearing`` (rad, robot frame)."""
+    return round(wrap(bearing) / (2 * math.pi / SONARS)) % SONARS
+
+
+def mean_heading(headings: Iterable[float]) -> float:
+    """The circular mean of ``headings`` (rad): right across the ±pi seam too."""
+    hs = list(headings)
+    return math.atan2(sum(math.sin(h) for h in hs), sum(math.cos(h) for h in hs))
 
 
 class Link:

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deliver import NORMAL, SKILLS, Mission, Stop
-from link import SONARS, Link, OutOfTime, Pose, wrap
+from link import SONARS, Link, OutOfTime, Pose, mean_heading, wrap
 from reactive_car import CarRider
 from reactive_route import (
     DOOR_STANDOFF,
@@ -658,9 +658,7 @@ class Reactive(CarRider, RouteFollower, Link):
         n = len(m.door_seen)
         gx = sum(g[0] for _, g in m.door_seen) / n
         gy = sum(g[1] for _, g in m.door_seen) / n
-        gh = math.atan2(
-            sum(math.sin(g[2]) for _, g in m.door_seen), sum(math.cos(g[2]) for _, g in m.door_seen)
-        )
+        gh = mean_heading(g[2] for _, g in m.door_seen)
         if any(math.hypot(g[0] - gx, g[1] - gy) > DOOR_FIX_M for _, g in m.door_seen):
             return None
         m.door_seen = []

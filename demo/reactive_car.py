@@ -13,7 +13,7 @@ import math
 from typing import TYPE_CHECKING
 
 from deliver import OPENED_ON_WALL_M, seen_wall_ends_at
-from link import SONARS, Pose, bearing_of, wrap
+from link import Pose, bearing_of, mean_heading, sonar_toward, wrap
 from reactive_route import PUSH_M, Action, goto, turn
 
 if TYPE_CHECKING:
@@ -394,9 +394,7 @@ class CarRider:
         """
         seen = self.mem.button_walls
         if seen:
-            x = sum(math.cos(h) for _, h in seen)
-            y = sum(math.sin(h) for _, h in seen)
-            return math.atan2(y, x)
+            return mean_heading(h for _, h in seen)
         fitted = float(s.wall.get("normal", 0.0)) if s.wall.get("seen") else 0.0
         return wrap(s.pose.theta + (fitted if abs(fitted) < BUTTON_WALL_RAD else 0.0))
 
@@ -413,7 +411,7 @@ class CarRider:
             return
         for side in (1, -1):
             way = wrap(b.theta + side * math.pi / 2)
-            i = round(wrap(way - p.theta) / (2 * math.pi / SONARS)) % SONARS
+            i = sonar_toward(way - p.theta)
             off = wrap(p.theta + bearing_of(i) - way)
             near = s.sonar[i] < END_WALL_FROM_M  # someone near fills three sonars' view
             if abs(off) < END_WALL_AIM_RAD and not near and seen_wall_ends_at(s.sonar, i):

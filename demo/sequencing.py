@@ -18,7 +18,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from link import SONARS, Link, bearing_of, wrap
+from link import SONARS, Link, bearing_of, sonar_toward, wrap
 
 import situate
 
@@ -140,7 +140,7 @@ class Sequencer(Link):
         ranges = await self.sonar()
 
         def free(b: float) -> float:
-            i = round(wrap(b) / (2 * math.pi / SONARS)) % SONARS
+            i = sonar_toward(b)
             return min(ranges[(i + k) % SONARS] for k in (-1, 0, 1))
 
         left, right = free(bearing + math.pi / 2), free(bearing - math.pi / 2)
