@@ -80,6 +80,17 @@ def sonar_toward(bearing: float) -> int:
     return round(wrap(bearing) / (2 * math.pi / SONARS)) % SONARS
 
 
+def live_sonar_ahead(dead_mask: int) -> int:
+    """The sonar nearest ahead that is not dead (bit i of ``dead_mask``: sonar i is dead).
+
+    `std.sonar_filter` fills a dead sonar in with the nearer of its neighbours' readings: in
+    a car facing its door, those see the jambs, and the door never reads open. Sonar 0 if
+    all are dead.
+    """
+    live = [k for k in range(SONARS) if not dead_mask >> k & 1]
+    return min(live, key=lambda k: abs(bearing_of(k))) if live else 0
+
+
 def mean_heading(headings: Iterable[float]) -> float:
     """The circular mean of ``headings`` (rad): right across the ±pi seam too."""
     hs = list(headings)

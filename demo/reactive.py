@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deliver import NORMAL, SKILLS, Mission, Stop
-from link import SONARS, Link, OutOfTime, Pose, mean_heading, wrap
-from reactive_car import CarRider
+from link import SONARS, Link, OutOfTime, Pose, live_sonar_ahead, mean_heading, wrap
+from reactive_car import BUTTON_ON_WALL_M, CarRider, wall_through
 from reactive_route import (
     DOOR_STANDOFF,
     HOMED_M,
@@ -45,6 +45,7 @@ from reactive_route import (
     goto,
     turn,
 )
+from sequencing import DOOR_BESIDE_BARCODE_M
 from sequencing import DOOR_WAIT_S as SEQUENCED_DOOR_WAIT_S
 
 import situate
@@ -62,6 +63,7 @@ PERCEPTION = (
 PERCEPTS = (
     "odom",
     "sonar.range",
+    "sonar.health",
     "barcodes",
     "floor",
     "arm",
@@ -109,6 +111,22 @@ DOOR_BLOCKED_S = 10.0
 DOOR_PUSHES = 3
 #: Having given up on a door, the robot leaves it alone this long, s.
 DOOR_AGAIN_S = 40.0
+#: The lab door is in its barcode's wall: an opening whose line is farther than this from the
+#: barcode (m), or whose near jamb is farther along the wall than `DOOR_BESIDE_BARCODE_M` (the
+#: sequenced robot's bound), is some other way (the corridor seen from the doorway, say).
+DOOR_OFF_BARCODE_WALL_M = 0.5
+#: The lab door barcode's wall is noted from the fits ahead through the barcode, seen from
+#: this far to this far (m; the last `LAB_WALL_FITS` of them): nearer, the few echoes round the
+#: barcode are the door's jamb as much as the wall, and a line fitted through them may be
+#: the jamb's. A robot that homed on the barcode aslant, into the doorway, lines up this far
+#: square in front of the barcode (m).
+LAB_WALL_FROM_M = 1.5
+LAB_WALL_SEEN_M = 3.0
+LAB_WALL_FITS = 50
+LINE_UP_M = 1.0
+#: A door is square to its wall: placed farther off the lab door barcode's wall than this,
+#: it is placed aslant (the sequenced robot's bound for a wall square to a corridor), rad.
+DOOR_SQUARE_RAD = math.radians(25)
 #: Rules that move the robot about in the lab: under one of them, or following a corridor on
 #: a route leg, not 1 m from where it was this long ago, the robot is stuck (clutter, a corner,
 #: wedged in a doorway), s. (Homing on the call button and the route's other steps may take as
@@ -148,6 +166,12 @@ class Senses:
     door_passed: bool
     car_entered: bool
     car_exited: bool
+    #: The sonars `std.sonar_filter` takes to be dead (bit i: sonar i).
+    dead: int = 0
+
+    def ahead(self) -> int:
+        """The sonar to read what is straight ahead with: the live one nearest ahead."""
+        return live_sonar_ahead(self.dead)
 
     def enclosed(self, *, tight: bool = False) -> bool:
         """Walls near all round (inside a car: all but the door's sonars; ``tight``: all)."""
@@ -252,6 +276,10 @@ class Memory:
     #: Where the lab door's barcode was last seen (odometry), and from where.
     lab_door_at: tuple[float, float] | None = None
     lab_door_from: tuple[float, float] = (0.0, 0.0)
+    #: The lab door barcode's wall as fitted: its normal's headings (odometry), the last few.
+    lab_door_walls: list[float] = field(default_factory=list)
+    #: Whether the robot lined up in front of the lab door's barcode since it last gave up.
+    door_lined_up: bool = False
 
 
 class Reactive(CarRider, RouteFollower, Link):
@@ -339,6 +367,7 @@ class Reactive(CarRider, RouteFollower, Link):
             door_passed=bool(v["door_passed"]),
             car_entered=bool(v["car_entered"]),
             car_exited=bool(v["car_exited"]),
+            dead=int((v["sonar.health"] or {}).get("mask", 0)),
         )
 
     # ----- the next stop -------------------------------------------------------------------
@@ -437,11 +466,14 @@ class Reactive(CarRider, RouteFollower, Link):
         return self.mem.out_of_lab and not self.mem.in_car
 
     def at_lab_door(self, s: Senses) -> bool:
-        """In the lab, in front of the lab door's barcode (or passing the door)."""
-        if s.t - self.mem.door_given_up_at < DOOR_AGAIN_S:
+        """In the lab, in front of the lab door's barcode (or lining up, or passing the door)."""
+        m = self.mem
+        if s.t - m.door_given_up_at < DOOR_AGAIN_S:
             return False
-        return not self.mem.out_of_lab and (
-            self.mem.door_goal is not None or s.sees(self.m.lab_door_barcode, HOMED_M)
+        return not m.out_of_lab and (
+            m.door_goal is not None
+            or m.door_stage == "line up"
+            or s.sees(self.m.lab_door_barcode, HOMED_M)
         )
 
     def lab_door_known(self, s: Senses) -> bool:
@@ -575,6 +607,11 @@ class Reactive(CarRider, RouteFollower, Link):
     def pass_door_action(self, s: Senses) -> Action:
         """In front of a door beside a barcode: to the opening, face it, through."""
         m = self.mem
+        if m.door_stage == "line up":
+            step = self.line_up_on_lab_door(s)
+            if step is not None:
+                return step
+            m.door_stage, m.door_lined_up = "", True
         if m.door_stage == "blocked":
             if s.sonar[0] < DOOR_CLEAR_M and s.t - m.door_blocked_at < DOOR_BLOCKED_S:
                 return Action(("runaway",), key=("door blocked", m.door_pushes))
@@ -598,6 +635,25 @@ class Reactive(CarRider, RouteFollower, Link):
                 return self.wait_for_opening(s)
             goal = self.steady_door(s)
             if goal is None:
+                return self.wait_for_opening(s)
+            # The lab door (out of the lab, this is the office's, whose barcode's place the
+            # route's homing step does not keep).
+            at = m.lab_door_at if not m.out_of_lab else None
+            walls = m.lab_door_walls if not m.out_of_lab else []
+            if (at is not None and not beside_barcode(goal, float(o.get("width", 0.0)), at)) or (
+                walls and abs(wrap(goal[2] - mean_heading(walls))) > DOOR_SQUARE_RAD
+            ):
+                # Not the lab door's opening, or placed aslant: homed aslant into the doorway,
+                # the robot sees the corridor beyond, say, or the door's jambs askew. It lines
+                # up square in front of the barcode, once.
+                if self.debug:
+                    print(f"[{s.t:7.1f} s]   an opening off barcode {m.lab_door_at}: not its door")
+                if walls and not m.door_lined_up:
+                    m.door_stage, m.door_waiting_since = "line up", None
+                    step = self.line_up_on_lab_door(s)
+                    if step is not None:
+                        return step
+                    m.door_stage, m.door_lined_up = "", True
                 return self.wait_for_opening(s)
             first = m.door_first
             if (
@@ -632,6 +688,24 @@ class Reactive(CarRider, RouteFollower, Link):
             m.door_stage = "check"
             return Action(("runaway",), key=("door check", m.door_goal))
         return Action(("runaway", "pass_door"), key=("door pass", m.door_goal, m.door_pushes))
+
+    def line_up_on_lab_door(self, s: Senses) -> Action | None:
+        """To `LINE_UP_M` square in front of the lab door's barcode, facing its wall.
+
+        The wall is the mean of its fits (`remember`). None once there (or with no fit).
+        """
+        m = self.mem
+        if m.lab_door_at is None or not m.lab_door_walls:
+            return None
+        n = mean_heading(m.lab_door_walls)
+        bx, by = m.lab_door_at
+        tx, ty = bx - LINE_UP_M * math.cos(n), by - LINE_UP_M * math.sin(n)
+        if math.hypot(s.pose.x - tx, s.pose.y - ty) > 0.12:
+            return goto(tx, ty, ("line up", round(tx, 2), round(ty, 2)))
+        off = wrap(n - s.pose.theta)
+        if abs(off) > 0.06:
+            return turn(off, ("line up face", round(n, 2)), s.t)
+        return None
 
     def steady_door(self, s: Senses) -> tuple[float, float, float] | None:
         """The door from the opening seen now, if seen steadily (`DOOR_FIX_S`, `DOOR_FIX_M`).
@@ -672,6 +746,7 @@ class Reactive(CarRider, RouteFollower, Link):
         elif s.t - m.door_waiting_since > DOOR_WAIT_S:
             # No door here after all (or shut for long): leave it, look again later.
             m.door_given_up_at, m.door_waiting_since, m.door_first = s.t, None, None
+            m.door_lined_up = False
             m.door_after_pass = False
         return Action(("runaway",), key="wait for opening")
 
@@ -715,6 +790,10 @@ class Reactive(CarRider, RouteFollower, Link):
             a = s.pose.theta + d[0]
             m.lab_door_at = (s.pose.x + d[1] * math.cos(a), s.pose.y + d[1] * math.sin(a))
             m.lab_door_from = (s.pose.x, s.pose.y)
+            near = LAB_WALL_FROM_M <= d[1] <= LAB_WALL_SEEN_M
+            fitted = wall_through(d, s.wall, BUTTON_ON_WALL_M) if near else None
+            if fitted is not None:
+                m.lab_door_walls = [*m.lab_door_walls[-LAB_WALL_FITS + 1 :], s.pose.theta + fitted]
         made = s.said - m.said_at_start
         if made > m.made:
             m.made = made
@@ -843,3 +922,20 @@ class Reactive(CarRider, RouteFollower, Link):
         await self.use()
         await self.flush()
         await self.say(f"mission complete ({self.switches} rule switches)")
+
+
+def beside_barcode(
+    goal: tuple[float, float, float], width: float, code: tuple[float, float]
+) -> bool:
+    """Whether a door placed at ``goal`` is beside the barcode at ``code`` (odometry).
+
+    ``goal`` is the point `DOOR_STANDOFF` in front of the opening and the heading through it.
+    The barcode is on the opening's line (`DOOR_OFF_BARCODE_WALL_M`), and the opening's near
+    jamb is within `DOOR_BESIDE_BARCODE_M` of it along the wall (docs/maps.md: 0.1 to 0.6 m).
+    """
+    gx, gy, h = goal
+    dx = code[0] - (gx + DOOR_STANDOFF * math.cos(h))
+    dy = code[1] - (gy + DOOR_STANDOFF * math.sin(h))
+    across = dx * math.cos(h) + dy * math.sin(h)
+    along = abs(-dx * math.sin(h) + dy * math.cos(h)) - width / 2
+    return abs(across) < DOOR_OFF_BARCODE_WALL_M and along < DOOR_BESIDE_BARCODE_M

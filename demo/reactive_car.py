@@ -10,7 +10,7 @@ it from each cycle's senses.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from deliver import OPENED_ON_WALL_M, seen_wall_ends_at
 from link import Pose, bearing_of, mean_heading, sonar_toward, wrap
@@ -65,6 +65,19 @@ END_WALL_AIM_RAD = math.radians(8)
 END_WALL_FROM_M = 1.5
 
 
+def wall_through(code: tuple[float, float], wall: dict[str, Any], within: float) -> float | None:
+    """The wall fitted ahead (`std.fit_wall`), if a barcode seen is on it: its normal, rad.
+
+    ``code`` is the barcode's reading (bearing, distance; robot frame). It is on the wall if
+    it lies within ``within`` m of the wall's line; the normal is in the robot frame.
+    """
+    if not wall.get("seen"):
+        return None
+    fitted = float(wall.get("normal", 0.0))
+    off = code[1] * math.cos(code[0] - fitted) - float(wall.get("distance", 0.0))
+    return fitted if abs(fitted) < math.pi / 2 and abs(off) < within else None
+
+
 class CarRider:
     """Calls a car, gets in, rides and gets out; mixed into the reactive controller.
 
@@ -96,7 +109,7 @@ class CarRider:
             and self.mem.turned_in_car
             and s.floor == self.stop_floor()
             # The door open ahead; once going out, on out (the doors do not close on it).
-            and (s.sonar[0] > 2.2 or self.rule_name == "leave car")
+            and (s.sonar[s.ahead()] > 2.2 or self.rule_name == "leave car")
         )
 
     def riding(self, s: Senses) -> bool:
@@ -161,17 +174,22 @@ class CarRider:
         return Action(("runaway", "leave_car"), key=("leave car", m.leave_from))
 
     def ride(self, s: Senses) -> Action:
-        """Turns round to face the car's door (the panel's wall behind), then waits."""
+        """Turns round to face the car's door (the panel's wall behind), then waits.
+
+        It faces the door with the live sonar nearest ahead (`Senses.ahead`), as the sequenced
+        robot does: a dead sonar reads its neighbours' jambs, and the door never reads open.
+        """
         m = self.mem
         if m.door_heading is None:
             normal = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
             m.door_heading = wrap(s.pose.theta + normal + math.pi)
-        off = wrap(m.door_heading - s.pose.theta)
+        look = s.ahead()
+        off = wrap(m.door_heading - bearing_of(look) - s.pose.theta)
         if not m.turned_in_car and abs(off) > 0.08:
             return turn(off, "turn in car", s.t, runaway=True)
         m.turned_in_car = True
-        if s.sonar[0] < 2.2:  # the door shut ahead
-            m.car_door_ahead = s.sonar[0]
+        if s.sonar[look] < 2.2:  # the door shut ahead
+            m.car_door_ahead = s.sonar[look]
         return Action(("runaway",), key="ride")
 
     def push_floor(self, s: Senses) -> Action:
@@ -210,7 +228,7 @@ class CarRider:
                 m.faced_at = s.t
             if not door_ahead and s.t - m.faced_at < CAR_DOOR_LOOK_S:
                 return Action(("runaway",), key=("look for car door", m.opened))
-            if s.sonar[0] < 1.6 or not door_ahead:
+            if s.sonar[s.ahead()] < 1.6 or not door_ahead:
                 # No open door ahead: it closed meanwhile, or it was no car's door (someone
                 # who stood still and walked off reads as a way opening too, but into the
                 # lobby, with no wall ahead for a door to be in).
@@ -377,11 +395,10 @@ class CarRider:
         m = self.mem
         m.button_walls = [w for w in m.button_walls if s.t - w[0] < BUTTON_WALL_S]
         b = s.barcodes.get(self.button(s.floor))
-        if b is None or b[1] > BUTTON_WALL_SEEN_M or not s.wall.get("seen"):
+        if b is None or b[1] > BUTTON_WALL_SEEN_M:
             return
-        fitted = float(s.wall.get("normal", 0.0))
-        off = b[1] * math.cos(b[0] - fitted) - float(s.wall.get("distance", 0.0))
-        if abs(fitted) < math.pi / 2 and abs(off) < BUTTON_ON_WALL_M:
+        fitted = wall_through(b, s.wall, BUTTON_ON_WALL_M)
+        if fitted is not None:
             m.button_walls.append((s.t, wrap(s.pose.theta + fitted)))
 
     def button_wall(self, s: Senses) -> float:

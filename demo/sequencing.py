@@ -18,7 +18,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from link import SONARS, Link, bearing_of, sonar_toward, wrap
+from link import SONARS, Link, bearing_of, live_sonar_ahead, sonar_toward, wrap
 
 import situate
 
@@ -624,9 +624,7 @@ class Sequencer(Link):
     async def live_sonar_ahead(self) -> int:
         """The sonar nearest ahead that `std.sonar_filter` does not take to be dead."""
         health = await self.value("sonar.health")
-        mask = int(health["mask"]) if health else 0
-        live = [k for k in range(SONARS) if not mask >> k & 1]
-        return min(live, key=lambda k: abs(bearing_of(k))) if live else 0
+        return live_sonar_ahead(int(health["mask"]) if health else 0)
 
     async def enclosed(self) -> bool:
         """Whether walls are near all round (inside a car: all but the door's sonars)."""

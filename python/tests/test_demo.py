@@ -272,6 +272,27 @@ def test_the_reactive_robot_delivers_on_the_hard_set_where_it_once_failed(
 
 
 @needs_bin
+@pytest.mark.parametrize(
+    ("seed", "task", "hard"),
+    [
+        # homed on the lab door's barcode aslant, into the doorway: the corridor beyond was
+        # taken for the door, "passed" along it, and the route followed from there
+        (24000, "lobby:0", False),
+        # the same, with the door placed 37 degrees askew: the wall the barcode is on was
+        # fitted from 1.3 m, through the door's jamb (now from 1.5 m to 3 m only)
+        (24012, "lobby:-1", True),
+    ],
+)
+def test_the_reactive_robot_leaves_the_lab_where_it_once_failed(
+    seed: int, task: str, hard: bool, tmp_path: Path
+) -> None:
+    people = ["--people", "3", "--door-closures", "--dead-sonar", str(seed % 24)] if hard else []
+    building = str(_generated(seed, tmp_path))
+    out = demo(seed, map_file=building, extra=["--mode", "reactive", "--task", task, *people])
+    assert out["task_done"], out
+
+
+@needs_bin
 def test_a_seed_replays_exactly() -> None:
     a = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
     b = demo(5, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)

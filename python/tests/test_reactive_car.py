@@ -209,3 +209,24 @@ def test_the_patrol_goes_to_a_metre_short_of_each_end_wall() -> None:
     r.mem.patrol_leg = 0
     first = r.wait_for_car(senses(6.0, pose=Pose(-1.0, 0.0, 0.0)))
     assert abs(first.params[("home_position", "y")] - PATROL_HALF_M) < 1e-9
+
+
+def test_riding_with_the_front_sonar_dead_the_door_is_watched_with_a_live_one() -> None:
+    # Sonar 0 dead (the hard set's seed 24000): the sonar filter fills it in with the nearer
+    # of its neighbours, which see the car's jambs. The door never read open on the goal
+    # floor, and the robot rode the car for the rest of the run.
+    r = robot()
+    m = r.mem
+    m.in_car, m.pressed_floor, m.door_heading = True, r.stop_floor(), 0.0
+    action = r.ride(senses(1.0, dead=1))
+    assert action.params[("turn", "angle")] == -2 * math.pi / SONARS
+    assert not m.turned_in_car
+    turned = Pose(0.0, 0.0, -2 * math.pi / SONARS)  # sonar 1 (15 degrees left) ahead
+    r.ride(senses(2.0, pose=turned, dead=1))
+    assert m.turned_in_car
+    jambs = [1.5] * SONARS
+    jambs[1] = 4.0  # through the open door
+    assert r.car_arrived(senses(3.0, pose=turned, sonar=jambs, dead=1, floor=r.stop_floor()))
+    filled = [1.5] * SONARS
+    filled[0] = 4.0
+    assert not r.car_arrived(senses(3.0, pose=turned, sonar=filled, dead=1, floor=r.stop_floor()))
