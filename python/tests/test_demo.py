@@ -260,6 +260,9 @@ def test_the_reactive_robot_follows_the_office_route(seed: int, task: str, tmp_p
         # a lobby with four cars: car doors placed on the wrong wall again and again (now
         # only on the walls found: the button's, fitted as it homed, and the end walls)
         22016,
+        # sonar 0 dead: filled in from its neighbours, which saw the car's jambs, it never
+        # read the door open on the goal floor (now the live sonar nearest ahead watches it)
+        24000,
     ],
 )
 def test_the_reactive_robot_delivers_on_the_hard_set_where_it_once_failed(
