@@ -636,8 +636,8 @@ class Reactive(CarRider, RouteFollower, Link):
             goal = self.steady_door(s)
             if goal is None:
                 return self.wait_for_opening(s)
-            # The lab door (out of the lab, this is the office's, whose barcode's place the
-            # route's homing step does not keep).
+            # Checked against the lab door's barcode in the lab only: out of it, this is the
+            # office's door, which this check has not been tried on.
             at = m.lab_door_at if not m.out_of_lab else None
             walls = m.lab_door_walls if not m.out_of_lab else []
             if (at is not None and not beside_barcode(goal, float(o.get("width", 0.0)), at)) or (
