@@ -48,10 +48,6 @@ WRONG_WAY_RAD = math.pi / 2
 BACK_ON_WAY_RAD = 0.3
 #: A step's trail (`RouteState.trail`) notes where the robot is every this much new way, m.
 TRAIL_STEP_M = 0.25
-#: Homing on a route's barcode and losing it (seen too obliquely, near its wall), the robot
-#: goes this far square in front of where it was seen (m), for at most this long (s).
-LOST_CODE_M = 1.2
-LOST_CODE_S = 60.0
 
 
 @dataclass
@@ -124,10 +120,6 @@ class RouteState:
     #: Since when a wall has been across the way (None: none now), and when it last was.
     wall_since: float | None = None
     wall_seen: float = 0.0
-    #: Homing on a barcode: where it was last seen (odometry), and since when it is out of
-    #: view (None: in view).
-    code_at: tuple[float, float] | None = None
-    code_lost_at: float | None = None
 
     def square_before(
         self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
@@ -231,17 +223,12 @@ class RouteFollower:
                     return Action(("runaway",), key=("squaring", r.step))
                 return self.next_step(r, s)
             if s.sees(code):
-                b = s.barcodes[code]
-                at = s.pose.theta + b[0]
-                r.code_at = (s.pose.x + b[1] * math.cos(at), s.pose.y + b[1] * math.sin(at))
-                r.code_lost_at = None
                 return Action(
                     ("runaway", "track_barcode", "home"),
                     {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
                     key=("route home", code),
                 )
-            lost = self.in_front_of_lost(r, s, code)
-            return lost if lost is not None else self.wander_about(s)
+            return self.wander_about(s)
         if step.get("pass"):
             if self.through_door(s):
                 if r.leg == self.office_leg():
@@ -308,33 +295,6 @@ class RouteFollower:
                 if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
                     return goto(gx, gy, ("into mouth", r.step))
         return self.next_step(r, s)
-
-    def in_front_of_lost(self, r: RouteState, s: Senses, code: int) -> Action | None:
-        """To `LOST_CODE_M` square in front of a barcode lost while homing, facing its wall.
-
-        Homing brings the robot near the barcode's wall, where a barcode beside it is seen too
-        obliquely to read. It is on a wall of the corridor the route followed: its normal is
-        square to the route's heading, on the side it was seen. None once there and facing
-        it (not in view from there, it is forgotten), after `LOST_CODE_S`, or with no sighting.
-        """
-        if r.code_at is None or r.heading is None:
-            return None
-        if r.code_lost_at is None:
-            r.code_lost_at = s.t
-        bx, by = r.code_at
-        if s.t - r.code_lost_at > LOST_CODE_S:
-            r.code_at = None
-            return None
-        left = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - r.heading) > 0
-        n = wrap(r.heading + (math.pi / 2 if left else -math.pi / 2))
-        gx, gy = bx - LOST_CODE_M * math.cos(n), by - LOST_CODE_M * math.sin(n)
-        if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.2:
-            return goto(gx, gy, ("to lost barcode", code, round(gx, 1), round(gy, 1)), avoid=True)
-        off = wrap(n - s.pose.theta)
-        if abs(off) > 0.1:
-            return turn(off, ("face lost barcode", code), s.t)
-        r.code_at = None
-        return None
 
     def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
         """Whether a follow step's `until` holds (counting openings as they pass)."""

@@ -11,7 +11,7 @@ import math
 from typing import Any
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
-from link import SONARS, Pose, wrap
+from link import SONARS, Pose
 from reactive import DOOR_PUSHES, SIGHTING_SHORT_M, STUCK_S, Reactive
 from reactive_car import PANEL_LOST_S, PATROL_MAX_M
 from reactive_route import RouteState
@@ -354,20 +354,3 @@ def test_out_of_the_lab_a_door_is_not_held_to_the_lab_doors_barcode() -> None:
     aslant = {"seen": True, "width": 1.0, "normal": 0.6, "x": 3.0, "y": 2.0}
     _place(r, 10.0, aslant, cycles=7)
     assert r.mem.door_goal is not None
-
-
-def test_a_route_barcode_lost_while_homing_is_looked_for_square_in_front_of_its_wall() -> None:
-    # Homing on the office's barcode brought the robot near its wall, where it was seen too
-    # obliquely to read; the robot wandered for the rest of the half hour (24016).
-    r = _robot()
-    r.mem.route = RouteState("button_to_office", step=3, heading=math.pi)  # the home step
-    seen = (wrap(math.atan2(-1.0, -3.0) - math.pi), math.hypot(1.0, 3.0))
-    r.route_action(_senses(1.0, pose=Pose(0.0, 0.0, math.pi), barcodes={40: seen}))
-    lost = r.route_action(_senses(2.0, pose=Pose(-2.5, -0.6, -2.0)))
-    assert lost.key[0] == "to lost barcode"
-    # On the corridor's wall on the left (facing west): 1.2 m north of it, facing south.
-    assert abs(lost.params[("home_position", "x")] - -3.0) < 1e-9
-    assert abs(lost.params[("home_position", "y")] - 0.2) < 1e-9
-    there = r.route_action(_senses(3.0, pose=Pose(-3.0, 0.2, -math.pi / 2)))
-    assert r.mem.route.code_at is None  # not in view from in front of it: forgotten
-    assert there.key[0] in ("look", "wander")
