@@ -607,11 +607,8 @@ class Reactive(CarRider, RouteFollower, Link):
     def pass_door_action(self, s: Senses) -> Action:
         """In front of a door beside a barcode: to the opening, face it, through."""
         m = self.mem
-        if m.door_stage == "line up":
-            step = self.line_up_on_lab_door(s)
-            if step is not None:
-                return step
-            m.door_stage, m.door_lined_up = "", True
+        if m.door_stage == "line up" and (step := self.lining_up(s)) is not None:
+            return step
         if m.door_stage == "blocked":
             if s.sonar[0] < DOOR_CLEAR_M and s.t - m.door_blocked_at < DOOR_BLOCKED_S:
                 return Action(("runaway",), key=("door blocked", m.door_pushes))
@@ -650,10 +647,8 @@ class Reactive(CarRider, RouteFollower, Link):
                     print(f"[{s.t:7.1f} s]   an opening off barcode {m.lab_door_at}: not its door")
                 if walls and not m.door_lined_up:
                     m.door_stage, m.door_waiting_since = "line up", None
-                    step = self.line_up_on_lab_door(s)
-                    if step is not None:
+                    if (step := self.lining_up(s)) is not None:
                         return step
-                    m.door_stage, m.door_lined_up = "", True
                 return self.wait_for_opening(s)
             first = m.door_first
             if (
@@ -688,6 +683,13 @@ class Reactive(CarRider, RouteFollower, Link):
             m.door_stage = "check"
             return Action(("runaway",), key=("door check", m.door_goal))
         return Action(("runaway", "pass_door"), key=("door pass", m.door_goal, m.door_pushes))
+
+    def lining_up(self, s: Senses) -> Action | None:
+        """The line-up's next action; once lined up (None), the stage ends, and not again."""
+        step = self.line_up_on_lab_door(s)
+        if step is None:
+            self.mem.door_stage, self.mem.door_lined_up = "", True
+        return step
 
     def line_up_on_lab_door(self, s: Senses) -> Action | None:
         """To `LINE_UP_M` square in front of the lab door's barcode, facing its wall.
