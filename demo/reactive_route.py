@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from link import Pose, wrap
-from sequencing import WALL_AHEAD_M
+from sequencing import HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M, WALL_AHEAD_M
 
 if TYPE_CHECKING:
     from deliver import Mission
@@ -48,6 +48,12 @@ WRONG_WAY_RAD = math.pi / 2
 BACK_ON_WAY_RAD = 0.3
 #: A step's trail (`RouteState.trail`) notes where the robot is every this much new way, m.
 TRAIL_STEP_M = 0.25
+#: Homing on a route's barcode and losing it (seen too obliquely, near its wall), the robot
+#: goes this far square in front of where it was seen (m), for at most this long (s).
+LOST_CODE_M = 1.2
+LOST_CODE_S = 60.0
+#: Within this of where it squared up (m), and of the heading (rad), the robot is still there.
+SQUARED_HERE_M, SQUARED_HERE_RAD = 0.3, 0.35
 
 
 @dataclass
@@ -120,6 +126,17 @@ class RouteState:
     #: Since when a wall has been across the way (None: none now), and when it last was.
     wall_since: float | None = None
     wall_seen: float = 0.0
+    #: Squared before a door: the corridor's heading before squaring (`heading` is then the
+    #: wall's normal); a "door again" homes and squares along it again. None: not squared.
+    along: float | None = None
+    #: The door's last give-up handled (`Memory.door_given_up_at`), and whether the route's
+    #: hint was tried for this door.
+    given_up: float = -1e9
+    hinted: bool = False
+    #: Homing on a barcode: where it was last seen and its wall's normal, towards the wall
+    #: (odometry; None: not seen), and since when it is out of view (None: in view).
+    code_at: tuple[float, float, float] | None = None
+    code_lost_at: float | None = None
 
     def square_before(
         self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
@@ -133,6 +150,31 @@ class RouteState:
         cy = s.pose.y + barcode[1] * math.sin(at)
         self.heading, self.stage = heading, "square"
         self.square_at = (cx - standoff * math.cos(heading), cy - standoff * math.sin(heading))
+
+
+def squared_here(r: RouteState, s: Senses) -> bool:
+    """Whether the robot stands where it squared up in front of a barcode, facing its wall."""
+    if r.square_at is None or r.heading is None:
+        return False
+    near = math.hypot(s.pose.x - r.square_at[0], s.pose.y - r.square_at[1]) < SQUARED_HERE_M
+    return near and abs(wrap(r.heading - s.pose.theta)) < SQUARED_HERE_RAD
+
+
+def code_sighting(
+    r: RouteState, s: Senses, barcode: tuple[float, float]
+) -> tuple[float, float, float] | None:
+    """Where a route's barcode seen now is, and its wall's normal (towards it; odometry).
+
+    The barcode is on a wall of the corridor the route followed: its normal is square to
+    the corridor's heading (`RouteState.along` once squared up before, else the route's
+    heading), on the side it is seen from here. None without a heading.
+    """
+    heading = r.along if r.along is not None else r.heading
+    if heading is None:
+        return None
+    at = s.pose.theta + barcode[0]
+    n = wrap(heading + (math.pi / 2 if wrap(at - heading) > 0 else -math.pi / 2))
+    return (s.pose.x + barcode[1] * math.cos(at), s.pose.y + barcode[1] * math.sin(at), n)
 
 
 class RouteFollower:
@@ -212,33 +254,49 @@ class RouteFollower:
             if s.sees(code, HOMED_M) and abs(s.barcodes[code][0]) < 0.25:
                 door_next = any(x.get("pass") for x in steps[r.step + 1 :])
                 b = s.barcodes[code]
-                at = s.pose.theta + b[0]
                 if door_next and r.squared != r.step and r.heading is not None:
                     # A door beside the barcode: square in front of it first, so that the
-                    # door finder looks along its wall. The barcode is on a wall of the
-                    # corridor the route followed: its normal is square to the route's
-                    # heading, on the barcode's side.
-                    side = math.pi / 2 if wrap(at - r.heading) > 0 else -math.pi / 2
-                    r.square_before(s, b, wrap(r.heading + side), DOOR_STANDOFF)
+                    # door finder looks along its wall (`code_sighting` says which). Homing
+                    # again after a "door again", the corridor's heading is the one kept.
+                    r.along = r.heading if r.along is None else r.along
+                    sighting = code_sighting(r, s, b)
+                    assert sighting is not None
+                    r.square_before(s, b, sighting[2], DOOR_STANDOFF)
                     return Action(("runaway",), key=("squaring", r.step))
                 return self.next_step(r, s)
             if s.sees(code):
+                r.code_at, r.code_lost_at = code_sighting(r, s, s.barcodes[code]), None
                 return Action(
                     ("runaway", "track_barcode", "home"),
                     {("track_barcode", "id"): code, ("home", "stop_distance"): DOOR_STANDOFF},
                     key=("route home", code),
                 )
-            return self.wander_about(s)
+            lost = self.in_front_of_lost(r, s, code)
+            return lost if lost is not None else self.wander_about(s)
         if step.get("pass"):
             if self.through_door(s):
                 if r.leg == self.office_leg():
                     self.mem.in_office = True
+                r.along, r.hinted = None, False
                 return self.next_step(r, s)
-            if self.mem.door_given_up_at > s.t - 1.0:
+            if self.mem.door_given_up_at > max(s.t - 1.0, r.given_up):
+                r.given_up = self.mem.door_given_up_at
+                hint = next(
+                    (str(x["turn"]) for x in reversed(steps[: r.step]) if x.get("turn")), ""
+                )
+                if hint in ("left", "right") and not r.hinted and squared_here(r, s):
+                    # No opening in sight from in front of the barcode (a wide door beside it
+                    # is seen too obliquely from there): where the route's hint says, once, as
+                    # the sequenced robot does. In front of it, the door is placed anew.
+                    r.hinted = True
+                    self.door_by_hint(r, s, 1.0 if hint == "left" else -1.0)
+                    return Action(("runaway",), key=("door by hint", hint))
                 # No door showed here: back to the barcode's step, to home and square again.
                 homes = [n for n in range(r.step) if steps[n].get("home") is not None]
                 if homes:
                     r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
+                    # Homing again along the corridor, not the wall's normal squaring set.
+                    r.heading = r.along if r.along is not None else r.heading
                     self.mem.door_goal, self.mem.door_stage = None, ""
                     self.mem.door_first, self.mem.door_after_pass = None, False
                     return Action(("runaway",), key=("door again", s.t))
@@ -295,6 +353,45 @@ class RouteFollower:
                 if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
                     return goto(gx, gy, ("into mouth", r.step))
         return self.next_step(r, s)
+
+    def in_front_of_lost(self, r: RouteState, s: Senses, code: int) -> Action | None:
+        """To `LOST_CODE_M` square in front of a barcode lost while homing, facing its wall.
+
+        Homing brings the robot near the barcode's wall, where a barcode beside it is seen too
+        obliquely to read (`code_sighting`). None once there and facing it (not in view from
+        there, it is forgotten), after `LOST_CODE_S`, or with no sighting.
+        """
+        if r.code_at is None:
+            return None
+        if r.code_lost_at is None:
+            r.code_lost_at = s.t
+        bx, by, n = r.code_at
+        if s.t - r.code_lost_at > LOST_CODE_S:
+            r.code_at = None
+            return None
+        gx, gy = bx - LOST_CODE_M * math.cos(n), by - LOST_CODE_M * math.sin(n)
+        if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.2:
+            return goto(gx, gy, ("to lost barcode", code, round(gx, 1), round(gy, 1)), avoid=True)
+        off = wrap(n - s.pose.theta)
+        if abs(off) > 0.1:
+            return turn(off, ("face lost barcode", code), s.t)
+        r.code_at = None
+        return None
+
+    def door_by_hint(self, r: RouteState, s: Senses, side: float) -> None:
+        """Places the door by the route's hint: ahead and to ``side`` (1 left, -1 right).
+
+        The point `DOOR_STANDOFF` in front of its centre, facing the barcode's wall (the
+        heading squared up to).
+        """
+        h = r.heading if r.heading is not None else s.pose.theta
+        ax, ay = HINT_DOOR_AHEAD_M - DOOR_STANDOFF, side * HINT_DOOR_ASIDE_M
+        c, sn = math.cos(h), math.sin(h)
+        goal = (s.pose.x + c * ax - sn * ay, s.pose.y + sn * ax + c * ay, h)
+        m = self.mem
+        m.door_goal, m.door_stage, m.door_first = goal, "goto", goal
+        m.door_fixes, m.door_pushes, m.door_after_pass = 0, 0, False
+        m.door_waiting_since = None
 
     def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
         """Whether a follow step's `until` holds (counting openings as they pass)."""

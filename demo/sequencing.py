@@ -35,6 +35,9 @@ DOOR_WAIT_S = 75.0
 #: A door's nearer jamb is at most this far from its barcode (docs/maps.md: 0.1 to 0.6 m), with
 #: the slack of placing a jamb by sonar; an opening farther off is some other way, m.
 DOOR_BESIDE_BARCODE_M = 1.0
+#: No opening in sight after `DOOR_WAIT_S`, the door is taken to be where the route's hint
+#: (its last turn: left or right) says: its centre this far ahead and to that side, m.
+HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M = 1.0, 0.75
 #: How long a wall across the way must stay put while the robot stands (people move on), s.
 WALL_STAYS_S = 6.0
 #: Through a door: this far beyond the wall's line, m.
@@ -489,7 +492,7 @@ class Sequencer(Link):
             await self.say(f"    the sonars find no opening: trying the route's hint ({hint})")
             side = 1.0 if hint == "left" else -1.0
             normal = 0.0
-            centre = (1.0, side * 0.75)
+            centre = (HINT_DOOR_AHEAD_M, side * HINT_DOOR_ASIDE_M)
         else:
             if self.debug:
                 ranges = [round(r, 2) for r in await self.sonar()]

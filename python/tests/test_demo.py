@@ -263,6 +263,13 @@ def test_the_reactive_robot_follows_the_office_route(seed: int, task: str, tmp_p
         # sonar 0 dead: filled in from its neighbours, which saw the car's jambs, it never
         # read the door open on the goal floor (now the live sonar nearest ahead watches it)
         24000,
+        # no opening in sight from in front of the office's barcode (a wide door beside it is
+        # seen too obliquely from there): it stood there for good (now it tries where the
+        # route's hint says, once, as the sequenced robot does)
+        24003,
+        # the office's barcode lost homing on it, near its wall: the robot wandered for good
+        # (now it looks for it square in front of its wall, on the side it was seen from)
+        24016,
     ],
 )
 def test_the_reactive_robot_delivers_on_the_hard_set_where_it_once_failed(

@@ -11,12 +11,13 @@ import math
 from typing import Any
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
-from link import SONARS, Pose
+from link import SONARS, Pose, wrap
 from reactive import DOOR_PUSHES, SIGHTING_SHORT_M, STUCK_S, Reactive
 from reactive_car import PANEL_LOST_S, PATROL_MAX_M
-from reactive_route import RouteState
+from reactive_route import DOOR_STANDOFF, RouteState
 from reactive_support import robot as _robot
 from reactive_support import senses as _senses
+from sequencing import HINT_DOOR_ASIDE_M
 
 
 def test_a_car_whose_panel_never_shows_is_no_car() -> None:
@@ -354,3 +355,83 @@ def test_out_of_the_lab_a_door_is_not_held_to_the_lab_doors_barcode() -> None:
     aslant = {"seen": True, "width": 1.0, "normal": 0.6, "x": 3.0, "y": 2.0}
     _place(r, 10.0, aslant, cycles=7)
     assert r.mem.door_goal is not None
+
+
+def test_a_door_not_in_sight_is_tried_by_the_hint_then_squared_up_to_again() -> None:
+    # No door showed beside the office's barcode (a wide one, seen too obliquely from in front
+    # of it): the robot stood there for the rest of the run (24003). And back to homing on the
+    # barcode, the route's heading was the wall's normal (squaring set it), and the side of the
+    # wall was read against it: the robot squared facing along the wall, not at it.
+    r = _robot()
+    _following(r, step=3)
+    rs = r.mem.route
+    assert rs is not None
+    rs.heading = 0.0  # the corridor runs east; the office's barcode is on its north wall
+    facing_it = _senses(10.0, pose=Pose(0.0, 0.0, math.pi / 2), barcodes={40: (0.0, 1.0)})
+    r.route_action(facing_it)
+    assert rs.stage == "square"
+    assert rs.heading == math.pi / 2
+    assert rs.square_at is not None
+    assert abs(rs.square_at[1] - (1.0 - DOOR_STANDOFF)) < 1e-9
+    # Squared: on to the door, which does not show. Given up on, it is placed where the
+    # route's hint (its last turn: left) says, once, as the sequenced robot does.
+    r.route_action(_senses(11.0, pose=Pose(0.0, 1.0 - DOOR_STANDOFF, math.pi / 2)))
+    assert rs.step == 4
+    r.mem.door_given_up_at = 40.0
+    r.route_action(_senses(40.5, pose=Pose(0.0, 0.1, math.pi / 2)))
+    assert r.mem.door_goal is not None
+    assert r.mem.door_stage == "goto"
+    gx, gy, gh = r.mem.door_goal
+    assert abs(gx - -HINT_DOOR_ASIDE_M) < 1e-9
+    assert abs(gy - (0.1 + 1.0 - DOOR_STANDOFF)) < 1e-9
+    assert gh == math.pi / 2
+    # Not tried from elsewhere (stopped in the doorway, say): only from where it squared up.
+    other = _robot()
+    _following(other, step=4)
+    assert other.mem.route is not None
+    other.mem.route.heading, other.mem.route.square_at = math.pi / 2, (0.0, 0.1)
+    other.mem.door_given_up_at = 40.0
+    other.route_action(_senses(40.5, pose=Pose(-0.6, 0.8, math.pi / 2 + 0.5)))
+    assert other.mem.door_goal is None
+    assert other.mem.route.step == 3
+    # The same give-up is handled once only.
+    r.route_action(_senses(40.7, pose=Pose(0.0, 0.1, math.pi / 2)))
+    assert rs.step == 4
+    # Given up on again: back to the barcode's step, with the corridor's heading.
+    r.mem.door_given_up_at = 120.0
+    r.route_action(_senses(120.5, pose=Pose(0.0, 0.1, math.pi / 2)))
+    assert rs.step == 3
+    assert rs.heading == 0.0
+    # Homed on it again: squares facing the wall again.
+    r.route_action(_senses(130.0, pose=Pose(0.0, 0.0, math.pi / 2), barcodes={40: (0.0, 1.0)}))
+    assert rs.stage == "square"
+    assert rs.heading == math.pi / 2
+
+
+def test_a_route_barcode_lost_while_homing_is_looked_for_square_in_front_of_its_wall() -> None:
+    # Homing on the office's barcode brought the robot near its wall, where it was seen too
+    # obliquely to read; the robot wandered for the rest of the half hour (24016).
+    r = _robot()
+    r.mem.route = RouteState("button_to_office", step=3, heading=math.pi)  # the home step
+    seen = (wrap(math.atan2(-1.0, -3.0) - math.pi), math.hypot(1.0, 3.0))
+    r.route_action(_senses(1.0, pose=Pose(0.0, 0.0, math.pi), barcodes={40: seen}))
+    lost = r.route_action(_senses(2.0, pose=Pose(-2.5, -0.6, -2.0)))
+    assert lost.key[0] == "to lost barcode"
+    # On the corridor's wall on the left (facing west): 1.2 m north of it, facing south.
+    assert abs(lost.params[("home_position", "x")] - -3.0) < 1e-9
+    assert abs(lost.params[("home_position", "y")] - 0.2) < 1e-9
+    there = r.route_action(_senses(3.0, pose=Pose(-3.0, 0.2, -math.pi / 2)))
+    assert r.mem.route.code_at is None  # not in view from in front of it: forgotten
+    assert there.key[0] in ("look", "wander")
+    # The side is the one it was seen from: lost from beyond the wall's line (stopped in the
+    # door's mouth, say), the search still goes to the corridor's side.
+    r.route_action(_senses(3.5, pose=Pose(0.0, 0.0, math.pi), barcodes={40: seen}))
+    lost = r.route_action(_senses(3.6, pose=Pose(-3.5, -1.4, math.pi / 2)))
+    assert abs(lost.params[("home_position", "y")] - 0.2) < 1e-9
+    # Lost again after a "door again", the route's heading is the wall's normal: the search
+    # still goes square in front of the wall, along the corridor's heading kept.
+    r.mem.route.along, r.mem.route.heading = math.pi, -math.pi / 2
+    r.route_action(_senses(4.0, pose=Pose(0.0, 0.0, math.pi), barcodes={40: seen}))
+    lost = r.route_action(_senses(5.0, pose=Pose(-2.5, -0.6, -2.0)))
+    assert abs(lost.params[("home_position", "x")] - -3.0) < 1e-9
+    assert abs(lost.params[("home_position", "y")] - 0.2) < 1e-9
