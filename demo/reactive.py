@@ -34,7 +34,7 @@ from typing import Any
 
 from deliver import NORMAL, SKILLS, Mission, Stop
 from link import SONARS, Link, OutOfTime, Pose, live_sonar_ahead, mean_heading, wrap
-from reactive_car import BUTTON_ON_WALL_M, CarRider, wall_through
+from reactive_car import CODE_ON_WALL_M, CarRider, wall_through
 from reactive_route import (
     DOOR_STANDOFF,
     HOMED_M,
@@ -793,7 +793,7 @@ class Reactive(CarRider, RouteFollower, Link):
             m.lab_door_at = (s.pose.x + d[1] * math.cos(a), s.pose.y + d[1] * math.sin(a))
             m.lab_door_from = (s.pose.x, s.pose.y)
             near = LAB_WALL_FROM_M <= d[1] <= LAB_WALL_SEEN_M
-            fitted = wall_through(d, s.wall, BUTTON_ON_WALL_M) if near else None
+            fitted = wall_through(d, s.wall, CODE_ON_WALL_M) if near else None
             if fitted is not None:
                 m.lab_door_walls = [*m.lab_door_walls[-LAB_WALL_FITS + 1 :], s.pose.theta + fitted]
         made = s.said - m.said_at_start

@@ -47,9 +47,11 @@ CAR_DOOR_LOOK_S = 1.0
 #: Going into a car that opened takes at most this long, s.
 CAR_ENTER_S = 25.0
 #: Pushing a call button, the robot faces its wall within this, rad; a wall fitted farther
-#: off is the button's if the button's barcode is this near its line, m.
+#: off is the button's if the button's barcode is on its line (`CODE_ON_WALL_M`).
 BUTTON_WALL_RAD = 0.5
-BUTTON_ON_WALL_M = 0.15
+#: A barcode this near a fitted wall's line is on that wall (the call button's, the lab
+#: door's: `wall_through`), m.
+CODE_ON_WALL_M = 0.15
 #: The button's wall is fitted from within this of the button (m), and the last this long of
 #: fits (s) are averaged.
 BUTTON_WALL_SEEN_M = 1.6
@@ -389,7 +391,7 @@ class CarRider:
         """Notes the call button's wall (its normal's heading, odometry), when it is in sight.
 
         That is the wall fitted ahead, if the button's barcode is on it (within
-        `BUTTON_ON_WALL_M`), seen from within `BUTTON_WALL_SEEN_M`. One fit may be a few
+        `CODE_ON_WALL_M`), seen from within `BUTTON_WALL_SEEN_M`. One fit may be a few
         degrees off: the robot calls with the last `BUTTON_WALL_S` of them.
         """
         m = self.mem
@@ -397,7 +399,7 @@ class CarRider:
         b = s.barcodes.get(self.button(s.floor))
         if b is None or b[1] > BUTTON_WALL_SEEN_M:
             return
-        fitted = wall_through(b, s.wall, BUTTON_ON_WALL_M)
+        fitted = wall_through(b, s.wall, CODE_ON_WALL_M)
         if fitted is not None:
             m.button_walls.append((s.t, wrap(s.pose.theta + fitted)))
 
