@@ -150,6 +150,6 @@ def test_a_request_the_access_rules_refuse_says_they_may_have(credbot: str) -> N
         async with connecting as robot:
             await robot.stats()  # allowed
             with pytest.raises(situate.NotRunning, match="credentials or access rules"):
-                await robot.activate(["wander"])
+                await robot.activate("wander")
 
     run(main())

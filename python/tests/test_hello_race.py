@@ -63,7 +63,7 @@ def test_hello_waits_for_a_program_that_declares_its_requests_late(robot: str | 
         _link.close_session(session)
     finally:
         for q in queryables:
-            q.undeclare()  # type: ignore[no-untyped-call]
+            q.undeclare()
         program.close()  # type: ignore[no-untyped-call]
 
 

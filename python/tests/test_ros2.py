@@ -166,7 +166,7 @@ def test_rosbags_decodes_what_the_bridge_publishes_on_rmw_zenoh_keys(toybot: str
                 if all(len(v) >= 3 for v in got.values()):
                     break
             time.sleep(0.05)
-        sub.undeclare()
+        sub.undeclare()  # type: ignore[no-untyped-call]
         with lock:
             assert all(len(v) >= 3 for v in got.values()), {t: len(v) for t, v in got.items()}
             results = {t: list(v) for t, v in got.items()}

@@ -283,7 +283,7 @@ def test_prints_are_captured_per_skill_and_sent_when_verbose(
     assert robot.events("print") == []  # not verbose: kept, not sent
     robot.set_verbose("b")
     robot.step(1)
-    prints = robot.events("print")
+    prints = [e for e in robot.events("print") if isinstance(e, situate.Print)]
     assert [(e.skill, e.line, e.cycle) for e in prints] == [
         ("b", "beta from beta", 3),
         ("b", "second line", 3),
@@ -576,12 +576,12 @@ def test_declarations_read_from_signatures() -> None:
     [
         (lambda: situate.skill(name="k", kind="device")(lambda: None), 'kind must be "sync"'),
         (lambda: situate.skill(lambda x: None), "input `x` has no type"),
-        (lambda: situate.skill(lambda x: None, inputs={"x": "f33"}), "bad type `f33`"),
-        (lambda: situate.skill(lambda: None, outputs={"y": "{a: }"}), "output `y`: bad type"),
+        (lambda: situate.skill(lambda x: None, inputs={"x": "f33"}), "bad type `f33`"),  # type: ignore[call-overload]
+        (lambda: situate.skill(lambda: None, outputs={"y": "{a: }"}), "output `y`: bad type"),  # type: ignore[call-overload]
         (lambda: situate.skill(lambda g=situate.param(5.0, min=0, max=1): None), "parameter `g`"),
         (lambda: situate.skill(lambda g=[1]: None), "not a parameter type"),
         (lambda: situate.skill(lambda *a: None), "*a"),
-        (lambda: situate.skill(lambda: None, inputs={"x": "f64"}), "no argument named `x`"),
+        (lambda: situate.skill(lambda: None, inputs={"x": "f64"}), "no argument named `x`"),  # type: ignore[call-overload]
     ],
 )
 def test_bad_declarations_are_refused_naming_the_skill(
