@@ -12,7 +12,7 @@ report's "Reading" section (between ``<!-- reading -->`` and ``<!-- /reading -->
 from the existing report; everything else is generated. The report and the figure are drawn by
 ``experiment_report.py`` beside this script. Usage, from the repository's top::
 
-    .venv/bin/python scripts/experiment.py [--buildings 12] [--jobs 2] [--resume]
+    .venv/bin/python scripts/experiment.py [--buildings 24] [--jobs 2] [--resume]
 """
 
 from __future__ import annotations
@@ -400,7 +400,7 @@ def progress_line(n: int, total: int, r: dict[str, Any]) -> str:
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     """The command line."""
     p = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    p.add_argument("--buildings", type=int, default=12, help="buildings to keep (default 12)")
+    p.add_argument("--buildings", type=int, default=24, help="buildings to keep (default 24)")
     p.add_argument("--first-seed", type=int, default=50000, help="first building seed (50000)")
     p.add_argument("--designs", default=",".join(DESIGNS), help="comma-separated demo modes")
     p.add_argument("--tasks", type=int, default=8, choices=range(1, 9), help="T1..Tn (8)")

@@ -186,8 +186,8 @@ The same buildings, tasks and seeds, with the delivery's hard set (`scripts/deli
 people walking the corridors, doors closed now and then, and one sonar dead (`--people 3
 --door-closures --dead-sonar K`, K = building seed mod 24). Neither design was tuned on these
 buildings; both were tuned on the hard set of other buildings: the sequenced robot over several
-sessions (issue 12), the reactive one in its third to sixth rounds, about 50, 80, 60 and 75
-minutes (decision 0008).
+sessions (issue 12), the reactive one in its third to eighth rounds (decision 0008, "Tuning
+log").
 
 {k_table(hard_k)}
 
