@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from link import Pose, wrap
-from sequencing import HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M, WALL_AHEAD_M
+from sequencing import HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M, WALL_AHEAD_M, door_hint
 
 if TYPE_CHECKING:
     from deliver import Mission
@@ -281,9 +281,7 @@ class RouteFollower:
                 return self.next_step(r, s)
             if self.mem.door_given_up_at > max(s.t - 1.0, r.given_up):
                 r.given_up = self.mem.door_given_up_at
-                hint = next(
-                    (str(x["turn"]) for x in reversed(steps[: r.step]) if x.get("turn")), ""
-                )
+                hint = door_hint(steps, r.step)
                 if hint in ("left", "right") and not r.hinted and squared_here(r, s):
                     # No opening in sight from in front of the barcode (a wide door beside it
                     # is seen too obliquely from there): where the route's hint says, once, as

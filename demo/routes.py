@@ -15,7 +15,7 @@ from collections.abc import Awaitable, Callable, Mapping, Sequence
 from typing import Any
 
 from link import SONARS, PhaseFailed, Pose, bearing_of, wrap
-from sequencing import DOOR_STANDOFF, WALL_AHEAD_M, Sequencer
+from sequencing import DOOR_STANDOFF, WALL_AHEAD_M, Sequencer, door_hint
 
 #: Following for a distance: the time in which some way must be made, s.
 FOLLOW_SLICE_S = 20.0
@@ -601,9 +601,7 @@ class RouteSequencer(Sequencer):
                         break
                     await self.say(f"    could not home on barcode {pending_home}: again")
             if ok and step.get("pass"):
-                hint = next(
-                    (str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None
-                )
+                hint = door_hint(steps, n)
                 for _attempt in range(3):
                     ok = await self.pass_door(pending_home, hint) and await self.beyond_wall()
                     if ok or pending_home is None:

@@ -15,7 +15,7 @@ Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the do
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from link import SONARS, Link, bearing_of, live_sonar_ahead, sonar_toward, wrap
@@ -40,6 +40,13 @@ DOOR_BESIDE_BARCODE_M = 1.0
 HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M = 1.0, 0.75
 #: How long a wall across the way must stay put while the robot stands (people move on), s.
 WALL_STAYS_S = 6.0
+
+
+def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
+    """The route's hint for the door of step ``n``: the last turn before it (docs/maps.md)."""
+    return next((str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None)
+
+
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
 #: Wandering between two looks round, s.
