@@ -548,6 +548,7 @@ fn monitors(settings: &Settings, report: &mut Report) {
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),
+            session: None,
             client: None,
         }) {
             panic!("monitor refused: {e}");

@@ -9,9 +9,11 @@ protocol itself is ``docs/protocol.md``.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import re
+import secrets
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -310,8 +312,30 @@ def hello(
     return answered[0]
 
 
-def undeclare(entity: zenoh.Subscriber[Any] | zenoh.Publisher) -> None:
-    """Undeclares a subscriber or publisher; one of a closed session is already gone."""
+def session_public_id(secret: str) -> str:
+    """A client session's public id: the first 16 bytes of its secret's SHA3-256, in hex.
+
+    The manager shows only this id (``monitor_list``, events); the secret,
+    sent with ``monitor_add`` and ``monitor_cancel``, proves the session
+    (docs/protocol.md, "Sessions").
+    """
+    return hashlib.sha3_256(secret.encode()).hexdigest()[:32]
+
+
+def open_client_session(session: zenoh.Session, robot: str) -> tuple[str, str, zenoh.LivelinessToken]:
+    """A new client session with ``robot``: its secret, public id and liveliness token.
+
+    The token, on ``situate/<robot>/session/<id>``, lives until it is undeclared or the
+    Zenoh session closes; then the manager removes the session's monitors.
+    """
+    secret = secrets.token_hex(16)
+    public = session_public_id(secret)
+    token = session.liveliness().declare_token(f"situate/{robot}/session/{public}")
+    return secret, public, token
+
+
+def undeclare(entity: zenoh.Subscriber[Any] | zenoh.Publisher | zenoh.LivelinessToken) -> None:
+    """Undeclares a subscriber, publisher or token; one of a closed session is already gone."""
     with contextlib.suppress(zenoh.ZError):
         entity.undeclare()  # type: ignore[no-untyped-call]  # zenoh's stub lacks `-> None`
 

@@ -67,6 +67,9 @@ MAX_BATCH = 64
 #: A request waiting to leave: its verb, its encoded arguments, its reply's future.
 _Outgoing = tuple[str, dict[str, Any], "asyncio.Future[Any]"]
 
+#: The verbs that carry this connection's session secret (docs/protocol.md, "Sessions").
+_SESSION_VERBS = frozenset({"monitor_add", "monitor_cancel"})
+
 T = TypeVar("T")
 
 
@@ -184,12 +187,20 @@ class Robot:
         *,
         endpoints: Sequence[str],
         timeout: float,
+        client_session: tuple[str, str, zenoh.LivelinessToken],
     ) -> None:
         self._session = session
         self._endpoints = list(endpoints)
         self._streams: set[Stream[Any]] = set()
-        #: Who this connection is to the robot, for its per-client cap on monitors.
+        #: The name this connection gives itself, shown with its monitors (a label, not an identity).
         self.client_id: str = f"py-{os.getpid()}-{secrets.token_hex(4)}"
+        # The session that holds this connection's monitors (docs/protocol.md, "Sessions"):
+        # its secret goes with monitor_add/monitor_cancel, its token lives as long as this
+        # connection; when it goes, the manager removes this connection's monitors.
+        self._session_secret, public_id, self._session_token = client_session
+        #: This connection's session as the manager shows it (``MonitorInfo.session``,
+        #: ``MonitorCancelled.session``): only this connection cancels its monitors.
+        self.session_id: str = public_id
         #: What the manager said in ``hello``: protocol, robot name, version.
         self.hello: Hello = hello
         #: The robot's name (its robot file's ``robot:``).
@@ -236,6 +247,8 @@ class Robot:
         future: asyncio.Future[Any] = loop.create_future()
         if not self._outbox:
             loop.call_soon(self._send_outbox)
+        if verb in _SESSION_VERBS and "session" not in args:
+            args["session"] = self._session_secret
         self._outbox.append((verb, {k: encode(v) for k, v in args.items()}, future))
         return future
 
@@ -314,9 +327,11 @@ class Robot:
             settle_all(None, e)
 
     async def close(self) -> None:
-        """Ends every stream and closes the Zenoh session."""
+        """Ends every stream, lets go of this connection's monitors and closes the Zenoh session."""
         for stream in list(self._streams):
             stream.close()
+        # The session's token goes first: the manager then removes this connection's monitors.
+        await asyncio.to_thread(_link.undeclare, self._session_token)
         await asyncio.to_thread(_link.close_session, self._session)
 
     async def __aenter__(self) -> Robot:
@@ -455,7 +470,12 @@ class Robot:
         return int(result["monitor"])
 
     async def cancel_monitor(self, monitor: int) -> None:
-        """Removes a monitor; an unknown id is :class:`~situate.UnknownMonitor`."""
+        """Removes one of this connection's monitors.
+
+        An unknown id is :class:`~situate.UnknownMonitor`; another session's monitor is
+        :class:`~situate.NotOwner` (only the session that added a monitor cancels it).
+        A connection's monitors are removed when it closes, or when its process dies.
+        """
         await self.request("monitor_cancel", monitor=monitor)
 
     async def monitors(self) -> list[MonitorInfo]:
@@ -588,8 +608,19 @@ class Connector:
         except BaseException:
             await asyncio.to_thread(_link.close_session, session)
             raise
+        try:
+            client_session = await asyncio.to_thread(
+                _link.open_client_session, session, str(hello["robot"])
+            )
+        except BaseException:
+            await asyncio.to_thread(_link.close_session, session)
+            raise
         return Robot(
-            session, Hello.from_json(hello), endpoints=self._endpoints, timeout=self._timeout
+            session,
+            Hello.from_json(hello),
+            endpoints=self._endpoints,
+            timeout=self._timeout,
+            client_session=client_session,
         )
 
     def __await__(self) -> Generator[Any, None, Robot]:

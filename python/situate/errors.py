@@ -33,6 +33,8 @@ __all__ = [
     "Interrupted",
     "Invalid",
     "MissingProviders",
+    "NoSession",
+    "NotOwner",
     "NotRunning",
     "ProtocolMismatch",
     "SituateError",
@@ -171,6 +173,22 @@ class UnknownMonitor(SituateError):
     KIND = "unknown_monitor"
 
 
+class NotOwner(SituateError):
+    """A monitor another session holds: only the session that added a monitor cancels it."""
+
+    KIND = "not_owner"
+
+
+class NoSession(SituateError):
+    """A ``session`` whose liveliness token the manager cannot find, or that has ended.
+
+    A :class:`~situate.Robot` holds its session for as long as it is open; this comes
+    only to clients that manage sessions themselves (docs/protocol.md, "Sessions").
+    """
+
+    KIND = "no_session"
+
+
 class Invalid(SituateError):
     """A well-formed request the manager cannot carry out in its current state."""
 
@@ -224,6 +242,8 @@ _BY_KIND: dict[str, type[SituateError]] = {
         UnknownSignal,
         BadCondition,
         UnknownMonitor,
+        NotOwner,
+        NoSession,
         Invalid,
         Interrupted,
         Unavailable,

@@ -27,6 +27,7 @@ __all__ = [
     "Event",
     "ManagerStarted",
     "ManagerStopped",
+    "MonitorCancelled",
     "MonitorEvent",
     "MonitorFired",
     "OtherEvent",
@@ -35,6 +36,7 @@ __all__ = [
     "PriorityChanged",
     "SkillFaulted",
     "Telemetry",
+    "WorkerFailed",
     "parse_event",
     "parse_telemetry",
 ]
@@ -68,6 +70,25 @@ class MonitorFired:
 
 MonitorEvent = MonitorFired
 """What :meth:`situate.Robot.when` returns: the :class:`MonitorFired` event it waited for."""
+
+
+@dataclass(frozen=True)
+class MonitorCancelled:
+    """A monitor was removed before it fired for good.
+
+    ``reason`` says by whom: ``"owner"`` (its own session cancelled it),
+    ``"forced"`` (someone else did, e.g. the GUI after asking its user: a
+    sequencer waiting on it should know it will never fire) or
+    ``"session_ended"`` (its session's client went away). ``session`` is the
+    public id of the session that held it (``None``: the program running the
+    robot); compare it with :attr:`situate.Robot.session_id`.
+    """
+
+    monitor: int
+    condition: str
+    session: str | None
+    reason: str
+    cycle: int
 
 
 @dataclass(frozen=True)
@@ -131,6 +152,20 @@ class ManagerStopped:
 
 
 @dataclass(frozen=True)
+class WorkerFailed:
+    """A worker thread of the manager or the link panicked.
+
+    ``thread`` names it (``situate-link-req``, ...), ``cause`` is ``panicked: ...``, and
+    ``action`` what was done: ``restarted``, or that the robot is stopped (a thread that
+    kept panicking, or the cycle's own).
+    """
+
+    thread: str
+    cause: str
+    action: str
+
+
+@dataclass(frozen=True)
 class OtherEvent:
     """An event of a kind this version of the package does not know, kept whole."""
 
@@ -140,6 +175,7 @@ class OtherEvent:
 
 Event = Union[
     MonitorFired,
+    MonitorCancelled,
     ActivationApplied,
     ParamChanged,
     PriorityChanged,
@@ -147,6 +183,7 @@ Event = Union[
     Print,
     ManagerStarted,
     ManagerStopped,
+    WorkerFailed,
     OtherEvent,
 ]
 """Any event a manager publishes."""
@@ -173,6 +210,15 @@ def parse_event(data: dict[str, Any]) -> Event:
                 values={str(k): decode_untyped(v) for k, v in values.items()},
                 # A manager older than `any` watches one condition per monitor.
                 held=tuple(int(i) for i in data.get("held", [0])),
+            )
+        if kind == "monitor_cancelled":
+            session = data.get("session")
+            return MonitorCancelled(
+                monitor=int(data["monitor"]),
+                condition=str(data["condition"]),
+                session=None if session is None else str(session),
+                reason=str(data["reason"]),
+                cycle=int(data["cycle"]),
             )
         if kind == "activation_applied":
             return ActivationApplied(
@@ -201,6 +247,10 @@ def parse_event(data: dict[str, Any]) -> Event:
             return ManagerStarted(cycle=int(data["cycle"]))
         if kind == "manager_stopped":
             return ManagerStopped(cycle=int(data["cycle"]))
+        if kind == "worker_failed":
+            return WorkerFailed(
+                thread=str(data["thread"]), cause=str(data["cause"]), action=str(data["action"])
+            )
     except (KeyError, TypeError, ValueError, AttributeError):
         pass
     return OtherEvent(kind=kind, data=data)

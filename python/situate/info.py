@@ -312,6 +312,12 @@ class Stats:
     """Cycles that started more than half a period late, and skipped periods."""
     rate_hz: float = 0.0
     """The achieved cycle rate over about the last 20 cycles (0 when stopped)."""
+    worker_failures: int = 0
+    """Worker threads of the manager or the link that panicked (``worker_failed`` events)."""
+    request_hold_ns: int = 0
+    """How long requests served between cycles ran past the time the next cycle was due, in all."""
+    lost_ns: int = 0
+    """Time lost to cycles that started so late that periods were skipped."""
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> Stats:
@@ -329,6 +335,9 @@ class Stats:
             active=_strings(j.get("active")),
             late_starts=int(j.get("late_starts", 0)),
             rate_hz=float(j.get("rate_hz", 0.0)),
+            worker_failures=int(j.get("worker_failures", 0)),
+            request_hold_ns=int(j.get("request_hold_ns", 0)),
+            lost_ns=int(j.get("lost_ns", 0)),
         )
 
 
@@ -347,8 +356,12 @@ class MonitorInfo:
     #: The conditions of a monitor added with ``any=[...]``, as given (``condition``
     #: is then their disjunction); ``None`` for a monitor on one condition.
     any: tuple[str, ...] | None = None
-    #: The ``client`` that added it (a :class:`~situate.Robot` sends its ``client_id``), if it said.
+    #: The name its client gave itself (a :class:`~situate.Robot` sends its ``client_id``), if any:
+    #: a label, not an identity.
     client: str | None = None
+    #: The public id of the session that holds it (only that session cancels it; compare
+    #: with :attr:`situate.Robot.session_id`); ``None``: the program running the robot.
+    session: str | None = None
 
     @classmethod
     def from_json(cls, j: dict[str, Any]) -> MonitorInfo:
@@ -363,6 +376,7 @@ class MonitorInfo:
             report=tuple(str(r) for r in j.get("report", [])),
             any=None if j.get("any") is None else tuple(str(c) for c in j["any"]),
             client=None if j.get("client") is None else str(j["client"]),
+            session=None if j.get("session") is None else str(j["session"]),
         )
 
 

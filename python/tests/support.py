@@ -132,15 +132,20 @@ def wait_for_hello(process: subprocess.Popen[str], endpoint: str, robot: str) ->
     pytest.fail(f"the manager did not answer `hello` within {STARTUP_S} s: {last}")
 
 
-def start_manager(robot_file: Path, robot: str, *extra: str) -> Manager:
-    """Starts `situate run ROBOT_FILE` on a free port and waits until it answers."""
+def start_manager(
+    robot_file: Path, robot: str, *extra: str, env: dict[str, str] | None = None
+) -> Manager:
+    """Starts `situate run ROBOT_FILE` on a free port and waits until it answers.
+
+    ``env``: variables set for the program besides the test's own.
+    """
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     process = subprocess.Popen(
         [situate_program(), "run", str(robot_file), "--listen", endpoint, *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=program_env(),
+        env={**program_env(), **(env or {})},
         cwd=REPO,
     )
     try:

@@ -9,9 +9,10 @@ for; the wait is bounded by a generous timeout, never a sleep.
 from __future__ import annotations
 
 import asyncio
+import time
 
 import pytest
-from support import EVENT_S, Manager, run
+from support import EVENT_S, TOYBOT, Manager, run, start_manager
 
 import situate
 from situate import Event, MonitorFired, Robot, Stream
@@ -310,3 +311,32 @@ def test_a_monitor_reports_the_values_asked_for_as_of_its_cycle(toybot: Manager)
             await robot.run()
 
     run(main())
+
+
+def test_a_link_thread_that_panics_is_reported_and_restarted_seen_from_outside() -> None:
+    # The program's own hook makes its link's request and telemetry threads panic once, as a bug
+    # would, from their first turns on; a client finds them counted in `stats`, restarted, and the
+    # robot answering on; the program's log names each.
+    threads = ["situate-link-telemetry", "situate-link-req"]
+    manager = start_manager(TOYBOT, "toybot", env={"SITUATE_TEST_PANIC": ",".join(threads)})
+    try:
+
+        async def main() -> situate.Stats:
+            async with situate.connect("toybot", endpoint=manager.endpoint, timeout=30) as robot:
+                # Telemetry asked for keeps its thread turning.
+                await robot.telemetry(["sonar.range"])
+                deadline = time.monotonic() + EVENT_S
+                while (stats := await robot.stats()).worker_failures < len(threads):
+                    assert time.monotonic() < deadline, stats
+                    await asyncio.sleep(0.05)
+                return stats
+
+        stats = run(main())
+    finally:
+        stderr = manager.stop()
+    assert stats.worker_failures == len(threads), stats
+    assert stats.cycle > 0
+    assert "SITUATE_TEST_PANIC" in stderr
+    for thread in threads:
+        assert f"thread={thread}" in stderr or thread in stderr, stderr
+    assert "restarted" in stderr, stderr

@@ -9,8 +9,11 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import subprocess
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 import zenoh
@@ -424,6 +427,79 @@ def test_monitors_are_added_listed_and_cancelled(toybot: Manager) -> None:
             assert [m.monitor for m in await robot.monitors()] == [second]
             with pytest.raises(situate.UnknownMonitor):
                 await robot.cancel_monitor(first)
+
+    run(main())
+
+
+def test_only_the_session_that_added_a_monitor_cancels_it(toybot: Manager) -> None:
+    async def main() -> None:
+        async with (
+            situate.connect("toybot", endpoint=toybot.endpoint) as a,
+            situate.connect("toybot", endpoint=toybot.endpoint) as b,
+        ):
+            assert a.session_id != b.session_id
+            events = b.events("monitor_cancelled")
+            mine = await a.monitor("sonar.range[0] < -1", "level")
+            [listed] = await b.monitors()
+            # Everyone sees whose it is (the public id, which cannot cancel anything)…
+            assert (listed.monitor, listed.session, listed.client) == (mine, a.session_id, a.client_id)
+            # …but another connection cannot cancel it.
+            with pytest.raises(situate.NotOwner, match=f"monitor {mine} belongs to session"):
+                await b.cancel_monitor(mine)
+            assert [m.monitor for m in await b.monitors()] == [mine]
+            await a.cancel_monitor(mine)
+            cancelled = await asyncio.wait_for(events.__anext__(), 60)
+            assert cancelled == situate.MonitorCancelled(
+                monitor=mine,
+                condition="sonar.range[0] < -1",
+                session=a.session_id,
+                reason="owner",
+                cycle=cancelled.cycle,
+            )
+            # A hand-made secret without its liveliness token is no session.
+            with pytest.raises(situate.NoSession, match="situate/toybot/session/"):
+                await b.request("monitor_add", condition="cycle > 0", session="f" * 32)
+
+    run(main())
+
+
+SEQUENCER_THAT_CRASHES = """
+import asyncio, os, sys
+import situate
+
+async def main() -> None:
+    robot = await situate.connect("toybot", endpoint=sys.argv[1])
+    for _ in range(240):
+        robot.send("monitor_add", condition="sonar.range[0] < -1", mode="level")
+    await robot.send("monitor_list")
+    print(robot.session_id, flush=True)
+    os.kill(os.getpid(), 9)  # a crash: no close, no goodbye
+
+asyncio.run(main())
+"""
+
+
+def test_a_crashed_sequencers_monitors_go_with_it(toybot: Manager, tmp_path: Path) -> None:
+    script = tmp_path / "crash.py"
+    script.write_text(SEQUENCER_THAT_CRASHES)
+
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as watcher:
+            # It once found the robot full on its 5th start.
+            for start in range(6):
+                done = subprocess.run(
+                    [sys.executable, str(script), toybot.endpoint],
+                    capture_output=True,
+                    text=True,
+                    timeout=120,
+                )
+                assert done.returncode == -9, done.stderr
+                session = done.stdout.strip()
+                deadline = time.monotonic() + 60
+                while any(m.session == session for m in await watcher.monitors()):
+                    assert time.monotonic() < deadline, f"start {start}: its monitors stayed"
+                    await asyncio.sleep(0.05)
+            assert await watcher.monitors() == []
 
     run(main())
 

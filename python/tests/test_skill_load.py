@@ -7,6 +7,8 @@ the robot file's `python:` entry.
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import textwrap
 from collections.abc import Callable
 from pathlib import Path
@@ -229,3 +231,41 @@ def test_the_in_process_robot_leaves_c_libraries_to_the_program(files: Write) ->
     )
     with pytest.raises(ValueError, match="loaded by the `situate` program only"):
         sit.LocalRobot(path)
+
+
+ARRAYS = """
+import situate
+
+@situate.skill(name="ok.skill", outputs={"ys": "f64[]"})
+def ok_skill() -> dict[str, list[float]]:
+    return {"ys": [1.0, 2.0]}
+"""
+
+IN_A_FRESH_INTERPRETER = """
+import sys
+import situate
+robot = situate.LocalRobot(sys.argv[1])
+# Loaded, not yet run: arrays cross as numpy arrays, so numpy is already there.
+print("numpy" in sys.modules)
+"""
+
+
+def test_a_skill_with_array_ports_imports_numpy_at_load_not_in_its_first_timed_run(
+    files: Write,
+) -> None:
+    # The import (100-200 ms) once ran inside the body's first timed call: with
+    # `budget_ms: 100` the skill was faulted at cycle 1 in 3 runs of 3.
+    files("skills.py", ARRAYS)
+    path = files(
+        "robot.yaml",
+        robot("skills.py").replace("type: ok.skill}", "type: ok.skill, budget_ms: 100}"),
+    )
+    script = files("fresh.py", IN_A_FRESH_INTERPRETER)
+    done = subprocess.run(
+        [sys.executable, str(script), str(path)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "True"
+    result = situate("run", str(path), "--cycles", "5", "--no-link")
+    assert result.returncode == 0, result.stderr
+    assert "faulted" not in result.stdout + result.stderr

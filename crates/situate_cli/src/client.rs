@@ -434,14 +434,15 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
                     .flatten()
                     .map(|m| {
                         format!(
-                            "monitor {} ({}{}): {}; fired {}, holds {}{}",
+                            "monitor {} ({}{}): {}; fired {}, holds {}{}{}",
                             m["monitor"],
                             m["mode"].as_str().unwrap_or(""),
                             if m["pause"].as_bool() == Some(true) { ", pause" } else { "" },
                             m["condition"].as_str().unwrap_or(""),
                             m["fired"],
                             m["holds"],
-                            m["client"].as_str().map(|c| format!("; client {c}")).unwrap_or_default()
+                            m["session"].as_str().map(|s| format!("; session {s}")).unwrap_or_default(),
+                            m["client"].as_str().map(|c| format!(" (client {c})")).unwrap_or_default()
                         )
                     })
                     .collect();

@@ -438,6 +438,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
                     spec.robot,
                     link.listen.join(", ")
                 ));
+                inject_panics(&l);
                 running.served = Some(l);
             }
             Err(e) => {
@@ -792,4 +793,20 @@ fn summary_text(stats: &ManagerStats, skills: &[SkillInfo]) -> String {
         );
     }
     text.trim_end().to_string()
+}
+
+/// A hook for tests from outside the program: `SITUATE_TEST_PANIC=<thread>[,<thread>…]` makes each
+/// named link thread (`situate-link-req`, `situate-link-events`, `situate-link-telemetry`) panic
+/// once, so a test can see the `worker_failed` event and the restart as a client does. Unknown
+/// names are warned about and ignored.
+fn inject_panics(link: &Link) {
+    let Ok(names) = std::env::var("SITUATE_TEST_PANIC") else { return };
+    for name in names.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        if situate_link::server::THREADS.contains(&name) {
+            tracing::warn!(thread = name, "SITUATE_TEST_PANIC: this link thread will panic once");
+            link.inject_panic(name);
+        } else {
+            tracing::warn!(thread = name, "SITUATE_TEST_PANIC names no link thread; ignored");
+        }
+    }
 }

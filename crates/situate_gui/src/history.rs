@@ -427,6 +427,14 @@ impl History {
             Event::MonitorFired { monitor, condition, cycle, .. } => {
                 (*cycle, "monitor", format!("monitor {monitor} fired: {condition}"))
             }
+            Event::MonitorCancelled { monitor, condition, reason, cycle, .. } => {
+                let why = match reason {
+                    situate_manager::CancelReason::Owner => "cancelled",
+                    situate_manager::CancelReason::Forced => "cancelled by another session",
+                    situate_manager::CancelReason::SessionEnded => "gone with its session",
+                };
+                (*cycle, "monitor", format!("monitor {monitor} {why}: {condition}"))
+            }
             Event::ManagerStarted { cycle } => (*cycle, "manager", "the cycle started".to_string()),
             Event::ManagerStopped { cycle } => (*cycle, "manager", "the cycle stopped".to_string()),
             Event::WorkerFailed { thread, cause, action } => {

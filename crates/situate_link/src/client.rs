@@ -82,9 +82,13 @@ pub struct Client {
     session: Session,
     endpoints: Vec<String>,
     pub timeout: Duration,
-    /// Who this connection is to a robot: sent as `monitor_add`'s `client`
-    /// (unless the arguments name one) for the per-client cap on monitors.
+    /// The name this connection gives itself: sent as `monitor_add`'s
+    /// `client` (unless the arguments name one), shown with its monitors.
     pub client_id: String,
+    /// Per robot, the session that holds this connection's monitors
+    /// ([`crate::client_session`]): opened at the first request about a
+    /// monitor, ended when the connection is dropped.
+    sessions: std::sync::Mutex<std::collections::HashMap<String, crate::client_session::ClientSession>>,
 }
 
 impl Client {
@@ -99,7 +103,13 @@ impl Client {
             detail: unreachable_detail(&e.to_string()),
         })?;
         let client_id = format!("rs-{}-{}", std::process::id(), session.zid());
-        Ok(Client { session, endpoints: endpoints.to_vec(), timeout: Duration::from_secs(5), client_id })
+        Ok(Client {
+            session,
+            endpoints: endpoints.to_vec(),
+            timeout: Duration::from_secs(5),
+            client_id,
+            sessions: Default::default(),
+        })
     }
 
     pub fn session(&self) -> &Session {
@@ -117,6 +127,12 @@ impl Client {
         if verb == "monitor_add" && args.get("client").is_none() {
             if let Some(obj) = args.to_mut().as_object_mut() {
                 obj.insert("client".into(), Json::String(self.client_id.clone()));
+            }
+        }
+        if matches!(verb, "monitor_add" | "monitor_cancel") && args.get("session").is_none() {
+            let secret = self.session_secret(robot)?;
+            if let Some(obj) = args.to_mut().as_object_mut() {
+                obj.insert("session".into(), Json::String(secret));
             }
         }
         // A get that finds nobody to ask ends at once with no reply (a robot that has opened its
@@ -169,6 +185,25 @@ impl Client {
             .into()),
             None => Err(ClientError::BadReply(body.to_string())),
         }
+    }
+
+    /// The secret of this connection's session with `robot`, opened now if need be.
+    fn session_secret(&self, robot: &str) -> Result<String, ClientError> {
+        let mut sessions = self.sessions.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(s) = sessions.get(robot) {
+            return Ok(s.secret().to_string());
+        }
+        let opened = crate::client_session::ClientSession::open(&self.session, robot)
+            .map_err(|detail| ClientError::Send { key: crate::client_session::token_key(robot, "…"), detail })?;
+        let secret = opened.secret().to_string();
+        sessions.insert(robot.to_string(), opened);
+        Ok(secret)
+    }
+
+    /// The public id of this connection's session with `robot`, if one is open
+    /// (what `monitor_list` shows as `session` for its monitors).
+    pub fn session_id(&self, robot: &str) -> Option<String> {
+        self.sessions.lock().unwrap_or_else(|p| p.into_inner()).get(robot).map(|s| s.id().to_string())
     }
 
     /// The robots whose managers answer `hello`.

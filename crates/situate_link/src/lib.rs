@@ -3,6 +3,7 @@
 //! `docs/protocol.md`; this crate is its reference implementation.
 
 pub mod client;
+pub mod client_session;
 pub mod flood;
 pub mod json;
 pub mod remote;

@@ -28,6 +28,7 @@ use situate_manager::{Handle, Pending, Reply, Request};
 use zenoh::query::Query;
 use zenoh::{Session, Wait};
 
+use crate::client_session::Sessions;
 use crate::json::{self, Decoded};
 use crate::session::LinkConfig;
 use crate::LinkError;
@@ -117,15 +118,15 @@ impl Link {
             .wait()
             .map_err(|e| LinkError::Open(e.to_string()))?;
 
+        let sessions = Sessions::watch(robot, &session, &handle)?;
         let injected = Arc::new(Injected::default());
         let mut threads = Vec::new();
         {
             let (handle, telemetry, robot) = (handle.clone(), Arc::clone(&telemetry), robot.to_string());
             let (prefix, injected, reporter) = (prefix.clone(), Arc::clone(&injected), handle.clone());
             let verbs = Arc::new(verbs);
-            threads.push(spawn(REQ_THREAD, reporter, move || {
-                bridge(&rx, &handle, &telemetry, &robot, &prefix, &injected, &verbs)
-            })?);
+            let ask = Asker { handle, sessions, telemetry, robot, verbs };
+            threads.push(spawn(REQ_THREAD, reporter, move || bridge(&rx, &ask, &prefix, &injected))?);
         }
         {
             let (session, events, stop, robot) =
@@ -220,15 +221,16 @@ impl Answer {
     }
 }
 
-fn bridge(
-    rx: &Receiver<Query>,
-    handle: &Handle,
-    telemetry: &Mutex<Telemetry>,
-    robot: &str,
-    prefix: &str,
-    injected: &Injected,
-    verbs: &Verbs,
-) {
+/// What the bridge thread answers requests with.
+struct Asker {
+    handle: Handle,
+    sessions: Sessions,
+    telemetry: Arc<Mutex<Telemetry>>,
+    robot: String,
+    verbs: Arc<Verbs>,
+}
+
+fn bridge(rx: &Receiver<Query>, ask: &Asker, prefix: &str, injected: &Injected) {
     let mut burst: Vec<InFlight> = Vec::with_capacity(BURST);
     while let Ok(first) = rx.recv() {
         injected.check(REQ_THREAD);
@@ -236,7 +238,7 @@ fn bridge(
         // awaited; the order of the requests is kept.
         let mut next = Some(first);
         while let Some(query) = next {
-            let answer = answer(&query, handle, telemetry, robot, verbs);
+            let answer = answer(&query, ask);
             burst.push(InFlight { reply_key: reply_key(&query, prefix), query, answer });
             next = if burst.len() < BURST { rx.try_recv().ok() } else { None };
         }
@@ -256,29 +258,21 @@ fn reply_key(query: &Query, prefix: &str) -> String {
 
 /// Decodes a query and answers it, or submits it to the manager (a `batch`: each of its
 /// requests in order, as if each came alone).
-fn answer(query: &Query, handle: &Handle, telemetry: &Mutex<Telemetry>, robot: &str, verbs: &Verbs) -> Answer {
+fn answer(query: &Query, ask: &Asker) -> Answer {
     let verb = query.key_expr().as_str().rsplit('/').next().unwrap_or("");
     let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
     if verb == json::BATCH {
         return match json::decode_batch(&payload) {
             Err(e) => Answer::Ready(json::wire_error(&e)),
-            Ok(requests) => Answer::Batch(
-                requests.iter().map(|(verb, args)| answer_one(verb, args, handle, telemetry, robot, verbs)).collect(),
-            ),
+            Ok(requests) => Answer::Batch(requests.iter().map(|(verb, args)| answer_one(verb, args, ask)).collect()),
         };
     }
-    answer_one(verb, &payload, handle, telemetry, robot, verbs)
+    answer_one(verb, &payload, ask)
 }
 
 /// One request: answered here, or submitted to the manager.
-fn answer_one(
-    verb: &str,
-    payload: &[u8],
-    handle: &Handle,
-    telemetry: &Mutex<Telemetry>,
-    robot: &str,
-    verbs: &Verbs,
-) -> Answer {
+fn answer_one(verb: &str, payload: &[u8], ask: &Asker) -> Answer {
+    let Asker { handle, sessions, telemetry, robot, verbs } = ask;
     if let Some(f) = verbs.0.get(verb) {
         return Answer::Ready(match json::decode_args(verb, payload) {
             Err(e) => json::wire_error(&e),
@@ -304,9 +298,22 @@ fn answer_one(
         Ok(Decoded::Manager(Request::Shutdown)) => {
             json::wire_error(&json::WireError::bad_request("shutdown is not a link request"))
         }
-        Ok(Decoded::Manager(request)) => match handle.submit(request) {
-            Ok(pending) => return Answer::Manager(pending),
-            Err(e) => json::control_error(&e),
+        Ok(Decoded::Manager(request)) => match monitor_session(&request) {
+            // Not about a monitor.
+            None => match handle.submit(request) {
+                Ok(pending) => return Answer::Manager(pending),
+                Err(e) => json::control_error(&e),
+            },
+            // A monitor belongs to a live session (crate::client_session).
+            Some(Some(id)) => match sessions.submit_for(&id, request) {
+                Ok(pending) => return Answer::Manager(pending),
+                Err(Ok(refused)) => json::wire_error(&refused),
+                Err(Err(e)) => json::control_error(&e),
+            },
+            Some(None) => json::wire_error(&json::WireError::bad_request(format!(
+                "`{verb}`: missing argument `session` (the client's session secret: a monitor belongs to the \
+                 session that added it; docs/protocol.md, \"Sessions\")"
+            ))),
         },
     })
 }
@@ -315,6 +322,14 @@ fn answer_one(
 /// (a JSON object, `{}` when none came) to its result, or an error whose
 /// kind the client sees (`bad_request`, `refused`, …).
 pub type VerbFn = Arc<dyn Fn(&Json) -> Result<Json, json::WireError> + Send + Sync>;
+
+/// For a request about a monitor, the session it names (`Some(None)`: none).
+fn monitor_session(request: &Request) -> Option<Option<String>> {
+    match request {
+        Request::AddMonitor { session, .. } | Request::CancelMonitor { session, .. } => Some(session.clone()),
+        _ => None,
+    }
+}
 
 /// The program's own requests, by verb.
 #[derive(Clone, Default)]

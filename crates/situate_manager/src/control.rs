@@ -70,12 +70,30 @@ pub enum Request {
         /// the condition reads: signal leaves, whole records (as their
         /// leaves), `skill.param`, `time`, `cycle`.
         report: Vec<String>,
-        /// Who asks, for the per-client cap ([`crate::MAX_MONITORS_PER_CLIENT`]);
-        /// `None` for those that do not say (they share one allowance).
+        /// The session that will hold the monitor: only it cancels it, its
+        /// monitors count against [`crate::MAX_MONITORS_PER_SESSION`], and they
+        /// go when it ends ([`Request::EndSession`]). The link and the GUI fill
+        /// it in for their clients (a link client proves its session with a
+        /// secret, docs/protocol.md "Sessions"); `None` is the program itself
+        /// (in-process requests), whose monitors share one allowance.
+        session: Option<String>,
+        /// A name the client gives itself, shown with its monitors; not an
+        /// identity (anyone may give any name).
         client: Option<String>,
     },
+    /// Remove a monitor: only its session may ([`Request::AddMonitor`]'s
+    /// `session`, the same `None` for the program's own), unless `force`d
+    /// (the GUI, after asking its user); the owner then gets a
+    /// `monitor_cancelled` event saying so.
     CancelMonitor {
         monitor: u64,
+        session: Option<String>,
+        force: bool,
+    },
+    /// A session ended (its client went away): its monitors are removed, each
+    /// with a `monitor_cancelled` event.
+    EndSession {
+        session: String,
     },
     ListMonitors,
     Run,
@@ -106,6 +124,8 @@ pub enum Reply {
     Stats(ManagerStats),
     MonitorAdded(u64),
     Monitors(Vec<MonitorInfo>),
+    /// The monitors an [`Request::EndSession`] removed.
+    MonitorsCancelled(Vec<u64>),
 }
 
 /// Why a request was refused. Every message names the thing and, where it
@@ -130,6 +150,9 @@ pub enum ControlError {
     BadReport(String),
     #[error("no monitor {0}")]
     UnknownMonitor(u64),
+    /// A request about something another session holds (a monitor).
+    #[error("{0}")]
+    NotOwner(String),
     #[error("{0}")]
     Invalid(String),
     /// A request cut short because a skill's body got stuck and was left
@@ -202,6 +225,15 @@ pub enum Event {
         line: String,
         cycle: u64,
     },
+    /// A monitor was removed before it fired for good: by its session, by
+    /// someone else (`reason` says who), or because its session ended.
+    MonitorCancelled {
+        monitor: u64,
+        condition: String,
+        session: Option<String>,
+        reason: CancelReason,
+        cycle: u64,
+    },
     ManagerStarted {
         cycle: u64,
     },
@@ -249,8 +281,11 @@ pub struct SkillTiming {
     pub runs: u64,
     pub last_ns: u64,
     pub max_ns: u64,
-    /// The time of all runs: an untimed run counts as long as the last
-    /// timed one, so `total_ns / runs` is the mean.
+    /// The time of all runs: the timed ones exactly, the others as the
+    /// coarse clock read them. A coarse reading is the kernel's tick (a few
+    /// ms) times the ticks that fell within the run, so it is right on
+    /// average (a 1 µs run reads 0, or one tick once in thousands): one slow
+    /// run counts once, as long as it was, whether or not it was timed.
     pub total_ns: u64,
     /// How many runs were timed (`runs` when every run is).
     pub timed_runs: u64,
@@ -265,24 +300,20 @@ impl SkillTiming {
         }
     }
 
-    /// Counts `n` runs that were not timed (each as long as the last timed one).
-    pub fn add_untimed(&mut self, n: u64) {
-        self.runs += n;
-        self.total_ns += n * self.last_ns;
+    /// Counts `runs` runs that were not timed exactly, which took `coarse_ns`
+    /// in all on the coarse clock.
+    pub fn add_untimed(&mut self, runs: u64, coarse_ns: u64) {
+        self.runs += runs;
+        self.total_ns = self.total_ns.saturating_add(coarse_ns);
     }
 
-    /// Counts one run, with its time if it was timed.
-    pub fn record(&mut self, elapsed_ns: Option<u64>) {
+    /// Counts one run timed exactly.
+    pub fn record(&mut self, elapsed_ns: u64) {
         self.runs += 1;
-        match elapsed_ns {
-            Some(ns) => {
-                self.timed_runs += 1;
-                self.last_ns = ns;
-                self.max_ns = self.max_ns.max(ns);
-                self.total_ns += ns;
-            }
-            None => self.total_ns += self.last_ns,
-        }
+        self.timed_runs += 1;
+        self.last_ns = elapsed_ns;
+        self.max_ns = self.max_ns.max(elapsed_ns);
+        self.total_ns = self.total_ns.saturating_add(elapsed_ns);
     }
 }
 
@@ -385,8 +416,31 @@ pub struct MonitorInfo {
     pub holds: bool,
     pub pause: bool,
     pub report: Vec<String>,
-    /// The `client` that added it, if it said.
+    /// The session that holds it (`None`: the program itself).
+    pub session: Option<String>,
+    /// The name its client gave, if any (a label, not an identity).
     pub client: Option<String>,
+}
+
+/// Why a monitor was removed before it fired for good.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CancelReason {
+    /// Its own session cancelled it.
+    Owner,
+    /// Someone else did, with `force` (the GUI, after asking its user).
+    Forced,
+    /// Its session ended (the client closed it or went away).
+    SessionEnded,
+}
+
+impl CancelReason {
+    pub fn name(self) -> &'static str {
+        match self {
+            CancelReason::Owner => "owner",
+            CancelReason::Forced => "forced",
+            CancelReason::SessionEnded => "session_ended",
+        }
+    }
 }
 
 /// Anything that answers requests: the manager itself, or a handle to it.
@@ -473,14 +527,21 @@ pub trait Control {
 
     /// A monitor on `condition` (one, or any of several).
     fn add_monitor_on(&mut self, condition: MonitorCondition, mode: MonitorMode) -> Result<u64, ControlError> {
-        match self.request(Request::AddMonitor { condition, mode, pause: false, report: Vec::new(), client: None })? {
+        match self.request(Request::AddMonitor {
+            condition,
+            mode,
+            pause: false,
+            report: Vec::new(),
+            session: None,
+            client: None,
+        })? {
             Reply::MonitorAdded(id) => Ok(id),
             other => Err(unexpected(other)),
         }
     }
 
     fn cancel_monitor(&mut self, monitor: u64) -> Result<(), ControlError> {
-        self.request(Request::CancelMonitor { monitor }).map(|_| ())
+        self.request(Request::CancelMonitor { monitor, session: None, force: false }).map(|_| ())
     }
 
     fn step(&mut self, cycles: u64) -> Result<(), ControlError> {

@@ -26,12 +26,12 @@ pub mod yaml;
 
 pub use config::{ClockKind, ExecutorKind, RobotFile};
 pub use control::{
-    Control, ControlError, Event, Handle, ManagerStats, Pending, PortInfo, Reply, Request, ResourceWinner,
-    SignalReading, SkillInfo, SkillTiming,
+    CancelReason, Control, ControlError, Event, Handle, ManagerStats, MonitorInfo, Pending, PortInfo, Reply, Request,
+    ResourceWinner, SignalReading, SkillInfo, SkillTiming,
 };
 pub use frame::{Frame, FrameValues};
 pub use graph::Graph;
-pub use manager::{Joiner, Manager, TapReceiver, MAX_MONITORS, MAX_MONITORS_PER_CLIENT};
+pub use manager::{Joiner, Manager, TapReceiver, MAX_MONITORS, MAX_MONITORS_PER_SESSION};
 pub use monitor::{MonitorCondition, MonitorMode, MAX_ANY_CONDITIONS};
 pub use registry::Registry;
 pub use spec::{BuildError, Diagnostic, RobotSpec, Severity, SkillSpec};

@@ -108,10 +108,12 @@ const PRINT_HISTORY: usize = 64;
 /// counting as many as it has. Every one may be evaluated each cycle: a bound on
 /// their number is a bound on the cycle's cost, whatever the clients do.
 pub const MAX_MONITORS: usize = 1000;
-/// The most conditions the monitors of one client watch (its `client` name
-/// on `monitor_add`; those added without one share one allowance), so that
-/// one sequencer that forgets to cancel cannot take the whole robot's.
-pub const MAX_MONITORS_PER_CLIENT: usize = 250;
+/// The most conditions the monitors of one session watch (the program's own,
+/// with no session, share one allowance), so that one sequencer that forgets
+/// to cancel cannot take the whole robot's. Sessions are not authentication:
+/// a client that opens several sessions gets several allowances (keep
+/// strangers off the link with Zenoh's access control, docs/protocol.md).
+pub const MAX_MONITORS_PER_SESSION: usize = 250;
 
 /// Runtime state of one instance besides its body.
 struct Inst {
@@ -127,8 +129,12 @@ struct Inst {
     /// Readings of a lockstep dskill, taken at the next cycle's start.
     lockstep_readings: Vec<Option<Value>>,
     /// Its body was left behind (it ran past its deadline and may never
-    /// return): a fresh one is made when it is activated again.
+    /// return): a fresh one is made when it is activated again, once the
+    /// one left behind has returned (see [`Manager::still_running`]).
     abandoned: bool,
+    /// The mailbox of a threaded body left behind (its thread says there
+    /// when it has ended).
+    behind_worker: Option<Arc<crate::runner::Shared>>,
     /// The cycle from which its parameters last changed (monitors reading
     /// one are evaluated again then).
     params_from: u64,
@@ -287,6 +293,7 @@ impl Manager {
                 worker,
                 lockstep_readings: vec![None; def.outputs.len()],
                 abandoned: false,
+                behind_worker: None,
                 params_from: 0,
                 typed_outputs,
             });
@@ -465,6 +472,7 @@ impl Manager {
             inst.worker = Some(Worker::new(def.inputs.len(), def.outputs.len()));
         }
         inst.abandoned = false;
+        inst.behind_worker = None;
         Ok(())
     }
 
@@ -489,9 +497,19 @@ impl Manager {
         );
         if let Some(worker) = &self.insts[i].worker {
             worker.stop();
+            self.insts[i].behind_worker = Some(Arc::clone(&worker.shared));
         }
         self.insts[i].abandoned = true;
         self.fault(i, cause);
+    }
+
+    /// Whether a body of instance `i` left behind is still running (on a
+    /// cycle thread, or on its own thread): it holds that thread and, if it
+    /// computes, a core, so no fresh body is started beside it.
+    pub(super) fn still_running(&self, i: usize) -> bool {
+        let inst = &self.insts[i];
+        inst.abandoned
+            && (self.clocks[i].behind() > 0 || inst.behind_worker.as_ref().is_some_and(|shared| !shared.lock().ended))
     }
 
     fn fault(&mut self, i: usize, cause: String) {

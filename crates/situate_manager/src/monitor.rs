@@ -135,7 +135,9 @@ pub(crate) struct Monitor {
     pub report: Vec<(String, usize)>,
     /// The names `report` asked for, as written (records not expanded).
     pub report_asked: Vec<String>,
-    /// The client that added it, if it said.
+    /// The session that holds it (`None`: the program itself).
+    pub session: Option<String>,
+    /// The name its client gave, if any.
     pub client: Option<String>,
 }
 
@@ -159,6 +161,7 @@ impl Monitors {
         pause: bool,
         report: Vec<(String, usize)>,
         report_asked: Vec<String>,
+        session: Option<String>,
         client: Option<String>,
     ) -> u64 {
         debug_assert!((1..=MAX_ANY_CONDITIONS).contains(&conditions.len()));
@@ -191,16 +194,17 @@ impl Monitors {
             pause,
             report,
             report_asked,
+            session,
             client,
         });
         id
     }
 
-    /// The monitors of `client` and the conditions they watch.
-    pub fn count_of(&self, client: Option<&str>) -> (usize, usize) {
+    /// The monitors of `session` and the conditions they watch.
+    pub fn count_of(&self, session: Option<&str>) -> (usize, usize) {
         self.list
             .iter()
-            .filter(|m| m.client.as_deref() == client)
+            .filter(|m| m.session.as_deref() == session)
             .fold((0, 0), |(n, c), m| (n + 1, c + m.conditions.len()))
     }
 
@@ -209,10 +213,23 @@ impl Monitors {
         self.list.iter().map(|m| m.conditions.len()).sum()
     }
 
-    pub fn cancel(&mut self, id: u64) -> bool {
-        let before = self.list.len();
-        self.list.retain(|m| m.id != id);
-        self.list.len() != before
+    /// The monitor `id`, if it is there.
+    pub fn get(&self, id: u64) -> Option<&Monitor> {
+        self.list.iter().find(|m| m.id == id)
+    }
+
+    /// Removes monitor `id`; returns it.
+    pub fn cancel(&mut self, id: u64) -> Option<Monitor> {
+        let i = self.list.iter().position(|m| m.id == id)?;
+        Some(self.list.remove(i))
+    }
+
+    /// Removes every monitor of `session`; returns them, in the order they were added.
+    pub fn end_session(&mut self, session: &str) -> Vec<Monitor> {
+        let (gone, kept) =
+            std::mem::take(&mut self.list).into_iter().partition(|m| m.session.as_deref() == Some(session));
+        self.list = kept;
+        gone
     }
 
     /// Evaluates every monitor; calls `fire` for each that fires this cycle.

@@ -10,7 +10,7 @@
 //! ("lockstep"), so a simulation replays exactly.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -38,6 +38,8 @@ pub(crate) struct Exec {
     /// memory the cycle does not touch otherwise) at its next timed run, or
     /// when the timing is asked for (see `Manager::count_run`).
     pub untimed_runs: u64,
+    /// Their times on the coarse clock, summed (see [`SkillTiming::add_untimed`]).
+    pub untimed_ns: u64,
     /// The body [fills its outputs](Skill::fills_outputs): an output buffer
     /// holding the value its last output replaced is handed to the body as
     /// a spare instead of being recycled on entry.
@@ -55,6 +57,7 @@ impl Default for Exec {
             elapsed_ns: 0,
             timed: false,
             untimed_runs: 0,
+            untimed_ns: 0,
             fills: false,
         }
     }
@@ -72,6 +75,7 @@ impl Exec {
             elapsed_ns: 0,
             timed: false,
             untimed_runs: 0,
+            untimed_ns: 0,
         }
     }
 
@@ -224,13 +228,18 @@ pub(crate) fn coarse_tick_ns() -> u64 {
 /// (two relaxed stores); the watchdog only reads it, and clears it when it
 /// leaves a stuck body behind. A body's own `leave` clears only its own
 /// mark, so a late return never clears the mark of a fresh body.
+///
+/// It also counts the runs left behind that have not returned yet: a body
+/// left behind still holds a thread (and, if it computes, a core), so no
+/// fresh body of the skill is started while one is (see `Manager::activate`).
 pub(crate) struct BodyClock {
     since: AtomicU64,
+    behind: AtomicU32,
 }
 
 impl BodyClock {
     pub fn new() -> Self {
-        BodyClock { since: AtomicU64::new(0) }
+        BodyClock { since: AtomicU64::new(0), behind: AtomicU32::new(0) }
     }
 
     fn enter(&self, start_coarse_ns: u64) -> u64 {
@@ -240,7 +249,10 @@ impl BodyClock {
     }
 
     fn leave(&self, mark: u64) {
-        let _ = self.since.compare_exchange(mark, 0, Ordering::Relaxed, Ordering::Relaxed);
+        if self.since.compare_exchange(mark, 0, Ordering::AcqRel, Ordering::Acquire).is_err() {
+            // Not its mark any more: the watchdog left this run behind, and it has now returned.
+            let _ = self.behind.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+        }
     }
 
     /// The mark of the body running now (0: none).
@@ -254,9 +266,20 @@ impl BodyClock {
         Duration::from_nanos((coarse_ns() + 1).saturating_sub(mark))
     }
 
-    /// The watchdog left the body with `mark` behind: it no longer counts.
+    /// The watchdog left the body with `mark` behind: it no longer counts as
+    /// the running body, but as one left behind until it returns.
     pub fn forget(&self, mark: u64) {
-        self.leave(mark);
+        // Counted before the mark is cleared: a return that finds its mark gone finds the count.
+        self.behind.fetch_add(1, Ordering::AcqRel);
+        if self.since.compare_exchange(mark, 0, Ordering::AcqRel, Ordering::Acquire).is_err() {
+            // It returned just now: nothing left behind.
+            let _ = self.behind.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+        }
+    }
+
+    /// How many runs left behind have not returned yet.
+    pub fn behind(&self) -> u32 {
+        self.behind.load(Ordering::Acquire)
     }
 }
 
@@ -328,6 +351,9 @@ pub(crate) struct Mailbox {
     pub stats: WorkerStats,
     /// The worker thread ended by a panic (see `worker`).
     pub dead: bool,
+    /// Its thread has ended (returned or panicked): what a body left behind
+    /// on it no longer holds.
+    pub ended: bool,
 }
 
 impl Mailbox {
@@ -445,6 +471,7 @@ fn worker(skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, period: D
         mb.active = false;
         mb.dead = true;
     }
+    mailbox.lock().ended = true;
 }
 
 fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, period: Duration, clock: WorkerClock) {
@@ -511,7 +538,7 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
                 // down: what it produced late belongs to no cycle.
                 return;
             }
-            mb.stats.record(Some(elapsed));
+            mb.stats.record(elapsed);
             mb.prints.extend(cx.take_prints());
             match result {
                 Ok(()) => {

@@ -104,14 +104,24 @@ fn a_sync_body_that_never_returns_is_left_behind_and_the_cycle_goes_on() {
     until("cycles after the fault", || handle.stats().unwrap().cycle > at + 10);
     assert!(!handle.skill("b").unwrap().active);
     assert!(handle.query("z").unwrap().cycle > at);
-    // Activating it again makes a fresh body, with the parameters of now.
+    // While the body left behind still runs, no fresh one is started beside it (each would
+    // hold another thread, and a computing one another core), and the refusal says why.
     handle.set_param("b", "mode", Value::F64(0.0)).unwrap();
-    handle.activate(&["b"]).unwrap();
+    for _ in 0..3 {
+        match handle.activate(&["b"]) {
+            Err(ControlError::Invalid(m)) => assert!(m.contains("is still running"), "{m}"),
+            other => panic!("activated beside a body still running: {other:?}"),
+        }
+    }
+    assert!(!handle.skill("b").unwrap().active);
+    assert_eq!(made.load(Ordering::SeqCst), 1, "no fresh body while the old one runs");
+    // The old body returns at last: its thread ends, the cycle is unharmed, and activating it
+    // again makes a fresh body, with the parameters of now.
+    gate.open();
+    until("the skill can be activated again", || handle.activate(&["b"]).is_ok());
     let again = handle.stats().unwrap().cycle;
     until("the fresh body's output", || handle.query("y").unwrap().cycle > again);
     assert_eq!(made.load(Ordering::SeqCst), 2, "one body left behind, one fresh");
-    // The old body returns at last: its thread ends, the cycle is unharmed.
-    gate.open();
     let now = handle.stats().unwrap().cycle;
     until("cycles after the old body returned", || handle.stats().unwrap().cycle > now + 10);
     assert!(handle.skill("b").unwrap().active);
@@ -195,9 +205,14 @@ fn an_async_cskill_stuck_in_a_run_is_faulted_past_its_liveness_deadline() {
     let cause = fault_of(&events, "slow");
     assert!(cause.contains("over its liveness deadline of 100 ms"), "{cause}");
     assert!(cause.contains("on its thread"), "{cause}");
+    // No fresh body beside the one still stuck on its thread.
+    match m.activate(&["slow"]) {
+        Err(ControlError::Invalid(message)) => assert!(message.contains("is still running"), "{message}"),
+        other => panic!("activated beside a body still running: {other:?}"),
+    }
     gate.open();
-    // A fresh body on its own thread runs on reactivation.
-    m.activate(&["slow"]).unwrap();
+    // Once it returned (its thread ends), a fresh body on its own thread runs on reactivation.
+    until("the skill can be activated again", || m.activate(&["slow"]).is_ok());
     let mut m = within_bound(move || {
         while m.skill("slow").unwrap().timing.runs == 0 {
             m.run_cycles(1);
@@ -358,4 +373,41 @@ fn an_unpaced_simulated_cycle_is_timed_on_samples_and_a_long_one_still_shows_in_
     // Cycles 1, 33, 65 and 97 were timed exactly, none of them the long one.
     assert!(stats.last_cycle_ns > 0 && stats.last_cycle_ns < 30_000_000, "{stats:?}");
     assert!(stats.mean_cycle_ns > 0.0 && stats.mean_cycle_ns < 30_000_000.0, "{stats:?}");
+}
+
+#[test]
+fn one_slow_run_counts_once_in_a_skills_timing_timed_or_not() {
+    // Bodies are timed exactly one cycle in 32; the runs between were once counted as long as
+    // the last timed one, so one slow run in a timed cycle counted 32 times (its mean 30× too
+    // high). Whichever cycle the slow run falls in, the skill's total can now never exceed the
+    // time its cycles took.
+    for slow_cycle in [33_u64, 40] {
+        let mut reg = Registry::new();
+        let d = decl("lumpy", SkillKind::Sync, &[], &[("y", "f64")]);
+        let dd = d.clone();
+        reg.add(SkillType::new(d, move || {
+            Ok(Box::new(FnSkill::new(&dd, move |io: &mut Io<'_>, _: &[Value]| {
+                if io.cx.cycle() == slow_cycle {
+                    std::thread::sleep(Duration::from_millis(400));
+                }
+                io.outputs[0] = Some(Value::F64(1.0));
+                Ok(())
+            })) as _)
+        }));
+        let spec = simulated("lumpy").skill(skill("l", "lumpy").budget_ms(60_000.0));
+        let mut m = build(&spec, &reg);
+        let wall = Instant::now();
+        m.step(96).unwrap();
+        let wall_ns = wall.elapsed().as_nanos() as u64;
+        let timing = m.skill("l").unwrap().timing;
+        assert_eq!(timing.runs, 96);
+        // A coarse reading overstates a run by less than a tick (≤ 10 ms): a generous slack.
+        assert!(
+            timing.total_ns <= wall_ns + 50 * 10_000_000,
+            "slow run in cycle {slow_cycle}: the timing says {} ms of runs in {} ms of cycles",
+            timing.total_ns / 1_000_000,
+            wall_ns / 1_000_000
+        );
+        assert!(timing.total_ns >= 400_000_000, "the slow run is counted: {timing:?}");
+    }
 }

@@ -5,7 +5,8 @@ mod common;
 use common::*;
 use situate_core::{SkillKind, Value};
 use situate_manager::{
-    Control, ControlError, Event, Manager, MonitorCondition, MonitorMode, Registry, Reply, Request, MAX_ANY_CONDITIONS,
+    CancelReason, Control, ControlError, Event, Manager, MonitorCondition, MonitorMode, Registry, Reply, Request,
+    MAX_ANY_CONDITIONS,
 };
 
 /// A sonar whose front range follows a script, one value per cycle, and a
@@ -163,6 +164,7 @@ fn a_pausing_monitor_stops_the_cycle_at_the_cycle_it_fires_in() {
             mode: MonitorMode::Edge,
             pause: true,
             report: Vec::new(),
+            session: None,
             client: None,
         })
         .unwrap();
@@ -196,6 +198,7 @@ fn a_pausing_monitor_also_ends_a_step_where_it_fires() {
             mode: MonitorMode::Edge,
             pause: true,
             report: Vec::new(),
+            session: None,
             client: None,
         })
         .unwrap();
@@ -219,6 +222,7 @@ fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
             mode: MonitorMode::Once,
             pause: false,
             report: report.iter().map(|s| s.to_string()).collect(),
+            session: None,
             client: None,
         })
     };
@@ -253,14 +257,15 @@ fn a_monitor_reports_the_values_it_was_asked_for_as_of_the_cycle_it_fires_in() {
 fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
     // 60,000 monitors once took a cycle from 45 µs to 75 ms.
     let mut m = robot(SCRIPT);
-    // Five clients, each under its own cap, fill the robot's.
+    // Five sessions, each under its own cap, fill the robot's.
     let add = |m: &mut Manager, k: usize| {
         m.request(Request::AddMonitor {
             condition: "sonar.range[0] < 0.25".into(),
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),
-            client: Some(format!("c{}", k % 5)),
+            session: Some(format!("c{}", k % 5)),
+            client: None,
         })
     };
     for k in 0..situate_manager::MAX_MONITORS {
@@ -273,59 +278,149 @@ fn a_robot_keeps_a_bounded_number_of_monitors_and_says_so() {
         other => panic!("{other:?}"),
     }
     // Cancelling one makes room again.
-    m.request(Request::CancelMonitor { monitor: 1 }).unwrap();
+    m.request(Request::CancelMonitor { monitor: 1, session: Some("c0".into()), force: false }).unwrap();
     add(&mut m, 0).expect("room again");
 }
 
+fn add_for(m: &mut Manager, session: Option<&str>, any: usize) -> Result<Reply, ControlError> {
+    let conditions = vec!["sonar.range[0] < 0.25".to_string(); any];
+    m.request(Request::AddMonitor {
+        condition: MonitorCondition::Any(conditions),
+        mode: MonitorMode::Level,
+        pause: false,
+        report: Vec::new(),
+        session: session.map(str::to_string),
+        client: Some("a-label".into()),
+    })
+}
+
 #[test]
-fn one_client_keeps_a_bounded_share_of_the_robots_monitors_and_is_told_so() {
+fn one_session_keeps_a_bounded_share_of_the_robots_monitors_and_is_told_so() {
     let mut m = robot(SCRIPT);
-    let add = |m: &mut Manager, client: Option<&str>, any: usize| {
-        let conditions = vec!["sonar.range[0] < 0.25".to_string(); any];
-        m.request(Request::AddMonitor {
-            condition: MonitorCondition::Any(conditions),
-            mode: MonitorMode::Level,
-            pause: false,
-            report: Vec::new(),
-            client: client.map(str::to_string),
-        })
-    };
-    let cap = situate_manager::MAX_MONITORS_PER_CLIENT;
+    let cap = situate_manager::MAX_MONITORS_PER_SESSION;
     for _ in 0..cap / 50 {
-        add(&mut m, Some("leaky"), 50).expect("under the client's cap");
+        add_for(&mut m, Some("leaky-session"), 50).expect("under the session's cap");
     }
-    match add(&mut m, Some("leaky"), 1) {
+    match add_for(&mut m, Some("leaky-session"), 1) {
         Err(ControlError::Invalid(message)) => assert_eq!(
             message,
             format!(
-                "monitor_add: client `leaky` has {} monitors watching {cap} conditions; this one's 1 would be past \
-                 the most one client keeps ({cap}); cancel some first",
+                "monitor_add: session `leaky-se` (client `a-label`) has {} monitors watching {cap} conditions; this \
+                 one's 1 would be past the most one session keeps ({cap}); cancel some first",
                 cap / 50
             )
         ),
         other => panic!("{other:?}"),
     }
-    // Another client, and those that give no name, still have theirs.
-    add(&mut m, Some("other"), 64).expect("another client");
+    // Another session, whatever label its client gives, and the program itself still have theirs.
+    add_for(&mut m, Some("other-session"), 64).expect("another session");
     for _ in 0..cap {
-        add(&mut m, None, 1).expect("the nameless share one allowance");
+        add_for(&mut m, None, 1).expect("the program's own share one allowance");
     }
-    match add(&mut m, None, 2) {
+    match add_for(&mut m, None, 2) {
         Err(ControlError::Invalid(message)) => assert!(
             message.starts_with(&format!(
-                "monitor_add: the clients that give no `client` have {cap} monitors watching {cap} conditions; this \
-                 one's 2 would be past the most one client keeps ({cap})"
+                "monitor_add: the program's own requests have {cap} monitors watching {cap} conditions; this \
+                 one's 2 would be past the most one session keeps ({cap})"
             )),
             "{message}"
         ),
         other => panic!("{other:?}"),
     }
     let situate_manager::Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
-    assert_eq!(list.iter().filter(|i| i.client.as_deref() == Some("leaky")).count(), cap / 50);
-    // Cancelling one of its own makes room for that client again.
-    let leaky = list.iter().find(|i| i.client.as_deref() == Some("leaky")).unwrap().monitor;
-    m.request(Request::CancelMonitor { monitor: leaky }).unwrap();
-    add(&mut m, Some("leaky"), 50).expect("room again");
+    assert_eq!(list.iter().filter(|i| i.session.as_deref() == Some("leaky-session")).count(), cap / 50);
+    assert!(list.iter().all(|i| i.client.as_deref() == Some("a-label")), "the label is kept");
+    // Cancelling one of its own makes room for that session again.
+    let leaky = list.iter().find(|i| i.session.as_deref() == Some("leaky-session")).unwrap().monitor;
+    m.request(Request::CancelMonitor { monitor: leaky, session: Some("leaky-session".into()), force: false }).unwrap();
+    add_for(&mut m, Some("leaky-session"), 50).expect("room again");
+}
+
+/// Every `monitor_cancelled` event so far, as (monitor, session, reason).
+fn cancelled(events: &crossbeam_channel::Receiver<Event>) -> Vec<(u64, Option<String>, CancelReason)> {
+    events
+        .try_iter()
+        .filter_map(|e| match e {
+            Event::MonitorCancelled { monitor, session, reason, .. } => Some((monitor, session, reason)),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn only_its_session_cancels_a_monitor_unless_forced_and_the_owner_is_told() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let id = |r: Reply| match r {
+        Reply::MonitorAdded(id) => id,
+        other => panic!("{other:?}"),
+    };
+    let a = id(add_for(&mut m, Some("session-a"), 1).unwrap());
+    let own = id(add_for(&mut m, None, 1).unwrap());
+    let cancel = |m: &mut Manager, monitor: u64, session: Option<&str>, force: bool| {
+        m.request(Request::CancelMonitor { monitor, session: session.map(str::to_string), force })
+    };
+    match cancel(&mut m, a, Some("session-b"), false) {
+        Err(ControlError::NotOwner(message)) => assert_eq!(
+            message,
+            format!("monitor_cancel: monitor {a} belongs to session `session-`; only its session cancels it")
+        ),
+        other => panic!("{other:?}"),
+    }
+    match cancel(&mut m, a, None, false) {
+        Err(ControlError::NotOwner(_)) => {}
+        other => panic!("the program is not the session either: {other:?}"),
+    }
+    match cancel(&mut m, own, Some("session-a"), false) {
+        Err(ControlError::NotOwner(message)) => {
+            assert!(message.ends_with("belongs to the program running the robot; only its session cancels it"))
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(cancelled(&events).is_empty(), "a refused cancel changes nothing");
+    let Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list.len(), 2);
+    // Forced (the GUI, after asking): gone, and its owner is told it was not its own doing.
+    cancel(&mut m, a, Some("gui-1"), true).unwrap();
+    assert_eq!(cancelled(&events), vec![(a, Some("session-a".to_string()), CancelReason::Forced)]);
+    cancel(&mut m, own, None, false).unwrap();
+    assert_eq!(cancelled(&events), vec![(own, None, CancelReason::Owner)]);
+    assert_eq!(cancel(&mut m, own, None, false), Err(ControlError::UnknownMonitor(own)));
+}
+
+#[test]
+fn a_sessions_monitors_go_when_it_ends_and_free_its_allowance() {
+    let mut m = robot(SCRIPT);
+    let events = m.events();
+    let cap = situate_manager::MAX_MONITORS_PER_SESSION;
+    // A sequencer that fills its allowance and crashes…
+    for _ in 0..cap / 50 {
+        add_for(&mut m, Some("crashed"), 50).unwrap();
+    }
+    add_for(&mut m, Some("survivor"), 3).unwrap();
+    assert!(add_for(&mut m, Some("crashed"), 1).is_err());
+    let Reply::MonitorsCancelled(gone) = m.request(Request::EndSession { session: "crashed".into() }).unwrap() else {
+        panic!()
+    };
+    assert_eq!(gone.len(), cap / 50);
+    let told = cancelled(&events);
+    assert_eq!(told.len(), gone.len());
+    assert!(told.iter().all(|(_, s, r)| s.as_deref() == Some("crashed") && *r == CancelReason::SessionEnded));
+    // …leaves nothing behind; the other session's are untouched.
+    let Reply::Monitors(list) = m.request(Request::ListMonitors).unwrap() else { panic!() };
+    assert_eq!(list.iter().map(|i| i.session.as_deref()).collect::<Vec<_>>(), vec![Some("survivor")]);
+    // A restarted sequencer (a new session) has its whole allowance, however often it crashed before.
+    for restart in 0..5 {
+        let session = format!("restart-{restart}");
+        for _ in 0..cap / 50 {
+            add_for(&mut m, Some(&session), 50).expect("a fresh allowance");
+        }
+        m.request(Request::EndSession { session }).unwrap();
+    }
+    let Reply::MonitorsCancelled(none) = m.request(Request::EndSession { session: "unknown".into() }).unwrap() else {
+        panic!()
+    };
+    assert!(none.is_empty());
 }
 
 // ----- any: one monitor on several conditions ----------------------------
@@ -347,6 +442,7 @@ fn add_any(m: &mut Manager, any: &[&str], mode: MonitorMode, report: &[&str]) ->
         mode,
         pause: false,
         report: report.iter().map(|r| r.to_string()).collect(),
+        session: None,
         client: None,
     })? {
         Reply::MonitorAdded(id) => Ok(id),
@@ -462,13 +558,14 @@ fn an_any_monitor_takes_one_to_64_conditions_and_each_counts_toward_the_cap() {
     let id = add_any(&mut m, &many[1..], MonitorMode::Level, &[]).unwrap();
     // Every condition is evaluated every cycle: the robot's cap counts conditions.
     for k in 0..situate_manager::MAX_MONITORS - MAX_ANY_CONDITIONS {
-        // Spread over clients, each under its own cap.
+        // Spread over sessions, each under its own cap.
         m.request(Request::AddMonitor {
             condition: "cycle > 0".into(),
             mode: MonitorMode::Level,
             pause: false,
             report: Vec::new(),
-            client: Some(format!("c{}", k % 5)),
+            session: Some(format!("c{}", k % 5)),
+            client: None,
         })
         .expect("under the cap");
     }

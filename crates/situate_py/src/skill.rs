@@ -463,6 +463,11 @@ pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType>
     let declaration = declaration.clone().unbind();
     // Install the stdout router now, from a Python thread.
     ensure_stdout(py)?;
+    // Arrays cross as numpy arrays: import numpy now, at load, not in the body's first timed
+    // run (an import takes 100–200 ms, past a tight `budget_ms`).
+    if decl.inputs.iter().chain(&decl.outputs).any(|p| has_array(&p.ty)) {
+        convert::have_numpy(py);
+    }
     Ok(SkillType::new(decl, move || {
         Python::attach(|py| {
             let d = declaration.bind(py).get();
@@ -474,6 +479,15 @@ pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType>
             Ok(Box::new(skill) as Box<dyn Skill>)
         })
     }))
+}
+
+/// Whether values of type `t` hold a numeric array (a record may hold one in a field).
+fn has_array(t: &SignalType) -> bool {
+    match t {
+        SignalType::Array { .. } => true,
+        SignalType::Record(r) => r.fields.iter().any(|(_, t)| has_array(t)),
+        _ => false,
+    }
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@ pub fn control_error(e: &ControlError) -> Json {
         ControlError::BadCondition { .. } => "bad_condition",
         ControlError::BadReport(_) => "unknown_signal",
         ControlError::UnknownMonitor(_) => "unknown_monitor",
+        ControlError::NotOwner(_) => "not_owner",
         ControlError::Invalid(_) => "invalid",
         ControlError::Interrupted(_) => "interrupted",
         ControlError::Disconnected => "unavailable",
@@ -124,7 +125,7 @@ fn graph_to_json(g: &GraphInfo) -> Json {
 fn monitor_to_json(m: &MonitorInfo) -> Json {
     json!({
         "monitor": m.monitor, "condition": m.condition, "any": m.any, "mode": m.mode.name(), "fired": m.fired,
-        "holds": m.holds, "pause": m.pause, "report": m.report, "client": m.client,
+        "holds": m.holds, "pause": m.pause, "report": m.report, "session": m.session, "client": m.client,
     })
 }
 
@@ -149,6 +150,7 @@ pub fn reply_to_json(reply: &Reply) -> Json {
         Reply::Stats(s) => stats_to_json(s),
         Reply::MonitorAdded(id) => json!({ "monitor": id }),
         Reply::Monitors(list) => Json::Array(list.iter().map(monitor_to_json).collect()),
+        Reply::MonitorsCancelled(ids) => json!({ "cancelled": ids }),
     }
 }
 
@@ -181,6 +183,11 @@ pub fn event_to_json(e: &Event) -> (&'static str, Json) {
         Event::Print { skill, line, cycle } => {
             ("print", json!({"kind": "print", "skill": skill, "line": line, "cycle": cycle}))
         }
+        Event::MonitorCancelled { monitor, condition, session, reason, cycle } => (
+            "monitor_cancelled",
+            json!({"kind": "monitor_cancelled", "monitor": monitor, "condition": condition, "session": session,
+                   "reason": reason.name(), "cycle": cycle}),
+        ),
         Event::ManagerStarted { cycle } => ("manager_started", json!({"kind": "manager_started", "cycle": cycle})),
         Event::ManagerStopped { cycle } => ("manager_stopped", json!({"kind": "manager_stopped", "cycle": cycle})),
         Event::WorkerFailed { thread, cause, action } => {
@@ -230,6 +237,7 @@ mod tests {
             holds: false,
             pause: false,
             report: vec![],
+            session: None,
             client: None,
         };
         assert_eq!(monitor_to_json(&info)["any"], json!(["a", "b"]));

@@ -100,6 +100,15 @@ impl Args<'_> {
         }
     }
 
+    /// The optional `session` secret, as the session's public id (see
+    /// [`crate::client_session`]).
+    fn session(&mut self) -> Result<Option<String>, WireError> {
+        if !self.has("session") {
+            return Ok(None);
+        }
+        crate::client_session::public_id(&self.string("session")?).map(Some)
+    }
+
     fn has(&self, name: &str) -> bool {
         self.obj.contains_key(name) || self.huge.contains_key(name)
     }
@@ -472,11 +481,13 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             };
             let pause = a.boolean("pause", Some(false))?;
             let report = if a.has("report") { a.strings("report", "signal or parameter names")? } else { Vec::new() };
+            let session = a.session()?;
             let client = if a.has("client") { Some(a.string("client")?) } else { None };
-            Decoded::Manager(Request::AddMonitor { condition, mode, pause, report, client })
+            Decoded::Manager(Request::AddMonitor { condition, mode, pause, report, session, client })
         }
         "monitor_cancel" => {
-            Decoded::Manager(Request::CancelMonitor { monitor: a.integer("monitor", 0, i64::MAX)? as u64 })
+            let monitor = a.integer("monitor", 0, i64::MAX)? as u64;
+            Decoded::Manager(Request::CancelMonitor { monitor, session: a.session()?, force: false })
         }
         "monitor_list" => Decoded::Manager(Request::ListMonitors),
         "telemetry" => {
@@ -721,12 +732,18 @@ mod tests {
             MonitorCondition::One("cycle > 3".into())
         );
         assert_eq!(
-            decode_request("monitor_add", br#"{"any": ["a.b", "cycle > 3"], "mode": "edge", "pause": true}"#).unwrap(),
+            decode_request(
+                "monitor_add",
+                br#"{"any": ["a.b", "cycle > 3"], "mode": "edge", "pause": true, "session": "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa"}"#
+            )
+            .unwrap(),
             Decoded::Manager(Request::AddMonitor {
                 condition: MonitorCondition::Any(vec!["a.b".into(), "cycle > 3".into()]),
                 mode: MonitorMode::Edge,
                 pause: true,
                 report: Vec::new(),
+                // The public id of the secret, never the secret itself.
+                session: Some("2eee42b299cb44bb3d5dd0a02210ce29".into()),
                 client: None,
             })
         );

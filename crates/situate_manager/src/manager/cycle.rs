@@ -375,10 +375,11 @@ impl Manager {
         let exec = &mut self.execs[i];
         if exec.timed {
             let timing = &mut self.insts[i].timing;
-            timing.add_untimed(std::mem::take(&mut exec.untimed_runs));
-            timing.record(Some(exec.elapsed_ns));
+            timing.add_untimed(std::mem::take(&mut exec.untimed_runs), std::mem::take(&mut exec.untimed_ns));
+            timing.record(exec.elapsed_ns);
         } else {
             exec.untimed_runs += 1;
+            exec.untimed_ns += exec.elapsed_ns;
         }
     }
 

@@ -71,6 +71,16 @@ impl Manager {
                 }
             }
         }
+        // A body left behind that has not returned holds a thread (and perhaps a core): a fresh
+        // one beside it would take another, and each reactivation one more.
+        if let Some(i) = (0..active.len()).find(|&i| active[i] && !self.insts[i].active && self.still_running(i)) {
+            return Err(ControlError::Invalid(format!(
+                "cannot activate `{}`: its last body was left behind past its deadline and is still \
+                 running (it holds a thread and perhaps a core); a fresh one is made once it returns \
+                 (a body that never returns holds its thread until the program ends)",
+                self.graph.instances[i].name
+            )));
+        }
         let mut changed = Vec::new();
         for (i, &on) in active.iter().enumerate() {
             if on && !self.insts[i].active {
@@ -176,7 +186,7 @@ impl Manager {
             outputs: def.outputs.iter().enumerate().map(|(k, p)| port(p, self.last_output(i, k))).collect(),
             timing: {
                 let mut timing = inst.timing;
-                timing.add_untimed(self.execs[i].untimed_runs);
+                timing.add_untimed(self.execs[i].untimed_runs, self.execs[i].untimed_ns);
                 timing
             },
             prints: inst.prints.iter().cloned().collect(),
@@ -272,13 +282,15 @@ impl Manager {
 
     /// Installs a monitor compiled by [`front::prepare_monitor`] (on the
     /// caller's thread when it came through a handle), within the caps: the
-    /// robot's and the client's.
+    /// robot's and the session's.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn install_monitor(
         &mut self,
         prepared: PreparedMonitor,
         mode: crate::monitor::MonitorMode,
         pause: bool,
         report_asked: Vec<String>,
+        session: Option<String>,
         client: Option<String>,
     ) -> Result<Reply, ControlError> {
         let PreparedMonitor { mut conditions, any, targets, reported } = prepared;
@@ -293,16 +305,17 @@ impl Manager {
                 self.monitors.list.len()
             )));
         }
-        let (mine, mine_watched) = self.monitors.count_of(client.as_deref());
-        if mine_watched + adding > MAX_MONITORS_PER_CLIENT {
-            let who = match &client {
-                Some(c) => format!("client `{c}` has"),
-                None => "the clients that give no `client` have".to_string(),
+        let (mine, mine_watched) = self.monitors.count_of(session.as_deref());
+        if mine_watched + adding > MAX_MONITORS_PER_SESSION {
+            let who = match (&session, &client) {
+                (Some(s), Some(c)) => format!("session `{}` (client `{c}`) has", short_session(s)),
+                (Some(s), None) => format!("session `{}` has", short_session(s)),
+                (None, _) => "the program's own requests have".to_string(),
             };
             let adds = if any { format!("this one's {adding} would be") } else { "one more is".to_string() };
             return Err(ControlError::Invalid(format!(
                 "monitor_add: {who} {mine} monitors watching {mine_watched} conditions; {adds} past \
-                 the most one client keeps ({MAX_MONITORS_PER_CLIENT}); cancel some first"
+                 the most one session keeps ({MAX_MONITORS_PER_SESSION}); cancel some first"
             )));
         }
         // The compiled references become the manager's own.
@@ -312,7 +325,48 @@ impl Manager {
             c.remap_refs(global);
         }
         let reported = reported.into_iter().map(|(name, r)| (name, global(r))).collect();
-        Ok(Reply::MonitorAdded(self.monitors.add(conditions, any, mode, pause, reported, report_asked, client)))
+        Ok(Reply::MonitorAdded(self.monitors.add(
+            conditions,
+            any,
+            mode,
+            pause,
+            reported,
+            report_asked,
+            session,
+            client,
+        )))
+    }
+
+    /// Cancels monitor `id` for `session` (its owner), or for anyone when `force`d.
+    fn cancel_monitor(&mut self, id: u64, session: Option<String>, force: bool) -> Result<Reply, ControlError> {
+        let owner = self.monitors.get(id).ok_or(ControlError::UnknownMonitor(id))?.session.clone();
+        let reason = if owner == session {
+            CancelReason::Owner
+        } else if force {
+            CancelReason::Forced
+        } else {
+            let whose = match &owner {
+                Some(s) => format!("session `{}`", short_session(s)),
+                None => "the program running the robot".to_string(),
+            };
+            return Err(ControlError::NotOwner(format!(
+                "monitor_cancel: monitor {id} belongs to {whose}; only its session cancels it"
+            )));
+        };
+        if let Some(m) = self.monitors.cancel(id) {
+            self.monitor_cancelled(m, reason);
+        }
+        Ok(Reply::Done)
+    }
+
+    fn monitor_cancelled(&mut self, m: crate::monitor::Monitor, reason: CancelReason) {
+        self.bus.send(Event::MonitorCancelled {
+            monitor: m.id,
+            condition: m.source,
+            session: m.session,
+            reason,
+            cycle: self.cycle,
+        });
     }
 
     /// The manager's id for a name a condition reads.
@@ -332,8 +386,8 @@ impl Manager {
         monitor: Option<PreparedMonitorBox>,
     ) -> Result<Reply, ControlError> {
         match (request, monitor) {
-            (Request::AddMonitor { mode, pause, report, client, .. }, Some(prepared)) => {
-                self.install_monitor(*prepared, mode, pause, report, client)
+            (Request::AddMonitor { mode, pause, report, session, client, .. }, Some(prepared)) => {
+                self.install_monitor(*prepared, mode, pause, report, session, client)
             }
             (request, _) => self.request(request),
         }
@@ -371,16 +425,18 @@ impl Manager {
             Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
             Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
             Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
-            Request::AddMonitor { condition, mode, pause, report, client } => {
+            Request::AddMonitor { condition, mode, pause, report, session, client } => {
                 let prepared = front::prepare_monitor(&self.graph, &condition, &report)?;
-                self.install_monitor(prepared, mode, pause, report, client)
+                self.install_monitor(prepared, mode, pause, report, session, client)
             }
-            Request::CancelMonitor { monitor } => {
-                if self.monitors.cancel(monitor) {
-                    Ok(Reply::Done)
-                } else {
-                    Err(ControlError::UnknownMonitor(monitor))
+            Request::CancelMonitor { monitor, session, force } => self.cancel_monitor(monitor, session, force),
+            Request::EndSession { session } => {
+                let gone = self.monitors.end_session(&session);
+                let ids = gone.iter().map(|m| m.id).collect();
+                for m in gone {
+                    self.monitor_cancelled(m, CancelReason::SessionEnded);
                 }
+                Ok(Reply::MonitorsCancelled(ids))
             }
             Request::ListMonitors => Ok(Reply::Monitors(
                 self.monitors
@@ -395,6 +451,7 @@ impl Manager {
                         holds: m.holds,
                         pause: m.pause,
                         report: m.report_asked.clone(),
+                        session: m.session.clone(),
                         client: m.client.clone(),
                     })
                     .collect(),
@@ -454,4 +511,10 @@ impl Manager {
         let fresh = slot.stamp == self.cycle || self.graph.instances[i].kind == situate_core::SkillKind::Async;
         (self.insts[i].active && fresh).then(|| slot.value.clone()).flatten()
     }
+}
+
+/// A session id as messages show it: its first 8 characters (enough to tell
+/// sessions apart in a list, and no more of it than needed).
+fn short_session(session: &str) -> &str {
+    session.get(..8).unwrap_or(session)
 }
