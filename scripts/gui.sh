@@ -26,13 +26,13 @@ npm_ready() {
     local major
     major=$(node -p 'process.versions.node.split(".")[0]')
     [ "$major" -ge 20 ] || die "Node 20 or newer is needed, found $(node --version)"
-    # Install when node_modules is missing or older than the lock file. `npm install` with the
-    # committed lock, not `npm ci`: the lock has no entries for the platform packages of
-    # rollup that the registry here does not serve, and `npm ci` refuses such a lock as
-    # "out of sync" while `npm install` installs the locked versions and leaves it as it is.
+    # Install when node_modules is missing or older than the lock file, with `npm ci`: exactly the
+    # locked versions, and the lock is never written (a build must not dirty the checkout). The
+    # lock is the one npm itself writes (every platform's optional packages listed, as npm lists
+    # them), so `npm install` leaves it as it is too.
     if [ ! -d web/node_modules ] || [ web/package-lock.json -nt web/node_modules/.package-lock.json ]; then
-        echo "gui.sh: npm install in web/ (versions from package-lock.json)"
-        (cd web && npm install --no-audit --no-fund)
+        echo "gui.sh: npm ci in web/ (versions from package-lock.json)"
+        (cd web && npm ci --no-audit --no-fund)
     fi
 }
 
