@@ -15,6 +15,14 @@ fmt() { # seconds -> "1m05s" / "42s"
     if [ "$s" -ge 60 ]; then printf '%dm%02ds' $((s / 60)) $((s % 60)); else printf '%ds' "$s"; fi
 }
 
+# What the checkout's tracked files hold now: no stage may change them (a build that rewrote
+# web/package-lock.json once left every fresh clone dirty).
+tracked_state() {
+    git rev-parse --is-inside-work-tree >/dev/null 2>&1 || return 0
+    { git status --porcelain=v1 --untracked-files=no; git diff; } | sha256sum
+}
+tracked_before=$(tracked_state)
+
 lines=()
 status=0
 start=$SECONDS
@@ -37,6 +45,13 @@ for stage in "${STAGES[@]}"; do
     echo "==> make test:${line}"
     lines+=("$line")
 done
+
+if [ "$status" -eq 0 ] && [ "$(tracked_state)" != "$tracked_before" ]; then
+    echo "make test: the stages changed tracked files of the checkout:" >&2
+    git status --short --untracked-files=no >&2
+    lines+=("$(printf '  %-12s FAILED  tracked files changed' checkout)")
+    status=1
+fi
 
 echo
 echo "make test: stages"

@@ -51,3 +51,41 @@ def test_a_failing_stage_stops_the_run_with_its_exit_code(tmp_path: Path) -> Non
     assert summary[2].split() == ["three", "not", "run"]
     assert summary[3].startswith("make test: FAILED after ")
     assert "running three" not in out.stdout
+
+
+def test_a_stage_that_changes_a_tracked_file_fails_the_run(tmp_path: Path) -> None:
+    # A build that rewrote web/package-lock.json once left every fresh clone dirty after
+    # `make test`. In a checkout of its own (the real one must stay as it is), a stage that
+    # changes a tracked file fails the run and names the file.
+    repo = tmp_path / "checkout"
+    (repo / "scripts").mkdir(parents=True)
+    (repo / "scripts" / "test.sh").write_text((REPO / "scripts" / "test.sh").read_text())
+    (repo / "scripts" / "test.sh").chmod(0o755)
+    (repo / "lock.json").write_text("{}\n")
+    git = ["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t"]
+    for args in (["init", "-q"], ["add", "."], ["commit", "-q", "-m", "x"]):
+        subprocess.run([*git, *args], check=True, capture_output=True)
+    make = tmp_path / "make"
+    make.write_text(
+        "#!/usr/bin/env bash\n"
+        'stage="${@: -1}"\n'
+        f'case "$stage" in dirty) echo changed > {repo / "lock.json"} ;; esac\n'
+    )
+    make.chmod(0o755)
+
+    def stages(*names: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [str(repo / "scripts" / "test.sh"), *names],
+            env={"PATH": "/usr/bin:/bin", "MAKE": str(make)},
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+
+    clean = stages("one")
+    assert clean.returncode == 0, clean.stdout + clean.stderr
+    dirty = stages("one", "dirty")
+    assert dirty.returncode == 1, dirty.stdout
+    assert "lock.json" in dirty.stderr
+    assert "checkout     FAILED  tracked files changed" in dirty.stdout
