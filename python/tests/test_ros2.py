@@ -462,7 +462,8 @@ def test_activation_and_parameters_are_ros_2_services(toybot: str) -> None:
         assert on.success, on.message
         assert asyncio.run(wander_active()) is True
 
-        # A request that is no SetBool request: an error reply naming the type, nothing changed.
+        # A request that is no SetBool request: refused in the response (a ROS 2 client shows
+        # its message), naming the type, nothing changed.
         replies = list(
             s.get(
                 c.key("toybot/wander/set_active", "std_srvs/srv/SetBool"),
@@ -471,6 +472,10 @@ def test_activation_and_parameters_are_ros_2_services(toybot: str) -> None:
             )
         )
         assert len(replies) == 1, replies
-        assert replies[0].err is not None, replies
-        assert "std_srvs/srv/SetBool" in replies[0].err.payload.to_string()
+        assert replies[0].ok is not None, replies
+        refused = store.deserialize_cdr(
+            replies[0].ok.payload.to_bytes(), "std_srvs/srv/SetBool_Response"
+        )
+        assert refused.success is False, refused
+        assert "std_srvs/srv/SetBool" in refused.message, refused
         assert asyncio.run(wander_active()) is True

@@ -24,6 +24,7 @@
 //! ([`services`]): `ros2 service call …/set_active std_srvs/srv/SetBool`, `ros2 param set`.
 
 pub mod config;
+pub mod decode;
 pub mod msgs;
 pub mod rmw;
 pub mod services;
@@ -176,6 +177,12 @@ impl Bridge {
     /// Each service's fully qualified name and its key expression (none without `services`).
     pub fn services(&self) -> &[(String, String)] {
         self.servers.as_ref().map_or(&[], |s| s.names.as_slice())
+    }
+
+    /// What the services refused so far: calls past the queue, requests that could not be read
+    /// (all zero without `services`).
+    pub fn service_stats(&self) -> services::ServiceStats {
+        self.servers.as_ref().map_or_else(services::ServiceStats::default, services::Servers::stats)
     }
 
     /// The node's liveliness token.

@@ -1,6 +1,8 @@
 //! The ROS 2 messages the bridge publishes, as serde types that the `cdr` crate encodes in the
 //! byte layout ROS 2 uses on the wire (XCDR1, little endian, behind the 4-byte encapsulation
 //! header `00 01 00 00`), and the names and type hashes rmw_zenoh puts in key expressions.
+//! Payloads are read back by [`crate::decode`], which bounds every declared length by the bytes
+//! present (the `cdr` crate's reader allocates what a length declares: decision 0011).
 //!
 //! Field order and types follow the `.msg` definitions of ROS 2 Jazzy (and later: the hashes
 //! below are the same in Kilted and Rolling); the Python tests decode every message with the
@@ -9,6 +11,8 @@
 use serde::de::{SeqAccess, Visitor};
 use serde::ser::SerializeTuple;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+pub use crate::decode::DecodeError;
 
 /// A message type the bridge can publish.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
@@ -262,9 +266,10 @@ pub fn encode<T: Serialize>(msg: &T) -> Result<Vec<u8>, cdr::Error> {
     cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite)
 }
 
-/// Decodes a ROS 2 payload (any CDR encapsulation).
-pub fn decode<'de, T: Deserialize<'de>>(payload: &[u8]) -> Result<T, cdr::Error> {
-    cdr::deserialize(payload)
+/// Decodes a ROS 2 payload (plain CDR, either byte order), every declared length checked
+/// against the bytes present before anything is allocated ([`crate::decode`]).
+pub fn decode<'de, T: Deserialize<'de>>(payload: &'de [u8]) -> Result<T, DecodeError> {
+    crate::decode::from_payload(payload)
 }
 
 #[cfg(test)]

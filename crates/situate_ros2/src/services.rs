@@ -16,9 +16,14 @@
 //! attachment).
 //!
 //! The queryables' callbacks only queue the queries; a thread of the bridge answers them, so a
-//! slow answer from the manager never holds up Zenoh's own threads.
+//! slow answer from the manager never holds up Zenoh's own threads. Every call gets an answer:
+//! a call past the queue ([`QUEUE`] deep) gets an error reply at once, and so does a call made
+//! while the bridge stops. A request is read only if it is at most [`MAX_REQUEST_BYTES`], and
+//! every length in it is bounded by the bytes present ([`crate::decode`]); one that cannot be
+//! read is refused in the reply when its type can say so (`SetBool`'s `success: false`,
+//! `SetParameters`' one result with `successful: false`), with a Zenoh error reply otherwise.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -36,8 +41,11 @@ use crate::Ros2Error;
 
 /// How long one answer may wait for the manager.
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
-/// Queries waiting for the bridge's thread; more are refused (the client's call fails).
-const QUEUE: usize = 256;
+/// Calls waiting for the bridge's thread; a call past them gets an error reply at once.
+pub const QUEUE: usize = 256;
+/// The largest request read; a larger one is refused without being read. ROS 2's parameter
+/// requests are a few hundred bytes (`ros2 param load` sends a whole file's in one call).
+pub const MAX_REQUEST_BYTES: usize = 1 << 20;
 
 /// A ROS 2 service type: its name, its DDS name and its RIHS01 hash as ROS 2 Jazzy and later
 /// compute it (the service's type description: request, response and event messages; checked by
@@ -220,15 +228,99 @@ enum Service {
     GetParameterTypes,
 }
 
+impl Service {
+    fn ty(&self) -> SrvType {
+        match self {
+            Service::SetActive(_) => SET_BOOL,
+            Service::GetParameters => GET_PARAMETERS,
+            Service::SetParameters => SET_PARAMETERS,
+            Service::ListParameters => LIST_PARAMETERS,
+            Service::DescribeParameters => DESCRIBE_PARAMETERS,
+            Service::GetParameterTypes => GET_PARAMETER_TYPES,
+        }
+    }
+}
+
+/// What the service servers refused since the bridge started ([`crate::Bridge::service_stats`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ServiceStats {
+    /// Calls that found [`QUEUE`] calls waiting, answered with an error reply at once.
+    pub refused_queue_full: u64,
+    /// Requests that could not be read (too large, truncated, a length past the bytes present,
+    /// not CDR, a malformed rmw_zenoh attachment).
+    pub malformed: u64,
+}
+
+/// The refusals, counted, and logged once per burst (a full queue) or once at all (malformed
+/// requests) so a flood of bad calls cannot flood the log.
+#[derive(Debug, Default)]
+struct Refusals {
+    queue_full: AtomicU64,
+    /// Calls refused since the queue last filled up.
+    burst: AtomicU64,
+    in_burst: AtomicBool,
+    malformed: AtomicU64,
+    warned_malformed: AtomicBool,
+}
+
+impl Refusals {
+    fn queue_full(&self, query: Query) {
+        self.queue_full.fetch_add(1, Ordering::Relaxed);
+        self.burst.fetch_add(1, Ordering::Relaxed);
+        if !self.in_burst.swap(true, Ordering::Relaxed) {
+            tracing::warn!(
+                queue = QUEUE,
+                "ROS 2 bridge: {QUEUE} service calls waiting; calls past them get an error reply until the queue drains"
+            );
+        }
+        let message = format!("the ROS 2 bridge's service queue is full ({QUEUE} calls waiting): call again later");
+        if let Err(e) = query.reply_err(message).wait() {
+            tracing::debug!(key = %query.key_expr(), error = %e, "ROS 2 bridge: an error reply failed");
+        }
+    }
+
+    /// Called when the queue is empty: a burst of refusals is over, and said so once.
+    fn drained(&self) {
+        if self.in_burst.swap(false, Ordering::Relaxed) {
+            let refused = self.burst.swap(0, Ordering::Relaxed);
+            tracing::warn!(
+                refused,
+                "ROS 2 bridge: the service queue drained; {refused} calls were refused while it was full"
+            );
+        }
+    }
+
+    fn malformed(&self, key: &str, message: &str) {
+        self.malformed.fetch_add(1, Ordering::Relaxed);
+        if self.warned_malformed.swap(true, Ordering::Relaxed) {
+            tracing::debug!(key, message, "ROS 2 bridge: a request refused");
+        } else {
+            tracing::warn!(key, message, "ROS 2 bridge: a request refused (further ones are counted, not logged)");
+        }
+    }
+
+    fn stats(&self) -> ServiceStats {
+        ServiceStats {
+            refused_queue_full: self.queue_full.load(Ordering::Relaxed),
+            malformed: self.malformed.load(Ordering::Relaxed),
+        }
+    }
+}
+
 /// The bridge's service servers: held while they live.
 pub(crate) struct Servers {
-    _queryables: Vec<zenoh::query::Queryable<()>>,
+    queryables: Vec<zenoh::query::Queryable<()>>,
     _tokens: Vec<zenoh::liveliness::LivelinessToken>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
+    /// The queue, to answer what is left in it when the servers stop.
+    waiting: crossbeam_channel::Receiver<(Service, Query)>,
+    refusals: Arc<Refusals>,
     /// (fully qualified service name, key expression).
     pub(crate) names: Vec<(String, String)>,
 }
+
+const STOPPING: &str = "the ROS 2 bridge is stopping";
 
 impl Servers {
     /// Declares `set_active` for each skill whose name is a valid ROS 2 name, and the node's
@@ -246,43 +338,42 @@ impl Servers {
             Err(e) => return Err(Ros2Error::Skills(e.to_string())),
         };
         let node_fq = node.resolve(&node.name);
-        let mut services: Vec<(String, SrvType, Service)> = Vec::new();
+        let mut services: Vec<(String, Service)> = Vec::new();
         for s in &skills {
             if rmw::valid_ros_name(&s.name, false) {
-                services.push((
-                    format!("{node_fq}/{}/set_active", s.name),
-                    SET_BOOL,
-                    Service::SetActive(s.name.clone()),
-                ));
+                services.push((format!("{node_fq}/{}/set_active", s.name), Service::SetActive(s.name.clone())));
             } else {
                 tracing::warn!(skill = %s.name, "ROS 2 bridge: the skill's name is no ROS 2 name: no set_active service");
             }
         }
-        for (name, ty, service) in [
-            ("get_parameters", GET_PARAMETERS, Service::GetParameters),
-            ("set_parameters", SET_PARAMETERS, Service::SetParameters),
-            ("list_parameters", LIST_PARAMETERS, Service::ListParameters),
-            ("describe_parameters", DESCRIBE_PARAMETERS, Service::DescribeParameters),
-            ("get_parameter_types", GET_PARAMETER_TYPES, Service::GetParameterTypes),
+        for (name, service) in [
+            ("get_parameters", Service::GetParameters),
+            ("set_parameters", Service::SetParameters),
+            ("list_parameters", Service::ListParameters),
+            ("describe_parameters", Service::DescribeParameters),
+            ("get_parameter_types", Service::GetParameterTypes),
         ] {
-            services.push((format!("{node_fq}/{name}"), ty, service));
+            services.push((format!("{node_fq}/{name}"), service));
         }
 
         let (tx, rx) = crossbeam_channel::bounded::<(Service, Query)>(QUEUE);
+        let refusals = Arc::new(Refusals::default());
         let zid = session.zid().to_string();
         let mut queryables = Vec::new();
         let mut tokens = Vec::new();
         let mut names = Vec::new();
-        for (k, (fq, ty, service)) in services.into_iter().enumerate() {
+        for (k, (fq, service)) in services.into_iter().enumerate() {
+            let ty = service.ty();
             let key = node.service_key(&fq, &ty.dds_name(), ty.hash);
             let tx = tx.clone();
+            let refused = Arc::clone(&refusals);
             let queryable = session
                 .declare_queryable(key.clone())
                 .complete(true)
-                .callback(move |query| {
-                    if tx.try_send((service.clone(), query)).is_err() {
-                        tracing::warn!("ROS 2 bridge: too many service calls waiting; one refused");
-                    }
+                .callback(move |query| match tx.try_send((service.clone(), query)) {
+                    Ok(()) => {}
+                    Err(crossbeam_channel::TrySendError::Full((_, query))) => refused.queue_full(query),
+                    Err(crossbeam_channel::TrySendError::Disconnected((_, query))) => reply_error(&query, STOPPING),
                 })
                 .wait()
                 .map_err(|e| Ros2Error::Zenoh { what: format!("a queryable on `{key}`"), message: e.to_string() })?;
@@ -299,17 +390,26 @@ impl Servers {
         let stop = Arc::new(AtomicBool::new(false));
         let st = Arc::clone(&stop);
         let handle = handle.clone();
+        let refused = Arc::clone(&refusals);
+        let waiting = rx.clone();
         let thread = std::thread::Builder::new()
             .name("situate-ros2-srv".into())
             .spawn(move || {
                 while !st.load(Ordering::SeqCst) {
                     if let Ok((service, query)) = rx.recv_timeout(Duration::from_millis(50)) {
-                        answer(&handle, &service, &query);
+                        answer(&handle, &service, &query, &refused);
+                    }
+                    if rx.is_empty() {
+                        refused.drained();
                     }
                 }
             })
             .map_err(Ros2Error::Thread)?;
-        Ok(Servers { _queryables: queryables, _tokens: tokens, stop, thread: Some(thread), names })
+        Ok(Servers { queryables, _tokens: tokens, stop, thread: Some(thread), waiting, refusals, names })
+    }
+
+    pub(crate) fn stats(&self) -> ServiceStats {
+        self.refusals.stats()
     }
 
     pub(crate) fn stop(&mut self) {
@@ -318,6 +418,12 @@ impl Servers {
             if t.join().is_err() {
                 tracing::warn!("the ROS 2 bridge's service thread panicked");
             }
+        }
+        // No call is taken after the queryables go; the calls still waiting are answered, not
+        // dropped without a reply.
+        self.queryables.clear();
+        while let Ok((_, query)) = self.waiting.try_recv() {
+            reply_error(&query, STOPPING);
         }
     }
 }
@@ -339,16 +445,24 @@ fn request_id(query: &Query) -> Result<(i64, [u8; 16]), String> {
     Ok((sequence, gid))
 }
 
-fn answer(handle: &Handle, service: &Service, query: &Query) {
+fn answer(handle: &Handle, service: &Service, query: &Query, refusals: &Refusals) {
     let (sequence, gid) = match request_id(query) {
         Ok(id) => id,
         Err(e) => {
-            reply_error(query, &format!("a malformed rmw_zenoh attachment: {e}"));
+            let message = format!("a malformed rmw_zenoh attachment: {e}");
+            refusals.malformed(query.key_expr().as_str(), &message);
+            reply_error(query, &message);
             return;
         }
     };
-    let payload = query.payload().map(|p| p.to_bytes().into_owned()).unwrap_or_default();
-    let response = respond(handle, service, &payload);
+    let payload = query.payload().map(|p| p.to_bytes()).unwrap_or_default();
+    let response = match read_call(service, &payload) {
+        Ok(call) => respond(handle, call),
+        Err(message) => {
+            refusals.malformed(query.key_expr().as_str(), &message);
+            refusal(service, message)
+        }
+    };
     match response {
         Ok(bytes) => {
             let now_ns = std::time::SystemTime::now()
@@ -371,23 +485,66 @@ fn reply_error(query: &Query, message: &str) {
     }
 }
 
-/// Decodes a request, does it, and encodes the response; `Err` for a request that cannot be
-/// decoded, or when the manager does not answer (the client gets a Zenoh error reply saying
-/// which).
-fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>, String> {
+/// A request, read.
+enum Call {
+    SetActive(String, bool),
+    Get(Names),
+    Set(SetParametersRequest),
+    List(ListParametersRequest),
+    Describe(Names),
+    Types(Names),
+}
+
+/// Reads a request: at most [`MAX_REQUEST_BYTES`], every length in it bounded by the bytes
+/// present; `Err` names the service type and what is wrong where.
+fn read_call(service: &Service, payload: &[u8]) -> Result<Call, String> {
+    let ty = service.ty();
+    if payload.len() > MAX_REQUEST_BYTES {
+        return Err(format!(
+            "a {} request of {} bytes is not read: requests are limited to {MAX_REQUEST_BYTES} bytes",
+            ty.ros_name,
+            payload.len()
+        ));
+    }
     fn req<'a, T: Deserialize<'a>>(payload: &'a [u8], ty: SrvType) -> Result<T, String> {
         decode(payload).map_err(|e| format!("cannot decode a {} request: {e}", ty.ros_name))
     }
-    fn out<T: Serialize>(msg: &T) -> Result<Vec<u8>, String> {
-        encode(msg).map_err(|e| format!("cannot encode the response: {e}"))
-    }
+    Ok(match service {
+        Service::SetActive(skill) => Call::SetActive(skill.clone(), req::<SetBoolRequest>(payload, ty)?.data),
+        Service::GetParameters => Call::Get(req(payload, ty)?),
+        Service::SetParameters => Call::Set(req(payload, ty)?),
+        Service::ListParameters => Call::List(req(payload, ty)?),
+        Service::DescribeParameters => Call::Describe(req(payload, ty)?),
+        Service::GetParameterTypes => Call::Types(req(payload, ty)?),
+    })
+}
+
+fn out<T: Serialize>(msg: &T) -> Result<Vec<u8>, String> {
+    encode(msg).map_err(|e| format!("cannot encode the response: {e}"))
+}
+
+/// The answer to a request that could not be read: in the response when its type can carry a
+/// refusal (a ROS 2 client only logs a Zenoh error reply, and its call waits on), else `Err`
+/// for a Zenoh error reply.
+fn refusal(service: &Service, message: String) -> Result<Vec<u8>, String> {
     match service {
-        Service::SetActive(skill) => {
-            let r: SetBoolRequest = req(payload, SET_BOOL)?;
-            out(&set_active(handle, skill, r.data))
+        Service::SetActive(_) => out(&SetBoolResponse { success: false, message }),
+        // One result: the client's parameters cannot be counted in a request that cannot be read.
+        Service::SetParameters => {
+            out(&SetParametersResponse { results: vec![SetParametersResult { successful: false, reason: message }] })
         }
-        Service::GetParameters => {
-            let r: Names = req(payload, GET_PARAMETERS)?;
+        Service::GetParameters | Service::ListParameters | Service::DescribeParameters | Service::GetParameterTypes => {
+            Err(message)
+        }
+    }
+}
+
+/// Does a request and encodes the response; `Err` when the manager does not answer (the client
+/// gets a Zenoh error reply saying so).
+fn respond(handle: &Handle, call: Call) -> Result<Vec<u8>, String> {
+    match call {
+        Call::SetActive(skill, on) => out(&set_active(handle, &skill, on)),
+        Call::Get(r) => {
             let params = parameters(handle)?;
             let values = r
                 .names
@@ -396,18 +553,13 @@ fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>
                 .collect();
             out(&GetParametersResponse { values })
         }
-        Service::SetParameters => {
-            let r: SetParametersRequest = req(payload, SET_PARAMETERS)?;
+        Call::Set(r) => {
             let params = parameters(handle)?;
             let results = r.parameters.iter().map(|p| set_parameter(handle, &params, p)).collect();
             out(&SetParametersResponse { results })
         }
-        Service::ListParameters => {
-            let r: ListParametersRequest = req(payload, LIST_PARAMETERS)?;
-            out(&ListParametersResponse { result: list(&parameters(handle)?, &r) })
-        }
-        Service::DescribeParameters => {
-            let r: Names = req(payload, DESCRIBE_PARAMETERS)?;
+        Call::List(r) => out(&ListParametersResponse { result: list(&parameters(handle)?, &r) }),
+        Call::Describe(r) => {
             let params = parameters(handle)?;
             let descriptors = r
                 .names
@@ -428,8 +580,7 @@ fn respond(handle: &Handle, service: &Service, payload: &[u8]) -> Result<Vec<u8>
                 .collect();
             out(&DescribeParametersResponse { descriptors })
         }
-        Service::GetParameterTypes => {
-            let r: Names = req(payload, GET_PARAMETER_TYPES)?;
+        Call::Types(r) => {
             let params = parameters(handle)?;
             let types = r
                 .names

@@ -1,85 +1,16 @@
 //! The bridge on a real robot and a real Zenoh session: what a ROS 2 node on rmw_zenoh would see
 //! (keys, liveliness tokens, attachments, CDR payloads), read by a second session.
 
+mod support;
+
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-use situate::manager::{ClockKind, Handle, Joiner, Manager, Reply, Request, RobotFile, RobotSpec};
-use situate_link::{Link, LinkConfig};
+use situate::manager::{Reply, Request};
 use situate_ros2::msgs::{self, LaserScan, Odometry, Twist};
-use situate_ros2::{Bridge, MsgType, Ros2Config, Ros2Error};
+use situate_ros2::{rmw, Bridge, MsgType, Ros2Error};
+use support::{call, call_until_answered, config, observer, service_key, tokens_until, toy_robot, CLIENT_GID, WAIT};
 use zenoh::Wait;
-
-/// Bounds for things that take milliseconds on an idle machine (CI machines are shared).
-const WAIT: Duration = Duration::from_secs(60);
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("addr").port()
-}
-
-struct Robot {
-    handle: Handle,
-    link: Option<Link>,
-    join: Option<Joiner>,
-    endpoint: String,
-}
-
-impl Drop for Robot {
-    fn drop(&mut self) {
-        drop(self.link.take());
-        let _ = self.handle.request_timeout(Request::Shutdown, Duration::from_secs(5));
-        if let Some(j) = self.join.take() {
-            let _ = j.join();
-        }
-    }
-}
-
-fn toy_robot(name: &str) -> Robot {
-    let text = format!(
-        "robot: {name}\ncycle: {{rate_hz: 50}}\ndevices:\n  - {{name: sonar, type: toy.sonar}}\n  \
-         - {{name: wheels, type: toy.wheels}}\nskills:\n  - {{name: runaway, type: toy.runaway}}\n  \
-         - {{name: wander, type: toy.wander}}\n"
-    );
-    let file = RobotFile::parse(&format!("{name}.yaml"), &text).expect("robot file");
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
-    let session = Link::open(&config).expect("session");
-    let spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
-    let manager = Manager::build(&spec, &situate_toys::registry()).expect("builds");
-    let (handle, join) = manager.spawn(true);
-    let link = Link::serve(name, handle.clone(), session, &config).expect("link");
-    Robot { handle, link: Some(link), join: Some(join), endpoint }
-}
-
-fn config(yaml: &str) -> Ros2Config {
-    let tree = situate::manager::yaml::parse(yaml).expect("YAML");
-    Ros2Config::from_node(tree.value.get("ros2").expect("ros2")).expect("valid")
-}
-
-fn observer(endpoint: &str) -> zenoh::Session {
-    let config = situate_link::session::client_config(&[endpoint.to_string()], None).expect("config");
-    zenoh::open(config).wait().expect("observer session")
-}
-
-/// The liveliness tokens under `@ros2_lv/<domain>/**`, asked until `done` holds (a minute at most).
-fn tokens_until(session: &zenoh::Session, domain: u32, done: impl Fn(&[String]) -> bool) -> Vec<String> {
-    let deadline = Instant::now() + WAIT;
-    loop {
-        let replies = session.liveliness().get(format!("@ros2_lv/{domain}/**")).wait().expect("liveliness get");
-        let mut keys = Vec::new();
-        while let Ok(reply) = replies.recv() {
-            if let Ok(sample) = reply.result() {
-                keys.push(sample.key_expr().to_string());
-            }
-        }
-        keys.sort();
-        if done(&keys) {
-            return keys;
-        }
-        assert!(Instant::now() < deadline, "the tokens never got there; the last seen: {keys:#?}");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
 
 const THREE_TOPICS: &str = "ros2:\n  namespace: /toy\n  rate_hz: 50\n  topics:\n    \
     - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}\n    \
@@ -91,8 +22,22 @@ fn a_ros2_node_sees_the_topics_their_tokens_and_cdr_messages_in_rmw_zenohs_forma
     let robot = toy_robot("rosbot");
     let obs = observer(&robot.endpoint);
     let received = obs.declare_subscriber("0/**").with(flume_like()).wait().expect("subscriber");
-    let session = robot.link.as_ref().expect("link").session().clone();
+    let session = robot.session();
     let zid = session.zid().to_string();
+    // A subscriber declared here is not yet known to the robot: a put made before its declaration
+    // reaches the robot's session goes to nobody, as it would to a ROS 2 subscriber that joins
+    // late (a loaded machine saw the first put missed). The bridge starts once the robot's
+    // session routes its topics' keys to the subscriber, so every put from the first is seen.
+    let keys: HashMap<&str, String> = [
+        ("cmd_vel", format!("0/toy/cmd_vel/geometry_msgs::msg::dds_::Twist_/{}", MsgType::Twist.type_hash())),
+        ("odom", format!("0/odom/nav_msgs::msg::dds_::Odometry_/{}", MsgType::Odometry.type_hash())),
+        ("sonar", format!("0/toy/sonar/sensor_msgs::msg::dds_::LaserScan_/{}", MsgType::LaserScan.type_hash())),
+    ]
+    .into_iter()
+    .collect();
+    for key in keys.values() {
+        wait_for_a_subscriber(&session, key);
+    }
     let bridge = Bridge::start("rosbot", robot.handle.clone(), session, &config(THREE_TOPICS)).expect("starts");
 
     // Discovery: the node and one publisher per topic, exactly as rmw_zenoh writes them.
@@ -119,13 +64,6 @@ fn a_ros2_node_sees_the_topics_their_tokens_and_cdr_messages_in_rmw_zenohs_forma
     assert_eq!(bridge.node_token(), expected[0]);
 
     // Data: every topic on its key, each put with rmw_zenoh's attachment and a CDR payload.
-    let keys: HashMap<&str, String> = [
-        ("cmd_vel", format!("0/toy/cmd_vel/geometry_msgs::msg::dds_::Twist_/{}", MsgType::Twist.type_hash())),
-        ("odom", format!("0/odom/nav_msgs::msg::dds_::Odometry_/{}", MsgType::Odometry.type_hash())),
-        ("sonar", format!("0/toy/sonar/sensor_msgs::msg::dds_::LaserScan_/{}", MsgType::LaserScan.type_hash())),
-    ]
-    .into_iter()
-    .collect();
     let bridge_keys: Vec<&str> = bridge.topics().iter().map(|(_, k)| k.as_str()).collect();
     for k in keys.values() {
         assert!(bridge_keys.contains(&k.as_str()), "{k} not in {bridge_keys:?}");
@@ -194,7 +132,7 @@ fn a_ros2_node_sees_the_topics_their_tokens_and_cdr_messages_in_rmw_zenohs_forma
 #[test]
 fn signals_that_do_not_exist_or_do_not_fit_their_message_are_refused_by_name() {
     let robot = toy_robot("rosbad");
-    let session = robot.link.as_ref().expect("link").session().clone();
+    let session = robot.session();
     let start = |yaml: &str| Bridge::start("rosbad", robot.handle.clone(), session.clone(), &config(yaml));
     match start("ros2:\n  topics:\n    - {signal: sonar.rang, topic: sonar, type: sensor_msgs/msg/LaserScan}\n") {
         Err(e @ Ros2Error::Signal { .. }) => {
@@ -219,46 +157,26 @@ fn signals_that_do_not_exist_or_do_not_fit_their_message_are_refused_by_name() {
     assert!(matches!(robot.handle.request_timeout(Request::QueryStats, WAIT), Ok(Reply::Stats(_))));
 }
 
+/// Waits until `session` would deliver a put on `key` to some subscriber (a minute at most).
+fn wait_for_a_subscriber(session: &zenoh::Session, key: &str) {
+    let probe = session.declare_publisher(key.to_string()).wait().expect("probe publisher");
+    let deadline = Instant::now() + WAIT;
+    while !probe.matching_status().wait().expect("matching status").matching() {
+        assert!(Instant::now() < deadline, "the robot's session never saw the subscriber for {key}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 /// A bounded FIFO channel handler for the subscriber (zenoh's default).
 fn flume_like() -> zenoh::handlers::FifoChannel {
     zenoh::handlers::FifoChannel::new(1024)
-}
-
-/// Calls a service of the bridge as an rmw_zenoh client does; the reply's payload and its
-/// attachment's sequence number and GID, or the error reply's text.
-fn call(
-    observer: &zenoh::Session,
-    key: &str,
-    request: &[u8],
-    sequence: i64,
-) -> Result<(Vec<u8>, i64, [u8; 16]), String> {
-    let gid = [7u8; 16];
-    let replies = observer
-        .get(key)
-        .payload(request.to_vec())
-        .attachment(situate_ros2::rmw::attachment(sequence, 0, &gid))
-        .timeout(WAIT)
-        .wait()
-        .expect("get");
-    let reply = replies.recv().map_err(|_| "no reply".to_string())?;
-    match reply.result() {
-        Ok(sample) => {
-            let mut d = zenoh_ext::ZDeserializer::new(sample.attachment().expect("the reply's attachment"));
-            let seq: i64 = d.deserialize().expect("sequence number");
-            let _stamp: i64 = d.deserialize().expect("timestamp");
-            let client: [u8; 16] = d.deserialize().expect("GID");
-            assert_eq!(client, gid, "the reply names the client");
-            Ok((sample.payload().to_bytes().into_owned(), seq, client))
-        }
-        Err(e) => Err(e.payload().try_to_string().map(|s| s.into_owned()).unwrap_or_default()),
-    }
 }
 
 #[test]
 fn the_parameter_services_answer_and_say_so_when_the_manager_is_gone() {
     use situate_ros2::services::{ListParametersRequest, ListParametersResponse, LIST_PARAMETERS};
     let robot = toy_robot("srvbot");
-    let session = robot.link.as_ref().expect("link").session().clone();
+    let session = robot.session();
     let bridge =
         Bridge::start("srvbot", robot.handle.clone(), session, &config("ros2:\n  services: true\n")).expect("starts");
     let key = bridge
@@ -290,4 +208,59 @@ fn the_parameter_services_answer_and_say_so_when_the_manager_is_gone() {
     let err = call(&observer, &key, &request, 2).expect_err("an error reply");
     assert!(err.contains("did not answer"), "{err}");
     drop(bridge);
+}
+
+#[test]
+fn every_call_past_the_service_queue_gets_an_error_reply_at_once() {
+    use situate_ros2::services::{GetParameterTypesResponse, Names, QUEUE};
+    let robot = toy_robot("floodbot");
+    let bridge = Bridge::start("floodbot", robot.handle.clone(), robot.session(), &config("ros2:\n  services: true\n"))
+        .expect("starts");
+    let key = service_key(&bridge, "/floodbot/get_parameter_types");
+    let observer = observer(&robot.endpoint);
+    let request = msgs::encode(&Names { names: vec!["wander.speed".into()] }).expect("encode");
+    call_until_answered(&observer, &key, &request);
+
+    // Many more calls than the queue holds, all sent before any reply is read (each answer asks
+    // the manager; sending a call does not wait), then every call's replies read in turn.
+    const CALLS: usize = 3000;
+    let pending: Vec<_> = (0..CALLS)
+        .map(|i| {
+            observer
+                .get(&key)
+                .payload(request.clone())
+                .attachment(rmw::attachment(i as i64 + 1, 0, &CLIENT_GID))
+                .timeout(WAIT)
+                .wait()
+                .expect("get")
+        })
+        .collect();
+    let (mut answered, mut refused) = (0usize, 0usize);
+    for (i, replies) in pending.iter().enumerate() {
+        let reply = replies.recv().unwrap_or_else(|_| {
+            panic!("call {} of {CALLS} got no reply ({answered} answered and {refused} refused before it)", i + 1)
+        });
+        match reply.result() {
+            Ok(sample) => {
+                let mut d = zenoh_ext::ZDeserializer::new(sample.attachment().expect("the reply's attachment"));
+                let seq: i64 = d.deserialize().expect("sequence number");
+                assert_eq!(seq, i as i64 + 1, "the reply answers its own call");
+                let types: GetParameterTypesResponse =
+                    msgs::decode(&sample.payload().to_bytes()).expect("a GetParameterTypes response");
+                assert_eq!(types.types, vec![3], "wander.speed is a double");
+                answered += 1;
+            }
+            Err(e) => {
+                let text = e.payload().try_to_string().map(|s| s.into_owned()).unwrap_or_default();
+                assert!(text.contains("queue is full") && text.contains(&format!("{QUEUE} calls")), "{text}");
+                refused += 1;
+            }
+        }
+        assert!(replies.recv().is_err(), "call {}: one reply only", i + 1);
+    }
+    assert!(refused > 0, "the flood never filled the queue ({answered} answered): the test tested nothing");
+    // When a call was refused, the queue held QUEUE calls, and each of them was answered.
+    assert!(answered >= QUEUE, "{answered} answered, {refused} refused");
+    assert_eq!(bridge.service_stats().refused_queue_full, refused as u64, "every refusal counted");
+    println!("{CALLS} calls: {answered} answered, {refused} refused with the queue full");
 }
