@@ -559,9 +559,9 @@ pub(crate) struct Envelope {
     pub request: Request,
     /// An `AddMonitor`'s conditions, compiled by the sender.
     pub monitor: Option<crate::manager::PreparedMonitorBox>,
-    /// [`Handle::tap`]: install a tap of this capacity (the request is then
+    /// [`Handle::tap`]: install a tap made so (the request is then
     /// ignored) and send its receiver here.
-    pub tap: Option<(usize, Sender<crate::TapReceiver>)>,
+    pub tap: Option<(crate::frame::TapOptions, Sender<crate::TapReceiver>)>,
     pub reply: Sender<Result<Reply, ControlError>>,
 }
 
@@ -591,13 +591,17 @@ impl Handle {
     }
 
     /// Taps the running manager's cycle from its next cycle on, as
-    /// [`Manager::tap`](crate::Manager::tap) does before it is spawned (and
-    /// replacing any tap it has). Gives up after `timeout`.
-    pub fn tap(&self, capacity: usize, timeout: Duration) -> Result<crate::TapReceiver, ControlError> {
+    /// [`Manager::tap`](crate::Manager::tap) does before it is spawned (beside
+    /// any tap it has). Gives up after `timeout`.
+    pub fn tap(
+        &self,
+        options: impl Into<crate::frame::TapOptions>,
+        timeout: Duration,
+    ) -> Result<crate::TapReceiver, ControlError> {
         let (tx, rx) = crossbeam_channel::bounded(1);
         let (tap_tx, tap_rx) = crossbeam_channel::bounded(1);
         let envelope =
-            Envelope { request: Request::QueryStats, monitor: None, tap: Some((capacity, tap_tx)), reply: tx };
+            Envelope { request: Request::QueryStats, monitor: None, tap: Some((options.into(), tap_tx)), reply: tx };
         self.tx.send(envelope).map_err(|_| ControlError::Disconnected)?;
         rx.recv_timeout(timeout).map_err(|_| ControlError::Disconnected)??;
         tap_rx.try_recv().map_err(|_| ControlError::Disconnected)

@@ -15,6 +15,90 @@
 
 use situate_core::{Value, ValueRef};
 
+/// How a tap is made ([`Manager::tap`](crate::Manager::tap)): how many
+/// frames its queue holds, and what the cycle does with a frame that finds
+/// it full. A plain capacity (`tap(64)`) is a tap that drops.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TapOptions {
+    /// Frames the queue holds (at least 1).
+    pub capacity: usize,
+    pub when_full: WhenFull,
+}
+
+impl TapOptions {
+    /// A tap of `capacity` frames that drops when full.
+    pub fn new(capacity: usize) -> TapOptions {
+        TapOptions { capacity, when_full: WhenFull::Drop }
+    }
+
+    /// The same, but waiting for room under the simulated clock
+    /// ([`WhenFull::WaitIfSimulated`]).
+    pub fn wait_if_simulated(self) -> TapOptions {
+        TapOptions { when_full: WhenFull::WaitIfSimulated, ..self }
+    }
+}
+
+impl From<usize> for TapOptions {
+    fn from(capacity: usize) -> TapOptions {
+        TapOptions::new(capacity)
+    }
+}
+
+/// What the cycle does with a frame that finds its tap's queue full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WhenFull {
+    /// Drop it and count it ([`Drops`]): the cycle never waits for the
+    /// reader (the GUI's history, a wall-clock recording).
+    #[default]
+    Drop,
+    /// Under the simulated clock, wait until the reader makes room: no
+    /// robot time passes while the cycle waits, so losing the frame would
+    /// gain nothing (a recording). Under the wall clock, as [`WhenFull::Drop`]:
+    /// a late cycle would be late for the devices.
+    WaitIfSimulated,
+}
+
+/// Past this many ranges, [`Drops`] grows its last range instead of adding
+/// one: its memory is bounded however often a reader falls behind.
+pub const MAX_DROP_RANGES: usize = 1024;
+
+/// The cycles a tap lost to a full queue.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Drops {
+    /// How many (exact).
+    pub count: u64,
+    /// Which, as (first, last) ranges of cycles, in order. At most
+    /// [`MAX_DROP_RANGES`]; past that the last range is grown to the latest
+    /// drop, so the ranges always cover every cycle lost (and then may cover
+    /// some that were not).
+    pub ranges: Vec<(u64, u64)>,
+}
+
+impl Drops {
+    /// Counts the cycles `first..=last` as lost (after those already
+    /// counted).
+    pub fn add_range(&mut self, first: u64, last: u64) {
+        if last < first {
+            return;
+        }
+        self.add(first);
+        self.count += last - first;
+        if let Some((_, end)) = self.ranges.last_mut() {
+            *end = (*end).max(last);
+        }
+    }
+
+    /// Counts `cycle` as lost (cycles come in increasing order).
+    pub fn add(&mut self, cycle: u64) {
+        self.count += 1;
+        let full = self.ranges.len() >= MAX_DROP_RANGES;
+        match self.ranges.last_mut() {
+            Some((_, last)) if full || cycle <= last.saturating_add(1) => *last = (*last).max(cycle),
+            _ => self.ranges.push((cycle, cycle)),
+        }
+    }
+}
+
 /// The values written in one cycle, leaf by leaf.
 #[derive(Debug, Clone)]
 pub struct Frame {
@@ -170,6 +254,28 @@ impl From<Vec<(usize, Value)>> for FrameValues {
 mod tests {
     use super::*;
     use situate_core::record_value;
+
+    #[test]
+    fn drops_are_kept_as_ranges_and_bounded() {
+        let mut d = Drops::default();
+        for c in [3, 4, 5, 9, 10, 20] {
+            d.add(c);
+        }
+        assert_eq!(d.count, 6);
+        assert_eq!(d.ranges, [(3, 5), (9, 10), (20, 20)]);
+        d.add_range(21, 30);
+        d.add_range(40, 41);
+        assert_eq!(d.count, 18);
+        assert_eq!(d.ranges, [(3, 5), (9, 10), (20, 30), (40, 41)]);
+        let mut d = Drops::default();
+        for k in 0..(MAX_DROP_RANGES as u64 + 10) {
+            d.add(2 * k);
+        }
+        assert_eq!(d.count, MAX_DROP_RANGES as u64 + 10);
+        assert_eq!(d.ranges.len(), MAX_DROP_RANGES);
+        // The last range covers every later drop.
+        assert_eq!(d.ranges.last(), Some(&(2 * (MAX_DROP_RANGES as u64 - 1), 2 * (MAX_DROP_RANGES as u64 + 9))));
+    }
 
     #[test]
     fn every_kind_of_value_comes_back_as_pushed_in_order() {

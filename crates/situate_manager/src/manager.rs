@@ -63,7 +63,9 @@ pub use spawned::Joiner;
 /// The cycle's end of a tap.
 struct Tap {
     tx: crossbeam_channel::Sender<Frame>,
-    dropped: Arc<std::sync::atomic::AtomicU64>,
+    when_full: crate::frame::WhenFull,
+    /// Locked only when a frame is dropped, and by the reader.
+    drops: Arc<std::sync::Mutex<crate::frame::Drops>>,
     /// Frames the reader is done with ([`TapReceiver::give_back`]).
     returns: Receiver<Frame>,
 }
@@ -75,14 +77,20 @@ const RETURNS: usize = 256;
 /// were dropped because it was full. It ends when the manager does.
 pub struct TapReceiver {
     pub frames: Receiver<Frame>,
-    dropped: Arc<std::sync::atomic::AtomicU64>,
+    drops: Arc<std::sync::Mutex<crate::frame::Drops>>,
     returns: crossbeam_channel::Sender<Frame>,
 }
 
 impl TapReceiver {
     /// Frames dropped so far because the receiver was full.
     pub fn dropped(&self) -> u64 {
-        self.dropped.load(std::sync::atomic::Ordering::Relaxed)
+        self.drops().count
+    }
+
+    /// The cycles dropped so far because the receiver was full: how many,
+    /// and which.
+    pub fn drops(&self) -> crate::frame::Drops {
+        self.drops.lock().unwrap_or_else(|p| p.into_inner()).clone()
     }
 
     /// Hands a frame the reader is done with back to the cycle (never
@@ -399,17 +407,21 @@ impl Manager {
 
     /// Taps the cycle: from now on, at the end of every cycle, the values
     /// written in it (leaf by leaf, as [`Frame`]s) go to the returned
-    /// receiver, which holds up to `capacity` frames. The cycle never waits
-    /// for it: a frame that finds it full is dropped and counted (see
-    /// [`TapReceiver::dropped`]). Several taps get the same frames; one
-    /// goes when its receiver is dropped. The leaves are those of
-    /// [`Manager::graph`] (`leaves[i]`).
-    pub fn tap(&mut self, capacity: usize) -> TapReceiver {
-        let (tx, rx) = crossbeam_channel::bounded(capacity.max(1));
+    /// receiver, which holds up to `options.capacity` frames (a plain
+    /// number: that capacity). By default the cycle never waits for it: a
+    /// frame that finds it full is dropped and counted (see
+    /// [`TapReceiver::drops`]); with
+    /// [`WhenFull::WaitIfSimulated`](crate::frame::WhenFull) the cycle on the
+    /// simulated clock waits for room instead. Several taps get the same
+    /// frames; one goes when its receiver is dropped. The leaves are those
+    /// of [`Manager::graph`] (`leaves[i]`).
+    pub fn tap(&mut self, options: impl Into<crate::frame::TapOptions>) -> TapReceiver {
+        let options = options.into();
+        let (tx, rx) = crossbeam_channel::bounded(options.capacity.max(1));
         let (returns_tx, returns) = crossbeam_channel::bounded(RETURNS);
-        let dropped = Arc::new(std::sync::atomic::AtomicU64::new(0));
-        self.taps.push(Tap { tx, dropped: Arc::clone(&dropped), returns });
-        TapReceiver { frames: rx, dropped, returns: returns_tx }
+        let drops = Arc::new(std::sync::Mutex::new(crate::frame::Drops::default()));
+        self.taps.push(Tap { tx, when_full: options.when_full, drops: Arc::clone(&drops), returns });
+        TapReceiver { frames: rx, drops, returns: returns_tx }
     }
 
     pub fn events(&self) -> Receiver<Event> {

@@ -4,8 +4,13 @@
 //! [`Recorder::start`] taps the manager's cycle ([`Manager::tap`]) and
 //! subscribes to its events before it is spawned; a thread of its own writes
 //! them as they come, so the file grows with the run and memory stays flat.
-//! The cycle never waits for the recorder: a frame that finds the queue full
-//! is dropped and counted ([`Summary::dropped`]).
+//! On the simulated clock the cycle waits for the writer when it is
+//! [`QUEUE_FRAMES`] cycles behind (no robot time passes meanwhile: the run
+//! is the same, only slower), so no cycle is lost. On the wall clock the
+//! cycle never waits: a frame that finds the queue full is dropped and
+//! counted ([`Summary::dropped`]), and the file says which cycles it lacks
+//! (`situate/gaps` and the `situate_drops` metadata record), so a replay
+//! never takes it for complete.
 //!
 //! What the file holds (JSON messages, each channel with a JSON Schema, so a
 //! viewer needs no plug-in):
@@ -25,9 +30,13 @@
 //! - `situate/cycles`: one message per cycle, `{"cycle", "hash", "leaves"}`,
 //!   the cycle's fingerprint ([`hash::cycle_hash`], 16 hex digits) and how
 //!   many leaves were written: two runs are the same where these are;
+//! - `situate/gaps`: cycles dropped while recording (wall clock only), one
+//!   message per run of them, `{"cycle": first, "last", "count"}`, written
+//!   as soon as the writer sees the gap (the cycles after it) or at the end;
 //! - a metadata record `situate` (robot, period, leaves, and what the caller
 //!   adds: the robot file and its `--set`s, so `situate replay` can rebuild
-//!   the robot).
+//!   the robot), and at the end one `situate_drops`: `dropped_cycles` (how
+//!   many) and `ranges` (which: a JSON list of `[first, last]`).
 //!
 //! A message's `log_time` and `publish_time` are the manager's clock at the
 //! cycle (simulated or wall) in nanoseconds; the cycle is in every message.
@@ -51,12 +60,20 @@ use situate_core::SignalType;
 use situate_link::json::event_to_json;
 use std::time::Duration;
 
+use situate_manager::frame::{Drops, TapOptions};
 use situate_manager::{Control, Event, Frame, Handle, Manager, Reply, Request, TapReceiver};
 
 pub use schema::{leaf_schema, message_schema};
 
 /// Frames the cycle may get ahead of the file by (at 100 Hz, 40 s).
 pub const QUEUE_FRAMES: usize = 4096;
+
+/// The metadata record written when the recording ends: which cycles it
+/// lacks (`dropped_cycles`, `ranges`).
+pub const DROPS_METADATA: &str = "situate_drops";
+
+/// The topic of the gap markers: cycles dropped while recording.
+pub const GAPS_TOPIC: &str = "situate/gaps";
 
 /// How often the writer looks for new frames.
 const POLL: Duration = Duration::from_millis(5);
@@ -88,12 +105,37 @@ pub struct Summary {
     /// Messages written, all channels.
     pub messages: u64,
     pub channels: usize,
-    /// Cycles lost because the writer fell behind by [`QUEUE_FRAMES`].
+    /// Cycles lost because the writer fell behind by [`QUEUE_FRAMES`]
+    /// (wall clock only: on the simulated clock the cycle waits).
     pub dropped: u64,
+    /// Which: (first, last) ranges of cycles, as the file says them.
+    pub dropped_ranges: Vec<(u64, u64)>,
     /// The file's size.
     pub bytes: u64,
     /// The first and last cycle recorded.
     pub cycles: Option<(u64, u64)>,
+}
+
+/// How a recording is made; [`Options::default`] for the usual.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Frames the cycle may get ahead of the file by ([`QUEUE_FRAMES`]).
+    pub queue_frames: usize,
+    /// For tests (a writer that falls behind, on demand): the writer waits
+    /// for a message here before and after each round of reading the queue,
+    /// so a sender (of a zero-capacity channel) that has sent two knows the
+    /// writer read the queue once and reads it no more until it sends
+    /// again. Once the sender is dropped it no longer waits. On the
+    /// simulated clock a held writer holds the robot's cycle too;
+    /// [`Recorder::finish`] waits for the writer: drop the sender first.
+    #[doc(hidden)]
+    pub hold: Option<Receiver<()>>,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options { queue_frames: QUEUE_FRAMES, hold: None }
+    }
 }
 
 /// Where a recording's cycles come from.
@@ -126,7 +168,17 @@ impl Recorder {
         manager: &mut Manager,
         metadata: BTreeMap<String, String>,
     ) -> Result<Recorder, RecordError> {
-        Recorder::start_from(path, Source::Manager(manager), metadata)
+        Recorder::start_from(path, Source::Manager(manager), metadata, Options::default())
+    }
+
+    /// [`Recorder::start_with`], made as `options` say.
+    pub fn start_with_options(
+        path: &Path,
+        manager: &mut Manager,
+        metadata: BTreeMap<String, String>,
+        options: Options,
+    ) -> Result<Recorder, RecordError> {
+        Recorder::start_from(path, Source::Manager(manager), metadata, options)
     }
 
     /// Starts recording a manager that is running (spawned), from its next
@@ -138,13 +190,25 @@ impl Recorder {
         metadata: BTreeMap<String, String>,
         timeout: Duration,
     ) -> Result<Recorder, RecordError> {
-        Recorder::start_from(path, Source::Handle(handle, timeout), metadata)
+        Recorder::start_from(path, Source::Handle(handle, timeout), metadata, Options::default())
+    }
+
+    /// [`Recorder::start_running`], made as `options` say.
+    pub fn start_running_with_options(
+        path: &Path,
+        handle: &Handle,
+        metadata: BTreeMap<String, String>,
+        timeout: Duration,
+        options: Options,
+    ) -> Result<Recorder, RecordError> {
+        Recorder::start_from(path, Source::Handle(handle, timeout), metadata, options)
     }
 
     fn start_from(
         path: &Path,
         mut source: Source<'_>,
         metadata: BTreeMap<String, String>,
+        options: Options,
     ) -> Result<Recorder, RecordError> {
         let io = |source| RecordError::Io { path: path.to_path_buf(), source };
         let file = File::create(path).map_err(io)?;
@@ -188,13 +252,16 @@ impl Recorder {
             .write_metadata(&mcap::records::Metadata { name: "situate".to_string(), metadata: meta })
             .map_err(|source| mcap_error(path, source))?;
         let period_s = stats.map(|s| s.period_s).unwrap_or(0.0);
+        // The cycle waits for the writer on the simulated clock, and drops
+        // (counted, and said in the file) on the wall clock.
+        let tap_options = TapOptions::new(options.queue_frames).wait_if_simulated();
         let (tap, events) = match source {
-            Source::Manager(m) => (m.tap(QUEUE_FRAMES), m.events()),
+            Source::Manager(m) => (m.tap(tap_options), m.events()),
             Source::Handle(h, timeout) => {
                 // Events first: none of the tapped cycles' is missed.
                 let events = h.events();
                 let tap = h
-                    .tap(QUEUE_FRAMES, timeout)
+                    .tap(tap_options, timeout)
                     .map_err(|e| RecordError::Robot { path: path.to_path_buf(), message: e.to_string() })?;
                 (tap, events)
             }
@@ -212,6 +279,9 @@ impl Recorder {
             winner_channel: None,
             cycle_channel: None,
             keyframe_channel: None,
+            gap_channel: None,
+            last_cycle: None,
+            lost: Drops::default(),
             latest: BTreeMap::new(),
             buf: Vec::new(),
             sequence: HashMap::new(),
@@ -223,7 +293,7 @@ impl Recorder {
             .name("situate-record".into())
             .spawn(move || {
                 lower_thread_priority();
-                file.run(tap, events, stopped)
+                file.run(tap, events, stopped, options.hold)
             })
             .map_err(io)?;
         Ok(Recorder { stop, thread, path: path.to_path_buf() })
@@ -265,6 +335,11 @@ struct Writing {
     winner_channel: Option<u16>,
     cycle_channel: Option<u16>,
     keyframe_channel: Option<u16>,
+    gap_channel: Option<u16>,
+    /// The last cycle written.
+    last_cycle: Option<u64>,
+    /// The cycles the file lacks, as its gap markers say them.
+    lost: Drops,
     /// Every leaf's latest value and its cycle, for keyframes.
     latest: BTreeMap<usize, (u64, Vec<u8>)>,
     /// A message's bytes (reused).
@@ -278,12 +353,25 @@ struct Writing {
 }
 
 impl Writing {
-    fn run(mut self, tap: TapReceiver, events: Receiver<Event>, stop: Receiver<()>) -> Result<Summary, RecordError> {
+    fn run(
+        mut self,
+        tap: TapReceiver,
+        events: Receiver<Event>,
+        stop: Receiver<()>,
+        mut hold: Option<Receiver<()>>,
+    ) -> Result<Summary, RecordError> {
         // Polled, not waited on: a reader blocked on the queue would be woken
         // by the cycle's every send, a system call on the cycle's thread
         // (about a sixth of the demo's cycle). Polled, the cycle's send only
         // queues; the file lags the robot by at most a poll.
+        // The test hook: a message before and one after each round.
+        let wait = |hold: &mut Option<Receiver<()>>| {
+            if hold.as_ref().is_some_and(|h| h.recv().is_err()) {
+                *hold = None;
+            }
+        };
         loop {
+            wait(&mut hold);
             let mut open = true;
             loop {
                 match tap.frames.try_recv() {
@@ -299,6 +387,7 @@ impl Writing {
                     }
                 }
             }
+            wait(&mut hold);
             // After the frames sent before them: an event is timed by its
             // cycle, from the frames around it.
             while let Ok(event) = events.try_recv() {
@@ -319,19 +408,68 @@ impl Writing {
         while let Ok(event) = events.try_recv() {
             self.event(&event)?;
         }
-        self.summary.dropped = tap.dropped();
+        // The cycles lost after the last one written (those between were
+        // marked as the frames after them came).
+        let drops = tap.drops();
+        // Gone before the file's end is written: a cycle waiting for room
+        // goes on now.
+        drop(tap);
+        let after = self.last_cycle.map_or(0, |c| c + 1);
+        for &(first, last) in &drops.ranges {
+            if last >= after {
+                self.gap(first.max(after), last)?;
+            }
+        }
+        self.summary.dropped = self.lost.count;
+        self.summary.dropped_ranges = self.lost.ranges.clone();
+        let ranges = serde_json::to_string(&self.lost.ranges).unwrap_or_default();
+        let metadata = BTreeMap::from([
+            ("dropped_cycles".to_string(), self.lost.count.to_string()),
+            ("ranges".to_string(), ranges),
+        ]);
+        self.writer
+            .write_metadata(&mcap::records::Metadata { name: DROPS_METADATA.to_string(), metadata })
+            .map_err(|source| mcap_error(&self.path, source))?;
         self.writer.finish().map_err(|source| mcap_error(&self.path, source))?;
         self.summary.channels = self.leaf_channels.len()
             + self.event_channels.len()
             + usize::from(self.print_channel.is_some())
             + usize::from(self.winner_channel.is_some())
             + usize::from(self.cycle_channel.is_some())
-            + usize::from(self.keyframe_channel.is_some());
+            + usize::from(self.keyframe_channel.is_some())
+            + usize::from(self.gap_channel.is_some());
         self.summary.bytes = std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
         Ok(self.summary)
     }
 
+    /// Marks the cycles `first..=last` as dropped, in the file (at once, so
+    /// a file cut short says it too) and in the summary.
+    fn gap(&mut self, first: u64, last: u64) -> Result<(), RecordError> {
+        let channel = match self.gap_channel {
+            Some(c) => c,
+            None => {
+                let schema = serde_json::to_vec(&schema::gap_schema()).unwrap_or_default();
+                let c = self.channel("situate.gap", &schema, GAPS_TOPIC, &[])?;
+                self.gap_channel = Some(c);
+                c
+            }
+        };
+        let count = last - first + 1;
+        tracing::warn!("recording {}: cycles {first} to {last} dropped (the writer fell behind)", self.path.display());
+        self.lost.add_range(first, last);
+        let time = nanos(self.time_of(Some(first)));
+        self.write(channel, time, &json!({"cycle": first, "last": last, "count": count}))
+    }
+
     fn frame(&mut self, frame: &Frame) -> Result<(), RecordError> {
+        // Cycles are numbered one after the other: a jump is frames the
+        // tap dropped.
+        if let Some(prev) = self.last_cycle {
+            if frame.cycle > prev + 1 {
+                self.gap(prev + 1, frame.cycle - 1)?;
+            }
+        }
+        self.last_cycle = Some(frame.cycle);
         let time = nanos(frame.time_s);
         for (leaf, value) in frame.values.iter() {
             let channel = match self.leaf_channels.get(&leaf) {

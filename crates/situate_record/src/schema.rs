@@ -136,3 +136,20 @@ pub fn keyframe_schema() -> Json {
         "required": ["cycle", "leaves"]
     })
 }
+
+/// The schema of a gap marker: `{"cycle", "last", "count"}`, cycles dropped
+/// while recording.
+pub fn gap_schema() -> Json {
+    json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "situate gap",
+        "type": "object",
+        "description": "cycles dropped while recording (the writer fell behind a wall-clock run): the file lacks them",
+        "properties": {
+            "cycle": {"type": "integer", "minimum": 0, "description": "the first cycle dropped"},
+            "last": {"type": "integer", "minimum": 0, "description": "the last cycle dropped"},
+            "count": {"type": "integer", "minimum": 1}
+        },
+        "required": ["cycle", "last", "count"]
+    })
+}

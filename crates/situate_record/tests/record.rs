@@ -7,7 +7,8 @@ use std::path::PathBuf;
 
 use situate::manager::{ClockKind, Manager, Registry, Request, RobotSpec, SkillSpec};
 use situate::prelude::*;
-use situate_record::{RecordError, Recorder};
+use situate_record::read::Recording;
+use situate_record::{Options, RecordError, Recorder};
 
 #[derive(Skill, Default)]
 #[skill(name = "rec.count")]
@@ -34,10 +35,14 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn manager() -> Manager {
+    manager_on(ClockKind::Simulated)
+}
+
+fn manager_on(clock: ClockKind) -> Manager {
     let mut registry = Registry::new();
     registry.register::<Count>();
     let spec = RobotSpec::new("rec")
-        .clock(ClockKind::Simulated)
+        .clock(clock)
         .period_s(0.1)
         .skill(SkillSpec::new("c", "rec.count").remap("n", "count").remap("ramp", "ramp").active(true))
         // A second writer of `count`, of higher priority, switched on later.
@@ -170,4 +175,137 @@ fn a_running_robot_is_recorded_from_its_next_cycle_through_its_handle() {
     let (first, last) = summary.cycles.expect("cycles");
     assert_eq!(last - first + 1, summary.frames, "no cycle missing: {summary:?}");
     assert_eq!(summary.dropped, 0);
+}
+
+/// The `situate/gaps` markers of a file, (first, last), and its
+/// `situate_drops` metadata record.
+fn gaps_of(path: &std::path::Path) -> (Vec<(u64, u64)>, BTreeMap<String, String>) {
+    let bytes = std::fs::read(path).unwrap();
+    let mut gaps = Vec::new();
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        let message = message.unwrap();
+        if message.channel.topic == "situate/gaps" {
+            let data: serde_json::Value = serde_json::from_slice(&message.data).unwrap();
+            let (first, last) = (data["cycle"].as_u64().unwrap(), data["last"].as_u64().unwrap());
+            assert_eq!(data["count"].as_u64(), Some(last - first + 1), "{data}");
+            gaps.push((first, last));
+        }
+    }
+    let mut drops = BTreeMap::new();
+    for record in mcap::read::LinearReader::new(&bytes).unwrap() {
+        if let mcap::records::Record::Metadata(m) = record.unwrap() {
+            if m.name == "situate_drops" {
+                drops = m.metadata;
+            }
+        }
+    }
+    (gaps, drops)
+}
+
+#[test]
+fn on_the_simulated_clock_a_writer_that_falls_behind_holds_the_cycle_and_loses_nothing() {
+    let path = temp("slow-writer");
+    let mut m = manager();
+    // A queue of one frame, and a writer that reads only when let.
+    let (release, hold) = crossbeam_channel::bounded::<()>(0);
+    let options = Options { queue_frames: 1, hold: Some(hold) };
+    let recorder =
+        Recorder::start_with_options(&path, &mut m, BTreeMap::new(), options).unwrap_or_else(|e| panic!("{e}"));
+    let runner = std::thread::spawn(move || {
+        for _ in 0..200 {
+            m.cycle();
+        }
+        m
+    });
+    // The writer reads a round at a time, as long as the robot runs.
+    while !runner.is_finished() {
+        let _ = release.send_timeout((), std::time::Duration::from_millis(10));
+    }
+    let m = runner.join().unwrap_or_else(|_| panic!("the robot's thread panicked"));
+    drop(release);
+    drop(m);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((summary.frames, summary.dropped), (200, 0), "{summary:?}");
+    assert_eq!(summary.cycles, Some((1, 200)));
+    let (gaps, drops) = gaps_of(&path);
+    assert!(gaps.is_empty(), "{gaps:?}");
+    assert_eq!(drops.get("dropped_cycles").map(String::as_str), Some("0"), "{drops:?}");
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_file(&path).ok();
+    assert_eq!(rec.cycles.keys().copied().collect::<Vec<_>>(), (1..=200).collect::<Vec<_>>());
+    assert_eq!((rec.dropped_count, rec.dropped.len()), (0, 0));
+}
+
+#[test]
+fn on_the_wall_clock_dropped_cycles_are_counted_and_written_into_the_file() {
+    let path = temp("wall-drops");
+    let mut m = manager_on(ClockKind::Wall);
+    let (release, hold) = crossbeam_channel::bounded::<()>(0);
+    let options = Options { queue_frames: 4, hold: Some(hold) };
+    let recorder =
+        Recorder::start_with_options(&path, &mut m, BTreeMap::new(), options).unwrap_or_else(|e| panic!("{e}"));
+    // The writer held: cycles 1-4 are queued, 5-50 dropped (the cycle never waits).
+    for _ in 0..50 {
+        m.cycle();
+    }
+    // One round of reading let (two messages: it starts, it has read).
+    release.send(()).unwrap();
+    release.send(()).unwrap();
+    // Cycles 51-54 are queued, 55-60 dropped; the writer, let again, sees
+    // cycle 51 after 4 and marks 5-50 there.
+    for _ in 0..10 {
+        m.cycle();
+    }
+    release.send(()).unwrap();
+    release.send(()).unwrap();
+    drop(release);
+    drop(m);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(summary.frames, 8, "{summary:?}");
+    assert_eq!(summary.dropped, 52, "{summary:?}");
+    assert_eq!(summary.dropped_ranges, [(5, 50), (55, 60)], "{summary:?}");
+    // Durably: a marker per gap (the one in the middle written when cycle
+    // 51 came, the last at the end) and the record at the end.
+    let (gaps, drops) = gaps_of(&path);
+    assert_eq!(gaps, [(5, 50), (55, 60)]);
+    assert_eq!(drops.get("dropped_cycles").map(String::as_str), Some("52"), "{drops:?}");
+    assert_eq!(drops.get("ranges").map(String::as_str), Some("[[5,50],[55,60]]"), "{drops:?}");
+    // Read back: what the file lacks.
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_file(&path).ok();
+    assert_eq!(rec.cycles.keys().copied().collect::<Vec<_>>(), [1, 2, 3, 4, 51, 52, 53, 54]);
+    assert_eq!((rec.dropped_count, rec.dropped.clone()), (52, vec![(5, 50), (55, 60)]));
+    assert_eq!(rec.first_dropped_from(0), Some(5));
+    assert_eq!(rec.first_dropped_from(51), Some(55));
+}
+
+#[test]
+fn a_running_simulated_robot_recorded_through_its_handle_waits_for_a_slow_writer() {
+    use situate::manager::{Control as _, Reply};
+    use std::time::{Duration, Instant};
+    let path = temp("running-slow");
+    // Not paced: the cycle runs as fast as it can, the queue holds one frame.
+    let m = manager();
+    let (mut handle, join) = m.spawn(true);
+    let options = Options { queue_frames: 1, hold: None };
+    let recorder =
+        Recorder::start_running_with_options(&path, &handle, BTreeMap::new(), Duration::from_secs(30), options)
+            .unwrap_or_else(|e| panic!("{e}"));
+    let stats = |handle: &mut situate::manager::Handle| match handle.request(Request::QueryStats) {
+        Ok(Reply::Stats(s)) => s.cycle,
+        _ => 0,
+    };
+    let start = stats(&mut handle);
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while Instant::now() < deadline && stats(&mut handle) < start + 300 {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let _ = handle.request(Request::Shutdown);
+    let _ = join.join();
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    assert!(summary.frames >= 300, "{summary:?}");
+    let (first, last) = summary.cycles.expect("cycles");
+    assert_eq!(last - first + 1, summary.frames, "no cycle missing: {summary:?}");
+    assert_eq!(summary.dropped, 0, "{summary:?}");
 }

@@ -198,8 +198,9 @@ impl Manager {
         }
     }
 
-    /// Hands the values written this cycle to the tap (never waits: a full
-    /// tap loses the frame, counted; a closed one is removed).
+    /// Hands the values written this cycle to the tap (a full tap loses the
+    /// frame, counted, or, if it asked to and the clock is simulated, is
+    /// waited for; a closed one is removed).
     #[cold]
     fn send_frame(&mut self) {
         self.take_back_frames();
@@ -224,10 +225,18 @@ impl Manager {
         );
         let prints = std::mem::take(&mut self.tap_prints);
         let frame = Frame { cycle, time_s: self.time_s, values, prints, winners };
+        let simulated = self.clock == ClockKind::Simulated;
         let send = |tap: &super::Tap, frame: Frame| match tap.tx.try_send(frame) {
             Ok(()) => true,
+            // No robot time passes while the cycle waits: the run is the
+            // same, only slower, and the reader loses nothing.
+            Err(crossbeam_channel::TrySendError::Full(frame))
+                if simulated && tap.when_full == crate::frame::WhenFull::WaitIfSimulated =>
+            {
+                tap.tx.send(frame).is_ok()
+            }
             Err(crossbeam_channel::TrySendError::Full(_)) => {
-                tap.dropped.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                tap.drops.lock().unwrap_or_else(|p| p.into_inner()).add(cycle);
                 true
             }
             Err(crossbeam_channel::TrySendError::Disconnected(_)) => false,
