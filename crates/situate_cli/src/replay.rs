@@ -41,6 +41,11 @@ pub(crate) struct ReplayArgs {
     /// Ctrl-C: its timeline holds every replayed cycle, to step, seek and play.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     pub(crate) gui: Option<String>,
+    /// Let the GUI answer to this host name too, besides localhost and its own address (e.g.
+    /// robot.lan, without a port; repeat for several). Requests naming any other host are
+    /// refused, a guard against DNS rebinding (docs/gui.md).
+    #[arg(long, value_name = "NAME")]
+    pub(crate) gui_allow_host: Vec<String>,
     /// Record the replay to this MCAP file.
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
@@ -64,16 +69,16 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                 ),
             ))
         }
-        Some((first, last)) => {
-            let missing = (last - first + 1).saturating_sub(rec.cycles.len() as u64);
-            if missing > 0 {
-                let gap = (first..=last).find(|c| !rec.cycles.contains_key(c)).unwrap_or(first);
-                out.warn(format_args!(
-                    "warning: {} lacks {missing} cycles (the first: {gap}), dropped while recording; the replay differs there",
-                    args.file.display()
-                ));
-            }
-        }
+        Some(_) => {}
+    }
+    if rec.dropped_count > 0 {
+        out.warn(format_args!(
+            "warning: {} lacks {} cycles, dropped while recording ({}): the replay stops before the first and \
+             cannot say the run is identical",
+            args.file.display(),
+            rec.dropped_count,
+            ranges_text(&rec.dropped)
+        ));
     }
     let robot = match (&args.robot, rec.metadata.get("robot_file")) {
         (Some(r), _) => r.clone(),
@@ -91,9 +96,9 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             args.file.display()
         ));
     }
-    let recorded_sets: Vec<String> =
-        rec.metadata.get("sets").and_then(|s| serde_json::from_str(s).ok()).unwrap_or_default();
-    let compose = Compose { set: recorded_sets.into_iter().chain(args.compose.set.iter().cloned()).collect() };
+    // Checked when the recording was read: a `sets` that is not a list of
+    // strings is a bad file there, not silently none here.
+    let compose = Compose { set: rec.sets.iter().chain(args.compose.set.iter()).cloned().collect() };
     let Loaded { mut spec, remote, file: robot_file, .. } = load(&robot, &compose)?;
     let (mut registry, _world) = registry_for(&robot_file, program_registry(ext)?, ext, &SimOverrides::default())
         .map_err(|errors| bad_file(&robot, &errors))?;
@@ -156,7 +161,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
         Ok(r) => r,
         Err(e) => return Err(problem(Exit::Failure, format!("--record: {e}"))),
     };
-    let identical = outcome.first.is_none() && outcome.cycles > 0;
+    let identical = outcome.identical();
     let span = rec.span();
     if out.json {
         println!(
@@ -170,6 +175,9 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                 "matched": outcome.matched,
                 "identical": identical,
                 "first_difference": outcome.first.as_ref().map(replay::Divergence::to_json),
+                "dropped_cycles": outcome.dropped,
+                "dropped_ranges": outcome.dropped_ranges,
+                "stopped_before": outcome.stopped_before,
                 "live": cast.live,
                 "played": cast.players,
                 "wall_s": started.elapsed().as_secs_f64(),
@@ -188,6 +196,18 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
         );
         match &outcome.first {
             None if identical => println!("identical: every cycle matches the recording"),
+            None if outcome.dropped > 0 => println!(
+                "not identical: the recording lacks {} cycles, dropped while recording ({}){}; {} of {} cycles \
+                 replayed match",
+                outcome.dropped,
+                ranges_text(&outcome.dropped_ranges),
+                match outcome.stopped_before {
+                    Some(c) => format!(", so the replay stopped before cycle {c}"),
+                    None => String::new(),
+                },
+                outcome.matched,
+                outcome.cycles
+            ),
             None => println!("nothing to compare: the recording has no cycles"),
             Some(d) => {
                 println!("differs from {d}");
@@ -195,6 +215,13 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                     println!("  also differing in that cycle: {}", d.others.join(", "));
                 }
                 println!("{} of {} cycles match", outcome.matched, outcome.cycles);
+                if outcome.dropped > 0 {
+                    println!(
+                        "and the recording lacks {} cycles, dropped while recording ({})",
+                        outcome.dropped,
+                        ranges_text(&outcome.dropped_ranges)
+                    );
+                }
             }
         }
         if let Some(r) = &recording {
@@ -203,9 +230,23 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     }
     let code = if identical { Exit::Ok.code() } else { Exit::Failure.code() };
     if let Some((listen, layout, manager)) = gui_manager {
-        serve_gui(&rec, manager, listen, layout, frames_rx, events, outcome.cycles, out)?;
+        serve_gui(&rec, manager, listen, &args.gui_allow_host, layout, frames_rx, events, outcome.cycles, out)?;
     }
     Ok(code)
+}
+
+/// Cycle ranges as `5–50, 60, 70–80`, the first ten.
+fn ranges_text(ranges: &[(u64, u64)]) -> String {
+    const SHOWN: usize = 10;
+    let mut text: Vec<String> = ranges
+        .iter()
+        .take(SHOWN)
+        .map(|&(a, b)| if a == b { format!("cycle {a}") } else { format!("cycles {a}–{b}") })
+        .collect();
+    if ranges.len() > SHOWN {
+        text.push(format!("and {} more ranges", ranges.len() - SHOWN));
+    }
+    text.join(", ")
 }
 
 /// Serves the GUI on the replayed robot, stopped after its last cycle, its
@@ -215,6 +256,7 @@ fn serve_gui(
     rec: &Recording,
     manager: Manager,
     listen: std::net::SocketAddr,
+    allowed_hosts: &[String],
     layout: situate_gui::Layout,
     frames: crossbeam_channel::Receiver<situate::manager::Frame>,
     events: crossbeam_channel::Receiver<situate::manager::Event>,
@@ -228,7 +270,9 @@ fn serve_gui(
         .unwrap_or(usize::MAX)
         .saturating_add(16)
         .clamp(situate_gui::history::DEFAULT_FRAMES, situate_gui::history::MAX_FRAMES);
-    let config = situate_gui::GuiConfig { listen, world, history_frames, ..situate_gui::GuiConfig::default() };
+    let allowed_hosts = allowed_hosts.to_vec();
+    let config =
+        situate_gui::GuiConfig { listen, world, history_frames, allowed_hosts, ..situate_gui::GuiConfig::default() };
     let tap = situate_gui::HistoryTap::from_channels(layout, frames, events, 0);
     let gui = situate_gui::serve_with_history(handle.clone(), config, Some(tap))
         .map_err(|e| problem(Exit::Failure, format!("starting the GUI on {listen}: {e}")))?;

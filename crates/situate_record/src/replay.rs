@@ -12,7 +12,10 @@
 //!
 //! What a replay needs, and the recording does not hold, is stated in
 //! `docs/recording.md` ("Replay"): a serial executor, synchronous live
-//! skills, the simulated clock, and no budget faults.
+//! skills, the simulated clock, and no budget faults. A replay runs every
+//! body to completion: [`cast`] lifts every deadline to the longest a robot
+//! may have (a day), so a slow machine or a tight `budget_ms` in the robot
+//! file faults nothing.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, OnceLock};
@@ -53,6 +56,9 @@ pub struct Cast {
 /// player, registered in `registry` as `replay.<instance>`, always active.
 /// `live: None`: every skill that can run here runs live. A name in `live`
 /// that is not a skill of the robot, or is a dskill, is an error naming it.
+/// Every deadline (the robot's and each skill's `budget_ms` and
+/// `liveness_ms`) becomes the longest allowed, a day: a replay runs bodies
+/// to completion, however slow the machine.
 pub fn cast(
     spec: &mut situate_manager::RobotSpec,
     registry: &mut situate_manager::Registry,
@@ -74,7 +80,14 @@ pub fn cast(
         }
     }
     let mut cast = Cast::default();
+    // Deadlines are the wall clock's: the recording's cycles were not
+    // faulted by this machine's speed, so the replay's must not be either.
+    let no_deadline = Some(situate_manager::config::MAX_DEADLINE_MS);
+    spec.budget_ms = no_deadline;
+    spec.liveness_ms = no_deadline;
     for s in &mut spec.skills {
+        s.budget_ms = no_deadline;
+        s.liveness_ms = no_deadline;
         let decl = match registry.get(&s.type_name) {
             Some(t) => (*t.decl).clone(),
             None => match remote.iter().find(|(n, _)| n == &s.name) {
@@ -94,7 +107,6 @@ pub fn cast(
         s.type_name = type_name;
         s.active = true;
         s.period_ms = None;
-        s.liveness_ms = None;
         s.section = None;
         s.remap.retain(|r| decl.outputs.iter().any(|o| o.name == r.port));
         cast.players.push(s.name.clone());
@@ -260,6 +272,22 @@ pub struct Outcome {
     pub matched: u64,
     /// The first cycle that differs, and where.
     pub first: Option<Divergence>,
+    /// Cycles the recording lacks (dropped while recording): how many, and
+    /// which as (first, last) ranges.
+    pub dropped: u64,
+    pub dropped_ranges: Vec<(u64, u64)>,
+    /// The replay stopped before this cycle, the first one the recording
+    /// lacks (up to `--to`): past it the players would write nothing where
+    /// the robot had values, so nothing after it can be compared.
+    pub stopped_before: Option<u64>,
+}
+
+impl Outcome {
+    /// Every cycle of the recording was replayed and matched: some cycles
+    /// compared, none differing, none missing from the recording.
+    pub fn identical(&self) -> bool {
+        self.first.is_none() && self.cycles > 0 && self.dropped == 0
+    }
 }
 
 /// Compares a replayed frame with the recording: `None` when they agree.
@@ -423,7 +451,9 @@ pub fn run(
 /// [`run`], compared from cycle `from` and stopped after cycle `to`. The
 /// cycles before `from` run too: a skill's memory is not in the recording,
 /// so the only exact way to a cycle is from the start (the delivery's 4,900
-/// cycles replay in about 0.2 s).
+/// cycles replay in about 0.2 s). A recording that lacks cycles (dropped
+/// while recording) is replayed up to the first one it lacks
+/// ([`Outcome::stopped_before`]); the cycles it lacks are in the outcome.
 pub fn run_window(
     rec: &Recording,
     manager: &mut Manager,
@@ -434,9 +464,13 @@ pub fn run_window(
 ) -> Outcome {
     let tap = manager.tap(4);
     let mut changes = requests(rec, live);
-    let mut outcome = Outcome::default();
+    let mut outcome = Outcome { dropped: rec.dropped_count, dropped_ranges: rec.dropped.clone(), ..Outcome::default() };
     let Some((_, last)) = rec.span() else { return outcome };
-    let last = last.min(to);
+    let mut last = last.min(to);
+    if let Some(gap) = rec.first_dropped_from(0).filter(|&gap| gap <= to) {
+        outcome.stopped_before = Some(gap);
+        last = last.min(gap.saturating_sub(1));
+    }
     while manager.cycle_count() < last {
         let next = manager.cycle_count() + 1;
         for request in changes.remove(&next).unwrap_or_default() {

@@ -119,7 +119,10 @@ fn record(name: &str) -> Recording {
 }
 
 fn replay(rec: &Recording, alpha: f64, live: Option<&[String]>) -> Outcome {
-    let mut spec = spec(alpha);
+    replay_spec(rec, spec(alpha), live)
+}
+
+fn replay_spec(rec: &Recording, mut spec: RobotSpec, live: Option<&[String]>) -> Outcome {
     let mut registry = registry();
     let cast = cast(&mut spec, &mut registry, &[], live).unwrap_or_else(|e| panic!("{e}"));
     let mut m = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
@@ -227,4 +230,55 @@ fn a_window_of_cycles_is_compared_after_running_from_the_start() {
     assert_eq!(seen, (41..=50).collect::<Vec<_>>());
     assert_eq!((outcome.cycles, outcome.matched, outcome.first), (10, 10, None));
     assert_eq!(m.cycle_count(), 50);
+}
+
+#[test]
+fn a_replay_runs_bodies_to_completion_whatever_the_robot_files_deadlines() {
+    let rec = record("budget");
+    // Deadlines of a nanosecond, for the robot and for each skill: on the
+    // wall clock every run would be late.
+    let mut tight = spec(0.5);
+    tight.budget_ms = Some(1e-6);
+    tight.liveness_ms = Some(1e-6);
+    for s in &mut tight.skills {
+        s.budget_ms = Some(1e-6);
+        s.liveness_ms = Some(1e-6);
+    }
+    for live in [None, Some(vec!["filter".to_string()])] {
+        let outcome = replay_spec(&rec, tight.clone(), live.as_deref());
+        assert_eq!(outcome.first, None, "live: {live:?}");
+        assert_eq!((outcome.cycles, outcome.matched), (80, 80), "live: {live:?}");
+        assert!(outcome.identical());
+    }
+}
+
+#[test]
+fn a_recording_that_lacks_cycles_replays_up_to_the_first_and_is_never_identical() {
+    // A wall-clock recording whose writer was held: cycles 1-4 queued,
+    // 5-50 dropped.
+    let path = temp("dropped");
+    let mut wall = spec(0.5);
+    wall.clock = ClockKind::Wall;
+    let mut m = Manager::build(&wall, &registry()).unwrap_or_else(|e| panic!("{e}"));
+    let (release, hold) = crossbeam_channel::bounded::<()>(0);
+    let options = situate_record::Options { queue_frames: 4, hold: Some(hold) };
+    let recorder = Recorder::start_with_options(&path, &mut m, std::collections::BTreeMap::new(), options)
+        .unwrap_or_else(|e| panic!("{e}"));
+    for _ in 0..50 {
+        m.cycle();
+    }
+    drop(release);
+    drop(m);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((summary.frames, summary.dropped), (4, 46), "{summary:?}");
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(rec.span(), Some((1, 4)));
+    let outcome = replay(&rec, 0.5, None);
+    // The cycles present match; the outcome says what the file lacks.
+    assert_eq!(outcome.first, None);
+    assert_eq!((outcome.cycles, outcome.matched), (4, 4));
+    assert_eq!((outcome.dropped, outcome.dropped_ranges.clone()), (46, vec![(5, 50)]));
+    assert_eq!(outcome.stopped_before, Some(5));
+    assert!(!outcome.identical(), "{outcome:?}");
 }

@@ -1,0 +1,261 @@
+//! Recordings damaged or doctored after they were written: each is refused
+//! when read, with an error naming the problem and where it is, in time and
+//! memory bounded by the file. Each bad file is made from a real recording
+//! (written, then changed).
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value as Json;
+use situate::manager::{ClockKind, Manager, Registry, RobotSpec, SkillSpec};
+use situate::prelude::*;
+use situate_record::read::{ReadError, Recording};
+use situate_record::Recorder;
+
+#[derive(Skill, Default)]
+#[skill(name = "bad.count")]
+struct Count {
+    #[output]
+    n: f64,
+    #[output]
+    ring: [f32; 32],
+}
+
+impl Body for Count {
+    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.n = cx.cycle() as f64;
+        // Values that compress poorly, so the file has several chunks.
+        let mut x = cx.cycle().wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        for r in &mut self.ring {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            *r = (x >> 40) as f32;
+        }
+        Ok(())
+    }
+}
+
+const CYCLES: u64 = 3000;
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("situate-bad-{}-{name}.mcap", std::process::id()))
+}
+
+/// A real recording of `CYCLES` cycles, with a `--set` in its metadata.
+fn recording(name: &str) -> PathBuf {
+    let path = temp(name);
+    let mut registry = Registry::new();
+    registry.register::<Count>();
+    let spec = RobotSpec::new("bad")
+        .clock(ClockKind::Simulated)
+        .period_s(0.01)
+        .skill(SkillSpec::new("c", "bad.count").remap("n", "count").remap("ring", "ring"));
+    let mut m = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
+    let meta = BTreeMap::from([("sets".to_string(), r#"["c.x=1"]"#.to_string())]);
+    let recorder = Recorder::start_with(&path, &mut m, meta).unwrap_or_else(|e| panic!("{e}"));
+    m.run_cycles(CYCLES);
+    drop(m);
+    let summary = recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(summary.frames, CYCLES);
+    // As written, it reads back whole.
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rec.span(), Some((1, CYCLES)));
+    assert_eq!(rec.sets, ["c.x=1"]);
+    path
+}
+
+/// Writes `src` again to `dst` as a valid MCAP file (CRCs and summary
+/// right), its metadata and messages changed by `meta` and `message`.
+fn rewrite(
+    src: &Path,
+    dst: &Path,
+    meta: impl Fn(&str, &mut BTreeMap<String, String>),
+    message: impl Fn(&str, &mut Json),
+) {
+    let bytes = std::fs::read(src).unwrap();
+    let file = std::io::BufWriter::new(std::fs::File::create(dst).unwrap());
+    let mut w = mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).create(file).unwrap();
+    for record in mcap::read::LinearReader::new(&bytes).unwrap() {
+        if let mcap::records::Record::Metadata(mut m) = record.unwrap() {
+            meta(&m.name, &mut m.metadata);
+            w.write_metadata(&m).unwrap();
+        }
+    }
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let mut m = m.unwrap();
+        let mut data: Json = serde_json::from_slice(&m.data).unwrap();
+        message(&m.channel.topic, &mut data);
+        m.data = Cow::Owned(serde_json::to_vec(&data).unwrap());
+        w.write(&m).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+/// The error reading `path`, as said (the file's name first).
+fn refused(path: &Path) -> String {
+    let started = std::time::Instant::now();
+    let outcome = Recording::open(path);
+    let error = match outcome {
+        Ok(rec) => panic!("{} was read: {} cycles, span {:?}", path.display(), rec.cycles.len(), rec.span()),
+        Err(e) => e,
+    };
+    assert!(matches!(error, ReadError::Bad { .. }), "{error:?}");
+    let text = error.to_string();
+    assert!(text.starts_with(&path.display().to_string()), "{text}");
+    // Not a timing test: a bound far above the few milliseconds it takes.
+    assert!(started.elapsed() < std::time::Duration::from_secs(60), "{text}");
+    text
+}
+
+#[test]
+fn a_cycle_far_past_the_recorded_ones_is_refused_naming_it() {
+    // The last cycle renumbered 10^15: a replay would run that many cycles.
+    let src = recording("huge-src");
+    let dst = temp("huge");
+    rewrite(
+        &src,
+        &dst,
+        |_, _| {},
+        |topic, data| {
+            if topic != "situate/winners" && data["cycle"] == CYCLES {
+                data["cycle"] = Json::from(1_000_000_000_000_000u64);
+            }
+        },
+    );
+    let text = refused(&dst);
+    assert!(text.contains(&format!("cycle 1000000000000000 follows cycle {}", CYCLES - 1)), "{text}");
+    assert!(text.contains("neither in the file nor marked as dropped"), "{text}");
+    // Only the fingerprint renumbered: the cycle's leaves have none.
+    rewrite(
+        &src,
+        &dst,
+        |_, _| {},
+        |topic, data| {
+            if topic == "situate/cycles" && data["cycle"] == CYCLES {
+                data["cycle"] = Json::from(1_000_000_000_000_000u64);
+            }
+        },
+    );
+    let text = refused(&dst);
+    assert!(text.contains(&format!("cycle {CYCLES}: leaves recorded but no `situate/cycles`")), "{text}");
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
+
+#[test]
+fn a_period_that_is_not_a_number_is_refused_naming_it() {
+    let src = recording("nan-src");
+    let dst = temp("nan");
+    for bad in ["nan", "inf", "-0.01", "0", "1e300", "ten"] {
+        rewrite(
+            &src,
+            &dst,
+            |name, m| {
+                if name == "situate" {
+                    m.insert("period_s".into(), bad.into());
+                }
+            },
+            |_, _| {},
+        );
+        let text = refused(&dst);
+        assert!(text.contains("`period_s`") && text.contains(&format!("`{bad}`")), "{text}");
+    }
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
+
+#[test]
+fn recorded_parameter_sets_that_are_not_json_are_refused_naming_them() {
+    let src = recording("sets-src");
+    let dst = temp("sets");
+    for bad in ["c.x=1", "[1, 2]", "{\"c.x\": 1}", "[\"c.x=1\""] {
+        rewrite(
+            &src,
+            &dst,
+            |name, m| {
+                if name == "situate" {
+                    m.insert("sets".into(), bad.into());
+                }
+            },
+            |_, _| {},
+        );
+        let text = refused(&dst);
+        assert!(text.contains("`sets`") && text.contains("not a JSON list"), "{bad}: {text}");
+    }
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
+
+/// Where each chunk record starts, from the file's summary.
+fn chunk_offsets(bytes: &[u8]) -> Vec<usize> {
+    let summary = mcap::Summary::read(bytes).unwrap().expect("a summary");
+    summary.chunk_indexes.iter().map(|c| c.chunk_start_offset as usize).collect()
+}
+
+#[test]
+fn a_damaged_chunk_is_refused_naming_where_it_is() {
+    let src = recording("chunk-src");
+    let bytes = std::fs::read(&src).unwrap();
+    let chunks = chunk_offsets(&bytes);
+    assert!(chunks.len() >= 2, "{} chunks: a chunk in the middle is damaged", chunks.len());
+    let at = chunks[1];
+    let dst = temp("chunk");
+    // The chunk's header zeroed, its opcode and length kept: it says it
+    // holds nothing, and would be skipped.
+    let mut zeroed = bytes.clone();
+    zeroed[at + 9..at + 9 + 40].fill(0);
+    std::fs::write(&dst, &zeroed).unwrap();
+    let text = refused(&dst);
+    assert!(text.contains(&format!("at byte {at} (chunk)")) && text.contains("damaged chunk header"), "{text}");
+    // The whole record's start zeroed, opcode and length too.
+    let mut zeroed = bytes.clone();
+    zeroed[at..at + 9 + 40].fill(0);
+    std::fs::write(&dst, &zeroed).unwrap();
+    let text = refused(&dst);
+    assert!(text.contains(&format!("at byte {at} (unknown record type 0x00)")), "{text}");
+    // A byte of its compressed data changed: the decompression or the
+    // chunk's CRC says so.
+    let mut flipped = bytes.clone();
+    flipped[at + 9 + 60] ^= 0x55;
+    std::fs::write(&dst, &flipped).unwrap();
+    let text = refused(&dst);
+    assert!(text.contains(&format!("at byte {at} (chunk)")) && text.contains("damaged chunk"), "{text}");
+    // A chunk whose header claims a huge size: refused before anything is
+    // allocated for it.
+    let mut huge = bytes.clone();
+    huge[at + 9 + 16..at + 9 + 24].copy_from_slice(&u64::MAX.to_le_bytes());
+    std::fs::write(&dst, &huge).unwrap();
+    let text = refused(&dst);
+    assert!(text.contains(&format!("at byte {at} (chunk)")) && text.contains("uncompressed"), "{text}");
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
+
+#[test]
+fn a_file_cut_short_or_not_a_recording_is_refused() {
+    let src = recording("cut-src");
+    let bytes = std::fs::read(&src).unwrap();
+    let dst = temp("cut");
+    for len in [bytes.len() / 2, bytes.len() - 3, 12, 3] {
+        std::fs::write(&dst, &bytes[..len]).unwrap();
+        let text = refused(&dst);
+        assert!(text.contains("cut short") || text.contains("MCAP magic"), "{len}: {text}");
+    }
+    std::fs::write(&dst, b"just some text, not a recording\n").unwrap();
+    assert!(refused(&dst).contains("not an MCAP file"));
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
+
+#[test]
+fn a_device_or_a_directory_is_refused_before_it_is_read() {
+    // /dev/zero never ends: it must not be read at all.
+    for path in [Path::new("/dev/zero"), Path::new("/dev/urandom")] {
+        if path.exists() {
+            assert!(refused(path).contains("not a regular file"));
+        }
+    }
+    assert!(refused(&std::env::temp_dir()).contains("not a regular file"));
+}
