@@ -16,7 +16,9 @@
 //! Bounded: at most [`MAX_CLIENTS`] clients, [`MAX_SUBSCRIPTIONS`] subscriptions each, a send
 //! queue of [`QUEUE`] messages and [`QUEUE_BYTES`] per client (a slow client loses messages, counted and told in a
 //! `status` warning: neither the poller nor the server ever waits for it), client messages of
-//! at most 64 KiB; a bad client message is answered by a `status` error.
+//! at most 64 KiB; a bad client message is answered by a `status` error. Like every route, it
+//! answers only requests naming this server in `Host` (lib.rs, "Who may connect"); a client that
+//! sends nothing and answers no ping for [`crate::GuiConfig::ws_idle_timeout`] is closed.
 
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -34,6 +36,7 @@ use situate_link::json as wire;
 use situate_manager::{Reply, Request};
 use tokio::sync::mpsc;
 
+use crate::serve::{Beat, Keepalive};
 use crate::{ask, History, Shared};
 
 /// The WebSocket subprotocol spoken.
@@ -591,37 +594,56 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
     };
     let Some((client, mut rx)) = shared.foxglove.join(QUEUE) else {
         let m = status(ERROR, &format!("too many Foxglove clients (at most {MAX_CLIENTS})"));
-        let _ = socket.send(Message::Text(m.to_string().into())).await;
-        let _ = socket.send(Message::Close(None)).await;
+        let keepalive = Keepalive::new(shared.ws_idle);
+        let _ = keepalive.send(&mut socket, Message::Text(m.to_string().into())).await;
+        keepalive.close(&mut socket).await;
         return;
     };
     let _member = Member { hub: &shared.foxglove, client: Arc::clone(&client) };
     let mut shutdown = shared.shutdown.clone();
+    let mut keepalive = Keepalive::new(shared.ws_idle);
     tracing::debug!("Foxglove client connected");
     for m in [server_info(&shared), advertised] {
-        if socket.send(Message::Text(m.to_string().into())).await.is_err() {
+        if !keepalive.send(&mut socket, Message::Text(m.to_string().into())).await {
             return;
         }
     }
     loop {
         tokio::select! {
             _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
-                let _ = socket.send(Message::Close(None)).await;
+                keepalive.close(&mut socket).await;
                 break;
             }
-            incoming = socket.recv() => match incoming {
-                Some(Ok(Message::Text(text))) => {
-                    handle_text(&shared, &client, text.as_str(), channel_count, &known)
+            beat = keepalive.beat() => match beat {
+                Beat::Ping => {
+                    if !keepalive.send(&mut socket, Message::Ping(Default::default())).await {
+                        break;
+                    }
                 }
-                Some(Ok(Message::Binary(_))) => {
-                    client.offer_json(&status(ERROR, "this server takes no client messages in binary (no clientPublish)"));
+                Beat::Dead => {
+                    tracing::debug!("Foxglove client silent for the idle timeout: closing");
+                    keepalive.close(&mut socket).await;
+                    break;
                 }
-                Some(Ok(Message::Close(_))) | Some(Err(_)) | None => break,
-                Some(Ok(_)) => {}
             },
+            incoming = socket.recv() => {
+                if let Some(Ok(_)) = &incoming {
+                    keepalive.heard();
+                }
+                match incoming {
+                    Some(Ok(Message::Text(text))) => {
+                        handle_text(&shared, &client, text.as_str(), channel_count, &known)
+                    }
+                    Some(Ok(Message::Binary(_))) => {
+                        client.offer_json(&status(ERROR, "this server takes no client messages in binary (no clientPublish)"));
+                    }
+                    Some(Ok(Message::Close(_))) | Some(Err(_)) | None => break,
+                    Some(Ok(_)) => {}
+                }
+            }
             Some(m) = rx.recv() => {
                 client.taken(&m);
-                if socket.send(m).await.is_err() {
+                if !keepalive.send(&mut socket, m).await {
                     break;
                 }
             }

@@ -45,6 +45,14 @@
 //! ## Metrics
 //! `GET /metrics` answers in Prometheus' text format: cycle time, overruns, per-skill time and
 //! faults ([`metrics`]).
+//!
+//! ## Who may connect
+//! Every route answers only requests whose `Host` names this server: `localhost`, a loopback
+//! address, the bound address, or a name in [`GuiConfig::allowed_hosts`] (a guard against DNS
+//! rebinding: see `hosts.rs`); others get `403`. At most [`GuiConfig::max_connections`]
+//! connections are served at once (past it: `503` and closed); a connection that sends no whole
+//! request head within [`GuiConfig::header_timeout`], and a WebSocket that sends nothing and
+//! answers no ping for [`GuiConfig::ws_idle_timeout`], are closed (docs/gui.md).
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -66,8 +74,10 @@ use tokio::sync::{broadcast, watch};
 
 pub mod foxglove;
 pub mod history;
+mod hosts;
 pub mod metrics;
 mod sample;
+mod serve;
 mod session;
 
 pub use history::{History, HistoryError, HistoryTap, Layout};
@@ -80,6 +90,12 @@ mod assets {
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 /// The largest message a browser may send.
 const MAX_MESSAGE: usize = 64 * 1024;
+/// The default cap on connections served at once ([`GuiConfig::max_connections`]).
+pub const DEFAULT_MAX_CONNECTIONS: usize = 256;
+/// The default time a connection has to send a whole request head ([`GuiConfig::header_timeout`]).
+pub const DEFAULT_HEADER_TIMEOUT: Duration = Duration::from_secs(10);
+/// The default time a WebSocket may stay silent, pings unanswered ([`GuiConfig::ws_idle_timeout`]).
+pub const DEFAULT_WS_IDLE_TIMEOUT: Duration = Duration::from_secs(60);
 /// The signals the world view draws, when they exist.
 const WORLD_SIGNALS: [&str; 4] = ["truth.pose", "sonar.range", "truth.cars", "truth.people"];
 
@@ -99,6 +115,20 @@ pub struct GuiConfig {
     /// The memory the timeline may take (default [`history::DEFAULT_BYTES`]): when the values
     /// are large, it keeps fewer cycles.
     pub history_bytes: usize,
+    /// Host names the server answers to besides `localhost`, loopback addresses and the bound
+    /// address (e.g. `robot.lan`, without a port): a request naming any other host in `Host` is
+    /// refused with `403`, so a web page cannot reach the robot by rebinding its own name.
+    pub allowed_hosts: Vec<String>,
+    /// The connections served at once, WebSockets included (default
+    /// [`DEFAULT_MAX_CONNECTIONS`]); past it a new connection is answered `503` and closed.
+    pub max_connections: usize,
+    /// How long a connection may take to send a whole request head, and may stay idle between
+    /// requests, before it is closed (default [`DEFAULT_HEADER_TIMEOUT`]).
+    pub header_timeout: Duration,
+    /// How long a WebSocket may send nothing and answer no ping before it is closed (default
+    /// [`DEFAULT_WS_IDLE_TIMEOUT`]; pinged every third of it). Also the longest a send to it may
+    /// wait for the client to read.
+    pub ws_idle_timeout: Duration,
 }
 
 impl Default for GuiConfig {
@@ -109,6 +139,10 @@ impl Default for GuiConfig {
             sample_hz: 10.0,
             history_frames: history::DEFAULT_FRAMES,
             history_bytes: history::DEFAULT_BYTES,
+            allowed_hosts: Vec::new(),
+            max_connections: DEFAULT_MAX_CONNECTIONS,
+            header_timeout: DEFAULT_HEADER_TIMEOUT,
+            ws_idle_timeout: DEFAULT_WS_IDLE_TIMEOUT,
         }
     }
 }
@@ -263,6 +297,8 @@ struct Shared {
     outcome: Mutex<Option<Json>>,
     world: Option<Json>,
     sample_hz: f64,
+    /// [`GuiConfig::ws_idle_timeout`].
+    ws_idle: Duration,
     clients: AtomicUsize,
     next_client: AtomicU64,
     /// Per connected tab, the signals it watches.
@@ -298,10 +334,19 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
             config.history_frames
         )));
     }
+    if config.max_connections == 0 {
+        return Err(GuiError::Config("max_connections must be at least 1".into()));
+    }
+    for (name, d) in [("header_timeout", config.header_timeout), ("ws_idle_timeout", config.ws_idle_timeout)] {
+        if d < Duration::from_millis(10) {
+            return Err(GuiError::Config(format!("{name} must be at least 10 ms, got {d:?}")));
+        }
+    }
     let std_listener =
         std::net::TcpListener::bind(config.listen).map_err(|source| GuiError::Bind { addr: config.listen, source })?;
     let addr = std_listener.local_addr().map_err(GuiError::Start)?;
     std_listener.set_nonblocking(true).map_err(GuiError::Start)?;
+    let host_rule = Arc::new(hosts::HostRule::new(addr, &config.allowed_hosts).map_err(GuiError::Config)?);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .max_blocking_threads(4)
@@ -337,6 +382,7 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
         outcome: Mutex::new(None),
         world: config.world,
         sample_hz: config.sample_hz,
+        ws_idle: config.ws_idle_timeout,
         clients: AtomicUsize::new(0),
         next_client: AtomicU64::new(1),
         watched: Mutex::new(HashMap::new()),
@@ -368,19 +414,14 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
         .route("/api/world", get(world))
         .route("/metrics", get(metrics_page))
         .fallback(static_file)
-        .with_state(Arc::clone(&shared));
-    let mut shutdown_wait = shutdown_rx;
+        .with_state(Arc::clone(&shared))
+        // One layer in front of every route, the fallback's static files included.
+        .layer(axum::middleware::from_fn_with_state(host_rule, hosts::check_host));
+    let limits = serve::Limits { max_connections: config.max_connections, header_timeout: config.header_timeout };
     threads.push(spawn(
         "situate-gui-server",
         Box::new(move || {
-            runtime.block_on(async move {
-                let graceful = async move {
-                    let _ = shutdown_wait.wait_for(|s| *s).await.map(|_| ());
-                };
-                if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(graceful).await {
-                    tracing::error!(error = %e, "the GUI server ended");
-                }
-            });
+            runtime.block_on(serve::accept_loop(listener, app, limits, shutdown_rx));
             runtime.shutdown_timeout(Duration::from_secs(2));
         }),
     )?);
@@ -390,6 +431,28 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
 
 fn ask(handle: &Handle, request: Request) -> Result<Reply, ControlError> {
     handle.request_timeout(request, REQUEST_TIMEOUT)
+}
+
+/// Raises this process's soft limit on open files to its hard limit, and returns the limit now
+/// in force. Each GUI connection, link client and recording takes a file descriptor, and the
+/// common default soft limit (1024) is soon reached; a program serving them calls this at start.
+pub fn raise_open_files_limit() -> std::io::Result<u64> {
+    let mut limit = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+    // SAFETY: getrlimit writes the struct it is given, which lives for the call.
+    if unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut limit) } != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    if limit.rlim_cur < limit.rlim_max {
+        let raised = libc::rlimit { rlim_cur: limit.rlim_max, rlim_max: limit.rlim_max };
+        // SAFETY: setrlimit reads the struct it is given, which lives for the call.
+        if unsafe { libc::setrlimit(libc::RLIMIT_NOFILE, &raised) } != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        limit = raised;
+    }
+    // rlim_t is narrower than u64 on some 32-bit targets.
+    #[allow(clippy::useless_conversion)]
+    Ok(u64::from(limit.rlim_cur))
 }
 
 // ----- HTTP -----------------------------------------------------------------------------------
@@ -491,6 +554,7 @@ pub(crate) mod tests {
             outcome: Mutex::new(None),
             world: None,
             sample_hz: 10.0,
+            ws_idle: DEFAULT_WS_IDLE_TIMEOUT,
             clients: AtomicUsize::new(0),
             next_client: AtomicU64::new(1),
             watched: Mutex::new(HashMap::new()),
@@ -503,7 +567,7 @@ pub(crate) mod tests {
         }
     }
 
-    fn http(addr: SocketAddr, request: &str) -> String {
+    pub(crate) fn http(addr: SocketAddr, request: &str) -> String {
         let mut s = TcpStream::connect(addr).expect("connect");
         s.set_read_timeout(Some(Duration::from_secs(10))).expect("timeout");
         s.write_all(request.as_bytes()).expect("write");
@@ -533,27 +597,71 @@ pub(crate) mod tests {
         let addr = gui.local_addr();
         assert!(addr.ip().is_loopback());
         assert_ne!(addr.port(), 0);
-        let page = http(addr, "GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        let get = |path: &str, host: &str| {
+            http(addr, &format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n"))
+        };
+        let page = get("/", &addr.to_string());
         assert!(page.starts_with("HTTP/1.1 200"), "{page}");
         assert!(page.contains("<html") || page.contains("<!doctype html>"), "{page}");
         if !has_web_app() {
             assert!(page.contains("make gui"), "the placeholder says what to run: {page}");
         }
-        let w = http(addr, "GET /api/world HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        let w = get("/api/world", &addr.to_string());
         assert!(w.contains("\"robot_radius\":0.25"), "{w}");
-        let missing = http(addr, "GET /nope.js HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+        let missing = get("/nope.js", &addr.to_string());
         assert!(missing.starts_with("HTTP/1.1 404"), "{missing}");
-        let upgrade = |origin: &str| {
+        let upgrade = |host: &str, origin: &str| {
             format!(
-                "GET /ws HTTP/1.1\r\nHost: {addr}\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n\
+                "GET /ws HTTP/1.1\r\nHost: {host}\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n\
                  Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n{origin}\r\n"
             )
         };
-        let evil = http(addr, &upgrade("Origin: http://evil.example\r\n"));
+        let evil = http(addr, &upgrade(&addr.to_string(), "Origin: http://evil.example\r\n"));
         assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
-        let ok = http(addr, &upgrade(&format!("Origin: http://{addr}\r\n")));
+        let ok = http(addr, &upgrade(&addr.to_string(), &format!("Origin: http://{addr}\r\n")));
         assert!(ok.starts_with("HTTP/1.1 101"), "{ok}");
+        // DNS rebinding: a page at evil.example, its name pointed at this machine, is its own
+        // origin; only the Host tells it apart, on every route.
+        let port = addr.port();
+        let rebound = format!("evil.example:{port}");
+        let evil = http(addr, &upgrade(&rebound, &format!("Origin: http://{rebound}\r\n")));
+        assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
+        let page = get("/", &rebound);
+        assert!(page.contains("--gui-allow-host evil.example"), "the refusal says how to allow a name: {page}");
+        for path in ["/", "/index.html", "/api/world", "/metrics", "/nope.js", "/foxglove"] {
+            let page = get(path, &rebound);
+            assert!(page.starts_with("HTTP/1.1 403"), "{path}: {page}");
+        }
+        let no_host = http(addr, "GET /api/world HTTP/1.0\r\n\r\n");
+        assert!(no_host.starts_with("HTTP/1.0 400") || no_host.starts_with("HTTP/1.1 400"), "{no_host}");
+        assert!(no_host.contains("no Host header"), "{no_host}");
+        let absolute = http(
+            addr,
+            &format!("GET http://{rebound}/api/world HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"),
+        );
+        assert!(absolute.starts_with("HTTP/1.1 403"), "the request-target's host counts too: {absolute}");
+        // What a browser sends for this server: its address (browser tests open
+        // http://127.0.0.1:<port>/), localhost, or a tunnel's port.
+        for host in [format!("localhost:{port}"), format!("[::1]:{port}"), "localhost:9000".into()] {
+            let page = get("/api/world", &host);
+            assert!(page.starts_with("HTTP/1.1 200"), "{host}: {page}");
+        }
         gui.stop();
+        // A name the user allows.
+        let gui = serve(handle.clone(), GuiConfig { allowed_hosts: vec!["Robot.LAN".into()], ..GuiConfig::default() })
+            .expect("serve");
+        let (addr, port) = (gui.local_addr(), gui.local_addr().port());
+        let named = format!("robot.lan:{port}");
+        let ok = http(addr, &upgrade(&named, &format!("Origin: http://{named}\r\n")));
+        assert!(ok.starts_with("HTTP/1.1 101"), "{ok}");
+        let evil = http(addr, &upgrade(&rebound, &format!("Origin: http://{rebound}\r\n")));
+        assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
+        gui.stop();
+        match serve(handle.clone(), GuiConfig { allowed_hosts: vec!["robot.lan:80".into()], ..GuiConfig::default() }) {
+            Err(GuiError::Config(m)) => assert!(m.contains("without a port"), "{m}"),
+            Err(other) => panic!("expected a config error, got {other}"),
+            Ok(_) => panic!("expected a config error"),
+        }
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();
     }
@@ -590,7 +698,7 @@ pub(crate) mod tests {
         let (mut handle, join) = robot();
         let gui = serve(handle.clone(), GuiConfig::default()).expect("serve");
         let scrape = |addr| {
-            let page = http(addr, "GET /metrics HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+            let page = http(addr, &format!("GET /metrics HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"));
             assert!(page.starts_with("HTTP/1.1 200"), "{page}");
             assert!(page.to_ascii_lowercase().contains("content-type: text/plain; version=0.0.4"), "{page}");
             let body = page.split_once("\r\n\r\n").map(|(_, b)| b.to_string()).unwrap_or_default();
@@ -623,6 +731,29 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn the_open_files_limit_is_raised_to_the_hard_limit() {
+        let get = || {
+            let mut l = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+            // SAFETY: getrlimit writes the struct it is given.
+            assert_eq!(unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut l) }, 0);
+            l
+        };
+        let before = get();
+        if before.rlim_cur == before.rlim_max && before.rlim_max > 64 {
+            // Lowered a little first (other tests run beside this one), so there is a raise to see.
+            let lowered = libc::rlimit { rlim_cur: before.rlim_max - 1, rlim_max: before.rlim_max };
+            // SAFETY: setrlimit reads the struct it is given.
+            assert_eq!(unsafe { libc::setrlimit(libc::RLIMIT_NOFILE, &lowered) }, 0);
+        }
+        let now = raise_open_files_limit().expect("raised");
+        let after = get();
+        assert_eq!(after.rlim_cur, after.rlim_max, "the soft limit is the hard one");
+        #[allow(clippy::useless_conversion)]
+        let soft = u64::from(after.rlim_cur);
+        assert_eq!(soft, now);
+    }
+
+    #[test]
     fn a_busy_port_and_a_bad_rate_are_clear_errors() {
         let (mut handle, join) = robot();
         let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
@@ -641,6 +772,17 @@ pub(crate) mod tests {
             Err(GuiError::Config(m)) => assert!(m.contains("history_frames"), "{m}"),
             Err(other) => panic!("expected a config error, got {other}"),
             Ok(_) => panic!("expected a config error"),
+        }
+        for (config, name) in [
+            (GuiConfig { max_connections: 0, ..GuiConfig::default() }, "max_connections"),
+            (GuiConfig { header_timeout: Duration::ZERO, ..GuiConfig::default() }, "header_timeout"),
+            (GuiConfig { ws_idle_timeout: Duration::from_millis(1), ..GuiConfig::default() }, "ws_idle_timeout"),
+        ] {
+            match serve(handle.clone(), config) {
+                Err(GuiError::Config(m)) => assert!(m.contains(name), "{m}"),
+                Err(other) => panic!("expected a config error, got {other}"),
+                Ok(_) => panic!("expected a config error"),
+            }
         }
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();

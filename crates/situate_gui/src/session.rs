@@ -15,13 +15,15 @@ use situate_link::json as wire;
 use situate_manager::{Reply, Request};
 use tokio::sync::broadcast;
 
+use crate::serve::{Beat, Keepalive};
 use crate::{ask, HistoryError, Shared, MAX_MESSAGE, WORLD_SIGNALS};
 
 /// The GUI's own verbs, besides the link's.
 const GUI_VERBS: [&str; 3] = ["watch", "history", "history_frame"];
 
 /// A browser's WebSocket must come from a page of this server (no cross-site WebSocket): a
-/// request with an `Origin` header is accepted only when its host is the request's `Host`.
+/// request with an `Origin` header is accepted only when its host is the request's `Host`
+/// (which the server's middleware has checked is a host it answers to).
 pub(crate) fn same_origin(headers: &HeaderMap) -> bool {
     let Some(origin) = headers.get(header::ORIGIN) else { return true };
     let (Ok(origin), Some(Ok(host))) = (origin.to_str(), headers.get(header::HOST).map(|h| h.to_str())) else {
@@ -83,44 +85,62 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
     let _guard = ClientGuard { shared: Arc::clone(&shared), id };
     let _ = shared.wake.send(());
     tracing::debug!(client = id, "GUI tab connected");
+    let mut keepalive = Keepalive::new(shared.ws_idle);
     let hello = hello_message(&shared, id);
-    if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
+    if !keepalive.send(&mut socket, Message::Text(hello.to_string().into())).await {
         return;
     }
     let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Utf8Bytes>();
     loop {
         tokio::select! {
             _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
-                let _ = socket.send(Message::Close(None)).await;
+                keepalive.close(&mut socket).await;
                 break;
             }
-            incoming = socket.recv() => match incoming {
-                Some(Ok(Message::Text(text))) => {
-                    let shared = Arc::clone(&shared);
-                    let tx = reply_tx.clone();
-                    tokio::task::spawn_blocking(move || {
-                        let reply = handle_message(&shared, id, text.as_str());
-                        let _ = tx.send(reply.to_string().into());
-                    });
-                }
-                Some(Ok(Message::Binary(_))) => {
-                    let e = json!({"type": "reply", "id": null,
-                        "error": {"kind": "bad_request", "message": "send JSON text frames, not binary"}});
-                    if socket.send(Message::Text(e.to_string().into())).await.is_err() {
+            beat = keepalive.beat() => match beat {
+                Beat::Ping => {
+                    if !keepalive.send(&mut socket, Message::Ping(Default::default())).await {
                         break;
                     }
                 }
-                Some(Ok(_)) => {}
-                Some(Err(_)) | None => break,
+                Beat::Dead => {
+                    tracing::debug!(client = id, "GUI tab silent for the idle timeout: closing");
+                    keepalive.close(&mut socket).await;
+                    break;
+                }
             },
+            incoming = socket.recv() => {
+                if let Some(Ok(_)) = &incoming {
+                    keepalive.heard();
+                }
+                match incoming {
+                    Some(Ok(Message::Text(text))) => {
+                        let shared = Arc::clone(&shared);
+                        let tx = reply_tx.clone();
+                        tokio::task::spawn_blocking(move || {
+                            let reply = handle_message(&shared, id, text.as_str());
+                            let _ = tx.send(reply.to_string().into());
+                        });
+                    }
+                    Some(Ok(Message::Binary(_))) => {
+                        let e = json!({"type": "reply", "id": null,
+                            "error": {"kind": "bad_request", "message": "send JSON text frames, not binary"}});
+                        if !keepalive.send(&mut socket, Message::Text(e.to_string().into())).await {
+                            break;
+                        }
+                    }
+                    Some(Ok(_)) => {}
+                    Some(Err(_)) | None => break,
+                }
+            }
             Some(reply) = reply_rx.recv() => {
-                if socket.send(Message::Text(reply)).await.is_err() {
+                if !keepalive.send(&mut socket, Message::Text(reply)).await {
                     break;
                 }
             }
             t = telemetry.recv() => match t {
                 Ok(text) => {
-                    if socket.send(Message::Text(text)).await.is_err() {
+                    if !keepalive.send(&mut socket, Message::Text(text)).await {
                         break;
                     }
                 }
@@ -129,13 +149,13 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
             },
             e = events.recv() => match e {
                 Ok(text) => {
-                    if socket.send(Message::Text(text)).await.is_err() {
+                    if !keepalive.send(&mut socket, Message::Text(text)).await {
                         break;
                     }
                 }
                 Err(broadcast::error::RecvError::Lagged(n)) => {
                     let note = json!({"type": "lagged", "missed": n});
-                    if socket.send(Message::Text(note.to_string().into())).await.is_err() {
+                    if !keepalive.send(&mut socket, Message::Text(note.to_string().into())).await {
                         break;
                     }
                 }
