@@ -186,6 +186,11 @@ pub(crate) struct RunArgs {
     /// No GUI, even if the robot file has a `gui:` section.
     #[arg(long, conflicts_with = "gui")]
     pub(crate) no_gui: bool,
+    /// Let the GUI answer to this host name too, besides localhost and its own address (e.g.
+    /// robot.lan, without a port; repeat for several). Requests naming any other host are
+    /// refused, a guard against DNS rebinding (docs/gui.md).
+    #[arg(long, value_name = "NAME", conflicts_with = "no_gui")]
+    pub(crate) gui_allow_host: Vec<String>,
     /// Record the run to this MCAP file: every signal, event, print and resource winner
     /// (docs/recording.md).
     #[arg(long, value_name = "FILE")]

@@ -58,6 +58,11 @@ pub(crate) struct DemoOptions {
     /// The GUI's address (not with --headless).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub(crate) gui: String,
+    /// Let the GUI answer to this host name too, besides localhost and its own address (e.g.
+    /// robot.lan, without a port; repeat for several). Requests naming any other host are
+    /// refused, a guard against DNS rebinding (docs/gui.md).
+    #[arg(long, value_name = "NAME")]
+    pub(crate) gui_allow_host: Vec<String>,
     /// Give up after this much simulated time, s.
     #[arg(long, default_value_t = 1800.0)]
     pub(crate) limit_s: f64,
@@ -147,6 +152,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         stopped: true,
         gui: (!demo.headless).then(|| demo.gui.clone()),
         no_gui: demo.headless,
+        gui_allow_hosts: demo.gui_allow_host.clone(),
         record: demo.record.clone(),
         ..RunOptions::default()
     };

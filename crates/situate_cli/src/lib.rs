@@ -150,6 +150,11 @@ where
         }
     };
     init_logging(&cli.global);
+    // The GUI's and the link's connections each take a file descriptor: the soft limit (often
+    // 1024) would be reached long before the hard one.
+    if let Err(e) = situate_gui::raise_open_files_limit() {
+        tracing::debug!(error = %e, "could not raise the open files limit");
+    }
     let out = Out { json: cli.global.json, quiet: cli.global.quiet };
     match run(cli.command, &ext, out) {
         Ok(code) => code,

@@ -213,6 +213,8 @@ pub(crate) struct RunOptions {
     pub(crate) gui: Option<String>,
     /// No GUI even if the file asks for one.
     pub(crate) no_gui: bool,
+    /// `--gui-allow-host`: names the GUI answers to besides its own address.
+    pub(crate) gui_allow_hosts: Vec<String>,
     /// `--set`.
     pub(crate) compose: Compose,
     /// `--record`: the MCAP file.
@@ -463,7 +465,8 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     }
     if let Some(listen) = gui_listen {
         let world = running.sim.as_ref().map(|s| s.map.world_json());
-        let config = situate_gui::GuiConfig { listen, world, ..situate_gui::GuiConfig::default() };
+        let allowed_hosts = opts.gui_allow_hosts.clone();
+        let config = situate_gui::GuiConfig { listen, world, allowed_hosts, ..situate_gui::GuiConfig::default() };
         match situate_gui::serve_with_history(running.handle.clone(), config, gui_tap) {
             Ok(g) => {
                 out.note(format_args!("GUI on {}", g.url()));
@@ -545,6 +548,7 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         speed,
         gui,
         no_gui,
+        gui_allow_host,
         record,
         record_dir,
         compose,
@@ -560,6 +564,7 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         stopped: false,
         gui,
         no_gui,
+        gui_allow_hosts: gui_allow_host,
         compose,
         record,
         record_dir,
