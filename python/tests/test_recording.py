@@ -12,10 +12,11 @@ import subprocess
 import sys
 from collections import defaultdict
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import pytest
 from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
 from test_demo import BIN, ROOT, needs_bin, situate_bin  # noqa: F401 (the fixture)
 
 
@@ -209,7 +210,175 @@ def test_a_recording_keeps_the_mcap_format_rules_foxglove_reads_by(tmp_path: Pat
             schema = summary.schemas[channel.schema_id]
             assert schema.encoding == "jsonschema"
             assert json.loads(schema.data)["type"] == "object"
-        assert [m.name for m in reader.iter_metadata()] == ["situate"]
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        assert list(metadata) == ["situate", "situate_drops"]
+        # On the simulated clock no cycle is ever dropped: the cycle waits for the writer.
+        assert metadata["situate_drops"] == {"dropped_cycles": "0", "ranges": "[]"}
+
+
+def _record_toy(path: Path, cycles: int = 300) -> None:
+    assert BIN is not None
+    cmd = [str(BIN), "run", "examples/toybot.yaml", "--clock", "simulated", "--cycles", str(cycles)]
+    cmd += ["--no-link", "--no-gui", "--record", str(path)]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+
+
+def _rewrite(
+    src: Path,
+    dst: Path,
+    metadata: Callable[[str, dict[str, str]], None] = lambda name, m: None,
+    keep: Callable[[str, dict[str, Any]], bool] = lambda topic, data: True,
+    change: Callable[[str, dict[str, Any]], None] = lambda topic, data: None,
+    extra: list[tuple[str, int, dict[str, Any]]] | None = None,
+    extra_metadata: dict[str, dict[str, str]] | None = None,
+) -> None:
+    """Writes the recording `src` again as a valid MCAP file (chunk CRCs, summary), its metadata
+    and messages changed: the messages `keep` refuses left out, the others changed by `change`;
+    `extra` messages (topic, log time, data) and metadata records added."""
+    with src.open("rb") as f, dst.open("wb") as out:
+        reader = make_reader(f)
+        writer = Writer(out, compression=CompressionType.ZSTD)
+        writer.start()
+        for record in reader.iter_metadata():
+            data = dict(record.metadata)
+            metadata(record.name, data)
+            writer.add_metadata(record.name, data)
+        for name, data in (extra_metadata or {}).items():
+            writer.add_metadata(name, data)
+        channels: dict[str, int] = {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if channel.topic not in channels:
+                assert schema is not None
+                schema_id = writer.register_schema(schema.name, schema.encoding, schema.data)
+                channels[channel.topic] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schema_id, dict(channel.metadata)
+                )
+            data = json.loads(message.data)
+            if not keep(channel.topic, data):
+                continue
+            change(channel.topic, data)
+            writer.add_message(
+                channels[channel.topic],
+                message.log_time,
+                json.dumps(data).encode(),
+                message.publish_time,
+                message.sequence,
+            )
+        for topic, log_time, data in extra or []:
+            if topic not in channels:
+                schema_id = writer.register_schema(
+                    "situate.gap", "jsonschema", b'{"type": "object"}'
+                )
+                channels[topic] = writer.register_channel(topic, "json", schema_id)
+            writer.add_message(channels[topic], log_time, json.dumps(data).encode(), log_time)
+        writer.finish()  # type: ignore[no-untyped-call]
+
+
+def _refused(path: Path) -> str:
+    """`situate replay FILE` refuses it as a bad file (exit 3), in bounded time; the message."""
+    code, result = _replay(path)
+    assert code == 3, result
+    error = result["error"]
+    assert error["kind"] == "bad_file", error
+    message: str = error["message"]
+    assert message.startswith(str(path)), message
+    return message
+
+
+@needs_bin
+def test_a_damaged_or_doctored_recording_is_refused_naming_what_and_where(tmp_path: Path) -> None:
+    src = tmp_path / "toy.mcap"
+    _record_toy(src)
+    bad = tmp_path / "bad.mcap"
+
+    # The last cycle renumbered 10^15: refused, not replayed for ever.
+    def renumber(topic: str, data: dict[str, Any]) -> None:
+        if topic != "situate/winners" and data.get("cycle") == 300:
+            data["cycle"] = 10**15
+
+    _rewrite(src, bad, change=renumber)
+    assert "cycle 1000000000000000 follows cycle 299" in _refused(bad)
+
+    # A period that is not a number: refused, not a panic.
+    def nan_period(name: str, m: dict[str, str]) -> None:
+        if name == "situate":
+            m["period_s"] = "nan"
+
+    _rewrite(src, bad, metadata=nan_period)
+    message = _refused(bad)
+    assert "`period_s`" in message, message
+    assert "`nan`" in message, message
+
+    # Parameter sets that are not JSON: refused, not ignored.
+    def bad_sets(name: str, m: dict[str, str]) -> None:
+        if name == "situate":
+            m["sets"] = "wander.speed=0.3"
+
+    _rewrite(src, bad, metadata=bad_sets)
+    message = _refused(bad)
+    assert "`sets`" in message, message
+    assert "not a JSON list" in message, message
+
+    # A chunk's header zeroed: refused where it is, not skipped.
+    raw = bytearray(src.read_bytes())
+    with src.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    assert summary.chunk_indexes
+    at = summary.chunk_indexes[0].chunk_start_offset
+    raw[at + 9 : at + 9 + 40] = bytes(40)
+    bad.write_bytes(bytes(raw))
+    message = _refused(bad)
+    assert f"at byte {at} (chunk)" in message, message
+    assert "damaged chunk header" in message, message
+
+    # A device that never ends: refused before it is read.
+    assert "not a regular file" in _refused(Path("/dev/zero"))
+
+
+@needs_bin
+def test_a_recording_that_lacks_cycles_replays_as_not_identical_naming_them(
+    tmp_path: Path,
+) -> None:
+    # As a wall-clock recording whose writer fell behind: cycles 101-150 dropped, marked by a
+    # gap marker and the record at the end.
+    src = tmp_path / "toy.mcap"
+    _record_toy(src)
+    lacking = tmp_path / "lacking.mcap"
+
+    def keep(topic: str, data: dict[str, Any]) -> bool:
+        # Those cycles' frames are lost; events go their own way and stay.
+        return topic.startswith("situate/events/") or not 101 <= data.get("cycle", 0) <= 150
+
+    def drops(name: str, m: dict[str, str]) -> None:
+        if name == "situate_drops":
+            m.update({"dropped_cycles": "50", "ranges": "[[101,150]]"})
+
+    gap = ("situate/gaps", 5_050_000_000, {"cycle": 101, "last": 150, "count": 50})
+    _rewrite(src, lacking, metadata=drops, keep=keep, extra=[gap])
+    code, result = _replay(lacking)
+    assert code == 1, result
+    assert result["identical"] is False, result
+    assert result["dropped_cycles"] == 50, result
+    assert result["dropped_ranges"] == [[101, 150]], result
+    assert result["stopped_before"] == 101, result
+    assert result["cycles"] == result["matched"] == 100, result
+    assert result["first_difference"] is None, result
+    # In words too.
+    assert BIN is not None
+    done = subprocess.run(
+        [str(BIN), "replay", str(lacking)], cwd=ROOT, capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "not identical" in done.stdout, done.stdout
+    assert "cycles 101-150" in done.stdout, done.stdout
+    assert "identical: every cycle" not in done.stdout, done.stdout
+
+    # Without the marks, the missing cycles are a damaged file, not a replay that "matches".
+    unmarked = tmp_path / "unmarked.mcap"
+    _rewrite(src, unmarked, keep=keep)
+    assert "neither in the file nor marked as dropped" in _refused(unmarked)
 
 
 def test_the_reader_is_the_reference_one() -> None:

@@ -235,13 +235,13 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     Ok(code)
 }
 
-/// Cycle ranges as `5–50, 60, 70–80`, the first ten.
+/// Cycle ranges as `cycles 5-50, cycle 60, cycles 70-80`, the first ten.
 fn ranges_text(ranges: &[(u64, u64)]) -> String {
     const SHOWN: usize = 10;
     let mut text: Vec<String> = ranges
         .iter()
         .take(SHOWN)
-        .map(|&(a, b)| if a == b { format!("cycle {a}") } else { format!("cycles {a}–{b}") })
+        .map(|&(a, b)| if a == b { format!("cycle {a}") } else { format!("cycles {a}-{b}") })
         .collect();
     if ranges.len() > SHOWN {
         text.push(format!("and {} more ranges", ranges.len() - SHOWN));
@@ -285,4 +285,18 @@ fn serve_gui(
     let _ = situate::manager::Control::request(&mut handle, situate::manager::Request::Shutdown);
     let _ = join.join_timeout(Duration::from_secs(10));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ranges_text;
+
+    #[test]
+    fn replay_names_the_dropped_cycles_ten_ranges_at_most() {
+        assert_eq!(ranges_text(&[(5, 50), (60, 60)]), "cycles 5-50, cycle 60");
+        let many: Vec<(u64, u64)> = (0..13).map(|k| (10 * k, 10 * k + 1)).collect();
+        let text = ranges_text(&many);
+        assert!(text.starts_with("cycles 0-1, cycles 10-11"), "{text}");
+        assert!(text.ends_with("cycles 90-91, and 3 more ranges"), "{text}");
+    }
 }

@@ -1,0 +1,104 @@
+//! `situate replay` from the outside: a robot file with tight deadlines
+//! replays identically (a replay runs bodies to completion), and damaged
+//! recordings are refused as bad files (exit 3) naming where, without
+//! reading what is not there.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{assert_no_panic, json_of, situate, stderr, TOYBOT};
+
+/// Records the toy robot on the simulated clock, `cycles` cycles, into `dir`.
+fn record(dir: &Path, cycles: u32) -> PathBuf {
+    let path = dir.join("toy.mcap");
+    let cycles = cycles.to_string();
+    let out = situate([
+        "run",
+        TOYBOT,
+        "--clock",
+        "simulated",
+        "--cycles",
+        cycles.as_str(),
+        "--no-link",
+        "--no-gui",
+        "--record",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    path
+}
+
+fn replay(args: &[&str]) -> std::process::Output {
+    let mut all = vec!["replay", "--json"];
+    all.extend_from_slice(args);
+    let out = situate(all);
+    assert_no_panic(&out);
+    out
+}
+
+#[test]
+fn replay_with_a_robot_file_of_tight_deadlines_is_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = record(dir.path(), 300);
+    // The same robot, every run given a nanosecond: on the wall clock each
+    // would be faulted; a replay runs them to completion.
+    let source = std::fs::read_to_string(TOYBOT).unwrap();
+    let tight =
+        source.replace("  executor: serial\n", "  executor: serial\n  budget_ms: 0.000001\n  liveness_ms: 0.000001\n");
+    assert_ne!(tight, source, "the toy robot's cycle section changed");
+    let robot = dir.path().join("tight.yaml");
+    std::fs::write(&robot, tight).unwrap();
+    let out = replay(&[rec.to_str().unwrap(), "--robot", robot.to_str().unwrap()]);
+    let result = json_of(&out);
+    assert_eq!(out.status.code(), Some(0), "{result}\n{}", stderr(&out));
+    assert_eq!(result["identical"], true, "{result}");
+    assert_eq!((result["cycles"].as_u64(), result["matched"].as_u64()), (Some(300), Some(300)), "{result}");
+    assert_eq!(result["dropped_cycles"], 0, "{result}");
+}
+
+/// Where the first chunk record starts (walking the records from the magic).
+fn first_chunk(bytes: &[u8]) -> usize {
+    let mut pos = 8;
+    while pos + 9 <= bytes.len() {
+        let len = u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().unwrap()) as usize;
+        if bytes[pos] == 0x06 {
+            return pos;
+        }
+        pos += 9 + len;
+    }
+    panic!("no chunk in the recording");
+}
+
+/// `situate replay FILE` refused as a bad file: exit 3, the error (JSON)
+/// naming the file.
+fn refused(file: &Path) -> String {
+    let out = replay(&[file.to_str().unwrap()]);
+    let result = json_of(&out);
+    assert_eq!(out.status.code(), Some(3), "{result}");
+    assert_eq!(result["error"]["kind"], "bad_file", "{result}");
+    let message = result["error"]["message"].as_str().unwrap_or_default().to_string();
+    assert!(message.starts_with(file.to_str().unwrap()), "{message}");
+    message
+}
+
+#[test]
+fn replay_refuses_a_damaged_recording_as_a_bad_file_naming_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = record(dir.path(), 300);
+    let bytes = std::fs::read(&rec).unwrap();
+    let at = first_chunk(&bytes);
+    let bad = dir.path().join("bad.mcap");
+    // The chunk's header zeroed: it claims to hold nothing.
+    let mut zeroed = bytes.clone();
+    zeroed[at + 9..at + 9 + 40].fill(0);
+    std::fs::write(&bad, &zeroed).unwrap();
+    let message = refused(&bad);
+    assert!(message.contains(&format!("at byte {at} (chunk)")), "{message}");
+    // Cut short, as by a robot killed while recording.
+    std::fs::write(&bad, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    assert!(refused(&bad).contains("cut short"));
+    // Not a file at all: refused before anything is read (it never ends).
+    let message = refused(Path::new("/dev/zero"));
+    assert!(message.contains("not a regular file"), "{message}");
+}
