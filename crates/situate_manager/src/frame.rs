@@ -53,10 +53,17 @@ pub enum WhenFull {
     Drop,
     /// Under the simulated clock, wait until the reader makes room: no
     /// robot time passes while the cycle waits, so losing the frame would
-    /// gain nothing (a recording). Under the wall clock, as [`WhenFull::Drop`]:
-    /// a late cycle would be late for the devices.
+    /// gain nothing (a recording). The queue then holds at most
+    /// [`WAITING_CAPACITY`] frames: a longer one would not make the robot
+    /// faster, only leave more for the reader to read when the robot stops.
+    /// Under the wall clock, as [`WhenFull::Drop`]: a late cycle would be
+    /// late for the devices.
     WaitIfSimulated,
 }
+
+/// The most frames a tap's queue holds when the cycle waits for its reader
+/// ([`WhenFull::WaitIfSimulated`] on the simulated clock).
+pub const WAITING_CAPACITY: usize = 512;
 
 /// Past this many ranges, [`Drops`] grows its last range instead of adding
 /// one: its memory is bounded however often a reader falls behind.

@@ -79,9 +79,19 @@ pub struct TapReceiver {
     pub frames: Receiver<Frame>,
     drops: Arc<std::sync::Mutex<crate::frame::Drops>>,
     returns: crossbeam_channel::Sender<Frame>,
+    /// The cycle waits for room instead of dropping (simulated clock).
+    cycle_waits: bool,
 }
 
 impl TapReceiver {
+    /// Whether the cycle waits for room when the receiver is full (a tap
+    /// made [`WhenFull::WaitIfSimulated`](crate::frame::WhenFull) of a
+    /// manager on the simulated clock): then a slow reader slows the robot,
+    /// and it should not give way to other work.
+    pub fn cycle_waits(&self) -> bool {
+        self.cycle_waits
+    }
+
     /// Frames dropped so far because the receiver was full.
     pub fn dropped(&self) -> u64 {
         self.drops().count
@@ -415,13 +425,20 @@ impl Manager {
     /// simulated clock waits for room instead. Several taps get the same
     /// frames; one goes when its receiver is dropped. The leaves are those
     /// of [`Manager::graph`] (`leaves[i]`).
+    ///
+    /// A tap whose cycle waits holds at most
+    /// [`WAITING_CAPACITY`](crate::frame::WAITING_CAPACITY) frames.
     pub fn tap(&mut self, options: impl Into<crate::frame::TapOptions>) -> TapReceiver {
         let options = options.into();
-        let (tx, rx) = crossbeam_channel::bounded(options.capacity.max(1));
+        let cycle_waits =
+            options.when_full == crate::frame::WhenFull::WaitIfSimulated && self.clock == ClockKind::Simulated;
+        let capacity =
+            if cycle_waits { options.capacity.min(crate::frame::WAITING_CAPACITY) } else { options.capacity };
+        let (tx, rx) = crossbeam_channel::bounded(capacity.max(1));
         let (returns_tx, returns) = crossbeam_channel::bounded(RETURNS);
         let drops = Arc::new(std::sync::Mutex::new(crate::frame::Drops::default()));
         self.taps.push(Tap { tx, when_full: options.when_full, drops: Arc::clone(&drops), returns });
-        TapReceiver { frames: rx, drops, returns: returns_tx }
+        TapReceiver { frames: rx, drops, returns: returns_tx, cycle_waits }
     }
 
     pub fn events(&self) -> Receiver<Event> {

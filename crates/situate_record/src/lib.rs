@@ -292,7 +292,11 @@ impl Recorder {
         let thread = std::thread::Builder::new()
             .name("situate-record".into())
             .spawn(move || {
-                lower_thread_priority();
+                // On the simulated clock the cycle waits for the writer: a
+                // writer giving way to other work would slow the robot too.
+                if !tap.cycle_waits() {
+                    lower_thread_priority();
+                }
                 file.run(tap, events, stopped, options.hold)
             })
             .map_err(io)?;
@@ -664,10 +668,11 @@ impl Writing {
     }
 }
 
-/// The writer yields the CPU to the cycle and to the sequencer: its work
-/// (encoding JSON, compressing) can wait, within the queue's 4,096 cycles,
-/// theirs cannot. On Linux it runs at nice +10; elsewhere, or if refused, as
-/// it is.
+/// On the wall clock the writer yields the CPU to the cycle and to the
+/// sequencer: its work (encoding JSON, compressing) can wait, within the
+/// queue's 4,096 cycles, theirs cannot. On Linux it runs at nice +10;
+/// elsewhere, or if refused, as it is. (On the simulated clock the cycle
+/// waits for the writer, which keeps the thread's priority.)
 fn lower_thread_priority() {
     #[cfg(target_os = "linux")]
     {
