@@ -87,6 +87,7 @@ function start(): void {
         timeline.reset();
       }
       runId = id;
+      monitors.setSession(str(msg["session"]));
       document.body.dataset["run"] = id;
       setText(runInfo, `run ${id} · started ${clock(started)}`);
       showOutcome(msg["outcome"]);

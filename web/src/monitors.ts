@@ -7,6 +7,8 @@ import { Connection, isObject, RefusedError, type Json, type JsonObject } from "
 import { errorText, h, linkControl, num, setText, show, str } from "./dom";
 
 const EVENT_LINES = 300;
+/** How often the monitor list is asked for again. */
+const MONITOR_REFRESH_MS = 2000;
 
 export class Monitors {
   readonly el: HTMLElement;
@@ -19,6 +21,8 @@ export class Monitors {
   private fired: { monitor: number; condition: string; cycle: number }[] = [];
   /** Whether the cycle stopped (`manager_stopped`) since it last started. */
   private stopped = false;
+  /** This tab's session (from the hello): the monitors it adds are its own. */
+  private session = "";
 
   constructor(
     private readonly conn: Connection,
@@ -52,6 +56,25 @@ export class Monitors {
       this.paused,
       this.list,
     );
+    // Monitors come and go without events of their own (a sequencer's added, a session ended):
+    // the list is asked for again every few seconds while the page is shown.
+    window.setInterval(() => {
+      if (document.visibilityState === "visible") void this.refresh();
+    }, MONITOR_REFRESH_MS);
+  }
+
+  /** This tab's session, as the hello names it. */
+  setSession(session: string): void {
+    this.session = session;
+  }
+
+  /** Who holds a monitor, for a person: this tab, the robot's program, or a client's name. */
+  private owner(m: JsonObject): string {
+    const session = m["session"];
+    if (typeof session !== "string") return "the robot's program";
+    if (session === this.session) return "this tab";
+    const client = m["client"];
+    return typeof client === "string" && client !== "" ? client : `session ${session.slice(0, 8)}`;
   }
 
   /** A new run: its monitors are its own. */
@@ -76,10 +99,15 @@ export class Monitors {
         this.pausing.set(id, str(m["condition"]));
         this.check();
       }
-      const cancel = linkControl(h("button", {}, "Cancel"));
+      const owner = this.owner(m);
+      const mine = owner === "this tab";
+      const cancel = linkControl(h("button", { title: mine ? "cancel this tab's monitor" : `cancel ${owner}'s monitor (asks first)` }, "Cancel"));
       cancel.addEventListener("click", async () => {
+        // Another session's monitor: its sequencer may be waiting on it. Ask, then tell the
+        // manager the user confirmed (`force`); the owner gets a `monitor_cancelled` event.
+        if (!mine && !window.confirm(`Monitor ${id} belongs to ${owner}, which may be waiting for it to fire. Cancel it anyway? (${owner} is told.)`)) return;
         try {
-          await this.conn.request("monitor_cancel", { monitor: id });
+          await this.conn.request("monitor_cancel", mine ? { monitor: id } : { monitor: id, force: true });
           await this.refresh();
         } catch (e) {
           setText(this.error, errorText(e));
@@ -89,6 +117,7 @@ export class Monitors {
         "tr",
         { "data-monitor": id },
         h("td", {}, String(id)),
+        h("td", { "data-testid": `monitor-owner-${id}` }, owner),
         h("td", { class: "mono" }, str(m["condition"])),
         h("td", {}, str(m["mode"])),
         h("td", {}, m["pause"] === true ? "pauses" : ""),
@@ -97,7 +126,7 @@ export class Monitors {
         h("td", {}, cancel),
       );
     });
-    this.list.replaceChildren(h("tr", {}, h("th", {}, "id"), h("th", {}, "condition"), h("th", {}, "mode"), h("th", {}, ""), h("th", {}, ""), h("th", {}, ""), h("th", {}, "")), ...rows);
+    this.list.replaceChildren(h("tr", {}, h("th", {}, "id"), h("th", {}, "owner"), h("th", {}, "condition"), h("th", {}, "mode"), h("th", {}, ""), h("th", {}, ""), h("th", {}, ""), h("th", {}, "")), ...rows);
   }
 
   event(e: JsonObject): void {
@@ -105,6 +134,9 @@ export class Monitors {
       case "monitor_fired":
         this.fired.push({ monitor: num(e["monitor"]), condition: str(e["condition"]), cycle: num(e["cycle"]) });
         if (this.fired.length > 100) this.fired.shift();
+        void this.refresh();
+        break;
+      case "monitor_cancelled":
         void this.refresh();
         break;
       case "manager_stopped":

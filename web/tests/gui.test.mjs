@@ -3,7 +3,8 @@
 
 import assert from "node:assert/strict";
 import { after, before, afterEach, describe, test } from "node:test";
-import { cli, closeGui, openGui, screenshotPath, until } from "./harness.mjs";
+import { spawn } from "node:child_process";
+import { cli, closeGui, openGui, screenshotPath, situateBin, until } from "./harness.mjs";
 
 /** Deep equality of two JSON values, whatever the key order, numbers within 1e-9 (relative). */
 function same(a, b) {
@@ -209,6 +210,42 @@ describe("situate GUI", () => {
     await page.getByTestId("monitor-condition").fill("odom.x <");
     await page.getByTestId("monitor-add").click();
     await until(async () => ((await page.getByTestId("monitor-error").textContent()) ?? "").includes("column"), "the condition's error");
+  });
+
+  test("a sequencer's monitor shows its owner and is cancelled only after asking; the sequencer is told", async () => {
+    // A sequencer (the CLI's `monitor`, its own session) waits on a monitor that never fires.
+    const seq = spawn(situateBin, ["monitor", "cycle < 0", "--mode", "level", "--connect", `tcp/127.0.0.1:${tb.linkPort}`], {
+      stdio: ["ignore", "pipe", "pipe"],
+      env: { ...process.env, RUST_LOG: "error" },
+    });
+    let stderr = "";
+    seq.stderr.on("data", (d) => (stderr += d));
+    const exited = new Promise((resolve) => seq.on("exit", (code) => resolve(code)));
+    try {
+      const theirs = await until(async () => (await cli(tb.linkPort, "monitors")).find((m) => m.condition === "cycle < 0"), "the sequencer's monitor");
+      const row = page.locator(`[data-monitor="${theirs.monitor}"]`);
+      await until(async () => (await row.count()) > 0, "the monitor listed in the page");
+      const owner = await page.getByTestId(`monitor-owner-${theirs.monitor}`).textContent();
+      assert.notEqual(owner, "this tab");
+      assert.match(owner, /rs-/, "the sequencer's name is shown as its owner");
+      // Asked first: dismissed, nothing happens.
+      let asked = "";
+      page.once("dialog", (d) => ((asked = d.message()), d.dismiss()));
+      await row.getByRole("button", { name: "Cancel" }).click();
+      await until(async () => asked !== "", "the page asks before cancelling another session's monitor");
+      assert.match(asked, /belongs to/);
+      assert.ok((await cli(tb.linkPort, "monitors")).some((m) => m.monitor === theirs.monitor), "a dismissed question cancels nothing");
+      // Confirmed: cancelled, and the sequencer learns it will not fire.
+      page.once("dialog", (d) => d.accept());
+      await row.getByRole("button", { name: "Cancel" }).click();
+      await until(async () => !(await cli(tb.linkPort, "monitors")).some((m) => m.monitor === theirs.monitor), "the monitor cancelled over the link");
+      const code = await Promise.race([exited, new Promise((r) => setTimeout(() => r("still running"), 60_000))]);
+      assert.notEqual(code, 0, "the sequencer does not wait for a monitor that will never fire");
+      assert.notEqual(code, "still running");
+      assert.match(stderr, /was cancelled by another session/);
+    } finally {
+      seq.kill();
+    }
   });
 
   test("two tabs watch at once", async () => {

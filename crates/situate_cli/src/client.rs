@@ -302,7 +302,8 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             Ok(())
         }),
         ClientCommand::Monitor { condition, any, mode, count, remote } => client_verb(&remote, |c, robot| {
-            let (_sub, events) = c.subscribe(robot, "events/monitor_fired")?;
+            // `monitor_fired`, and `monitor_cancelled`: someone else may cancel it (the GUI, forced).
+            let (_sub, events) = c.subscribe(robot, "events/**")?;
             let (args, shown) = match &condition {
                 Some(condition) => (json!({"condition": condition, "mode": mode}), condition.clone()),
                 None => (
@@ -320,7 +321,18 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             let interrupted = signals::Stop::install()?;
             while limit.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
-                    if e["monitor"].as_u64() == Some(id) {
+                    if e["monitor"].as_u64() == Some(id) && e["kind"] == "monitor_cancelled" {
+                        anyhow::bail!(
+                            "monitor {id} was cancelled by {} at cycle {}: it will not fire",
+                            match e["reason"].as_str() {
+                                Some("forced") => "another session (the GUI's user)",
+                                Some("session_ended") => "the robot, as this connection's session ended",
+                                _ => "this connection",
+                            },
+                            e["cycle"]
+                        );
+                    }
+                    if e["monitor"].as_u64() == Some(id) && e["kind"] == "monitor_fired" {
                         seen += 1;
                         out.result(&e, || {
                             format!(

@@ -50,6 +50,7 @@ pub(crate) fn hello_message(shared: &Shared, client: u64) -> Json {
     json!({
         "type": "hello",
         "client": client,
+        "session": tab_session(shared, client),
         "protocol": wire::PROTOCOL,
         "run": {"id": shared.run.id, "started_unix_s": shared.run.started_unix_s},
         "sample_hz": shared.sample_hz,
@@ -73,7 +74,19 @@ impl Drop for ClientGuard {
     fn drop(&mut self) {
         self.shared.watched.lock().unwrap_or_else(|p| p.into_inner()).remove(&self.id);
         self.shared.clients.fetch_sub(1, Ordering::SeqCst);
+        // The tab's monitors go with it (never waited for: the manager handles it between cycles).
+        let end = Request::EndSession { session: tab_session(&self.shared, self.id) };
+        if let Err(e) = self.shared.handle.submit(end) {
+            tracing::debug!(error = %e, client = self.id, "could not end a GUI tab's session");
+        }
     }
+}
+
+/// A tab's session (docs/protocol.md, "Sessions"): the monitors it adds are its own, only it (or,
+/// with `force`, another tab after asking its user) cancels them, and they go when it closes. The
+/// server knows when a tab goes, so a tab needs no secret or token.
+fn tab_session(shared: &Shared, client: u64) -> String {
+    format!("gui-{}-{client}", shared.run.id)
 }
 
 async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
@@ -186,6 +199,30 @@ pub(crate) fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
     if verb == "telemetry" {
         return error_reply(&id, "bad_request", "the GUI samples telemetry itself: use `watch` to choose signals");
     }
+    // A tab's monitors belong to its own session, whatever it says; `force` (cancel another
+    // session's monitor) is the GUI's own argument, sent once the page asked its user.
+    let mut args = args;
+    let mut force = false;
+    if matches!(verb, "monitor_add" | "monitor_cancel") {
+        if let Some(obj) = args.as_object_mut() {
+            obj.remove("session");
+            if verb == "monitor_cancel" {
+                match obj.remove("force") {
+                    None | Some(Json::Bool(false)) => {}
+                    Some(Json::Bool(true)) => force = true,
+                    Some(other) => {
+                        return error_reply(
+                            &id,
+                            "bad_request",
+                            &format!("`monitor_cancel`: argument `force` must be true or false, got {other}"),
+                        )
+                    }
+                }
+            } else if !obj.contains_key("client") {
+                obj.insert("client".into(), json!(format!("GUI tab {client}")));
+            }
+        }
+    }
     let payload = args.to_string();
     match wire::decode_request(verb, payload.as_bytes()) {
         Err(e) => json!({"type": "reply", "id": id, "error": {"kind": e.kind, "message": e.message}}),
@@ -196,7 +233,15 @@ pub(crate) fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
             Err(e) => with_id(wire::control_error(&e), &id),
         },
         Ok(wire::Decoded::Telemetry { .. }) => error_reply(&id, "bad_request", "use `watch`"),
-        Ok(wire::Decoded::Manager(request)) => {
+        Ok(wire::Decoded::Manager(mut request)) => {
+            match &mut request {
+                Request::AddMonitor { session, .. } => *session = Some(tab_session(shared, client)),
+                Request::CancelMonitor { session, force: f, .. } => {
+                    *session = Some(tab_session(shared, client));
+                    *f = force;
+                }
+                _ => {}
+            }
             tracing::debug!(?request, client, "GUI request");
             match ask(&shared.handle, request) {
                 Ok(reply) => json!({"type": "reply", "id": id, "ok": wire::reply_to_json(&reply)}),
@@ -274,6 +319,53 @@ mod tests {
     use super::*;
     use crate::tests::{robot, shared};
     use crate::{serve_with_history, GuiConfig, HistoryTap};
+
+    #[test]
+    fn a_tabs_monitors_are_its_own_another_tab_cancels_them_only_by_force_and_they_go_with_it() {
+        let (mut handle, join) = robot();
+        let events = handle.events();
+        let s = Arc::new(shared(handle.clone()));
+        let add = handle_message(
+            &s,
+            1,
+            r#"{"id": 1, "verb": "monitor_add", "args": {"condition": "cycle < 0", "session": "a-claimed-one"}}"#,
+        );
+        let monitor = add["ok"]["monitor"].as_u64().unwrap_or_else(|| panic!("{add}"));
+        let list = handle_message(&s, 1, r#"{"id": 2, "verb": "monitor_list"}"#);
+        assert_eq!(list["ok"][0]["session"], json!(tab_session(&s, 1)), "the tab's session, whatever it claimed");
+        assert_eq!(list["ok"][0]["client"], "GUI tab 1");
+        // Another tab: refused, unless it says its user confirmed.
+        let cancel = format!(r#"{{"id": 3, "verb": "monitor_cancel", "args": {{"monitor": {monitor}}}}}"#);
+        let r = handle_message(&s, 2, &cancel);
+        assert_eq!(r["error"]["kind"], "not_owner", "{r}");
+        let forced =
+            format!(r#"{{"id": 4, "verb": "monitor_cancel", "args": {{"monitor": {monitor}, "force": true}}}}"#);
+        let r = handle_message(&s, 2, &forced);
+        assert!(r.get("error").is_none(), "{r}");
+        let told = std::iter::from_fn(|| events.recv_timeout(Duration::from_secs(60)).ok()).find_map(|e| match e {
+            situate_manager::Event::MonitorCancelled { monitor: m, reason, .. } if m == monitor => Some(reason),
+            _ => None,
+        });
+        assert_eq!(told, Some(situate_manager::CancelReason::Forced), "the owner is told it was forced");
+        let r = handle_message(&s, 2, r#"{"id": 5, "verb": "monitor_cancel", "args": {"monitor": 1, "force": 1}}"#);
+        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
+        // A tab that closes takes its monitors with it.
+        let add = handle_message(&s, 3, r#"{"id": 6, "verb": "monitor_add", "args": {"condition": "cycle < 0"}}"#);
+        assert!(add["ok"]["monitor"].is_u64(), "{add}");
+        s.clients.fetch_add(1, Ordering::SeqCst);
+        drop(ClientGuard { shared: Arc::clone(&s), id: 3 });
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            let list = handle_message(&s, 1, r#"{"id": 7, "verb": "monitor_list"}"#);
+            if list["ok"].as_array().is_some_and(|l| l.is_empty()) {
+                break;
+            }
+            assert!(Instant::now() < deadline, "the closed tab's monitor stayed: {list}");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        handle.request(Request::Shutdown).unwrap();
+        join.join().unwrap();
+    }
 
     #[test]
     fn requests_go_through_the_links_decoder_and_the_control_api() {
