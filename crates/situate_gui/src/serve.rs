@@ -397,7 +397,8 @@ mod tests {
             situate::manager::Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
         let tap = HistoryTap::new(&mut manager);
         let (mut handle, join) = manager.spawn(true);
-        let idle = Duration::from_millis(1500);
+        // Long enough that a live client stalled by a loaded machine still answers in time.
+        let idle = Duration::from_millis(3000);
         let gui =
             serve_with_history(handle.clone(), GuiConfig { ws_idle_timeout: idle, ..GuiConfig::default() }, Some(tap))
                 .expect("serve");
@@ -417,7 +418,7 @@ mod tests {
         let stream = TcpStream::connect(addr).expect("connect");
         stream.set_read_timeout(Some(BOUND)).expect("timeout");
         let (mut ws, _) = tungstenite::client(format!("ws://{addr}/ws"), stream).expect("ws");
-        let (mut pings, until) = (0, Instant::now() + idle * 3);
+        let (mut pings, until) = (0, Instant::now() + idle * 2);
         while Instant::now() < until {
             match ws.read() {
                 Ok(tungstenite::Message::Ping(_)) => pings += 1,
