@@ -322,7 +322,9 @@ def session_public_id(secret: str) -> str:
     return hashlib.sha3_256(secret.encode()).hexdigest()[:32]
 
 
-def open_client_session(session: zenoh.Session, robot: str) -> tuple[str, str, zenoh.LivelinessToken]:
+def open_client_session(
+    session: zenoh.Session, robot: str
+) -> tuple[str, str, zenoh.LivelinessToken]:
     """A new client session with ``robot``: its secret, public id and liveliness token.
 
     The token, on ``situate/<robot>/session/<id>``, lives until it is undeclared or the

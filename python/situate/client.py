@@ -192,7 +192,8 @@ class Robot:
         self._session = session
         self._endpoints = list(endpoints)
         self._streams: set[Stream[Any]] = set()
-        #: The name this connection gives itself, shown with its monitors (a label, not an identity).
+        #: The name this connection gives itself, shown with its monitors (a label, not an
+        #: identity).
         self.client_id: str = f"py-{os.getpid()}-{secrets.token_hex(4)}"
         # The session that holds this connection's monitors (docs/protocol.md, "Sessions"):
         # its secret goes with monitor_add/monitor_cancel, its token lives as long as this

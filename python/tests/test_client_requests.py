@@ -442,13 +442,18 @@ def test_only_the_session_that_added_a_monitor_cancels_it(toybot: Manager) -> No
             mine = await a.monitor("sonar.range[0] < -1", "level")
             [listed] = await b.monitors()
             # Everyone sees whose it is (the public id, which cannot cancel anything)…
-            assert (listed.monitor, listed.session, listed.client) == (mine, a.session_id, a.client_id)
+            assert (listed.monitor, listed.session, listed.client) == (
+                mine,
+                a.session_id,
+                a.client_id,
+            )
             # …but another connection cannot cancel it.
             with pytest.raises(situate.NotOwner, match=f"monitor {mine} belongs to session"):
                 await b.cancel_monitor(mine)
             assert [m.monitor for m in await b.monitors()] == [mine]
             await a.cancel_monitor(mine)
             cancelled = await asyncio.wait_for(events.__anext__(), 60)
+            assert isinstance(cancelled, situate.MonitorCancelled), cancelled
             assert cancelled == situate.MonitorCancelled(
                 monitor=mine,
                 condition="sonar.range[0] < -1",
