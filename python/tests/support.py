@@ -9,6 +9,7 @@ Readiness is a bounded poll of the protocol's `hello`, never a sleep.
 from __future__ import annotations
 
 import asyncio
+import fcntl
 import os
 import shutil
 import signal
@@ -175,6 +176,14 @@ def build_library(lang: str) -> None:
     if shutil.which("cmake") is None:
         pytest.fail("cmake is needed to build the C and C++ examples")
     build = REPO / "build" / f"{lang}_runaway"
+    build.parent.mkdir(exist_ok=True)
+    # Tests run in parallel processes (pytest -n): one build of a directory at a time.
+    with open(REPO / "build" / f".{lang}_runaway.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        _build_library(lang, build)
+
+
+def _build_library(lang: str, build: Path) -> None:
     configure = [
         "cmake",
         "-S",
