@@ -66,9 +66,10 @@ case "$ACTION" in
         build_web
         install_chromium
         echo "gui.sh: building the testbed and the situate CLI (debug, in $TARGET)"
-        # The testbed embeds web/dist at compile time: build it after the web app.
-        $CARGO build -p situate_gui --example testbed
-        $CARGO build -p situate_cli --bin situate
+        # The testbed embeds web/dist at compile time: build it after the web app. Built with the
+        # whole workspace's features (as `cargo test --workspace` built them), so that build is
+        # reused; `-p` alone would unify fewer features and rebuild much of the tree.
+        $CARGO build --workspace --example testbed --bin situate
         export TESTBED_BIN="$TARGET/debug/examples/testbed"
         export SITUATE_BIN="$TARGET/debug/situate"
         echo "gui.sh: running the browser tests (screenshots in web/test-results/)"

@@ -7,7 +7,9 @@
 #   scripts/python.sh test     ... then ruff, mypy (strict) and pytest
 #
 # Environment: PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
-# SITUATE_PY_PROFILE=release|debug (default release; debug reuses `cargo test`'s build),
+# SITUATE_PY_PROFILE=release|debug (default: release to install, debug under `test`, where it
+# reuses the build `cargo test --workspace` made instead of compiling the tree again in release:
+# minutes on a 2-core machine), PYTEST_WORKERS (parallel pytest processes, default 2),
 # SITUATE_ZENOH_VERSION (the Python zenoh installed for the tests, default 1.10.2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,11 +17,11 @@ export PATH="$HOME/.cargo/bin:$PATH"
 
 PYTHON=${PYTHON:-python3}
 VENV=.venv
-TOOLS=("maturin==1.16.*" "pytest>=8" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==${SITUATE_ZENOH_VERSION:-1.10.2}" "numpy>=1.22")
+TOOLS=("maturin==1.16.*" "pytest>=8" "pytest-xdist>=3.6" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==${SITUATE_ZENOH_VERSION:-1.10.2}" "numpy>=1.22")
 TOOLS+=("rosbags>=0.10,<1") # python/tests/test_ros2.py decodes the ROS 2 bridge's CDR with it
 TOOLS+=("mcap>=1.6,<2") # python/tests/test_recording.py reads `--record` files with the MCAP reference reader
 TARGET=${CARGO_TARGET_DIR:-target}
-PROFILE=${SITUATE_PY_PROFILE:-release}
+if [[ ${1:-} == test ]]; then PROFILE=${SITUATE_PY_PROFILE:-debug}; else PROFILE=${SITUATE_PY_PROFILE:-release}; fi
 say() { if [[ -t 1 ]]; then printf '\033[1mpython.sh:\033[0m %s\n' "$*"; else printf 'python.sh: %s\n' "$*"; fi; }
 
 # 1. The virtualenv and the tools (re-installed only when the list above changes).
@@ -59,6 +61,8 @@ if [[ ${1:-} == test ]]; then
     mypy python/situate demo/deliver.py demo/link.py demo/sequencing.py demo/routes.py demo/reactive.py demo/reactive_route.py demo/reactive_car.py scripts/experiment.py scripts/experiment_report.py scripts/delivery.py
     # The tests too, as their own run: they import the demo's modules by name (demo/ on the path).
     MYPYPATH=demo mypy python/tests
-    say "pytest"
-    pytest -q python/tests
+    # In parallel processes (pytest-xdist): the tests pick free ports and lock what they build.
+    workers=${PYTEST_WORKERS:-2}
+    say "pytest ($workers workers)"
+    pytest -q -n "$workers" --durations=8 python/tests
 fi

@@ -166,7 +166,7 @@ def situate_gen() -> Path:
         if exe.is_file():
             return exe
     subprocess.run(
-        ["cargo", "build", "-q", "-p", "situate_cabi", "--bin", "situate-gen"], cwd=REPO, check=True
+        ["cargo", "build", "-q", "--workspace", "--bin", "situate-gen"], cwd=REPO, check=True
     )
     return target / "debug" / "situate-gen"
 

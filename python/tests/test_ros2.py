@@ -47,8 +47,9 @@ def build_example() -> Path:
             "cargo",
             "build",
             "-q",
-            "-p",
-            "situate_ros2",
+            # The whole workspace's features, as `cargo test --workspace` built them: its
+            # build is reused (`-p` alone would unify fewer features and rebuild much of it).
+            "--workspace",
             "--example",
             "ros2_toybot",
             "--message-format=json",
