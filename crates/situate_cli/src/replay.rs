@@ -99,9 +99,11 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     // Checked when the recording was read: a `sets` that is not a list of
     // strings is a bad file there, not silently none here.
     let compose = Compose { set: rec.sets.iter().chain(args.compose.set.iter()).cloned().collect() };
-    let Loaded { mut spec, remote, file: robot_file, .. } = load(&robot, &compose)?;
+    let Loaded { mut spec, remote, file: robot_file, ros2, .. } = load(&robot, &compose)?;
     let (mut registry, _world) = registry_for(&robot_file, program_registry(ext)?, ext, &SimOverrides::default())
         .map_err(|errors| bad_file(&robot, &errors))?;
+    // The ROS 2 topics in are devices: they play back from the recording.
+    crate::robot::add_ros2_devices(&mut spec, &mut registry, ros2.as_ref());
     // What makes a run repeatable (docs/recording.md, "Replay").
     spec.clock = ClockKind::Simulated;
     spec.executor = ExecutorKind::Serial;

@@ -253,7 +253,7 @@ pub(crate) fn robot() -> Json {
 fn ros2() -> Json {
     json!({
         "type": "object",
-        "description": "Publish signals as ROS 2 topics, and offer activation and parameters as ROS 2 services, over the link's Zenoh session (docs/ros2.md).",
+        "description": "Publish signals as ROS 2 topics, feed signals from ROS 2 topics, and offer activation and parameters as ROS 2 services, over the link's Zenoh session (docs/ros2.md).",
         "additionalProperties": false,
         "properties": {
             "services": {"type": "boolean", "description": "Activation (<node>/<skill>/set_active) and the skills' parameters as ROS 2 services (default false)."},
@@ -270,14 +270,11 @@ fn ros2() -> Json {
                     "properties": {
                         "signal": {"type": "string"},
                         "topic": {"type": "string"},
-                        "type": {"enum": [
-                            "geometry_msgs/msg/Twist",
-                            "nav_msgs/msg/Odometry",
-                            "sensor_msgs/msg/LaserScan",
-                            "std_msgs/msg/Float64",
-                            "std_msgs/msg/Int64",
-                            "std_msgs/msg/Bool"
-                        ]},
+                        "type": {"enum": situate_ros2::MsgType::ALL.iter().map(|t| t.ros_name()).collect::<Vec<_>>()},
+                        "direction": {"enum": ["out", "in"], "description": "out (default): the signal is published; in: the topic's messages feed the signal, through a device."},
+                        "name": {"type": "string", "description": "A topic in: its device's name (default ros2_<topic>)."},
+                        "ring": {"type": "integer", "minimum": 1, "maximum": situate_ros2::config::MAX_RING, "description": "A topic in, LaserScan: resample into this many sectors from ahead, counter-clockwise."},
+                        "period_ms": {"type": "number", "minimum": 0.1, "maximum": 1000, "description": "A topic in: how often its device hands the latest message on (default 1)."},
                         "frame_id": {"type": "string"},
                         "child_frame_id": {"type": "string"},
                         "range_min": {"type": "number"},

@@ -10,7 +10,11 @@
 //!   topics:
 //!     - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}
 //!     - {signal: odom, topic: odom, type: nav_msgs/msg/Odometry, frame_id: odom, child_frame_id: base_link}
+//!     - {signal: odom, topic: /tf, type: tf2_msgs/msg/TFMessage}
 //!     - {signal: sonar.range, topic: sonar, type: sensor_msgs/msg/LaserScan, frame_id: base_link, range_max: 4.0}
+//!     # topics in: each is a device writing its signal (see `crate::inputs`)
+//!     - {topic: /scan, type: sensor_msgs/msg/LaserScan, signal: sonar.range, direction: in, ring: 24}
+//!     - {topic: /battery, type: sensor_msgs/msg/BatteryState, signal: battery, direction: in}
 //! ```
 
 use serde::Deserialize;
@@ -50,12 +54,39 @@ fn default_rate_hz() -> f64 {
     20.0
 }
 
-/// One signal published as a topic.
+/// Which way a topic goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    /// The signal is published as the topic (the default).
+    #[default]
+    Out,
+    /// The topic's messages feed the signal: a device of the robot writes it.
+    In,
+}
+
+/// One signal published as a topic, or one topic feeding a signal.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TopicConfig {
     /// The signal (a leaf such as `sonar.range` or a whole record such as `odom`).
     pub signal: String,
+    /// `out` (default): the signal is published; `in`: the topic feeds the signal.
+    #[serde(default)]
+    pub direction: Direction,
+    /// A topic in: the name of the device that writes the signal (default `ros2_` and the
+    /// topic's name with `/` as `_`: `/scan` → `ros2_scan`).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// A topic in, LaserScan: resample the scan into this many sectors, sector k centred on
+    /// bearing k·2π/n counter-clockwise from ahead and reading the nearest valid range in it
+    /// (a sonar ring's layout, `f32[n]`); default: the ranges as they come (`f32[]`).
+    #[serde(default)]
+    pub ring: Option<usize>,
+    /// A topic in: how often its device hands the latest message to the cycle, ms (default 1:
+    /// a message reaches the next cycle at most 1 ms after it arrives).
+    #[serde(default)]
+    pub period_ms: Option<f64>,
     /// The topic: relative to the node's namespace (`odom`) or absolute (`/odom`).
     pub topic: String,
     /// The message type.
@@ -136,8 +167,48 @@ impl Ros2Config {
             }
             let fq = crate::rmw::NodeName { domain_id: 0, namespace: self.namespace.clone(), name: String::new() }
                 .resolve(&t.topic);
-            if !seen.insert(fq.clone()) {
-                return Err(format!("topics[{i}]: topic `{fq}` is published twice"));
+            let ty = t.msg_type.ros_name();
+            match t.direction {
+                Direction::Out => {
+                    if !t.msg_type.can_publish() {
+                        return Err(format!("topics[{i}]: {ty} can only be read (`direction: in`), not published"));
+                    }
+                    for (key, set) in
+                        [("name", t.name.is_some()), ("ring", t.ring.is_some()), ("period_ms", t.period_ms.is_some())]
+                    {
+                        if set {
+                            return Err(format!("topics[{i}]: `{key}` is for a topic in (`direction: in`)"));
+                        }
+                    }
+                }
+                Direction::In => {
+                    if !t.msg_type.can_subscribe() {
+                        return Err(format!("topics[{i}]: {ty} can only be published (`direction: out`)"));
+                    }
+                    let name = t.device_name(&fq);
+                    if !valid_identifier(&name) {
+                        return Err(format!(
+                            "topics[{i}]: `name` {name:?} is no device name (letters, digits and `_`, not starting with a digit)"
+                        ));
+                    }
+                    if let Some(n) = t.ring {
+                        if t.msg_type != MsgType::LaserScan {
+                            return Err(format!("topics[{i}]: `ring` is for sensor_msgs/msg/LaserScan, not {ty}"));
+                        }
+                        if !(1..=MAX_RING).contains(&n) {
+                            return Err(format!("topics[{i}]: `ring` must be from 1 to {MAX_RING}, got {n}"));
+                        }
+                    }
+                    if let Some(p) = t.period_ms {
+                        if !(p.is_finite() && (0.1..=1000.0).contains(&p)) {
+                            return Err(format!("topics[{i}]: `period_ms` must be from 0.1 to 1000, got {p}"));
+                        }
+                    }
+                }
+            }
+            if !seen.insert((fq.clone(), t.direction)) {
+                let verb = if t.direction == Direction::Out { "published" } else { "read" };
+                return Err(format!("topics[{i}]: topic `{fq}` is {verb} twice"));
             }
             if let (Some(lo), Some(hi)) = (t.range_min, t.range_max) {
                 if lo > hi {
@@ -162,6 +233,27 @@ impl Ros2Config {
         }
         name
     }
+}
+
+/// The most sectors a LaserScan can be resampled into (`ring`).
+pub const MAX_RING: usize = 4096;
+
+impl TopicConfig {
+    /// A topic in: its device's name (`name`, else `ros2_` and the fully qualified topic with
+    /// `/` as `_`).
+    pub fn device_name(&self, fq_topic: &str) -> String {
+        match &self.name {
+            Some(n) => n.clone(),
+            None => format!("ros2_{}", fq_topic.trim_start_matches('/').replace('/', "_")),
+        }
+    }
+}
+
+/// A skill or device name: letters, digits and `_`, not starting with a digit.
+fn valid_identifier(name: &str) -> bool {
+    !name.is_empty()
+        && !name.starts_with(|c: char| c.is_ascii_digit())
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 fn node_to_json(node: &Node) -> Json {

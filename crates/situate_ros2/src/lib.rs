@@ -22,9 +22,14 @@
 //!
 //! With `services: true`, activation and the skills' parameters are ROS 2 services too
 //! ([`services`]): `ros2 service call …/set_active std_srvs/srv/SetBool`, `ros2 param set`.
+//!
+//! Topics in (`direction: in`) feed signals through devices of the robot ([`inputs`]): they are
+//! declared on the node before the manager is built ([`Ros2Node::declare`], [`Inputs::declare`],
+//! then [`Bridge::start_on`]).
 
 pub mod config;
 pub mod decode;
+pub mod inputs;
 pub mod msgs;
 pub mod rmw;
 pub mod services;
@@ -38,7 +43,8 @@ use situate_core::{ElemType, SignalType, Value};
 use situate_manager::{ControlError, Handle, Reply, Request};
 use zenoh::Wait;
 
-pub use config::{Ros2Config, Ros2ConfigError, TopicConfig};
+pub use config::{Direction, Ros2Config, Ros2ConfigError, TopicConfig};
+pub use inputs::{InputStats, Inputs};
 pub use msgs::MsgType;
 
 /// How long one sample may wait for the manager.
@@ -92,47 +98,95 @@ pub struct Bridge {
     topics: Vec<(String, String)>,
     servers: Option<services::Servers>,
     node_token: String,
+    inputs: Option<Inputs>,
 }
 
-impl Bridge {
-    /// Checks every topic's signal against its message type (through `handle`), declares the
-    /// node's and the publishers' liveliness tokens and the publishers on `session`, then samples
-    /// and publishes on its own thread until stopped. `robot` names the node when the
-    /// configuration does not.
-    pub fn start(
-        robot: &str,
-        handle: Handle,
-        session: zenoh::Session,
-        config: &Ros2Config,
-    ) -> Result<Bridge, Ros2Error> {
+/// The robot's ROS 2 node on a Zenoh session: its name and its liveliness token (what `ros2
+/// node list` sees), held until the node is dropped. Topics in ([`Inputs`]) and the [`Bridge`]
+/// declare their entities on it.
+pub struct Ros2Node {
+    pub(crate) session: zenoh::Session,
+    pub(crate) name: rmw::NodeName,
+    pub(crate) zid: String,
+    pub(crate) node_id: u64,
+    _token: zenoh::liveliness::LivelinessToken,
+    token_key: String,
+}
+
+impl Ros2Node {
+    /// Checks the configuration and declares the node on `session`; `robot` names the node
+    /// when the configuration does not.
+    pub fn declare(robot: &str, session: zenoh::Session, config: &Ros2Config) -> Result<Ros2Node, Ros2Error> {
         config.check().map_err(|message| Ros2ConfigError { pos: None, message })?;
-        let node = rmw::NodeName {
+        let name = rmw::NodeName {
             domain_id: config.domain_id,
             namespace: config.namespace.clone(),
             name: config.node_name(robot),
         };
         let zid = session.zid().to_string();
         let node_id = 0u64;
-        let node_token = node.node_token(&zid, node_id);
-        let declare_token = |key: &str| {
-            session
-                .liveliness()
-                .declare_token(key.to_string())
-                .wait()
-                .map_err(|e| Ros2Error::Zenoh { what: format!("the liveliness token `{key}`"), message: e.to_string() })
-        };
-        let node_liveliness = declare_token(&node_token)?;
+        let token_key = name.node_token(&zid, node_id);
+        let token = declare_token(&session, &token_key)?;
+        Ok(Ros2Node { session, name, zid, node_id, _token: token, token_key })
+    }
+
+    /// Declares a liveliness token of one of the node's entities.
+    pub(crate) fn declare_token(&self, key: &str) -> Result<zenoh::liveliness::LivelinessToken, Ros2Error> {
+        declare_token(&self.session, key)
+    }
+
+    /// The node's liveliness token.
+    pub fn token(&self) -> &str {
+        &self.token_key
+    }
+}
+
+fn declare_token(session: &zenoh::Session, key: &str) -> Result<zenoh::liveliness::LivelinessToken, Ros2Error> {
+    session
+        .liveliness()
+        .declare_token(key.to_string())
+        .wait()
+        .map_err(|e| Ros2Error::Zenoh { what: format!("the liveliness token `{key}`"), message: e.to_string() })
+}
+
+impl Bridge {
+    /// Declares the node (see [`Ros2Node::declare`]) and starts the bridge on it, with no topics
+    /// in (a configuration with some needs [`Inputs::declare`] before the manager is built).
+    pub fn start(
+        robot: &str,
+        handle: Handle,
+        session: zenoh::Session,
+        config: &Ros2Config,
+    ) -> Result<Bridge, Ros2Error> {
+        let node = Ros2Node::declare(robot, session, config)?;
+        Bridge::start_on(node, None, handle, config)
+    }
+
+    /// Checks every topic out's signal against its message type (through `handle`), declares the
+    /// publishers and their liveliness tokens on `node`, then samples and publishes on its own
+    /// thread until stopped. `inputs` (the topics in, declared before the manager was built) are
+    /// kept until the bridge stops.
+    pub fn start_on(
+        node: Ros2Node,
+        inputs: Option<Inputs>,
+        handle: Handle,
+        config: &Ros2Config,
+    ) -> Result<Bridge, Ros2Error> {
         let mut topics = Vec::new();
         for (i, t) in config.topics.iter().enumerate() {
-            let fq_name = node.resolve(&t.topic);
+            if t.direction != Direction::Out {
+                continue;
+            }
+            let fq_name = node.name.resolve(&t.topic);
             check_signal(&handle, t, &fq_name)?;
-            let key = node.topic_key(&fq_name, t.msg_type);
-            let publisher = session
+            let key = node.name.topic_key(&fq_name, t.msg_type);
+            let publisher = node
+                .session
                 .declare_publisher(key.clone())
                 .wait()
                 .map_err(|e| Ros2Error::Zenoh { what: format!("a publisher on `{key}`"), message: e.to_string() })?;
-            let token_key = node.publisher_token(&zid, node_id, i as u64 + 1, &fq_name, t.msg_type);
-            let token = declare_token(&token_key)?;
+            let token_key = node.name.publisher_token(&node.zid, node.node_id, i as u64 + 1, &fq_name, t.msg_type);
+            let token = node.declare_token(&token_key)?;
             tracing::info!(topic = %fq_name, signal = %t.signal, %key, "ROS 2 topic published");
             topics.push(Topic {
                 config: t.clone(),
@@ -147,7 +201,7 @@ impl Bridge {
         }
         let servers = if config.services {
             let first = config.topics.len() as u64 + 1;
-            let servers = services::Servers::start(&handle, &session, &node, node_id, first)?;
+            let servers = services::Servers::start(&handle, &node.session, &node.name, node.node_id, first)?;
             for (name, key) in &servers.names {
                 tracing::info!(service = %name, %key, "ROS 2 service offered");
             }
@@ -159,14 +213,20 @@ impl Bridge {
         let stop = Arc::new(AtomicBool::new(false));
         let period = Duration::from_secs_f64(1.0 / config.rate_hz);
         let st = Arc::clone(&stop);
+        let node_token = node.token_key.clone();
         let thread = std::thread::Builder::new()
             .name("situate-ros2".into())
             .spawn(move || {
-                let _node = node_liveliness;
+                let _node = node;
                 sample_loop(&handle, &mut topics, period, &st);
             })
             .map_err(Ros2Error::Thread)?;
-        Ok(Bridge { stop, thread: Some(thread), topics: names, servers, node_token })
+        Ok(Bridge { stop, thread: Some(thread), topics: names, servers, node_token, inputs })
+    }
+
+    /// What each topic in has received so far (none without topics in).
+    pub fn input_stats(&self) -> Vec<InputStats> {
+        self.inputs.as_ref().map_or_else(Vec::new, Inputs::stats)
     }
 
     /// Each topic's fully qualified name and the Zenoh key its messages are put on.
@@ -200,6 +260,7 @@ impl Bridge {
             servers.stop();
         }
         self.stop.store(true, Ordering::SeqCst);
+        self.inputs.take();
         if let Some(t) = self.thread.take() {
             if t.join().is_err() {
                 tracing::warn!("the ROS 2 bridge's thread panicked");
@@ -227,12 +288,15 @@ fn check_signal(handle: &Handle, t: &TopicConfig, fq_name: &str) -> Result<(), R
     };
     let f64_field = |r: &situate_core::RecordType, name: &str| matches!(r.field(name), Some((_, SignalType::F64)));
     let fits = match (t.msg_type, &reading.ty) {
-        (MsgType::Twist, SignalType::Record(r)) => f64_field(r, "v") && f64_field(r, "w"),
-        (MsgType::Odometry, SignalType::Record(r)) => f64_field(r, "x") && f64_field(r, "y") && f64_field(r, "theta"),
-        (MsgType::LaserScan, SignalType::Array { elem: ElemType::F32 | ElemType::F64, .. }) => true,
-        (MsgType::Float64, SignalType::F64) | (MsgType::Int64, SignalType::I64) | (MsgType::Bool, SignalType::Bool) => {
-            true
+        (MsgType::Twist | MsgType::TwistStamped, SignalType::Record(r)) => f64_field(r, "v") && f64_field(r, "w"),
+        (MsgType::Odometry | MsgType::TfMessage, SignalType::Record(r)) => {
+            f64_field(r, "x") && f64_field(r, "y") && f64_field(r, "theta")
         }
+        (MsgType::LaserScan, SignalType::Array { elem: ElemType::F32 | ElemType::F64, .. }) => true,
+        (MsgType::Float64 | MsgType::Range, SignalType::F64)
+        | (MsgType::Int64, SignalType::I64)
+        | (MsgType::Bool, SignalType::Bool)
+        | (MsgType::String, SignalType::Str) => true,
         _ => false,
     };
     if fits {
@@ -387,5 +451,39 @@ pub fn to_payload(t: &TopicConfig, value: &Value) -> Option<Result<Vec<u8>, cdr:
             Value::Bool(b) => encode(&Bool { data: *b }),
             _ => return None,
         },
+        MsgType::TwistStamped => encode(&TwistStamped {
+            header: Header { stamp, frame_id: t.frame_id.clone().unwrap_or_else(|| "base_link".into()) },
+            twist: Twist {
+                linear: Vector3 { x: field(value, "v")?, ..Vector3::default() },
+                angular: Vector3 { z: field(value, "w")?, ..Vector3::default() },
+            },
+        }),
+        MsgType::TfMessage => encode(&TfMessage {
+            transforms: vec![TransformStamped {
+                header: Header { stamp, frame_id: t.frame_id.clone().unwrap_or_else(|| "odom".into()) },
+                child_frame_id: t.child_frame_id.clone().unwrap_or_else(|| "base_link".into()),
+                transform: Transform {
+                    translation: Vector3 { x: field(value, "x")?, y: field(value, "y")?, z: 0.0 },
+                    rotation: Quaternion::from_yaw(field(value, "theta")?),
+                },
+            }],
+        }),
+        MsgType::Range => match value {
+            Value::F64(r) => encode(&Range {
+                header: Header { stamp, frame_id: t.frame_id.clone().unwrap_or_else(|| "base_link".into()) },
+                radiation_type: 0,
+                field_of_view: 0.26,
+                min_range: t.range_min.unwrap_or(0.0),
+                max_range: t.range_max.unwrap_or(4.0),
+                range: *r as f32,
+                variance: 0.0,
+            }),
+            _ => return None,
+        },
+        MsgType::String => match value {
+            Value::Str(text) => encode(&StringMsg { data: text.to_string() }),
+            _ => return None,
+        },
+        MsgType::Imu | MsgType::JointState | MsgType::BatteryState => return None,
     })
 }

@@ -14,44 +14,93 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 pub use crate::decode::DecodeError;
 
-/// A message type the bridge can publish.
+/// A message type the bridge can publish or subscribe to. Which signal each is made from (a
+/// topic out) or fills (a topic in, [`crate::inputs`]) is [`MsgType::expects`] and
+/// [`MsgType::signal_type`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, Serialize)]
 pub enum MsgType {
-    /// `geometry_msgs/msg/Twist` from a record `{v: f64, w: f64}` (m/s, rad/s).
+    /// `geometry_msgs/msg/Twist` ⇄ a record `{v: f64, w: f64}` (linear.x m/s, angular.z rad/s).
     #[serde(rename = "geometry_msgs/msg/Twist")]
     Twist,
-    /// `nav_msgs/msg/Odometry` from a record `{x, y, theta}` (and `v`, `w` when it has them).
+    /// `geometry_msgs/msg/TwistStamped` ⇄ a record `{v, w}`, as [`MsgType::Twist`] with a header
+    /// (what many controllers of ROS 2 Jazzy take on `cmd_vel`).
+    #[serde(rename = "geometry_msgs/msg/TwistStamped")]
+    TwistStamped,
+    /// `nav_msgs/msg/Odometry` ⇄ a record `{x, y, theta}` (and `v`, `w`: out when it has them,
+    /// in always).
     #[serde(rename = "nav_msgs/msg/Odometry")]
     Odometry,
-    /// `sensor_msgs/msg/LaserScan` from a ring of ranges (`f32[]`/`f64[]`, index i at bearing
-    /// i·2π/n, counter-clockwise from ahead).
+    /// `tf2_msgs/msg/TFMessage` (out only, on `/tf`): the transform `frame_id → child_frame_id`
+    /// (default `odom → base_link`) from an odometry record `{x, y, theta}`, as a base driver
+    /// broadcasts it.
+    #[serde(rename = "tf2_msgs/msg/TFMessage")]
+    TfMessage,
+    /// `sensor_msgs/msg/LaserScan` ⇄ a ring of ranges (`f32[]`; out also from `f64[]`).
     #[serde(rename = "sensor_msgs/msg/LaserScan")]
     LaserScan,
-    /// `std_msgs/msg/Float64` from an `f64`.
+    /// `sensor_msgs/msg/Range` ⇄ an `f64` (the range, m).
+    #[serde(rename = "sensor_msgs/msg/Range")]
+    Range,
+    /// `sensor_msgs/msg/Imu` (in only) → a record of orientation (`roll`, `pitch`, `yaw`), angular
+    /// velocity (`wx`, `wy`, `wz`) and linear acceleration (`ax`, `ay`, `az`).
+    #[serde(rename = "sensor_msgs/msg/Imu")]
+    Imu,
+    /// `sensor_msgs/msg/JointState` (in only) → a record of three `f64[]`: `position`,
+    /// `velocity`, `effort`, in the message's joint order.
+    #[serde(rename = "sensor_msgs/msg/JointState")]
+    JointState,
+    /// `sensor_msgs/msg/BatteryState` (in only) → a record `{voltage, current, charge,
+    /// percentage, temperature}` (f64; NaN where the battery does not say, as in ROS 2).
+    #[serde(rename = "sensor_msgs/msg/BatteryState")]
+    BatteryState,
+    /// `std_msgs/msg/Float64` ⇄ an `f64`.
     #[serde(rename = "std_msgs/msg/Float64")]
     Float64,
-    /// `std_msgs/msg/Int64` from an `i64`.
+    /// `std_msgs/msg/Int64` ⇄ an `i64`.
     #[serde(rename = "std_msgs/msg/Int64")]
     Int64,
-    /// `std_msgs/msg/Bool` from a `bool`.
+    /// `std_msgs/msg/Bool` ⇄ a `bool`.
     #[serde(rename = "std_msgs/msg/Bool")]
     Bool,
+    /// `std_msgs/msg/String` ⇄ a `string`.
+    #[serde(rename = "std_msgs/msg/String")]
+    String,
 }
 
 impl MsgType {
     /// Every type, for messages that list them.
-    pub const ALL: [MsgType; 6] =
-        [MsgType::Twist, MsgType::Odometry, MsgType::LaserScan, MsgType::Float64, MsgType::Int64, MsgType::Bool];
+    pub const ALL: [MsgType; 13] = [
+        MsgType::Twist,
+        MsgType::TwistStamped,
+        MsgType::Odometry,
+        MsgType::TfMessage,
+        MsgType::LaserScan,
+        MsgType::Range,
+        MsgType::Imu,
+        MsgType::JointState,
+        MsgType::BatteryState,
+        MsgType::Float64,
+        MsgType::Int64,
+        MsgType::Bool,
+        MsgType::String,
+    ];
 
     /// The ROS 2 name: `geometry_msgs/msg/Twist`.
     pub fn ros_name(self) -> &'static str {
         match self {
             MsgType::Twist => "geometry_msgs/msg/Twist",
+            MsgType::TwistStamped => "geometry_msgs/msg/TwistStamped",
             MsgType::Odometry => "nav_msgs/msg/Odometry",
+            MsgType::TfMessage => "tf2_msgs/msg/TFMessage",
             MsgType::LaserScan => "sensor_msgs/msg/LaserScan",
+            MsgType::Range => "sensor_msgs/msg/Range",
+            MsgType::Imu => "sensor_msgs/msg/Imu",
+            MsgType::JointState => "sensor_msgs/msg/JointState",
+            MsgType::BatteryState => "sensor_msgs/msg/BatteryState",
             MsgType::Float64 => "std_msgs/msg/Float64",
             MsgType::Int64 => "std_msgs/msg/Int64",
             MsgType::Bool => "std_msgs/msg/Bool",
+            MsgType::String => "std_msgs/msg/String",
         }
     }
 
@@ -64,27 +113,49 @@ impl MsgType {
         format!("{package}::msg::dds_::{ty}_")
     }
 
-    /// The type's RIHS01 hash (REP 2011), as ROS 2 Jazzy and later compute it.
+    /// The type's RIHS01 hash (REP 2011), as ROS 2 Jazzy and later compute it (the Python tests
+    /// check each against `rosbags`' `hash_rihs01`, and `std_msgs/msg/String`'s against the key
+    /// rmw_zenoh's design document shows).
     pub fn type_hash(self) -> &'static str {
         match self {
             MsgType::Twist => "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a",
+            MsgType::TwistStamped => "RIHS01_5f0fcd4f81d5d06ad9b4c4c63e3ea51b82d6ae4d0558f1d475229b1121db6f64",
             MsgType::Odometry => "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0",
+            MsgType::TfMessage => "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",
             MsgType::LaserScan => "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828",
+            MsgType::Range => "RIHS01_b42b62562e93cbfe9d42b82fe5994dfa3d63d7d5c90a317981703f7388adff3a",
+            MsgType::Imu => "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b",
+            MsgType::JointState => "RIHS01_a13ee3a330e346c9d87b5aa18d24e11690752bd33a0350f11c5882bc9179260e",
+            MsgType::BatteryState => "RIHS01_4bee5dfce981c98faa6828b868307a0a73f992ed0789f374ee96c8f840e69741",
             MsgType::Float64 => "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a",
             MsgType::Int64 => "RIHS01_8cd1048c2f186b6bd9a92472dc1ce51723c0833a221e2b7aecfff111774f4b49",
             MsgType::Bool => "RIHS01_feb91e995ff9ebd09c0cb3d2aed18b11077585839fb5db80193b62d74528f6c9",
+            MsgType::String => "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18",
         }
     }
 
-    /// What signal type it is made from, for error messages.
+    /// Whether a signal can be published as this type (a topic out).
+    pub fn can_publish(self) -> bool {
+        !matches!(self, MsgType::Imu | MsgType::JointState | MsgType::BatteryState)
+    }
+
+    /// Whether this type can feed a signal (a topic in).
+    pub fn can_subscribe(self) -> bool {
+        !matches!(self, MsgType::TfMessage)
+    }
+
+    /// What signal type it is made from (a topic out), for error messages.
     pub fn expects(self) -> &'static str {
         match self {
-            MsgType::Twist => "a record with f64 fields `v` and `w`",
+            MsgType::Twist | MsgType::TwistStamped => "a record with f64 fields `v` and `w`",
             MsgType::Odometry => "a record with f64 fields `x`, `y`, `theta` (and optionally `v`, `w`)",
+            MsgType::TfMessage => "a record with f64 fields `x`, `y`, `theta` (an odometry)",
             MsgType::LaserScan => "an array of f32 or f64 (a ring of ranges)",
-            MsgType::Float64 => "an f64",
+            MsgType::Range | MsgType::Float64 => "an f64",
             MsgType::Int64 => "an i64",
             MsgType::Bool => "a bool",
+            MsgType::String => "a string",
+            MsgType::Imu | MsgType::JointState | MsgType::BatteryState => "nothing: it is read, never published",
         }
     }
 }
@@ -258,6 +329,112 @@ pub struct Int64 {
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Bool {
     pub data: bool,
+}
+
+/// `std_msgs/msg/String`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct StringMsg {
+    pub data: String,
+}
+
+/// `geometry_msgs/msg/TwistStamped`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct TwistStamped {
+    pub header: Header,
+    pub twist: Twist,
+}
+
+/// `geometry_msgs/msg/Transform`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Transform {
+    pub translation: Vector3,
+    pub rotation: Quaternion,
+}
+
+/// `geometry_msgs/msg/TransformStamped`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct TransformStamped {
+    pub header: Header,
+    pub child_frame_id: String,
+    pub transform: Transform,
+}
+
+/// `tf2_msgs/msg/TFMessage`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct TfMessage {
+    pub transforms: Vec<TransformStamped>,
+}
+
+/// `sensor_msgs/msg/Range` (Jazzy's, with `variance`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Range {
+    pub header: Header,
+    pub radiation_type: u8,
+    pub field_of_view: f32,
+    pub min_range: f32,
+    pub max_range: f32,
+    pub range: f32,
+    pub variance: f32,
+}
+
+/// `sensor_msgs/msg/Imu`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Imu {
+    pub header: Header,
+    pub orientation: Quaternion,
+    pub orientation_covariance: [f64; 9],
+    pub angular_velocity: Vector3,
+    pub angular_velocity_covariance: [f64; 9],
+    pub linear_acceleration: Vector3,
+    pub linear_acceleration_covariance: [f64; 9],
+}
+
+/// `sensor_msgs/msg/JointState`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct JointState {
+    pub header: Header,
+    pub name: Vec<String>,
+    pub position: Vec<f64>,
+    pub velocity: Vec<f64>,
+    pub effort: Vec<f64>,
+}
+
+/// `sensor_msgs/msg/BatteryState`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct BatteryState {
+    pub header: Header,
+    pub voltage: f32,
+    pub temperature: f32,
+    pub current: f32,
+    pub charge: f32,
+    pub capacity: f32,
+    pub design_capacity: f32,
+    pub percentage: f32,
+    pub power_supply_status: u8,
+    pub power_supply_health: u8,
+    pub power_supply_technology: u8,
+    pub present: bool,
+    pub cell_voltage: Vec<f32>,
+    pub cell_temperature: Vec<f32>,
+    pub location: String,
+    pub serial_number: String,
+}
+
+/// `rosgraph_msgs/msg/Clock`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Clock {
+    pub clock: Time,
+}
+
+impl Quaternion {
+    /// Roll, pitch and yaw (rad; intrinsic z-y-x, as tf2 reads them) of a unit quaternion.
+    pub fn to_rpy(self) -> (f64, f64, f64) {
+        let Quaternion { x, y, z, w } = self;
+        let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+        let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+        let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+        (roll, pitch, yaw)
+    }
 }
 
 /// Encodes a message as a ROS 2 payload: the CDR little-endian encapsulation header, then the

@@ -66,6 +66,11 @@ impl NodeName {
         self.entity_token(zid, node_id, entity_id, "MP", fq_topic, &ty.dds_name(), ty.type_hash())
     }
 
+    /// A subscription's liveliness token (`MS`): what makes `ros2 topic info` count it.
+    pub fn subscription_token(&self, zid: &str, node_id: u64, entity_id: u64, fq_topic: &str, ty: MsgType) -> String {
+        self.entity_token(zid, node_id, entity_id, "MS", fq_topic, &ty.dds_name(), ty.type_hash())
+    }
+
     /// An entity's liveliness token: `kind` is `MP` (publisher), `SS` (service server), …; the
     /// services' default QoS is the topics' (reliable, volatile, keep last 10).
     #[allow(clippy::too_many_arguments)]
@@ -102,17 +107,12 @@ impl NodeName {
     }
 }
 
-/// A publisher's GID: a 128-bit FNV-1a hash of its liveliness token (rmw_zenoh also derives the
-/// GID from the token; only its uniqueness matters to subscribers).
+/// An entity's GID, as rmw_zenoh makes it (`generate_gid` in `liveliness_utils.cpp`): the
+/// XXH3 128-bit hash of its liveliness token's key, its low 64 bits then its high 64 bits, each
+/// in the machine's (little-endian) byte order. A ROS 2 subscriber compares it with the GID of
+/// the publisher it discovered through that token, so it must be this hash and no other.
 pub fn gid(token: &str) -> [u8; 16] {
-    const OFFSET: u128 = 0x6c62_272e_07bb_0142_62b8_2175_6295_c58d;
-    const PRIME: u128 = 0x0000_0000_0100_0000_0000_0000_0000_013b;
-    let mut h = OFFSET;
-    for b in token.bytes() {
-        h ^= u128::from(b);
-        h = h.wrapping_mul(PRIME);
-    }
-    h.to_le_bytes()
+    xxhash_rust::xxh3::xxh3_128(token.as_bytes()).to_le_bytes()
 }
 
 /// The attachment of one put: sequence number, source timestamp (ns since the epoch), GID.
@@ -185,6 +185,15 @@ mod tests {
         assert_eq!(&bytes[8..16], &1_700_000_000_000_000_000i64.to_le_bytes());
         assert_eq!(bytes[16], 16, "the array's length, as a varint");
         assert_eq!(&bytes[17..], &g);
+    }
+
+    #[test]
+    fn the_gid_is_xxh3_128_low_half_first() {
+        // XXH3-128 of no bytes is 99aa06d3014798d8_6001c324468d497f (xxHash's own test vector).
+        let mut expected = [0u8; 16];
+        expected[..8].copy_from_slice(&0x6001_c324_468d_497f_u64.to_le_bytes());
+        expected[8..].copy_from_slice(&0x99aa_06d3_0147_98d8_u64.to_le_bytes());
+        assert_eq!(gid(""), expected);
     }
 
     #[test]

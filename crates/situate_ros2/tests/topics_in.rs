@@ -1,0 +1,165 @@
+//! Topics in on a real Zenoh session: a ROS 2 publisher (here a second session writing what
+//! rmw_zenoh writes: key, attachment, CDR) feeds a device of the robot, and a skill acts on it.
+//! Messages of another type, or that cannot be read, are counted and reported once, and the
+//! robot runs on. (python/tests/test_ros2_in.py does the same with a peer that encodes with
+//! `rosbags`, a CDR library this crate does not share.)
+
+mod support;
+
+use std::time::{Duration, Instant};
+
+use situate::manager::{ClockKind, Control, Manager, RobotFile, RobotSpec};
+use situate::Value;
+use situate_link::{Link, LinkConfig};
+use situate_ros2::msgs::{encode, BatteryState, Header, LaserScan, Twist};
+use situate_ros2::{rmw, Bridge, Inputs, MsgType, Ros2Node};
+use support::{config, free_port, observer, tokens_until, WAIT};
+use zenoh::Wait;
+
+const ROS2: &str = "ros2:\n  topics:\n    \
+    - {topic: /scan, type: sensor_msgs/msg/LaserScan, signal: sonar.range, direction: in, ring: 24}\n    \
+    - {topic: battery, type: sensor_msgs/msg/BatteryState, signal: battery, direction: in, name: bms}\n    \
+    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}\n";
+
+/// A scan of 360 rays from -π, all at 3 m but an obstacle `ahead_m` straight ahead.
+fn scan(ahead_m: f32) -> Vec<u8> {
+    let mut ranges = vec![3.0f32; 360];
+    for r in &mut ranges[175..=185] {
+        *r = ahead_m;
+    }
+    encode(&LaserScan {
+        header: Header { frame_id: "laser".into(), ..Header::default() },
+        angle_min: -std::f32::consts::PI,
+        angle_max: std::f32::consts::PI,
+        angle_increment: std::f32::consts::TAU / 360.0,
+        range_min: 0.05,
+        range_max: 10.0,
+        ranges,
+        ..LaserScan::default()
+    })
+    .expect("encodes")
+}
+
+fn until<T>(what: &str, mut f: impl FnMut() -> Option<T>) -> T {
+    let deadline = Instant::now() + WAIT;
+    loop {
+        if let Some(t) = f() {
+            return t;
+        }
+        assert!(Instant::now() < deadline, "{what}: not within {WAIT:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn a_ros2_scan_drives_a_skill_and_bad_messages_are_counted_while_the_robot_runs_on() {
+    let text = "robot: lidarbot\ncycle: {rate_hz: 50}\nskills:\n  - {name: runaway, type: toy.runaway}\n";
+    let file = RobotFile::parse("lidarbot.yaml", text).expect("robot file");
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+    let session = Link::open(&link_config).expect("session");
+    let ros2 = config(ROS2);
+    let node = Ros2Node::declare("lidarbot", session.clone(), &ros2).expect("node");
+    let (inputs, devices) = Inputs::declare(&node, &ros2).expect("topics in");
+    let mut spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
+    let mut registry = situate_toys::registry();
+    let names: Vec<String> = devices.iter().map(|(s, _)| s.name.clone()).collect();
+    assert_eq!(names, ["ros2_scan", "bms"]);
+    for (skill, ty) in devices {
+        registry.add(ty);
+        spec.skills.push(skill);
+    }
+    let manager = Manager::build(&spec, &registry).expect("the topics in are devices the robot is built with");
+    let (mut handle, join) = manager.spawn(true);
+    let link = Link::serve("lidarbot", handle.clone(), session, &link_config).expect("link");
+    let bridge = Bridge::start_on(node, Some(inputs), handle.clone(), &ros2).expect("bridge");
+
+    // Discovery: each topic in is a subscription (MS) of the node, as rmw_zenoh declares it.
+    let peer = observer(&endpoint);
+    let zid = link.session().zid().to_string();
+    let ms = |id: u32, topic: &str, ty: MsgType| {
+        format!("@ros2_lv/0/{zid}/0/{id}/MS/%/%/lidarbot/{topic}/{}/{}/::,10:,:,:,,", ty.dds_name(), ty.type_hash())
+    };
+    let want = [ms(1, "%scan", MsgType::LaserScan), ms(2, "%battery", MsgType::BatteryState)];
+    tokens_until(&peer, 0, |keys| want.iter().all(|w| keys.contains(w)));
+
+    // A publisher as rmw_zenoh makes one: data key, attachment with its sequence and GID.
+    let key = |topic: &str, ty: MsgType| format!("0/{topic}/{}/{}", ty.dds_name(), ty.type_hash());
+    let gid = rmw::gid("@ros2_lv/0/peer/0/1/MP/%/%/lidar/%scan");
+    let mut sequence = 0;
+    let mut put = |key: &str, payload: Vec<u8>| {
+        sequence += 1;
+        peer.put(key, payload).attachment(rmw::attachment(sequence, 0, &gid)).wait().expect("put");
+    };
+
+    // An obstacle 0.3 m ahead: the runaway backs off (v < 0), from the ROS 2 scan alone.
+    let drive = until("the runaway acting on the ROS 2 scan", || {
+        put(&key("scan", MsgType::LaserScan), scan(0.3));
+        let reading = handle.query("drive").ok()?;
+        match reading.value? {
+            Value::Record(r) => match r.get("v") {
+                Some(Value::F64(v)) if *v < 0.0 => Some(*v),
+                _ => None,
+            },
+            _ => None,
+        }
+    });
+    assert!(drive < 0.0);
+    let ring = handle.query("sonar.range").expect("sonar.range");
+    let Some(Value::F32s(r)) = ring.value else { panic!("the ring: {ring:?}") };
+    assert_eq!(r.len(), 24);
+    assert!((r[0] - 0.3).abs() < 1e-6 && (r[12] - 3.0).abs() < 1e-6, "sector 0 ahead, 12 behind: {r:?}");
+
+    // A battery message becomes a record.
+    let battery = encode(&BatteryState { voltage: 24.5, percentage: 0.8, ..BatteryState::default() }).expect("encodes");
+    let v = until("the battery record", || {
+        put(&key("battery", MsgType::BatteryState), battery.clone());
+        match handle.query("battery.voltage").ok()?.value? {
+            Value::F64(v) => Some(v),
+            _ => None,
+        }
+    });
+    assert!((v - 24.5).abs() < 1e-6);
+
+    // A Twist on /scan (another type), and a payload that declares a 4 GiB range array: each
+    // counted, each reported once, and the robot runs on with the last good scan.
+    let before = handle.stats().expect("stats").cycle;
+    for _ in 0..5 {
+        put(&key("scan", MsgType::Twist), encode(&Twist::default()).expect("encodes"));
+        let mut bad = scan(0.3);
+        // The ranges' count sits after the header (8 + 4 + "laser\0" padded to 8 → 20) and
+        // seven f32 (28): at body offset 48.
+        bad[4 + 48..4 + 52].copy_from_slice(&u32::MAX.to_le_bytes());
+        put(&key("scan", MsgType::LaserScan), bad);
+    }
+    let stats = until("five of each counted", || {
+        let s = bridge.input_stats().into_iter().find(|s| s.topic == "/scan")?;
+        (s.wrong_type >= 5 && s.undecodable >= 5).then_some(s)
+    });
+    assert_eq!(stats.device, "ros2_scan");
+    assert!(stats.received >= stats.accepted + 10, "{stats:?}");
+    let prints = until("the device's prints", || {
+        let info = handle.skill("ros2_scan").ok()?;
+        let lines: Vec<String> = info.prints.into_iter().map(|(_, l)| l).collect();
+        (lines.len() >= 2).then_some(lines)
+    });
+    assert_eq!(prints.len(), 2, "once per publisher and problem: {prints:#?}");
+    assert!(prints
+        .iter()
+        .any(|l| l.contains("geometry_msgs/msg/Twist") && l.contains("expected sensor_msgs/msg/LaserScan")));
+    assert!(prints.iter().any(|l| l.contains("could not be read") && l.contains("ranges")), "{prints:#?}");
+    let gid_hex: String = gid.iter().map(|b| format!("{b:02x}")).collect();
+    assert!(prints.iter().all(|l| l.contains(&gid_hex)), "each names the publisher: {prints:#?}");
+    until("cycles after the bad messages", || (handle.stats().ok()?.cycle > before + 10).then_some(()));
+    let ring = handle.query("sonar.range").expect("sonar.range");
+    assert!(matches!(ring.value, Some(Value::F32s(r)) if (r[0] - 0.3).abs() < 1e-6), "the last good scan stays");
+    let info = handle.skill("ros2_scan").expect("device");
+    assert!(info.active && info.faulted.is_none(), "{info:?}");
+
+    drop(bridge);
+    // Gone with the bridge: the subscriptions' tokens.
+    tokens_until(&peer, 0, |keys| !keys.iter().any(|k| k.contains("/MS/")));
+    drop(link);
+    let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
+    let _ = join.join();
+}
