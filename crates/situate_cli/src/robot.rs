@@ -431,6 +431,10 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
             spec.skills.push(skill);
         }
     }
+    if ros2.as_ref().is_some_and(|c| c.use_sim_time) {
+        // One cycle per period of ROS time: the simulated clock, stepped.
+        spec.clock = ClockKind::Simulated;
+    }
     let mut manager = Manager::build(&spec, &registry).map_err(|e| build_failure(file, &e))?;
     for w in &manager.graph().warnings {
         out.warn(w);
@@ -448,7 +452,9 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     };
     // The GUI's timeline taps the cycle too (beside a recording: each tap gets every cycle).
     let gui_tap = gui_listen.map(|_| situate_gui::HistoryTap::new(&mut manager));
-    let (handle, join) = manager.spawn(!opts.stopped);
+    // ROS time: the robot waits, stopped, for /clock to step it (situate_ros2::clock).
+    let ros_time = ros2.as_ref().is_some_and(|c| c.use_sim_time) && ros2_node.is_some();
+    let (handle, join) = manager.spawn(!opts.stopped && !ros_time);
     let mut running = Running {
         handle,
         join,

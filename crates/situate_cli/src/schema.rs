@@ -261,6 +261,7 @@ fn ros2() -> Json {
             "namespace": {"type": "string", "description": "Empty (the root) or absolute, e.g. /robot1."},
             "node": {"type": "string", "description": "The node's name (default: the robot's)."},
             "rate_hz": {"type": "number", "exclusiveMinimum": 0, "maximum": 100},
+            "use_sim_time": {"type": "boolean", "description": "ROS time: the cycle follows /clock, one cycle per period of ROS time (default false)."},
             "topics": {
                 "type": "array",
                 "items": {

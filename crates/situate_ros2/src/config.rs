@@ -7,6 +7,7 @@
 //!   namespace: /robot1    # the node's namespace (default: none)
 //!   node: situate         # the node's name (default: the robot's name)
 //!   rate_hz: 20           # how often signals are sampled (default 20, at most 100)
+//!   use_sim_time: false   # the cycle follows /clock (default false)
 //!   topics:
 //!     - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}
 //!     - {signal: odom, topic: odom, type: nav_msgs/msg/Odometry, frame_id: odom, child_frame_id: base_link}
@@ -48,6 +49,10 @@ pub struct Ros2Config {
     /// parameters (the node's parameter services) as ROS 2 services (default: no).
     #[serde(default)]
     pub services: bool,
+    /// ROS time (ROS 2's `use_sim_time`): the cycle follows `/clock`, one cycle per period of
+    /// ROS time, and the messages are stamped with it ([`crate::clock`]). Default: no.
+    #[serde(default)]
+    pub use_sim_time: bool,
 }
 
 fn default_rate_hz() -> f64 {
@@ -151,7 +156,7 @@ impl Ros2Config {
                 return Err(format!("`node` is no ROS 2 node name: {node:?} (letters, digits, underscores)"));
             }
         }
-        if self.topics.is_empty() && !self.services {
+        if self.topics.is_empty() && !self.services && !self.use_sim_time {
             return Err(
                 "`topics` is empty and `services` is off: name at least one signal to publish, or set `services: true`"
                     .into(),

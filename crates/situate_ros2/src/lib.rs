@@ -27,6 +27,7 @@
 //! declared on the node before the manager is built ([`Ros2Node::declare`], [`Inputs::declare`],
 //! then [`Bridge::start_on`]).
 
+pub mod clock;
 pub mod config;
 pub mod decode;
 pub mod inputs;
@@ -99,6 +100,7 @@ pub struct Bridge {
     servers: Option<services::Servers>,
     node_token: String,
     inputs: Option<Inputs>,
+    clock: Option<clock::ClockDriver>,
 }
 
 /// The robot's ROS 2 node on a Zenoh session: its name and its liveliness token (what `ros2
@@ -199,8 +201,27 @@ impl Bridge {
                 warned: false,
             });
         }
+        // Entity ids: the topics 1..=n in order, then /clock, then the services.
+        let mut next_entity = config.topics.len() as u64 + 1;
+        let clock = if config.use_sim_time {
+            let period_s = match handle.request_timeout(Request::QueryStats, REQUEST_TIMEOUT) {
+                Ok(Reply::Stats(s)) => s.period_s,
+                other => {
+                    return Err(Ros2Error::Zenoh {
+                        what: "ROS time".into(),
+                        message: format!("the manager did not say its period: {other:?}"),
+                    })
+                }
+            };
+            let driver = clock::ClockDriver::start(&node, next_entity, handle.clone(), period_s)?;
+            next_entity += 1;
+            Some(driver)
+        } else {
+            None
+        };
+        let stamps = clock.as_ref().map(clock::ClockDriver::time);
         let servers = if config.services {
-            let first = config.topics.len() as u64 + 1;
+            let first = next_entity;
             let servers = services::Servers::start(&handle, &node.session, &node.name, node.node_id, first)?;
             for (name, key) in &servers.names {
                 tracing::info!(service = %name, %key, "ROS 2 service offered");
@@ -218,10 +239,15 @@ impl Bridge {
             .name("situate-ros2".into())
             .spawn(move || {
                 let _node = node;
-                sample_loop(&handle, &mut topics, period, &st);
+                sample_loop(&handle, &mut topics, period, &st, stamps.as_deref());
             })
             .map_err(Ros2Error::Thread)?;
-        Ok(Bridge { stop, thread: Some(thread), topics: names, servers, node_token, inputs })
+        Ok(Bridge { stop, thread: Some(thread), topics: names, servers, node_token, inputs, clock })
+    }
+
+    /// What the ROS time driver counted (`None` without `use_sim_time`).
+    pub fn clock_stats(&self) -> Option<clock::ClockStats> {
+        self.clock.as_ref().map(clock::ClockDriver::stats)
     }
 
     /// What each topic in has received so far (none without topics in).
@@ -260,6 +286,7 @@ impl Bridge {
             servers.stop();
         }
         self.stop.store(true, Ordering::SeqCst);
+        self.clock.take();
         self.inputs.take();
         if let Some(t) = self.thread.take() {
             if t.join().is_err() {
@@ -312,11 +339,17 @@ fn check_signal(handle: &Handle, t: &TopicConfig, fq_name: &str) -> Result<(), R
     }
 }
 
-fn sample_loop(handle: &Handle, topics: &mut [Topic], period: Duration, stop: &AtomicBool) {
+fn sample_loop(
+    handle: &Handle,
+    topics: &mut [Topic],
+    period: Duration,
+    stop: &AtomicBool,
+    stamps: Option<&clock::RosTime>,
+) {
     let mut next = Instant::now();
     while !stop.load(Ordering::SeqCst) {
         for topic in topics.iter_mut() {
-            publish_if_new(handle, topic);
+            publish_if_new(handle, topic, stamps);
         }
         next += period;
         let now = Instant::now();
@@ -334,7 +367,7 @@ fn sample_loop(handle: &Handle, topics: &mut [Topic], period: Duration, stop: &A
     }
 }
 
-fn publish_if_new(handle: &Handle, topic: &mut Topic) {
+fn publish_if_new(handle: &Handle, topic: &mut Topic, stamps: Option<&clock::RosTime>) {
     let reading =
         match handle.request_timeout(Request::QuerySignal { signal: topic.config.signal.clone() }, REQUEST_TIMEOUT) {
             Ok(Reply::Signal(r)) => r,
@@ -352,7 +385,8 @@ fn publish_if_new(handle: &Handle, topic: &mut Topic) {
         return;
     }
     topic.last_cycle = Some(reading.cycle);
-    let payload = match to_payload(&topic.config, &value) {
+    let stamp = stamps.and_then(clock::RosTime::now).unwrap_or_else(msgs::Time::now);
+    let payload = match to_payload_stamped(&topic.config, &value, stamp) {
         Some(Ok(p)) => p,
         Some(Err(e)) => {
             tracing::warn!(topic = %topic.fq_name, error = %e, "ROS 2 bridge: cannot encode");
@@ -390,8 +424,12 @@ fn field(value: &Value, name: &str) -> Option<f64> {
 
 /// The message for a signal's value, CDR-encoded; `None` when the value does not fit.
 pub fn to_payload(t: &TopicConfig, value: &Value) -> Option<Result<Vec<u8>, cdr::Error>> {
+    to_payload_stamped(t, value, msgs::Time::now())
+}
+
+/// [`to_payload`], the headers stamped `stamp` (ROS time, or the wall clock).
+pub fn to_payload_stamped(t: &TopicConfig, value: &Value, stamp: msgs::Time) -> Option<Result<Vec<u8>, cdr::Error>> {
     use msgs::*;
-    let stamp = Time::now();
     Some(match t.msg_type {
         MsgType::Twist => encode(&Twist {
             linear: Vector3 { x: field(value, "v")?, ..Vector3::default() },

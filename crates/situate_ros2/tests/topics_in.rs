@@ -163,3 +163,68 @@ fn a_ros2_scan_drives_a_skill_and_bad_messages_are_counted_while_the_robot_runs_
     let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
     let _ = join.join();
 }
+
+#[test]
+fn with_use_sim_time_the_cycle_follows_ros_time_one_cycle_per_period_and_stops_with_the_clock() {
+    // 50 Hz: a 20 ms period. The robot is spawned stopped; only /clock steps it.
+    let text = "robot: simbot\ncycle: {rate_hz: 50}\nskills:\n  - {name: wander, type: toy.wander}\n";
+    let file = RobotFile::parse("simbot.yaml", text).expect("robot file");
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+    let session = Link::open(&link_config).expect("session");
+    let ros2 = config("ros2:\n  use_sim_time: true\n  topics:\n    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/TwistStamped}\n");
+    let node = Ros2Node::declare("simbot", session.clone(), &ros2).expect("node");
+    let spec = RobotSpec::from_file(&file).clock(ClockKind::Simulated);
+    let manager = Manager::build(&spec, &situate_toys::registry()).expect("builds");
+    let (mut handle, join) = manager.spawn(false);
+    let link = Link::serve("simbot", handle.clone(), session, &link_config).expect("link");
+    let bridge = Bridge::start_on(node, None, handle.clone(), &ros2).expect("bridge");
+
+    let peer = observer(&endpoint);
+    let zid = link.session().zid().to_string();
+    let clock_token = format!(
+        "@ros2_lv/0/{zid}/0/2/MS/%/%/simbot/%clock/{}/{}/::,10:,:,:,,",
+        situate_ros2::clock::CLOCK_DDS,
+        situate_ros2::clock::CLOCK_HASH
+    );
+    tokens_until(&peer, 0, |keys| keys.contains(&clock_token));
+    let clock_key = format!("0/clock/{}/{}", situate_ros2::clock::CLOCK_DDS, situate_ros2::clock::CLOCK_HASH);
+    let put_clock = |ns: i64| {
+        let t = situate_ros2::msgs::Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 };
+        peer.put(&clock_key, encode(&situate_ros2::msgs::Clock { clock: t }).expect("encodes")).wait().expect("put");
+    };
+    let t0: i64 = 1_000 * 1_000_000_000 + 3_000_000; // 1000.003 s of ROS time
+                                                     // The first message anchors time 0; say it until it is heard (the subscription may be new).
+    until("the first /clock heard", || {
+        put_clock(t0);
+        (bridge.clock_stats()?.messages > 0).then_some(())
+    });
+    assert_eq!(handle.stats().expect("stats").cycle, 0, "no cycle before the clock moves");
+    // 10× real time in 1 ms messages: 2 s of ROS time in 200 messages of 10 ms each.
+    for k in 1..=200 {
+        put_clock(t0 + k * 10_000_000);
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    // 2 s at 20 ms: exactly 100 cycles, none skipped, none doubled.
+    until("100 cycles for 2 s of ROS time", || (bridge.clock_stats()?.cycles == 100).then_some(()));
+    let stats = handle.stats().expect("stats");
+    assert_eq!(stats.cycle, 100);
+    assert!((stats.time_s - 2.0).abs() < 1e-9, "robot time follows ROS time: {}", stats.time_s);
+    // The clock stops; so does the cycle (a later message resumes it where it was).
+    put_clock(t0 + 2_000_000_000 + 5_000_000); // half a period more: no cycle
+    put_clock(t0 + 2_030_000_000); // 1.5 periods: one more
+    until("the 101st cycle", || (bridge.clock_stats()?.cycles == 101).then_some(()));
+    assert_eq!(handle.stats().expect("stats").cycle, 101);
+    // A reset (the clock goes back): the robot goes on from where it is, never backwards.
+    // (The driver keeps the latest time only: the count comes from the clock's value, never from
+    // how many messages came, so the reset is said alone, and seen, before the clock goes on.)
+    put_clock(t0);
+    until("the reset seen", || (bridge.clock_stats()?.resets == 1).then_some(()));
+    put_clock(t0 + 40_000_000);
+    until("two cycles after the reset", || (bridge.clock_stats()?.cycles == 103).then_some(()));
+    assert_eq!(handle.stats().expect("stats").cycle, 103);
+    drop(bridge);
+    drop(link);
+    let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
+    let _ = join.join();
+}

@@ -1,0 +1,232 @@
+//! ROS time: with `use_sim_time: true` the cycle follows `/clock` (`rosgraph_msgs/msg/Clock`)
+//! from a simulator, as Gazebo-driven ROS 2 nodes do.
+//!
+//! The robot runs on its simulated clock, stopped; this driver steps it. The first `/clock`
+//! message anchors the robot's time 0; from then on, whenever the clock has passed `n` whole
+//! periods since the anchor, the robot has run exactly `n` cycles: one cycle per period of ROS
+//! time, none skipped and none doubled, however the messages are spaced (a 10× clock in 1 ms
+//! messages, or one message a second). When the clock stops, so does the cycle. A clock that
+//! goes back (a simulator reset) re-anchors: the robot runs on from where it is, never backwards,
+//! and says so in the log.
+//!
+//! Messages are read on a Zenoh thread (the bounded CDR reader; one that cannot be read is
+//! counted and ignored) and handed to the driver's thread through a latest-value slot; the
+//! driver asks the manager for the cycles with `Step` requests (at most [`MAX_STEP`] at once, so
+//! a long jump of the clock leaves the robot answering between them).
+
+use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use situate_manager::{Handle, Request};
+use zenoh::Wait;
+
+use crate::msgs::{self, Clock};
+use crate::{Ros2Error, Ros2Node};
+
+/// `rosgraph_msgs/msg/Clock`, as rmw_zenoh names it.
+pub const CLOCK_DDS: &str = "rosgraph_msgs::msg::dds_::Clock_";
+/// Its RIHS01 hash (ROS 2 Jazzy; the Python tests check it against `rosbags`).
+pub const CLOCK_HASH: &str = "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564";
+
+/// The most cycles one request runs: a jump of the clock is caught up in steps of this many.
+pub const MAX_STEP: u64 = 1000;
+
+/// The latest ROS time, shared with the bridge's publishers (for their stamps).
+#[derive(Debug, Default)]
+pub struct RosTime {
+    /// ns since the epoch of ROS time; valid once `known`.
+    ns: AtomicI64,
+    known: AtomicBool,
+}
+
+impl RosTime {
+    /// The latest `/clock` value, if one came.
+    pub fn now(&self) -> Option<msgs::Time> {
+        if !self.known.load(Ordering::Acquire) {
+            return None;
+        }
+        let ns = self.ns.load(Ordering::Acquire);
+        Some(msgs::Time {
+            sec: i32::try_from(ns.div_euclid(1_000_000_000)).unwrap_or(i32::MAX),
+            nanosec: ns.rem_euclid(1_000_000_000) as u32,
+        })
+    }
+}
+
+/// What the driver counted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ClockStats {
+    /// `/clock` messages read.
+    pub messages: u64,
+    /// Messages that could not be read.
+    pub undecodable: u64,
+    /// Cycles run for the clock.
+    pub cycles: u64,
+    /// Times the clock went back and the anchor moved.
+    pub resets: u64,
+}
+
+#[derive(Default)]
+struct Shared {
+    latest: Mutex<(Option<i64>, bool)>,
+    wake: Condvar,
+    messages: AtomicU64,
+    undecodable: AtomicU64,
+    cycles: AtomicU64,
+    resets: AtomicU64,
+}
+
+/// The running driver; dropping it stops it and undeclares its subscription.
+pub struct ClockDriver {
+    shared: Arc<Shared>,
+    time: Arc<RosTime>,
+    thread: Option<JoinHandle<()>>,
+    _subscriber: zenoh::pubsub::Subscriber<()>,
+    _token: zenoh::liveliness::LivelinessToken,
+}
+
+impl ClockDriver {
+    /// Subscribes to `/clock` on `node` (holding its `MS` token, entity `entity_id`) and steps
+    /// the robot behind `handle`, whose period is `period_s`, one cycle per period of ROS time.
+    pub fn start(node: &Ros2Node, entity_id: u64, handle: Handle, period_s: f64) -> Result<ClockDriver, Ros2Error> {
+        let shared = Arc::new(Shared::default());
+        let time = Arc::new(RosTime::default());
+        let key = node.name.service_key("/clock", CLOCK_DDS, CLOCK_HASH);
+        let (s, t) = (Arc::clone(&shared), Arc::clone(&time));
+        let subscriber = node
+            .session
+            .declare_subscriber(key.clone())
+            .callback(move |sample| {
+                s.messages.fetch_add(1, Ordering::Relaxed);
+                let payload = sample.payload().to_bytes();
+                match msgs::decode::<Clock>(&payload) {
+                    Ok(c) => {
+                        let ns = i64::from(c.clock.sec) * 1_000_000_000 + i64::from(c.clock.nanosec);
+                        t.ns.store(ns, Ordering::Release);
+                        t.known.store(true, Ordering::Release);
+                        let mut latest = s.latest.lock().unwrap_or_else(|p| p.into_inner());
+                        latest.0 = Some(ns);
+                        s.wake.notify_one();
+                    }
+                    Err(e) => {
+                        if s.undecodable.fetch_add(1, Ordering::Relaxed) == 0 {
+                            tracing::warn!(error = %e, "a /clock message could not be read; ignored (and counted)");
+                        }
+                    }
+                }
+            })
+            .wait()
+            .map_err(|e| Ros2Error::Zenoh { what: format!("a subscriber on `{key}`"), message: e.to_string() })?;
+        let token_key =
+            node.name.entity_token(&node.zid, node.node_id, entity_id, "MS", "/clock", CLOCK_DDS, CLOCK_HASH);
+        let token = node.declare_token(&token_key)?;
+        let period_ns = (period_s * 1e9).round().max(1.0) as i64;
+        let s = Arc::clone(&shared);
+        let thread = std::thread::Builder::new()
+            .name("situate-ros-time".into())
+            .spawn(move || drive(&s, &handle, period_ns))
+            .map_err(Ros2Error::Thread)?;
+        tracing::info!(%key, period_s, "the cycle follows ROS time (/clock)");
+        Ok(ClockDriver { shared, time, thread: Some(thread), _subscriber: subscriber, _token: token })
+    }
+
+    /// The latest ROS time, for stamps.
+    pub fn time(&self) -> Arc<RosTime> {
+        Arc::clone(&self.time)
+    }
+
+    /// What it counted so far.
+    pub fn stats(&self) -> ClockStats {
+        let s = &self.shared;
+        ClockStats {
+            messages: s.messages.load(Ordering::Relaxed),
+            undecodable: s.undecodable.load(Ordering::Relaxed),
+            cycles: s.cycles.load(Ordering::Relaxed),
+            resets: s.resets.load(Ordering::Relaxed),
+        }
+    }
+}
+
+impl Drop for ClockDriver {
+    fn drop(&mut self) {
+        {
+            let mut latest = self.shared.latest.lock().unwrap_or_else(|p| p.into_inner());
+            latest.1 = true;
+            self.shared.wake.notify_one();
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The cycles owed at ROS time `now_ns`, with `anchor_ns` the robot's time 0.
+pub fn cycles_due(anchor_ns: i64, now_ns: i64, period_ns: i64) -> u64 {
+    u64::try_from((now_ns.saturating_sub(anchor_ns)) / period_ns.max(1)).unwrap_or(0)
+}
+
+fn drive(shared: &Shared, handle: &Handle, period_ns: i64) {
+    // The anchor: ROS time of the robot's cycle 0 (moved back by the cycles already run when the
+    // clock resets, so the count stays continuous).
+    let mut anchor: Option<i64> = None;
+    let mut last: Option<i64> = None;
+    let mut done: u64 = 0;
+    loop {
+        let now = {
+            let mut latest = shared.latest.lock().unwrap_or_else(|p| p.into_inner());
+            loop {
+                if latest.1 {
+                    return;
+                }
+                if let Some(ns) = latest.0.take() {
+                    break ns;
+                }
+                latest = shared.wake.wait(latest).unwrap_or_else(|p| p.into_inner());
+            }
+        };
+        if last.is_some_and(|l| now < l) {
+            shared.resets.fetch_add(1, Ordering::Relaxed);
+            tracing::warn!(from_ns = last.unwrap_or(0), to_ns = now, "ROS time went back: the cycle goes on from here");
+            anchor = None;
+        }
+        last = Some(now);
+        let a = *anchor.get_or_insert_with(|| {
+            now.saturating_sub(i64::try_from(done).unwrap_or(i64::MAX).saturating_mul(period_ns))
+        });
+        let mut due = cycles_due(a, now, period_ns).saturating_sub(done);
+        while due > 0 {
+            let n = due.min(MAX_STEP);
+            match handle.request_timeout(Request::Step { cycles: n }, Duration::from_secs(600)) {
+                Ok(_) => {
+                    done += n;
+                    due -= n;
+                    shared.cycles.fetch_add(n, Ordering::Relaxed);
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "ROS time: the manager did not step; the driver stops");
+                    return;
+                }
+            }
+            if shared.latest.lock().unwrap_or_else(|p| p.into_inner()).1 {
+                return;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_cycle_per_whole_period_since_the_anchor() {
+        let p = 10_000_000; // 10 ms
+        assert_eq!(cycles_due(0, 0, p), 0);
+        assert_eq!(cycles_due(0, 9_999_999, p), 0);
+        assert_eq!(cycles_due(0, 10_000_000, p), 1);
+        assert_eq!(cycles_due(5, 1_000_000_005, p), 100);
+        assert_eq!(cycles_due(100, 50, p), 0, "before the anchor: none");
+    }
+}
