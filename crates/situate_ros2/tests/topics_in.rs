@@ -228,3 +228,37 @@ fn with_use_sim_time_the_cycle_follows_ros_time_one_cycle_per_period_and_stops_w
     let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
     let _ = join.join();
 }
+
+#[test]
+fn odometry_goes_out_on_tf_and_a_drive_as_twist_stamped() {
+    use situate_ros2::msgs::{decode, TfMessage, TwistStamped};
+    let ros2 = config(
+        "ros2:\n  topics:\n    - {signal: odom, topic: /tf, type: tf2_msgs/msg/TFMessage, child_frame_id: base_footprint}\n    \
+         - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/TwistStamped}\n",
+    );
+    let record = |fields: &[(&str, f64)]| {
+        Value::Record(std::sync::Arc::new(situate::RecordValue {
+            fields: fields.iter().map(|(n, v)| (std::sync::Arc::from(*n), Value::F64(*v))).collect(),
+        }))
+    };
+    let odom = record(&[("x", 1.5), ("y", -2.0), ("theta", std::f64::consts::FRAC_PI_2), ("v", 0.1), ("w", 0.0)]);
+    let stamp = situate_ros2::msgs::Time { sec: 42, nanosec: 7 };
+    let tf = situate_ros2::to_payload_stamped(&ros2.topics[0], &odom, stamp).expect("fits").expect("encodes");
+    let tf: TfMessage = decode(&tf).expect("a TFMessage");
+    assert_eq!(tf.transforms.len(), 1);
+    let t = &tf.transforms[0];
+    assert_eq!((t.header.frame_id.as_str(), t.child_frame_id.as_str()), ("odom", "base_footprint"));
+    assert_eq!(t.header.stamp, stamp);
+    assert_eq!((t.transform.translation.x, t.transform.translation.y), (1.5, -2.0));
+    let q = t.transform.rotation;
+    assert!(
+        (q.z - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12 && (q.w - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12
+    );
+    let drive = record(&[("v", 0.4), ("w", -0.2)]);
+    let twist = situate_ros2::to_payload_stamped(&ros2.topics[1], &drive, stamp).expect("fits").expect("encodes");
+    let twist: TwistStamped = decode(&twist).expect("a TwistStamped");
+    assert_eq!((twist.twist.linear.x, twist.twist.angular.z), (0.4, -0.2));
+    assert_eq!(twist.header.frame_id, "base_link");
+    // A value that is no odometry does not fit.
+    assert!(situate_ros2::to_payload_stamped(&ros2.topics[0], &drive, stamp).is_none());
+}
