@@ -262,3 +262,79 @@ fn odometry_goes_out_on_tf_and_a_drive_as_twist_stamped() {
     // A value that is no odometry does not fit.
     assert!(situate_ros2::to_payload_stamped(&ros2.topics[0], &drive, stamp).is_none());
 }
+
+#[test]
+fn twenty_thousand_fuzzed_messages_are_each_counted_and_the_robot_runs_on() {
+    let text = "robot: fuzzbot\ncycle: {rate_hz: 100}\nskills:\n  - {name: runaway, type: toy.runaway}\n";
+    let file = RobotFile::parse("fuzzbot.yaml", text).expect("robot file");
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+    let session = Link::open(&link_config).expect("session");
+    let ros2 = config(
+        "ros2:\n  topics:\n    - {topic: /scan, type: sensor_msgs/msg/LaserScan, signal: sonar.range, direction: in}\n",
+    );
+    let node = Ros2Node::declare("fuzzbot", session.clone(), &ros2).expect("node");
+    let (inputs, devices) = Inputs::declare(&node, &ros2).expect("topics in");
+    let mut spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
+    let mut registry = situate_toys::registry();
+    for (skill, ty) in devices {
+        registry.add(ty);
+        spec.skills.push(skill);
+    }
+    let manager = Manager::build(&spec, &registry).expect("builds");
+    let (mut handle, join) = manager.spawn(true);
+    let link = Link::serve("fuzzbot", handle.clone(), session, &link_config).expect("link");
+    let bridge = Bridge::start_on(node, Some(inputs), handle.clone(), &ros2).expect("bridge");
+    let peer = observer(&endpoint);
+    let key = format!("0/scan/{}/{}", MsgType::LaserScan.dds_name(), MsgType::LaserScan.type_hash());
+    // Wait until a good scan gets through: the subscription is known to the peer's session.
+    let good = scan(2.0);
+    let mut sent = 0u64;
+    until("a first scan", || {
+        peer.put(&key, good.clone()).congestion_control(zenoh::qos::CongestionControl::Block).wait().expect("put");
+        sent += 1;
+        (bridge.input_stats()[0].accepted > 0).then_some(())
+    });
+    // Each a mutation of a good scan (bytes flipped, cut, lengths set huge) or random bytes.
+    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    const N: u64 = 20_000;
+    for _ in 0..N {
+        let mut m = good.clone();
+        match next() % 4 {
+            0 => m.truncate((next() as usize) % m.len()),
+            1 => {
+                for _ in 0..1 + next() % 8 {
+                    let i = (next() as usize) % m.len();
+                    m[i] = next() as u8;
+                }
+            }
+            2 => {
+                let i = 4 + (next() as usize) % (m.len() - 8);
+                m[i..i + 4].copy_from_slice(&(next() as u32 | 0x8000_0000).to_le_bytes());
+            }
+            _ => m = (0..next() % 2048).map(|_| next() as u8).collect(),
+        }
+        peer.put(&key, m).congestion_control(zenoh::qos::CongestionControl::Block).wait().expect("put");
+    }
+    let stats = until("every fuzzed message counted", || {
+        let s = bridge.input_stats()[0].clone();
+        (s.received >= sent + N).then_some(s)
+    });
+    assert_eq!(stats.received, sent + N, "every message reached the subscription once: {stats:?}");
+    assert_eq!(stats.received, stats.accepted + stats.undecodable + stats.wrong_type, "each counted once: {stats:?}");
+    assert!(stats.undecodable > N / 2, "most are unreadable: {stats:?}");
+    let before = handle.stats().expect("stats").cycle;
+    until("the robot cycling on", || (handle.stats().ok()?.cycle > before + 10).then_some(()));
+    let info = handle.skill("ros2_scan").expect("device");
+    assert!(info.active && info.faulted.is_none(), "{info:?}");
+    drop(bridge);
+    drop(link);
+    let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
+    let _ = join.join();
+}
