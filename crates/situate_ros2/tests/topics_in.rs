@@ -1,7 +1,7 @@
 //! Topics in on a real Zenoh session: a ROS 2 publisher (here a second session writing what
 //! rmw_zenoh writes: key, attachment, CDR) feeds a device of the robot, and a skill acts on it.
 //! Messages of another type, or that cannot be read, are counted and reported once, and the
-//! robot runs on. (python/tests/test_ros2_in.py does the same with a peer that encodes with
+//! robot runs on. (python/tests/test_ros2_in.py does it end to end through `situate run`, encoding with
 //! `rosbags`, a CDR library this crate does not share.)
 
 mod support;
