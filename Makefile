@@ -47,6 +47,7 @@ test-python: ## Python: ruff, ruff format --check, mypy --strict, pytest (builds
 bench: python gui ## Run the benchmarks (ratios in one run; see bench/README.md).
 	$(CARGO) bench -p situate_bench --locked --bench core
 	$(CARGO) bench -p situate_bench --locked --bench languages
+	$(CARGO) bench -p situate_bench --locked --bench ros2
 	.venv/bin/python bench/python/overhead.py
 	bench/link/run.sh
 	bench/gui/run.sh
