@@ -7,7 +7,9 @@
 //! time, none skipped and none doubled, however the messages are spaced (a 10× clock in 1 ms
 //! messages, or one message a second). When the clock stops, so does the cycle. A clock that
 //! goes back (a simulator reset) re-anchors: the robot runs on from where it is, never backwards,
-//! and says so in the log.
+//! and says so in the log. So does a jump forward of more than [`MAX_JUMP_S`] in one message (a
+//! simulator restarted at another time, or a `/clock` that is no clock): the robot does not run
+//! the hours of cycles such a jump would owe.
 //!
 //! Messages are read on a Zenoh thread (the bounded CDR reader; one that cannot be read is
 //! counted and ignored) and handed to the driver's thread through a latest-value slot; the
@@ -32,6 +34,10 @@ pub const CLOCK_HASH: &str = "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c6
 
 /// The most cycles one request runs: a jump of the clock is caught up in steps of this many.
 pub const MAX_STEP: u64 = 1000;
+
+/// The longest step forward of ROS time between two messages that is caught up cycle by cycle;
+/// a longer one re-anchors, as a step back does.
+pub const MAX_JUMP_S: i64 = 60;
 
 /// The latest ROS time, shared with the bridge's publishers (for their stamps).
 #[derive(Debug, Default)]
@@ -64,7 +70,8 @@ pub struct ClockStats {
     pub undecodable: u64,
     /// Cycles run for the clock.
     pub cycles: u64,
-    /// Times the clock went back and the anchor moved.
+    /// Times the clock went back, or jumped forward more than [`MAX_JUMP_S`], and the anchor
+    /// moved.
     pub resets: u64,
 }
 
@@ -186,10 +193,14 @@ fn drive(shared: &Shared, handle: &Handle, period_ns: i64) {
                 latest = shared.wake.wait(latest).unwrap_or_else(|p| p.into_inner());
             }
         };
-        if last.is_some_and(|l| now < l) {
-            shared.resets.fetch_add(1, Ordering::Relaxed);
-            tracing::warn!(from_ns = last.unwrap_or(0), to_ns = now, "ROS time went back: the cycle goes on from here");
-            anchor = None;
+        if let Some(l) = last {
+            let jump = now.saturating_sub(l);
+            if jump < 0 || jump > MAX_JUMP_S * 1_000_000_000 {
+                shared.resets.fetch_add(1, Ordering::Relaxed);
+                let how = if jump < 0 { "went back" } else { "jumped forward" };
+                tracing::warn!(from_ns = l, to_ns = now, "ROS time {how}: the cycle goes on from here");
+                anchor = None;
+            }
         }
         last = Some(now);
         let a = *anchor.get_or_insert_with(|| {

@@ -70,6 +70,9 @@ pub enum Ros2Error {
     /// Zenoh refused a declaration (a publisher or a liveliness token).
     #[error("`ros2`: could not declare {what} on Zenoh: {message}")]
     Zenoh { what: String, message: String },
+    /// The skill manager did not say its period, which ROS time steps by.
+    #[error("`ros2`: `use_sim_time`: the skill manager did not say its cycle's period: {0}")]
+    Period(String),
     /// The skill manager did not list its skills, which the services are made from.
     #[error("`ros2`: `services`: the skill manager did not list its skills: {0}")]
     Skills(String),
@@ -206,12 +209,7 @@ impl Bridge {
         let clock = if config.use_sim_time {
             let period_s = match handle.request_timeout(Request::QueryStats, REQUEST_TIMEOUT) {
                 Ok(Reply::Stats(s)) => s.period_s,
-                other => {
-                    return Err(Ros2Error::Zenoh {
-                        what: "ROS time".into(),
-                        message: format!("the manager did not say its period: {other:?}"),
-                    })
-                }
+                other => return Err(Ros2Error::Period(format!("{other:?}"))),
             };
             let driver = clock::ClockDriver::start(&node, next_entity, handle.clone(), period_s)?;
             next_entity += 1;

@@ -223,6 +223,12 @@ fn with_use_sim_time_the_cycle_follows_ros_time_one_cycle_per_period_and_stops_w
     put_clock(t0 + 40_000_000);
     until("two cycles after the reset", || (bridge.clock_stats()?.cycles == 103).then_some(()));
     assert_eq!(handle.stats().expect("stats").cycle, 103);
+    // A jump of a day (a /clock that is no clock): re-anchored, not a day of cycles.
+    put_clock(t0 + 86_400_000_000_000);
+    until("the jump seen", || (bridge.clock_stats()?.resets == 2).then_some(()));
+    put_clock(t0 + 86_400_000_000_000 + 20_000_000);
+    until("one cycle after the jump", || (bridge.clock_stats()?.cycles == 104).then_some(()));
+    assert_eq!(handle.stats().expect("stats").cycle, 104);
     drop(bridge);
     drop(link);
     let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
