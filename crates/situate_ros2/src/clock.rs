@@ -195,7 +195,7 @@ fn drive(shared: &Shared, handle: &Handle, period_ns: i64) {
         };
         if let Some(l) = last {
             let jump = now.saturating_sub(l);
-            if jump < 0 || jump > MAX_JUMP_S * 1_000_000_000 {
+            if !(0..=MAX_JUMP_S * 1_000_000_000).contains(&jump) {
                 shared.resets.fetch_add(1, Ordering::Relaxed);
                 let how = if jump < 0 { "went back" } else { "jumped forward" };
                 tracing::warn!(from_ns = l, to_ns = now, "ROS time {how}: the cycle goes on from here");
