@@ -8,7 +8,7 @@ mod support;
 
 use std::time::{Duration, Instant};
 
-use situate::manager::{ClockKind, Control, Manager, RobotFile, RobotSpec};
+use situate::manager::{ClockKind, Control, Handle, Joiner, Manager, Request, RobotFile, RobotSpec};
 use situate::Value;
 use situate_link::{Link, LinkConfig};
 use situate_ros2::msgs::{encode, BatteryState, Header, LaserScan, Twist};
@@ -51,32 +51,71 @@ fn until<T>(what: &str, mut f: impl FnMut() -> Option<T>) -> T {
     }
 }
 
+/// A robot of `skills` (robot-file YAML) on a link of its own, with its ROS 2 node: the topics in
+/// as devices, then the bridge. Stopped in order when dropped (bridge, link, manager).
+struct RosRobot {
+    handle: Handle,
+    join: Option<Joiner>,
+    link: Option<Link>,
+    bridge: Option<Bridge>,
+    endpoint: String,
+}
+
+impl RosRobot {
+    fn start(name: &str, rate_hz: u32, skills: &str, ros2: &str, clock: ClockKind) -> RosRobot {
+        let text = format!("robot: {name}\ncycle: {{rate_hz: {rate_hz}}}\nskills:\n{skills}");
+        let file = RobotFile::parse(&format!("{name}.yaml"), &text).expect("robot file");
+        let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+        let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
+        let session = Link::open(&link_config).expect("session");
+        let ros2 = config(ros2);
+        let node = Ros2Node::declare(name, session.clone(), &ros2).expect("node");
+        let (inputs, devices) = Inputs::declare(&node, &ros2).expect("topics in");
+        let mut spec = RobotSpec::from_file(&file).clock(clock);
+        let mut registry = situate_toys::registry();
+        for (skill, ty) in devices {
+            registry.add(ty);
+            spec.skills.push(skill);
+        }
+        let manager = Manager::build(&spec, &registry).expect("the topics in are devices the robot is built with");
+        // With ROS time the robot waits, stopped, for /clock to step it.
+        let (handle, join) = manager.spawn(!ros2.use_sim_time);
+        let link = Link::serve(name, handle.clone(), session, &link_config).expect("link");
+        let bridge = Bridge::start_on(node, Some(inputs), handle.clone(), &ros2).expect("bridge");
+        RosRobot { handle, join: Some(join), link: Some(link), bridge: Some(bridge), endpoint }
+    }
+
+    fn bridge(&self) -> &Bridge {
+        self.bridge.as_ref().expect("the bridge")
+    }
+
+    fn zid(&self) -> String {
+        self.link.as_ref().expect("the link").session().zid().to_string()
+    }
+}
+
+impl Drop for RosRobot {
+    fn drop(&mut self) {
+        drop(self.bridge.take());
+        drop(self.link.take());
+        let _ = self.handle.request_timeout(Request::Shutdown, Duration::from_secs(5));
+        if let Some(j) = self.join.take() {
+            let _ = j.join();
+        }
+    }
+}
+
 #[test]
 fn a_ros2_scan_drives_a_skill_and_bad_messages_are_counted_while_the_robot_runs_on() {
-    let text = "robot: lidarbot\ncycle: {rate_hz: 50}\nskills:\n  - {name: runaway, type: toy.runaway}\n";
-    let file = RobotFile::parse("lidarbot.yaml", text).expect("robot file");
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
-    let session = Link::open(&link_config).expect("session");
-    let ros2 = config(ROS2);
-    let node = Ros2Node::declare("lidarbot", session.clone(), &ros2).expect("node");
-    let (inputs, devices) = Inputs::declare(&node, &ros2).expect("topics in");
-    let mut spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
-    let mut registry = situate_toys::registry();
-    let names: Vec<String> = devices.iter().map(|(s, _)| s.name.clone()).collect();
-    assert_eq!(names, ["ros2_scan", "bms"]);
-    for (skill, ty) in devices {
-        registry.add(ty);
-        spec.skills.push(skill);
+    let mut robot = RosRobot::start("lidarbot", 50, "  - {name: runaway, type: toy.runaway}\n", ROS2, ClockKind::Wall);
+    let mut handle = robot.handle.clone();
+    for device in ["ros2_scan", "bms"] {
+        assert_eq!(handle.skill(device).expect("a device of the robot").kind, situate::SkillKind::Device);
     }
-    let manager = Manager::build(&spec, &registry).expect("the topics in are devices the robot is built with");
-    let (mut handle, join) = manager.spawn(true);
-    let link = Link::serve("lidarbot", handle.clone(), session, &link_config).expect("link");
-    let bridge = Bridge::start_on(node, Some(inputs), handle.clone(), &ros2).expect("bridge");
 
     // Discovery: each topic in is a subscription (MS) of the node, as rmw_zenoh declares it.
-    let peer = observer(&endpoint);
-    let zid = link.session().zid().to_string();
+    let peer = observer(&robot.endpoint);
+    let zid = robot.zid();
     let ms = |id: u32, topic: &str, ty: MsgType| {
         format!("@ros2_lv/0/{zid}/0/{id}/MS/%/%/lidarbot/{topic}/{}/{}/::,10:,:,:,,", ty.dds_name(), ty.type_hash())
     };
@@ -133,7 +172,7 @@ fn a_ros2_scan_drives_a_skill_and_bad_messages_are_counted_while_the_robot_runs_
         put(&key("scan", MsgType::LaserScan), bad);
     }
     let stats = until("five of each counted", || {
-        let s = bridge.input_stats().into_iter().find(|s| s.topic == "/scan")?;
+        let s = robot.bridge().input_stats().into_iter().find(|s| s.topic == "/scan")?;
         (s.wrong_type >= 5 && s.undecodable >= 5).then_some(s)
     });
     assert_eq!(stats.device, "ros2_scan");
@@ -156,32 +195,24 @@ fn a_ros2_scan_drives_a_skill_and_bad_messages_are_counted_while_the_robot_runs_
     let info = handle.skill("ros2_scan").expect("device");
     assert!(info.active && info.faulted.is_none(), "{info:?}");
 
-    drop(bridge);
+    drop(robot.bridge.take());
     // Gone with the bridge: the subscriptions' tokens.
     tokens_until(&peer, 0, |keys| !keys.iter().any(|k| k.contains("/MS/")));
-    drop(link);
-    let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
-    let _ = join.join();
 }
 
 #[test]
 fn with_use_sim_time_the_cycle_follows_ros_time_one_cycle_per_period_and_stops_with_the_clock() {
     // 50 Hz: a 20 ms period. The robot is spawned stopped; only /clock steps it.
-    let text = "robot: simbot\ncycle: {rate_hz: 50}\nskills:\n  - {name: wander, type: toy.wander}\n";
-    let file = RobotFile::parse("simbot.yaml", text).expect("robot file");
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
-    let session = Link::open(&link_config).expect("session");
-    let ros2 = config("ros2:\n  use_sim_time: true\n  topics:\n    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/TwistStamped}\n");
-    let node = Ros2Node::declare("simbot", session.clone(), &ros2).expect("node");
-    let spec = RobotSpec::from_file(&file).clock(ClockKind::Simulated);
-    let manager = Manager::build(&spec, &situate_toys::registry()).expect("builds");
-    let (mut handle, join) = manager.spawn(false);
-    let link = Link::serve("simbot", handle.clone(), session, &link_config).expect("link");
-    let bridge = Bridge::start_on(node, None, handle.clone(), &ros2).expect("bridge");
-
-    let peer = observer(&endpoint);
-    let zid = link.session().zid().to_string();
+    let robot = RosRobot::start(
+        "simbot",
+        50,
+        "  - {name: wander, type: toy.wander}\n",
+        "ros2:\n  use_sim_time: true\n  topics:\n    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/TwistStamped}\n",
+        ClockKind::Simulated,
+    );
+    let (mut handle, bridge) = (robot.handle.clone(), robot.bridge());
+    let peer = observer(&robot.endpoint);
+    let zid = robot.zid();
     let clock_token = format!(
         "@ros2_lv/0/{zid}/0/2/MS/%/%/simbot/%clock/{}/{}/::,10:,:,:,,",
         situate_ros2::clock::CLOCK_DDS,
@@ -229,10 +260,6 @@ fn with_use_sim_time_the_cycle_follows_ros_time_one_cycle_per_period_and_stops_w
     put_clock(t0 + 86_400_000_000_000 + 20_000_000);
     until("one cycle after the jump", || (bridge.clock_stats()?.cycles == 104).then_some(()));
     assert_eq!(handle.stats().expect("stats").cycle, 104);
-    drop(bridge);
-    drop(link);
-    let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
-    let _ = join.join();
 }
 
 #[test]
@@ -271,27 +298,15 @@ fn odometry_goes_out_on_tf_and_a_drive_as_twist_stamped() {
 
 #[test]
 fn twenty_thousand_fuzzed_messages_are_each_counted_and_the_robot_runs_on() {
-    let text = "robot: fuzzbot\ncycle: {rate_hz: 100}\nskills:\n  - {name: runaway, type: toy.runaway}\n";
-    let file = RobotFile::parse("fuzzbot.yaml", text).expect("robot file");
-    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
-    let link_config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
-    let session = Link::open(&link_config).expect("session");
-    let ros2 = config(
+    let robot = RosRobot::start(
+        "fuzzbot",
+        100,
+        "  - {name: runaway, type: toy.runaway}\n",
         "ros2:\n  topics:\n    - {topic: /scan, type: sensor_msgs/msg/LaserScan, signal: sonar.range, direction: in}\n",
+        ClockKind::Wall,
     );
-    let node = Ros2Node::declare("fuzzbot", session.clone(), &ros2).expect("node");
-    let (inputs, devices) = Inputs::declare(&node, &ros2).expect("topics in");
-    let mut spec = RobotSpec::from_file(&file).clock(ClockKind::Wall);
-    let mut registry = situate_toys::registry();
-    for (skill, ty) in devices {
-        registry.add(ty);
-        spec.skills.push(skill);
-    }
-    let manager = Manager::build(&spec, &registry).expect("builds");
-    let (mut handle, join) = manager.spawn(true);
-    let link = Link::serve("fuzzbot", handle.clone(), session, &link_config).expect("link");
-    let bridge = Bridge::start_on(node, Some(inputs), handle.clone(), &ros2).expect("bridge");
-    let peer = observer(&endpoint);
+    let (mut handle, bridge) = (robot.handle.clone(), robot.bridge());
+    let peer = observer(&robot.endpoint);
     let key = format!("0/scan/{}/{}", MsgType::LaserScan.dds_name(), MsgType::LaserScan.type_hash());
     // Wait until a good scan gets through: the subscription is known to the peer's session.
     let good = scan(2.0);
@@ -339,8 +354,4 @@ fn twenty_thousand_fuzzed_messages_are_each_counted_and_the_robot_runs_on() {
     until("the robot cycling on", || (handle.stats().ok()?.cycle > before + 10).then_some(()));
     let info = handle.skill("ros2_scan").expect("device");
     assert!(info.active && info.faulted.is_none(), "{info:?}");
-    drop(bridge);
-    drop(link);
-    let _ = handle.request_timeout(situate::manager::Request::Shutdown, Duration::from_secs(5));
-    let _ = join.join();
 }
