@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import fcntl
+import json
 import os
 import shutil
 import signal
@@ -23,6 +24,7 @@ from pathlib import Path
 from typing import TypeVar
 
 import pytest
+import zenoh
 
 from situate import _link
 from situate.errors import SituateError
@@ -59,6 +61,15 @@ def free_port() -> int:
         s.bind(("127.0.0.1", 0))
         port: int = s.getsockname()[1]
         return port
+
+
+def zenoh_client(endpoint: str) -> zenoh.Session:
+    """A plain Zenoh client session on `endpoint` (no scouting), as a ROS 2 node's would be."""
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    return zenoh.open(conf)
 
 
 def program_env() -> dict[str, str]:

@@ -24,7 +24,7 @@ import pytest
 import zenoh
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-from support import REPO, STARTUP_S, free_port
+from support import REPO, STARTUP_S, free_port, zenoh_client
 from zenoh.ext import Int64, z_deserialize, z_serialize
 
 TYPES = {
@@ -104,14 +104,6 @@ def toybot() -> Iterator[str]:
             proc.kill()
 
 
-def session(endpoint: str) -> zenoh.Session:
-    conf = zenoh.Config()
-    conf.insert_json5("mode", '"client"')
-    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    return zenoh.open(conf)
-
-
 def tokens(s: zenoh.Session) -> list[str]:
     keys = []
     for reply in s.liveliness().get("@ros2_lv/0/**"):
@@ -122,7 +114,7 @@ def tokens(s: zenoh.Session) -> list[str]:
 
 def test_rosbags_decodes_what_the_bridge_publishes_on_rmw_zenoh_keys(toybot: str) -> None:
     store = get_typestore(Stores.ROS2_JAZZY)
-    with session(toybot) as s:
+    with zenoh_client(toybot) as s:
         zid = None
         deadline = time.monotonic() + STARTUP_S
         while time.monotonic() < deadline:
@@ -345,7 +337,7 @@ def test_activation_and_parameters_are_ros_2_services(toybot: str) -> None:
     import situate
 
     store = service_store()
-    with session(toybot) as s:
+    with zenoh_client(toybot) as s:
         deadline = time.monotonic() + STARTUP_S
         found: list[str] = []
         while time.monotonic() < deadline:

@@ -10,7 +10,6 @@ GID against XXH3-128 computed by the `xxhash` package (rmw_zenoh's `generate_gid
 
 from __future__ import annotations
 
-import json
 import re
 import threading
 import time
@@ -20,7 +19,7 @@ import numpy as np
 import xxhash
 import zenoh
 from rosbags.typesys import Stores, get_typestore
-from support import REPO, STARTUP_S, start_manager
+from support import REPO, STARTUP_S, start_manager, zenoh_client
 from zenoh.ext import Int64, z_serialize
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
@@ -38,14 +37,6 @@ def key(topic: str, ros_type: str) -> str:
 def gid(token: str) -> bytes:
     """rmw_zenoh's GID: XXH3-128 of the token, low 64 bits then high, each little endian."""
     return int(xxhash.xxh3_128_intdigest(token.encode())).to_bytes(16, "little")
-
-
-def session(endpoint: str) -> zenoh.Session:
-    conf = zenoh.Config()
-    conf.insert_json5("mode", '"client"')
-    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    return zenoh.open(conf)
 
 
 def test_every_hash_situate_writes_is_the_one_ros_2_computes() -> None:
@@ -93,7 +84,7 @@ def scan(ahead_m: float, behind_m: float = 3.0) -> bytes:
 def test_a_ros_2_lidar_drives_the_runaway_and_its_command_comes_back_as_cmd_vel() -> None:
     robot = start_manager(REPO / "examples/ros2/lidar_runaway.yaml", "lidar_runaway")
     try:
-        with session(robot.endpoint) as s:
+        with zenoh_client(robot.endpoint) as s:
             # situate's subscription is discovered as rmw_zenoh's are: an MS token.
             deadline = time.monotonic() + STARTUP_S
             subs: list[str] = []

@@ -16,9 +16,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-import zenoh
 from ros2_peer import DiffDriveBase, Pose, Ros2Peer
-from support import STARTUP_S, situate, start_manager
+from support import STARTUP_S, situate, start_manager, zenoh_client
 
 ROBOT = """\
 robot: rosbot
@@ -33,14 +32,6 @@ ros2:
     - {topic: /odom, type: nav_msgs/msg/Odometry, signal: odom, direction: in}
     - {signal: drive, topic: /cmd_vel, type: geometry_msgs/msg/Twist}
 """
-
-
-def client(endpoint: str) -> zenoh.Session:
-    conf = zenoh.Config()
-    conf.insert_json5("mode", '"client"')
-    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    return zenoh.open(conf)
 
 
 def wait_until(cond: Callable[[], bool], what: str) -> None:
@@ -68,7 +59,7 @@ def test_the_toy_skills_drive_a_ros_2_base_on_its_own_clock(tmp_path: Path) -> N
         return json.loads(out.stdout)
 
     try:
-        with client(robot.endpoint) as s:
+        with zenoh_client(robot.endpoint) as s:
             peer = Ros2Peer(s, node="base")
             base = DiffDriveBase(peer, rate_hz=20, sim_time=True, start=Pose(3.0, 2.0, 0.0))
             try:
