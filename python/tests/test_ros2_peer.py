@@ -25,20 +25,17 @@ import numpy as np
 import pytest
 import xxhash
 import zenoh
+from ros2_base import Box, DiffDriveBase, Pose, Room
 from ros2_peer import (
     QOS_CLOCK,
     QOS_DEFAULT,
     QOS_SENSOR_DATA,
     QOS_TF,
-    Box,
-    DiffDriveBase,
     Durability,
     History,
-    Pose,
     Publisher,
     Qos,
     Reliability,
-    Room,
     Ros2Peer,
     attachment,
     data_key,

@@ -1,6 +1,6 @@
 """A ROS 2 robot is a situate robot: the toy skills drive a ROS 2 base through topics alone.
 
-The robot on the other side is `ros2_peer.DiffDriveBase`, a kinematic differential-drive base in
+The robot on the other side is `ros2_base.DiffDriveBase`, a kinematic differential-drive base in
 a 6 m by 4 m room speaking rmw_zenoh exactly (checked in test_ros2_peer.py against rmw_zenoh and
 captures of real ROS 2 systems): it takes `/cmd_vel` and publishes `/scan`, `/odom`, `/tf` and
 `/clock`. situate runs no simulator: its `sonar.range` and `odom` come from `/scan` and `/odom`
@@ -16,7 +16,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from ros2_peer import DiffDriveBase, Pose, Ros2Peer
+from ros2_base import DiffDriveBase, Pose
+from ros2_peer import Ros2Peer
 from support import STARTUP_S, situate, start_manager, zenoh_client
 
 ROBOT = """\
