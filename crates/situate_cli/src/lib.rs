@@ -30,6 +30,7 @@ mod map;
 mod output;
 mod replay;
 mod robot;
+mod ros2;
 mod schema;
 mod signals;
 mod sim;

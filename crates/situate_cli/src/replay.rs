@@ -103,7 +103,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     let (mut registry, _world) = registry_for(&robot_file, program_registry(ext)?, ext, &SimOverrides::default())
         .map_err(|errors| bad_file(&robot, &errors))?;
     // The ROS 2 topics in are devices: they play back from the recording.
-    crate::robot::add_ros2_devices(&mut spec, &mut registry, ros2.as_ref());
+    crate::ros2::add_devices(&mut spec, &mut registry, ros2.as_ref());
     // What makes a run repeatable (docs/recording.md, "Replay").
     spec.clock = ClockKind::Simulated;
     spec.executor = ExecutorKind::Serial;

@@ -146,7 +146,7 @@ pub(crate) fn static_graph(
     let mut loaded = load(file, compose)?;
     let (mut registry, _sim) = registry_for(&loaded.file, program_registry(ext)?, ext, &SimOverrides::default())
         .map_err(|errors| bad_file(file, &errors))?;
-    add_ros2_devices(&mut loaded.spec, &mut registry, loaded.ros2.as_ref());
+    crate::ros2::add_devices(&mut loaded.spec, &mut registry, loaded.ros2.as_ref());
     // Every section `run` reads is checked by the code `run` uses.
     gui_address(&loaded.file, &RunOptions::default()).map_err(|e| bad_file(file, &[e]))?;
     for (_, decl) in &loaded.remote {
@@ -156,21 +156,6 @@ pub(crate) fn static_graph(
     match situate::manager::Graph::build(&loaded.spec, &registry) {
         Ok(graph) => Ok((loaded, graph)),
         Err(e) => Err(build_failure(file, &e)),
-    }
-}
-
-/// The devices of the `ros2:` section's topics in, added to a robot that is checked or replayed
-/// (declarations only: nothing subscribes; a replay plays their signals back).
-pub(crate) fn add_ros2_devices(
-    spec: &mut RobotSpec,
-    registry: &mut situate::manager::Registry,
-    ros2: Option<&situate_ros2::Ros2Config>,
-) {
-    if let Some(config) = ros2 {
-        for (skill, ty) in situate_ros2::inputs::devices(&spec.robot, config) {
-            registry.add(ty);
-            spec.skills.push(skill);
-        }
     }
 }
 
@@ -411,30 +396,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     }
     // The ROS 2 node, and its topics in as devices of the robot: declared before the build,
     // which wires their signals like any device's.
-    let mut ros2_node = None;
-    if let Some(config) = &ros2 {
-        let devices = match &session {
-            Some(session) => {
-                let node = situate_ros2::Ros2Node::declare(&spec.robot, session.clone(), config)
-                    .map_err(|e| problem(Exit::Failure, format!("starting the ROS 2 node: {e}")))?;
-                let (inputs, devices) = situate_ros2::Inputs::declare(&node, config)
-                    .map_err(|e| problem(Exit::Failure, format!("starting the ROS 2 node: {e}")))?;
-                ros2_node = Some((node, inputs));
-                devices
-            }
-            // No link, no ROS 2 (said below); the devices are there, and write nothing.
-            None => situate_ros2::inputs::devices(&spec.robot, config),
-        };
-        // (Not `add_ros2_devices`: these are the live ones, fed by the subscriptions.)
-        for (skill, ty) in devices {
-            registry.add(ty);
-            spec.skills.push(skill);
-        }
-    }
-    if ros2.as_ref().is_some_and(|c| c.use_sim_time) {
-        // One cycle per period of ROS time: the simulated clock, stepped.
-        spec.clock = ClockKind::Simulated;
-    }
+    let ros2_node = crate::ros2::declare(&mut spec, &mut registry, ros2.as_ref(), session.as_ref())?;
     let mut manager = Manager::build(&spec, &registry).map_err(|e| build_failure(file, &e))?;
     for w in &manager.graph().warnings {
         out.warn(w);
