@@ -456,8 +456,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
         }
     }
     if let (Some(config), Some((node, inputs)), Some(_)) = (&ros2, ros2_node, &running.served) {
-        let topics_in =
-            config.topics.len() - config.topics.iter().filter(|t| t.direction == situate_ros2::Direction::Out).count();
+        let topics_in = config.topics.iter().filter(|t| t.direction == situate_ros2::Direction::In).count();
         match situate_ros2::Bridge::start_on(node, Some(inputs), running.handle.clone(), config) {
             Ok(bridge) => {
                 out.note(format_args!(
