@@ -65,5 +65,6 @@ if [[ ${1:-} == test ]]; then
     # In parallel processes (pytest-xdist): the tests pick free ports and lock what they build.
     workers=${PYTEST_WORKERS:-2}
     say "pytest ($workers workers)"
-    pytest -q -n "$workers" --durations=8 python/tests
+    # Every test's time goes to target/pytest-report.xml (JUnit XML), for finding the slow ones.
+    pytest -q -n "$workers" --durations=8 --junitxml="$TARGET/pytest-report.xml" python/tests
 fi
