@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -35,6 +36,30 @@ def test_check_and_types_work_offline() -> None:
     assert result.returncode == 0, result.stderr
     assert "ok — robot `toybot`" in result.stdout
     assert "toy.runaway" in situate("types").stdout
+
+
+@pytest.mark.parametrize(
+    "args", [("schema", "robot"), ("schema", "map"), ("completions", "bash"), ("types",)]
+)
+def test_a_reader_that_went_away_ends_the_program_quietly(args: tuple[str, ...]) -> None:
+    # `situate schema robot | head -c1`, made certain: the pipe's read end is closed before the
+    # program writes, so its first write fails (EPIPE) whatever the timing.
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        done = subprocess.run(
+            [situate_program(), *args],
+            stdout=write_end,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=60,
+            env=program_env(),
+            check=False,
+        )
+    finally:
+        os.close(write_end)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""  # no panic, no traceback
 
 
 def test_a_bad_command_line_exits_2() -> None:

@@ -357,7 +357,7 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             let mut seen = 0;
             while count.is_none_or(|n| seen < n) && !interrupted.flag().load(Ordering::SeqCst) {
                 if let Ok(e) = events.recv_timeout(Duration::from_millis(200)) {
-                    println!("{e}");
+                    stdoutln!("{e}");
                     seen += 1;
                 }
             }
@@ -408,7 +408,7 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
         ClientCommand::Graph { file, dot, compose, remote } => {
             let graph = graph_json(file.as_deref(), &compose, &remote, ext)?;
             if dot {
-                print!("{}", graph_dot(&graph));
+                stdout!("{}", graph_dot(&graph));
             } else {
                 out.result(&graph, || graph_text(&graph));
             }

@@ -249,21 +249,21 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
         "skills_faulted": faulted.iter().map(|(skill, cause, cycle)| json!({"skill": skill, "cause": cause, "cycle": cycle})).collect::<Vec<_>>(),
     });
     if out.json {
-        println!("{outcome}");
+        stdoutln!("{outcome}");
     } else {
         let delivered = match delivered_at {
             Some(t) => format!("message delivered at t = {t:.1} s"),
             None => "message not delivered".to_string(),
         };
         match (run.interrupted, delivered_at) {
-            (Some(sig), _) => println!(
+            (Some(sig), _) => stdoutln!(
                 "demo: interrupted ({}) at t = {sim_time:.1} s{}, {delivered} (seed {})",
                 signals::name(sig),
                 run.phase.as_ref().map(|p| format!(" in phase {p}")).unwrap_or_default(),
                 demo.seed
             ),
-            (None, Some(_)) => println!("demo: {delivered} (seed {})", demo.seed),
-            (None, None) => println!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
+            (None, Some(_)) => stdoutln!("demo: {delivered} (seed {})", demo.seed),
+            (None, None) => stdoutln!("demo: NOT delivered after {sim_time:.1} s (seed {})", demo.seed),
         }
         if stops != [situate_sim::task::Stop::Office] {
             let list: Vec<String> = stops
@@ -274,19 +274,19 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
                     None => format!("{s} not made"),
                 })
                 .collect();
-            println!("demo: task {}: {}", if task_done { "done" } else { "NOT done" }, list.join(", "));
+            stdoutln!("demo: task {}: {}", if task_done { "done" } else { "NOT done" }, list.join(", "));
         }
-        println!(
+        stdoutln!(
             "demo: {} cycles, {runs} skill runs, {:.1} ms in skills, {wall_s:.1} s wall ({:.0}× real time)",
             stats.cycle,
             cpu_ns as f64 / 1e6,
             if wall_s > 0.0 { sim_time / wall_s } else { 0.0 }
         );
         for (skill, cause, cycle) in &faulted {
-            println!("demo: skill `{skill}` faulted at cycle {cycle}: {}", cause.lines().last().unwrap_or(cause));
+            stdoutln!("demo: skill `{skill}` faulted at cycle {cycle}: {}", cause.lines().last().unwrap_or(cause));
         }
         if let Some(r) = &recording {
-            print!("demo: {}", crate::robot::recording_text(r));
+            stdout!("demo: {}", crate::robot::recording_text(r));
         }
     }
     let code = match (run.interrupted, task_done) {

@@ -21,6 +21,16 @@ use std::sync::Arc;
 
 use clap::Parser as _;
 
+/// `print!` for the program's results: see [`output::write_stdout`] (a closed pipe ends quietly).
+macro_rules! stdout {
+    ($($arg:tt)*) => { $crate::output::write_stdout(format_args!($($arg)*)) };
+}
+
+/// `println!` for the program's results: see [`output::write_stdout`] (a closed pipe ends quietly).
+macro_rules! stdoutln {
+    ($($arg:tt)*) => { $crate::output::write_stdout(format_args!("{}\n", format_args!($($arg)*))) };
+}
+
 mod args;
 mod client;
 mod demo;
@@ -143,7 +153,7 @@ where
             if json {
                 let message = e.render().to_string();
                 let message = message.trim().trim_start_matches("error: ").to_string();
-                println!("{}", Problem::new(Exit::Usage, message).to_json());
+                stdoutln!("{}", Problem::new(Exit::Usage, message).to_json());
             } else {
                 let _ = e.print();
             }
@@ -205,7 +215,9 @@ fn run(command: Command, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
         Command::Schema { format, output } => schema::schema_command(&format, output.as_deref(), out)?,
         Command::Completions { shell } => {
             use clap::CommandFactory as _;
-            clap_complete::generate(shell, &mut Cli::command(), "situate", &mut std::io::stdout());
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "situate", &mut script);
+            stdout!("{}", String::from_utf8_lossy(&script));
         }
     }
     Ok(Exit::Ok.code())

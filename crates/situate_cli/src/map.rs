@@ -84,11 +84,11 @@ pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
             };
             let g = generate::generate(seed, &opts).map_err(|e| problem(Exit::Usage, e.to_string()))?;
             if output.as_os_str() == "-" {
-                print!("{}", g.yaml);
+                stdout!("{}", g.yaml);
             } else {
                 std::fs::write(&output, &g.yaml).with_context(|| format!("cannot write {}", output.display()))?;
                 if out.json {
-                    println!("{}", json!({"file": output.display().to_string(), "seed": seed}));
+                    stdoutln!("{}", json!({"file": output.display().to_string(), "seed": seed}));
                 } else {
                     eprintln!("{}: building of seed {seed} written", output.display());
                 }
@@ -116,9 +116,9 @@ fn map_check(file: &Path, json: bool) -> anyhow::Result<u8> {
             .collect(),
     };
     if json {
-        println!("{}", json!({"file": shown, "ok": findings.is_empty(), "findings": findings}));
+        stdoutln!("{}", json!({"file": shown, "ok": findings.is_empty(), "findings": findings}));
     } else if findings.is_empty() {
-        println!("{shown}: ok");
+        stdoutln!("{shown}: ok");
     } else {
         for f in &findings {
             eprintln!("{}", f["text"].as_str().unwrap_or_default());

@@ -8,7 +8,27 @@
 //! prints it once, as text on stderr or, under `--json`, as one JSON object
 //! `{"error": {…}}` on stdout.
 
+use std::io::Write;
+
 use serde_json::{json, Value as Json};
+
+/// Writes a result to stdout (the `stdout!`/`stdoutln!` macros), flushed at once.
+///
+/// A reader that went away (`situate schema robot | head -c1`) ends the program there, quietly and
+/// with exit status 0, as ripgrep does: what it asked for was read. `println!` would panic instead
+/// (Rust ignores SIGPIPE, so the write fails with `EPIPE`); the Python package's `situate`, which
+/// runs this in the interpreter, would show that panic as a traceback. Any other failure to write
+/// (a full disk under `> file`) is said on stderr and ends the program with exit status 1.
+pub(crate) fn write_stdout(args: std::fmt::Arguments<'_>) {
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_fmt(args).and_then(|()| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(Exit::Ok.code().into());
+        }
+        eprintln!("situate: writing to stdout: {e}");
+        std::process::exit(Exit::Failure.code().into());
+    }
+}
 
 /// Why the program ended: each kind its own exit code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -169,11 +189,11 @@ impl Out {
     /// A result: `value` under `--json`, else the text `text` gives.
     pub fn result(&self, value: &Json, text: impl FnOnce() -> String) {
         if self.json {
-            println!("{value}");
+            stdoutln!("{value}");
         } else {
             let text = text();
             if !text.is_empty() {
-                println!("{text}");
+                stdoutln!("{text}");
             }
         }
     }
@@ -189,7 +209,7 @@ impl Out {
             }
         };
         if self.json {
-            println!("{}", problem.to_json());
+            stdoutln!("{}", problem.to_json());
         } else {
             for line in &problem.lines {
                 eprintln!("{line}");

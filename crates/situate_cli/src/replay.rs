@@ -166,7 +166,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     let identical = outcome.identical();
     let span = rec.span();
     if out.json {
-        println!(
+        stdoutln!(
             "{}",
             json!({
                 "recording": args.file,
@@ -187,7 +187,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             })
         );
     } else {
-        println!(
+        stdoutln!(
             "replayed {} cycles of {} in {:.2} s: {} live ({}), {} played from the recording",
             outcome.cycles,
             args.file.display(),
@@ -197,8 +197,8 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             cast.players.len()
         );
         match &outcome.first {
-            None if identical => println!("identical: every cycle matches the recording"),
-            None if outcome.dropped > 0 => println!(
+            None if identical => stdoutln!("identical: every cycle matches the recording"),
+            None if outcome.dropped > 0 => stdoutln!(
                 "not identical: the recording lacks {} cycles, dropped while recording ({}){}; {} of {} cycles \
                  replayed match",
                 outcome.dropped,
@@ -210,15 +210,15 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                 outcome.matched,
                 outcome.cycles
             ),
-            None => println!("nothing to compare: the recording has no cycles"),
+            None => stdoutln!("nothing to compare: the recording has no cycles"),
             Some(d) => {
-                println!("differs from {d}");
+                stdoutln!("differs from {d}");
                 if !d.others.is_empty() {
-                    println!("  also differing in that cycle: {}", d.others.join(", "));
+                    stdoutln!("  also differing in that cycle: {}", d.others.join(", "));
                 }
-                println!("{} of {} cycles match", outcome.matched, outcome.cycles);
+                stdoutln!("{} of {} cycles match", outcome.matched, outcome.cycles);
                 if outcome.dropped > 0 {
-                    println!(
+                    stdoutln!(
                         "and the recording lacks {} cycles, dropped while recording ({})",
                         outcome.dropped,
                         ranges_text(&outcome.dropped_ranges)
@@ -227,7 +227,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             }
         }
         if let Some(r) = &recording {
-            print!("{}", crate::robot::recording_text(r));
+            stdout!("{}", crate::robot::recording_text(r));
         }
     }
     let code = if identical { Exit::Ok.code() } else { Exit::Failure.code() };

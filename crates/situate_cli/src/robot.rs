@@ -693,7 +693,7 @@ pub(crate) fn serve_skill(
             "received": s.received, "computed": s.computed, "dropped": s.dropped, "errors": s.errors,
         });
         if out.json {
-            println!("{result}");
+            stdoutln!("{result}");
         } else {
             out.note(format_args!(
                 "stopped{}; {} inputs received, {} runs, {} dropped as stale, {} errors",

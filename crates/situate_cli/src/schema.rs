@@ -353,7 +353,7 @@ pub(crate) fn schema_command(format: &str, output: Option<&Path>, out: Out) -> a
                 .map_err(|e| problem(Exit::Failure, format!("writing {}: {e}", path.display())))?;
             out.note(format_args!("{}: the {format} schema written", path.display()));
         }
-        None => println!("{text}"),
+        None => stdoutln!("{text}"),
     }
     Ok(())
 }
