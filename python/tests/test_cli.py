@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -219,13 +220,29 @@ def test_stats_and_cycle(toybot: Manager) -> None:
     assert stats.returncode == 0, stats.stderr
     assert stats.stdout.startswith("robot `toybot`: cycle")
     assert "running" in stats.stdout
-    assert situate("cycle", "stop", *toybot.connect_args).returncode == 0
+    stopped = situate("cycle", "stop", *toybot.connect_args)
+    assert stopped.returncode == 0
+    assert re.fullmatch(r"robot `toybot`: stopped at cycle \d+ \([\d.]+ s\)\n", stopped.stdout)
     before = json.loads(situate("stats", "--json", *toybot.connect_args).stdout)
-    assert situate("cycle", "step", "3", *toybot.connect_args).returncode == 0
+    # The stats' time without float noise: to the millisecond at most.
+    stats_text = situate("stats", *toybot.connect_args).stdout
+    assert re.search(r", \d+(\.\d{1,3})? s, stopped;", stats_text), stats_text
+    stepped = situate("cycle", "step", "3", *toybot.connect_args)
+    assert stepped.returncode == 0
+    at = before["cycle"] + 3
+    said = f"robot `toybot`: stepped 3 cycles, now at cycle {at} ("
+    assert stepped.stdout.startswith(said), stepped
+    assert stepped.stdout.endswith("), stopped\n")
     after = json.loads(situate("stats", "--json", *toybot.connect_args).stdout)
-    assert after["cycle"] == before["cycle"] + 3
+    assert after["cycle"] == at
     assert not after["running"]
-    assert situate("cycle", "run", *toybot.connect_args).returncode == 0
+    one = json.loads(situate("cycle", "step", "--json", *toybot.connect_args).stdout)
+    assert one["cycle"] == "step"
+    assert one["at_cycle"] == at + 1
+    assert one["running"] is False
+    run = situate("cycle", "run", *toybot.connect_args)
+    assert run.returncode == 0
+    assert run.stdout.startswith("robot `toybot`: running, at cycle "), run.stdout
     assert json.loads(situate("stats", "--json", *toybot.connect_args).stdout)["running"]
     bad = situate("cycle", "step", "0", *toybot.connect_args)
     assert bad.returncode == 5

@@ -376,7 +376,7 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
                     "robot `{}`: cycle {}, {} s, {}; cycle time mean {:.1} µs, max {:.1} µs; overruns {}; late starts {}; active: {}",
                     s["robot"].as_str().unwrap_or(""),
                     s["cycle"],
-                    s["time_s"],
+                    seconds(s["time_s"].as_f64().unwrap_or(0.0)),
                     if s["running"].as_bool() == Some(true) {
                         format!("running at {:.1} Hz", s["rate_hz"].as_f64().unwrap_or(0.0))
                     } else {
@@ -392,11 +392,27 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             Ok(())
         }),
         ClientCommand::Cycle { action, cycles, remote } => client_verb(&remote, |c, robot| {
+            let stepped = cycles.unwrap_or(1);
             match action.as_str() {
-                "step" => c.request(robot, "step", &json!({"cycles": cycles.unwrap_or(1)}))?,
+                "step" => c.request(robot, "step", &json!({"cycles": stepped}))?,
                 other => c.request(robot, other, &json!({}))?,
             };
-            out.result(&json!({"cycle": action}), String::new);
+            // Where the cycle is now, and whether it runs: what the command did, said.
+            let s = c.request(robot, "stats", &json!({}))?;
+            let (at, running) = (s["cycle"].as_u64().unwrap_or(0), s["running"].as_bool() == Some(true));
+            let result = json!({"cycle": action, "at_cycle": at, "running": running, "time_s": s["time_s"]});
+            out.result(&result, || {
+                let time = seconds(s["time_s"].as_f64().unwrap_or(0.0));
+                let name = s["robot"].as_str().unwrap_or(robot);
+                match (action.as_str(), running) {
+                    ("step", _) => format!(
+                        "robot `{name}`: stepped {stepped} cycle{}, now at cycle {at} ({time} s), stopped",
+                        if stepped == 1 { "" } else { "s" }
+                    ),
+                    (_, true) => format!("robot `{name}`: running, at cycle {at} ({time} s)"),
+                    (_, false) => format!("robot `{name}`: stopped at cycle {at} ({time} s)"),
+                }
+            });
             Ok(())
         }),
         ClientCommand::Signals { file, compose, remote } => {
@@ -612,6 +628,18 @@ fn names(list: &Json) -> String {
 }
 
 /// `sonar.range  f32[24]  written by sonar  read by runaway, wander`.
+/// Seconds as a person reads them: to the millisecond, without the float's noise or trailing
+/// zeros (`21.9`, not `21.900000000000002`; `3`, not `3.000`).
+fn seconds(s: f64) -> String {
+    let text = format!("{s:.3}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".to_string()
+    } else {
+        text.to_string()
+    }
+}
+
 fn signals_text(signals: &Json) -> String {
     let rows: Vec<&Json> = signals.as_array().into_iter().flatten().collect();
     let width = rows.iter().filter_map(|s| s["signal"].as_str()).map(str::len).max().unwrap_or(0);
@@ -767,6 +795,16 @@ fn held_text(condition: Option<&str>, any: &[String], held: &serde_json::Value) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn seconds_read_without_float_noise() {
+        assert_eq!(seconds(21.900000000000002), "21.9");
+        assert_eq!(seconds(3.0), "3");
+        assert_eq!(seconds(0.0), "0");
+        assert_eq!(seconds(-0.0001), "0");
+        assert_eq!(seconds(0.1234), "0.123");
+        assert_eq!(seconds(120.05), "120.05");
+    }
 
     #[derive(clap::Parser)]
     struct Cli {

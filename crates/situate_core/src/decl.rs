@@ -145,10 +145,18 @@ impl ParamSpec {
             ParamType::I64 => "an integer",
             ParamType::F64 => "a number",
         };
+        // An integer's bounds read as integers (`[1, 100]`), a number's as numbers (`[0.0, 3.0]`).
+        let bound = |x: f64| {
+            if self.ty == ParamType::I64 && x.fract() == 0.0 && x.abs() < 9.2e18 {
+                format!("{}", x as i64)
+            } else {
+                format!("{x:?}")
+            }
+        };
         match (self.min, self.max) {
-            (Some(lo), Some(hi)) => format!("{what} in [{lo:?}, {hi:?}]"),
-            (Some(lo), None) => format!("{what} ≥ {lo:?}"),
-            (None, Some(hi)) => format!("{what} ≤ {hi:?}"),
+            (Some(lo), Some(hi)) => format!("{what} in [{}, {}]", bound(lo), bound(hi)),
+            (Some(lo), None) => format!("{what} ≥ {}", bound(lo)),
+            (None, Some(hi)) => format!("{what} ≤ {}", bound(hi)),
             // Unbounded, a parameter still has its type's range.
             (None, None) if self.ty == ParamType::I64 => format!("{what} from {} to {}", i64::MIN, i64::MAX),
             (None, None) => "a finite number".to_string(),
@@ -299,6 +307,18 @@ impl SkillDecl {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_integers_bounds_read_as_integers_and_a_numbers_as_numbers() {
+        let int = |lo, hi| ParamSpec::new("n", ParamType::I64, Value::I64(3)).range(lo, hi).expectation();
+        assert_eq!(int(Some(1.0), Some(100.0)), "an integer in [1, 100]");
+        assert_eq!(int(Some(-5.0), None), "an integer ≥ -5");
+        assert_eq!(int(None, Some(7.0)), "an integer ≤ 7");
+        // A bound that is not a whole number (a hand-written manifest's) is shown as it is.
+        assert_eq!(int(Some(0.5), None), "an integer ≥ 0.5");
+        let num = ParamSpec::new("x", ParamType::F64, Value::F64(1.0)).range(Some(0.0), Some(3.0));
+        assert_eq!(num.expectation(), "a number in [0.0, 3.0]");
+    }
 
     #[test]
     fn a_number_out_of_range_is_refused_with_the_range_named() {
