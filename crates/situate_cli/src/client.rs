@@ -767,7 +767,8 @@ fn client_problem(e: &ClientError) -> anyhow::Error {
         ClientError::NoAnswer { .. }
         | ClientError::TimedOut { .. }
         | ClientError::NotReachable { .. }
-        | ClientError::Ambiguous(_) => Problem::new(Exit::NoRobot, e.to_string()).said_by_situate(),
+        | ClientError::Ambiguous(_)
+        | ClientError::OtherRobots { .. } => Problem::new(Exit::NoRobot, e.to_string()).said_by_situate(),
         other => Problem::new(Exit::Failure, other.to_string()).said_by_situate(),
     };
     p.into()

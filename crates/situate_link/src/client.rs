@@ -55,8 +55,23 @@ pub enum ClientError {
     NotReachable { endpoints: String, detail: String },
     #[error("several robots answered ({0}); name one with --robot")]
     Ambiguous(String),
+    /// The robot named did not answer, and others did: most likely a misspelt name.
+    #[error("robot `{robot}` did not answer; {} (name it with --robot)", answering_text(answering))]
+    OtherRobots { robot: String, answering: Vec<String> },
     #[error("a reply that is not the protocol's JSON: {0}")]
     BadReply(String),
+}
+
+/// How long a robot named with `--robot` is waited for once others have answered `hello`.
+pub const NAMED_GRACE: Duration = Duration::from_secs(1);
+
+/// `robot `a` did` / `robots `a`, `b` did`.
+fn answering_text(robots: &[String]) -> String {
+    let names: Vec<String> = robots.iter().map(|r| format!("`{r}`")).collect();
+    match names.as_slice() {
+        [one] => format!("robot {one} did"),
+        _ => format!("robots {} did", names.join(", ")),
+    }
 }
 
 /// A duration as a person writes it: `5 s`, `0.5 s`.
@@ -210,7 +225,13 @@ impl Client {
     /// Asks until one answers or the timeout (at most 2 s) is over, as [`Client::request`]
     /// asks again a robot that is still starting.
     pub fn robots(&self) -> Result<Vec<String>, ClientError> {
-        let deadline = Instant::now() + self.timeout.min(Duration::from_secs(2));
+        self.robots_until(|found| !found.is_empty(), self.timeout.min(Duration::from_secs(2)))
+    }
+
+    /// Asks `hello` of every robot until `enough` holds for those that answered, or `limit` is
+    /// over; the robots that answered, sorted.
+    fn robots_until(&self, enough: impl Fn(&[String]) -> bool, limit: Duration) -> Result<Vec<String>, ClientError> {
+        let deadline = Instant::now() + limit;
         loop {
             let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1));
             let replies = self
@@ -229,9 +250,9 @@ impl Client {
                     }
                 }
             }
-            if !robots.is_empty() || Instant::now() >= deadline {
-                robots.sort();
-                robots.dedup();
+            robots.sort();
+            robots.dedup();
+            if enough(&robots) || Instant::now() >= deadline {
                 return Ok(robots);
             }
             std::thread::sleep(RETRY.min(left));
@@ -239,9 +260,25 @@ impl Client {
     }
 
     /// The robot to talk to: `name` if given, else the only one answering.
+    ///
+    /// A name given is checked against the robots that answer `hello`, as [`Client::robots`]
+    /// asks (nothing when it answers at once): when others answer and it still does not a second
+    /// later ([`NAMED_GRACE`]: a robot just starting), the error names them
+    /// ([`ClientError::OtherRobots`]) instead of a request waiting the whole timeout for nobody.
+    /// When nobody answers, the name is taken as it is (a robot still starting, or access rules
+    /// that hide the others): the request then waits for it.
     pub fn resolve_robot(&self, name: Option<&str>) -> Result<String, ClientError> {
         if let Some(n) = name {
-            return Ok(n.to_string());
+            let named = |found: &[String]| found.iter().any(|r| r == n);
+            let first = self.robots_until(|found| !found.is_empty(), self.timeout.min(Duration::from_secs(2)))?;
+            if first.is_empty() || named(&first) {
+                return Ok(n.to_string());
+            }
+            let answering = self.robots_until(named, NAMED_GRACE)?;
+            if answering.is_empty() || named(&answering) {
+                return Ok(n.to_string());
+            }
+            return Err(ClientError::OtherRobots { robot: n.to_string(), answering });
         }
         let robots = self.robots()?;
         match robots.len() {

@@ -71,6 +71,14 @@ fn requests_and_errors_travel_over_zenoh() {
     let r = start(ClockKind::Wall);
     let c = client(&r);
     assert_eq!(c.resolve_robot(None).unwrap(), "linkbot");
+    assert_eq!(c.resolve_robot(Some("linkbot")).unwrap(), "linkbot");
+    // A name nobody answers to, with another robot there: the error names the one that answered.
+    match c.resolve_robot(Some("otherbot")) {
+        Err(e @ ClientError::OtherRobots { .. }) => {
+            assert_eq!(e.to_string(), "robot `otherbot` did not answer; robot `linkbot` did (name it with --robot)")
+        }
+        other => panic!("expected OtherRobots, got {other:?}"),
+    }
     let hello = c.request("linkbot", "hello", &json!({})).unwrap();
     assert_eq!(hello["protocol"], 1);
     let (kind, msg) = remote_err(c.request("linkbot", "activate", &json!({"skills": ["wandr"]})).unwrap_err());
