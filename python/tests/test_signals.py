@@ -200,6 +200,8 @@ def test_ctrl_c_at_a_terminal_stops_the_demo_with_its_outcome() -> None:
         code, out, err = demo.finish()
     assert code == 130, out + err
     assert "demo: interrupted (SIGINT) at t = " in out, out
+    # Said once, by the demo: not again by the sequencer, with its own time.
+    assert out.count("interrupted (") == 1, out
     assert "in phase 1 (wandering about the lab" in out, out
     assert "message not delivered" in out
     assert "Traceback" not in out + err
@@ -212,6 +214,7 @@ def test_sigterm_to_the_demo_stops_its_sequencer() -> None:
         demo.process.send_signal(signal.SIGTERM)  # to `situate` only: it tells the sequencer
         code, out, err = demo.finish()
     assert code == 143, out + err
-    assert "interrupted (SIGTERM) in phase 1 (wandering" in out, out  # the sequencer's line
     assert "demo: interrupted (SIGTERM) at t = " in out, out
+    assert "in phase 1 (wandering" in out, out
+    assert out.count("interrupted (") == 1, out
     assert "Traceback" not in out + err

@@ -470,10 +470,26 @@ fn relay_lines(out: impl std::io::Read, noted: &std::sync::Mutex<Noted>) {
                 n.failure = Some(text[at + "mission failed: ".len()..].trim_end().to_string());
             }
         }
+        // The sequencer's own "interrupted" line: the demo says it once, after, with the
+        // simulator's time (the sequencer's is the last it read) and the signal that came first.
+        if is_interruption(&text) {
+            continue;
+        }
         let mut stdout = std::io::stdout().lock();
         let _ = stdout.write_all(&line);
         let _ = stdout.flush();
     }
+}
+
+/// Whether a sequencer's line says it was interrupted: `[  20.2 s] interrupted (SIGINT) …` or
+/// `interrupted (SIGINT) before the mission started` (demo/deliver.py).
+fn is_interruption(line: &str) -> bool {
+    let line = line.trim_start();
+    let rest = match line.strip_prefix('[') {
+        Some(stamped) => stamped.split_once("] ").map_or("", |(_, rest)| rest),
+        None => line,
+    };
+    rest.starts_with("interrupted (SIG")
 }
 
 /// `N (what it does)` from a narrative line `[  12.3 s] phase N: what it does`.
@@ -483,4 +499,18 @@ fn phase_of(line: &str) -> Option<String> {
     let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
     let text = rest[digits..].strip_prefix(": ")?;
     (digits > 0).then(|| format!("{} ({})", &rest[..digits], text.trim_end()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sequencers_interruption_line_is_known_and_no_other() {
+        assert!(is_interruption("[   20.2 s] interrupted (SIGINT) in phase 1 (wandering), message not delivered\n"));
+        assert!(is_interruption("interrupted (SIGTERM) before the mission started\n"));
+        assert!(!is_interruption("[   20.2 s] phase 1: wandering about the lab\n"));
+        assert!(!is_interruption("[   20.2 s]     said: \"interrupted (SIGINT)\" is what I heard\n"));
+        assert!(!is_interruption("[ unterminated interrupted (SIGINT)\n"));
+    }
 }
