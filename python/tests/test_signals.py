@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import os
 import queue
+import re
 import signal
+import socket
 import subprocess
 import sys
 import textwrap
@@ -218,3 +220,37 @@ def test_sigterm_to_the_demo_stops_its_sequencer() -> None:
     assert "in phase 1 (wandering" in out, out
     assert out.count("interrupted (") == 1, out
     assert "Traceback" not in out + err
+
+
+def test_the_demo_is_reached_by_the_cli_where_it_says_with_listen_or_without() -> None:
+    # --listen: where the CLI reaches the demo's robot.
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    args = ("demo", "--python", sys.executable, "--gui", "127.0.0.1:0", "--speed", "1")
+    with Program(*args, "--listen", endpoint, session=True) as demo:
+        demo.wait_for("phase 1: wandering about the lab")
+        stats = situate("stats", "--connect", endpoint)
+        assert stats.returncode == 0, stats.stderr
+        assert stats.stdout.startswith("robot `deliverybot`: cycle ")
+        os.killpg(demo.process.pid, signal.SIGINT)
+        assert demo.finish()[0] == 130
+    # Without it, the CLI's default endpoint; held by another, a free port, said at the start.
+    held = socket.socket()
+    try:
+        held.bind(("127.0.0.1", 7447))
+        held.listen()
+    except OSError:
+        pass  # someone else holds it: as good
+    try:
+        with Program(*args, session=True) as demo:
+            demo.wait_for("the link listens on")
+            note = next(line for line in demo.err if "the link listens on" in line)
+            found = re.search(r"`--connect (tcp/127\.0\.0\.1:\d+)`", note)
+            assert found, note
+            assert "tcp/127.0.0.1:7447 is taken" in note, note
+            demo.wait_for("phase 1: wandering about the lab")
+            stats = situate("stats", "--connect", found.group(1))
+            assert stats.returncode == 0, stats.stderr
+            os.killpg(demo.process.pid, signal.SIGINT)
+            assert demo.finish()[0] == 130
+    finally:
+        held.close()

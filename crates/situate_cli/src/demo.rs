@@ -74,6 +74,11 @@ pub(crate) struct DemoOptions {
     /// (docs/recording.md).
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
+    /// The link's endpoint, where `situate stats`, `situate echo`… reach the demo's robot.
+    /// Default: the one they connect to by default (tcp/127.0.0.1:7447), or, when another
+    /// robot holds it, a free port (said at the start); headless, a free port.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub(crate) listen: Option<String>,
 }
 
 /// A free TCP port on the loopback interface.
@@ -142,11 +147,18 @@ fn interpreter(demo: &DemoOptions, ext: &Extensions) -> PathBuf {
 
 pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
     let (robot_file, sequencer) = demo_files(demo, ext)?;
-    let port = free_port()?;
-    let endpoint = format!("tcp/127.0.0.1:{port}");
+    // With the GUI, a person watches: the CLI's default endpoint, so that `situate stats` and
+    // the rest reach the robot with no port to copy. Headless, many runs may go at once (the
+    // experiment, the tests): a free port each.
+    let (listen, listen_fallback) = match (&demo.listen, demo.headless) {
+        (Some(given), _) => (given.clone(), false),
+        (None, false) => (situate_link::DEFAULT_ENDPOINT.to_string(), true),
+        (None, true) => (format!("tcp/127.0.0.1:{}", free_port()?), false),
+    };
     let opts = RunOptions {
         clock: Some("simulated".into()),
-        listen: vec![endpoint.clone()],
+        listen: vec![listen],
+        listen_fallback,
         sim: SimOverrides { map: demo.map.clone(), seed: Some(demo.seed), world: demo.world.clone() },
         speed: if demo.headless { None } else { Some(demo.speed) },
         stopped: true,
@@ -176,6 +188,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
             return Err(problem(Exit::Usage, format!("--task: {e}")));
         }
     };
+    let endpoint = running.listen.join(",");
     let faults = FaultLog::start(&running.handle);
     let python = interpreter(demo, ext);
     let started = Instant::now();

@@ -205,6 +205,9 @@ pub(crate) struct RunOptions {
     pub(crate) clock: Option<String>,
     pub(crate) no_link: bool,
     pub(crate) listen: Vec<String>,
+    /// When `listen` cannot be opened (another robot holds the port), listen on a free loopback
+    /// port instead, and say so ([`Running::listen`] is where): `situate demo`'s default.
+    pub(crate) listen_fallback: bool,
     pub(crate) sim: SimOverrides,
     /// Pacing of the simulated clock (× real time).
     pub(crate) speed: Option<f64>,
@@ -236,6 +239,8 @@ pub(crate) struct Running {
     pub(crate) gui: Option<situate_gui::GuiServer>,
     pub(crate) sim: Option<Simulation>,
     pub(crate) robot: String,
+    /// The endpoints the link listens on (empty without one).
+    pub(crate) listen: Vec<String>,
     /// `--record`: ended after the manager, with what it holds.
     pub(crate) recorder: Option<situate_record::Recorder>,
     /// The link's `record` request: a recording it started is ended after
@@ -365,7 +370,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     let session = if opts.no_link {
         None
     } else {
-        let opened = Link::open(&link).map_err(|e| {
+        let refused = |link: &LinkConfig, e: &dyn std::fmt::Display| {
             problem(
                 Exit::Failure,
                 format!(
@@ -374,7 +379,27 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
                     crate::output::clean(&format!("{e:#}"))
                 ),
             )
-        })?;
+        };
+        let opened = match Link::open(&link) {
+            Ok(opened) => opened,
+            Err(e) if opts.listen_fallback => {
+                let taken = link.listen.join(", ");
+                let port = std::net::TcpListener::bind("127.0.0.1:0")
+                    .and_then(|l| l.local_addr())
+                    .map_err(|e| problem(Exit::Failure, format!("finding a free port for the link: {e}")))?
+                    .port();
+                link.listen = vec![format!("tcp/127.0.0.1:{port}")];
+                tracing::debug!(error = %e, "the link's endpoint is taken");
+                let opened = Link::open(&link).map_err(|e| refused(&link, &e))?;
+                out.note(format_args!(
+                    "{taken} is taken (another robot?): the link listens on {} instead (`--connect {}`)",
+                    link.listen.join(", "),
+                    link.listen.join(",")
+                ));
+                opened
+            }
+            Err(e) => return Err(refused(&link, &e)),
+        };
         Some(opened)
     };
     if let Some(session) = &session {
@@ -426,6 +451,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
         gui: None,
         sim,
         robot: spec.robot.clone(),
+        listen: if opts.no_link { Vec::new() } else { link.listen.clone() },
         recorder,
         link_recorder: None,
     };
@@ -570,6 +596,7 @@ pub(crate) fn run_robot(args: RunArgs, ext: &Extensions, out: Out) -> anyhow::Re
         clock,
         no_link,
         listen,
+        listen_fallback: false,
         sim: SimOverrides { map, seed, world },
         speed,
         stopped: false,
