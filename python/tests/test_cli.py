@@ -36,7 +36,11 @@ def test_check_and_types_work_offline() -> None:
     result = situate("check", str(TOYBOT))
     assert result.returncode == 0, result.stderr
     assert "ok — robot `toybot`" in result.stdout
-    assert "toy.runaway" in situate("types").stdout
+    types = situate("types").stdout
+    assert "toy.runaway" in types
+    # The simulator's devices too, with their ports and parameters.
+    assert "sim.sonar (device, priority 0)" in types
+    assert "param cone_deg: f64" in types
 
 
 @pytest.mark.parametrize(
@@ -102,6 +106,10 @@ def test_param_get_and_set(toybot: Manager) -> None:
     unknown = situate("param", "get", "runaway", "safe_distanc", *toybot.connect_args)
     assert unknown.returncode == 5
     assert "did you mean `safe_distance`" in unknown.stderr
+    # Nothing close: the parameters there are.
+    far_off = situate("param", "get", "runaway", "range", *toybot.connect_args)
+    assert far_off.returncode == 5
+    assert "unknown parameter `range` (its parameters: `safe_distance`, `speed`)" in far_off.stderr
 
 
 def test_query(toybot: Manager) -> None:

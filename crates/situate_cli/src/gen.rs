@@ -91,8 +91,13 @@ pub(crate) fn decl_json(d: &situate_core::SkillDecl) -> Json {
 
 /// `situate types`.
 pub(crate) fn types(registry: &Registry, out: Out) {
-    let decls: Vec<&situate_core::SkillDecl> =
+    // The simulator's devices too: they are registered only for a robot file with a
+    // `simulator:` section (they need its world), but a person choosing types needs to see them.
+    let sim = situate_sim::declarations();
+    let mut decls: Vec<&situate_core::SkillDecl> =
         registry.names().filter_map(|n| registry.get(n)).map(|t| &*t.decl).collect();
+    decls.extend(sim.iter().filter(|d| registry.get(&d.type_name).is_none()));
+    decls.sort_by(|a, b| a.type_name.cmp(&b.type_name));
     out.result(&Json::Array(decls.iter().map(|d| decl_json(d)).collect()), || {
         use std::fmt::Write as _;
         let mut text = String::new();

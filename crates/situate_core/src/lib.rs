@@ -11,7 +11,7 @@ pub mod types;
 pub mod value;
 
 pub use decl::{ParamSpec, ParamType, ParamValue, ParamValueError, PortSpec, SkillDecl, SkillKind};
-pub use names::{did_you_mean, suggestion};
+pub use names::{did_you_mean, param_suggestion, suggestion};
 pub use skill::{Body, Context, Declare, FnSkill, Io, Skill, SkillError, SkillMaker, SkillType};
 pub use types::{ElemType, RecordType, SignalType, TypeParseError};
 pub use value::{record_type, record_value, RecordValue, SignalValue, Value, ValueRef};

@@ -28,6 +28,24 @@ where
     did_you_mean(name, candidates).map(|c| format!(" — did you mean `{c}`?")).unwrap_or_default()
 }
 
+/// For an unknown parameter: `" — did you mean `x`?"` when one is close, else the parameters
+/// there are (`" (its parameters: `a`, `b`)"`, or `" (it has no parameters)"`), so that the
+/// message always says what would be right.
+pub fn param_suggestion<'a, I>(name: &str, params: I) -> String
+where
+    I: IntoIterator<Item = &'a str> + Clone,
+{
+    if let Some(close) = did_you_mean(name, params.clone()) {
+        return format!(" — did you mean `{close}`?");
+    }
+    let all: Vec<String> = params.into_iter().map(|p| format!("`{p}`")).collect();
+    if all.is_empty() {
+        " (it has no parameters)".to_string()
+    } else {
+        format!(" (its parameters: {})", all.join(", "))
+    }
+}
+
 /// Edit distance over chars counting a swap of two neighbours as one edit
 /// (optimal string alignment), so `levle` is one edit from `level`.
 pub fn edit_distance(a: &str, b: &str) -> usize {
@@ -56,6 +74,14 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_unknown_parameter_gets_the_close_one_or_the_list() {
+        let params = ["safe_distance", "speed"];
+        assert_eq!(param_suggestion("safe_distnce", params), " — did you mean `safe_distance`?");
+        assert_eq!(param_suggestion("x", params), " (its parameters: `safe_distance`, `speed`)");
+        assert_eq!(param_suggestion("x", []), " (it has no parameters)");
+    }
 
     #[test]
     fn suggests_close_names_only() {

@@ -259,7 +259,7 @@ impl Graph {
                             "skill `{}`: unknown parameter `{}`{}",
                             s.name,
                             entry.name,
-                            suggestion(&entry.name, decl.params.iter().map(|p| p.name.as_str()))
+                            situate_core::param_suggestion(&entry.name, decl.params.iter().map(|p| p.name.as_str()))
                         ),
                     ),
                     Some((i, p)) => match p.check(&entry.value) {

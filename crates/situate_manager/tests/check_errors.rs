@@ -174,7 +174,7 @@ skills:
         [
             "robot.yaml:5:27: error: skill `ranger2`: `test.ranger` is a device (dskill); list it under `devices:`, not `skills:`",
             "robot.yaml:6:25: error: skill `servo`: `test.servo` is a device (dskill); list it under `devices:`, not `skills:`",
-            "robot.yaml:6:46: error: skill `servo`: unknown parameter `x`",
+            "robot.yaml:6:46: error: skill `servo`: unknown parameter `x` (it has no parameters)",
         ]
     );
 }

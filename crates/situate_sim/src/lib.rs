@@ -20,5 +20,5 @@ pub mod task;
 pub mod world;
 
 pub use map::{load_map, Map, MapError};
-pub use skills::{register, registry, SharedWorld};
+pub use skills::{declarations, register, registry, SharedWorld};
 pub use world::{BaseLimits, SonarSettings, World, WorldConfig};

@@ -311,6 +311,20 @@ pub fn register(registry: &mut Registry, world: SharedWorld) {
         .add(typed::<SimTruth>(&world, |s, w| s.world = Some(w)));
 }
 
+/// The sim dskill types' declarations (ports, parameters, documentation), without a world: what
+/// `situate types` lists. They run only in a robot file with a `simulator:` section.
+pub fn declarations() -> Vec<situate::SkillDecl> {
+    vec![
+        SimSonar::declaration(),
+        SimBase::declaration(),
+        SimBarcode::declaration(),
+        SimArm::declaration(),
+        SimSpeaker::declaration(),
+        SimAltimeter::declaration(),
+        SimTruth::declaration(),
+    ]
+}
+
 /// A registry holding the sim dskills over `world`.
 pub fn registry(world: SharedWorld) -> Registry {
     let mut r = Registry::new();

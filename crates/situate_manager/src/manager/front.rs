@@ -45,7 +45,7 @@ pub(crate) fn find_param(graph: &Graph, skill: &str, param: &str) -> Result<(usi
         None => Err(ControlError::UnknownParam {
             skill: skill.into(),
             param: param.into(),
-            suggestion: suggestion(param, decl.params.iter().map(|p| p.name.as_str())),
+            suggestion: situate_core::param_suggestion(param, decl.params.iter().map(|p| p.name.as_str())),
         }),
     }
 }
