@@ -235,6 +235,8 @@ def test_the_demo_is_reached_by_the_cli_where_it_says_with_listen_or_without() -
         assert demo.finish()[0] == 130
     # Without it, the CLI's default endpoint; held by another, a free port, said at the start.
     held = socket.socket()
+    # As servers do (Zenoh too): a connection of an earlier run in TIME_WAIT does not stop it.
+    held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:
         held.bind(("127.0.0.1", 7447))
         held.listen()

@@ -106,8 +106,9 @@ fn stats_on_a_stuck_robot_says_so_in_a_sentence() {
 #[test]
 fn a_robot_nobody_serves_is_said_in_a_sentence() {
     let robot = StuckRobot::start();
-    let err = sentence(&situate(&["stats", "--robot", "nobody", "--connect", &robot.endpoint, "--timeout", "1"]));
-    // Another robot answers there: the sentence names it (the name given was likely misspelt).
+    // Another robot answers there: the sentence names it (the name given was likely misspelt),
+    // a second after nobody served the name (the timeout only bounds the wait).
+    let err = sentence(&situate(&["stats", "--robot", "nobody", "--connect", &robot.endpoint, "--timeout", "30"]));
     assert_eq!(err, "situate: robot `nobody` did not answer; robot `stuck` did (name it with --robot)");
 }
 

@@ -62,7 +62,8 @@ pub enum ClientError {
     BadReply(String),
 }
 
-/// How long a robot named with `--robot` is waited for once others have answered `hello`.
+/// How long a request finds nobody serving its robot's key before [`Client::request`] asks
+/// which robots do answer (a robot still starting declares its keys within this).
 pub const NAMED_GRACE: Duration = Duration::from_secs(1);
 
 /// `robot `a` did` / `robots `a`, `b` did`.
@@ -156,6 +157,12 @@ impl Client {
         // did not answer ends it with a `Timeout` reply instead, never asked again.
         let deadline = Instant::now() + self.timeout;
         let mut retried = false;
+        // Nobody serving the key a while (`NAMED_GRACE`): are other robots there? Then the name
+        // is likely misspelt, and the error names them at once instead of waiting out the
+        // timeout for a robot that is not coming. Asked once; a robot still starting beside
+        // none other is still waited for.
+        let mut others_asked = false;
+        let since = Instant::now();
         let (replies, reply) = loop {
             let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(1));
             let replies = self
@@ -169,6 +176,14 @@ impl Client {
                 Ok(reply) => break (replies, reply),
                 Err(_) if Instant::now() < deadline => {
                     retried = true;
+                    if !others_asked && since.elapsed() >= NAMED_GRACE {
+                        others_asked = true;
+                        let left = deadline.saturating_duration_since(Instant::now());
+                        let answering = self.robots_until(|found| !found.is_empty(), left)?;
+                        if !answering.is_empty() && !answering.iter().any(|r| r == robot) {
+                            return Err(ClientError::OtherRobots { robot: robot.into(), answering });
+                        }
+                    }
                     std::thread::sleep(RETRY.min(left))
                 }
                 Err(_) => return Err(self.no_answer(&key)),
@@ -260,25 +275,9 @@ impl Client {
     }
 
     /// The robot to talk to: `name` if given, else the only one answering.
-    ///
-    /// A name given is checked against the robots that answer `hello`, as [`Client::robots`]
-    /// asks (nothing when it answers at once): when others answer and it still does not a second
-    /// later ([`NAMED_GRACE`]: a robot just starting), the error names them
-    /// ([`ClientError::OtherRobots`]) instead of a request waiting the whole timeout for nobody.
-    /// When nobody answers, the name is taken as it is (a robot still starting, or access rules
-    /// that hide the others): the request then waits for it.
     pub fn resolve_robot(&self, name: Option<&str>) -> Result<String, ClientError> {
         if let Some(n) = name {
-            let named = |found: &[String]| found.iter().any(|r| r == n);
-            let first = self.robots_until(|found| !found.is_empty(), self.timeout.min(Duration::from_secs(2)))?;
-            if first.is_empty() || named(&first) {
-                return Ok(n.to_string());
-            }
-            let answering = self.robots_until(named, NAMED_GRACE)?;
-            if answering.is_empty() || named(&answering) {
-                return Ok(n.to_string());
-            }
-            return Err(ClientError::OtherRobots { robot: n.to_string(), answering });
+            return Ok(n.to_string());
         }
         let robots = self.robots()?;
         match robots.len() {

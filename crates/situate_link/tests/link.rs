@@ -71,9 +71,8 @@ fn requests_and_errors_travel_over_zenoh() {
     let r = start(ClockKind::Wall);
     let c = client(&r);
     assert_eq!(c.resolve_robot(None).unwrap(), "linkbot");
-    assert_eq!(c.resolve_robot(Some("linkbot")).unwrap(), "linkbot");
-    // A name nobody answers to, with another robot there: the error names the one that answered.
-    match c.resolve_robot(Some("otherbot")) {
+    // A name nobody serves, with another robot there: the error names the one that answered.
+    match c.request("otherbot", "stats", &json!({})) {
         Err(e @ ClientError::OtherRobots { .. }) => {
             assert_eq!(e.to_string(), "robot `otherbot` did not answer; robot `linkbot` did (name it with --robot)")
         }
