@@ -81,12 +81,6 @@ pub(crate) struct DemoOptions {
     pub(crate) listen: Option<String>,
 }
 
-/// A free TCP port on the loopback interface.
-fn free_port() -> anyhow::Result<u16> {
-    let l = std::net::TcpListener::bind("127.0.0.1:0").context("finding a free port")?;
-    Ok(l.local_addr()?.port())
-}
-
 /// Where the demo's files may be: `demo/` in the current directory (a
 /// checkout), then the host's package data (the wheel ships `demo/`,
 /// `maps/` and `examples/`), then the data of the published crate this
@@ -153,7 +147,7 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     let (listen, listen_fallback) = match (&demo.listen, demo.headless) {
         (Some(given), _) => (given.clone(), false),
         (None, false) => (situate_link::DEFAULT_ENDPOINT.to_string(), true),
-        (None, true) => (format!("tcp/127.0.0.1:{}", free_port()?), false),
+        (None, true) => (crate::robot::free_loopback_endpoint()?, false),
     };
     let opts = RunOptions {
         clock: Some("simulated".into()),

@@ -197,6 +197,15 @@ pub(crate) fn check(file: &Path, compose: &Compose, ext: &Extensions, out: Out) 
     Ok(())
 }
 
+/// A link endpoint on a free TCP port of the loopback interface (`tcp/127.0.0.1:PORT`).
+pub(crate) fn free_loopback_endpoint() -> anyhow::Result<String> {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map_err(|e| problem(Exit::Failure, format!("finding a free port for the link: {e}")))?
+        .port();
+    Ok(format!("tcp/127.0.0.1:{port}"))
+}
+
 /// How to run a robot file: the command line's overrides.
 #[derive(Default, Clone)]
 pub(crate) struct RunOptions {
@@ -384,11 +393,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
             Ok(opened) => opened,
             Err(e) if opts.listen_fallback => {
                 let taken = link.listen.join(", ");
-                let port = std::net::TcpListener::bind("127.0.0.1:0")
-                    .and_then(|l| l.local_addr())
-                    .map_err(|e| problem(Exit::Failure, format!("finding a free port for the link: {e}")))?
-                    .port();
-                link.listen = vec![format!("tcp/127.0.0.1:{port}")];
+                link.listen = vec![free_loopback_endpoint()?];
                 tracing::debug!(error = %e, "the link's endpoint is taken");
                 let opened = Link::open(&link).map_err(|e| refused(&link, &e))?;
                 out.note(format_args!(
