@@ -4,7 +4,7 @@ export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-rust test-python test-gui python gui lint bench system-deps
+.PHONY: help demo test test-rust test-python test-gui python gui lint fmt build prepare bench system-deps
 
 help: ## Show the targets.
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
@@ -22,12 +22,27 @@ system-deps: ## Install the system tools the tests use (iproute2), when missing.
 # workspace's target folder with the workspace's features, so it reuses what clippy compiled there.
 EXTENSION := --manifest-path examples/rust/extension/Cargo.toml
 
-lint: ## Formatting and lints: rustfmt, clippy -D warnings.
-	$(CARGO) fmt --all -- --check
-	$(CARGO) fmt $(EXTENSION) -- --check
+lint: fmt ## Formatting and lints: rustfmt, clippy -D warnings.
 	$(CARGO) clippy --workspace --all-targets --locked -- -D warnings
 	$(CARGO) clippy $(EXTENSION) --all-targets --locked --features workspace-features \
 		--target-dir "$${CARGO_TARGET_DIR:-target}" -- -D warnings
+
+fmt: ## Formatting: rustfmt --check (the workspace and the extension example).
+	$(CARGO) fmt --all -- --check
+	$(CARGO) fmt $(EXTENSION) -- --check
+
+# `make test`'s compile: every target of the workspace (tests, benches, examples) and the extension
+# example, each compiled once. Under scripts/test.sh, which sets clippy-driver as the workspace's
+# compiler, this is also the lint (`make lint`'s clippy) without a second, check-only compile.
+build: ## Compile every test target (under `make test`: with clippy's lints as errors).
+	$(CARGO) test --workspace --locked --no-run
+	$(CARGO) test --workspace --benches --locked --no-run
+	CARGO_INCREMENTAL=0 $(CARGO) build $(EXTENSION) --locked --features workspace-features \
+		--target-dir "$${CARGO_TARGET_DIR:-target}"
+
+prepare: ## Install the tools the tests download: the Python tools in .venv, Chromium.
+	scripts/python.sh tools
+	scripts/gui.sh chromium
 
 test-rust: ## The Rust tests (unit, integration, property, doc; tests/extension.rs builds examples/rust/extension).
 	$(CARGO) test --workspace --locked

@@ -2,9 +2,10 @@
 # The debugging GUI: build the web app (web/dist, embedded by crates/situate_gui), and test it in a
 # real browser.
 #
-#   scripts/gui.sh build   npm install when needed, then type-check and build web/dist
-#   scripts/gui.sh test    build, then build the testbed and the `situate` CLI, install Debian's
-#                          chromium when /usr/bin/chromium is missing, and run the browser tests
+#   scripts/gui.sh build     npm install when needed, then type-check and build web/dist
+#   scripts/gui.sh chromium  install Debian's chromium when /usr/bin/chromium is missing
+#   scripts/gui.sh test      build, then build the testbed and the `situate` CLI, install Debian's
+#                            chromium when /usr/bin/chromium is missing, and run the browser tests
 #
 # Respects CARGO_TARGET_DIR. Fails loudly (non-zero exit) on any failure.
 set -euo pipefail
@@ -36,8 +37,21 @@ npm_ready() {
     fi
 }
 
+# web/dist is newer than every file it is built from (and the tests the type-check covers).
+web_built() {
+    [ -f web/dist/index.html ] || return 1
+    [ -z "$(find web/src web/tests web/index.html web/package.json web/package-lock.json \
+        web/tsconfig.json web/vite.config.ts -newer web/dist/index.html -print -quit)" ]
+}
+
 build_web() {
     npm_ready
+    # Not built again when up to date: a new web/dist recompiles the crates that embed it (and
+    # under `make test` the stages that run side by side would race over that).
+    if web_built; then
+        echo "gui.sh: web/dist is up to date"
+        return
+    fi
     echo "gui.sh: building web/dist"
     (cd web && npm run build)
     [ -f web/dist/index.html ] || die "web/dist/index.html was not built"
@@ -62,6 +76,9 @@ case "$ACTION" in
     build)
         build_web
         ;;
+    chromium)
+        install_chromium
+        ;;
     test)
         build_web
         install_chromium
@@ -76,6 +93,6 @@ case "$ACTION" in
         (cd web && npm test)
         ;;
     *)
-        die "usage: scripts/gui.sh [build|test]"
+        die "usage: scripts/gui.sh [build|chromium|test]"
         ;;
 esac

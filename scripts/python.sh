@@ -5,6 +5,7 @@
 #
 #   scripts/python.sh          set up and install
 #   scripts/python.sh test     ... then ruff, mypy (strict) and pytest
+#   scripts/python.sh tools    only .venv and the tools (what `make test` downloads while it compiles)
 #
 # Environment: PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
 # SITUATE_PY_PROFILE=release|debug (default: release to install, debug under `test`, where it
@@ -36,6 +37,8 @@ if [[ ! -f $stamp || "$(cat "$stamp")" != "${TOOLS[*]}" ]]; then
     "$VENV/bin/python" -m pip install -q --disable-pip-version-check "${TOOLS[@]}"
     printf '%s' "${TOOLS[*]}" >"$stamp"
 fi
+
+[[ ${1:-} == tools ]] && exit 0
 
 # 2. The wheel (abi3: one wheel for CPython 3.9+), installed like any user's. Its package data
 #    (the demo, the maps and the examples, for `situate demo` anywhere) is copied in first.

@@ -1,14 +1,37 @@
 #!/usr/bin/env bash
-# `make test`: every stage in order, one line per stage with how long it took, and the total.
-# A failing stage stops the run (later stages are listed as not run) and the exit code is its own.
+# `make test`: every stage, one line per stage with how long it took, and the total.
 #
-#   scripts/test.sh [stage...]    the stages default to all of them, in this order
+#   scripts/test.sh               the whole plan below
+#   scripts/test.sh stage...      only these stages, one after the other, in the order given
+#
+# The plan, on a 2-core machine where compiling is most of the time:
+#   1. system-deps, gui, fmt, build: one after the other. `build` compiles every target once with
+#      clippy's lints as errors (clippy-driver as the workspace's compiler, see LINTED below), so
+#      linting costs no second, check-only compile of the whole tree.
+#   2. prepare (the Python tools, Chromium): downloads, in the background while 1 compiles.
+#   3. test-rust, test-python, test-gui: side by side once 1 and 2 are done. Each writes its output
+#      to target/test-logs/<stage>.log; a failed stage's log is printed whole.
+# A failing stage stops the stages not yet started (they are listed as not run) and the exit code
+# is the first failure's own.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-STAGES=("$@")
-[ ${#STAGES[@]} -gt 0 ] || STAGES=(system-deps gui lint test-rust test-python test-gui)
 MAKE=${MAKE:-make}
+LOGS=${CARGO_TARGET_DIR:-target}/test-logs
+
+# clippy-driver as the compiler of the workspace's own crates, with clippy's arguments: what
+# `cargo clippy -- -D warnings` sets for `cargo check`, here for the real build. Every stage gets
+# it, so each reuses what `build` compiled (cargo keeps builds with and without it apart).
+# Without clippy-driver the whole plan refuses to run (its `build` would lint nothing); stages named
+# one by one run without it.
+PATH="${HOME:+$HOME/.cargo/bin:}$PATH"
+if driver=$(command -v clippy-driver); then
+    export RUSTC_WORKSPACE_WRAPPER=$driver
+    export CLIPPY_ARGS=-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__
+elif [ $# -eq 0 ]; then
+    echo "make test: clippy-driver is missing (rustup component add clippy)" >&2
+    exit 1
+fi
 
 fmt() { # seconds -> "1m05s" / "42s"
     local s=$1
@@ -23,39 +46,109 @@ tracked_state() {
 }
 tracked_before=$(tracked_state)
 
-lines=()
+declare -A line_of=()
+order=()
 status=0
 start=$SECONDS
-for stage in "${STAGES[@]}"; do
+
+record() { # stage rc seconds
+    local stage=$1 rc=$2 took
+    took=$(fmt "$3")
+    if [ "$rc" -eq 0 ]; then
+        line_of[$stage]=$(printf '  %-12s ok      %s' "$stage" "$took")
+    else
+        line_of[$stage]=$(printf '  %-12s FAILED  %s (exit %d)' "$stage" "$took" "$rc")
+        [ "$status" -ne 0 ] || status=$rc
+    fi
+    echo "==> make test:${line_of[$stage]}"
+}
+
+not_run() {
+    local stage
+    for stage in "$@"; do
+        order+=("$stage")
+        line_of[$stage]=$(printf '  %-12s not run' "$stage")
+    done
+}
+
+# A stage in the foreground, its output as it comes.
+run() {
+    local stage=$1 t0=$SECONDS rc
+    order+=("$stage")
     if [ "$status" -ne 0 ]; then
-        lines+=("$(printf '  %-12s not run' "$stage")")
-        continue
+        line_of[$stage]=$(printf '  %-12s not run' "$stage")
+        return
     fi
     echo "==> make test: $stage"
-    t0=$SECONDS
     "$MAKE" --no-print-directory "$stage"
     rc=$?
-    took=$(fmt $((SECONDS - t0)))
-    if [ "$rc" -eq 0 ]; then
-        line=$(printf '  %-12s ok      %s' "$stage" "$took")
+    record "$stage" "$rc" $((SECONDS - t0))
+}
+
+# Stages in the background, each into its log; `collect` waits for them in the order started.
+declare -A pid_of=() t0_of=()
+started=()
+spawn() {
+    local stage=$1 rc
+    order+=("$stage")
+    mkdir -p "$LOGS"
+    rm -f "$LOGS/$stage.end"
+    echo "==> make test: $stage (in the background, output in $LOGS/$stage.log)"
+    t0_of[$stage]=$(date +%s)
+    {
+        "$MAKE" --no-print-directory "$stage" >"$LOGS/$stage.log" 2>&1
+        rc=$?
+        date +%s >"$LOGS/$stage.end" # its own time, not the time until it was collected
+        exit "$rc"
+    } &
+    pid_of[$stage]=$!
+    started+=("$stage")
+}
+collect() {
+    local stage rc
+    for stage in "${started[@]}"; do
+        wait "${pid_of[$stage]}"
+        rc=$?
+        record "$stage" "$rc" $(($(cat "$LOGS/$stage.end" 2>/dev/null || date +%s) - t0_of[$stage]))
+        if [ "$rc" -ne 0 ]; then
+            echo "==> make test: $stage failed; its output ($LOGS/$stage.log):"
+            cat "$LOGS/$stage.log"
+            echo "==> make test: end of $stage's output"
+        fi
+    done
+    started=()
+}
+
+if [ $# -gt 0 ]; then
+    for stage in "$@"; do run "$stage"; done
+else
+    run system-deps
+    if [ "$status" -eq 0 ]; then spawn prepare; else not_run prepare; fi
+    run gui
+    run fmt
+    run build
+    collect # prepare
+    if [ "$status" -eq 0 ]; then
+        spawn test-rust
+        spawn test-python
+        spawn test-gui
+        collect
     else
-        line=$(printf '  %-12s FAILED  %s (exit %d)' "$stage" "$took" "$rc")
-        status=$rc
+        not_run test-rust test-python test-gui
     fi
-    echo "==> make test:${line}"
-    lines+=("$line")
-done
+fi
 
 if [ "$status" -eq 0 ] && [ "$(tracked_state)" != "$tracked_before" ]; then
     echo "make test: the stages changed tracked files of the checkout:" >&2
     git status --short --untracked-files=no >&2
-    lines+=("$(printf '  %-12s FAILED  tracked files changed' checkout)")
+    order+=(checkout)
+    line_of[checkout]=$(printf '  %-12s FAILED  tracked files changed' checkout)
     status=1
 fi
 
 echo
 echo "make test: stages"
-printf '%s\n' "${lines[@]}"
+for stage in "${order[@]}"; do echo "${line_of[$stage]}"; done
 if [ "$status" -eq 0 ]; then
     echo "make test: all green in $(fmt $((SECONDS - start)))"
 else

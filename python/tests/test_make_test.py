@@ -89,3 +89,97 @@ def test_a_stage_that_changes_a_tracked_file_fails_the_run(tmp_path: Path) -> No
     assert dirty.returncode == 1, dirty.stdout
     assert "lock.json" in dirty.stderr
     assert "checkout     FAILED  tracked files changed" in dirty.stdout
+
+
+PLAN = ["system-deps", "prepare", "gui", "fmt", "build", "test-rust", "test-python", "test-gui"]
+
+
+def run_plan(tmp_path: Path, fail: str) -> subprocess.CompletedProcess[str]:
+    """The whole plan (no stages named), with a stand-in `make` and `clippy-driver`.
+
+    The three test stages each wait (with a generous bound) until all three have started, so
+    the plan passes only when they run side by side; the stage named `fail` exits 2.
+    """
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    driver = bin_dir / "clippy-driver"
+    driver.write_text("#!/bin/sh\nexit 0\n")
+    driver.chmod(0o755)
+    started = tmp_path / "started"
+    started.mkdir()
+    make = tmp_path / "make"
+    make.write_text(
+        "#!/usr/bin/env bash\n"
+        'stage="${@: -1}"\n'
+        'echo "running $stage with $RUSTC_WORKSPACE_WRAPPER"\n'
+        'case "$stage" in test-*)\n'
+        f"  touch {started}/$stage\n"
+        "  for _ in $(seq 300); do\n"
+        f'    [ "$(ls {started} | wc -l)" -eq 3 ] && break\n'
+        "    sleep 0.1\n"
+        "  done\n"
+        f'  [ "$(ls {started} | wc -l)" -eq 3 ] || {{ echo "$stage ran alone"; exit 9; }}\n'
+        ";; esac\n"
+        f'[ "$stage" = "{fail}" ] && {{ echo "$stage said no"; exit 2; }}\n'
+        "exit 0\n"
+    )
+    make.chmod(0o755)
+    return subprocess.run(
+        [str(REPO / "scripts" / "test.sh")],
+        env={
+            "PATH": f"{bin_dir}:/usr/bin:/bin",
+            "MAKE": str(make),
+            "CARGO_TARGET_DIR": str(tmp_path / "target"),
+        },
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
+def summary_of(out: subprocess.CompletedProcess[str]) -> dict[str, list[str]]:
+    lines = out.stdout.split("make test: stages\n", 1)[1].splitlines()[:-1]
+    return {line.split()[0]: line.split()[1:] for line in lines}
+
+
+def test_the_plan_runs_the_test_stages_side_by_side_and_prints_a_failed_ones_output(
+    tmp_path: Path,
+) -> None:
+    out = run_plan(tmp_path, fail="test-python")
+    assert out.returncode == 2, out.stdout + out.stderr
+    summary = summary_of(out)
+    assert list(summary) == PLAN
+    assert summary["test-python"][:1] == ["FAILED"]
+    assert "(exit 2)" in " ".join(summary["test-python"])
+    for stage in ("system-deps", "prepare", "gui", "fmt", "build", "test-rust", "test-gui"):
+        assert summary[stage][0] == "ok", (stage, out.stdout)
+    # The failed stage's output is printed whole; every stage got clippy-driver as the
+    # workspace's compiler (so each reuses the linted build).
+    assert "test-python said no" in out.stdout
+    assert f"running build with {tmp_path / 'bin' / 'clippy-driver'}" in out.stdout
+    assert "make test: FAILED after " in out.stdout
+
+
+def test_a_failed_build_leaves_the_test_stages_not_run(tmp_path: Path) -> None:
+    out = run_plan(tmp_path, fail="build")
+    assert out.returncode == 2, out.stdout + out.stderr
+    summary = summary_of(out)
+    assert list(summary) == PLAN
+    assert summary["build"][0] == "FAILED"
+    assert summary["prepare"][0] == "ok"
+    for stage in ("test-rust", "test-python", "test-gui"):
+        assert summary[stage] == ["not", "run"], (stage, out.stdout)
+
+
+def test_the_plan_refuses_to_run_without_clippy_driver(tmp_path: Path) -> None:
+    out = subprocess.run(
+        [str(REPO / "scripts" / "test.sh")],
+        env={"PATH": "/usr/bin:/bin", "MAKE": "false"},
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert out.returncode == 1
+    assert "clippy-driver is missing" in out.stderr
