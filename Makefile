@@ -35,6 +35,7 @@ fmt: ## Formatting: rustfmt --check (the workspace and the extension example).
 # example, each compiled once. Under scripts/test.sh, which sets clippy-driver as the workspace's
 # compiler, this is also the lint (`make lint`'s clippy) without a second, check-only compile.
 build: ## Compile every test target (under `make test`: with clippy's lints as errors).
+	@if [ -n "$${RUSTC_WORKSPACE_WRAPPER:-}" ]; then scripts/lint-canary.sh; fi
 	$(CARGO) test --workspace --locked --no-run
 	$(CARGO) test --workspace --benches --locked --no-run
 	CARGO_INCREMENTAL=0 $(CARGO) build $(EXTENSION) --locked --features workspace-features \

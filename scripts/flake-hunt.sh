@@ -4,10 +4,12 @@
 # failed and where its log is. A flaky test is a failing test: every failure it finds is a race
 # to fix, not a run to retry.
 #
-#   scripts/flake-hunt.sh [-n RUNS] [-l LOADERS] [stage...]
+#   scripts/flake-hunt.sh [-n RUNS] [-l LOADERS] [-p] [stage...]
 #
 #   -n RUNS      runs of each stage (default 5)
 #   -l LOADERS   busy loops beside the tests (default: the number of cores; 0: no load)
+#   -p           run `make test`'s whole plan (scripts/test.sh: the test stages side by side)
+#                RUNS times instead of the stages one by one
 #   stage        stages of scripts/test.sh (default: lint test-rust test-python test-gui; the
 #                stages that only build are run once first, unloaded)
 #
@@ -19,16 +21,19 @@ cd "$(dirname "$0")/.."
 
 RUNS=5
 LOADERS=$(nproc)
-while getopts "n:l:" opt; do
+PLAN=0
+while getopts "n:l:p" opt; do
     case $opt in
         n) RUNS=$OPTARG ;;
         l) LOADERS=$OPTARG ;;
-        *) echo "usage: $0 [-n RUNS] [-l LOADERS] [stage...]" >&2; exit 2 ;;
+        p) PLAN=1 ;;
+        *) echo "usage: $0 [-n RUNS] [-l LOADERS] [-p] [stage...]" >&2; exit 2 ;;
     esac
 done
 shift $((OPTIND - 1))
 STAGES=("$@")
 [ ${#STAGES[@]} -gt 0 ] || STAGES=(lint test-rust test-python test-gui)
+[ "$PLAN" -eq 0 ] || STAGES=(plan)
 MAKE=${MAKE:-make}
 OUT=${CARGO_TARGET_DIR:-target}/flake-hunt
 mkdir -p "$OUT"
@@ -73,7 +78,11 @@ for ((run = 1; run <= RUNS; run++)); do
     for stage in "${STAGES[@]}"; do
         log="$OUT/$stage-$run.log"
         t0=$SECONDS
-        "$MAKE" --no-print-directory "$stage" >"$log" 2>&1
+        if [ "$stage" = plan ]; then
+            scripts/test.sh >"$log" 2>&1
+        else
+            "$MAKE" --no-print-directory "$stage" >"$log" 2>&1
+        fi
         rc=$?
         took=$((SECONDS - t0))
         if [ "$rc" -eq 0 ]; then

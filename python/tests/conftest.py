@@ -9,6 +9,23 @@ from pathlib import Path
 import pytest
 from support import TOYBOT, Manager, start_manager
 
+# The modules whose tests take seconds (whole deliveries, recordings: 15-40 s each in test_demo.py),
+# in the order to start them; the other tests take well under one. pytest-xdist hands tests out as
+# workers free up (`--maxschedchunk 1`, scripts/python.sh): started first, the long ones run side
+# by side and the short ones fill the gaps at the end, instead of one worker finishing a long
+# delivery alone.
+SLOW_FIRST = ("test_demo.py", "test_recording.py", "test_ros2_robot.py", "test_cli.py")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Runs the slow modules' tests first (the sort is stable: each module keeps its order)."""
+
+    def rank(item: pytest.Item) -> int:
+        name = item.path.name
+        return SLOW_FIRST.index(name) if name in SLOW_FIRST else len(SLOW_FIRST)
+
+    items.sort(key=rank)
+
 
 @pytest.fixture
 def toybot() -> Iterator[Manager]:
