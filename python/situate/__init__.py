@@ -97,6 +97,7 @@ from .skill import Param, Port, Skill, SkillDeclarationError, param, port, skill
 
 if TYPE_CHECKING:
     from ._loader import SkillLoadError
+    from ._cli import data_dir
     from .local import LocalRobot, RunResult, run
     from .remote import RemoteSkill, RemoteSkillServer, remote_skill, serve_skill
 
@@ -104,6 +105,7 @@ if TYPE_CHECKING:
 #: and serving remote skills cost a sequencer nothing when it starts.
 _LAZY = {
     "SkillLoadError": "._loader",
+    "data_dir": "._cli",
     "LocalRobot": ".local",
     "RunResult": ".local",
     "run": ".local",
@@ -199,6 +201,7 @@ __all__ = [
     "WorkerFailed",
     "__version__",
     "connect",
+    "data_dir",
     "param",
     "port",
     "remote_skill",

@@ -43,6 +43,12 @@ def test_the_demo_maps_and_examples_ship_with_the_package() -> None:
     shipped += ["cmake/situateConfig.cmake", "include/situate.h", "include/situate.hpp"]
     for path in shipped:
         assert (data / path).is_file(), path
+    # Reachable without the private module: `situate.data_dir()` and `situate data-dir`.
+    assert situate_pkg.data_dir() == data
+    where = json.loads(situate("data-dir", "--json").stdout)
+    assert Path(where["data_dir"]) == data.resolve()
+    assert Path(where["examples"]) == (data / "examples").resolve()
+    assert situate("--data-dir").stdout.strip() == where["data_dir"]
 
 
 def test_the_demo_runs_outside_the_checkout_with_the_packages_interpreter(tmp_path: Path) -> None:

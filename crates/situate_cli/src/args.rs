@@ -75,6 +75,11 @@ pub(crate) enum Command {
     /// `cmake -Dsituate_DIR="$(situate cmake-dir)"`.
     #[command(name = "cmake-dir", long_flag = "cmake-dir")]
     CmakeDir,
+    /// Print the directory holding the demo, the maps and the examples (`demo/`, `maps/`,
+    /// `examples/`): the installed package's copy, or the checkout this program was built from:
+    /// `cp -r "$(situate data-dir)/examples/toybot.yaml" .`
+    #[command(name = "data-dir", long_flag = "data-dir")]
+    DataDir,
     /// List the skill types this program knows, with their declarations (and those of the
     /// libraries and Python files given).
     Types {

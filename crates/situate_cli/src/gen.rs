@@ -71,6 +71,41 @@ pub(crate) fn print_cmake_dir(ext: &Extensions, out: Out) -> anyhow::Result<()> 
     Ok(())
 }
 
+/// The directory holding `demo/`, `maps/` and `examples/`: the host's package data (the wheel
+/// ships them), else the checkout this program was built from, if it is still there, else the
+/// data of the published crate.
+pub(crate) fn data_dir(ext: &Extensions) -> Option<PathBuf> {
+    let checkout = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    ext.data_dir
+        .iter()
+        .cloned()
+        .chain([checkout, crate::packaged_data()])
+        .find(|d| d.join("demo/robot.yaml").is_file() && d.join("maps").is_dir() && d.join("examples").is_dir())
+        .map(|d| d.canonicalize().unwrap_or(d))
+}
+
+/// `situate data-dir`: where the demo, the maps and the examples are. Under `--json`:
+/// `{"data_dir", "demo", "maps", "examples"}`.
+pub(crate) fn print_data_dir(ext: &Extensions, out: Out) -> anyhow::Result<()> {
+    let dir = data_dir(ext).ok_or_else(|| {
+        problem(
+            Exit::Failure,
+            "no demo, maps or examples found: this program has no package data and was not built in a \
+             checkout; install the Python package (it ships them) or use a checkout",
+        )
+    })?;
+    out.result(
+        &json!({
+            "data_dir": dir.display().to_string(),
+            "demo": dir.join("demo").display().to_string(),
+            "maps": dir.join("maps").display().to_string(),
+            "examples": dir.join("examples").display().to_string(),
+        }),
+        || dir.display().to_string(),
+    );
+    Ok(())
+}
+
 /// One skill type's declaration as JSON (`situate types --json`).
 pub(crate) fn decl_json(d: &situate_core::SkillDecl) -> Json {
     json!({

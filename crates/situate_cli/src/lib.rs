@@ -51,7 +51,7 @@ use args::{Cli, Command, Global};
 pub use output::Exit;
 use output::{Out, Problem};
 pub use sim::Simulation;
-pub use skill_types::{Origins as SkillTypeOrigins, THE_PROGRAM};
+pub use skill_types::robot_registry;
 
 /// Loads the skill types of one `python:` file of a robot file.
 pub type PythonLoader = Arc<dyn Fn(&Path) -> Result<Vec<situate_core::SkillType>, String> + Send + Sync>;
@@ -206,6 +206,7 @@ fn run(command: Command, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
         Command::Replay(args) => return replay::replay_command(args, ext, out),
         Command::Gen { lang, manifest, out: dir } => gen::generate(&lang, &manifest, &dir, out)?,
         Command::CmakeDir => gen::print_cmake_dir(ext, out)?,
+        Command::DataDir => gen::print_data_dir(ext, out)?,
         Command::Types { library, python } => gen::types(&skill_types::registry_with(&library, &python, ext)?, out),
         Command::Client(command) => client::run(command, ext, out)?,
         Command::Map(command) => return map::map_command(command, out),

@@ -151,6 +151,16 @@ pub(crate) fn registry_for(
     }
 }
 
+/// The skill types `situate run` gives a robot file, for a host that runs the robot in its own
+/// process (the Python package's `situate.LocalRobot`): the built-ins (`toy.*`, `std.*`), the
+/// host's Rust types, the simulator's devices over a world of their own when the file has a
+/// `simulator:` section (its map and seed), and the types of the file's `libraries:` and
+/// `python:` files. Each error names the file and line it is about.
+pub fn robot_registry(robot_file: &RobotFile, ext: &Extensions) -> Result<Registry, Vec<String>> {
+    let registry = program_registry(ext).map_err(|e| vec![format!("{e:#}")])?;
+    registry_for(robot_file, registry, ext, &SimOverrides::default()).map(|(registry, _sim)| registry)
+}
+
 /// The skill types every robot file can name: the toys and the standard
 /// skill library (`std.*`).
 fn builtin_registry() -> Registry {

@@ -44,6 +44,21 @@ fn cmake_dir_names_the_checkouts_package_as_text_and_json() {
 }
 
 #[test]
+fn data_dir_names_the_checkout_holding_the_demo_maps_and_examples() {
+    let out = situate(&["data-dir"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let dir = repo();
+    assert_eq!(stdout(&out).trim(), dir.display().to_string());
+    assert_eq!(stdout(&situate(&["--data-dir"])).trim(), dir.display().to_string());
+    let json: serde_json::Value = serde_json::from_str(&stdout(&situate(&["data-dir", "--json"]))).unwrap();
+    assert_eq!(json["data_dir"], dir.display().to_string());
+    for part in ["demo", "maps", "examples"] {
+        assert_eq!(json[part], dir.join(part).display().to_string());
+    }
+    assert!(dir.join("examples/toybot.yaml").is_file());
+}
+
+#[test]
 fn a_c_skill_builds_with_the_situate_program_alone() {
     let tmp = tempfile::tempdir().unwrap();
     // The package laid out as the wheel ships it: cmake/ and include/ side by side, no checkout

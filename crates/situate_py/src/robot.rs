@@ -1,7 +1,9 @@
 //! A robot file run in process, for tests and scripts (`situate.LocalRobot`).
 //!
-//! The manager is built from the file as `situate run` builds it (the toy
-//! skills, the file's `python:` skills), but is not spawned: the caller
+//! The manager is built from the file as `situate run` builds it (every
+//! skill type the program knows: the toys, `std.*`, the simulator's `sim.*`
+//! for a file with a `simulator:`, the file's `libraries:` and `python:`
+//! files), but is not spawned: the caller
 //! steps it, and asks it anything with the link protocol's verbs — the very
 //! JSON the link serves (`situate_link::json`), so the Python side decodes
 //! replies and events with the client's own code. The GIL is released while
@@ -31,37 +33,13 @@ fn lines(errors: impl IntoIterator<Item = String>) -> String {
     errors.into_iter().collect::<Vec<_>>().join("\n")
 }
 
+/// The skill types `situate run` gives the file (the built-ins, the simulator's devices for a file
+/// with a `simulator:`, its `libraries:` and `python:` files), and the benchmark's types.
 fn registry_for(py: Python<'_>, file: &RobotFile) -> Result<Registry, String> {
-    let mut registry = situate_toys::registry();
-    crate::bench::register(&mut registry);
-    let mut errors = Vec::new();
-    for lib in &file.libraries {
-        errors.push(
-            file.error(
-                lib.pos,
-                format!("`{}`: C/C++ skill libraries are loaded by the `situate` program only", lib.value),
-            )
-            .to_string(),
-        );
-    }
-    // A file that brings a type name again is refused, as by the program.
-    let mut origins = situate_cli::SkillTypeOrigins::of(&registry, situate_cli::THE_PROGRAM);
-    for py_file in &file.python {
-        let path = file.resolve_at(py_file.pos, &py_file.value);
-        let from = format!("`{}`", py_file.value);
-        let added = py.detach(|| loader::load_file(&path)).and_then(|types| match origins.first_load(&path) {
-            true => origins.add(&mut registry, types, &from),
-            false => Ok(()),
-        });
-        if let Err(e) = added {
-            errors.push(file.error(py_file.pos, e).to_string());
-        }
-    }
-    if errors.is_empty() {
-        Ok(registry)
-    } else {
-        Err(lines(errors))
-    }
+    let ext = situate_cli::Extensions { python: Some(loader::python_loader()), ..Default::default() }
+        .skills(crate::bench::register);
+    // The GIL is released: the Python loader takes it for each file it loads.
+    py.detach(|| situate_cli::robot_registry(file, &ext)).map_err(lines)
 }
 
 /// Runs `n` cycles; with `record`, the readings after each.
