@@ -54,6 +54,7 @@ from .errors import (
     NoSession,
     NotOwner,
     NotRunning,
+    OtherRobots,
     ProtocolMismatch,
     SituateError,
     Unavailable,
@@ -96,8 +97,8 @@ from .info import (
 from .skill import Param, Port, Skill, SkillDeclarationError, param, port, skill
 
 if TYPE_CHECKING:
-    from ._loader import SkillLoadError
     from ._cli import data_dir
+    from ._loader import SkillLoadError
     from .local import LocalRobot, RunResult, run
     from .remote import RemoteSkill, RemoteSkillServer, remote_skill, serve_skill
 
@@ -168,6 +169,7 @@ __all__ = [
     "NotOwner",
     "NotRunning",
     "OtherEvent",
+    "OtherRobots",
     "Param",
     "ParamChanged",
     "ParamInfo",
