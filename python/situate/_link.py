@@ -21,7 +21,14 @@ from typing import Any, TypeVar, Union
 
 import zenoh
 
-from .errors import AmbiguousRobot, BadReply, NotRunning, SituateError, from_reply
+from .errors import (
+    AmbiguousRobot,
+    BadReply,
+    NotRunning,
+    OtherRobots,
+    SituateError,
+    from_reply,
+)
 
 #: Where a manager listens unless its robot file says otherwise.
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -243,6 +250,10 @@ def send(
 #: How often a ``hello`` is asked again while no manager has answered yet.
 HELLO_RETRY_S = 0.05
 
+#: How long a named robot finds nobody answering before the robots that do answer are asked (a
+#: robot still starting declares its keys within this); the Rust client's ``NAMED_GRACE``.
+NAMED_GRACE_S = 1.0
+
 _T = TypeVar("_T")
 
 
@@ -290,10 +301,30 @@ def hello(
 ) -> dict[str, Any]:
     """The ``hello`` of robot ``robot``, or of the only robot answering when ``None``."""
     if robot is not None:
-        # Asked again while nobody is there to answer (see `_until_answered`).
+        # Asked again while nobody is there to answer (see `_until_answered`). Once nobody has
+        # served the name for `NAMED_GRACE_S` (or at the timeout, if sooner), the robots that do
+        # answer are asked, once: a misspelt name is then said at once, with the names there are.
         key = f"situate/{robot}/req/hello"
-        reply = _until_answered(timeout, lambda left: _first_reply(session, key, "{}", left))
+        started = time.monotonic()
+        others_asked = False
+
+        def others(left: float) -> None:
+            nonlocal others_asked
+            others_asked = True
+            answering = [h["robot"] for h in _robots_once(session, timeout=min(left, 2.0))]
+            if answering and robot not in answering:
+                raise OtherRobots(robot, answering)
+
+        def ask(left: float) -> zenoh.Reply | None:
+            reply = _first_reply(session, key, "{}", left)
+            if reply is None and not others_asked and time.monotonic() - started >= NAMED_GRACE_S:
+                others(left)
+            return reply
+
+        reply = _until_answered(timeout, ask)
         if reply is None:
+            if not others_asked:
+                others(1.0)
             raise _no_answer(key, timeout, endpoints)
         result = _result(key, reply, timeout, endpoints)
         if not isinstance(result, dict):

@@ -21,7 +21,7 @@ the request and send it again.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 __all__ = [
@@ -36,6 +36,7 @@ __all__ = [
     "NoSession",
     "NotOwner",
     "NotRunning",
+    "OtherRobots",
     "ProtocolMismatch",
     "SituateError",
     "Unavailable",
@@ -215,6 +216,24 @@ class NotRunning(SituateError):
     """No skill manager answered: nothing listens at the endpoint, or no robot of that name."""
 
     KIND = "not_running"
+
+
+class OtherRobots(NotRunning):
+    """The robot named did not answer, and others did: most likely a misspelt name.
+
+    Attributes:
+        robot: The name asked for.
+        answering: The robots that did answer, by name.
+    """
+
+    KIND = "other_robots"
+
+    def __init__(self, robot: str, answering: Sequence[str]) -> None:
+        names = ", ".join(f"`{name}`" for name in answering)
+        did = f"robot {names} did" if len(answering) == 1 else f"robots {names} did"
+        super().__init__(f"robot `{robot}` did not answer; {did} (name it with robot=)")
+        self.robot: str = robot
+        self.answering: list[str] = list(answering)
 
 
 class AmbiguousRobot(SituateError):

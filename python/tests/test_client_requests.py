@@ -41,11 +41,23 @@ def test_connect_finds_the_only_robot_and_says_hello(toybot: Manager) -> None:
     run(main())
 
 
-def test_connect_to_an_unknown_robot_says_no_manager_answered(toybot: Manager) -> None:
+def test_connect_to_an_unknown_robot_names_the_robots_that_answered(toybot: Manager) -> None:
     async def main() -> None:
-        with pytest.raises(situate.NotRunning, match="no skill manager answered `situate/wallE/"):
-            async with situate.connect("wallE", endpoint=toybot.endpoint, timeout=1.0):
+        # A short timeout: the others are asked at its end.
+        with pytest.raises(situate.OtherRobots) as e:
+            async with situate.connect("wallE", endpoint=toybot.endpoint, timeout=0.5):
                 pass
+        assert str(e.value) == (
+            "robot `wallE` did not answer; robot `toybot` did (name it with robot=)"
+        )
+        assert (e.value.robot, e.value.answering) == ("wallE", ["toybot"])
+        assert isinstance(e.value, situate.NotRunning)  # what callers caught before
+        # A long one: asked after a second of nobody serving the name, not at its end.
+        started = time.monotonic()
+        with pytest.raises(situate.OtherRobots):
+            async with situate.connect("wallE", endpoint=toybot.endpoint, timeout=120.0):
+                pass
+        assert time.monotonic() - started < 60.0, "the name was waited for to the timeout"
 
     run(main())
 
