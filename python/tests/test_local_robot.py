@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from support import REPO
+from support import REPO, build_library
 
 import situate
 
@@ -41,6 +41,17 @@ def test_a_standard_skill_drives_the_simulated_base_in_process() -> None:
     assert before is not None
     moved = ((after["x"] - before["x"]) ** 2 + (after["y"] - before["y"]) ** 2) ** 0.5
     assert moved > 0.2, (before, after)
+
+
+def test_c_and_cpp_libraries_run_in_process_beside_rust_and_python() -> None:
+    for lang in ("c", "cpp"):
+        build_library(lang)
+    result = situate.run(REPO / "examples" / "mixed" / "robot.yaml", 300, clock="simulated")
+    assert {s.type_name.split(".")[0] for s in result.skills.values()} >= {"c", "cpp", "py"}
+    agree = {n: result.robot.query(f"agree.{n}").value for n in ("cycles", "mismatches")}
+    assert agree["cycles"] is not None, agree
+    assert agree["cycles"] > 100, agree
+    assert agree["mismatches"] == 0, agree
 
 
 def test_a_file_with_an_unknown_type_still_names_the_line(tmp_path: Path) -> None:

@@ -82,6 +82,10 @@ def test_a_recorded_delivery_reads_back_with_the_mcap_reader(tmp_path: Path) -> 
     assert len(per_topic["situate/events/activation_applied"]) > 5
     said = [d["value"] for _, d in per_topic["speaker.say"]]
     assert any(said), said
+    # The file ends on the outcome: the robot's own ground truth says the message was delivered
+    # (it reports the world one cycle after the speaker's word; the run ends when it has).
+    delivered = per_topic["truth.mission.delivered"]
+    assert delivered[-1][1]["value"] is True, delivered[-3:]
 
 
 @needs_bin

@@ -196,6 +196,9 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     let run =
         run_sequencer(command, &stop).with_context(|| format!("starting the sequencer with `{}`", python.display()));
     let wall_s = started.elapsed().as_secs_f64();
+    if matches!(&run, Ok(r) if r.interrupted.is_none()) {
+        settle_the_truth(&running.handle, &sim.world);
+    }
     // With the GUI, the page keeps showing the robot where the mission left it, with the outcome,
     // until Ctrl-C: the cycle is stopped so what it shows is the end of the mission.
     let stay = match (&running.gui, &run) {
@@ -322,6 +325,32 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     }
     // A Ctrl-C after the mission only closes the GUI: the status is the mission's.
     Ok(code)
+}
+
+/// Most cycles [`settle_the_truth`] runs.
+const SETTLE_CYCLES: u64 = 5;
+
+/// The delivery happens in the world when the speaker says the message, after the simulator's
+/// ground truth (`sim.truth`) was read in that cycle: the robot's own `truth.mission.delivered`
+/// says so one cycle later. The sequencer ends on the speaker's word, so the run (and its
+/// recording, and the page) would end before the robot's signals show the outcome. Cycles are
+/// stepped until they do (a few at most); a robot file without `sim.truth` is left as it is.
+fn settle_the_truth(handle: &situate::manager::Handle, world: &situate_sim::SharedWorld) {
+    use situate::manager::Control;
+    let delivered = world.lock().map(|w| w.delivered_at().is_some()).unwrap_or(false);
+    if !delivered {
+        return;
+    }
+    let mut handle = handle.clone();
+    for _ in 0..SETTLE_CYCLES {
+        match handle.query("truth.mission.delivered") {
+            Ok(r) if r.value == Some(situate_core::Value::Bool(false)) => {}
+            _ => return, // said, or no such signal
+        }
+        if handle.step(1).is_err() {
+            return;
+        }
+    }
 }
 
 /// The mission's outcome as the page shows it: delivered, or not and why.
