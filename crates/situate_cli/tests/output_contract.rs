@@ -232,3 +232,55 @@ fn a_running_robot_refuses_with_5_and_answers_the_introspection_verbs() {
     let bad = robot.verb(&["param", "load", file.to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(3), "{}", stderr(&bad));
 }
+
+/// The exit code a sentence of a doc claims: `template` with `{N}` where the code is, matched
+/// against the doc with its line breaks as spaces. A sentence that is gone fails the test too.
+fn claimed_exit(doc: &str, template: &str) -> i32 {
+    let text = std::fs::read_to_string(repo().join(doc)).unwrap_or_else(|e| panic!("{doc}: {e}"));
+    let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    let (before, after) = template.split_once("{N}").expect("a template with {N}");
+    let at = text.find(before).unwrap_or_else(|| panic!("{doc} no longer says `{before}…`: update this test"));
+    let rest = &text[at + before.len()..];
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    assert!(rest[digits.len()..].starts_with(after), "{doc}: `{before}{digits}` is not followed by `{after}`");
+    digits.parse().unwrap_or_else(|_| panic!("{doc}: no exit code after `{before}`"))
+}
+
+/// What the docs say about exit codes in running prose, checked against the program, so that
+/// they cannot drift again (`check` was once documented as exiting with 1, and was 3).
+#[test]
+fn the_docs_say_the_exit_codes_the_program_gives() {
+    let (dir, broken) = robot_file("broken.yaml", BROKEN);
+    let check = claimed_exit(
+        "docs/robot-files.md",
+        "`situate check` exits with status 0 when the file has no errors, {N} otherwise",
+    );
+    assert_eq!(situate([OsStr::new("check"), broken.as_os_str()]).status.code(), Some(check));
+    assert_eq!(situate(["check", TOYBOT]).status.code(), Some(0));
+
+    let unwritable = claimed_exit(
+        "docs/recording.md",
+        "A path that cannot be written is refused before the robot starts (exit {N},",
+    );
+    let nowhere = dir.path().join("no-such-folder").join("run.mcap");
+    let out = situate([
+        OsStr::new("run"),
+        OsStr::new(TOYBOT),
+        OsStr::new("--cycles"),
+        OsStr::new("5"),
+        OsStr::new("--no-link"),
+        OsStr::new("--record"),
+        nowhere.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(unwritable), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--record: "), "{}", stderr(&out));
+
+    let replay_unreadable = claimed_exit(
+        "docs/cli.md",
+        "exit 1 when it differs or the recording lacks cycles, {N} for a recording that cannot be read",
+    );
+    let garbage = dir.path().join("garbage.mcap");
+    std::fs::write(&garbage, b"not a recording").unwrap();
+    let out = situate([OsStr::new("replay"), garbage.as_os_str()]);
+    assert_eq!(out.status.code(), Some(replay_unreadable), "{}", stderr(&out));
+}

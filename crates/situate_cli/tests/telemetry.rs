@@ -95,6 +95,19 @@ fn echo_ends_cleanly_on_ctrl_c_and_puts_the_selection_back() {
     wait_for_selection(&client, &[]);
 }
 
+/// The fields docs/cli.md gives for `situate hz --json`, sorted: the quoted names of the `{...}`
+/// after "with `--json`" in the paragraph on `hz`.
+fn documented_hz_fields() -> Vec<String> {
+    let doc = std::fs::read_to_string(repo().join("docs/cli.md")).expect("docs/cli.md");
+    let para = doc.find("`situate hz sonar.range` reports").expect("docs/cli.md's paragraph on `hz`");
+    let from = para + doc[para..].find("with `--json`").expect("its `--json` form") + "with `--json`".len();
+    let open = from + doc[from..].find("`{").expect("`{");
+    let close = open + doc[open..].find("}`").expect("}`");
+    let mut fields: Vec<String> = doc[open..close].split('"').skip(1).step_by(2).map(str::to_string).collect();
+    fields.sort_unstable();
+    fields
+}
+
 #[test]
 fn hz_reports_the_rate_of_a_signal_written_every_cycle() {
     let robot = Robot::start();
@@ -113,6 +126,10 @@ fn hz_reports_the_rate_of_a_signal_written_every_cycle() {
         assert_eq!(last["min_cycles"], 1, "{last}");
         assert!(rate > 10.0, "{last}");
     }
+    // The fields are the ones docs/cli.md lists (it once left `written` out).
+    let mut fields: Vec<String> = last.as_object().expect("an object").keys().cloned().collect();
+    fields.sort_unstable();
+    assert_eq!(fields, documented_hz_fields(), "docs/cli.md's `hz --json` fields differ: {last}");
     let text = robot.verb(&["rate", "drive.v", "--window", "0.3", "--count", "1"]);
     assert_eq!(text.status.code(), Some(0), "{}", stderr(&text));
     assert!(stdout(&text).starts_with("drive.v: "), "{}", stdout(&text));
