@@ -14,7 +14,13 @@ from support import TOYBOT, Manager, start_manager
 # workers free up (`--maxschedchunk 1`, scripts/python.sh): started first, the long ones run side
 # by side and the short ones fill the gaps at the end, instead of one worker finishing a long
 # delivery alone.
-SLOW_FIRST = ("test_demo.py", "test_recording.py", "test_ros2_robot.py", "test_cli.py")
+SLOW_FIRST = (
+    "test_newcomer.py",
+    "test_demo.py",
+    "test_recording.py",
+    "test_ros2_robot.py",
+    "test_cli.py",
+)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
