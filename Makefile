@@ -4,7 +4,7 @@ export PATH := $(HOME)/.cargo/bin:$(PATH)
 CARGO ?= cargo
 
 .DEFAULT_GOAL := help
-.PHONY: help demo test test-rust test-python test-gui python gui lint fmt build prepare bench system-deps
+.PHONY: help demo test test-rust test-python test-gui python gui lint fmt build build-tests build-more wheel prepare bench system-deps
 
 help: ## Show the targets.
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
@@ -34,12 +34,19 @@ fmt: ## Formatting: rustfmt --check (the workspace and the extension example).
 # `make test`'s compile: every target of the workspace (tests, benches, examples) and the extension
 # example, each compiled once. Under scripts/test.sh, which sets clippy-driver as the workspace's
 # compiler, this is also the lint (`make lint`'s clippy) without a second, check-only compile.
-build: ## Compile every test target (under `make test`: with clippy's lints as errors).
+build: build-tests build-more ## Compile every test target (under `make test`: with clippy's lints as errors).
+
+build-tests: ## Compile the workspace's tests, programs and examples (what every test stage needs).
 	@if [ -n "$${RUSTC_WORKSPACE_WRAPPER:-}" ]; then scripts/lint-canary.sh; fi
 	$(CARGO) test --workspace --locked --no-run
+
+build-more: ## Compile the benches and the extension example (only `test-rust` needs them).
 	$(CARGO) test --workspace --benches --locked --no-run
 	CARGO_INCREMENTAL=0 $(CARGO) build $(EXTENSION) --locked --features workspace-features \
 		--target-dir "$${CARGO_TARGET_DIR:-target}"
+
+wheel: ## Build the Python package as the tests use it (debug, reusing build-tests) into .venv.
+	SITUATE_PY_PROFILE=debug scripts/python.sh
 
 prepare: ## Install the tools the tests download: the Python tools in .venv, Chromium.
 	scripts/python.sh tools

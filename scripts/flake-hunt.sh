@@ -61,7 +61,9 @@ stop_load() {
     wait "${loaders[@]}" 2>/dev/null
     loaders=()
 }
-trap stop_load EXIT INT TERM
+trap stop_load EXIT
+# A stop request ends the hunt (the loops go with it), not only the run under way.
+trap 'echo "flake-hunt: stopped" >&2; exit 130' INT TERM
 
 # The names of the tests a log says failed: cargo's `test x ... FAILED`, pytest's `FAILED path::test`,
 # Playwright's `✘ … › test`.

@@ -82,13 +82,22 @@ case "$ACTION" in
     test)
         build_web
         install_chromium
-        echo "gui.sh: building the testbed and the situate CLI (debug, in $TARGET)"
-        # The testbed embeds web/dist at compile time: build it after the web app. Built with the
-        # whole workspace's features (as `cargo test --workspace` built them), so that build is
-        # reused; `-p` alone would unify fewer features and rebuild much of the tree.
-        $CARGO build --workspace --example testbed --bin situate
         export TESTBED_BIN="$TARGET/debug/examples/testbed"
         export SITUATE_BIN="$TARGET/debug/situate"
+        if [ "${SITUATE_TESTS_PREBUILT:-}" = 1 ]; then
+            # `make test`'s plan (scripts/test.sh) built them (`cargo test --workspace --no-run`
+            # builds the programs and the examples) before the test stages started side by side.
+            [ -x "$TESTBED_BIN" ] && [ -x "$SITUATE_BIN" ] \
+                || die "SITUATE_TESTS_PREBUILT=1 but $TESTBED_BIN or $SITUATE_BIN is missing"
+            echo "gui.sh: using the testbed and the situate CLI built by make test"
+        else
+            echo "gui.sh: building the testbed and the situate CLI (debug, in $TARGET)"
+            # The testbed embeds web/dist at compile time: build it after the web app. Built
+            # with the whole workspace's features (as `cargo test --workspace` built them), so
+            # that build is reused; `-p` alone would unify fewer features and rebuild much of
+            # the tree.
+            $CARGO build --workspace --example testbed --bin situate
+        fi
         echo "gui.sh: running the browser tests (screenshots in web/test-results/)"
         (cd web && npm test)
         ;;

@@ -7,7 +7,8 @@
 #   scripts/python.sh test     ... then ruff, mypy (strict) and pytest
 #   scripts/python.sh tools    only .venv and the tools (what `make test` downloads while it compiles)
 #
-# Environment: PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
+# Environment: SITUATE_TESTS_PREBUILT=1 (set by scripts/test.sh: `test` uses the installed
+# package as it is), PYTHON (default python3), CARGO_TARGET_DIR (default target/, shared with cargo),
 # SITUATE_PY_PROFILE=release|debug (default: release to install, debug under `test`, where it
 # reuses the build `cargo test --workspace` made instead of compiling the tree again in release:
 # minutes on a 2-core machine), PYTEST_WORKERS (parallel pytest processes, default 2),
@@ -42,18 +43,25 @@ fi
 
 # 2. The wheel (abi3: one wheel for CPython 3.9+), installed like any user's. Its package data
 #    (the demo, the maps and the examples, for `situate demo` anywhere) is copied in first.
-scripts/package-data.sh
-wheels=$TARGET/situate-wheels
-rm -rf "$wheels"
-profile_flag=(--release)
-[[ $PROFILE == debug ]] && profile_flag=()
-say "building the wheel ($PROFILE)"
-start=$SECONDS
-"$VENV/bin/maturin" build "${profile_flag[@]}" --quiet --interpreter "$VENV/bin/python" \
-    --out "$wheels" 2> >(grep -vE '^\s*(Compiling|Checking|Downloaded|Downloading|Locking|Adding|Updating)' >&2)
-wheel=$(ls "$wheels"/situate-*.whl)
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps --force-reinstall "$wheel"
-say "installed $(basename "$wheel") in $((SECONDS - start)) s"
+# Under `make test`'s plan (scripts/test.sh) its `wheel` stage installed it before the test stages
+# started side by side; building it again would wait for the cargo build running beside them.
+if [[ ${1:-} == test && ${SITUATE_TESTS_PREBUILT:-} == 1 ]]; then
+    [[ -x $VENV/bin/situate ]] || { say "SITUATE_TESTS_PREBUILT=1 but no package in $VENV"; exit 1; }
+    say "using the package installed by the wheel stage"
+else
+    scripts/package-data.sh
+    wheels=$TARGET/situate-wheels
+    rm -rf "$wheels"
+    profile_flag=(--release)
+    [[ $PROFILE == debug ]] && profile_flag=()
+    say "building the wheel ($PROFILE)"
+    start=$SECONDS
+    "$VENV/bin/maturin" build "${profile_flag[@]}" --quiet --interpreter "$VENV/bin/python" \
+        --out "$wheels" 2> >(grep -vE '^\s*(Compiling|Checking|Downloaded|Downloading|Locking|Adding|Updating)' >&2)
+    wheel=$(ls "$wheels"/situate-*.whl)
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps --force-reinstall "$wheel"
+    say "installed $(basename "$wheel") in $((SECONDS - start)) s"
+fi
 
 # 3. Lints and tests.
 if [[ ${1:-} == test ]]; then

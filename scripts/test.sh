@@ -5,12 +5,15 @@
 #   scripts/test.sh stage...      only these stages, one after the other, in the order given
 #
 # The plan, on a 2-core machine where compiling is most of the time:
-#   1. system-deps, gui, fmt, build: one after the other. `build` compiles every target once with
-#      clippy's lints as errors (clippy-driver as the workspace's compiler, see LINTED below), so
-#      linting costs no second, check-only compile of the whole tree.
+#   1. system-deps, gui, fmt, build-tests, wheel: one after the other. build-tests compiles every
+#      test, program and example once with clippy's lints as errors (clippy-driver as the
+#      workspace's compiler, below), so linting costs no second, check-only compile of the tree;
+#      wheel installs the Python package from that build.
 #   2. prepare (the Python tools, Chromium): downloads, in the background while 1 compiles.
-#   3. test-rust, test-python, test-gui: side by side once 1 and 2 are done. Each writes its output
-#      to target/test-logs/<stage>.log; a failed stage's log is printed whole.
+#   3. test-python and test-gui start (SITUATE_TESTS_PREBUILT=1: they build nothing), then
+#      build-more compiles the benches and the extension example beside them, then test-rust
+#      starts. Each test stage writes its output to target/test-logs/<stage>.log; a failed
+#      stage's log is printed whole.
 # A failing stage stops the stages not yet started (they are listed as not run) and the exit code
 # is the first failure's own.
 set -uo pipefail
@@ -22,7 +25,7 @@ LOGS=${CARGO_TARGET_DIR:-target}/test-logs
 # clippy-driver as the compiler of the workspace's own crates, with clippy's arguments: what
 # `cargo clippy -- -D warnings` sets for `cargo check`, here for the real build. Every stage gets
 # it, so each reuses what `build` compiled (cargo keeps builds with and without it apart).
-# Without clippy-driver the whole plan refuses to run (its `build` would lint nothing); stages named
+# Without clippy-driver the whole plan refuses to run (its build would lint nothing); stages named
 # one by one run without it.
 PATH="${HOME:+$HOME/.cargo/bin:}$PATH"
 if driver=$(command -v clippy-driver); then
@@ -126,15 +129,21 @@ else
     if [ "$status" -eq 0 ]; then spawn prepare; else not_run prepare; fi
     run gui
     run fmt
-    run build
+    run build-tests
     collect # prepare
+    run wheel
+    # The Python and GUI tests use what build-tests and wheel made, and call no cargo of their
+    # own (it would wait for build-more's): they start while the benches and the extension
+    # example, which only the Rust tests need, compile.
+    export SITUATE_TESTS_PREBUILT=1
     if [ "$status" -eq 0 ]; then
-        spawn test-rust
         spawn test-python
         spawn test-gui
+        run build-more
+        if [ "$status" -eq 0 ]; then spawn test-rust; else not_run test-rust; fi
         collect
     else
-        not_run test-rust test-python test-gui
+        not_run test-python test-gui build-more test-rust
     fi
 fi
 

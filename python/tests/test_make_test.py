@@ -91,7 +91,18 @@ def test_a_stage_that_changes_a_tracked_file_fails_the_run(tmp_path: Path) -> No
     assert "checkout     FAILED  tracked files changed" in dirty.stdout
 
 
-PLAN = ["system-deps", "prepare", "gui", "fmt", "build", "test-rust", "test-python", "test-gui"]
+PLAN = [
+    "system-deps",
+    "prepare",
+    "gui",
+    "fmt",
+    "build-tests",
+    "wheel",
+    "test-python",
+    "test-gui",
+    "build-more",
+    "test-rust",
+]
 
 
 def run_plan(tmp_path: Path, fail: str) -> subprocess.CompletedProcess[str]:
@@ -111,7 +122,8 @@ def run_plan(tmp_path: Path, fail: str) -> subprocess.CompletedProcess[str]:
     make.write_text(
         "#!/usr/bin/env bash\n"
         'stage="${@: -1}"\n'
-        'echo "running $stage with $RUSTC_WORKSPACE_WRAPPER"\n'
+        'echo "running $stage with $RUSTC_WORKSPACE_WRAPPER"'
+        ' "prebuilt=${SITUATE_TESTS_PREBUILT:-0}"\n'
         'case "$stage" in test-*)\n'
         f"  touch {started}/$stage\n"
         "  for _ in $(seq 300); do\n"
@@ -152,23 +164,27 @@ def test_the_plan_runs_the_test_stages_side_by_side_and_prints_a_failed_ones_out
     assert list(summary) == PLAN
     assert summary["test-python"][:1] == ["FAILED"]
     assert "(exit 2)" in " ".join(summary["test-python"])
-    for stage in ("system-deps", "prepare", "gui", "fmt", "build", "test-rust", "test-gui"):
+    for stage in set(PLAN) - {"test-python"}:
         assert summary[stage][0] == "ok", (stage, out.stdout)
     # The failed stage's output is printed whole; every stage got clippy-driver as the
     # workspace's compiler (so each reuses the linted build).
     assert "test-python said no" in out.stdout
-    assert f"running build with {tmp_path / 'bin' / 'clippy-driver'}" in out.stdout
+    driver = tmp_path / "bin" / "clippy-driver"
+    assert f"running build-tests with {driver} prebuilt=0" in out.stdout
+    # The test stages build nothing of their own (it would wait for build-more's cargo).
+    gui_log = (tmp_path / "target" / "test-logs" / "test-gui.log").read_text()
+    assert f"running test-gui with {driver} prebuilt=1" in gui_log
     assert "make test: FAILED after " in out.stdout
 
 
 def test_a_failed_build_leaves_the_test_stages_not_run(tmp_path: Path) -> None:
-    out = run_plan(tmp_path, fail="build")
+    out = run_plan(tmp_path, fail="build-tests")
     assert out.returncode == 2, out.stdout + out.stderr
     summary = summary_of(out)
-    assert list(summary) == PLAN
-    assert summary["build"][0] == "FAILED"
+    assert sorted(summary) == sorted(PLAN)
+    assert summary["build-tests"][0] == "FAILED"
     assert summary["prepare"][0] == "ok"
-    for stage in ("test-rust", "test-python", "test-gui"):
+    for stage in ("wheel", "test-rust", "test-python", "test-gui", "build-more"):
         assert summary[stage] == ["not", "run"], (stage, out.stdout)
 
 
