@@ -7,7 +7,7 @@ CARGO ?= cargo
 .PHONY: help demo test test-rust test-python test-gui python gui lint fmt build build-tests build-more wheel prepare bench system-deps
 
 help: ## Show the targets.
-	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-10s %s\n", $$1, $$2}'
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*## "} {printf "  make %-12s %s\n", $$1, $$2}'
 
 demo: python gui ## The delivery demo: simulator, manager, Python sequencer; GUI on http://127.0.0.1:8080.
 	$(CARGO) run --release -p situate_cli -- demo --python .venv/bin/python $(DEMO_ARGS)
