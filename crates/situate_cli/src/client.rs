@@ -10,10 +10,12 @@ use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use clap::{Args, Subcommand};
+use clap_complete::ArgValueCandidates;
 use serde_json::{json, Value as Json};
 use situate_link::{Client, ClientError};
 
 use crate::args::Compose;
+use crate::complete;
 use crate::output::{problem, Exit, Out, Problem};
 use crate::signals;
 use crate::Extensions;
@@ -40,7 +42,7 @@ pub(crate) enum ClientCommand {
     Skills(#[command(flatten)] Remote),
     /// Activate skills of a running robot (from its next cycle on).
     Activate {
-        #[arg(required = true)]
+        #[arg(required = true, add = ArgValueCandidates::new(complete::skills))]
         names: Vec<String>,
         /// Also activate providers of inputs nobody active provides.
         #[arg(long)]
@@ -50,7 +52,7 @@ pub(crate) enum ClientCommand {
     },
     /// Deactivate skills of a running robot.
     Deactivate {
-        #[arg(required = true)]
+        #[arg(required = true, add = ArgValueCandidates::new(complete::skills))]
         names: Vec<String>,
         #[command(flatten)]
         remote: Remote,
@@ -96,6 +98,7 @@ pub(crate) enum ClientCommand {
     Monitors(#[command(flatten)] Remote),
     /// The current value of a signal (`sonar.range`, or a whole record such as `odom`).
     Query {
+        #[arg(add = ArgValueCandidates::new(complete::signals))]
         signal: String,
         #[command(flatten)]
         remote: Remote,
@@ -131,7 +134,7 @@ pub(crate) enum ClientCommand {
     /// one object per line), like `ros2 topic echo`: `echo sonar.range odom.x --count 10`.
     Echo {
         /// Signals (`sonar.range`) or whole records (`odom`).
-        #[arg(required = true)]
+        #[arg(required = true, add = ArgValueCandidates::new(complete::signals))]
         signals: Vec<String>,
         /// Print at most this many lines a second (the robot's telemetry rate, `link.telemetry_hz`,
         /// default 10, is the most there are).
@@ -147,6 +150,7 @@ pub(crate) enum ClientCommand {
     /// since the start).
     #[command(alias = "rate")]
     Hz {
+        #[arg(add = ArgValueCandidates::new(complete::signals))]
         signal: String,
         /// Seconds between reports.
         #[arg(long, default_value_t = 1.0, value_name = "S")]
@@ -196,7 +200,9 @@ pub(crate) enum RecordAction {
 pub(crate) enum ParamAction {
     /// One parameter's value.
     Get {
+        #[arg(add = ArgValueCandidates::new(complete::skills))]
         skill: String,
+        #[arg(add = ArgValueCandidates::new(complete::params))]
         param: String,
         #[command(flatten)]
         remote: Remote,
@@ -204,7 +210,9 @@ pub(crate) enum ParamAction {
     /// Set one parameter (from the next cycle): the value is JSON (a number, true/false, a list,
     /// a quoted string), anything else is taken as text.
     Set {
+        #[arg(add = ArgValueCandidates::new(complete::skills))]
         skill: String,
+        #[arg(add = ArgValueCandidates::new(complete::params))]
         param: String,
         value: String,
         #[command(flatten)]

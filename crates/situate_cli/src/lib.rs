@@ -33,6 +33,7 @@ macro_rules! stdoutln {
 
 mod args;
 mod client;
+mod complete;
 mod demo;
 mod gen;
 mod link_record;
@@ -141,6 +142,19 @@ where
     T: Into<OsString> + Clone,
 {
     let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    // `COMPLETE=bash situate` prints the shell's registration, and the shell then asks for each
+    // completion the same way (names of the running robot: `complete.rs`); nothing else runs.
+    let cwd = std::env::current_dir().ok();
+    match clap_complete::CompleteEnv::with_factory(<Cli as clap::CommandFactory>::command)
+        .try_complete(args.clone(), cwd.as_deref())
+    {
+        Ok(true) => return 0,
+        Ok(false) => {}
+        Err(e) => {
+            let _ = e.print();
+            return Exit::Usage.code();
+        }
+    }
     let cli = match Cli::try_parse_from(&args) {
         Ok(cli) => cli,
         Err(e) => {

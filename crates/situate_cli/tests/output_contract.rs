@@ -193,6 +193,41 @@ fn schema_and_completions() {
     assert!(stdout(&bash).contains("situate") && stdout(&bash).contains("signals"), "{}", stdout(&bash));
 }
 
+/// `COMPLETE=fish situate -- situate ARGS…`: the candidates the shell would show, one per line as
+/// `name<TAB>help` (fish's protocol is the plainest of clap_complete's).
+fn complete(endpoint: &str, args: &[&str]) -> Vec<String> {
+    let out = Command::new(env!("CARGO_BIN_EXE_situate"))
+        .args(["--", "situate"])
+        .args(args)
+        .env("COMPLETE", "fish")
+        .env("SITUATE_CONNECT", endpoint)
+        .env("SITUATE_COMPLETE_TIMEOUT_S", "30")
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("situate runs");
+    assert!(out.status.success(), "{}", stderr(&out));
+    stdout(&out).lines().map(|l| l.split('\t').next().unwrap_or("").to_string()).collect()
+}
+
+#[test]
+fn completions_offer_the_running_robots_skills_signals_and_parameters() {
+    let robot = Robot::start();
+    assert_eq!(complete(&robot.endpoint, &["activate", "wa"]), ["wander"]);
+    let signals = complete(&robot.endpoint, &["echo", "od"]);
+    assert_eq!(signals, ["odom", "odom.theta", "odom.x", "odom.y"]);
+    assert!(complete(&robot.endpoint, &["hz", ""]).contains(&"sonar.range".to_string()));
+    let params = complete(&robot.endpoint, &["param", "set", "runaway", "sa"]);
+    assert_eq!(params, ["safe_distance"]);
+    assert_eq!(complete(&robot.endpoint, &["param", "get", "run"]), ["runaway"]);
+    // The registration a shell sources.
+    let bash = Command::new(env!("CARGO_BIN_EXE_situate")).env("COMPLETE", "bash").output().unwrap();
+    assert!(stdout(&bash).contains("_clap_complete_situate"), "{}", stdout(&bash));
+    // Nobody there: no names, only the options, and no error.
+    let nobody = free_endpoint();
+    let offered = complete(&nobody, &["activate", ""]);
+    assert!(offered.iter().all(|c| c.starts_with('-')), "{offered:?}");
+}
+
 #[test]
 fn a_running_robot_refuses_with_5_and_answers_the_introspection_verbs() {
     let robot = Robot::start();
