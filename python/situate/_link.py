@@ -254,6 +254,17 @@ HELLO_RETRY_S = 0.05
 #: robot still starting declares its keys within this); the Rust client's ``NAMED_GRACE``.
 NAMED_GRACE_S = 1.0
 
+#: How long the robots that do answer are given, once a named one did not (only then).
+OTHERS_S = 3.0
+
+
+def _is_timeout(reply: zenoh.Reply) -> bool:
+    """Whether ``reply`` is Zenoh's end of a query nobody answered in time."""
+    if reply.ok is not None or reply.err is None:
+        return False
+    return bool(reply.err.payload.to_string().strip().lower() == "timeout")
+
+
 _T = TypeVar("_T")
 
 
@@ -302,29 +313,32 @@ def hello(
     """The ``hello`` of robot ``robot``, or of the only robot answering when ``None``."""
     if robot is not None:
         # Asked again while nobody is there to answer (see `_until_answered`). Once nobody has
-        # served the name for `NAMED_GRACE_S` (or at the timeout, if sooner), the robots that do
-        # answer are asked, once: a misspelt name is then said at once, with the names there are.
+        # served the name for `NAMED_GRACE_S`, the robots that do answer are asked (again each
+        # `NAMED_GRACE_S` while none does): a misspelt name is then said at once, with the names
+        # there are, and a robot still starting beside none other is still waited for.
         key = f"situate/{robot}/req/hello"
-        started = time.monotonic()
-        others_asked = False
+        next_ask = time.monotonic() + NAMED_GRACE_S
 
         def others(left: float) -> None:
-            nonlocal others_asked
-            others_asked = True
-            answering = [h["robot"] for h in _robots_once(session, timeout=min(left, 2.0))]
+            answering = [h["robot"] for h in _robots_once(session, timeout=left)]
             if answering and robot not in answering:
                 raise OtherRobots(robot, answering)
 
         def ask(left: float) -> zenoh.Reply | None:
+            nonlocal next_ask
             reply = _first_reply(session, key, "{}", left)
-            if reply is None and not others_asked and time.monotonic() - started >= NAMED_GRACE_S:
-                others(left)
+            if reply is None and time.monotonic() >= next_ask:
+                others(min(left, 2.0))
+                next_ask = time.monotonic() + NAMED_GRACE_S
             return reply
 
         reply = _until_answered(timeout, ask)
+        # Nobody answered: no reply, or Zenoh's `Timeout` (on a busy machine a get that finds
+        # nobody can end so). Before saying so, the robots that do answer are asked once more,
+        # with time enough for a busy one: a name that is not there is said with those.
+        if reply is None or _is_timeout(reply):
+            others(OTHERS_S)
         if reply is None:
-            if not others_asked:
-                others(1.0)
             raise _no_answer(key, timeout, endpoints)
         result = _result(key, reply, timeout, endpoints)
         if not isinstance(result, dict):
