@@ -12,6 +12,7 @@ import asyncio
 import fcntl
 import json
 import os
+import random
 import shutil
 import signal
 import socket
@@ -55,12 +56,35 @@ def situate_program() -> str:
     pytest.fail("the `situate` console script is not installed: run scripts/python.sh first")
 
 
+def _ephemeral_start() -> int:
+    """Where the kernel's range of ports for outgoing connections starts (Linux; else 32768)."""
+    try:
+        return int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return 32768
+
+
 def free_port() -> int:
-    """A TCP port nobody listens on right now."""
+    """A TCP port nobody listens on right now, below the range of outgoing connections' ports.
+
+    A port the kernel picks (`bind(0)`) comes from that range, and once closed it may be given to
+    any outgoing connection (a Zenoh client of another test) before the program under test binds
+    it: "Address already in use". Picked at random below the range, only another test picking
+    the same port can take it first; `start_manager` tries another port then.
+    """
+    low, high = 20000, max(_ephemeral_start() - 1, 20001)
+    for _ in range(100):
+        port = random.randint(low, high)
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
+        fallback: int = s.getsockname()[1]
+        return fallback
 
 
 def zenoh_client(endpoint: str) -> zenoh.Session:
@@ -120,6 +144,14 @@ class Manager:
         return err or ""
 
 
+#: Ports `start_manager` tries before it gives up.
+PORT_TRIES = 5
+
+
+class PortTaken(Exception):
+    """The program could not listen on its port: something took it after free_port() chose it."""
+
+
 def wait_for_hello(process: subprocess.Popen[str], endpoint: str, robot: str) -> None:
     """Polls `hello` until the manager answers (bounded), failing early if it exited."""
     deadline = time.monotonic() + STARTUP_S
@@ -127,6 +159,8 @@ def wait_for_hello(process: subprocess.Popen[str], endpoint: str, robot: str) ->
     while time.monotonic() < deadline:
         if process.poll() is not None:
             _, err = process.communicate()
+            if "Address already in use" in err:
+                raise PortTaken(err)
             pytest.fail(f"`situate run` exited with {process.returncode}:\n{err}")
         try:
             session = _link.open_session([endpoint])
@@ -151,22 +185,29 @@ def start_manager(
 
     ``env``: variables set for the program besides the test's own.
     """
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    process = subprocess.Popen(
-        [situate_program(), "run", str(robot_file), "--listen", endpoint, *extra],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env={**program_env(), **(env or {})},
-        cwd=REPO,
-    )
-    try:
-        wait_for_hello(process, endpoint, robot)
-    except BaseException:
-        process.kill()
-        process.communicate()
-        raise
-    return Manager(process, robot, endpoint)
+    for attempt in range(PORT_TRIES):
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        process = subprocess.Popen(
+            [situate_program(), "run", str(robot_file), "--listen", endpoint, *extra],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**program_env(), **(env or {})},
+            cwd=REPO,
+        )
+        try:
+            wait_for_hello(process, endpoint, robot)
+        except PortTaken:
+            # Taken between free_port() and the program's bind (another test's): another port.
+            if attempt + 1 < PORT_TRIES:
+                continue
+            raise
+        except BaseException:
+            process.kill()
+            process.communicate()
+            raise
+        return Manager(process, robot, endpoint)
+    raise AssertionError("unreachable")
 
 
 def situate_gen() -> Path:

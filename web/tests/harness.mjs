@@ -3,7 +3,7 @@
 // Everything started here is stopped by `stopAll`, also when a test fails.
 
 import { spawn, execFile } from "node:child_process";
-import { mkdtempSync, mkdirSync, rmSync, existsSync } from "node:fs";
+import { mkdtempSync, mkdirSync, rmSync, existsSync, readFileSync } from "node:fs";
 import net from "node:net";
 import os from "node:os";
 import path from "node:path";
@@ -31,16 +31,34 @@ export const CHROMIUM_ARGS = [
 ];
 
 /** A free TCP port on 127.0.0.1 (asked of the OS, then released). */
-export function freePort() {
-  return new Promise((resolve, reject) => {
+/** Whether `port` (0: any) can be listened on now; resolves with the port, or 0. */
+function tryListen(port) {
+  return new Promise((resolve) => {
     const srv = net.createServer();
-    srv.on("error", reject);
-    srv.listen(0, "127.0.0.1", () => {
+    srv.on("error", () => resolve(0));
+    srv.listen(port, "127.0.0.1", () => {
       const addr = srv.address();
-      const port = typeof addr === "object" && addr ? addr.port : 0;
-      srv.close(() => resolve(port));
+      const got = typeof addr === "object" && addr ? addr.port : 0;
+      srv.close(() => resolve(got));
     });
   });
+}
+
+/**
+ * A loopback port nobody listens on now, chosen below the kernel's range for outgoing
+ * connections (as situate_link::free_loopback_port does): a port from that range may be given to
+ * another program's outgoing connection before the testbed binds it.
+ */
+export async function freePort() {
+  let low = 32768;
+  try {
+    low = Number(readFileSync("/proc/sys/net/ipv4/ip_local_port_range", "utf8").trim().split(/\s+/)[0]) || low;
+  } catch {}
+  for (let i = 0; i < 100 && low > 21000; i++) {
+    const port = await tryListen(20000 + Math.floor(Math.random() * (low - 20000)));
+    if (port) return port;
+  }
+  return tryListen(0);
 }
 
 /** Starts the testbed; resolves when it prints READY. `guiPort`: serve the GUI there (a restart). */

@@ -143,11 +143,12 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     let (robot_file, sequencer) = demo_files(demo, ext)?;
     // With the GUI, a person watches: the CLI's default endpoint, so that `situate stats` and
     // the rest reach the robot with no port to copy. Headless, many runs may go at once (the
-    // experiment, the tests): a free port each.
+    // experiment, the tests): a free port each, and another if that one is taken before the
+    // link binds it (by another program's outgoing connection, say).
     let (listen, listen_fallback) = match (&demo.listen, demo.headless) {
         (Some(given), _) => (given.clone(), false),
         (None, false) => (situate_link::DEFAULT_ENDPOINT.to_string(), true),
-        (None, true) => (crate::robot::free_loopback_endpoint()?, false),
+        (None, true) => (crate::robot::free_loopback_endpoint()?, true),
     };
     let opts = RunOptions {
         clock: Some("simulated".into()),

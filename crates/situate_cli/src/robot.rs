@@ -199,10 +199,8 @@ pub(crate) fn check(file: &Path, compose: &Compose, ext: &Extensions, out: Out) 
 
 /// A link endpoint on a free TCP port of the loopback interface (`tcp/127.0.0.1:PORT`).
 pub(crate) fn free_loopback_endpoint() -> anyhow::Result<String> {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map_err(|e| problem(Exit::Failure, format!("finding a free port for the link: {e}")))?
-        .port();
+    let port = situate_link::free_loopback_port()
+        .map_err(|e| problem(Exit::Failure, format!("finding a free port for the link: {e}")))?;
     Ok(format!("tcp/127.0.0.1:{port}"))
 }
 
@@ -393,9 +391,18 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
             Ok(opened) => opened,
             Err(e) if opts.listen_fallback => {
                 let taken = link.listen.join(", ");
-                link.listen = vec![free_loopback_endpoint()?];
                 tracing::debug!(error = %e, "the link's endpoint is taken");
-                let opened = Link::open(&link).map_err(|e| refused(&link, &e))?;
+                // A free port can be taken too before the link binds it (the kernel may give it
+                // to any outgoing connection meanwhile): a few tries.
+                let mut tries = 0;
+                let opened = loop {
+                    link.listen = vec![free_loopback_endpoint()?];
+                    match Link::open(&link) {
+                        Ok(opened) => break opened,
+                        Err(_) if tries < 3 => tries += 1,
+                        Err(e) => return Err(refused(&link, &e)),
+                    }
+                };
                 out.note(format_args!(
                     "{taken} is taken (another robot?): the link listens on {} instead (`--connect {}`)",
                     link.listen.join(", "),

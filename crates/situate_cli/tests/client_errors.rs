@@ -46,7 +46,7 @@ impl StuckRobot {
             .period_s(0.01)
             .skill(SkillSpec::new("hang", "t.hang").budget_ms(3_600_000.0));
         let manager = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
-        let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let port = situate_link::free_loopback_port().expect("a free port");
         let endpoint = format!("tcp/127.0.0.1:{port}");
         let config = LinkConfig { listen: vec![endpoint.clone()], ..LinkConfig::default() };
         let session = Link::open(&config).unwrap_or_else(|e| panic!("{e}"));

@@ -6,11 +6,13 @@ pub mod client;
 pub mod client_session;
 pub mod flood;
 pub mod json;
+mod port;
 pub mod remote;
 pub mod server;
 pub mod session;
 
 pub use client::{Client, ClientError, RemoteError};
+pub use port::free_loopback_port;
 pub use remote::{serve_skill, HostError, HostStats, RemoteSkill};
 pub use server::{Link, VerbFn, Verbs};
 pub use session::{LinkConfig, DEFAULT_ENDPOINT};

@@ -5,7 +5,6 @@
 
 use std::ffi::OsStr;
 use std::io::{BufRead as _, BufReader};
-use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -77,9 +76,10 @@ pub fn assert_no_panic(out: &Output) {
     assert_ne!(out.status.code(), Some(101), "situate panicked:\n{err}");
 }
 
-/// A loopback TCP endpoint nobody listens on right now.
+/// A loopback TCP endpoint nobody listens on right now (below the range of outgoing
+/// connections' ports: `situate_link::free_loopback_port`).
 pub fn free_endpoint() -> String {
-    let port = TcpListener::bind("127.0.0.1:0").expect("a free port").local_addr().expect("its address").port();
+    let port = situate_link::free_loopback_port().expect("a free port");
     format!("tcp/127.0.0.1:{port}")
 }
 
@@ -98,8 +98,19 @@ impl Robot {
     }
 
     /// `program run FILE`, whose robot is named `robot`; waits (up to [`WAIT`])
-    /// until it serves the link.
+    /// until it serves the link. A port taken between [`free_endpoint`] and the program's bind
+    /// (by another test) is tried again on another.
     pub fn start_with(program: &Path, file: &Path, robot: &str) -> Robot {
+        for _ in 0..4 {
+            if let Some(robot) = Robot::try_start(program, file, robot) {
+                return robot;
+            }
+        }
+        panic!("{} run: its port was taken five times running", file.display())
+    }
+
+    /// [`Robot::start_with`] once: `None` when the program could not listen on its port.
+    fn try_start(program: &Path, file: &Path, robot: &str) -> Option<Robot> {
         let endpoint = free_endpoint();
         let mut child = Command::new(program)
             .arg("run")
@@ -123,7 +134,8 @@ impl Robot {
         let mut said = Vec::new();
         loop {
             match rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
-                Ok(line) if line.contains(&serving) => return robot,
+                Ok(line) if line.contains(&serving) => return Some(robot),
+                Ok(line) if line.contains("Address already in use") => return None,
                 Ok(line) => said.push(line),
                 Err(_) => {
                     panic!("{} run did not say it serves the link; it said:\n{}", file.display(), said.join("\n"))

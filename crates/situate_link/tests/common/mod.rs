@@ -8,7 +8,7 @@ use situate_link::{Link, LinkConfig};
 
 /// A TCP port nobody listens on right now.
 pub fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+    situate_link::free_loopback_port().expect("a free port")
 }
 
 /// A manager on its own thread, served by a link; stopped on drop.

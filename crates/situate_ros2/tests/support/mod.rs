@@ -14,7 +14,7 @@ use zenoh::Wait;
 pub const WAIT: Duration = Duration::from_secs(60);
 
 pub fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("addr").port()
+    situate_link::free_loopback_port().expect("a free port")
 }
 
 pub struct Robot {
