@@ -108,7 +108,15 @@ describe("the timeline", () => {
     await page.mouse.move(box.x + box.width * 0.25, y, { steps: 5 });
     await page.mouse.up();
     const value = Number(await page.getByTestId("tl-slider").inputValue());
-    assert.ok(value < first + (last - first) * 0.5, `the slider moved back (${value} in ${first}–${last})`);
+    // The history goes on growing while the page is paused (the robot runs): on a slow machine
+    // the slider's range at the release is wider than the span read before the drag, so the
+    // quarter of the slider is measured against the range it has now.
+    const range = await page.getByTestId("tl-slider").evaluate((el) => ({ min: Number(el.min), max: Number(el.max) }));
+    assert.ok(range.max >= last, `the slider spans the history: ${JSON.stringify(range)} vs ${first}–${last}`);
+    assert.ok(
+      value < range.min + (range.max - range.min) * 0.5,
+      `the slider moved back (${value} in ${range.min}–${range.max}; ${first}–${last} before the drag)`,
+    );
     await until(async () => (await shown()) === value, `cycle ${value} shown`);
     assert.equal(await text(page.getByTestId("tl-cycle")), `cycle ${value}`);
     const p = await pose();
