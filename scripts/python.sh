@@ -21,7 +21,8 @@ PYTHON=${PYTHON:-python3}
 VENV=.venv
 TOOLS=("maturin==1.16.*" "pytest>=8" "pytest-xdist>=3.6" "ruff>=0.15" "mypy>=1.18" "eclipse-zenoh==${SITUATE_ZENOH_VERSION:-1.10.2}" "numpy>=1.22")
 TOOLS+=("rosbags>=0.10,<1") # python/tests/test_ros2.py decodes the ROS 2 bridge's CDR with it
-TOOLS+=("xxhash>=3.4") # python/tests/ros2_peer.py: rmw_zenoh derives an entity's GID as XXH3-128 of its token
+TOOLS+=("xxhash>=3.4") # python/situate/ros2.py: rmw_zenoh derives an entity's GID as XXH3-128 of its token
+TOOLS+=("mujoco>=3.2") # python/tests/test_physics.py: the physics robot (situate.physics)
 TOOLS+=("mcap>=1.6,<2") # python/tests/test_recording.py reads `--record` files with the MCAP reference reader
 TARGET=${CARGO_TARGET_DIR:-target}
 if [[ ${1:-} == test ]]; then PROFILE=${SITUATE_PY_PROFILE:-debug}; else PROFILE=${SITUATE_PY_PROFILE:-release}; fi

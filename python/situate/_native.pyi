@@ -16,6 +16,9 @@ def version() -> str:
 def load_file(path: str) -> list[str]:
     """Loads a `python:` file's skill types as the program would; returns their descriptions."""
 
+def map_json(path: str) -> str:
+    """The building of a map file as JSON (what `situate map show` prints); `ValueError` if bad."""
+
 def convert_check(value: Any, ty: str) -> Any:
     """Converts `value` to signal type `ty` and back, as a skill output would be."""
 

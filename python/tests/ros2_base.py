@@ -1,9 +1,9 @@
 """The ROS 2 robot to test against: a kinematic differential-drive base on a `Ros2Peer`.
 
 `DiffDriveBase` takes `cmd_vel` and publishes `/odom`, `/tf`, `/scan` and (with simulated time)
-`/clock` exactly as a ROS 2 driver on rmw_zenoh does: the wire format is `ros2_peer`'s (checked in
-test_ros2_peer.py against rmw_zenoh and captures of real systems); this module is the robot: its
-room, its kinematics and its ray-cast scan.
+`/clock` exactly as a ROS 2 driver on rmw_zenoh does: the wire format is `situate.ros2`'s
+(checked in test_ros2_peer.py against rmw_zenoh and captures of real systems); this module is the
+robot: its room, its kinematics and its ray-cast scan.
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from ros2_peer import QOS_SENSOR_DATA, QOS_TF, Ros2Peer, Subscription, msg
+
+from situate.ros2 import QOS_SENSOR_DATA, QOS_TF, Ros2Peer, Subscription, msg
 
 
 @dataclass(frozen=True)

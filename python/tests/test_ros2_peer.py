@@ -1,4 +1,4 @@
-"""The ROS 2 robot double (ros2_peer.py) checked against what real ROS 2 systems put on the wire.
+"""The ROS 2 robot double (situate.ros2) checked against what real ROS 2 systems put on the wire.
 
 First the double's keys, tokens, QoS strings, GIDs, attachments and type hashes against values
 published from real ROS 2 systems (each one's source is next to it); then two peers on a real Zenoh
@@ -26,7 +26,9 @@ import pytest
 import xxhash
 import zenoh
 from ros2_base import Box, DiffDriveBase, Pose, Room
-from ros2_peer import (
+from zenoh.ext import Int64, z_deserialize
+
+from situate.ros2 import (
     QOS_CLOCK,
     QOS_DEFAULT,
     QOS_SENSOR_DATA,
@@ -49,7 +51,6 @@ from ros2_peer import (
     token,
     type_hash,
 )
-from zenoh.ext import Int64, z_deserialize
 
 #: Generous: the machine is shared and slow; things normally take milliseconds.
 WAIT_S = 30.0

@@ -17,8 +17,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ros2_base import DiffDriveBase, Pose
-from ros2_peer import Ros2Peer
 from support import STARTUP_S, situate, start_manager, zenoh_client
+
+from situate.ros2 import Ros2Peer
 
 ROBOT = """\
 robot: rosbot

@@ -54,6 +54,12 @@ use output::{Out, Problem};
 pub use sim::Simulation;
 pub use skill_types::robot_registry;
 
+/// The building of a map file as JSON (`situate map show`: its shape in `docs/maps.md`), or
+/// the loader's error, naming the file and line.
+pub fn building_json(path: &Path) -> Result<String, String> {
+    situate_sim::load_map(path).map(|m| m.building_json().to_string()).map_err(|e| e.to_string())
+}
+
 /// Loads the skill types of one `python:` file of a robot file.
 pub type PythonLoader = Arc<dyn Fn(&Path) -> Result<Vec<situate_core::SkillType>, String> + Send + Sync>;
 

@@ -54,6 +54,9 @@ pub(crate) enum MapCommand {
     /// (reachability, barcodes readable, cars boardable, doors, route). Every finding is reported
     /// as FILE:LINE: ELEMENT: MESSAGE; exit status 1 when there is any.
     Check { file: PathBuf },
+    /// Print the whole building as JSON (floors, walls, doors, barcodes, elevator, mission), for
+    /// another simulator or a tool built from the same map (its shape: docs/maps.md).
+    Show { file: PathBuf },
 }
 
 pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
@@ -96,6 +99,11 @@ pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
             Ok(Exit::Ok.code())
         }
         MapCommand::Check { file } => map_check(&file, out.json),
+        MapCommand::Show { file } => {
+            let map = situate_sim::load_map(&file).map_err(|e| problem(Exit::BadFile, e.to_string()))?;
+            stdoutln!("{}", map.building_json());
+            Ok(Exit::Ok.code())
+        }
     }
 }
 

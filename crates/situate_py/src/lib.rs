@@ -52,11 +52,19 @@ fn load_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Vec<String>> 
     Ok(types.iter().map(|t| skill::describe(&t.decl)).collect())
 }
 
+/// The building of a map file as JSON (what `situate map show` prints); raises `ValueError`
+/// with the loader's message (file and line).
+#[pyfunction]
+fn map_json(py: Python<'_>, path: std::path::PathBuf) -> PyResult<String> {
+    py.detach(|| situate_cli::building_json(&path)).map_err(pyo3::exceptions::PyValueError::new_err)
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(main, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(load_file, m)?)?;
+    m.add_function(wrap_pyfunction!(map_json, m)?)?;
     m.add_function(wrap_pyfunction!(skill::declare, m)?)?;
     m.add_function(wrap_pyfunction!(convert_check, m)?)?;
     m.add_class::<skill::Declaration>()?;

@@ -365,6 +365,71 @@ impl Map {
         json!({"floors": floors, "cars": cars, "robot_radius": self.robot_radius})
     }
 
+    /// The whole building as JSON, for another simulator built from the same file (the physics
+    /// robot, `situate.physics`): every floor's walls, obstacles, doors, barcodes (with the
+    /// direction each faces, `null`: readable from anywhere), lobby and office; the elevator's
+    /// timing and cars (shaft, door, panel); the mission; the robot's radius. What `situate map
+    /// show` prints (its shape: `docs/maps.md`, "The building as JSON").
+    pub fn building_json(&self) -> Json {
+        let seg = |s: &Seg| json!([s.a.x, s.a.y, s.b.x, s.b.y]);
+        let barcode = |b: &Barcode| json!({"id": b.id, "x": b.at.x, "y": b.at.y, "facing": b.facing});
+        let floors: Vec<Json> = self
+            .floors
+            .iter()
+            .map(|f| {
+                let doors: Vec<Json> = f
+                    .doors
+                    .iter()
+                    .map(|d| json!({"name": d.name, "seg": seg(&d.seg), "barcode": d.barcode.as_ref().map(barcode)}))
+                    .collect();
+                json!({
+                    "level": f.level,
+                    "name": f.name,
+                    "walls": f.walls.iter().map(seg).collect::<Vec<_>>(),
+                    "obstacles": f.obstacles.iter().map(|p| p.iter().map(|q| json!([q.x, q.y])).collect::<Vec<_>>()).collect::<Vec<_>>(),
+                    "doors": doors,
+                    "barcodes": f.barcodes.iter().map(barcode).collect::<Vec<_>>(),
+                    "lobby": f.lobby.as_ref().map(|l| json!({"button": [l.button.x, l.button.y], "facing": l.facing, "barcode": l.barcode})),
+                    "office": f.office.as_ref().map(|o| json!({
+                        "polygon": o.polygon.iter().map(|q| json!([q.x, q.y])).collect::<Vec<_>>(),
+                        "barcode": barcode(&o.barcode),
+                    })),
+                })
+            })
+            .collect();
+        let e = &self.elevator;
+        let cars: Vec<Json> = e
+            .cars
+            .iter()
+            .map(|c| {
+                let (panel, facing) = c.panel();
+                let side = match c.door_side {
+                    Side::North => "north",
+                    Side::South => "south",
+                    Side::East => "east",
+                    Side::West => "west",
+                };
+                json!({
+                    "id": c.id, "x0": c.x0, "y0": c.y0, "x1": c.x1, "y1": c.y1,
+                    "door_side": side, "door_width": c.door_width, "door": seg(&c.door()),
+                    "walls": c.walls().iter().map(seg).collect::<Vec<_>>(),
+                    "panel": {"x": panel.x, "y": panel.y, "facing": facing}, "barcode": c.barcode,
+                })
+            })
+            .collect();
+        json!({
+            "name": self.name,
+            "robot_radius": self.robot_radius,
+            "floors": floors,
+            "elevator": {
+                "travel_s_per_floor": e.travel_s_per_floor, "door_move_s": e.door_move_s,
+                "open_s": [e.open_s.0, e.open_s.1], "arrive_s": [e.arrive_s.0, e.arrive_s.1],
+                "cars": cars,
+            },
+            "mission": self.mission_json(),
+        })
+    }
+
     /// The mission and its route hints as JSON, for a sequencer.
     pub fn mission_json(&self) -> Json {
         let m = &self.mission;

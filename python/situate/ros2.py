@@ -1,10 +1,11 @@
-"""A test double of a ROS 2 robot: a node that speaks rmw_zenoh on a Zenoh session.
+"""A ROS 2 node in Python that speaks rmw_zenoh on a Zenoh session, with no ROS 2 installed.
 
-It publishes and subscribes exactly as a ROS 2 program on `rmw_zenoh_cpp` (Jazzy, Kilted) does, so
-situate's ROS 2 side can be tested against "a robot" without ROS 2. `Ros2Peer` is one ROS 2 node;
-`ros2_base.DiffDriveBase` is a kinematic differential-drive robot on top of it, in a rectangular
-room, that takes `cmd_vel` and publishes `/odom`, `/tf`, `/scan` and (with simulated time)
-`/clock`.
+It publishes and subscribes exactly as a ROS 2 program on `rmw_zenoh_cpp` (Jazzy, Kilted) does.
+The physics robot (`situate.physics`) is such a node, and the tests' ROS 2 robots
+(python/tests/ros2_base.py's kinematic `DiffDriveBase`) are built on it, so situate's ROS 2 side
+is tried against "a robot" without ROS 2. `Ros2Peer` is one ROS 2 node; `Publisher` and
+`Subscription` its entities. It needs the `physics` extra (``pip install 'situate[physics]'``:
+`rosbags` and `xxhash`).
 
 Messages are encoded and decoded with `rosbags`' ROS 2 Jazzy type store, and the type hashes in
 keys and tokens are its RIHS01 hashes (`Typestore.hash_rihs01`).

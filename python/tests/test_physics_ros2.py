@@ -1,0 +1,183 @@
+"""The physics robot is a ROS 2 robot: situate's standard skills drive it through ROS 2 alone.
+
+`situate.physics.node.PhysicsNode` (MuJoCo: mass, wheel motors, friction, the sonar's cone) in
+the default building's lab, speaking rmw_zenoh on a Zenoh session connected to situate's link.
+situate runs no simulator: its ``sonar.range`` and ``odom`` come from the node's ``/sonar`` and
+``/odom`` (topics in), its ``drive`` goes out as ``/cmd_vel``, and its cycle follows the node's
+``/clock`` (``use_sim_time``). The delivery's wander, avoid and runaway skills, unchanged, move
+the base about the lab, and its walls hold it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from support import REPO, STARTUP_S, situate, start_manager, zenoh_client
+
+from situate.physics import Building, PhysicsWorld
+from situate.physics.node import PhysicsNode
+from situate.ros2 import Ros2Peer
+
+ROBOT = """\
+robot: physbot
+cycle: {rate_hz: 10, clock: simulated}
+skills:
+  - {name: runaway, type: std.runaway}
+  - {name: avoid, type: std.avoid}
+  - {name: wander, type: std.wander, params: {seed: 5}}
+ros2:
+  use_sim_time: true
+  rate_hz: 100
+  topics:
+    - {topic: /sonar, type: sensor_msgs/msg/LaserScan, signal: sonar.range, direction: in, ring: 24}
+    - {topic: /odom, type: nav_msgs/msg/Odometry, signal: odom, direction: in}
+    - {signal: drive, topic: /cmd_vel, type: geometry_msgs/msg/Twist}
+"""
+
+
+def wait_until(
+    cond: Callable[[], bool],
+    what: str,
+    bound: float = 3 * STARTUP_S,
+    detail: Callable[[], str] | None = None,
+) -> None:
+    deadline = time.monotonic() + bound
+    while not cond():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what}: {detail() if detail else 'not in time'}")
+        time.sleep(0.05)
+
+
+def test_the_standard_skills_drive_the_physics_robot_through_ros_2(tmp_path: Path) -> None:
+    robot_file = tmp_path / "physbot.yaml"
+    robot_file.write_text(ROBOT)
+    robot = start_manager(robot_file, "physbot")
+    connect = robot.connect_args
+
+    def stats() -> dict[str, float]:
+        out = situate("stats", *connect, "--json")
+        assert out.returncode == 0, out.stderr
+        result: dict[str, float] = json.loads(out.stdout)
+        return result
+
+    def query(signal: str) -> object:
+        out = situate("query", signal, *connect, "--json")
+        assert out.returncode == 0, out.stderr
+        value = json.loads(out.stdout)
+        return value.get("value", value) if isinstance(value, dict) else value
+
+    building = Building.load(REPO / "maps" / "default.yaml")
+    world = PhysicsWorld(building, seed=2)
+    start = world.pose()
+    try:
+        with zenoh_client(robot.endpoint) as s:
+            peer = Ros2Peer(s, node="physics")
+            node = PhysicsNode(world, peer, rate_hz=10)
+            try:
+                wait_until(
+                    lambda: any("/MS/" in k and "/%clock/" in k for k in peer.graph()),
+                    "situate's /clock subscription",
+                )
+                assert stats()["cycle"] == 0, "no cycle before the robot's clock runs"
+                node.start(time_scale=2.0)
+                # The skills' commands reach the base, and the base drives about the lab.
+                wait_until(lambda: node.commands_received > 20, "commands reach the base")
+                wait_until(
+                    lambda: math.dist((world.pose().x, world.pose().y), (start.x, start.y)) > 1.0,
+                    "the base drives a metre",
+                )
+                node.stop()
+                assert not node.cmd_problems, node.cmd_problems
+                # One cycle per tick of the robot's clock, none skipped, none doubled.
+                wait_until(
+                    lambda: stats()["cycle"] == node.ticks - 1,
+                    "a cycle per tick",
+                    detail=lambda: f"cycle {stats()['cycle']}, ticks {node.ticks}",
+                )
+                # situate's odom is the base's wheel odometry (as of the last tick or the one
+                # before: the device hands a message to the cycle within a millisecond).
+                odom = query("odom")
+                assert isinstance(odom, dict), odom
+                o = world.odometry()
+                assert math.dist((float(odom["x"]), float(odom["y"])), (o.x, o.y)) < 0.1, odom
+                ring = query("sonar.range")
+                assert isinstance(ring, list), ring
+                assert len(ring) == 24
+                # The lab's walls held the base, and it stayed on its wheels.
+                p = world.pose()
+                assert 0.0 < p.x < 8.5, p
+                assert 0.0 < p.y < 6.0, p
+                assert p.floor == -1
+                assert world.tilt() < 0.1
+            finally:
+                node.close()
+                peer.close()
+    finally:
+        err = robot.stop()
+    assert "panicked" not in err, err
+
+
+def test_python_m_situate_physics_runs_the_robot_until_sigterm(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nrobot_radius: 0.25\n")
+    out = subprocess.run(
+        [sys.executable, "-m", "situate.physics", str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=STARTUP_S,
+        check=False,
+    )
+    assert out.returncode == 3, out
+    assert "bad.yaml" in out.stderr
+    robot_file = tmp_path / "physbot.yaml"
+    robot_file.write_text(ROBOT)
+    robot = start_manager(robot_file, "physbot")
+    try:
+        with zenoh_client(robot.endpoint) as s:
+            peer = Ros2Peer(s, node="watcher")
+            node = subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "situate.physics",
+                    str(REPO / "maps" / "default.yaml"),
+                    "--connect",
+                    robot.endpoint,
+                    "--node",
+                    "base",
+                ],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+            try:
+                # Its node and its /clock publisher are in the ROS 2 graph, and situate's
+                # cycle follows its clock.
+                wait_until(
+                    lambda: any(
+                        "/MP/" in k and "/%clock/" in k and "/base/" in k for k in peer.graph()
+                    ),
+                    "the physics node's /clock publisher",
+                )
+                wait_until(
+                    lambda: (
+                        json.loads(situate("stats", *robot.connect_args, "--json").stdout)["cycle"]
+                        > 5
+                    ),
+                    "the cycle follows the physics robot's clock",
+                )
+            finally:
+                node.send_signal(signal.SIGTERM)
+                stdout, stderr = node.communicate(timeout=STARTUP_S)
+            peer.close()
+        assert node.returncode == 0, stderr
+        assert "physics robot in 'default'" in stdout
+    finally:
+        robot.stop()
