@@ -63,7 +63,7 @@ from typing import Any
 
 import xxhash
 import zenoh
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from zenoh.ext import Int64, z_serialize
 
 ADMIN_SPACE = "@ros2_lv"
@@ -74,12 +74,34 @@ _STORE: Any = None
 _STORE_LOCK = threading.Lock()
 
 
+#: situate's own messages: the package `ros2/situate_msgs` of the repository, for a ROS 2 system
+#: to build (python/tests/test_physics_ros2.py checks these are its files).
+SITUATE_MSGS = {
+    "situate_msgs/msg/Barcodes": """\
+# The barcodes a reader sees now: situate's `barcodes` signal (docs/robot-signals.md), one entry
+# per barcode within the reader's range and field of view, facing it and in line of sight,
+# nearest first. The three arrays have one element per barcode.
+std_msgs/Header header
+
+# The barcodes' ids.
+int64[] ids
+# Where each is, rad, counter-clockwise from ahead (the base's x axis).
+float64[] bearing
+# How far each is from the base's centre, m.
+float64[] distance
+""",
+}
+
+
 def store() -> Any:
-    """Returns rosbags' ROS 2 Jazzy type store (made once)."""
+    """Returns rosbags' ROS 2 Jazzy type store, with `SITUATE_MSGS` (made once)."""
     global _STORE
     with _STORE_LOCK:
         if _STORE is None:
-            _STORE = get_typestore(Stores.ROS2_JAZZY)
+            s = get_typestore(Stores.ROS2_JAZZY)
+            for name, text in SITUATE_MSGS.items():
+                s.register(get_types_from_msg(text, name))
+            _STORE = s
         return _STORE
 
 
@@ -407,6 +429,7 @@ class Subscription:
         callback: Callable[[Any], None] | None,
         qos: Qos,
         keep: int,
+        ordered: bool = False,
     ) -> None:
         if qos.durability != Durability.VOLATILE:
             raise NotImplementedError("transient-local subscriptions are not in this double")
@@ -425,7 +448,13 @@ class Subscription:
         self._count = 0
         self._problems: list[str] = []
         self._last_seq: dict[bytes, int] = {}
-        self._sub = peer.session.declare_subscriber(self.key, self._on_sample)
+        # `ordered`: the callback runs on Zenoh's thread as each sample arrives, so the ordered
+        # subscriptions of a session see one publisher session's puts in the order they were
+        # made; by default zenoh-python runs each subscription's callbacks on a thread of its own.
+        handler: Any = (
+            zenoh.handlers.Callback(self._on_sample, indirect=False) if ordered else self._on_sample
+        )
+        self._sub = peer.session.declare_subscriber(self.key, handler)
         self._token = peer.session.liveliness().declare_token(self.token)
         self._closed = False
 
@@ -616,15 +645,19 @@ class Ros2Peer:
         qos: Qos = QOS_DEFAULT,
         *,
         keep: int = 1000,
+        ordered: bool = False,
     ) -> Subscription:
         """Creates a subscription (a Zenoh subscriber, then its MS token).
 
-        `callback` gets each decoded message on Zenoh's thread; the last `keep` are kept.
+        `callback` gets each decoded message; the last `keep` are kept. By default each
+        subscription's callbacks run on a thread of its own; with `ordered`, on Zenoh's thread
+        as the samples arrive, so that the ordered subscriptions see one remote session's puts
+        in the order they were made (the callback must be quick: it holds up the session).
         """
         with self._lock:
             if self._closed:
                 raise RuntimeError("the peer is closed")
-        sub = Subscription(self, topic, ros_type, callback, qos, keep)
+        sub = Subscription(self, topic, ros_type, callback, qos, keep, ordered)
         with self._lock:
             self._entities.append(sub)
         return sub

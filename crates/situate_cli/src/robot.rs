@@ -503,6 +503,11 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
                     bridge.topics().len()
                 ));
                 running.ros2 = Some(bridge);
+                if ros_time && !opts.stopped {
+                    // ROS time: the cycle follows /clock from its first message; a `stop` (or a
+                    // pausing monitor) holds it, a `run` lets it go on.
+                    let _ = running.handle.request_timeout(situate::manager::Request::Run, Duration::from_secs(30));
+                }
             }
             Err(e) => {
                 let _ = running.finish();

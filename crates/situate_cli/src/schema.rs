@@ -262,6 +262,7 @@ fn ros2() -> Json {
             "node": {"type": "string", "description": "The node's name (default: the robot's)."},
             "rate_hz": {"type": "number", "exclusiveMinimum": 0, "maximum": 100},
             "use_sim_time": {"type": "boolean", "description": "ROS time: the cycle follows /clock, one cycle per period of ROS time (default false)."},
+            "lockstep": {"type": "boolean", "description": "With use_sim_time: the topics out go as each cycle ends, then ~/cycle says up to which ROS time the cycles ran, for a simulator to wait on (default false)."},
             "topics": {
                 "type": "array",
                 "items": {

@@ -102,6 +102,19 @@ pub enum Request {
     Step {
         cycles: u64,
     },
+    /// Follow a clock outside the manager (ROS time: `situate_ros2`'s `/clock`): with `on`,
+    /// `Run` no longer starts the manager's own clock; it lets [`Request::Tick`]s run cycles,
+    /// and `Stop` (or a pausing monitor) holds them back. `Step` still runs cycles at once.
+    /// `on: false` gives the cycle back to the manager's clock.
+    ExternalClock {
+        on: bool,
+    },
+    /// A tick of the external clock: run cycles until the cycle count is `until`, while the
+    /// manager runs (a pausing monitor stops it where it fires; stopped, none run). Replies
+    /// [`Reply::Ticked`]: the cycles it ran and the count after (below `until` when it stopped).
+    Tick {
+        until: u64,
+    },
     /// End the manager's thread (from a [`Handle`]).
     Shutdown,
 }
@@ -126,6 +139,11 @@ pub enum Reply {
     Monitors(Vec<MonitorInfo>),
     /// The monitors an [`Request::EndSession`] removed.
     MonitorsCancelled(Vec<u64>),
+    /// What a [`Request::Tick`] did: the cycles it ran, and the cycle count after.
+    Ticked {
+        ran: u64,
+        cycle: u64,
+    },
 }
 
 /// Why a request was refused. Every message names the thing and, where it

@@ -250,6 +250,9 @@ pub struct Manager {
     /// A pausing monitor fired in the last cycle: a running cycle stops, a
     /// step ends early.
     paused: bool,
+    /// The cycle follows a clock outside the manager ([`Request::ExternalClock`]): running
+    /// lets its ticks through, and the manager's own clock never runs a cycle.
+    external_clock: bool,
     /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
     sampled: bool,
     /// The ready steps of a level (kept to reuse its allocation).
@@ -377,6 +380,7 @@ impl Manager {
             stop_at: None,
             speed: None,
             paused: false,
+            external_clock: false,
             sampled: true,
             ready: Vec::new(),
             exchanging: Vec::new(),

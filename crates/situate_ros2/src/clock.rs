@@ -53,11 +53,7 @@ impl RosTime {
         if !self.known.load(Ordering::Acquire) {
             return None;
         }
-        let ns = self.ns.load(Ordering::Acquire);
-        Some(msgs::Time {
-            sec: i32::try_from(ns.div_euclid(1_000_000_000)).unwrap_or(i32::MAX),
-            nanosec: ns.rem_euclid(1_000_000_000) as u32,
-        })
+        Some(time_of(self.ns.load(Ordering::Acquire)))
     }
 }
 
@@ -85,6 +81,68 @@ struct Shared {
     resets: AtomicU64,
 }
 
+/// Lock-step (`lockstep: true`): the topics out, published by the driver as each cycle ends,
+/// and the node's `~/cycle` publisher, put after them once the cycles a `/clock` message owed
+/// have run.
+pub(crate) struct Lockstep {
+    pub(crate) topics: Vec<crate::Topic>,
+    pub(crate) ack: zenoh::pubsub::Publisher<'static>,
+    pub(crate) ack_gid: [u8; 16],
+    pub(crate) ack_sequence: i64,
+    /// Held while the publisher lives.
+    pub(crate) _ack_token: zenoh::liveliness::LivelinessToken,
+}
+
+impl Lockstep {
+    /// Declares the `~/cycle` publisher (entity `entity_id`) on `node`, blocking rather than
+    /// dropping when the network is slow: a simulator waits for every one.
+    pub(crate) fn declare(node: &Ros2Node, entity_id: u64, topics: Vec<crate::Topic>) -> Result<Lockstep, Ros2Error> {
+        let fq = format!("{}/{}/cycle", node.name.namespace.trim_end_matches('/'), node.name.name);
+        let key = node.name.service_key(&fq, CLOCK_DDS, CLOCK_HASH);
+        let ack = node
+            .session
+            .declare_publisher(key.clone())
+            .congestion_control(zenoh::qos::CongestionControl::Block)
+            .wait()
+            .map_err(|e| Ros2Error::Zenoh { what: format!("a publisher on `{key}`"), message: e.to_string() })?;
+        let token_key = node.name.entity_token(&node.zid, node.node_id, entity_id, "MP", &fq, CLOCK_DDS, CLOCK_HASH);
+        let token = node.declare_token(&token_key)?;
+        tracing::info!(topic = %fq, %key, "lock-step: the cycles done are published");
+        Ok(Lockstep { topics, ack, ack_gid: crate::rmw::gid(&token_key), ack_sequence: 0, _ack_token: token })
+    }
+
+    /// Publishes the topics out written since they were last published, stamped `stamp`.
+    fn publish_outputs(&mut self, handle: &Handle, time: &RosTime) {
+        for topic in &mut self.topics {
+            crate::publish_if_new(handle, topic, Some(time));
+        }
+    }
+
+    /// Says the robot has run its cycles up to ROS time `ns`.
+    fn publish_done(&mut self, ns: i64) {
+        let done = Clock { clock: time_of(ns) };
+        let payload = match msgs::encode(&done) {
+            Ok(p) => p,
+            Err(e) => {
+                tracing::warn!(error = %e, "lock-step: cannot encode ~/cycle");
+                return;
+            }
+        };
+        self.ack_sequence += 1;
+        let attachment = crate::rmw::attachment(self.ack_sequence, crate::wall_ns(), &self.ack_gid);
+        if let Err(e) = self.ack.put(payload).attachment(attachment).wait() {
+            tracing::warn!(error = %e, "lock-step: the ~/cycle put failed");
+        }
+    }
+}
+
+fn time_of(ns: i64) -> msgs::Time {
+    msgs::Time {
+        sec: i32::try_from(ns.div_euclid(1_000_000_000)).unwrap_or(i32::MAX),
+        nanosec: ns.rem_euclid(1_000_000_000) as u32,
+    }
+}
+
 /// The running driver; dropping it stops it and undeclares its subscription.
 pub struct ClockDriver {
     shared: Arc<Shared>,
@@ -97,7 +155,16 @@ pub struct ClockDriver {
 impl ClockDriver {
     /// Subscribes to `/clock` on `node` (holding its `MS` token, entity `entity_id`) and steps
     /// the robot behind `handle`, whose period is `period_s`, one cycle per period of ROS time.
-    pub fn start(node: &Ros2Node, entity_id: u64, handle: Handle, period_s: f64) -> Result<ClockDriver, Ros2Error> {
+    /// The manager's cycle follows this clock from now on ([`Request::ExternalClock`]): it runs
+    /// while the manager runs, and a stop (a pausing monitor, a client's `stop`) holds it. With
+    /// `lockstep`, the topics out are published by the driver as each cycle ends.
+    pub(crate) fn start(
+        node: &Ros2Node,
+        entity_id: u64,
+        handle: Handle,
+        period_s: f64,
+        lockstep: Option<Lockstep>,
+    ) -> Result<ClockDriver, Ros2Error> {
         let shared = Arc::new(Shared::default());
         let time = Arc::new(RosTime::default());
         let key = node.name.service_key("/clock", CLOCK_DDS, CLOCK_HASH);
@@ -129,11 +196,16 @@ impl ClockDriver {
         let token_key =
             node.name.entity_token(&node.zid, node.node_id, entity_id, "MS", "/clock", CLOCK_DDS, CLOCK_HASH);
         let token = node.declare_token(&token_key)?;
+        handle
+            .request_timeout(Request::ExternalClock { on: true }, Duration::from_secs(30))
+            .map_err(|e| Ros2Error::Period(format!("the manager did not take the external clock: {e}")))?;
         let period_ns = (period_s * 1e9).round().max(1.0) as i64;
-        let s = Arc::clone(&shared);
+        let (s, t) = (Arc::clone(&shared), Arc::clone(&time));
+        // Woken by a ManagerStarted event too: cycles owed while the robot was stopped run then.
+        let events = handle.events();
         let thread = std::thread::Builder::new()
             .name("situate-ros-time".into())
-            .spawn(move || drive(&s, &handle, period_ns))
+            .spawn(move || Driver { shared: &s, time: &t, handle: &handle, events, period_ns, lockstep }.run())
             .map_err(Ros2Error::Thread)?;
         tracing::info!(%key, period_s, "the cycle follows ROS time (/clock)");
         Ok(ClockDriver { shared, time, thread: Some(thread), _subscriber: subscriber, _token: token })
@@ -174,54 +246,142 @@ pub fn cycles_due(anchor_ns: i64, now_ns: i64, period_ns: i64) -> u64 {
     u64::try_from((now_ns.saturating_sub(anchor_ns)) / period_ns.max(1)).unwrap_or(0)
 }
 
-fn drive(shared: &Shared, handle: &Handle, period_ns: i64) {
-    // The anchor: ROS time of the robot's cycle 0 (moved back by the cycles already run when the
-    // clock resets, so the count stays continuous).
-    let mut anchor: Option<i64> = None;
-    let mut last: Option<i64> = None;
-    let mut done: u64 = 0;
-    loop {
-        let now = {
-            let mut latest = shared.latest.lock().unwrap_or_else(|p| p.into_inner());
+/// While cycles are owed and the robot is stopped, it is asked again this often (a client's
+/// `step` may have run them): the stop ends with a `ManagerStarted` event, which wakes the
+/// driver at once.
+const OWED_POLL: Duration = Duration::from_millis(20);
+
+struct Driver<'a> {
+    shared: &'a Shared,
+    time: &'a RosTime,
+    handle: &'a Handle,
+    events: crossbeam_channel::Receiver<situate_manager::Event>,
+    period_ns: i64,
+    lockstep: Option<Lockstep>,
+}
+
+/// What a wait for the next thing to do found.
+enum Woken {
+    Clock(i64),
+    Look,
+    Stop,
+}
+
+impl Driver<'_> {
+    fn run(mut self) {
+        // The anchor: ROS time `.0` is the robot's cycle `.1`. Moved (to the cycle count then)
+        // when the clock resets, so the count stays continuous.
+        let mut anchor: Option<(i64, u64)> = None;
+        let mut last: Option<i64> = None;
+        // The manager's cycle count, as its last reply said.
+        let mut cycle = match self.handle.request_timeout(Request::QueryStats, Duration::from_secs(30)) {
+            Ok(situate_manager::Reply::Stats(s)) => s.cycle,
+            _ => 0,
+        };
+        // A /clock message came whose cycles are not yet said done (lock-step).
+        let mut unanswered = false;
+        let mut owed = false;
+        loop {
+            match self.wait(owed) {
+                Woken::Stop => return,
+                Woken::Look => {}
+                Woken::Clock(now) => {
+                    if let Some(l) = last {
+                        let jump = now.saturating_sub(l);
+                        if !(0..=MAX_JUMP_S * 1_000_000_000).contains(&jump) {
+                            self.shared.resets.fetch_add(1, Ordering::Relaxed);
+                            let how = if jump < 0 { "went back" } else { "jumped forward" };
+                            tracing::warn!(from_ns = l, to_ns = now, "ROS time {how}: the cycle goes on from here");
+                            anchor = None;
+                        }
+                    }
+                    last = Some(now);
+                    anchor.get_or_insert((now, cycle));
+                    unanswered = true;
+                }
+            }
+            let (Some(now), Some((a_ns, a_cycle))) = (last, anchor) else { continue };
+            let target = a_cycle.saturating_add(cycles_due(a_ns, now, self.period_ns));
+            owed = false;
+            // Ask even when nothing seems owed: a client's `step` may have moved the count.
             loop {
-                if latest.1 {
+                let until = if self.lockstep.is_some() {
+                    cycle.saturating_add(1).min(target.max(cycle))
+                } else {
+                    target.min(cycle.saturating_add(MAX_STEP))
+                };
+                let reply = self.handle.request_timeout(Request::Tick { until }, Duration::from_secs(600));
+                let (ran, after) = match reply {
+                    Ok(situate_manager::Reply::Ticked { ran, cycle }) => (ran, cycle),
+                    Ok(other) => {
+                        tracing::warn!(?other, "ROS time: an unexpected reply to a tick; the driver stops");
+                        return;
+                    }
+                    Err(e) => {
+                        tracing::warn!(error = %e, "ROS time: the manager did not step; the driver stops");
+                        return;
+                    }
+                };
+                self.shared.cycles.fetch_add(ran, Ordering::Relaxed);
+                cycle = after;
+                if ran > 0 {
+                    if let Some(l) = self.lockstep.as_mut() {
+                        l.publish_outputs(self.handle, self.time);
+                    }
+                }
+                if self.stopping() {
                     return;
                 }
-                if let Some(ns) = latest.0.take() {
-                    break ns;
+                if cycle >= target {
+                    break;
                 }
-                latest = shared.wake.wait(latest).unwrap_or_else(|p| p.into_inner());
+                if after < until {
+                    // Stopped: the rest waits for a run (or a client's steps).
+                    owed = true;
+                    break;
+                }
             }
-        };
-        if let Some(l) = last {
-            let jump = now.saturating_sub(l);
-            if !(0..=MAX_JUMP_S * 1_000_000_000).contains(&jump) {
-                shared.resets.fetch_add(1, Ordering::Relaxed);
-                let how = if jump < 0 { "went back" } else { "jumped forward" };
-                tracing::warn!(from_ns = l, to_ns = now, "ROS time {how}: the cycle goes on from here");
-                anchor = None;
+            if !owed && unanswered {
+                if let Some(l) = self.lockstep.as_mut() {
+                    l.publish_outputs(self.handle, self.time);
+                    l.publish_done(now);
+                }
+                unanswered = false;
             }
         }
-        last = Some(now);
-        let a = *anchor.get_or_insert_with(|| {
-            now.saturating_sub(i64::try_from(done).unwrap_or(i64::MAX).saturating_mul(period_ns))
-        });
-        let mut due = cycles_due(a, now, period_ns).saturating_sub(done);
-        while due > 0 {
-            let n = due.min(MAX_STEP);
-            match handle.request_timeout(Request::Step { cycles: n }, Duration::from_secs(600)) {
-                Ok(_) => {
-                    done += n;
-                    due -= n;
-                    shared.cycles.fetch_add(n, Ordering::Relaxed);
-                }
-                Err(e) => {
-                    tracing::warn!(error = %e, "ROS time: the manager did not step; the driver stops");
-                    return;
-                }
+    }
+
+    fn stopping(&self) -> bool {
+        self.shared.latest.lock().unwrap_or_else(|p| p.into_inner()).1
+    }
+
+    /// Waits for a `/clock` message, or (`owed`) a `ManagerStarted` event or [`OWED_POLL`].
+    fn wait(&self, owed: bool) -> Woken {
+        let mut latest = self.shared.latest.lock().unwrap_or_else(|p| p.into_inner());
+        loop {
+            if latest.1 {
+                return Woken::Stop;
             }
-            if shared.latest.lock().unwrap_or_else(|p| p.into_inner()).1 {
-                return;
+            if let Some(ns) = latest.0.take() {
+                return Woken::Clock(ns);
+            }
+            if owed {
+                // Drained without holding the lock long: events are few (a start, a stop, prints).
+                let started =
+                    self.events.try_iter().any(|e| matches!(e, situate_manager::Event::ManagerStarted { .. }));
+                if started {
+                    return Woken::Look;
+                }
+                let (back, timeout) =
+                    self.shared.wake.wait_timeout(latest, OWED_POLL).unwrap_or_else(|p| p.into_inner());
+                latest = back;
+                if timeout.timed_out() {
+                    return Woken::Look;
+                }
+            } else {
+                // Keep the events from piling up while nothing is owed.
+                while self.events.try_recv().is_ok() {}
+                latest = self.shared.wake.wait(latest).unwrap_or_else(|p| p.into_inner());
             }
         }
     }

@@ -8,6 +8,7 @@
 //!   node: situate         # the node's name (default: the robot's name)
 //!   rate_hz: 20           # how often signals are sampled (default 20, at most 100)
 //!   use_sim_time: false   # the cycle follows /clock (default false)
+//!   lockstep: false       # with use_sim_time: outputs per cycle, then ~/cycle (default false)
 //!   topics:
 //!     - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}
 //!     - {signal: odom, topic: odom, type: nav_msgs/msg/Odometry, frame_id: odom, child_frame_id: base_link}
@@ -53,6 +54,12 @@ pub struct Ros2Config {
     /// ROS time, and the messages are stamped with it ([`crate::clock`]). Default: no.
     #[serde(default)]
     pub use_sim_time: bool,
+    /// Lock-step with a simulator (needs `use_sim_time`): the topics out are published as each
+    /// cycle ends, and the node's `~/cycle` topic (`rosgraph_msgs/msg/Clock`) says, after them,
+    /// up to which ROS time the robot has run its cycles; a simulator that waits for it before
+    /// its next step makes a run the same every time ([`crate::clock`]). Default: no.
+    #[serde(default)]
+    pub lockstep: bool,
 }
 
 fn default_rate_hz() -> f64 {
@@ -155,6 +162,9 @@ impl Ros2Config {
             if !valid_ros_name(node, false) || node.contains('/') {
                 return Err(format!("`node` is no ROS 2 node name: {node:?} (letters, digits, underscores)"));
             }
+        }
+        if self.lockstep && !self.use_sim_time {
+            return Err("`lockstep` needs `use_sim_time: true`: the lock-step is with a simulator's /clock".into());
         }
         if self.topics.is_empty() && !self.services && !self.use_sim_time {
             return Err(
@@ -348,5 +358,9 @@ ros2:
         assert!(e.message.contains("`services: true`"), "{e}");
         let e = Ros2Config::from_node(&section("ros2:\n  services: yes please\n")).expect_err("not a bool");
         assert!(e.message.contains("bool"), "{e}");
+        let e = Ros2Config::from_node(&section("ros2:\n  services: true\n  lockstep: true\n")).expect_err("no clock");
+        assert!(e.message.contains("`lockstep` needs `use_sim_time: true`"), "{e}");
+        let c = Ros2Config::from_node(&section("ros2:\n  use_sim_time: true\n  lockstep: true\n")).expect("lockstep");
+        assert!(c.lockstep);
     }
 }

@@ -78,6 +78,12 @@ pub fn signal_type(ty: MsgType, ring: Option<usize>) -> SignalType {
                 .collect(),
         ))),
         MsgType::BatteryState => record(&["voltage", "current", "charge", "percentage", "temperature"]),
+        // The robot's `barcodes` record (docs/robot-signals.md, `situate_robot::Barcodes`).
+        MsgType::Barcodes => SignalType::Record(Arc::new(RecordType::new(vec![
+            ("ids".to_string(), SignalType::Array { elem: ElemType::I64, len: None }),
+            ("bearing".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
+            ("distance".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
+        ]))),
         MsgType::Int64 => SignalType::I64,
         MsgType::Bool => SignalType::Bool,
         MsgType::String => SignalType::Str,
@@ -374,6 +380,18 @@ impl Reader {
                     [m.voltage, m.current, m.charge, m.percentage, m.temperature].map(|v| Value::F64(f64::from(v))),
                 )
             }
+            MsgType::Barcodes => {
+                let m: msgs::Barcodes = msgs::decode(payload).map_err(e)?;
+                if m.ids.len() != m.bearing.len() || m.ids.len() != m.distance.len() {
+                    return Err(format!(
+                        "ids, bearing and distance differ in length ({}, {}, {})",
+                        m.ids.len(),
+                        m.bearing.len(),
+                        m.distance.len()
+                    ));
+                }
+                self.record([Value::I64s(m.ids.into()), Value::F64s(m.bearing.into()), Value::F64s(m.distance.into())])
+            }
             MsgType::Float64 => Value::F64(msgs::decode::<msgs::Float64>(payload).map_err(e)?.data),
             MsgType::Int64 => Value::I64(msgs::decode::<msgs::Int64>(payload).map_err(e)?.data),
             MsgType::Bool => Value::Bool(msgs::decode::<msgs::Bool>(payload).map_err(e)?.data),
@@ -484,6 +502,16 @@ mod tests {
             (MsgType::Imu, encode(&msgs::Imu::default()).unwrap()),
             (MsgType::JointState, encode(&msgs::JointState { position: vec![1.0], ..Default::default() }).unwrap()),
             (MsgType::BatteryState, encode(&msgs::BatteryState::default()).unwrap()),
+            (
+                MsgType::Barcodes,
+                encode(&msgs::Barcodes {
+                    ids: vec![10],
+                    bearing: vec![0.5],
+                    distance: vec![2.0],
+                    ..Default::default()
+                })
+                .unwrap(),
+            ),
             (MsgType::Float64, encode(&msgs::Float64 { data: 2.5 }).unwrap()),
             (MsgType::Int64, encode(&msgs::Int64 { data: -3 }).unwrap()),
             (MsgType::Bool, encode(&msgs::Bool { data: true }).unwrap()),

@@ -82,7 +82,7 @@ pub enum Ros2Error {
 }
 
 /// One signal published as a topic.
-struct Topic {
+pub(crate) struct Topic {
     config: TopicConfig,
     fq_name: String,
     publisher: zenoh::pubsub::Publisher<'static>,
@@ -185,11 +185,16 @@ impl Bridge {
             let fq_name = node.name.resolve(&t.topic);
             check_signal(&handle, t, &fq_name)?;
             let key = node.name.topic_key(&fq_name, t.msg_type);
-            let publisher = node
-                .session
-                .declare_publisher(key.clone())
-                .wait()
-                .map_err(|e| Ros2Error::Zenoh { what: format!("a publisher on `{key}`"), message: e.to_string() })?;
+            // Lock-step: a simulator waits for every message, so none is dropped.
+            let congestion = if config.lockstep {
+                zenoh::qos::CongestionControl::Block
+            } else {
+                zenoh::qos::CongestionControl::Drop
+            };
+            let publisher =
+                node.session.declare_publisher(key.clone()).congestion_control(congestion).wait().map_err(|e| {
+                    Ros2Error::Zenoh { what: format!("a publisher on `{key}`"), message: e.to_string() }
+                })?;
             let token_key = node.name.publisher_token(&node.zid, node.node_id, i as u64 + 1, &fq_name, t.msg_type);
             let token = node.declare_token(&token_key)?;
             tracing::info!(topic = %fq_name, signal = %t.signal, %key, "ROS 2 topic published");
@@ -204,15 +209,24 @@ impl Bridge {
                 warned: false,
             });
         }
-        // Entity ids: the topics 1..=n in order, then /clock, then the services.
+        let names = topics.iter().map(|t| (t.fq_name.clone(), t.publisher.key_expr().to_string())).collect();
+        // Entity ids: the topics 1..=n in order, then /clock, then ~/cycle (lock-step), then the
+        // services.
         let mut next_entity = config.topics.len() as u64 + 1;
         let clock = if config.use_sim_time {
             let period_s = match handle.request_timeout(Request::QueryStats, REQUEST_TIMEOUT) {
                 Ok(Reply::Stats(s)) => s.period_s,
                 other => return Err(Ros2Error::Period(format!("{other:?}"))),
             };
-            let driver = clock::ClockDriver::start(&node, next_entity, handle.clone(), period_s)?;
-            next_entity += 1;
+            let lockstep = if config.lockstep {
+                // The driver publishes the topics out as each cycle ends: no sampling thread.
+                let l = clock::Lockstep::declare(&node, next_entity + 1, std::mem::take(&mut topics))?;
+                Some(l)
+            } else {
+                None
+            };
+            let driver = clock::ClockDriver::start(&node, next_entity, handle.clone(), period_s, lockstep)?;
+            next_entity += if config.lockstep { 2 } else { 1 };
             Some(driver)
         } else {
             None
@@ -228,7 +242,6 @@ impl Bridge {
         } else {
             None
         };
-        let names = topics.iter().map(|t| (t.fq_name.clone(), t.publisher.key_expr().to_string())).collect();
         let stop = Arc::new(AtomicBool::new(false));
         let period = Duration::from_secs_f64(1.0 / config.rate_hz);
         let st = Arc::clone(&stop);
@@ -237,6 +250,7 @@ impl Bridge {
             .name("situate-ros2".into())
             .spawn(move || {
                 let _node = node;
+                // Lock-step: the ROS time driver publishes the topics (none are left here).
                 sample_loop(&handle, &mut topics, period, &st, stamps.as_deref());
             })
             .map_err(Ros2Error::Thread)?;
@@ -365,7 +379,7 @@ fn sample_loop(
     }
 }
 
-fn publish_if_new(handle: &Handle, topic: &mut Topic, stamps: Option<&clock::RosTime>) {
+pub(crate) fn publish_if_new(handle: &Handle, topic: &mut Topic, stamps: Option<&clock::RosTime>) {
     let reading =
         match handle.request_timeout(Request::QuerySignal { signal: topic.config.signal.clone() }, REQUEST_TIMEOUT) {
             Ok(Reply::Signal(r)) => r,
@@ -399,15 +413,19 @@ fn publish_if_new(handle: &Handle, topic: &mut Topic, stamps: Option<&clock::Ros
         }
     };
     topic.sequence += 1;
-    let now_ns = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
-        .unwrap_or(0);
-    let attachment = rmw::attachment(topic.sequence, now_ns, &topic.gid);
+    let attachment = rmw::attachment(topic.sequence, wall_ns(), &topic.gid);
     if let Err(e) = topic.publisher.put(payload).attachment(attachment).wait() {
         tracing::warn!(topic = %topic.fq_name, error = %e, "ROS 2 bridge: put failed");
     }
     tracing::trace!(topic = %topic.fq_name, cycle = reading.cycle, "published");
+}
+
+/// The wall clock, ns since the Unix epoch (an attachment's source timestamp).
+pub(crate) fn wall_ns() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
+        .unwrap_or(0)
 }
 
 fn field(value: &Value, name: &str) -> Option<f64> {
@@ -520,6 +538,6 @@ pub fn to_payload_stamped(t: &TopicConfig, value: &Value, stamp: msgs::Time) -> 
             Value::Str(text) => encode(&StringMsg { data: text.to_string() }),
             _ => return None,
         },
-        MsgType::Imu | MsgType::JointState | MsgType::BatteryState => return None,
+        MsgType::Imu | MsgType::JointState | MsgType::BatteryState | MsgType::Barcodes => return None,
     })
 }

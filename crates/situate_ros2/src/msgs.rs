@@ -53,6 +53,10 @@ pub enum MsgType {
     /// percentage, temperature}` (f64; NaN where the battery does not say, as in ROS 2).
     #[serde(rename = "sensor_msgs/msg/BatteryState")]
     BatteryState,
+    /// `situate_msgs/msg/Barcodes` (in only; the package is `ros2/situate_msgs`) → the robot's
+    /// `barcodes` record `{ids: i64[], bearing: f64[], distance: f64[]}`: a barcode reader's.
+    #[serde(rename = "situate_msgs/msg/Barcodes")]
+    Barcodes,
     /// `std_msgs/msg/Float64` ⇄ an `f64`.
     #[serde(rename = "std_msgs/msg/Float64")]
     Float64,
@@ -69,7 +73,7 @@ pub enum MsgType {
 
 impl MsgType {
     /// Every type, for messages that list them.
-    pub const ALL: [MsgType; 13] = [
+    pub const ALL: [MsgType; 14] = [
         MsgType::Twist,
         MsgType::TwistStamped,
         MsgType::Odometry,
@@ -79,6 +83,7 @@ impl MsgType {
         MsgType::Imu,
         MsgType::JointState,
         MsgType::BatteryState,
+        MsgType::Barcodes,
         MsgType::Float64,
         MsgType::Int64,
         MsgType::Bool,
@@ -97,6 +102,7 @@ impl MsgType {
             MsgType::Imu => "sensor_msgs/msg/Imu",
             MsgType::JointState => "sensor_msgs/msg/JointState",
             MsgType::BatteryState => "sensor_msgs/msg/BatteryState",
+            MsgType::Barcodes => "situate_msgs/msg/Barcodes",
             MsgType::Float64 => "std_msgs/msg/Float64",
             MsgType::Int64 => "std_msgs/msg/Int64",
             MsgType::Bool => "std_msgs/msg/Bool",
@@ -127,6 +133,8 @@ impl MsgType {
             MsgType::Imu => "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b",
             MsgType::JointState => "RIHS01_a13ee3a330e346c9d87b5aa18d24e11690752bd33a0350f11c5882bc9179260e",
             MsgType::BatteryState => "RIHS01_4bee5dfce981c98faa6828b868307a0a73f992ed0789f374ee96c8f840e69741",
+            // From ros2/situate_msgs/msg/Barcodes.msg (checked against rosbags in test_physics_ros2.py).
+            MsgType::Barcodes => "RIHS01_8158355b2018e7e7259d57dacba88095bc75e52a4f153b5debb188d3c13913ea",
             MsgType::Float64 => "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a",
             MsgType::Int64 => "RIHS01_8cd1048c2f186b6bd9a92472dc1ce51723c0833a221e2b7aecfff111774f4b49",
             MsgType::Bool => "RIHS01_feb91e995ff9ebd09c0cb3d2aed18b11077585839fb5db80193b62d74528f6c9",
@@ -136,7 +144,7 @@ impl MsgType {
 
     /// Whether a signal can be published as this type (a topic out).
     pub fn can_publish(self) -> bool {
-        !matches!(self, MsgType::Imu | MsgType::JointState | MsgType::BatteryState)
+        !matches!(self, MsgType::Imu | MsgType::JointState | MsgType::BatteryState | MsgType::Barcodes)
     }
 
     /// Whether this type can feed a signal (a topic in).
@@ -155,7 +163,9 @@ impl MsgType {
             MsgType::Int64 => "an i64",
             MsgType::Bool => "a bool",
             MsgType::String => "a string",
-            MsgType::Imu | MsgType::JointState | MsgType::BatteryState => "nothing: it is read, never published",
+            MsgType::Imu | MsgType::JointState | MsgType::BatteryState | MsgType::Barcodes => {
+                "nothing: it is read, never published"
+            }
         }
     }
 }
@@ -418,6 +428,15 @@ pub struct BatteryState {
     pub cell_temperature: Vec<f32>,
     pub location: String,
     pub serial_number: String,
+}
+
+/// `situate_msgs/msg/Barcodes` (`ros2/situate_msgs/msg/Barcodes.msg`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Barcodes {
+    pub header: Header,
+    pub ids: Vec<i64>,
+    pub bearing: Vec<f64>,
+    pub distance: Vec<f64>,
 }
 
 /// `rosgraph_msgs/msg/Clock`.

@@ -78,10 +78,14 @@ impl RosRobot {
             spec.skills.push(skill);
         }
         let manager = Manager::build(&spec, &registry).expect("the topics in are devices the robot is built with");
-        // With ROS time the robot waits, stopped, for /clock to step it.
+        // With ROS time the robot is spawned stopped (its own clock must never run a cycle), the
+        // bridge makes /clock its clock, and a run lets the clock's cycles through.
         let (handle, join) = manager.spawn(!ros2.use_sim_time);
         let link = Link::serve(name, handle.clone(), session, &link_config).expect("link");
         let bridge = Bridge::start_on(node, Some(inputs), handle.clone(), &ros2).expect("bridge");
+        if ros2.use_sim_time {
+            handle.request_timeout(Request::Run, WAIT).expect("run");
+        }
         RosRobot { handle, join: Some(join), link: Some(link), bridge: Some(bridge), endpoint }
     }
 
@@ -354,4 +358,101 @@ fn twenty_thousand_fuzzed_messages_are_each_counted_and_the_robot_runs_on() {
     until("the robot cycling on", || (handle.stats().ok()?.cycle > before + 10).then_some(()));
     let info = handle.skill("ros2_scan").expect("device");
     assert!(info.active && info.faulted.is_none(), "{info:?}");
+}
+
+/// What the lock-step test's observer heard, in order: a command (`cmd_vel`), or the robot's
+/// `~/cycle` saying it has run its cycles up to a ROS time (ns).
+#[derive(Debug, Clone, PartialEq)]
+enum Heard {
+    Command,
+    Done(i64),
+}
+
+#[test]
+fn in_lockstep_each_cycles_commands_go_out_before_the_cycle_done_and_a_stop_holds_ros_time() {
+    use situate_ros2::msgs::{decode, Clock};
+    use std::sync::{Arc, Mutex};
+    // 10 Hz: a 100 ms period; the wander toy commands the base every cycle.
+    let robot = RosRobot::start(
+        "lockbot",
+        10,
+        "  - {name: wander, type: toy.wander}\n",
+        "ros2:\n  use_sim_time: true\n  lockstep: true\n  topics:\n    - {signal: drive, topic: cmd_vel, type: geometry_msgs/msg/Twist}\n",
+        ClockKind::Simulated,
+    );
+    let (mut handle, bridge) = (robot.handle.clone(), robot.bridge());
+    let peer = observer(&robot.endpoint);
+    let zid = robot.zid();
+    // Its tokens: cmd_vel (1), /clock (2), ~/cycle (3).
+    let (dds, hash) = (situate_ros2::clock::CLOCK_DDS, situate_ros2::clock::CLOCK_HASH);
+    let done_token = format!("@ros2_lv/0/{zid}/0/3/MP/%/%/lockbot/%lockbot%cycle/{dds}/{hash}/::,10:,:,:,,");
+    tokens_until(&peer, 0, |keys| keys.contains(&done_token));
+    let heard = Arc::new(Mutex::new(Vec::<Heard>::new()));
+    let h = Arc::clone(&heard);
+    let _commands = peer
+        .declare_subscriber(format!("0/cmd_vel/{}/{}", MsgType::Twist.dds_name(), MsgType::Twist.type_hash()))
+        .callback(move |_| h.lock().unwrap().push(Heard::Command))
+        .wait()
+        .expect("subscriber");
+    let h = Arc::clone(&heard);
+    let _done = peer
+        .declare_subscriber(format!("0/lockbot/cycle/{dds}/{hash}"))
+        .callback(move |s| {
+            let c: Clock = decode(&s.payload().to_bytes()).expect("a Clock");
+            h.lock().unwrap().push(Heard::Done(i64::from(c.clock.sec) * 1_000_000_000 + i64::from(c.clock.nanosec)));
+        })
+        .wait()
+        .expect("subscriber");
+    let clock_key = format!("0/clock/{dds}/{hash}");
+    let put_clock = |ns: i64| {
+        let t = situate_ros2::msgs::Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 };
+        peer.put(&clock_key, encode(&Clock { clock: t }).expect("encodes")).wait().expect("put");
+    };
+    let t0: i64 = 500 * 1_000_000_000;
+    // The first message anchors time 0 and owes no cycle: said done at once (said again each
+    // time it is sent, until the subscriptions have met).
+    until("the first /clock said done", || {
+        put_clock(t0);
+        heard.lock().unwrap().contains(&Heard::Done(t0)).then_some(())
+    });
+    assert_eq!(handle.stats().expect("stats").cycle, 0);
+    let take = || std::mem::take(&mut *heard.lock().unwrap());
+    until("the observer heard every say-so of t0", || {
+        let n = bridge.clock_stats()?.messages as usize;
+        (heard.lock().unwrap().iter().filter(|h| **h == Heard::Done(t0)).count() == n).then_some(())
+    });
+    take();
+    // One period: one cycle; its command goes out, then the cycle done.
+    put_clock(t0 + 100_000_000);
+    until("one cycle done", || heard.lock().unwrap().contains(&Heard::Done(t0 + 100_000_000)).then_some(()));
+    assert_eq!(take(), [Heard::Command, Heard::Done(t0 + 100_000_000)]);
+    // Three periods at once: three cycles, three commands, then done.
+    put_clock(t0 + 400_000_000);
+    until("three cycles done", || heard.lock().unwrap().contains(&Heard::Done(t0 + 400_000_000)).then_some(()));
+    assert_eq!(take(), [Heard::Command, Heard::Command, Heard::Command, Heard::Done(t0 + 400_000_000)]);
+    assert_eq!(handle.stats().expect("stats").cycle, 4);
+    // Stopped (a client's `stop`, or a pausing monitor): ROS time goes on, the cycle does not,
+    // and nothing is said done until it runs again.
+    handle.request(Request::Stop).expect("stop");
+    let before = bridge.clock_stats().expect("stats").messages;
+    put_clock(t0 + 600_000_000);
+    until("the message taken", || (bridge.clock_stats()?.messages > before).then_some(()));
+    for _ in 0..10 {
+        assert_eq!(handle.stats().expect("stats").cycle, 4, "held while stopped");
+    }
+    assert!(take().is_empty(), "nothing said done while stopped");
+    handle.request(Request::Run).expect("run");
+    until("the two owed cycles done", || heard.lock().unwrap().contains(&Heard::Done(t0 + 600_000_000)).then_some(()));
+    assert_eq!(take(), [Heard::Command, Heard::Command, Heard::Done(t0 + 600_000_000)]);
+    assert_eq!(handle.stats().expect("stats").cycle, 6);
+    // A client's step runs cycles at once, ahead of ROS time: the clock catches up without
+    // running them again.
+    handle.request(Request::Stop).expect("stop");
+    handle.request(Request::Step { cycles: 3 }).expect("step");
+    assert_eq!(handle.stats().expect("stats").cycle, 9);
+    take();
+    put_clock(t0 + 800_000_000);
+    until("caught up", || heard.lock().unwrap().contains(&Heard::Done(t0 + 800_000_000)).then_some(()));
+    assert_eq!(handle.stats().expect("stats").cycle, 9, "owed 8, ran 9: none more");
+    assert_eq!(bridge.clock_stats().expect("stats").cycles, 6, "the driver ran six of the nine");
 }

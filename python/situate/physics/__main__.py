@@ -36,6 +36,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--namespace", default="", help="the ROS 2 node's namespace")
     p.add_argument("--domain-id", type=int, default=0, help="ROS_DOMAIN_ID")
     p.add_argument("--stamped", action="store_true", help="cmd_vel is TwistStamped")
+    p.add_argument(
+        "--lockstep",
+        metavar="TOPIC",
+        help="lock-step with the robot whose ~/cycle topic this is (e.g. /deliverybot/cycle): "
+        "each tick waits for its cycles (docs/physics.md)",
+    )
     a = p.parse_args(argv)
     try:
         building = Building.load(a.map)
@@ -53,7 +59,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     with zenoh.open(config) as session:
         peer = Ros2Peer(session, domain_id=a.domain_id, namespace=a.namespace, node=a.node)
         node = PhysicsNode(
-            PhysicsWorld(building, seed=a.seed), peer, rate_hz=a.rate_hz, stamped=a.stamped
+            PhysicsWorld(building, seed=a.seed),
+            peer,
+            rate_hz=a.rate_hz,
+            stamped=a.stamped,
+            lockstep=a.lockstep,
         )
         node.start(a.time_scale)
         print(

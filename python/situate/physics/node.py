@@ -5,15 +5,25 @@ What a Gazebo robot offers a ROS 2 stack, on the topics a ROS 2 robot driver use
 - subscribes to ``cmd_vel`` (`geometry_msgs/msg/Twist`, or `TwistStamped` with
   ``stamped=True``): the base's command; one older than `cmd_timeout` s of simulated time
   stops the base (``diff_drive_controller``'s ``cmd_vel_timeout``, default 0.5 s);
-- publishes, every tick of its clock (``rate_hz``), ``/clock`` (`rosgraph_msgs/msg/Clock`),
-  ``odom`` (`nav_msgs/msg/Odometry`: the wheel odometry, odom → base_link), ``/tf``
-  (`tf2_msgs/msg/TFMessage`: the same transform) and ``sonar`` (`sensor_msgs/msg/LaserScan`:
+- publishes, every tick of its clock (``rate_hz``), ``sonar`` (`sensor_msgs/msg/LaserScan`:
   the 24 sonars, ``angle_min`` 0, ``angle_increment`` 15°, ranges from the robot's centre; what
-  situate's ROS 2 bridge reads with ``ring: 24``), stamped with simulated time.
+  situate's ROS 2 bridge reads with ``ring: 24``), ``barcodes`` (`situate_msgs/msg/Barcodes`:
+  what the reader sees), ``odom`` (`nav_msgs/msg/Odometry`: the wheel odometry, odom →
+  base_link), ``/tf`` (`tf2_msgs/msg/TFMessage`: the same transform) and, last, ``/clock``
+  (`rosgraph_msgs/msg/Clock`), all stamped with simulated time.
 
 Tick k runs the physics for one period with the command in force, then publishes what the robot
 senses at simulated time ``k / rate_hz``. `run` paces the ticks at `time_scale` times real time
 (falling behind, it goes on from now and never skips a tick); `tick` runs one at once.
+
+**Lock-step** (``lockstep=`` the robot's ``~/cycle`` topic; situate's ``ros2: {use_sim_time:
+true, lockstep: true}``): after each tick the node waits until the robot says, on that topic,
+that it has run its cycles up to the tick's time (sending ``/clock`` again every `resend_s` s
+of waiting, so a first message sent before the robot listened is not waited for forever); the
+commands that came before that say-so are the ones the next tick obeys, and a tick with none is
+a stop: "no command in a cycle = stop", as the 2-D base. The robot holds the clock while it is
+stopped (a pausing monitor, a sequencer thinking), so the world waits too, and a run is the
+same every time for a seed. Its topics are then reliable and keep-all (never dropped).
 """
 
 from __future__ import annotations
@@ -26,7 +36,10 @@ from typing import Any
 import numpy as np
 
 from situate.physics.world import SONARS, PhysicsWorld
-from situate.ros2 import QOS_SENSOR_DATA, QOS_TF, Ros2Peer, msg
+from situate.ros2 import QOS_DEFAULT, QOS_SENSOR_DATA, QOS_TF, History, Qos, Ros2Peer, msg
+
+#: Lock-step: every topic reliable and keep-all, so that none is dropped and all arrive in order.
+QOS_LOCKSTEP = Qos(history=History.KEEP_ALL, depth=1000)
 
 
 class PhysicsNode:
@@ -43,8 +56,11 @@ class PhysicsNode:
         cmd_topic: str = "cmd_vel",
         odom_topic: str = "odom",
         sonar_topic: str = "sonar",
+        barcodes_topic: str = "barcodes",
         odom_frame: str = "odom",
         base_frame: str = "base_link",
+        lockstep: str | None = None,
+        resend_s: float = 1.0,
     ) -> None:
         if not 0 < rate_hz <= 1000:
             raise ValueError(f"rate_hz {rate_hz}: expected in (0, 1000]")
@@ -55,18 +71,43 @@ class PhysicsNode:
         self.cmd_timeout = cmd_timeout
         self.odom_frame = odom_frame
         self.base_frame = base_frame
+        self.lockstep = lockstep
+        self.resend_s = resend_s
         self._lock = threading.Lock()
+        self._said = threading.Condition(self._lock)
         self._ticks = 0
         self._command: tuple[float, float, float] | None = None  # v, w, simulated time it came
         self._commands = 0
+        # Lock-step: the command since the robot's last say-so, the one the next tick obeys,
+        # the latest time said done (ns) and how often /clock was sent again.
+        self._pending: tuple[float, float] | None = None
+        self._next: tuple[float, float] | None = None
+        self._done_ns = -1
+        self._resent = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._clock = peer.publisher("/clock", "rosgraph_msgs/msg/Clock")
-        self._odom = peer.publisher(odom_topic, "nav_msgs/msg/Odometry")
-        self._tf = peer.publisher("/tf", "tf2_msgs/msg/TFMessage", QOS_TF)
-        self._sonar = peer.publisher(sonar_topic, "sensor_msgs/msg/LaserScan", QOS_SENSOR_DATA)
+        qos = QOS_LOCKSTEP if lockstep else None
+        self._sonar = peer.publisher(
+            sonar_topic, "sensor_msgs/msg/LaserScan", qos or QOS_SENSOR_DATA
+        )
+        self._barcodes = peer.publisher(
+            barcodes_topic, "situate_msgs/msg/Barcodes", qos or QOS_SENSOR_DATA
+        )
+        self._odom = peer.publisher(odom_topic, "nav_msgs/msg/Odometry", *([qos] if qos else []))
+        self._tf = peer.publisher("/tf", "tf2_msgs/msg/TFMessage", qos or QOS_TF)
+        self._clock = peer.publisher("/clock", "rosgraph_msgs/msg/Clock", *([qos] if qos else []))
         cmd_type = "geometry_msgs/msg/TwistStamped" if stamped else "geometry_msgs/msg/Twist"
-        self._cmd = peer.subscribe(cmd_topic, cmd_type, self._on_cmd)
+        # Lock-step: the commands and the say-so in the order the robot sent them (`ordered`).
+        self._cmd = peer.subscribe(
+            cmd_topic, cmd_type, self._on_cmd, qos or QOS_DEFAULT, ordered=bool(lockstep)
+        )
+        self._done = (
+            peer.subscribe(
+                lockstep, "rosgraph_msgs/msg/Clock", self._on_done, QOS_LOCKSTEP, ordered=True
+            )
+            if lockstep
+            else None
+        )
 
     # -- state --
 
@@ -92,6 +133,12 @@ class PhysicsNode:
         """Whether the clock's thread runs."""
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def resent(self) -> int:
+        """How often ``/clock`` was sent again while waiting for the robot (lock-step)."""
+        with self._lock:
+            return self._resent
+
     def _on_cmd(self, message: Any) -> None:
         twist = message.twist if self.stamped else message
         v, w = float(twist.linear.x), float(twist.angular.z)
@@ -100,23 +147,60 @@ class PhysicsNode:
         with self._lock:
             self._commands += 1
             self._command = (v, w, self._ticks / self.rate_hz)
+            self._pending = (v, w)
+
+    def _on_done(self, message: Any) -> None:
+        ns = int(message.clock.sec) * 10**9 + int(message.clock.nanosec)
+        with self._said:
+            if ns > self._done_ns:
+                self._done_ns = ns
+                # The commands of the cycles just done: the next tick obeys the last of them.
+                self._next, self._pending = self._pending, None
+                self._said.notify_all()
 
     # -- ticks --
 
     def tick(self) -> None:
-        """One tick: the physics for one period, then what the robot senses, published."""
+        """One tick: the physics for one period, then what the robot senses, published.
+
+        In lock-step it returns once the robot has run its cycles up to the tick's time (or
+        the node is stopped).
+        """
         with self._lock:
             now = self._ticks / self.rate_hz
             cmd = self._command
+            step = self._next
         v, w = 0.0, 0.0
-        if cmd is not None and (self.cmd_timeout is None or now - cmd[2] <= self.cmd_timeout):
+        if self.lockstep:
+            if step is not None:
+                v, w = step
+        elif cmd is not None and (self.cmd_timeout is None or now - cmd[2] <= self.cmd_timeout):
             v, w = cmd[0], cmd[1]
         self.world.command(v, w)
         self.world.advance(1.0 / self.rate_hz)
         with self._lock:
             self._ticks += 1
             tick = self._ticks
-        self._publish(round(tick * 1e9 / self.rate_hz))
+        stamp_ns = round(tick * 1e9 / self.rate_hz)
+        self._publish(stamp_ns)
+        if self.lockstep:
+            self._wait_done(stamp_ns)
+
+    def _wait_done(self, stamp_ns: int) -> None:
+        with self._said:
+            while self._done_ns < stamp_ns and not self._stop.is_set():
+                if not self._said.wait(self.resend_s) and self._done_ns < stamp_ns:
+                    # Not said within resend_s: the robot may not have heard the first clock.
+                    self._resent += 1
+                    self._said.release()
+                    try:
+                        self._clock.publish(self._clock_msg(stamp_ns))
+                    finally:
+                        self._said.acquire()
+
+    def _clock_msg(self, stamp_ns: int) -> Any:
+        stamp = msg("builtin_interfaces/msg/Time", sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
+        return msg("rosgraph_msgs/msg/Clock", clock=stamp)
 
     def _publish(self, stamp_ns: int) -> None:
         stamp = msg("builtin_interfaces/msg/Time", sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
@@ -136,8 +220,18 @@ class PhysicsNode:
         ranges = self.world.sonar()
         spec = self.world.sonar_spec
         inc = 2 * math.pi / SONARS
+        seen = self.world.barcodes()
         # The sensors first, then the clock: a ROS 2 node that acts on /clock has the readings
-        # of that time already (rmw_zenoh delivers one session's puts in order).
+        # of that time already (one session's puts arrive in order).
+        self._barcodes.publish(
+            msg(
+                "situate_msgs/msg/Barcodes",
+                header=header(self.base_frame),
+                ids=np.array([s[0] for s in seen], dtype=np.int64),
+                bearing=np.array([s[1] for s in seen], dtype=np.float64),
+                distance=np.array([s[2] for s in seen], dtype=np.float64),
+            )
+        )
         self._sonar.publish(
             msg(
                 "sensor_msgs/msg/LaserScan",
@@ -195,7 +289,7 @@ class PhysicsNode:
                 ],
             )
         )
-        self._clock.publish(msg("rosgraph_msgs/msg/Clock", clock=stamp))
+        self._clock.publish(self._clock_msg(stamp_ns))
 
     # -- the clock's thread --
 
@@ -226,8 +320,10 @@ class PhysicsNode:
                 due = time.monotonic() + period
 
     def stop(self, timeout: float = 30.0) -> None:
-        """Stops the clock's thread after the tick under way."""
+        """Stops the clock's thread after the tick under way (a lock-step wait ends)."""
         self._stop.set()
+        with self._said:
+            self._said.notify_all()
         thread = self._thread
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout)
@@ -238,5 +334,7 @@ class PhysicsNode:
     def close(self) -> None:
         """Stops the clock and closes the node's publishers and subscription (the peer stays)."""
         self.stop()
-        for e in (self._cmd, self._clock, self._odom, self._tf, self._sonar):
-            e.close()
+        for e in (self._cmd, self._done, self._clock, self._odom, self._tf, self._sonar):
+            if e is not None:
+                e.close()
+        self._barcodes.close()

@@ -151,6 +151,7 @@ pub fn reply_to_json(reply: &Reply) -> Json {
         Reply::MonitorAdded(id) => json!({ "monitor": id }),
         Reply::Monitors(list) => Json::Array(list.iter().map(monitor_to_json).collect()),
         Reply::MonitorsCancelled(ids) => json!({ "cancelled": ids }),
+        Reply::Ticked { ran, cycle } => json!({ "ran": ran, "cycle": cycle }),
     }
 }
 

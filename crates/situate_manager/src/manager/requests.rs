@@ -485,12 +485,31 @@ impl Manager {
                 }
                 Ok(Reply::Done)
             }
+            Request::ExternalClock { on } => {
+                self.external_clock = on;
+                Ok(Reply::Done)
+            }
+            Request::Tick { until } => {
+                self.check_tick(until)?;
+                let from = self.cycle;
+                while self.running && self.cycle < until {
+                    self.cycle();
+                }
+                Ok(Reply::Ticked { ran: self.cycle - from, cycle: self.cycle })
+            }
             Request::Shutdown => Ok(Reply::Done),
         }
     }
 
     pub(super) fn check_step(&self, cycles: u64) -> Result<(), ControlError> {
         front::check_step(cycles)
+    }
+
+    pub(super) fn check_tick(&self, until: u64) -> Result<(), ControlError> {
+        if !self.external_clock {
+            return Err(ControlError::Invalid("tick: the cycle does not follow an external clock".into()));
+        }
+        front::check_step(until.saturating_sub(self.cycle))
     }
 
     /// Stops a running cycle (before a step).

@@ -234,8 +234,9 @@ fn serve(core: &Core, generation: u64) {
         if m.running && m.stop_at.is_some_and(|n| m.cycle >= n) {
             let _ = m.request(Request::Stop);
         }
-        if !m.running {
-            // Stopped: wait for a request without holding the lock.
+        if !m.running || m.external_clock {
+            // Stopped, or the cycle follows an external clock (its ticks are requests): wait
+            // for a request without holding the lock.
             drop(g);
             // `recv_timeout`, as `warm_channel_waits` does (see there).
             let received = loop {
@@ -382,6 +383,30 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
             }
             if let Some(reply) = core.step_reply().take() {
                 let _ = reply.send(Ok(Reply::Done));
+            }
+            Served::Go(g)
+        }
+        Request::Tick { until } => {
+            if let Err(e) = m.check_tick(until) {
+                let _ = reply.send(Err(e));
+                return Served::Go(g);
+            }
+            let from = m.cycle;
+            *core.step_reply() = Some(reply);
+            loop {
+                let Some(m) = current(&mut g, generation) else { return Served::End };
+                if !m.running || m.cycle >= until {
+                    break;
+                }
+                g = match cycle(core, g, generation) {
+                    Some(g) => g,
+                    // Left behind: the watchdog answered the tick.
+                    None => return Served::End,
+                };
+            }
+            let cycle = current(&mut g, generation).map_or(from, |m| m.cycle);
+            if let Some(reply) = core.step_reply().take() {
+                let _ = reply.send(Ok(Reply::Ticked { ran: cycle.saturating_sub(from), cycle }));
             }
             Served::Go(g)
         }
