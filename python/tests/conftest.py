@@ -18,6 +18,7 @@ SLOW_FIRST = (
     "test_newcomer.py",
     "test_demo.py",
     "test_recording.py",
+    "test_physics_delivery.py",
     "test_ros2_robot.py",
     "test_cli.py",
 )

@@ -185,6 +185,10 @@ pub(crate) struct RunArgs {
     /// On the simulated clock, run at this many times real time (default: as fast as possible).
     #[arg(long)]
     pub(crate) speed: Option<f64>,
+    /// Start with the cycle stopped: a sequencer (or `situate cycle run`) starts it. With ROS
+    /// time, the robot's clock waits for it too (lock-step).
+    #[arg(long)]
+    pub(crate) stopped: bool,
     /// Serve the debugging GUI at this address (e.g. 127.0.0.1:8080, or a port).
     #[arg(long)]
     pub(crate) gui: Option<String>,
