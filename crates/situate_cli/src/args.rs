@@ -151,7 +151,7 @@ fn gen_languages() -> clap::builder::PossibleValuesParser {
 pub(crate) struct Compose {
     /// Set a skill's parameter, over the file's value: `--set runaway.safe_distance=0.3`
     /// (repeatable; the value is YAML: a number, true/false, text, or a list `[1, 2]`).
-    #[arg(long = "set", value_name = "SKILL.PARAM=VALUE")]
+    #[arg(long = "set", value_name = "SKILL.PARAM=VALUE", add = clap_complete::ArgValueCandidates::new(crate::complete::settable))]
     pub(crate) set: Vec<String>,
 }
 

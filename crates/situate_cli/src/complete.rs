@@ -5,8 +5,10 @@
 //! parameters. The robot is the one the CLI would reach (`SITUATE_CONNECT`, else the default
 //! endpoint; the only robot answering there). Nothing answering within half a second
 //! (`SITUATE_COMPLETE_TIMEOUT_S`), or several robots: no names, and the shell goes on with what
-//! it has. The static scripts of `situate
-//! completions SHELL` still complete the commands and options, without the robot's names.
+//! it has. `situate run robot.yaml --set <TAB>` (and `check`, `signals`, `graph`) offers the
+//! parameters of the robot file on the line, as `skill.param=`, with no robot running. The
+//! static scripts of `situate completions SHELL` still complete the commands and options,
+//! without the robot's names.
 
 use std::time::Duration;
 
@@ -70,6 +72,34 @@ pub(crate) fn params() -> Vec<CompletionCandidate> {
         }
     }
     candidates(by_name.into_iter().map(|(name, owners)| (name, format!("of {}", owners.join(", ")))))
+}
+
+/// The robot file on the command line being completed: the first word after the verb that
+/// names a file (`situate run robot.yaml --set ru<TAB>`). The shell passes the line's words after
+/// a `--` (clap_complete's protocol), which the process's arguments hold whatever runs it (the
+/// Rust program, or the Python package's console script).
+fn file_on_line() -> Option<std::path::PathBuf> {
+    let words: Vec<String> = std::env::args().skip_while(|a| a != "--").skip(1).collect();
+    let verb = words.iter().position(|w| ["run", "check", "signals", "graph"].contains(&w.as_str()))?;
+    words[verb + 1..].iter().filter(|w| !w.starts_with('-')).map(std::path::PathBuf::from).find(|p| p.is_file())
+}
+
+/// `--set` values: the parameters of every skill of the robot file on the line, as
+/// `skill.param=`, each with its type and default. The completion loads no Python: a file with
+/// `python:` skill files, like one that does not load, gives none.
+pub(crate) fn settable() -> Vec<CompletionCandidate> {
+    let Some(file) = file_on_line() else { return Vec::new() };
+    let ext = crate::Extensions::default();
+    let Ok((_, graph)) = crate::robot::static_graph(&file, &crate::args::Compose::default(), &ext) else {
+        return Vec::new();
+    };
+    candidates(graph.instances.iter().flat_map(|inst| {
+        inst.skill_type.decl.params.iter().map(move |p| {
+            let unit = if p.unit.is_empty() { String::new() } else { format!(" {}", p.unit) };
+            let ty = format!("{:?}", p.ty).to_lowercase();
+            (format!("{}.{}=", inst.name, p.name), format!("{ty}, default {}{unit}", p.default))
+        })
+    }))
 }
 
 /// The running robot's signals (every leaf, and each record whole), each with its type.

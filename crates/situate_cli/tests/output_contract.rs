@@ -229,6 +229,21 @@ fn completions_offer_the_running_robots_skills_signals_and_parameters() {
 }
 
 #[test]
+fn completions_offer_the_robot_files_parameters_with_no_robot_running() {
+    // `run FILE --set <TAB>`: every skill's parameters, as `skill.param=`; nobody answers.
+    let nobody = free_endpoint();
+    let offered = complete(&nobody, &["run", TOYBOT, "--set", "run"]);
+    assert_eq!(offered, ["runaway.safe_distance=", "runaway.speed="]);
+    assert!(complete(&nobody, &["check", TOYBOT, "--set", ""]).contains(&"wander.seed=".to_string()));
+    // No file on the line, or one that does not load: nothing, and no error.
+    assert_eq!(complete(&nobody, &["run", "--set", "run"]), Vec::<String>::new());
+    let dir = tempfile::tempdir().unwrap();
+    let broken = dir.path().join("broken.yaml");
+    std::fs::write(&broken, "robot: [\n").unwrap();
+    assert_eq!(complete(&nobody, &["run", broken.to_str().unwrap(), "--set", ""]), Vec::<String>::new());
+}
+
+#[test]
 fn a_running_robot_refuses_with_5_and_answers_the_introspection_verbs() {
     let robot = Robot::start();
     let refused = robot.verb(&["activate", "wandr"]);
