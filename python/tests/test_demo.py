@@ -72,11 +72,22 @@ def demo(
     return outcome
 
 
+def why(out: dict[str, Any]) -> str:
+    """An outcome for a failed assertion: the skills that faulted and the end of the program's
+    log first (pytest cuts a long dict's repr short, and they say why a run went another way:
+    on a loaded machine a body can overrun its wall-clock budget and be switched off), then the
+    rest."""
+    first = ("delivered", "cycles", "skills_faulted", "sequencer_exit", "stderr")
+    head = "\n".join(f"{k}: {out.get(k)!r}" for k in first)
+    rest = {k: v for k, v in out.items() if k not in first}
+    return f"{head}\n{rest!r}"
+
+
 @needs_bin
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_the_whole_delivery_succeeds_headless(seed: int) -> None:
     out = demo(seed)
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
     assert out["sequencer_exit"] == 0, out
     assert out["skill_runs"] > 0
     assert out["mission_time_s"] > 0
@@ -107,7 +118,7 @@ def test_lobby_and_car_phases() -> None:
 @needs_bin
 def test_fourth_floor_corridor_to_the_office() -> None:
     out = demo(1, map_file="maps/scenarios/fourth_floor.yaml", first="office", limit_s=600)
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
     assert out["sequencer_exit"] == 0, out
 
 
@@ -115,7 +126,7 @@ def test_fourth_floor_corridor_to_the_office() -> None:
 def test_another_building() -> None:
     # maps/scenarios/annex.yaml: other layout, two cars, goal floor 2, other route hints.
     out = demo(1, map_file="maps/scenarios/annex.yaml")
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
     assert out["sequencer_exit"] == 0, out
 
 
@@ -162,7 +173,7 @@ def test_generated_buildings_that_failed_now_deliver(
     seed: int, extra: list[str], tmp_path: Path
 ) -> None:
     out = demo(seed, map_file=str(_generated(seed, tmp_path)), extra=extra)
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
     assert out["sequencer_exit"] == 0, out
 
 
@@ -211,7 +222,7 @@ def test_a_task_the_building_cannot_hold_is_refused_naming_the_stop() -> None:
 def test_the_reactive_robot_delivers_without_a_sequencer() -> None:
     # The experiment's baseline (demo/reactive.py): a rule list every cycle, no phases.
     out = demo(1, extra=["--mode", "reactive"])
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
     assert out["mode"] == "reactive"
 
 
@@ -225,7 +236,7 @@ def test_the_reactive_robot_delivers_without_a_sequencer() -> None:
 )
 def test_the_reactive_robot_delivers_where_it_once_failed(seed: int, tmp_path: Path) -> None:
     out = demo(seed, map_file=str(_generated(seed, tmp_path)), extra=["--mode", "reactive"])
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
 
 
 @needs_bin
@@ -278,7 +289,7 @@ def test_the_reactive_robot_delivers_on_the_hard_set_where_it_once_failed(
     hard = ["--people", "3", "--door-closures", "--dead-sonar", str(seed % 24)]
     building = str(_generated(seed, tmp_path))
     out = demo(seed, map_file=building, extra=["--mode", "reactive", *hard])
-    assert out["delivered"], out
+    assert out["delivered"], why(out)
 
 
 @needs_bin
