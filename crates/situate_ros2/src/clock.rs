@@ -1,20 +1,28 @@
 //! ROS time: with `use_sim_time: true` the cycle follows `/clock` (`rosgraph_msgs/msg/Clock`)
 //! from a simulator, as Gazebo-driven ROS 2 nodes do.
 //!
-//! The robot runs on its simulated clock, stopped; this driver steps it. The first `/clock`
-//! message anchors the robot's time 0; from then on, whenever the clock has passed `n` whole
-//! periods since the anchor, the robot has run exactly `n` cycles: one cycle per period of ROS
-//! time, none skipped and none doubled, however the messages are spaced (a 10× clock in 1 ms
-//! messages, or one message a second). When the clock stops, so does the cycle. A clock that
-//! goes back (a simulator reset) re-anchors: the robot runs on from where it is, never backwards,
-//! and says so in the log. So does a jump forward of more than [`MAX_JUMP_S`] in one message (a
-//! simulator restarted at another time, or a `/clock` that is no clock): the robot does not run
-//! the hours of cycles such a jump would owe.
+//! The robot runs on its simulated clock, and this driver is its clock
+//! ([`Request::ExternalClock`]): the manager runs a cycle only for the driver's
+//! [`Request::Tick`], and only while it runs, so a `stop` (a client's, or a monitor's `pause`)
+//! holds the cycle and a `run` lets the owed cycles through. The first `/clock` message anchors
+//! the robot's time 0; from then on, whenever the clock has passed `n` whole periods since the
+//! anchor, the robot has run exactly `n` cycles: one cycle per period of ROS time, none skipped
+//! and none doubled, however the messages are spaced (a 10× clock in 1 ms messages, or one
+//! message a second). When the clock stops, so does the cycle. A client's `step` runs cycles
+//! ahead of ROS time; the count is the manager's, so the clock catches up without running them
+//! again. A clock that goes back (a simulator reset) re-anchors: the robot runs on from where it
+//! is, never backwards, and says so in the log. So does a jump forward of more than
+//! [`MAX_JUMP_S`] in one message (a simulator restarted at another time, or a `/clock` that is
+//! no clock): the robot does not run the hours of cycles such a jump would owe.
 //!
 //! Messages are read on a Zenoh thread (the bounded CDR reader; one that cannot be read is
 //! counted and ignored) and handed to the driver's thread through a latest-value slot; the
-//! driver asks the manager for the cycles with `Step` requests (at most [`MAX_STEP`] at once, so
+//! driver asks the manager for the cycles with `Tick` requests (at most [`MAX_STEP`] at once, so
 //! a long jump of the clock leaves the robot answering between them).
+//!
+//! **Lock-step** (`Lockstep`, `lockstep: true`): the driver ticks one cycle at a time and
+//! publishes the topics out after each; once a message's cycles have run, it puts the message's
+//! time on the node's `~/cycle` topic, which a simulator waits for before its next step.
 
 use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
