@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use situate_core::{SkillKind, Value};
-use situate_manager::{ClockKind, Control, Event, Registry, RobotSpec};
+use situate_manager::{ClockKind, Control, Event, Registry, Reply, Request, RobotSpec};
 
 fn wall(robot: &str) -> RobotSpec {
     RobotSpec::new(robot).clock(ClockKind::Wall).period_s(0.002)
@@ -155,4 +155,37 @@ fn a_managed_thread_serves_requests_while_it_cycles() {
     let mut m = join.join().unwrap();
     assert_eq!(m.stats().unwrap().cycle, stopped_at + 3, "stopped means no more cycles");
     assert!(handle.query("y").is_err(), "the handle reports the manager gone");
+}
+
+/// An external clock (ROS time, `situate_ros2`) runs cycles only with `Tick`s, only while the
+/// manager runs; the manager's own clock never does. `stop_after` (`--cycles N`) holds there too.
+#[test]
+fn an_external_clock_ticks_the_cycle_while_it_runs_and_stops_where_it_is_told() {
+    let mut reg = Registry::new();
+    reg.add(fn_type(decl("tick", SkillKind::Sync, &[], &[("out", "i64")]), |io, _| {
+        io.outputs[0] = Some(Value::I64(io.cx.cycle() as i64));
+        Ok(())
+    }));
+    let mut m = build(&simulated("ext").skill(skill("t", "tick")), &reg);
+    m.stop_after(Some(5));
+    let refused = m.request(Request::Tick { until: 1 });
+    assert!(refused.is_err(), "no tick without an external clock: {refused:?}");
+    let (mut h, join) = m.spawn(false);
+    h.request(Request::ExternalClock { on: true }).unwrap();
+    // Stopped: a tick runs nothing.
+    assert_eq!(h.request(Request::Tick { until: 3 }).unwrap(), Reply::Ticked { ran: 0, cycle: 0 });
+    // Running: the manager's own clock runs no cycle (stats are answered between ticks only).
+    h.request(Request::Run).unwrap();
+    for _ in 0..20 {
+        assert_eq!(h.stats().unwrap().cycle, 0, "no cycle of its own");
+    }
+    assert_eq!(h.request(Request::Tick { until: 3 }).unwrap(), Reply::Ticked { ran: 3, cycle: 3 });
+    // `stop_after(5)`: a tick to 9 stops at 5, and the manager is stopped.
+    assert_eq!(h.request(Request::Tick { until: 9 }).unwrap(), Reply::Ticked { ran: 2, cycle: 5 });
+    assert!(!h.stats().unwrap().running);
+    // A step still runs at once.
+    h.request(Request::Step { cycles: 2 }).unwrap();
+    assert_eq!(h.stats().unwrap().cycle, 7);
+    h.request(Request::Shutdown).unwrap();
+    join.join().expect("the manager ends");
 }

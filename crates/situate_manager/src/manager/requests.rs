@@ -493,6 +493,11 @@ impl Manager {
                 self.check_tick(until)?;
                 let from = self.cycle;
                 while self.running && self.cycle < until {
+                    if self.stop_at.is_some_and(|n| self.cycle >= n) {
+                        // `--cycles N`: the external clock stops there too.
+                        let _ = self.request(Request::Stop);
+                        break;
+                    }
                     self.cycle();
                 }
                 Ok(Reply::Ticked { ran: self.cycle - from, cycle: self.cycle })

@@ -395,6 +395,10 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
             *core.step_reply() = Some(reply);
             loop {
                 let Some(m) = current(&mut g, generation) else { return Served::End };
+                if m.running && m.stop_at.is_some_and(|n| m.cycle >= n) {
+                    // `--cycles N`: the external clock stops there too.
+                    let _ = m.request(Request::Stop);
+                }
                 if !m.running || m.cycle >= until {
                     break;
                 }
