@@ -53,6 +53,7 @@ subscriber with a cache for it), services, actions, type description services.
 from __future__ import annotations
 
 import itertools
+import math
 import struct
 import threading
 import time
@@ -61,6 +62,7 @@ from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
 
+import numpy as np
 import xxhash
 import zenoh
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -114,6 +116,81 @@ def type_hash(ros_type: str) -> str:
 def msg(ros_type: str, **fields: Any) -> Any:
     """Returns a message of a ROS 2 type, made with rosbags' class for it."""
     return store().types[ros_type](**fields)
+
+
+def time_msg(stamp_ns: int) -> Any:
+    """Returns a `builtin_interfaces/msg/Time` of ns since the epoch (of ROS time)."""
+    return msg("builtin_interfaces/msg/Time", sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
+
+
+def header(stamp_ns: int, frame: str) -> Any:
+    """Returns a `std_msgs/msg/Header`."""
+    return msg("std_msgs/msg/Header", stamp=time_msg(stamp_ns), frame_id=frame)
+
+
+def _yaw(theta: float) -> Any:
+    return msg(
+        "geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(theta / 2), w=math.cos(theta / 2)
+    )
+
+
+def odometry_msg(
+    stamp_ns: int,
+    odom_frame: str,
+    base_frame: str,
+    x: float,
+    y: float,
+    theta: float,
+    v: float,
+    w: float,
+) -> Any:
+    """Returns a planar base's `nav_msgs/msg/Odometry`.
+
+    Its pose is (x, y, yaw), its twist (v, w); the covariances are 0 (unknown).
+    """
+    vec = "geometry_msgs/msg/Vector3"
+    return msg(
+        "nav_msgs/msg/Odometry",
+        header=header(stamp_ns, odom_frame),
+        child_frame_id=base_frame,
+        pose=msg(
+            "geometry_msgs/msg/PoseWithCovariance",
+            pose=msg(
+                "geometry_msgs/msg/Pose",
+                position=msg("geometry_msgs/msg/Point", x=x, y=y, z=0.0),
+                orientation=_yaw(theta),
+            ),
+            covariance=np.zeros(36, dtype=np.float64),
+        ),
+        twist=msg(
+            "geometry_msgs/msg/TwistWithCovariance",
+            twist=msg(
+                "geometry_msgs/msg/Twist",
+                linear=msg(vec, x=v, y=0.0, z=0.0),
+                angular=msg(vec, x=0.0, y=0.0, z=w),
+            ),
+            covariance=np.zeros(36, dtype=np.float64),
+        ),
+    )
+
+
+def tf_msg(stamp_ns: int, parent: str, child: str, x: float, y: float, theta: float) -> Any:
+    """Returns a `tf2_msgs/msg/TFMessage` of one planar transform `parent` → `child`."""
+    return msg(
+        "tf2_msgs/msg/TFMessage",
+        transforms=[
+            msg(
+                "geometry_msgs/msg/TransformStamped",
+                header=header(stamp_ns, parent),
+                child_frame_id=child,
+                transform=msg(
+                    "geometry_msgs/msg/Transform",
+                    translation=msg("geometry_msgs/msg/Vector3", x=x, y=y, z=0.0),
+                    rotation=_yaw(theta),
+                ),
+            )
+        ],
+    )
 
 
 # ----- names, keys, tokens ----------------------------------------------------------------------

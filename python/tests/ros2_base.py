@@ -16,7 +16,17 @@ from typing import Any
 
 import numpy as np
 
-from situate.ros2 import QOS_SENSOR_DATA, QOS_TF, Ros2Peer, Subscription, msg
+from situate.ros2 import (
+    QOS_SENSOR_DATA,
+    QOS_TF,
+    Ros2Peer,
+    Subscription,
+    header,
+    msg,
+    odometry_msg,
+    tf_msg,
+    time_msg,
+)
 
 
 @dataclass(frozen=True)
@@ -295,65 +305,15 @@ class DiffDriveBase:
         stamp_ns = self._time_ns(tick) if self.sim_time else time.time_ns()
         self._publish(tick, stamp_ns, pose, v, w)
 
-    def _stamp(self, stamp_ns: int) -> Any:
-        return msg("builtin_interfaces/msg/Time", sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
-
-    def _header(self, stamp_ns: int, frame: str) -> Any:
-        return msg("std_msgs/msg/Header", stamp=self._stamp(stamp_ns), frame_id=frame)
-
     def _publish(self, tick: int, stamp_ns: int, pose: Pose, v: float, w: float) -> None:
         n = 0
         if self._clock is not None:
-            self._clock.publish(msg("rosgraph_msgs/msg/Clock", clock=self._stamp(stamp_ns)))
+            self._clock.publish(msg("rosgraph_msgs/msg/Clock", clock=time_msg(stamp_ns)))
             n += 1
-        vec = "geometry_msgs/msg/Vector3"
-        rotation = msg(
-            "geometry_msgs/msg/Quaternion",
-            x=0.0,
-            y=0.0,
-            z=math.sin(pose.theta / 2),
-            w=math.cos(pose.theta / 2),
-        )
-        odom = msg(
-            "nav_msgs/msg/Odometry",
-            header=self._header(stamp_ns, self.odom_frame),
-            child_frame_id=self.base_frame,
-            pose=msg(
-                "geometry_msgs/msg/PoseWithCovariance",
-                pose=msg(
-                    "geometry_msgs/msg/Pose",
-                    position=msg("geometry_msgs/msg/Point", x=pose.x, y=pose.y, z=0.0),
-                    orientation=rotation,
-                ),
-                covariance=np.zeros(36, dtype=np.float64),
-            ),
-            twist=msg(
-                "geometry_msgs/msg/TwistWithCovariance",
-                twist=msg(
-                    "geometry_msgs/msg/Twist",
-                    linear=msg(vec, x=v, y=0.0, z=0.0),
-                    angular=msg(vec, x=0.0, y=0.0, z=w),
-                ),
-                covariance=np.zeros(36, dtype=np.float64),
-            ),
-        )
+        p = pose
+        odom = odometry_msg(stamp_ns, self.odom_frame, self.base_frame, p.x, p.y, p.theta, v, w)
         self._odom.publish(odom)
-        tf = msg(
-            "tf2_msgs/msg/TFMessage",
-            transforms=[
-                msg(
-                    "geometry_msgs/msg/TransformStamped",
-                    header=self._header(stamp_ns, self.odom_frame),
-                    child_frame_id=self.base_frame,
-                    transform=msg(
-                        "geometry_msgs/msg/Transform",
-                        translation=msg(vec, x=pose.x, y=pose.y, z=0.0),
-                        rotation=rotation,
-                    ),
-                )
-            ],
-        )
-        self._tf.publish(tf)
+        self._tf.publish(tf_msg(stamp_ns, self.odom_frame, self.base_frame, p.x, p.y, p.theta))
         n += 2
         if (tick - 1) % self.scan_every == 0:
             self._scan.publish(self.scan(pose, stamp_ns))
@@ -370,7 +330,7 @@ class DiffDriveBase:
         inc = 2 * math.pi / self.scan_rays
         return msg(
             "sensor_msgs/msg/LaserScan",
-            header=self._header(stamp_ns, self.scan_frame),
+            header=header(stamp_ns, self.scan_frame),
             angle_min=-math.pi,
             angle_max=-math.pi + (self.scan_rays - 1) * inc,
             angle_increment=inc,

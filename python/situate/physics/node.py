@@ -36,7 +36,19 @@ from typing import Any
 import numpy as np
 
 from situate.physics.world import SONARS, PhysicsWorld
-from situate.ros2 import QOS_DEFAULT, QOS_SENSOR_DATA, QOS_TF, History, Qos, Ros2Peer, msg
+from situate.ros2 import (
+    QOS_DEFAULT,
+    QOS_SENSOR_DATA,
+    QOS_TF,
+    History,
+    Qos,
+    Ros2Peer,
+    header,
+    msg,
+    odometry_msg,
+    tf_msg,
+    time_msg,
+)
 
 #: Lock-step: every topic reliable and keep-all, so that none is dropped and all arrive in order.
 QOS_LOCKSTEP = Qos(history=History.KEEP_ALL, depth=1000)
@@ -199,24 +211,10 @@ class PhysicsNode:
                         self._said.acquire()
 
     def _clock_msg(self, stamp_ns: int) -> Any:
-        stamp = msg("builtin_interfaces/msg/Time", sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
-        return msg("rosgraph_msgs/msg/Clock", clock=stamp)
+        return msg("rosgraph_msgs/msg/Clock", clock=time_msg(stamp_ns))
 
     def _publish(self, stamp_ns: int) -> None:
-        stamp = msg("builtin_interfaces/msg/Time", sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
-
-        def header(frame: str) -> Any:
-            return msg("std_msgs/msg/Header", stamp=stamp, frame_id=frame)
-
         o = self.world.odometry()
-        vec = "geometry_msgs/msg/Vector3"
-        rotation = msg(
-            "geometry_msgs/msg/Quaternion",
-            x=0.0,
-            y=0.0,
-            z=math.sin(o.theta / 2),
-            w=math.cos(o.theta / 2),
-        )
         ranges = self.world.sonar()
         spec = self.world.sonar_spec
         inc = 2 * math.pi / SONARS
@@ -226,7 +224,7 @@ class PhysicsNode:
         self._barcodes.publish(
             msg(
                 "situate_msgs/msg/Barcodes",
-                header=header(self.base_frame),
+                header=header(stamp_ns, self.base_frame),
                 ids=np.array([s[0] for s in seen], dtype=np.int64),
                 bearing=np.array([s[1] for s in seen], dtype=np.float64),
                 distance=np.array([s[2] for s in seen], dtype=np.float64),
@@ -235,7 +233,7 @@ class PhysicsNode:
         self._sonar.publish(
             msg(
                 "sensor_msgs/msg/LaserScan",
-                header=header(self.base_frame),
+                header=header(stamp_ns, self.base_frame),
                 angle_min=0.0,
                 angle_max=(SONARS - 1) * inc,
                 angle_increment=inc,
@@ -248,47 +246,9 @@ class PhysicsNode:
             )
         )
         self._odom.publish(
-            msg(
-                "nav_msgs/msg/Odometry",
-                header=header(self.odom_frame),
-                child_frame_id=self.base_frame,
-                pose=msg(
-                    "geometry_msgs/msg/PoseWithCovariance",
-                    pose=msg(
-                        "geometry_msgs/msg/Pose",
-                        position=msg("geometry_msgs/msg/Point", x=o.x, y=o.y, z=0.0),
-                        orientation=rotation,
-                    ),
-                    covariance=np.zeros(36, dtype=np.float64),
-                ),
-                twist=msg(
-                    "geometry_msgs/msg/TwistWithCovariance",
-                    twist=msg(
-                        "geometry_msgs/msg/Twist",
-                        linear=msg(vec, x=o.v, y=0.0, z=0.0),
-                        angular=msg(vec, x=0.0, y=0.0, z=o.w),
-                    ),
-                    covariance=np.zeros(36, dtype=np.float64),
-                ),
-            )
+            odometry_msg(stamp_ns, self.odom_frame, self.base_frame, o.x, o.y, o.theta, o.v, o.w)
         )
-        self._tf.publish(
-            msg(
-                "tf2_msgs/msg/TFMessage",
-                transforms=[
-                    msg(
-                        "geometry_msgs/msg/TransformStamped",
-                        header=header(self.odom_frame),
-                        child_frame_id=self.base_frame,
-                        transform=msg(
-                            "geometry_msgs/msg/Transform",
-                            translation=msg(vec, x=o.x, y=o.y, z=0.0),
-                            rotation=rotation,
-                        ),
-                    )
-                ],
-            )
-        )
+        self._tf.publish(tf_msg(stamp_ns, self.odom_frame, self.base_frame, o.x, o.y, o.theta))
         self._clock.publish(self._clock_msg(stamp_ns))
 
     # -- the clock's thread --
