@@ -10,11 +10,13 @@
 //! - [`convert`]: values between the cycle and Python (arrays without a copy).
 //! - [`loader`]: the `python:` files of a robot file, imported.
 //! - [`robot`]: a robot file run in process (`situate.LocalRobot`).
+//! - [`elevator`]: the 2-D simulator's elevator logic, for the physics robot.
 
 use pyo3::prelude::*;
 
 pub mod bench;
 pub mod convert;
+pub mod elevator;
 pub mod loader;
 pub mod robot;
 pub mod skill;
@@ -71,6 +73,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<skill::SkillStdout>()?;
     m.add_class::<convert::SharedArray>()?;
     m.add_class::<robot::LocalRobot>()?;
+    m.add_class::<elevator::Elevator>()?;
     Ok(())
 }
 

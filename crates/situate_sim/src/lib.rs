@@ -11,6 +11,7 @@
 //!   world, with the ports of the robot's signal contract (`situate_robot`).
 
 pub mod check;
+pub mod elevator;
 pub mod generate;
 pub mod geom;
 pub mod map;

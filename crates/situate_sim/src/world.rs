@@ -9,6 +9,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 use situate_robot::{sonar_bearing, SONARS};
 
+use crate::elevator::{Button, Cars, RobotAt};
+pub use crate::elevator::{CarPhase, CarState};
 use crate::geom::{cast, ray_circle, wrap, Aabb, RayFan, Seg, P2};
 use crate::map::{Barcode, Map};
 use crate::people::{self, Around, Person, Walkable, PATH_CLEARANCE, PERSON_RADIUS};
@@ -116,40 +118,6 @@ pub struct RobotState {
     pub floor: i64,
 }
 
-/// What an elevator car is doing.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum CarPhase {
-    /// Doors closed, standing.
-    Idle,
-    /// Moving (or waiting, when `from` is `to`) to floor `to`, arriving at `until`.
-    Travel { from: f64, to: i64, start: f64, until: f64 },
-    /// Doors opening.
-    Opening,
-    /// Doors open until the time given.
-    Open { until: f64 },
-    /// Doors closing (they open again for the robot in the doorway or a call).
-    Closing,
-}
-
-/// One car's state.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CarState {
-    /// Floor position (fractional while moving).
-    pub pos: f64,
-    /// Door opening, 0 closed … 1 open.
-    pub door: f64,
-    pub phase: CarPhase,
-    /// A floor pressed on the panel, not yet served.
-    pub target: Option<i64>,
-}
-
-impl CarState {
-    /// The floor the car is at or nearest to.
-    pub fn floor(&self) -> i64 {
-        self.pos.round() as i64
-    }
-}
-
 #[derive(Debug, Clone, PartialEq)]
 enum Pending {
     Call(i64),
@@ -185,8 +153,7 @@ pub struct World {
     target: (f64, f64),
     limits: BaseLimits,
     odom: (f64, f64, f64, f64, f64),
-    cars: Vec<CarState>,
-    calls: Vec<i64>,
+    elevator: Cars,
     pending: Vec<Pending>,
     pending_drive: Option<((f64, f64), BaseLimits)>,
     said: Vec<crate::task::Utterance>,
@@ -250,11 +217,7 @@ impl World {
     pub fn with_config(map: Map, seed: u64, cfg: WorldConfig) -> World {
         let m = &map.mission;
         let robot = RobotState { x: m.start.0, y: m.start.1, theta: m.start.2, v: 0.0, w: 0.0, floor: m.start_floor };
-        let lowest = map.floors.iter().map(|f| f.level).min().unwrap_or(0);
-        let cars = vec![
-            CarState { pos: lowest as f64, door: 0.0, phase: CarPhase::Idle, target: None };
-            map.elevator.cars.len()
-        ];
+        let elevator = Cars::new(&map);
         let statics = map.floors.iter().map(|f| map.static_segments(f)).collect();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(0);
@@ -281,8 +244,7 @@ impl World {
             target: (0.0, 0.0),
             limits: BaseLimits::default(),
             odom: (0.0, 0.0, 0.0, 0.0, 0.0),
-            cars,
-            calls: Vec::new(),
+            elevator,
             pending: Vec::new(),
             pending_drive: None,
             said: Vec::new(),
@@ -369,7 +331,7 @@ impl World {
 
     /// The cars' states, car 1 first.
     pub fn cars(&self) -> &[CarState] {
-        &self.cars
+        self.elevator.states()
     }
 
     /// Odometry: `(x, y, theta, v, w)` in the start frame.
@@ -411,20 +373,9 @@ impl World {
     /// whether a button was hit; its effect starts at the next physics step.
     pub fn press(&mut self, label: i64, reach: f64, fov: f64) -> bool {
         self.arm_attempts += 1;
-        let effect = self.buttons().into_iter().find(|(p, facing, l)| {
-            let rel = p.minus(self.pos());
-            let in_front = wrap(rel.y.atan2(rel.x) - self.robot.theta).abs() <= fov;
-            // The robot must be on the button's side.
-            let facing_ok = P2::dir(*facing).dot(rel.scale(-1.0)) > 0.0;
-            let accepts = match l {
-                ButtonKind::Call => true,
-                ButtonKind::Panel(_) => self.map.floor(label).is_some(),
-            };
-            rel.norm() <= reach && in_front && facing_ok && accepts
-        });
-        match effect {
-            Some((_, _, ButtonKind::Call)) => self.pending.push(Pending::Call(self.robot.floor)),
-            Some((_, _, ButtonKind::Panel(car))) => self.pending.push(Pending::Panel { car, floor: label }),
+        match self.elevator.reachable(&self.map, &self.robot_at(), label, reach, fov) {
+            Some(Button::Call) => self.pending.push(Pending::Call(self.robot.floor)),
+            Some(Button::Panel(car)) => self.pending.push(Pending::Panel { car, floor: label }),
             None => return false,
         }
         self.arm_presses += 1;
@@ -446,14 +397,18 @@ impl World {
         P2::new(self.robot.x, self.robot.y)
     }
 
+    /// The robot as the elevator sees it.
+    fn robot_at(&self) -> RobotAt {
+        RobotAt { floor: self.robot.floor, pos: self.pos(), theta: self.robot.theta }
+    }
+
     fn floor_index(&self, level: i64) -> Option<usize> {
         self.map.floors.iter().position(|f| f.level == level)
     }
 
     /// The robot's car, if it is inside one.
     pub fn robot_car(&self) -> Option<usize> {
-        let p = self.pos();
-        self.map.elevator.cars.iter().position(|c| c.contains(p))
+        Cars::inside(&self.map, self.pos())
     }
 
     /// Every segment that blocks motion and sensing on `level` now: walls,
@@ -475,9 +430,8 @@ impl World {
     /// The closed (or closing) part of each car door on `level`, then the
     /// map's closed door if it is on `level`.
     fn door_segments(&self, level: i64) -> impl Iterator<Item = Seg> + '_ {
-        let cars = self.map.elevator.cars.iter().zip(&self.cars).filter_map(move |(c, s)| {
-            let closed =
-                if s.floor() == level && !matches!(s.phase, CarPhase::Travel { .. }) { 1.0 - s.door } else { 1.0 };
+        let cars = self.map.elevator.cars.iter().zip(self.elevator.states()).filter_map(move |(c, s)| {
+            let closed = s.closed_on(level);
             (closed > 1e-6).then(|| {
                 let d = c.door();
                 Seg::new(d.a, d.at(closed))
@@ -509,33 +463,13 @@ impl World {
                 out.push(o.barcode.clone());
             }
         }
-        for (c, s) in self.map.elevator.cars.iter().zip(&self.cars) {
+        for (c, s) in self.map.elevator.cars.iter().zip(self.elevator.states()) {
             if s.floor() == level {
                 let (at, facing) = c.panel();
                 out.push(Barcode { id: c.barcode, at, facing: Some(facing), line: c.line });
             }
         }
         out
-    }
-
-    fn buttons(&self) -> Vec<(P2, f64, ButtonKind)> {
-        let mut out = Vec::new();
-        if let Some(l) = self.map.floor(self.robot.floor).and_then(|f| f.lobby.as_ref()) {
-            out.push((l.button, l.facing, ButtonKind::Call));
-        }
-        for (k, (c, s)) in self.map.elevator.cars.iter().zip(&self.cars).enumerate() {
-            if s.floor() == self.robot.floor && c.contains(self.pos()) {
-                let (p, facing) = c.panel();
-                out.push((p, facing, ButtonKind::Panel(k)));
-            }
-        }
-        out
-    }
-
-    /// Whether the robot's disc is in car `k`'s doorway on the car's floor.
-    fn in_doorway(&self, k: usize) -> bool {
-        let c = &self.map.elevator.cars[k];
-        self.cars[k].floor() == self.robot.floor && c.door().dist_to(self.pos()) < self.map.robot_radius + 0.05
     }
 
     fn step_once(&mut self) {
@@ -547,19 +481,8 @@ impl World {
         }
         for p in std::mem::take(&mut self.pending) {
             match p {
-                Pending::Call(f) => {
-                    if !self.calls.contains(&f) {
-                        self.calls.push(f);
-                    }
-                }
-                Pending::Panel { car, floor } => {
-                    if self.map.floor(floor).is_some() {
-                        self.cars[car].target = Some(floor);
-                        if let CarPhase::Open { until } = self.cars[car].phase {
-                            self.cars[car].phase = CarPhase::Open { until: until.min(now + 2.0) };
-                        }
-                    }
-                }
+                Pending::Call(f) => self.elevator.call(f),
+                Pending::Panel { car, floor } => self.elevator.select(&self.map, car, floor, now),
                 Pending::Say { text, at } => {
                     if self.delivered_at.is_none() && self.map.in_office(self.robot.floor, self.pos()) {
                         self.delivered_at = Some(at);
@@ -633,91 +556,10 @@ impl World {
     }
 
     fn step_elevator(&mut self, now: f64, dt: f64) {
-        let map = Arc::clone(&self.map);
-        let el = &map.elevator;
-        let inside = self.robot_car();
-        // Calls: served by a car already there, else a random idle car.
-        let mut calls = std::mem::take(&mut self.calls);
-        calls.retain(|&f| {
-            let there = self.cars.iter().any(|c| {
-                c.floor() == f && matches!(c.phase, CarPhase::Opening | CarPhase::Open { .. })
-                    || matches!(c.phase, CarPhase::Travel { to, .. } if to == f)
-            });
-            if there {
-                return false;
-            }
-            // A car closing its doors here opens them again.
-            if let Some(c) = self.cars.iter_mut().find(|c| c.floor() == f && c.phase == CarPhase::Closing) {
-                c.phase = CarPhase::Opening;
-                return false;
-            }
-            let idle: Vec<usize> = (0..self.cars.len())
-                .filter(|&k| self.cars[k].phase == CarPhase::Idle && self.cars[k].target.is_none() && inside != Some(k))
-                .collect();
-            if idle.is_empty() {
-                return true;
-            }
-            let k = idle[(self.rng.next_u64() % idle.len() as u64) as usize];
-            let delay = el.arrive_s.0 + uniform(&mut self.rng) * (el.arrive_s.1 - el.arrive_s.0);
-            let from = self.cars[k].pos;
-            self.cars[k].phase = CarPhase::Travel { from, to: f, start: now, until: now + delay.max(dt) };
-            tracing::debug!(car = k + 1, floor = f, delay, "car dispatched");
-            false
-        });
-        self.calls = calls;
-        let door_rate = dt / el.door_move_s;
-        for k in 0..self.cars.len() {
-            let mut c = self.cars[k];
-            match c.phase {
-                CarPhase::Idle => {
-                    if let Some(t) = c.target.take() {
-                        let dur = (t as f64 - c.pos).abs() * el.travel_s_per_floor;
-                        c.phase = if dur < 1e-9 {
-                            CarPhase::Opening
-                        } else {
-                            CarPhase::Travel { from: c.pos, to: t, start: now, until: now + dur }
-                        };
-                    }
-                }
-                CarPhase::Travel { from, to, start, until } => {
-                    if now + dt >= until {
-                        c.pos = to as f64;
-                        c.phase = CarPhase::Opening;
-                    } else {
-                        c.pos = from + (to as f64 - from) * ((now + dt - start) / (until - start));
-                    }
-                }
-                CarPhase::Opening => {
-                    c.door = (c.door + door_rate).min(1.0);
-                    if c.door >= 1.0 {
-                        let hold = if c.target.is_some() {
-                            2.0
-                        } else {
-                            el.open_s.0 + uniform(&mut self.rng) * (el.open_s.1 - el.open_s.0)
-                        };
-                        c.phase = CarPhase::Open { until: now + hold };
-                    }
-                }
-                CarPhase::Open { until } => {
-                    if now + dt >= until {
-                        c.phase = CarPhase::Closing;
-                    }
-                }
-                CarPhase::Closing => {
-                    if self.in_doorway(k) {
-                        c.phase = CarPhase::Opening;
-                    } else {
-                        c.door = (c.door - door_rate).max(0.0);
-                        if c.door <= 0.0 {
-                            c.phase = CarPhase::Idle;
-                        }
-                    }
-                }
-            }
-            self.cars[k] = c;
-        }
-        if let Some(k) = inside {
-            self.robot.floor = self.cars[k].floor();
+        let robot = self.robot_at();
+        self.elevator.step(&self.map, &robot, now, dt, &mut self.rng);
+        if let Some(k) = Cars::inside(&self.map, robot.pos) {
+            self.robot.floor = self.elevator.states()[k].floor();
         }
     }
 
@@ -842,12 +684,6 @@ impl World {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum ButtonKind {
-    Call,
-    Panel(usize),
-}
-
 /// Whether moving the robot's disc (radius `r`) from `a` to `b` hits a
 /// segment. A disc already overlapping a segment may move away from it.
 fn blocked(a: P2, b: P2, segs: &[Seg], r: f64) -> bool {
@@ -915,7 +751,7 @@ mod tests {
             let (x, y) = (-1.0 + 23.0 * uniform(&mut rng), -1.0 + 23.0 * uniform(&mut rng));
             w.place_robot(floor, x, y, (uniform(&mut rng) - 0.5) * 7.0);
             w.step = k * 37;
-            for c in w.cars.iter_mut() {
+            for c in w.elevator.states_mut() {
                 c.pos = floor as f64;
                 c.door = [0.0, 0.3, 1.0][(k % 3) as usize];
                 c.phase = [CarPhase::Idle, CarPhase::Opening, CarPhase::Open { until: 1e9 }][(k % 3) as usize];
