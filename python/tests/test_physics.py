@@ -102,7 +102,7 @@ def test_situate_map_show_prints_the_building(tmp_path: Path) -> None:
     assert shown["name"] == "room"
     assert shown["elevator"]["cars"][0]["door_side"] == "south"
     assert shown["floors"][0]["barcodes"] == [{"id": 11, "x": 9.98, "y": 3.0, "facing": math.pi}]
-    assert Building.from_json(out.stdout) == Building.load(path)
+    assert Building.from_json(out.stdout, source=str(path)) == Building.load(path)
     missing = situate("map", "show", str(tmp_path / "none.yaml"))
     assert missing.returncode == 3, missing
     assert "none.yaml" in missing.stderr
@@ -228,7 +228,97 @@ def test_the_default_building_builds_every_floor() -> None:
     b = Building.load(REPO / "maps" / "default.yaml")
     w = PhysicsWorld(b)
     assert w.pose().floor == b.start[0]
-    levels = {f.level for f in b.floors}
-    assert {w.model.geom(f"slab{level}").id for level in levels}
+    names = [w.model.geom(g).name for g in range(w.model.ngeom)]
+    for f in b.floors:
+        tag = f"f{f.level}".replace("-", "m")
+        assert any(n.startswith(f"{tag}_slab_") for n in names), f.level
     # The robot starts in the lab with something within reach of its sonars.
     assert (w.sonar() < 4.0).any()
+
+
+def _drive_to(w: PhysicsWorld, x: float, y: float, tol: float = 0.03, limit: float = 30.0) -> None:
+    """Drives the base to a point (turning towards it, then ahead) and stops it there."""
+    end = w.time + limit
+    while w.time < end:
+        p = w.pose()
+        d = math.hypot(x - p.x, y - p.y)
+        if d < tol:
+            break
+        turn = math.remainder(math.atan2(y - p.y, x - p.x) - p.theta, 2 * math.pi)
+        w.command(min(0.3 * max(0.0, math.cos(turn)), d) if abs(turn) < 0.5 else 0.0, 2.0 * turn)
+        w.advance(0.05)
+    w.command(0.0, 0.0)
+    w.advance(0.5)
+
+
+def _face(w: PhysicsWorld, theta: float) -> None:
+    for _ in range(200):
+        turn = math.remainder(theta - w.pose().theta, 2 * math.pi)
+        if abs(turn) < 0.02:
+            break
+        w.command(0.0, 2.0 * turn)
+        w.advance(0.05)
+    w.command(0.0, 0.0)
+    w.advance(0.5)
+
+
+def test_a_car_comes_when_called_and_carries_the_robot_to_the_floor_chosen() -> None:
+    b = Building.load(REPO / "maps" / "default.yaml")
+    # Before the call button of the basement lobby (15, 17.98), facing it.
+    w = PhysicsWorld(b, seed=1, start=(-1, 15.0, 17.45, math.pi / 2))
+    assert not w.press(30, reach=0.3), "out of reach"
+    assert w.press(30)
+    assert w.arm == (2, 1)
+    # A car comes, and its landing door opens: until then, the door is a wall.
+    came = None
+    for _ in range(300):
+        w.advance(0.1)
+        came = next((k for k, c in enumerate(w.cars()) if c.phase == "open"), None)
+        if came is not None:
+            break
+    assert came is not None, w.cars()
+    car = b.cars[came]
+    assert w.cars()[came].position == -1
+    assert w.cars()[came].door == 1
+    assert abs(w.car_height(came) - -1 * 4.0) < 0.01
+    cx = (car.x0 + car.x1) / 2
+    # In, before the panel (2 cm off the back wall), facing it: floor 4.
+    _drive_to(w, cx, 17.3)
+    _drive_to(w, cx, car.y1 - 0.55)
+    _face(w, math.pi / 2)
+    assert car.contains(w.pose().x, w.pose().y)
+    assert w.press(4)
+    # The door shuts, the car rises with the robot on its floor plate, and opens on floor 4.
+    rose = False
+    for _ in range(600):
+        w.advance(0.1)
+        c = w.cars()[came]
+        rose = rose or c.phase == "travel"
+        if c.phase == "open" and c.position == 4:
+            break
+    assert rose
+    assert w.cars()[came].phase == "open"
+    p = w.pose()
+    assert p.floor == 4, p
+    assert car.contains(p.x, p.y), p
+    assert w.tilt() < 0.05
+    assert abs(w.car_height(came) - 16.0) < 0.01
+    # The sonar behind the robot (180°) reads the open doorway and the lobby beyond it.
+    assert w.sonar()[12] > 1.5
+    # Out into the floor 4 lobby.
+    _drive_to(w, cx, 17.0)
+    assert w.pose().floor == 4
+    assert w.pose().y < car.y0
+
+
+def test_a_closed_landing_door_is_a_wall() -> None:
+    b = Building.load(REPO / "maps" / "default.yaml")
+    car = b.cars[0]
+    cx = (car.x0 + car.x1) / 2
+    # Before car 1's closed basement door, facing it: the sonar ahead reads the door.
+    w = PhysicsWorld(b, seed=2, start=(-1, cx, car.y0 - 0.8, math.pi / 2))
+    w.advance(0.2)
+    assert abs(float(w.sonar()[0]) - 0.8) < 0.1
+    w.command(0.3, 0.0)
+    w.advance(5.0)
+    assert w.pose().y < car.y0 - b.robot_radius + 0.02

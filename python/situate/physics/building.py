@@ -60,6 +60,8 @@ class Floor:
     barcodes: tuple[Barcode, ...]
     #: The lobby's call button ``(x, y, facing)``, if the floor has a lobby.
     button: tuple[float, float, float] | None
+    #: The office's outline, if the office is on this floor: where a message is delivered.
+    office: tuple[tuple[float, float], ...] | None = None
 
     def obstacle_edges(self) -> list[Segment]:
         """Every edge of every obstacle polygon."""
@@ -81,6 +83,8 @@ class Building:
     cars: tuple[Car, ...]
     open_s: tuple[float, float]
     mission: dict[str, Any]
+    #: The map file it was read from (`load`): the elevator's logic reads it too.
+    source: str | None = None
 
     @staticmethod
     def load(path: str | Path) -> Building:
@@ -91,11 +95,11 @@ class Building:
         """
         from situate import _native
 
-        return Building.from_json(_native.map_json(str(path)))
+        return Building.from_json(_native.map_json(str(path)), source=str(path))
 
     @staticmethod
-    def from_json(text: str) -> Building:
-        """Reads the JSON that `situate map show` prints."""
+    def from_json(text: str, source: str | None = None) -> Building:
+        """Reads the JSON that `situate map show` prints (`source`: the map file it shows)."""
         j = json.loads(text)
 
         def seg(s: list[float]) -> Segment:
@@ -115,8 +119,10 @@ class Building:
                 bx, by = lobby["button"]
                 button = (float(bx), float(by), float(lobby["facing"]))
                 codes.append(Barcode(int(lobby["barcode"]), button[0], button[1], button[2]))
+            office = None
             if f.get("office"):
                 codes.append(barcode(f["office"]["barcode"]))
+                office = tuple((float(p[0]), float(p[1])) for p in f["office"]["polygon"])
             floors.append(
                 Floor(
                     level=int(f["level"]),
@@ -128,6 +134,7 @@ class Building:
                     doors=tuple(seg(d["seg"]) for d in f["doors"]),
                     barcodes=tuple(codes),
                     button=button,
+                    office=office,
                 )
             )
         e = j["elevator"]
@@ -152,6 +159,7 @@ class Building:
             cars=cars,
             open_s=(float(e["open_s"][0]), float(e["open_s"][1])),
             mission=dict(j["mission"]),
+            source=source,
         )
 
     def floor(self, level: int) -> Floor:
@@ -171,6 +179,11 @@ class Building:
         s = self.mission["start"]
         return int(s["floor"]), float(s["x"]), float(s["y"]), float(s["theta"])
 
+    def in_office(self, level: int, x: float, y: float) -> bool:
+        """Whether a point of a floor is in the office (where the message is delivered)."""
+        office = self.floor(level).office if any(f.level == level for f in self.floors) else None
+        return office is not None and _in_polygon(office, x, y)
+
     def bounds(self, level: int, margin: float = 1.0) -> tuple[float, float, float, float]:
         """The box around a floor's walls and the shafts: ``(xmin, ymin, xmax, ymax)``."""
         xs: list[float] = []
@@ -189,6 +202,17 @@ class Building:
         for c in self.cars:
             out.extend(c.walls)
         return out
+
+
+def _in_polygon(polygon: tuple[tuple[float, float], ...], x: float, y: float) -> bool:
+    """Whether a point is inside a polygon (even-odd rule)."""
+    inside = False
+    n = len(polygon)
+    for i in range(n):
+        (ax, ay), (bx, by) = polygon[i], polygon[(i + 1) % n]
+        if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
+            inside = not inside
+    return inside
 
 
 def _opt_float(v: Any) -> float | None:

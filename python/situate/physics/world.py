@@ -23,6 +23,9 @@ a `BaseSpec`, and runs it:
   rays across its cone from the robot's centre at `SONAR_HEIGHT` (`mj_multiRay`, the robot's own
   geoms left out) and reads the nearest return, plus Gaussian noise; a missed echo (probability
   `dropout`) or nothing within `max_range` reads ``max_range``. As the 2-D simulator's ring.
+- **The arm and the speaker**: `press` pushes the button with a label (the lobby's call
+  button, the panel of the car the robot is in) within reach, as the 2-D arm; `say` says a
+  text, and the message is delivered when it is said in the office.
 - **The barcode reader**: a barcode within `BARCODE_RANGE` and `BARCODE_FOV` either side of
   ahead, read from in front of its label (within 80° of the way it faces), and in line of sight
   (`mj_ray`: nothing nearer on the way). As the 2-D simulator's `barcodes`.
@@ -63,6 +66,21 @@ BARCODE_RANGE = 5.0
 BARCODE_FOV = math.radians(60)
 #: Geom group of the robot's own geoms: the sonar's and the reader's rays do not see them.
 ROBOT_GROUP = 3
+#: A floor slab's thickness, m.
+SLAB = 0.1
+#: The height of the shafts' walls and the landing doors: up to the next floor's slab, m.
+SHAFT_HEIGHT = FLOOR_HEIGHT - SLAB - 0.01
+#: A car's mass, kg (its weight compensated: the counterweight).
+CAR_MASS = 200.0
+#: The car's position servo: stiffness N/m and damping N·s/m (critically damped).
+CAR_KP = 1.0e6
+CAR_KV = 2 * math.sqrt(CAR_KP * CAR_MASS)
+#: The elevator logic's step, s (the 2-D simulator's step).
+ELEVATOR_DT = 0.01
+#: The arm's reach from the robot's centre, m, and how far off ahead a button may be, rad
+#: (the 2-D `sim.arm`'s defaults).
+ARM_REACH = 0.6
+ARM_FOV = math.radians(25)
 
 
 @dataclass(frozen=True)
@@ -124,6 +142,26 @@ class Pose:
     floor: int
 
 
+@dataclass(frozen=True)
+class Utterance:
+    """Something the robot said: when, where and what."""
+
+    time: float
+    floor: int
+    x: float
+    y: float
+    text: str
+
+
+@dataclass(frozen=True)
+class CarView:
+    """One car as the world has it: floor position (fractional while it moves), door opening."""
+
+    position: float
+    door: float
+    phase: str
+
+
 def _box(
     name: str, seg: Segment, z0: float, height: float, thickness: float, ext: tuple[float, float]
 ) -> str:
@@ -144,7 +182,17 @@ def _box(
     )
 
 
-def _walls(name: str, segs: list[Segment], z0: float) -> list[str]:
+def _tag(level: int) -> str:
+    """A floor's part of a geom's name."""
+    return f"f{level}".replace("-", "m")
+
+
+def _door_name(level: int, car: int) -> str:
+    """The landing door of a car on a floor."""
+    return f"{_tag(level)}_car{car}_door"
+
+
+def _walls(name: str, segs: list[Segment], z0: float, height: float = WALL_HEIGHT) -> list[str]:
     """Boxes for walls, centred on their lines.
 
     An end that meets another wall's end is lengthened by half the thickness: corners are closed.
@@ -164,7 +212,7 @@ def _walls(name: str, segs: list[Segment], z0: float) -> list[str]:
             half if ends[key(s[0], s[1])] > 1 else 0.0,
             half if ends[key(s[2], s[3])] > 1 else 0.0,
         )
-        geom = _box(f"{name}{i}", s, z0, WALL_HEIGHT, WALL_THICKNESS, ext)
+        geom = _box(f"{name}{i}", s, z0, height, WALL_THICKNESS, ext)
         if geom:
             out.append(geom)
     return out
@@ -194,25 +242,76 @@ def _solid(name: str, polygon: tuple[tuple[float, float], ...], z0: float) -> li
     return out
 
 
+def _slab(
+    name: str,
+    bounds: tuple[float, float, float, float],
+    holes: list[tuple[float, float, float, float]],
+    z: float,
+) -> list[str]:
+    """A floor slab (top at `z`) over `bounds`, with a hole for each shaft in `holes`.
+
+    Cut into a grid by the holes' edges; each row's cells outside every hole are merged.
+    """
+    x0, y0, x1, y1 = bounds
+    xs = sorted({x0, x1, *(v for h in holes for v in (h[0], h[2]) if x0 < v < x1)})
+    ys = sorted({y0, y1, *(v for h in holes for v in (h[1], h[3]) if y0 < v < y1)})
+
+    def solid(cx: float, cy: float) -> bool:
+        return not any(h[0] < cx < h[2] and h[1] < cy < h[3] for h in holes)
+
+    out = []
+    for j in range(len(ys) - 1):
+        cy, hy = (ys[j] + ys[j + 1]) / 2, (ys[j + 1] - ys[j]) / 2
+        i = 0
+        while i < len(xs) - 1:
+            if not solid((xs[i] + xs[i + 1]) / 2, cy):
+                i += 1
+                continue
+            k = i
+            while k + 1 < len(xs) - 1 and solid((xs[k + 1] + xs[k + 2]) / 2, cy):
+                k += 1
+            cx, hx = (xs[i] + xs[k + 1]) / 2, (xs[k + 1] - xs[i]) / 2
+            out.append(
+                f'<geom name="{name}_{j}_{i}" type="box" size="{hx:.6f} {hy:.6f} {SLAB / 2}" '
+                f'pos="{cx:.6f} {cy:.6f} {z - SLAB / 2:.6f}" class="slab"/>'
+            )
+            i = k + 1
+    return out
+
+
 def mjcf(building: Building, base: BaseSpec, timestep: float) -> str:
     """The MuJoCo model (MJCF) of the building and the robot, the robot at the origin."""
     r = building.robot_radius
     wr = base.wheel_radius
     geoms: list[str] = []
+    holes = [(c.x0, c.y0, c.x1, c.y1) for c in building.cars]
     for f in building.floors:
         z = f.level * FLOOR_HEIGHT
-        x0, y0, x1, y1 = building.bounds(f.level)
-        geoms.append(
-            f'<geom name="slab{f.level}" type="box" size="{(x1 - x0) / 2} {(y1 - y0) / 2} 0.05" '
-            f'pos="{(x0 + x1) / 2} {(y0 + y1) / 2} {z - 0.05}" class="slab"/>'
-        )
-        tag = f"f{f.level}".replace("-", "m")
+        tag = _tag(f.level)
+        geoms += _slab(f"{tag}_slab", building.bounds(f.level), holes, z)
         geoms += _walls(f"{tag}_wall", list(f.walls), z)
         for k, polygon in enumerate(f.obstacles):
             geoms += _solid(f"{tag}_obstacle{k}", polygon, z)
         for c in building.cars:
-            geoms += _walls(f"{tag}_car{c.id}_", list(c.walls), z)
-            geoms += _walls(f"{tag}_car{c.id}_door", [c.door], z)
+            geoms += _walls(f"{tag}_car{c.id}_", list(c.walls), z, SHAFT_HEIGHT)
+            geoms.append(
+                _box(_door_name(f.level, c.id), c.door, z, SHAFT_HEIGHT, WALL_THICKNESS, (0, 0))
+            )
+    lowest = min((f.level for f in building.floors), default=0) * FLOOR_HEIGHT
+    cars = []
+    servos = []
+    for c in building.cars:
+        hx, hy = (c.x1 - c.x0) / 2 - 0.005, (c.y1 - c.y0) / 2 - 0.005
+        cx, cy = (c.x0 + c.x1) / 2, (c.y0 + c.y1) / 2
+        cars.append(
+            f'<body name="car{c.id}" pos="{cx:.6f} {cy:.6f} {lowest}" '
+            f'gravcomp="1"><joint name="car{c.id}" type="slide" axis="0 0 1"/>'
+            f'<geom name="car{c.id}_floor" type="box" size="{hx:.6f} {hy:.6f} {SLAB / 2}" '
+            f'pos="0 0 {-SLAB / 2}" mass="{CAR_MASS}" class="car"/></body>'
+        )
+        servos.append(
+            f'<position name="car{c.id}" joint="car{c.id}" kp="{CAR_KP}" kv="{CAR_KV:.3f}"/>'
+        )
     chassis_h = 0.3
     caster = 0.03
     return f"""
@@ -222,35 +321,41 @@ def mjcf(building: Building, base: BaseSpec, timestep: float) -> str:
   <default>
     <default class="wall"><geom rgba="0.7 0.7 0.72 1" friction="0.6 0.005 0.0001"/></default>
     <default class="slab"><geom rgba="0.9 0.9 0.88 1" friction="1 0.005 0.0001"/></default>
+    <default class="car">
+      <geom rgba="0.8 0.75 0.6 1" friction="1 0.005 0.0001" contype="2" conaffinity="2"/>
+    </default>
+    <default class="robot"><geom contype="3" conaffinity="3"/></default>
   </default>
   <worldbody>
     {"".join(geoms)}
-    <body name="robot" pos="0 0 0">
+    <body name="robot" pos="0 0 0" childclass="robot">
       <freejoint name="robot"/>
       <geom name="chassis" type="cylinder" size="{r} {chassis_h / 2}"
-            pos="0 0 {wr + 0.02 + chassis_h / 2}" mass="{base.mass}" group="{ROBOT_GROUP}"
+            pos="0 0 {wr + 0.02 + chassis_h / 2}" mass="{base.mass}"
             rgba="0.2 0.4 0.8 1" friction="0.3 0.005 0.0001"/>
       <geom name="caster_front" type="sphere" size="{caster}" pos="{r - 0.07} 0 {caster}"
-            mass="0.2" group="{ROBOT_GROUP}" condim="1" priority="1"/>
+            mass="0.2" condim="1" priority="1"/>
       <geom name="caster_back" type="sphere" size="{caster}" pos="{-(r - 0.07)} 0 {caster}"
-            mass="0.2" group="{ROBOT_GROUP}" condim="1" priority="1"/>
+            mass="0.2" condim="1" priority="1"/>
       <body name="wheel_left" pos="0 {base.track / 2} {wr}">
         <joint name="wheel_left" type="hinge" axis="0 1 0" damping="0.01"/>
-        <geom type="cylinder" size="{wr} 0.006" euler="1.5707963 0 0" mass="1" group="{ROBOT_GROUP}"
+        <geom type="cylinder" size="{wr} 0.006" euler="1.5707963 0 0" mass="1"
               friction="{base.friction} 0.005 0.0001" priority="1" condim="4"/>
       </body>
       <body name="wheel_right" pos="0 {-base.track / 2} {wr}">
         <joint name="wheel_right" type="hinge" axis="0 1 0" damping="0.01"/>
-        <geom type="cylinder" size="{wr} 0.006" euler="1.5707963 0 0" mass="1" group="{ROBOT_GROUP}"
+        <geom type="cylinder" size="{wr} 0.006" euler="1.5707963 0 0" mass="1"
               friction="{base.friction} 0.005 0.0001" priority="1" condim="4"/>
       </body>
     </body>
+    {"".join(cars)}
   </worldbody>
   <actuator>
     <velocity name="left" joint="wheel_left" kv="{base.wheel_gain}"
               forcelimited="true" forcerange="{-base.wheel_torque} {base.wheel_torque}"/>
     <velocity name="right" joint="wheel_right" kv="{base.wheel_gain}"
               forcelimited="true" forcerange="{-base.wheel_torque} {base.wheel_torque}"/>
+    {"".join(servos)}
   </actuator>
 </mujoco>
 """
@@ -285,6 +390,8 @@ class PhysicsWorld:
         self._right = self.model.joint("wheel_right").qposadr[0]
         self._left_v = self.model.joint("wheel_left").dofadr[0]
         self._right_v = self.model.joint("wheel_right").dofadr[0]
+        self._robot_nq = max(self._left, self._right) + 1
+        self._robot_nv = max(self._left_v, self._right_v) + 1
         floor, x, y, theta = start if start is not None else building.start
         self.place(floor, x, y, theta)
         # Every sonar's rays, in the robot's frame: sonar i at i·15°, spread across its cone.
@@ -297,6 +404,36 @@ class PhysicsWorld:
         self._geomgroup = np.array([1 if g != ROBOT_GROUP else 0 for g in range(6)], np.uint8)
         self._command = (0.0, 0.0)
         self._moving = (0.0, 0.0)
+        # The elevator: its logic (the 2-D simulator's), each car's servo, each landing door.
+        self._elevator: Any = None
+        if building.cars:
+            if building.source is None:
+                raise ValueError(
+                    "a building with an elevator must be read from its map file (Building.load): "
+                    "the elevator's logic reads it"
+                )
+            from situate import _native
+
+            self._elevator = _native.Elevator(building.source, seed)
+        self._lowest = min((f.level for f in building.floors), default=0)
+        self._elevator_every = max(1, round(ELEVATOR_DT / timestep))
+        self._steps = 0
+        self._cars: list[tuple[float, float, str, float, float]] = (
+            self._elevator.cars() if self._elevator else []
+        )
+        self._doors = [
+            [
+                (self.model.geom(_door_name(f.level, c.id)).id, f.level, c.door)
+                for f in building.floors
+            ]
+            for c in building.cars
+        ]
+        self._car_servo = [self.model.actuator(f"car{c.id}").id for c in building.cars]
+        self._update_elevator()
+        mujoco.mj_forward(self.model, self.data)
+        self._presses = [0, 0]  # attempts, presses
+        self._said: list[Utterance] = []
+        self._delivered_at: float | None = None
 
     # ----- state -----
 
@@ -304,8 +441,9 @@ class PhysicsWorld:
         """Puts the robot at rest at a pose, and its odometry's origin there."""
         self.building.floor(floor)  # KeyError for a floor the building lacks
         d = self.data
-        d.qpos[:] = 0
-        d.qvel[:] = 0
+        # The robot's joints come first (its free joint, its wheels), the cars' after.
+        d.qpos[: self._robot_nq] = 0
+        d.qvel[: self._robot_nv] = 0
         d.qpos[0:3] = (x, y, floor * FLOOR_HEIGHT + 0.001)
         d.qpos[3:7] = (math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2))
         mujoco.mj_forward(self.model, d)
@@ -340,6 +478,31 @@ class PhysicsWorld:
         cz = 1 - 2 * (x * x + y * y)
         return math.acos(max(-1.0, min(1.0, cz)))
 
+    def cars(self) -> list[CarView]:
+        """The cars as the elevator's logic has them (the physical car follows it), car 1 first."""
+        return [CarView(pos, door, phase) for pos, door, phase, _, _ in self._cars]
+
+    def car_height(self, k: int) -> float:
+        """Car `k`'s (0-based) floor plate's height, m: where its servo has it."""
+        return float(
+            self.data.qpos[self.model.joint(f"car{self.building.cars[k].id}").qposadr[0]]
+        ) + (self._lowest * FLOOR_HEIGHT)
+
+    @property
+    def arm(self) -> tuple[int, int]:
+        """The arm's counters: pushes tried and pushes that hit a button."""
+        return self._presses[0], self._presses[1]
+
+    @property
+    def said(self) -> list[Utterance]:
+        """What the robot said so far."""
+        return list(self._said)
+
+    @property
+    def delivered_at(self) -> float | None:
+        """When the message was said in the office (simulated time, s), if it was."""
+        return self._delivered_at
+
     def odometry(self) -> Odometry:
         """The wheel odometry, in the frame of the start pose."""
         x, y, t, v, w = self._odom
@@ -353,13 +516,41 @@ class PhysicsWorld:
             raise ValueError(f"a command must be finite: v={v}, w={w}")
         self._command = (v, w)
 
+    def press(self, label: int, reach: float = ARM_REACH, fov: float = ARM_FOV) -> bool:
+        """The arm pushes the button for `label`, as the 2-D arm: whether it hit one.
+
+        A call button (any label) in the lobby of the robot's floor, or the floor panel (the
+        label is the floor) of the car the robot is in, within `reach` (m, from the robot's
+        centre) and `fov` (rad, either side of ahead), the robot on the side it faces.
+        """
+        self._presses[0] += 1
+        p = self.pose()
+        hit = self._elevator is not None and bool(
+            self._elevator.press(label, p.floor, p.x, p.y, p.theta, reach, fov, self.time)
+        )
+        self._presses[1] += int(hit)
+        return hit
+
+    def say(self, text: str) -> None:
+        """The robot says `text`: the delivery, when it is in the office."""
+        p = self.pose()
+        self._said.append(Utterance(self.time, p.floor, p.x, p.y, text))
+        if self._delivered_at is None and self.building.in_office(p.floor, p.x, p.y):
+            self._delivered_at = self.time
+
     def advance(self, seconds: float) -> None:
         """Runs the physics steps of `seconds` (rounded to whole steps)."""
         for _ in range(max(0, round(seconds / self.timestep))):
             self.step()
 
     def step(self) -> None:
-        """One physics step: the controller, the motors, the world, the odometry."""
+        """One physics step: the elevator, the controller, the motors, the world, the odometry."""
+        if self._elevator is not None and self._steps % self._elevator_every == 0:
+            p = self.pose()
+            self._elevator.step(self.time, ELEVATOR_DT, p.floor, p.x, p.y, p.theta)
+            self._cars = self._elevator.cars()
+            self._update_elevator()
+        self._steps += 1
         b, dt = self.base, self.timestep
         v_cmd = min(max(self._command[0], -b.max_v), b.max_v)
         w_cmd = min(max(self._command[1], -b.max_w), b.max_w)
@@ -372,6 +563,24 @@ class PhysicsWorld:
         d.ctrl[1] = (v + w * b.track / 2) / b.wheel_radius
         mujoco.mj_step(self.model, d)
         self._integrate_odometry()
+
+    def _update_elevator(self) -> None:
+        """Each car's servo aimed where the logic has it (eased), each landing door shortened."""
+        m = self.model
+        for k, (pos, door, phase, start, end) in enumerate(self._cars):
+            if phase == "travel" and abs(end - start) > 1e-9:
+                u = min(max((pos - start) / (end - start), 0.0), 1.0)
+                pos = start + (end - start) * u * u * (3 - 2 * u)
+            self.data.ctrl[self._car_servo[k]] = (pos - self._lowest) * FLOOR_HEIGHT
+            on = round(pos) if phase != "travel" else None
+            for geom, level, (x0, y0, x1, y1) in self._doors[k]:
+                closed = 1.0 if level != on else 1.0 - door
+                length = math.hypot(x1 - x0, y1 - y0)
+                half = max(closed * length / 2, 0.0005)
+                ux, uy = (x1 - x0) / length, (y1 - y0) / length
+                m.geom_size[geom][0] = half
+                m.geom_pos[geom][0] = x0 + ux * half
+                m.geom_pos[geom][1] = y0 + uy * half
 
     def _integrate_odometry(self) -> None:
         b, dt = self.base, self.timestep
@@ -390,10 +599,7 @@ class PhysicsWorld:
 
     def _eye(self) -> np.ndarray[Any, Any]:
         d = self.data
-        return np.array([d.qpos[0], d.qpos[1], self._floor_z() + SONAR_HEIGHT], dtype=np.float64)
-
-    def _floor_z(self) -> float:
-        return round(float(self.data.qpos[2]) / FLOOR_HEIGHT) * FLOOR_HEIGHT
+        return np.array([d.qpos[0], d.qpos[1], d.qpos[2] + SONAR_HEIGHT], dtype=np.float64)
 
     def sonar(self) -> np.ndarray[Any, Any]:
         """The 24 ranges now (from the robot's centre), with noise and missed echoes."""
@@ -437,7 +643,12 @@ class PhysicsWorld:
         p = self.pose()
         eye = self._eye()
         codes = list(self.building.floor(p.floor).barcodes)
-        codes += [_car_code(c) for c in self.building.cars]
+        # A car's panel is there when the car stands at the robot's floor (as in 2-D).
+        codes += [
+            _car_code(c)
+            for c, state in zip(self.building.cars, self._cars, strict=True)
+            if round(state[0]) == p.floor
+        ]
         seen = []
         for code in codes:
             dx, dy = code.x - p.x, code.y - p.y
