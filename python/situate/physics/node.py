@@ -10,7 +10,13 @@ What a Gazebo robot offers a ROS 2 stack, on the topics a ROS 2 robot driver use
   situate's ROS 2 bridge reads with ``ring: 24``), ``barcodes`` (`situate_msgs/msg/Barcodes`:
   what the reader sees), ``odom`` (`nav_msgs/msg/Odometry`: the wheel odometry, odom →
   base_link), ``/tf`` (`tf2_msgs/msg/TFMessage`: the same transform) and, last, ``/clock``
-  (`rosgraph_msgs/msg/Clock`), all stamped with simulated time.
+  (`rosgraph_msgs/msg/Clock`), all stamped with simulated time;
+- the arm and the speaker, as a robot driver's plain topics: subscribes to ``arm/press``
+  (`std_msgs/msg/Int64`: push the button with that label, as the 2-D arm) and ``speaker/say``
+  (`std_msgs/msg/String`), and publishes each tick their counters ``arm/attempts``,
+  ``arm/presses`` and ``speaker/count`` (`std_msgs/msg/Int64`) and the altimeter's ``floor``
+  (`std_msgs/msg/Int64`: the floor the robot is on, the nearest one while a car carries it).
+  A push or an utterance takes effect at the start of the next tick.
 
 Tick k runs the physics for one period with the command in force, then publishes what the robot
 senses at simulated time ``k / rate_hz``. `run` paces the ticks at `time_scale` times real time
@@ -96,6 +102,9 @@ class PhysicsNode:
         self._next: tuple[float, float] | None = None
         self._done_ns = -1
         self._resent = 0
+        # Pushes and utterances that came, done at the start of the next tick.
+        self._presses: list[int] = []
+        self._says: list[str] = []
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         qos = QOS_LOCKSTEP if lockstep else None
@@ -108,6 +117,16 @@ class PhysicsNode:
         self._odom = peer.publisher(odom_topic, "nav_msgs/msg/Odometry", *([qos] if qos else []))
         self._tf = peer.publisher("/tf", "tf2_msgs/msg/TFMessage", qos or QOS_TF)
         self._clock = peer.publisher("/clock", "rosgraph_msgs/msg/Clock", *([qos] if qos else []))
+        self._counters = {
+            name: peer.publisher(name, "std_msgs/msg/Int64", *([qos] if qos else []))
+            for name in ("arm/attempts", "arm/presses", "speaker/count", "floor")
+        }
+        self._press_sub = peer.subscribe(
+            "arm/press", "std_msgs/msg/Int64", self._on_press, qos or QOS_DEFAULT, ordered=True
+        )
+        self._say_sub = peer.subscribe(
+            "speaker/say", "std_msgs/msg/String", self._on_say, qos or QOS_DEFAULT, ordered=True
+        )
         cmd_type = "geometry_msgs/msg/TwistStamped" if stamped else "geometry_msgs/msg/Twist"
         # Lock-step: the commands and the say-so in the order the robot sent them (`ordered`).
         self._cmd = peer.subscribe(
@@ -161,6 +180,14 @@ class PhysicsNode:
             self._command = (v, w, self._ticks / self.rate_hz)
             self._pending = (v, w)
 
+    def _on_press(self, message: Any) -> None:
+        with self._lock:
+            self._presses.append(int(message.data))
+
+    def _on_say(self, message: Any) -> None:
+        with self._lock:
+            self._says.append(str(message.data))
+
     def _on_done(self, message: Any) -> None:
         ns = int(message.clock.sec) * 10**9 + int(message.clock.nanosec)
         with self._said:
@@ -182,6 +209,12 @@ class PhysicsNode:
             now = self._ticks / self.rate_hz
             cmd = self._command
             step = self._next
+            presses, self._presses = self._presses, []
+            says, self._says = self._says, []
+        for label in presses:
+            self.world.press(label)
+        for text in says:
+            self.world.say(text)
         v, w = 0.0, 0.0
         if self.lockstep:
             if step is not None:
@@ -249,6 +282,14 @@ class PhysicsNode:
             odometry_msg(stamp_ns, self.odom_frame, self.base_frame, o.x, o.y, o.theta, o.v, o.w)
         )
         self._tf.publish(tf_msg(stamp_ns, self.odom_frame, self.base_frame, o.x, o.y, o.theta))
+        attempts, presses = self.world.arm
+        for name, value in (
+            ("arm/attempts", attempts),
+            ("arm/presses", presses),
+            ("speaker/count", len(self.world.said)),
+            ("floor", self.world.pose().floor),
+        ):
+            self._counters[name].publish(msg("std_msgs/msg/Int64", data=value))
         self._clock.publish(self._clock_msg(stamp_ns))
 
     # -- the clock's thread --
@@ -294,7 +335,10 @@ class PhysicsNode:
     def close(self) -> None:
         """Stops the clock and closes the node's publishers and subscription (the peer stays)."""
         self.stop()
-        for e in (self._cmd, self._done, self._clock, self._odom, self._tf, self._sonar):
+        for e in (self._cmd, self._done, self._press_sub, self._say_sub):
             if e is not None:
                 e.close()
-        self._barcodes.close()
+        for p in (self._clock, self._odom, self._tf, self._sonar, self._barcodes):
+            p.close()
+        for p in self._counters.values():
+            p.close()
