@@ -156,6 +156,11 @@ struct Inst {
     /// The cycle from which its parameters last changed (monitors reading
     /// one are evaluated again then).
     params_from: u64,
+    /// The first cycle of its latest activation: while it is active, what it wrote before then
+    /// (in an earlier activation) is missing to monitors until it writes again, so that a
+    /// condition never holds on a restarted skill's old result (its first cycle may come
+    /// before its inputs do, a ROS 2 robot's say).
+    active_from: u64,
     /// Every output of its body is of its port's type by construction
     /// ([`Skill::output_typed`], asked when the body is made): the plan
     /// does not check them.
@@ -316,6 +321,7 @@ impl Manager {
                 abandoned: false,
                 behind_worker: None,
                 params_from: 0,
+                active_from: 0,
                 typed_outputs,
             });
         }
@@ -462,10 +468,12 @@ impl Manager {
                 return;
             }
         }
+        let next_cycle = self.cycle + 1;
         let inst = &mut self.insts[i];
         inst.active = active;
         if active {
             inst.faulted = None;
+            inst.active_from = next_cycle;
         }
         let def = &self.graph.instances[i];
         if let Some(worker) = inst.worker.as_mut() {

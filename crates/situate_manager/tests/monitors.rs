@@ -660,3 +660,37 @@ fn an_any_monitor_keeps_what_its_unchanged_conditions_held_and_fires_the_moment_
     m.step(1).unwrap();
     assert_eq!(fired_held(&events), vec![(edge, 9, vec![0])]);
 }
+
+#[test]
+fn a_restarted_skills_old_result_is_missing_until_it_writes_again() {
+    let mut m = door_robot();
+    let events = m.events();
+    m.step(4).unwrap();
+    // `door.open` is true, written in cycle 3. Off, it keeps that value for conditions.
+    m.deactivate(&["door"]).unwrap();
+    let off = m.add_monitor("door.open", MonitorMode::Once).unwrap();
+    m.step(1).unwrap();
+    assert_eq!(fired(&events), vec![(off, 5)]);
+    // On again: it runs in cycle 6 but writes nothing until 7. Its old `true` is no result of
+    // this activation: neither the condition nor its negation holds before it writes again.
+    m.activate(&["door"]).unwrap();
+    let on = m.add_monitor("door.open", MonitorMode::Level).unwrap();
+    let not = m.add_monitor("!door.open", MonitorMode::Level).unwrap();
+    m.step(1).unwrap();
+    assert_eq!(fired(&events), vec![]);
+    m.step(1).unwrap();
+    assert_eq!(fired(&events), vec![(not, 7)]);
+    // A monitor added before the restart lets go of the old value the cycle it goes missing.
+    m.step(1).unwrap();
+    m.cancel_monitor(not).unwrap();
+    let _ = fired(&events);
+    m.cancel_monitor(on).unwrap();
+    let after = m.add_monitor("!door.open", MonitorMode::Level).unwrap();
+    m.step(1).unwrap();
+    assert_eq!(fired(&events), vec![(after, 9)]);
+    m.deactivate(&["door"]).unwrap();
+    m.step(1).unwrap();
+    m.activate(&["door"]).unwrap();
+    m.step(1).unwrap();
+    assert_eq!(fired(&events), vec![(after, 10)], "cycle 11: the old `false` is missing");
+}

@@ -605,8 +605,12 @@ impl Manager {
         let clock = [Value::F64(self.time_s), Value::I64(self.cycle as i64)];
         let env = Env { refs: &self.refs, slots: &self.slots, insts: &self.insts, clock: &clock };
         let (cycle, time_s) = (self.cycle, self.time_s);
+        // A leaf changes when written, and when its writer is switched on again (what it wrote
+        // before goes missing: `Env::value`).
         let changed = |r: usize| match self.refs.get(r) {
-            Some(RefTarget::Leaf(l)) => self.slots.get(*l).is_some_and(|s| s.stamp == cycle),
+            Some(RefTarget::Leaf(l)) => self.slots.get(*l).is_some_and(|s| {
+                s.stamp == cycle || self.insts.get(s.writer as usize).is_some_and(|w| w.active_from == cycle)
+            }),
             Some(RefTarget::Param(i, _)) => self.insts.get(*i).is_some_and(|s| s.params_from >= cycle),
             Some(RefTarget::Time | RefTarget::Cycle) | None => true,
         };
@@ -644,7 +648,15 @@ struct Env<'a> {
 impl Lookup for Env<'_> {
     fn value(&self, id: usize) -> Option<&Value> {
         match self.refs.get(id)? {
-            RefTarget::Leaf(l) => self.slots.get(*l)?.value.as_ref(),
+            RefTarget::Leaf(l) => {
+                let slot = self.slots.get(*l)?;
+                // Written by a skill in an earlier activation, and not yet in this one: missing.
+                let old = self.insts.get(slot.writer as usize).is_some_and(|w| w.active && slot.stamp < w.active_from);
+                if old {
+                    return None;
+                }
+                slot.value.as_ref()
+            }
             RefTarget::Param(i, p) => self.insts.get(*i)?.params.get(*p),
             RefTarget::Time => Some(&self.clock[0]),
             RefTarget::Cycle => Some(&self.clock[1]),
