@@ -429,7 +429,12 @@ class PhysicsWorld:
             for c in building.cars
         ]
         self._car_servo = [self.model.actuator(f"car{c.id}").id for c in building.cars]
+        # Each car's servo target (m, from the lowest floor) at the last two logic steps: the
+        # target moves between them step by step, so the car runs smoothly, never by jerks.
+        self._car_from = [0.0] * len(building.cars)
+        self._car_to = [0.0] * len(building.cars)
         self._update_elevator()
+        self._car_from = list(self._car_to)
         mujoco.mj_forward(self.model, self.data)
         self._presses = [0, 0]  # attempts, presses
         self._said: list[Utterance] = []
@@ -549,7 +554,13 @@ class PhysicsWorld:
             p = self.pose()
             self._elevator.step(self.time, ELEVATOR_DT, p.floor, p.x, p.y, p.theta)
             self._cars = self._elevator.cars()
+            self._car_from = list(self._car_to)
             self._update_elevator()
+        if self._cars:
+            frac = (self._steps % self._elevator_every + 1) / self._elevator_every
+            for k, servo in enumerate(self._car_servo):
+                start, end = self._car_from[k], self._car_to[k]
+                self.data.ctrl[servo] = start + (end - start) * frac
         self._steps += 1
         b, dt = self.base, self.timestep
         v_cmd = min(max(self._command[0], -b.max_v), b.max_v)
@@ -565,13 +576,13 @@ class PhysicsWorld:
         self._integrate_odometry()
 
     def _update_elevator(self) -> None:
-        """Each car's servo aimed where the logic has it (eased), each landing door shortened."""
+        """Each car's servo target where the logic has it (eased), each landing door shortened."""
         m = self.model
         for k, (pos, door, phase, start, end) in enumerate(self._cars):
             if phase == "travel" and abs(end - start) > 1e-9:
                 u = min(max((pos - start) / (end - start), 0.0), 1.0)
                 pos = start + (end - start) * u * u * (3 - 2 * u)
-            self.data.ctrl[self._car_servo[k]] = (pos - self._lowest) * FLOOR_HEIGHT
+            self._car_to[k] = (pos - self._lowest) * FLOOR_HEIGHT
             on = round(pos) if phase != "travel" else None
             for geom, level, (x0, y0, x1, y1) in self._doors[k]:
                 closed = 1.0 if level != on else 1.0 - door
