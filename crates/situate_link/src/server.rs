@@ -300,10 +300,17 @@ fn answer_one(verb: &str, payload: &[u8], ask: &Asker) -> Answer {
         }
         Ok(Decoded::Manager(request)) => match monitor_session(&request) {
             // Not about a monitor.
-            None => match handle.submit(request) {
-                Ok(pending) => return Answer::Manager(pending),
-                Err(e) => json::control_error(&e),
-            },
+            None => {
+                let step = matches!(request, Request::Step { .. });
+                match handle.submit(request) {
+                    // A step is answered before anything after it goes to the manager: on an
+                    // external clock (ROS time) its cycles come with the clock's ticks, and what
+                    // a client sends after a step must see them.
+                    Ok(pending) if step => return Answer::Ready(Answer::Manager(pending).resolve()),
+                    Ok(pending) => return Answer::Manager(pending),
+                    Err(e) => json::control_error(&e),
+                }
+            }
             // A monitor belongs to a live session (crate::client_session).
             Some(Some(id)) => match sessions.submit_for(&id, request) {
                 Ok(pending) => return Answer::Manager(pending),

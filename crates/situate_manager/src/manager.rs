@@ -258,6 +258,9 @@ pub struct Manager {
     /// The cycle follows a clock outside the manager ([`Request::ExternalClock`]): running
     /// lets its ticks through, and the manager's own clock never runs a cycle.
     external_clock: bool,
+    /// On an external clock, a client's step under way: the clock's ticks run cycles up to this
+    /// one even while the manager is stopped (the spawned manager; see `spawned::Deferred`).
+    step_until: Option<u64>,
     /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
     sampled: bool,
     /// The ready steps of a level (kept to reuse its allocation).
@@ -387,6 +390,7 @@ impl Manager {
             speed: None,
             paused: false,
             external_clock: false,
+            step_until: None,
             sampled: true,
             ready: Vec::new(),
             exchanging: Vec::new(),

@@ -158,7 +158,8 @@ fn a_managed_thread_serves_requests_while_it_cycles() {
 }
 
 /// An external clock (ROS time, `situate_ros2`) runs cycles only with `Tick`s, only while the
-/// manager runs; the manager's own clock never does. `stop_after` (`--cycles N`) holds there too.
+/// manager runs (or a step asks for them); the manager's own clock never does. `stop_after`
+/// (`--cycles N`) holds there too.
 #[test]
 fn an_external_clock_ticks_the_cycle_while_it_runs_and_stops_where_it_is_told() {
     let mut reg = Registry::new();
@@ -183,9 +184,41 @@ fn an_external_clock_ticks_the_cycle_while_it_runs_and_stops_where_it_is_told() 
     // `stop_after(5)`: a tick to 9 stops at 5, and the manager is stopped.
     assert_eq!(h.request(Request::Tick { until: 9 }).unwrap(), Reply::Ticked { ran: 2, cycle: 5 });
     assert!(!h.stats().unwrap().running);
-    // A step still runs at once.
-    h.request(Request::Step { cycles: 2 }).unwrap();
-    assert_eq!(h.stats().unwrap().cycle, 7);
+    // A step runs the next cycles the clock gives, stopped as the manager is: its reply waits
+    // for them.
+    let stepper = {
+        let mut h = h.clone();
+        std::thread::spawn(move || h.request(Request::Step { cycles: 2 }))
+    };
+    let ticked = |h: &mut situate_manager::Handle, until: u64| match h.request(Request::Tick { until }).unwrap() {
+        Reply::Ticked { ran, cycle } => (ran, cycle),
+        other => panic!("{other:?}"),
+    };
+    wait_until("the step under way", || ticked(&mut h, 6) == (1, 6));
+    assert!(!stepper.is_finished(), "a step of 2 waits for its second cycle");
+    // One tick to 9 runs its second cycle, and no more: the manager is stopped.
+    assert_eq!(ticked(&mut h, 9), (1, 7));
+    assert_eq!(stepper.join().unwrap().unwrap(), Reply::Done);
+    assert_eq!(ticked(&mut h, 9), (0, 7));
+    // A stop ends a step where it is.
+    let stepper = {
+        let mut h = h.clone();
+        std::thread::spawn(move || h.request(Request::Step { cycles: 5 }))
+    };
+    wait_until("the second step under way", || ticked(&mut h, 8) == (1, 8));
+    h.request(Request::Stop).unwrap();
+    assert_eq!(stepper.join().unwrap().unwrap(), Reply::Done);
+    assert_eq!(ticked(&mut h, 20), (0, 8));
+    assert_eq!(h.stats().unwrap().cycle, 8);
     h.request(Request::Shutdown).unwrap();
     join.join().expect("the manager ends");
+}
+
+/// Calls `ok` until it holds, for at most a generous bound (a loaded machine).
+fn wait_until(what: &str, mut ok: impl FnMut() -> bool) {
+    let end = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !ok() {
+        assert!(std::time::Instant::now() < end, "{what}: not within 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
 }

@@ -8,9 +8,10 @@
 //! the robot's time 0; from then on, whenever the clock has passed `n` whole periods since the
 //! anchor, the robot has run exactly `n` cycles: one cycle per period of ROS time, none skipped
 //! and none doubled, however the messages are spaced (a 10× clock in 1 ms messages, or one
-//! message a second). When the clock stops, so does the cycle. A client's `step` runs cycles
-//! ahead of ROS time; the count is the manager's, so the clock catches up without running them
-//! again. A clock that goes back (a simulator reset) re-anchors: the robot runs on from where it
+//! message a second). When the clock stops, so does the cycle. A client's `step` runs the next
+//! cycles as the clock's ticks come, even while the manager is stopped, and is answered then
+//! (the manager's `spawned::Deferred`); the count is the manager's, so a driver asks for the
+//! cycles due and the manager runs those not yet run. A clock that goes back (a simulator reset) re-anchors: the robot runs on from where it
 //! is, never backwards, and says so in the log. So does a jump forward of more than
 //! [`MAX_JUMP_S`] in one message (a simulator restarted at another time, or a `/clock` that is
 //! no clock): the robot does not run the hours of cycles such a jump would owe.

@@ -417,10 +417,10 @@ fn in_lockstep_each_cycles_commands_go_out_before_the_cycle_done_and_a_stop_hold
     });
     assert_eq!(handle.stats().expect("stats").cycle, 0);
     let take = || std::mem::take(&mut *heard.lock().unwrap());
-    until("the observer heard every say-so of t0", || {
-        let n = bridge.clock_stats()?.messages as usize;
-        (heard.lock().unwrap().iter().filter(|h| **h == Heard::Done(t0)).count() == n).then_some(())
-    });
+    // A fence: a time 1 ns on owes no cycle and is said done as itself, after every say-so of
+    // the t0 messages still on their way (one session's puts arrive in order).
+    put_clock(t0 + 1);
+    until("the fence said done", || heard.lock().unwrap().contains(&Heard::Done(t0 + 1)).then_some(()));
     take();
     // One period: one cycle; its command goes out, then the cycle done.
     put_clock(t0 + 100_000_000);
@@ -445,14 +445,27 @@ fn in_lockstep_each_cycles_commands_go_out_before_the_cycle_done_and_a_stop_hold
     until("the two owed cycles done", || heard.lock().unwrap().contains(&Heard::Done(t0 + 600_000_000)).then_some(()));
     assert_eq!(take(), [Heard::Command, Heard::Command, Heard::Done(t0 + 600_000_000)]);
     assert_eq!(handle.stats().expect("stats").cycle, 6);
-    // A client's step runs cycles at once, ahead of ROS time: the clock catches up without
-    // running them again.
+    // A client's step runs the next cycles as ROS time gives them, never ahead of it (a cycle
+    // run ahead would read no readings, or whichever tick's came first): its reply waits.
     handle.request(Request::Stop).expect("stop");
-    handle.request(Request::Step { cycles: 3 }).expect("step");
-    assert_eq!(handle.stats().expect("stats").cycle, 9);
     take();
+    let stepper = {
+        let mut h = handle.clone();
+        std::thread::spawn(move || h.request(Request::Step { cycles: 3 }))
+    };
     put_clock(t0 + 800_000_000);
-    until("caught up", || heard.lock().unwrap().contains(&Heard::Done(t0 + 800_000_000)).then_some(()));
-    assert_eq!(handle.stats().expect("stats").cycle, 9, "owed 8, ran 9: none more");
-    assert_eq!(bridge.clock_stats().expect("stats").cycles, 6, "the driver ran six of the nine");
+    until("two of the step's cycles done", || {
+        heard.lock().unwrap().contains(&Heard::Done(t0 + 800_000_000)).then_some(())
+    });
+    assert_eq!(take(), [Heard::Command, Heard::Command, Heard::Done(t0 + 800_000_000)]);
+    assert!(!stepper.is_finished(), "the step waits for its third cycle");
+    put_clock(t0 + 900_000_000);
+    until("the step's third cycle done", || {
+        heard.lock().unwrap().contains(&Heard::Done(t0 + 900_000_000)).then_some(())
+    });
+    assert_eq!(stepper.join().expect("the stepper").expect("step"), situate_manager::Reply::Done);
+    assert_eq!(take(), [Heard::Command, Heard::Done(t0 + 900_000_000)]);
+    let stats = handle.stats().expect("stats");
+    assert_eq!((stats.cycle, stats.running), (9, false), "stepped, then stopped");
+    assert_eq!(bridge.clock_stats().expect("stats").cycles, 9, "the driver ran all nine");
 }

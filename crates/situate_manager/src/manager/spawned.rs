@@ -48,11 +48,29 @@ struct Core {
     /// The reply to a `Step` being run: the watchdog answers it when it
     /// leaves the stepping thread behind.
     step_reply: Mutex<Option<Sender<Result<Reply, ControlError>>>>,
+    /// A step on an external clock, and the requests that came while it runs.
+    deferred: Mutex<Deferred>,
+}
+
+/// On an external clock (ROS time from a simulator), a client's `Step` runs the next cycles as
+/// the clock gives them, not ahead of it: a cycle run ahead would read no new readings, or the
+/// readings of a tick that happened to arrive first, and a lock-stepped run would not be the
+/// same twice. Its reply waits until they have run (or a `Stop`, another step, or the end of
+/// the external clock ends it); other requests are served meanwhile. A client that steps and
+/// then asks for a value waits for the step's reply first: `Handle::request` does, and so does
+/// the link (`situate_link`), which sends nothing after a step before its reply.
+#[derive(Default)]
+struct Deferred {
+    step: Option<Sender<Result<Reply, ControlError>>>,
 }
 
 impl Core {
     fn step_reply(&self) -> MutexGuard<'_, Option<Sender<Result<Reply, ControlError>>>> {
         self.step_reply.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn deferred(&self) -> MutexGuard<'_, Deferred> {
+        self.deferred.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     fn lock(&self) -> Guard<'_> {
@@ -153,6 +171,7 @@ impl Manager {
             clocks: Arc::clone(&self.clocks),
             pool: self.pool.clone(),
             step_reply: Mutex::new(None),
+            deferred: Mutex::new(Deferred::default()),
             manager: Mutex::new(Some(self)),
         });
         start_cycle_thread(&core, 0);
@@ -235,6 +254,12 @@ fn serve(core: &Core, generation: u64) {
             let _ = m.request(Request::Stop);
         }
         if !m.running || m.external_clock {
+            // A step on the external clock that has run its cycles is answered.
+            if m.step_until.is_none() {
+                if let Some(reply) = core.deferred().step.take() {
+                    let _ = reply.send(Ok(Reply::Done));
+                }
+            }
             // Stopped, or the cycle follows an external clock (its ticks are requests): wait
             // for a request without holding the lock.
             drop(g);
@@ -248,10 +273,26 @@ fn serve(core: &Core, generation: u64) {
             };
             g = core.lock();
             match received {
-                Ok(envelope) => match serve_one(core, g, generation, envelope) {
-                    Served::Go(back) => g = back,
-                    Served::End => return,
-                },
+                Ok(envelope) => {
+                    let ends_step = envelope.tap.is_none()
+                        && matches!(
+                            envelope.request,
+                            Request::Stop | Request::Step { .. } | Request::ExternalClock { .. }
+                        );
+                    if let (true, Some(m)) = (ends_step, current(&mut g, generation)) {
+                        // A stop ends a step where it is; so do another step and the end of the
+                        // clock it waits for.
+                        if m.step_until.take().is_some() {
+                            if let Some(reply) = core.deferred().step.take() {
+                                let _ = reply.send(Ok(Reply::Done));
+                            }
+                        }
+                    }
+                    match serve_one(core, g, generation, envelope) {
+                        Served::Go(back) => g = back,
+                        Served::End => return,
+                    }
+                }
                 Err(_) => return core.finish(&mut g),
             }
             deadline = Instant::now();
@@ -370,6 +411,12 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
                 return Served::Go(g);
             }
             m.halt();
+            if m.external_clock {
+                // The clock's next ticks run them (see `Deferred`).
+                m.step_until = Some(m.cycle + cycles);
+                core.deferred().step = Some(reply);
+                return Served::Go(g);
+            }
             *core.step_reply() = Some(reply);
             for _ in 0..cycles {
                 g = match cycle(core, g, generation) {
@@ -399,7 +446,8 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
                     // `--cycles N`: the external clock stops there too.
                     let _ = m.request(Request::Stop);
                 }
-                if !m.running || m.cycle >= until {
+                let stepping = m.step_until.is_some_and(|s| m.cycle < s);
+                if !(m.running || stepping) || m.cycle >= until {
                     break;
                 }
                 g = match cycle(core, g, generation) {
@@ -407,6 +455,13 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
                     // Left behind: the watchdog answered the tick.
                     None => return Served::End,
                 };
+                if let Some(m) = current(&mut g, generation) {
+                    // A step's last cycle, or a pausing monitor (which ends a step where it
+                    // fires, as it stops a run).
+                    if m.step_until.is_some_and(|s| m.cycle >= s) || m.paused {
+                        m.step_until = None;
+                    }
+                }
             }
             let cycle = current(&mut g, generation).map_or(from, |m| m.cycle);
             if let Some(reply) = core.step_reply().take() {
