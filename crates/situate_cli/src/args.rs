@@ -174,7 +174,9 @@ pub(crate) struct RunArgs {
     /// Override the link's listen endpoints (e.g. tcp/127.0.0.1:7448).
     #[arg(long)]
     pub(crate) listen: Vec<String>,
-    /// Override the simulator's map file (robot files with `simulator:`).
+    /// Override the simulator's map file (robot files with `simulator:`); for a robot file
+    /// without one (a ROS 2 robot in a simulator of its own), the building the GUI's world view
+    /// and the recording show it in.
     #[arg(long)]
     pub(crate) map: Option<PathBuf>,
     /// Override the simulator's seed.

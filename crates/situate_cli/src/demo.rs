@@ -74,6 +74,11 @@ pub(crate) struct DemoOptions {
     /// (docs/recording.md).
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
+    /// The delivery on the physics robot (MuJoCo, through ROS 2; docs/physics.md) instead of the
+    /// 2-D simulator: `python -m situate.physics.deliver` with this seed, map, GUI and recording.
+    /// Needs the Python package with its `physics` extra.
+    #[arg(long)]
+    pub(crate) physics: bool,
     /// The link's endpoint, where `situate stats`, `situate echo`… reach the demo's robot.
     /// Default: the one they connect to by default (tcp/127.0.0.1:7447), or, when another
     /// robot holds it, a free port (said at the start); headless, a free port.
@@ -140,6 +145,9 @@ fn interpreter(demo: &DemoOptions, ext: &Extensions) -> PathBuf {
 }
 
 pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
+    if demo.physics {
+        return run_physics_demo(demo, ext, out);
+    }
     let (robot_file, sequencer) = demo_files(demo, ext)?;
     // With the GUI, a person watches: the CLI's default endpoint, so that `situate stats` and
     // the rest reach the robot with no port to copy. Headless, many runs may go at once (the
@@ -326,6 +334,67 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
     }
     // A Ctrl-C after the mission only closes the GUI: the status is the mission's.
     Ok(code)
+}
+
+/// `situate demo --physics`: the physics robot's delivery, run by the Python package
+/// (`situate.physics.deliver`: the robot, the MuJoCo world and the sequencer), its exit status
+/// passed on (0: delivered, 1: not, 3: a map that cannot be read).
+fn run_physics_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
+    let refused = [
+        (demo.mode != "sequenced", "--mode"),
+        (demo.task != "office", "--task"),
+        (demo.world.any(), "--people, --door-closures and --dead-sonar"),
+        (demo.listen.is_some(), "--listen"),
+    ];
+    if let Some((_, what)) = refused.iter().find(|(given, _)| *given) {
+        return Err(problem(Exit::Usage, format!("{what}: not with --physics (the physics robot's demo takes --map, --seed, --robot, --sequencer, --gui, --speed, --record, --limit-s)")));
+    }
+    let dirs = demo_dirs(ext);
+    let find = |given: &Option<PathBuf>, name: &str| {
+        given.clone().or_else(|| dirs.iter().map(|d| d.join(name)).find(|p| p.is_file())).ok_or_else(|| {
+            problem(
+                Exit::Usage,
+                format!("no {name} found: run it from the repository's top directory or install the Python package"),
+            )
+        })
+    };
+    let robot = find(&demo.robot, "demo/physics.yaml")?;
+    let sequencer = match &demo.sequencer {
+        Some(s) => s.clone(),
+        None => robot.parent().unwrap_or(Path::new(".")).join("deliver.py"),
+    };
+    let map = find(&demo.map, "maps/default.yaml")?;
+    let python = interpreter(demo, ext);
+    let mut command = std::process::Command::new(&python);
+    command
+        .args(["-m", "situate.physics.deliver", "--seed", &demo.seed.to_string()])
+        .arg("--map")
+        .arg(&map)
+        .arg("--robot")
+        .arg(&robot)
+        .arg("--sequencer")
+        .arg(&sequencer)
+        .args(["--limit-s", &demo.limit_s.to_string()]);
+    if !demo.headless {
+        command.args(["--gui", &demo.gui, "--time-scale", &demo.speed.to_string()]);
+    }
+    if let Some(r) = &demo.record {
+        command.arg("--record").arg(r);
+    }
+    if out.json {
+        command.arg("--json");
+    }
+    // The robot runs in this very program when it is one of its own (the Rust build); the
+    // Python package's runs in its interpreter, which the module uses by default.
+    if ext.interpreter.is_none() {
+        if let Ok(me) = std::env::current_exe() {
+            command.arg("--program").arg(me);
+        }
+    }
+    let status = command.status().with_context(|| {
+        format!("starting the physics demo with `{}` (it needs the Python package)", python.display())
+    })?;
+    Ok(status.code().and_then(|c| u8::try_from(c).ok()).unwrap_or(Exit::Failure.code()))
 }
 
 /// Most cycles [`settle_the_truth`] runs.

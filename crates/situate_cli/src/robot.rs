@@ -354,6 +354,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     let Loaded { mut spec, mut link, ros2, remote, file: robot_file } = load(file, &opts.compose)?;
     let (mut registry, sim) =
         registry_for(&robot_file, program_registry(ext)?, ext, &opts.sim).map_err(|errors| bad_file(file, &errors))?;
+    let shown = crate::sim::shown_building(&robot_file, &opts.sim).map_err(|errors| bad_file(file, &errors))?;
     if opts.no_link && !remote.is_empty() {
         let names: Vec<&str> = remote.iter().map(|(n, _)| n.as_str()).collect();
         return Err(problem(
@@ -441,7 +442,11 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
     manager.stop_after(opts.cycles);
     manager.set_speed(opts.speed);
     let events = manager.events();
-    let metadata = recording_metadata(file, &opts.compose.set, spec.clock, sim.as_ref());
+    let mut metadata = recording_metadata(file, &opts.compose.set, spec.clock, sim.as_ref());
+    if let Some((path, map)) = &shown {
+        metadata.insert("world".to_string(), map.world_json().to_string());
+        metadata.insert("map_file".to_string(), path.display().to_string());
+    }
     let recorder = match &opts.record {
         Some(path) => Some(
             situate_record::Recorder::start_with(path, &mut manager, metadata.clone())
@@ -518,7 +523,7 @@ pub(crate) fn start_robot(file: &Path, opts: &RunOptions, ext: &Extensions, out:
         out.warn(format_args!("`ros2:` needs the link: no ROS 2 bridge with --no-link"));
     }
     if let Some(listen) = gui_listen {
-        let world = running.sim.as_ref().map(|s| s.map.world_json());
+        let world = running.sim.as_ref().map(|s| &s.map).or(shown.as_ref().map(|(_, m)| m)).map(|m| m.world_json());
         let allowed_hosts = opts.gui_allow_hosts.clone();
         let config = situate_gui::GuiConfig { listen, world, allowed_hosts, ..situate_gui::GuiConfig::default() };
         match situate_gui::serve_with_history(running.handle.clone(), config, gui_tap) {

@@ -42,19 +42,30 @@ pub(crate) struct WorldArgs {
 }
 
 impl WorldArgs {
-    fn any(&self) -> bool {
+    pub(crate) fn any(&self) -> bool {
         self.people.is_some() || self.door_closures || !self.dead_sonars.is_empty()
     }
+}
+
+/// The building a robot that simulates none is shown in: `--map` given with a robot file
+/// without `simulator:` (a ROS 2 robot whose simulator is a program of its own, such as the
+/// physics robot). The GUI's world view and a recording's `world` show it there; nothing of
+/// the 2-D simulator runs. `None` when no `--map` was given or the file has a simulator.
+pub(crate) fn shown_building(
+    robot_file: &RobotFile,
+    over: &SimOverrides,
+) -> Result<Option<(PathBuf, situate_sim::Map)>, Vec<String>> {
+    let (None, Some(path)) = (&robot_file.simulator, &over.map) else { return Ok(None) };
+    let map = situate_sim::load_map(path).map_err(|e| vec![format!("--map: {e}")])?;
+    Ok(Some((path.clone(), map)))
 }
 
 /// Reads `simulator: {map: FILE, seed: N}` and builds the world.
 pub(crate) fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<Option<Simulation>, Vec<String>> {
     let Some(node) = &robot_file.simulator else {
-        if over.map.is_some() || over.seed.is_some() {
-            return Err(vec![format!(
-                "{}: --map and --seed need a robot file with a `simulator:` section",
-                robot_file.file
-            )]);
+        // `--map` alone names the building the robot is shown in (`shown_building`).
+        if over.seed.is_some() {
+            return Err(vec![format!("{}: --seed needs a robot file with a `simulator:` section", robot_file.file)]);
         }
         if over.world.any() {
             return Err(vec![format!(

@@ -399,15 +399,20 @@ fn a_device_under_skills_is_reported_as_that_and_not_as_a_priority_clash() {
 }
 
 #[test]
-fn map_and_seed_overrides_need_a_simulator() {
+fn a_seed_needs_a_simulator_and_a_map_alone_is_the_building_a_robot_is_shown_in() {
     let out = situate(["run", TOYBOT, "--no-link", "--cycles", "2", "--seed", "3"]);
     assert_no_panic(&out);
     assert!(!out.status.success());
-    assert!(
-        stderr(&out).contains("--map and --seed need a robot file with a `simulator:` section"),
-        "{}",
-        stderr(&out)
-    );
+    assert!(stderr(&out).contains("--seed needs a robot file with a `simulator:` section"), "{}", stderr(&out));
+    // Without a simulator, `--map` is the building the GUI and a recording show the robot in
+    // (a ROS 2 robot in a simulator of its own): read, and refused with the map's error.
+    let map = format!("{}/../../maps/default.yaml", env!("CARGO_MANIFEST_DIR"));
+    let out = situate(["run", TOYBOT, "--no-link", "--no-gui", "--cycles", "2", "--map", &map]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = situate(["run", TOYBOT, "--no-link", "--no-gui", "--cycles", "2", "--map", "no/such/map.yaml"]);
+    assert_no_panic(&out);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--map: ") && stderr(&out).contains("no/such/map.yaml"), "{}", stderr(&out));
 }
 
 #[test]
