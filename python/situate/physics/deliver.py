@@ -134,6 +134,30 @@ class _Robot:
         self._reader.join(timeout=5)
 
 
+def _sequence(command: list[str], node: Any) -> tuple[str, int | None]:
+    """Runs the sequencer to its end; stopped if the physics robot's clock stops first.
+
+    Its output, and its exit status.
+    """
+    lines: list[str] = []
+    with subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+    ) as sequencer:
+        assert sequencer.stdout is not None
+        reader = threading.Thread(target=lambda: lines.extend(sequencer.stdout or []), daemon=True)
+        reader.start()
+        while sequencer.poll() is None:
+            if not node.running:
+                # The world's clock died (an error in a tick): nothing will move again.
+                lines.append("situate.physics.deliver: the physics robot's clock stopped\n")
+                sequencer.terminate()
+                break
+            time.sleep(0.05)
+        status = sequencer.wait()
+        reader.join(timeout=5)
+    return "".join(lines), status
+
+
 @contextlib.contextmanager
 def _session(endpoint: str) -> Iterator[Any]:
     import zenoh
@@ -186,14 +210,7 @@ def deliver(
                 command = [sys.executable, str(sequencer), "--connect", robot.endpoint]
                 command += ["--robot", robot.name, "--mission", json.dumps(building.mission)]
                 command += ["--seed", str(seed), "--limit-s", str(limit_s)]
-                run = subprocess.run(
-                    command,
-                    stdout=subprocess.PIPE,
-                    stderr=subprocess.STDOUT,
-                    text=True,
-                    check=False,
-                )
-                out, status = run.stdout, run.returncode
+                out, status = _sequence(command, node)
                 if not quiet:
                     sys.stdout.write(out)
             finally:
