@@ -429,6 +429,8 @@ class PhysicsWorld:
             for c in building.cars
         ]
         self._car_servo = [self.model.actuator(f"car{c.id}").id for c in building.cars]
+        # Per car, the floor its doors were last shown open at and how far: unchanged, no update.
+        self._door_shown: list[tuple[int | None, float] | None] = [None] * len(building.cars)
         # Each car's servo target (m, from the lowest floor) at the last two logic steps: the
         # target moves between them step by step, so the car runs smoothly, never by jerks.
         self._car_from = [0.0] * len(building.cars)
@@ -560,7 +562,7 @@ class PhysicsWorld:
             frac = (self._steps % self._elevator_every + 1) / self._elevator_every
             for k, servo in enumerate(self._car_servo):
                 start, end = self._car_from[k], self._car_to[k]
-                self.data.ctrl[servo] = start + (end - start) * frac
+                self.data.ctrl[servo] = start + (end - start) * frac if start != end else end
         self._steps += 1
         b, dt = self.base, self.timestep
         v_cmd = min(max(self._command[0], -b.max_v), b.max_v)
@@ -584,6 +586,9 @@ class PhysicsWorld:
                 pos = start + (end - start) * u * u * (3 - 2 * u)
             self._car_to[k] = (pos - self._lowest) * FLOOR_HEIGHT
             on = round(pos) if phase != "travel" else None
+            if self._door_shown[k] == (on, door):
+                continue  # its doors as they are (most steps: nothing moves)
+            self._door_shown[k] = (on, door)
             for geom, level, (x0, y0, x1, y1) in self._doors[k]:
                 closed = 1.0 if level != on else 1.0 - door
                 length = math.hypot(x1 - x0, y1 - y0)
