@@ -262,6 +262,16 @@ def _face(w: PhysicsWorld, theta: float) -> None:
     w.advance(0.5)
 
 
+def _car_opened(w: PhysicsWorld, within_s: float = 30.0) -> int:
+    """Runs the world until a car's door is open (simulated time, at most `within_s`): which car."""
+    for _ in range(round(within_s / 0.1)):
+        w.advance(0.1)
+        came = next((k for k, c in enumerate(w.cars()) if c.phase == "open"), None)
+        if came is not None:
+            return came
+    raise AssertionError(f"no car opened within {within_s} s: {w.cars()}")
+
+
 def test_a_car_comes_when_called_and_carries_the_robot_to_the_floor_chosen() -> None:
     b = Building.load(REPO / "maps" / "default.yaml")
     # Before the call button of the basement lobby (15, 17.98), facing it.
@@ -270,13 +280,7 @@ def test_a_car_comes_when_called_and_carries_the_robot_to_the_floor_chosen() -> 
     assert w.press(30)
     assert w.arm == (2, 1)
     # A car comes, and its landing door opens: until then, the door is a wall.
-    came = None
-    for _ in range(300):
-        w.advance(0.1)
-        came = next((k for k, c in enumerate(w.cars()) if c.phase == "open"), None)
-        if came is not None:
-            break
-    assert came is not None, w.cars()
+    came = _car_opened(w)
     car = b.cars[came]
     assert w.cars()[came].position == -1
     assert w.cars()[came].door == 1
@@ -328,13 +332,7 @@ def test_a_turn_in_a_moving_car_is_measured_by_the_wheels() -> None:
     b = Building.load(REPO / "maps" / "default.yaml")
     w = PhysicsWorld(b, seed=1, start=(-1, 15.0, 17.45, math.pi / 2))
     assert w.press(30)
-    came = None
-    for _ in range(300):
-        w.advance(0.1)
-        came = next((k for k, c in enumerate(w.cars()) if c.phase == "open"), None)
-        if came is not None:
-            break
-    assert came is not None, w.cars()
+    came = _car_opened(w)
     car = b.cars[came]
     w.place(-1, (car.x0 + car.x1) / 2, car.y1 - 0.55, math.pi / 2)
     w.advance(0.5)
