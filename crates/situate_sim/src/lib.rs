@@ -18,6 +18,7 @@ pub mod map;
 pub mod people;
 pub mod skills;
 pub mod task;
+pub mod traffic;
 pub mod world;
 
 pub use map::{load_map, Map, MapError};

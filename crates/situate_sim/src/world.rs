@@ -13,7 +13,8 @@ use crate::elevator::{Button, Cars, RobotAt};
 pub use crate::elevator::{CarPhase, CarState};
 use crate::geom::{cast, ray_circle, wrap, Aabb, RayFan, Seg, P2};
 use crate::map::{Barcode, Map};
-use crate::people::{self, Around, Person, Walkable, PATH_CLEARANCE, PERSON_RADIUS};
+use crate::people::{Person, Walkable, PERSON_RADIUS};
+use crate::traffic::{RobotDisc, Traffic};
 
 /// Settings of the physics that are not a device's parameter.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,24 +49,7 @@ impl Default for WorldConfig {
     }
 }
 
-/// Door closures: how long a door stays closed, s.
-pub const CLOSED_S: (f64, f64) = (20.0, 60.0);
-/// Door closures: the gap between two closures, s.
-pub const OPEN_GAP_S: (f64, f64) = (60.0, 180.0);
-/// A door due to close waits until the robot's rim is this far from its opening, m.
-pub const DOOR_MARGIN: f64 = 0.3;
-
-/// Where the map's doors are in their closures (with `door_closures` on).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Closure {
-    /// Every door open; the next closure is due at `next`.
-    Open { next: f64 },
-    /// Door `door` of floor `floor` (indexes into `map.floors` and its
-    /// `doors`) is due to close for `for_s`, once its doorway is clear.
-    Due { floor: usize, door: usize, for_s: f64 },
-    /// That door is closed until `until`.
-    Closed { floor: usize, door: usize, until: f64 },
-}
+pub use crate::traffic::{Closure, CLOSED_S, DOOR_MARGIN, OPEN_GAP_S};
 
 /// Speed and acceleration limits of the base.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,11 +111,6 @@ enum Pending {
 
 /// Streams of the per-reading random numbers, so sensors never share one.
 const SONAR_STREAM: u64 = 1;
-/// The people's stream (their own, so people change no other random number).
-const PEOPLE_STREAM: u64 = 2;
-/// The door closures' stream.
-const DOORS_STREAM: u64 = 3;
-
 /// Slack added to every distance beyond which a segment is skipped, m: far
 /// more than the rounding of the distances compared, far less than anything
 /// the simulation resolves.
@@ -162,12 +141,8 @@ pub struct World {
     arm_presses: i64,
     /// Fixed segments per floor (same order as `map.floors`).
     statics: Vec<Vec<Seg>>,
-    /// Where people may walk, per floor (empty without people).
-    walk: Arc<Vec<Walkable>>,
-    people: Vec<Person>,
-    people_rng: ChaCha8Rng,
-    closure: Option<Closure>,
-    doors_rng: ChaCha8Rng,
+    /// People walking and the map's doors closing.
+    traffic: Traffic,
 }
 
 /// A uniform number in [0, 1).
@@ -221,19 +196,7 @@ impl World {
         let statics = map.floors.iter().map(|f| map.static_segments(f)).collect();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(0);
-        let mut people_rng = ChaCha8Rng::seed_from_u64(seed);
-        people_rng.set_stream(PEOPLE_STREAM);
-        let mut doors_rng = ChaCha8Rng::seed_from_u64(seed);
-        doors_rng.set_stream(DOORS_STREAM);
-        let (walk, people) = if cfg.people > 0 {
-            let walk = people::walkable(&map);
-            let people = people::place(&map, &walk, cfg.people, &mut people_rng);
-            (walk, people)
-        } else {
-            (Vec::new(), Vec::new())
-        };
-        let any_door = map.floors.iter().any(|f| !f.doors.is_empty());
-        let closure = (cfg.door_closures && any_door).then(|| Closure::Open { next: gap(&mut doors_rng) });
+        let traffic = Traffic::new(&map, seed, cfg.people, cfg.door_closures);
         World {
             map: Arc::new(map),
             seed,
@@ -252,11 +215,7 @@ impl World {
             arm_attempts: 0,
             arm_presses: 0,
             statics,
-            walk: Arc::new(walk),
-            people,
-            people_rng,
-            closure,
-            doors_rng,
+            traffic,
         }
     }
 
@@ -267,36 +226,28 @@ impl World {
 
     /// The people, floor by floor.
     pub fn people(&self) -> &[Person] {
-        &self.people
+        self.traffic.people()
     }
 
     /// Where people may walk on each floor (empty without people).
     pub fn walkable(&self) -> &[Walkable] {
-        &self.walk
+        self.traffic.walkable()
     }
 
     /// Moves person `k` (tests, scenarios): it stands at `(x, y)` on
     /// `floor` until time `until` (s), then walks on. False: no such person.
     pub fn place_person(&mut self, k: usize, floor: i64, x: f64, y: f64, until: f64) -> bool {
-        let Some(p) = self.people.get_mut(k) else { return false };
-        *p = Person { floor, pos: P2::new(x, y), goal: None, pause_until: until, waited: 0.0, ..*p };
-        true
+        self.traffic.place_person(k, floor, x, y, until)
     }
 
     /// The door closures' state (`None` when off or the map has no doors).
     pub fn closure(&self) -> Option<Closure> {
-        self.closure
+        self.traffic.closure()
     }
 
     /// The map's door closed now: its floor, opening and the time it opens.
     pub fn closed_door(&self) -> Option<(i64, Seg, f64)> {
-        match self.closure {
-            Some(Closure::Closed { floor, door, until }) => {
-                let f = self.map.floors.get(floor)?;
-                Some((f.level, f.doors.get(door)?.seg, until))
-            }
-            _ => None,
-        }
+        self.traffic.closed_door(&self.map)
     }
 
     /// The closed door's opening on `level`.
@@ -443,7 +394,8 @@ impl World {
     /// The nearest hit of a ray from the robot on the people of its floor.
     fn ray_people(&self, origin: P2, dir: P2) -> Option<f64> {
         let level = self.robot.floor;
-        self.people
+        self.traffic
+            .people()
             .iter()
             .filter(|p| p.floor == level)
             .filter_map(|p| ray_circle(origin, dir, p.pos, PERSON_RADIUS))
@@ -494,65 +446,10 @@ impl World {
             }
         }
         self.step_elevator(now, dt);
-        self.step_doors(now);
-        self.step_people(now, dt);
+        let robot = RobotDisc { floor: self.robot.floor, pos: self.pos(), radius: self.map.robot_radius };
+        self.traffic.step(&self.map, &robot, now, dt);
         self.step_robot(dt);
         self.step += 1;
-    }
-
-    /// Door closures: a random door closes after a random gap, once its
-    /// doorway is clear of the robot and of people, and opens again later.
-    fn step_doors(&mut self, now: f64) {
-        let Some(state) = self.closure else { return };
-        self.closure = Some(match state {
-            Closure::Open { next } if now >= next => {
-                let total: usize = self.map.floors.iter().map(|f| f.doors.len()).sum();
-                let mut k = (self.doors_rng.next_u64() % total.max(1) as u64) as usize;
-                let for_s = CLOSED_S.0 + uniform(&mut self.doors_rng) * (CLOSED_S.1 - CLOSED_S.0);
-                let mut due = Closure::Open { next: now + gap(&mut self.doors_rng) };
-                for (fi, f) in self.map.floors.iter().enumerate() {
-                    if k < f.doors.len() {
-                        due = Closure::Due { floor: fi, door: k, for_s };
-                        break;
-                    }
-                    k -= f.doors.len();
-                }
-                due
-            }
-            Closure::Due { floor, door, for_s } => {
-                let f = &self.map.floors[floor];
-                let seg = f.doors[door].seg;
-                let robot_in =
-                    self.robot.floor == f.level && seg.dist_to(self.pos()) < self.map.robot_radius + DOOR_MARGIN;
-                let person_in =
-                    self.people.iter().any(|p| p.floor == f.level && seg.dist_to(p.pos) < PATH_CLEARANCE + 0.05);
-                if robot_in || person_in {
-                    state
-                } else {
-                    tracing::debug!(floor = f.level, door = door, for_s, "door closed");
-                    Closure::Closed { floor, door, until: now + for_s }
-                }
-            }
-            Closure::Closed { until, .. } if now >= until => Closure::Open { next: now + gap(&mut self.doors_rng) },
-            other => other,
-        });
-    }
-
-    fn step_people(&mut self, now: f64, dt: f64) {
-        if self.people.is_empty() {
-            return;
-        }
-        let robot = (self.pos(), self.map.robot_radius, self.robot.floor);
-        let closed = self.closed_door();
-        for p in self.people.iter_mut() {
-            let Some(fi) = self.map.floors.iter().position(|f| f.level == p.floor) else { continue };
-            let around = Around {
-                walk: &self.walk[fi],
-                closed: closed.filter(|d| d.0 == p.floor).map(|d| d.1),
-                robot: (robot.2 == p.floor).then_some((robot.0, robot.1)),
-            };
-            p.step(now, dt, &around, &mut self.people_rng);
-        }
     }
 
     fn step_elevator(&mut self, now: f64, dt: f64) {
@@ -577,7 +474,7 @@ impl World {
         // Only segments within `r` of the move can block it (see `blocked`).
         let segs = self.segments_in(self.robot.floor, &Aabb::spanning(from, want).grown(r + CULL_SLACK));
         let level = self.robot.floor;
-        let people = &self.people;
+        let people = self.traffic.people();
         let hit = |to: P2| {
             blocked(from, to, &segs, r)
                 || people.iter().any(|p| p.floor == level && blocked_disc(from, to, p.pos, r + PERSON_RADIUS))
@@ -633,7 +530,7 @@ impl World {
             fan.select(P2::dir(axis), &mut among);
             rays.map(|dir| {
                 let wall = fan.cast_among(P2::dir(dir), &among).unwrap_or(f64::INFINITY);
-                if self.people.is_empty() {
+                if self.traffic.people().is_empty() {
                     wall
                 } else {
                     wall.min(self.ray_people(p, P2::dir(dir)).unwrap_or(f64::INFINITY))
@@ -708,11 +605,6 @@ fn blocked_disc(a: P2, b: P2, c: P2, reach: f64) -> bool {
     } else {
         b.dist(c) < d0
     }
-}
-
-/// A random gap between door closures, s.
-fn gap(rng: &mut ChaCha8Rng) -> f64 {
-    OPEN_GAP_S.0 + uniform(rng) * (OPEN_GAP_S.1 - OPEN_GAP_S.0)
 }
 
 #[cfg(test)]

@@ -359,3 +359,28 @@ fn every_map_has_people_walking_clear_of_walls() {
         }
     }
 }
+
+/// The physics robot steps people and door closures by `Traffic` alone (`situate._native.Traffic`):
+/// with the robot's pose given each step, it is the 2-D world's, bit for bit.
+#[test]
+fn traffic_alone_is_the_worlds_people_and_doors() {
+    use situate_sim::traffic::{RobotDisc, Traffic};
+    let m = map("default.yaml");
+    let mut w = World::with_config(m.clone(), 7, with(3, true, vec![]));
+    let mut t = Traffic::new(&m, 7, 3, true);
+    assert_eq!(w.people(), t.people());
+    let mut closed = 0;
+    // 400 s: long enough for closures to come and go (a gap is 60-180 s), the robot driving
+    // about (people stop for it, doors wait for it).
+    for i in 1..=40_000u64 {
+        let r = w.robot();
+        let now = w.time_s();
+        w.set_drive(0.4, (i as f64 * 0.003).sin(), BaseLimits::default());
+        w.advance_to(i as f64 * 0.01);
+        t.step(&m, &RobotDisc { floor: r.floor, pos: P2::new(r.x, r.y), radius: m.robot_radius }, now, 0.01);
+        assert_eq!(w.people(), t.people(), "step {i}");
+        assert_eq!(w.closure(), t.closure(), "step {i}");
+        closed += usize::from(t.closed_door(&m).is_some());
+    }
+    assert!(closed > 0, "no door closed in 400 s");
+}
