@@ -355,3 +355,53 @@ def test_a_turn_in_a_moving_car_is_measured_by_the_wheels() -> None:
     turned = math.remainder(w.pose().theta - true0, 2 * math.pi)
     assert abs(turned) > 2.0, turned
     assert abs(measured - turned) < 0.1, (measured, turned)
+
+
+def test_a_person_is_a_body_the_sonar_sees_and_the_robot_cannot_pass(room: Building) -> None:
+    # People are the 2-D simulator's (situate._native.Traffic), kinematic bodies here.
+    w = PhysicsWorld(room, seed=4, sonar=QUIET, people=1)
+    assert w.people(), "no person placed"
+    w.advance(0.2)
+    clear = float(w.sonar()[0])
+    w.place_person(0, 0, 3.5, 3.0, until=1e9)  # 1.5 m ahead of the robot, standing there
+    assert w.people()[0] == (0, 3.5, 3.0)
+    w.advance(0.2)
+    assert clear > 3.0, clear
+    assert abs(float(w.sonar()[0]) - (1.5 - 0.25)) < 0.03, w.sonar()[0]
+    w.command(0.3, 0.0)
+    w.advance(8.0)
+    # The robot's rim stops at the person's (a little give: contact is soft in MuJoCo).
+    assert 2.6 < w.pose().x < 3.5 - 0.25 - room.robot_radius + 0.02, w.pose()
+    with pytest.raises(IndexError, match="no person 9"):
+        w.place_person(9, 0, 1.0, 1.0, until=0.0)
+
+
+def test_a_closed_door_is_a_panel_until_it_opens_again(room: Building) -> None:
+    w = PhysicsWorld(room, seed=3, sonar=QUIET, door_closures=True)
+    assert w.closed_door() is None
+    for _ in range(100):  # a closure comes 60-180 s after the last
+        if w.closed_door() is not None:
+            break
+        w.advance(5.0)
+    assert w.closed_door() == (0, 0), "the room's door never closed"
+    # Below the closed door, facing it: the sonar ahead reads the panel 1 m away.
+    w.place(0, 5.0, 5.0, math.pi / 2)
+    w.advance(0.2)
+    assert abs(float(w.sonar()[0]) - 1.0) < 0.05, w.sonar()[0]
+    for _ in range(100):  # it stays closed 20-60 s
+        if w.closed_door() is None:
+            break
+        w.advance(1.0)
+    assert w.closed_door() is None, "the door never opened again"
+    w.advance(0.2)
+    assert float(w.sonar()[0]) > 2.0, w.sonar()[0]
+
+
+def test_a_dead_sonar_reads_max_range(room: Building) -> None:
+    w = PhysicsWorld(room, seed=4, sonar=QUIET, dead_sonars=[12])
+    w.advance(0.2)
+    # Sonar 12 looks west at the wall 2 m away: dead, it reads max_range; the others read.
+    assert float(w.sonar()[12]) == QUIET.max_range
+    assert abs(float(w.sonar()[6]) - 3.0) < 0.03, w.sonar()[6]  # north wall, 3 m
+    with pytest.raises(ValueError, match="dead sonar 24"):
+        PhysicsWorld(room, dead_sonars=[24])

@@ -20,6 +20,7 @@ pub mod elevator;
 pub mod loader;
 pub mod robot;
 pub mod skill;
+pub mod traffic;
 
 /// Runs the `situate` program with `argv` (the first item is the program
 /// name, as in `sys.argv`) and returns its exit code. `interpreter` is the
@@ -74,6 +75,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<convert::SharedArray>()?;
     m.add_class::<robot::LocalRobot>()?;
     m.add_class::<elevator::Elevator>()?;
+    m.add_class::<traffic::Traffic>()?;
     Ok(())
 }
 

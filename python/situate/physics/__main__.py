@@ -12,6 +12,7 @@ from collections.abc import Sequence
 import zenoh
 
 from situate.physics.building import Building
+from situate.physics.cli import add_world_args, world_settings
 from situate.physics.node import PhysicsNode
 from situate.physics.world import PhysicsWorld
 from situate.ros2 import Ros2Peer
@@ -27,7 +28,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="a Zenoh endpoint to connect to (situate's link, or a router; default "
         "tcp/127.0.0.1:7447, where rmw_zenoh looks for its router)",
     )
-    p.add_argument("--seed", type=int, default=1, help="seeds the sensors' noise")
+    p.add_argument(
+        "--seed", type=int, default=1, help="seeds the sensors' noise, the cars and the people"
+    )
+    add_world_args(p)
     p.add_argument("--rate-hz", type=float, default=10.0, help="ticks of the clock per second")
     p.add_argument(
         "--time-scale", type=float, default=1.0, help="simulated seconds per real second"
@@ -45,6 +49,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(argv)
     try:
         building = Building.load(a.map)
+        world = PhysicsWorld(building, seed=a.seed, **world_settings(a))
     except ValueError as e:
         print(f"python -m situate.physics: {e}", file=sys.stderr)
         return 3
@@ -59,7 +64,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     with zenoh.open(config) as session:
         peer = Ros2Peer(session, domain_id=a.domain_id, namespace=a.namespace, node=a.node)
         node = PhysicsNode(
-            PhysicsWorld(building, seed=a.seed),
+            world,
             peer,
             rate_hz=a.rate_hz,
             stamped=a.stamped,

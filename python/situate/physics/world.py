@@ -22,7 +22,12 @@ a `BaseSpec`, and runs it:
 - **The sonar ring** (`SonarSpec`): sonar i looks at bearing ``i * 15°``; each casts `rays`
   rays across its cone from the robot's centre at `SONAR_HEIGHT` (`mj_multiRay`, the robot's own
   geoms left out) and reads the nearest return, plus Gaussian noise; a missed echo (probability
-  `dropout`) or nothing within `max_range` reads ``max_range``. As the 2-D simulator's ring.
+  `dropout`) or nothing within `max_range` reads ``max_range``; a dead sonar (`dead_sonars`)
+  always does. As the 2-D simulator's ring.
+- **People and door closures** (``people`` per floor, ``door_closures``): the 2-D simulator's
+  own logic (`situate._native.Traffic`) walks the people and closes the map's doors; here a
+  person is a kinematic (mocap) cylinder the robot's sonars see and bumps into, and a closed
+  door a panel across its opening. Off by default, as in the 2-D simulator.
 - **The arm and the speaker**: `press` pushes the button with a label (the lobby's call
   button, the panel of the car the robot is in) within reach, as the 2-D arm; `say` says a
   text, and the message is delivered when it is said in the office.
@@ -37,6 +42,7 @@ building, seed and commands at the same times, a run is the same, step for step.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -77,6 +83,13 @@ CAR_KP = 1.0e6
 CAR_KV = 2 * math.sqrt(CAR_KP * CAR_MASS)
 #: The elevator logic's step, s (the 2-D simulator's step).
 ELEVATOR_DT = 0.01
+#: A person: a cylinder this wide (the 2-D simulator's `PERSON_RADIUS`) and tall, m.
+PERSON_RADIUS = 0.25
+PERSON_HEIGHT = 1.7
+#: Most people per floor (the 2-D simulator's `--people` limit).
+MAX_PEOPLE = 100
+#: Where a person not in the building stands (none such: every person is on a floor).
+_AWAY = (0.0, 0.0, -1000.0)
 #: The arm's reach from the robot's centre, m, and how far off ahead a button may be, rad
 #: (the 2-D `sim.arm`'s defaults).
 ARM_REACH = 0.6
@@ -192,6 +205,11 @@ def _door_name(level: int, car: int) -> str:
     return f"{_tag(level)}_car{car}_door"
 
 
+def _panel_name(level: int, door: int) -> str:
+    """The panel that closes door `door` (its index on the floor) of a floor."""
+    return f"{_tag(level)}_door{door}"
+
+
 def _walls(name: str, segs: list[Segment], z0: float, height: float = WALL_HEIGHT) -> list[str]:
     """Boxes for walls, centred on their lines.
 
@@ -279,8 +297,12 @@ def _slab(
     return out
 
 
-def mjcf(building: Building, base: BaseSpec, timestep: float) -> str:
-    """The MuJoCo model (MJCF) of the building and the robot, the robot at the origin."""
+def mjcf(building: Building, base: BaseSpec, timestep: float, people: int = 0) -> str:
+    """The MuJoCo model (MJCF) of the building and the robot, the robot at the origin.
+
+    With `people` kinematic people (mocap bodies, placed by `PhysicsWorld`) and a panel in
+    every door of the map (shut here: `PhysicsWorld` opens them all but a closed one).
+    """
     r = building.robot_radius
     wr = base.wheel_radius
     geoms: list[str] = []
@@ -292,6 +314,10 @@ def mjcf(building: Building, base: BaseSpec, timestep: float) -> str:
         geoms += _walls(f"{tag}_wall", list(f.walls), z)
         for k, polygon in enumerate(f.obstacles):
             geoms += _solid(f"{tag}_obstacle{k}", polygon, z)
+        for k, door in enumerate(f.doors):
+            geoms.append(
+                _box(_panel_name(f.level, k), door, z, WALL_HEIGHT, WALL_THICKNESS, (0, 0))
+            )
         for c in building.cars:
             geoms += _walls(f"{tag}_car{c.id}_", list(c.walls), z, SHAFT_HEIGHT)
             geoms.append(
@@ -312,6 +338,12 @@ def mjcf(building: Building, base: BaseSpec, timestep: float) -> str:
         servos.append(
             f'<position name="car{c.id}" joint="car{c.id}" kp="{CAR_KP}" kv="{CAR_KV:.3f}"/>'
         )
+    bodies = [
+        f'<body name="person{k}" mocap="true" pos="{_AWAY[0]} {_AWAY[1]} {_AWAY[2]}">'
+        f'<geom name="person{k}" type="cylinder" size="{PERSON_RADIUS} {PERSON_HEIGHT / 2}" '
+        f'pos="0 0 {PERSON_HEIGHT / 2}" rgba="0.85 0.45 0.2 1"/></body>'
+        for k in range(people)
+    ]
     chassis_h = 0.3
     caster = 0.03
     return f"""
@@ -349,6 +381,7 @@ def mjcf(building: Building, base: BaseSpec, timestep: float) -> str:
       </body>
     </body>
     {"".join(cars)}
+    {"".join(bodies)}
   </worldbody>
   <actuator>
     <velocity name="left" joint="wheel_left" kv="{base.wheel_gain}"
@@ -373,16 +406,38 @@ class PhysicsWorld:
         sonar: SonarSpec | None = None,
         timestep: float = 0.002,
         start: tuple[int, float, float, float] | None = None,
+        people: int = 0,
+        door_closures: bool = False,
+        dead_sonars: Sequence[int] = (),
     ) -> None:
         if not 0 < timestep <= 0.01:
             raise ValueError(f"timestep {timestep} s: expected in (0, 0.01]")
+        if not 0 <= people <= MAX_PEOPLE:
+            raise ValueError(f"people {people}: expected 0 to {MAX_PEOPLE} per floor")
+        bad = [k for k in dead_sonars if not 0 <= k < SONARS]
+        if bad:
+            raise ValueError(f"dead sonar {bad[0]}: sonars are 0 to {SONARS - 1}")
+        # People and door closures: the 2-D simulator's logic, from the map file.
+        self._traffic: Any = None
+        if people or door_closures:
+            if building.source is None:
+                raise ValueError(
+                    "people and door closures need a building read from its map file "
+                    "(Building.load): their logic reads it"
+                )
+            from situate import _native
+
+            self._traffic = _native.Traffic(building.source, seed, people, door_closures)
+        walking = self._traffic.people() if self._traffic is not None else []
         self.building = building
         self.base = base or BaseSpec()
         self.sonar_spec = sonar or SonarSpec()
         if self.sonar_spec.rays < 1:
             raise ValueError("a sonar casts at least 1 ray")
         self.timestep = timestep
-        self.model: Any = mujoco.MjModel.from_xml_string(mjcf(building, self.base, timestep))
+        self.model: Any = mujoco.MjModel.from_xml_string(
+            mjcf(building, self.base, timestep, len(walking))
+        )
         self.data: Any = mujoco.MjData(self.model)
         self._rng = np.random.Generator(np.random.PCG64(seed))
         self._robot = self.model.body("robot").id
@@ -437,6 +492,19 @@ class PhysicsWorld:
         self._car_to = [0.0] * len(building.cars)
         self._update_elevator()
         self._car_from = list(self._car_to)
+        # Every map door's panel, open (shortened to its jamb) but the one the logic closed.
+        self._panels = {
+            (f.level, k): (self.model.geom(_panel_name(f.level, k)).id, door)
+            for f in building.floors
+            for k, door in enumerate(f.doors)
+        }
+        self._closed: tuple[int, int] | None = None
+        for geom, door in self._panels.values():
+            self._shut(geom, door, 0.0)
+        self._people: list[tuple[int, float, float]] = walking
+        self._dead = np.zeros(SONARS, dtype=bool)
+        self._dead[list(dead_sonars)] = True
+        self._update_traffic()
         mujoco.mj_forward(self.model, self.data)
         self._presses = [0, 0]  # attempts, presses
         self._said: list[Utterance] = []
@@ -494,6 +562,21 @@ class PhysicsWorld:
         return float(
             self.data.qpos[self.model.joint(f"car{self.building.cars[k].id}").qposadr[0]]
         ) + (self._lowest * FLOOR_HEIGHT)
+
+    def people(self) -> list[tuple[int, float, float]]:
+        """Each person's ``(floor, x, y)`` now, floor by floor."""
+        return list(self._people)
+
+    def place_person(self, k: int, floor: int, x: float, y: float, until: float) -> None:
+        """Moves person `k` (tests, scenarios): it stands at ``(x, y)`` on `floor` until time
+        `until` (s), then walks on."""
+        if self._traffic is None or not self._traffic.place_person(k, floor, x, y, until):
+            raise IndexError(f"no person {k}: {len(self._people)} people in the building")
+        self._update_traffic()
+
+    def closed_door(self) -> tuple[int, int] | None:
+        """The map's door closed now: ``(floor, k)``, door `k` of the floor's `doors`."""
+        return self._closed
 
     @property
     def arm(self) -> tuple[int, int]:
@@ -558,6 +641,10 @@ class PhysicsWorld:
             self._cars = self._elevator.cars()
             self._car_from = list(self._car_to)
             self._update_elevator()
+        if self._traffic is not None and self._steps % self._elevator_every == 0:
+            p = self.pose()
+            self._traffic.step(self.time, ELEVATOR_DT, p.floor, p.x, p.y)
+            self._update_traffic()
         if self._cars:
             frac = (self._steps % self._elevator_every + 1) / self._elevator_every
             for k, servo in enumerate(self._car_servo):
@@ -579,7 +666,6 @@ class PhysicsWorld:
 
     def _update_elevator(self) -> None:
         """Each car's servo target where the logic has it (eased), each landing door shortened."""
-        m = self.model
         for k, (pos, door, phase, start, end) in enumerate(self._cars):
             if phase == "travel" and abs(end - start) > 1e-9:
                 u = min(max((pos - start) / (end - start), 0.0), 1.0)
@@ -589,14 +675,36 @@ class PhysicsWorld:
             if self._door_shown[k] == (on, door):
                 continue  # its doors as they are (most steps: nothing moves)
             self._door_shown[k] = (on, door)
-            for geom, level, (x0, y0, x1, y1) in self._doors[k]:
-                closed = 1.0 if level != on else 1.0 - door
-                length = math.hypot(x1 - x0, y1 - y0)
-                half = max(closed * length / 2, 0.0005)
-                ux, uy = (x1 - x0) / length, (y1 - y0) / length
-                m.geom_size[geom][0] = half
-                m.geom_pos[geom][0] = x0 + ux * half
-                m.geom_pos[geom][1] = y0 + uy * half
+            for geom, level, seg in self._doors[k]:
+                self._shut(geom, seg, 1.0 if level != on else 1.0 - door)
+
+    def _shut(self, geom: int, seg: Segment, closed: float) -> None:
+        """A door's panel across `closed` (0 … 1) of its opening `seg`, from its first end."""
+        x0, y0, x1, y1 = seg
+        length = math.hypot(x1 - x0, y1 - y0)
+        if length < 1e-9:
+            return
+        half = max(closed * length / 2, 0.0005)
+        ux, uy = (x1 - x0) / length, (y1 - y0) / length
+        m = self.model
+        m.geom_size[geom][0] = half
+        m.geom_pos[geom][0] = x0 + ux * half
+        m.geom_pos[geom][1] = y0 + uy * half
+
+    def _update_traffic(self) -> None:
+        """The people where the logic has them; the closed door's panel shut, the others open."""
+        if self._traffic is None:
+            return
+        self._people = self._traffic.people()
+        for k, (level, x, y) in enumerate(self._people):
+            self.data.mocap_pos[k] = (x, y, level * FLOOR_HEIGHT)
+        closed = self._traffic.closed_door()
+        if closed != self._closed:
+            for door in (self._closed, closed):
+                if door is not None and door in self._panels:
+                    geom, seg = self._panels[door]
+                    self._shut(geom, seg, 1.0 if door == closed else 0.0)
+            self._closed = closed
 
     def _integrate_odometry(self) -> None:
         b, dt = self.base, self.timestep
@@ -647,7 +755,7 @@ class PhysicsWorld:
         noisy = dist + self._rng.normal(0.0, s.noise, SONARS) if s.noise > 0 else dist
         missed = self._rng.random(SONARS) < s.dropout
         out = np.where(
-            missed | ~np.isfinite(noisy) | (noisy > s.max_range), s.max_range, noisy
+            missed | self._dead | ~np.isfinite(noisy) | (noisy > s.max_range), s.max_range, noisy
         ).clip(s.min_range, s.max_range)
         return out.astype(np.float32)
 
