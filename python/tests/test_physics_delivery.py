@@ -15,9 +15,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+import signal
+import subprocess
+import sys
+import threading
+import urllib.request
 from pathlib import Path
 
-from support import REPO
+from support import REPO, free_port, program_env
 
 from situate.physics.building import Building
 from situate.physics.deliver import deliver
@@ -68,3 +73,39 @@ def test_the_physics_robot_delivers_the_message_the_same_way_twice(tmp_path: Pat
     assert (second.mission_time_s, second.ticks) == (first.mission_time_s, first.ticks)
     assert a[0] > 10_000
     assert a == b
+
+
+def test_with_a_gui_the_robot_stays_up_after_the_mission_until_ctrl_c() -> None:
+    port = free_port()
+    cmd = [sys.executable, "-m", "situate.physics.deliver", "--map", "maps/default.yaml"]
+    cmd += ["--gui", f"127.0.0.1:{port}", "--limit-s", "3", "--time-scale", "1000"]
+    cmd += ["--people", "1", "--door-closures"]
+    with subprocess.Popen(
+        cmd,
+        cwd=REPO,
+        env=program_env(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    ) as p:
+        assert p.stderr is not None
+        lines: list[str] = []
+        lingering = threading.Event()
+
+        def read() -> None:
+            for line in p.stderr or []:
+                lines.append(line)
+                if "the GUI stays on" in line:
+                    lingering.set()
+
+        threading.Thread(target=read, daemon=True).start()
+        assert lingering.wait(180), "".join(lines)
+        assert "the mission is over (NOT delivered)" in lines[-1], "".join(lines)
+        assert p.poll() is None, "it exited after the mission"
+        # The GUI still answers, and shows the building it was given.
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=30) as page:
+            assert page.status == 200
+        p.send_signal(signal.SIGINT)
+        out, _ = p.communicate(timeout=120)
+    assert p.returncode == 1, out
+    assert "NOT delivered" in out

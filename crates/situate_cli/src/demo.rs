@@ -340,14 +340,10 @@ pub(crate) fn run_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow
 /// (`situate.physics.deliver`: the robot, the MuJoCo world and the sequencer), its exit status
 /// passed on (0: delivered, 1: not, 3: a map that cannot be read).
 fn run_physics_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
-    let refused = [
-        (demo.mode != "sequenced", "--mode"),
-        (demo.task != "office", "--task"),
-        (demo.world.any(), "--people, --door-closures and --dead-sonar"),
-        (demo.listen.is_some(), "--listen"),
-    ];
+    let refused =
+        [(demo.mode != "sequenced", "--mode"), (demo.task != "office", "--task"), (demo.listen.is_some(), "--listen")];
     if let Some((_, what)) = refused.iter().find(|(given, _)| *given) {
-        return Err(problem(Exit::Usage, format!("{what}: not with --physics (the physics robot's demo takes --map, --seed, --robot, --sequencer, --gui, --speed, --record, --limit-s)")));
+        return Err(problem(Exit::Usage, format!("{what}: not with --physics (the physics robot's demo takes --map, --seed, --robot, --sequencer, --gui, --speed, --record, --limit-s, --people, --door-closures, --dead-sonar, --exit-when-done)")));
     }
     let dirs = demo_dirs(ext);
     let find = |given: &Option<PathBuf>, name: &str| {
@@ -374,12 +370,16 @@ fn run_physics_demo(demo: &DemoOptions, ext: &Extensions, out: Out) -> anyhow::R
         .arg(&robot)
         .arg("--sequencer")
         .arg(&sequencer)
-        .args(["--limit-s", &demo.limit_s.to_string()]);
+        .args(["--limit-s", &demo.limit_s.to_string()])
+        .args(demo.world.to_args());
     if !demo.headless {
         command.args(["--gui", &demo.gui, "--time-scale", &demo.speed.to_string()]);
     }
     if let Some(r) = &demo.record {
         command.arg("--record").arg(r);
+    }
+    if demo.exit_when_done {
+        command.arg("--exit-when-done");
     }
     if out.json {
         command.arg("--json");

@@ -45,6 +45,22 @@ impl WorldArgs {
     pub(crate) fn any(&self) -> bool {
         self.people.is_some() || self.door_closures || !self.dead_sonars.is_empty()
     }
+
+    /// The same settings as command-line arguments (for the physics robot's program, which
+    /// takes them as `situate demo` does).
+    pub(crate) fn to_args(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(n) = self.people {
+            out.extend(["--people".to_string(), n.to_string()]);
+        }
+        if self.door_closures {
+            out.push("--door-closures".to_string());
+        }
+        for k in &self.dead_sonars {
+            out.extend(["--dead-sonar".to_string(), k.to_string()]);
+        }
+        out
+    }
 }
 
 /// The building a robot that simulates none is shown in: `--map` given with a robot file

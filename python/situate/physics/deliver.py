@@ -12,8 +12,9 @@ them:
 
 The outcome is the world's: the message is delivered when the speaker says it in the office.
 With ``--json`` it is one JSON object on stdout (`Outcome`); else a line as ``situate demo``
-prints. The exit status is 0 when delivered, 1 when not, 2 for bad arguments, 3 for a building
-that cannot be read.
+prints. With ``--gui`` the robot and its GUI stay up when the mission is over, until Ctrl-C
+(``--exit-when-done``: not), as ``situate demo``'s. The exit status is 0 when delivered, 1 when
+not, 2 for bad arguments, 3 for a building that cannot be read.
 """
 
 from __future__ import annotations
@@ -28,10 +29,12 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
+
+from situate.physics.cli import add_world_args, world_settings
 
 #: How long the robot may take to start listening, s.
 STARTUP_S = 60.0
@@ -182,10 +185,14 @@ def deliver(
     gui: str | None = None,
     quiet: bool = True,
     program: Sequence[str] | None = None,
+    world_settings: dict[str, Any] | None = None,
+    linger: Callable[[Outcome], None] | None = None,
 ) -> Outcome:
     """Runs the delivery once on the physics robot in `map_file`'s building; its outcome.
 
-    `program` runs the robot (default: this package's ``situate``, ``python -m situate``).
+    `program` runs the robot (default: this package's ``situate``, ``python -m situate``);
+    `world_settings` are `PhysicsWorld`'s (people, door closures, dead sonars). `linger`, when
+    given, is called with the outcome before the robot is stopped (its GUI still up).
     """
     from situate.physics.building import Building
     from situate.physics.node import PhysicsNode
@@ -193,7 +200,7 @@ def deliver(
     from situate.ros2 import Ros2Peer
 
     building = Building.load(map_file)
-    world = PhysicsWorld(building, seed=seed)
+    world = PhysicsWorld(building, seed=seed, **(world_settings or {}))
     extra = ["--record", str(record)] if record is not None else []
     extra += ["--gui", gui, "--map", str(map_file)] if gui is not None else ["--no-gui"]
     started = time.monotonic()
@@ -201,6 +208,27 @@ def deliver(
     out = ""
     status: int | None = None
     ticks = 0
+
+    def outcome() -> Outcome:
+        wall = time.monotonic() - started
+        phases = PHASE.findall(out)
+        delivered = world.delivered_at is not None
+        pose = world.pose()
+        return Outcome(
+            map=str(map_file),
+            seed=seed,
+            delivered=delivered,
+            mission_time_s=world.delivered_at if world.delivered_at is not None else world.time,
+            wall_s=wall,
+            speedup=world.time / wall if wall > 0 else 0.0,
+            ticks=ticks,
+            at=(pose.floor, round(pose.x, 3), round(pose.y, 3)),
+            sequencer_exit=status,
+            phase=f"{phases[-1][0]}: {phases[-1][1]}" if phases else None,
+            tail=[] if delivered else out.splitlines()[-8:] + robot.lines[-5:],
+            recording=str(record) if record is not None else None,
+        )
+
     try:
         with _session(robot.endpoint) as session:
             peer = Ros2Peer(session, node="physics")
@@ -217,25 +245,36 @@ def deliver(
                 node.close()
                 ticks = node.ticks
                 peer.close()
+        if linger is not None:
+            linger(outcome())
     finally:
         robot.stop()
-    wall = time.monotonic() - started
-    phases = PHASE.findall(out)
-    delivered = world.delivered_at is not None
-    return Outcome(
-        map=str(map_file),
-        seed=seed,
-        delivered=delivered,
-        mission_time_s=world.delivered_at if world.delivered_at is not None else world.time,
-        wall_s=wall,
-        speedup=world.time / wall if wall > 0 else 0.0,
-        ticks=ticks,
-        at=(world.pose().floor, round(world.pose().x, 3), round(world.pose().y, 3)),
-        sequencer_exit=status,
-        phase=f"{phases[-1][0]}: {phases[-1][1]}" if phases else None,
-        tail=[] if delivered else out.splitlines()[-8:] + robot.lines[-5:],
-        recording=str(record) if record is not None else None,
-    )
+    return outcome()
+
+
+def _until_interrupted(gui: str) -> Callable[[Outcome], None]:
+    """Keeps the robot (and its GUI on `gui`) up after the mission until SIGINT or SIGTERM."""
+
+    def linger(outcome: Outcome) -> None:
+        done = threading.Event()
+        previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+        for sig in previous:
+            signal.signal(sig, lambda *_: done.set())
+        try:
+            said = "delivered" if outcome.delivered else "NOT delivered"
+            print(
+                f"demo --physics: the mission is over ({said}); the GUI stays on http://{gui} "
+                "until Ctrl-C (--exit-when-done: exit at once)",
+                file=sys.stderr,
+                flush=True,
+            )
+            while not done.wait(0.2):
+                pass
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+
+    return linger
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -255,6 +294,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--record", type=Path, help="record the robot's run to this MCAP file")
     p.add_argument("--gui", metavar="ADDR", help="serve the GUI here (e.g. 127.0.0.1:8080)")
     p.add_argument("--json", action="store_true", help="the outcome as one JSON object")
+    p.add_argument(
+        "--exit-when-done",
+        action="store_true",
+        help="with --gui: exit when the mission is over (default: the GUI stays up until Ctrl-C)",
+    )
+    add_world_args(p)
     p.add_argument(
         "--program",
         help="the situate program that runs the robot (default: this package's, "
@@ -277,6 +322,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             gui=a.gui,
             quiet=a.json,
             program=[a.program] if a.program else None,
+            world_settings=world_settings(a),
+            linger=_until_interrupted(a.gui) if a.gui and not a.exit_when_done else None,
         )
     except ValueError as e:  # the map file: its loader's message names the file and line
         print(f"python -m situate.physics.deliver: {e}", file=sys.stderr)
