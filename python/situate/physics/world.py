@@ -568,8 +568,10 @@ class PhysicsWorld:
         return list(self._people)
 
     def place_person(self, k: int, floor: int, x: float, y: float, until: float) -> None:
-        """Moves person `k` (tests, scenarios): it stands at ``(x, y)`` on `floor` until time
-        `until` (s), then walks on."""
+        """Moves person `k` (tests, scenarios).
+
+        It stands at ``(x, y)`` on `floor` until time `until` (s), then walks on.
+        """
         if self._traffic is None or not self._traffic.place_person(k, floor, x, y, until):
             raise IndexError(f"no person {k}: {len(self._people)} people in the building")
         self._update_traffic()
