@@ -18,11 +18,13 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from support import REPO, STARTUP_S, situate, start_manager, zenoh_client
 
 from situate.physics import Building, PhysicsWorld
 from situate.physics.node import PhysicsNode
+from situate.physics.world import FLOOR_HEIGHT
 from situate.ros2 import Ros2Peer
 
 ROBOT = """\
@@ -250,3 +252,84 @@ def test_situate_msgs_is_the_package_a_ros_2_system_builds() -> None:
         store.register(get_types_from_msg(text, name))
         assert type_hash(name) == store.hash_rihs01(name)
     assert "msg/Barcodes.msg" in (package / "CMakeLists.txt").read_text()
+
+
+def test_the_ground_truth_topic_is_the_robots_truth_pose() -> None:
+    """``ground_truth/odom`` is the true pose (Gazebo's p3d), and demo/physics.yaml maps it.
+
+    The node publishes the robot's true pose in the building each tick (map → base_link, z the
+    floor's slab, the true speeds), and the demo's robot file makes it ``truth.pose``, the GUI's
+    world view's robot, with its floor in ``floor``: they follow the physics robot as it drives.
+    """
+    robot = start_manager(REPO / "demo" / "physics.yaml", "deliverybot")
+    try:
+        out = situate("activate", "runaway", "avoid", "wander", *robot.connect_args)
+        assert out.returncode == 0, out.stderr
+
+        def query(signal: str) -> Any:
+            out = situate("query", signal, *robot.connect_args, "--json")
+            assert out.returncode == 0, out.stderr
+            return json.loads(out.stdout)
+
+        with zenoh_client(robot.endpoint) as s, zenoh_client(robot.endpoint) as ws:
+            watcher = Ros2Peer(ws, node="watcher")
+            truths: dict[int, Any] = {}
+
+            def on_truth(m: Any) -> None:
+                truths[int(m.header.stamp.sec) * 10**9 + int(m.header.stamp.nanosec)] = m
+
+            watch = watcher.subscribe(
+                "/ground_truth/odom", "nav_msgs/msg/Odometry", on_truth, ordered=True
+            )
+            peer = Ros2Peer(s, node="physics")
+            world = PhysicsWorld(Building.load(REPO / "maps" / "default.yaml"), seed=2)
+            node = PhysicsNode(world, peer, rate_hz=10, lockstep="/deliverybot/cycle")
+            try:
+                # The watcher's subscription is known before the first tick is published.
+                wait_until(
+                    lambda: any(
+                        "/MS/" in k and "/watcher/" in k and "ground_truth%odom" in k
+                        for k in peer.graph()
+                    ),
+                    "the watcher's subscription to /ground_truth/odom",
+                )
+                poses = [world.pose()]
+                assert poses[0].floor == -1, poses
+                for k in range(1, 101):
+                    node.tick()
+                    p = world.pose()
+                    poses.append(p)
+                    if k % 25:
+                        continue
+                    # The message of tick k: the pose and speeds the world has now.
+                    v, w = world.velocity()
+                    stamp_ns = k * 10**8
+                    wait_until(lambda: stamp_ns in truths, f"the ground truth of tick {k}")  # noqa: B023
+                    m = truths[stamp_ns]
+                    assert (m.header.frame_id, m.child_frame_id) == ("map", "base_link")
+                    pos = m.pose.pose.position
+                    assert (pos.x, pos.y, pos.z) == (p.x, p.y, p.floor * FLOOR_HEIGHT), (pos, p)
+                    q = m.pose.pose.orientation
+                    yaw = 2 * math.atan2(q.z, q.w)
+                    assert abs(math.remainder(yaw - p.theta, 2 * math.pi)) < 1e-9, (q, p)
+                    twist = m.twist.twist
+                    assert (twist.linear.x, twist.angular.z) == (v, w)
+                    # Lock-step: after tick k the robot has run k - 1 cycles, and cycle n's
+                    # truth.pose is the pose tick n published.
+                    pose = query("truth.pose")
+                    assert pose["cycle"] == k - 1, pose
+                    value, then = pose["value"], poses[k - 1]
+                    assert set(value) == {"x", "y", "theta", "v", "w"}, pose
+                    assert (value["x"], value["y"]) == (then.x, then.y), (pose, then)
+                    assert abs(math.remainder(value["theta"] - then.theta, 2 * math.pi)) < 1e-9
+                    assert query("floor")["value"] == then.floor == -1
+                assert not watch.problems, watch.problems
+            finally:
+                node.close()
+                peer.close()
+                watcher.close()
+        # The robot drove, and truth.pose followed it.
+        assert math.dist((poses[-1].x, poses[-1].y), (poses[0].x, poses[0].y)) > 0.3, poses
+    finally:
+        err = robot.stop()
+    assert "panicked" not in err, err

@@ -1,6 +1,9 @@
 // The world view: the simulator's map (walls, obstacles, doors, barcodes, buttons, the goal office,
 // elevator cars) on the robot's floor, the robot (`truth.pose`), its sonar rays (`sonar.range`) and
 // the cars' state (`truth.cars`), the people walking on the floor shown (`truth.people`).
+// A `truth.pose` without `floor` (a ROS 2 ground-truth Odometry mapped onto it: x, y, theta, v, w)
+// is on the floor of the robot's `floor` signal (not drawn until that has a value), or on floor 0
+// when the robot has no `floor` signal.
 // Zoom with the wheel, pan by dragging, "Reset view" to fit the map again; the view follows the
 // robot (its floor, and its position when zoomed in) until the user pans. The canvas is drawn at
 // the page's own pixel size, so labels keep their size whatever the window's width.
@@ -33,6 +36,22 @@ interface Robot {
   y: number;
   theta: number;
   floor: number;
+}
+
+/**
+ * The robot of the signals: `truth.pose`, its floor from `floor` when the pose has none (0 when the
+ * robot has no `floor` signal; none while its `floor` has no value yet, a floor not yet known).
+ */
+function robotOf(signals: Json | undefined): Robot | null {
+  const sig = isObject(signals) ? signals : {};
+  const pose = values(sig["truth.pose"]);
+  if (!isObject(pose)) return null;
+  let floor = pose["floor"];
+  if (typeof floor !== "number") {
+    floor = sig["floor"] === undefined ? 0 : values(sig["floor"]);
+    if (typeof floor !== "number") return null;
+  }
+  return { x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor };
 }
 
 export class WorldView {
@@ -180,9 +199,7 @@ export class WorldView {
   }
 
   private setSignals(signals: Json | undefined): void {
-    const sig = isObject(signals) ? signals : {};
-    const pose = values(sig["truth.pose"]);
-    this.robot = isObject(pose) ? { x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) } : null;
+    this.robot = robotOf(signals);
     this.signals = signals;
   }
 
@@ -203,8 +220,8 @@ export class WorldView {
 
   /** A live sample while the view shows the past: the trail grows, nothing else changes. */
   keepTrail(signals: Json | undefined, wall: number): void {
-    const pose = values(isObject(signals) ? signals["truth.pose"] : undefined);
-    if (isObject(pose)) this.addTrail({ x: num(pose["x"]), y: num(pose["y"]), theta: num(pose["theta"]), floor: num(pose["floor"]) }, wall);
+    const robot = robotOf(signals);
+    if (robot) this.addTrail(robot, wall);
   }
 
   private addTrail(robot: Robot, wall: number): void {

@@ -96,8 +96,9 @@ pub const DEFAULT_MAX_CONNECTIONS: usize = 256;
 pub const DEFAULT_HEADER_TIMEOUT: Duration = Duration::from_secs(10);
 /// The default time a WebSocket may stay silent, pings unanswered ([`GuiConfig::ws_idle_timeout`]).
 pub const DEFAULT_WS_IDLE_TIMEOUT: Duration = Duration::from_secs(60);
-/// The signals the world view draws, when they exist.
-const WORLD_SIGNALS: [&str; 4] = ["truth.pose", "sonar.range", "truth.cars", "truth.people"];
+/// The signals the world view draws, when they exist (`floor`: the robot's floor when its
+/// `truth.pose` has none, as a ROS 2 ground-truth Odometry mapped onto it).
+const WORLD_SIGNALS: [&str; 5] = ["truth.pose", "floor", "sonar.range", "truth.cars", "truth.people"];
 
 /// Where and how the GUI serves.
 #[derive(Debug, Clone, PartialEq)]

@@ -9,7 +9,11 @@ What a Gazebo robot offers a ROS 2 stack, on the topics a ROS 2 robot driver use
   the 24 sonars, ``angle_min`` 0, ``angle_increment`` 15°, ranges from the robot's centre; what
   situate's ROS 2 bridge reads with ``ring: 24``), ``barcodes`` (`situate_msgs/msg/Barcodes`:
   what the reader sees), ``odom`` (`nav_msgs/msg/Odometry`: the wheel odometry, odom →
-  base_link), ``/tf`` (`tf2_msgs/msg/TFMessage`: the same transform) and, last, ``/clock``
+  base_link), ``/tf`` (`tf2_msgs/msg/TFMessage`: the same transform), ``ground_truth/odom``
+  (`nav_msgs/msg/Odometry`: the robot's true pose in the building, map → base_link, as
+  Gazebo's p3d plugin offers it: x, y, the yaw, z the floor's slab (``floor * FLOOR_HEIGHT``),
+  the true forward speed and turn rate; for displays and tests, never for skills: situate's GUI
+  draws the robot from it mapped onto ``truth.pose``) and, last, ``/clock``
   (`rosgraph_msgs/msg/Clock`), all stamped with simulated time;
 - the arm and the speaker, as a robot driver's plain topics: subscribes to ``arm/press``
   (`std_msgs/msg/Int64`: push the button with that label, as the 2-D arm) and ``speaker/say``
@@ -41,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from situate.physics.world import SONARS, PhysicsWorld
+from situate.physics.world import FLOOR_HEIGHT, SONARS, PhysicsWorld
 from situate.ros2 import (
     QOS_DEFAULT,
     QOS_SENSOR_DATA,
@@ -75,7 +79,9 @@ class PhysicsNode:
         odom_topic: str = "odom",
         sonar_topic: str = "sonar",
         barcodes_topic: str = "barcodes",
+        truth_topic: str = "ground_truth/odom",
         odom_frame: str = "odom",
+        map_frame: str = "map",
         base_frame: str = "base_link",
         lockstep: str | None = None,
         resend_s: float = 1.0,
@@ -88,6 +94,7 @@ class PhysicsNode:
         self.stamped = stamped
         self.cmd_timeout = cmd_timeout
         self.odom_frame = odom_frame
+        self.map_frame = map_frame
         self.base_frame = base_frame
         self.lockstep = lockstep
         self.resend_s = resend_s
@@ -115,6 +122,7 @@ class PhysicsNode:
             barcodes_topic, "situate_msgs/msg/Barcodes", qos or QOS_SENSOR_DATA
         )
         self._odom = peer.publisher(odom_topic, "nav_msgs/msg/Odometry", *([qos] if qos else []))
+        self._truth = peer.publisher(truth_topic, "nav_msgs/msg/Odometry", *([qos] if qos else []))
         self._tf = peer.publisher("/tf", "tf2_msgs/msg/TFMessage", qos or QOS_TF)
         self._clock = peer.publisher("/clock", "rosgraph_msgs/msg/Clock", *([qos] if qos else []))
         self._counters = {
@@ -282,12 +290,19 @@ class PhysicsNode:
             odometry_msg(stamp_ns, self.odom_frame, self.base_frame, o.x, o.y, o.theta, o.v, o.w)
         )
         self._tf.publish(tf_msg(stamp_ns, self.odom_frame, self.base_frame, o.x, o.y, o.theta))
+        pose = self.world.pose()
+        v, w = self.world.velocity()
+        truth = odometry_msg(
+            stamp_ns, self.map_frame, self.base_frame, pose.x, pose.y, pose.theta, v, w
+        )
+        truth.pose.pose.position.z = pose.floor * FLOOR_HEIGHT
+        self._truth.publish(truth)
         attempts, presses = self.world.arm
         for name, value in (
             ("arm/attempts", attempts),
             ("arm/presses", presses),
             ("speaker/count", len(self.world.said)),
-            ("floor", self.world.pose().floor),
+            ("floor", pose.floor),
         ):
             self._counters[name].publish(msg("std_msgs/msg/Int64", data=value))
         self._clock.publish(self._clock_msg(stamp_ns))
@@ -338,7 +353,7 @@ class PhysicsNode:
         for e in (self._cmd, self._done, self._press_sub, self._say_sub):
             if e is not None:
                 e.close()
-        for p in (self._clock, self._odom, self._tf, self._sonar, self._barcodes):
+        for p in (self._clock, self._odom, self._truth, self._tf, self._sonar, self._barcodes):
             p.close()
         for p in self._counters.values():
             p.close()
