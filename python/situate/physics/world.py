@@ -72,6 +72,8 @@ BARCODE_RANGE = 5.0
 BARCODE_FOV = math.radians(60)
 #: Geom group of the robot's own geoms: the sonar's and the reader's rays do not see them.
 ROBOT_GROUP = 3
+#: Geom group of what is not there now (an open door's panel): no ray sees it.
+GONE_GROUP = 5
 #: A floor slab's thickness, m.
 SLAB = 0.1
 #: The height of the shafts' walls and the landing doors: up to the next floor's slab, m.
@@ -456,7 +458,9 @@ class PhysicsWorld:
             np.linspace(-cone / 2, cone / 2, s.rays) if s.rays > 1 else np.zeros(1, dtype=float)
         )
         self._ray_angles = (np.arange(SONARS)[:, None] * (2 * math.pi / SONARS) + offsets).ravel()
-        self._geomgroup = np.array([1 if g != ROBOT_GROUP else 0 for g in range(6)], np.uint8)
+        self._geomgroup = np.array(
+            [0 if g in (ROBOT_GROUP, GONE_GROUP) else 1 for g in range(6)], np.uint8
+        )
         self._command = (0.0, 0.0)
         self._moving = (0.0, 0.0)
         # The elevator: its logic (the 2-D simulator's), each car's servo, each landing door.
@@ -500,7 +504,7 @@ class PhysicsWorld:
         }
         self._closed: tuple[int, int] | None = None
         for geom, door in self._panels.values():
-            self._shut(geom, door, 0.0)
+            self._door(geom, door, closed=False)
         self._people: list[tuple[int, float, float]] = walking
         self._dead = np.zeros(SONARS, dtype=bool)
         self._dead[list(dead_sonars)] = True
@@ -693,6 +697,18 @@ class PhysicsWorld:
         m.geom_pos[geom][0] = x0 + ux * half
         m.geom_pos[geom][1] = y0 + uy * half
 
+    def _door(self, geom: int, seg: Segment, closed: bool) -> None:
+        """A map door's panel: across its opening when closed, else not there at all.
+
+        An open door's panel touches nothing and no ray sees it (as no geom at all: a stub of it
+        at the jamb would change the contacts of every run, people and closures or not).
+        """
+        m = self.model
+        self._shut(geom, seg, 1.0)
+        m.geom_contype[geom] = m.geom_conaffinity[geom] = 1 if closed else 0
+        m.geom_group[geom] = 0 if closed else GONE_GROUP
+        m.geom_rgba[geom][3] = 1.0 if closed else 0.0
+
     def _update_traffic(self) -> None:
         """The people where the logic has them; the closed door's panel shut, the others open."""
         if self._traffic is None:
@@ -705,7 +721,7 @@ class PhysicsWorld:
             for door in (self._closed, closed):
                 if door is not None and door in self._panels:
                     geom, seg = self._panels[door]
-                    self._shut(geom, seg, 1.0 if door == closed else 0.0)
+                    self._door(geom, seg, closed=door == closed)
             self._closed = closed
 
     def _integrate_odometry(self) -> None:
