@@ -358,7 +358,7 @@ def mjcf(building: Building, base: BaseSpec, timestep: float, people: int = 0) -
     <default class="car">
       <geom rgba="0.8 0.75 0.6 1" friction="1 0.005 0.0001" contype="2" conaffinity="2"/>
     </default>
-    <default class="robot"><geom contype="3" conaffinity="3"/></default>
+    <default class="robot"><geom contype="3" conaffinity="3" group="{ROBOT_GROUP}"/></default>
   </default>
   <worldbody>
     {"".join(geoms)}
