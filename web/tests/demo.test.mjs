@@ -3,32 +3,17 @@
 // script that gives up at once) makes the mission end quickly; the robot is the demo's own.
 
 import assert from "node:assert/strict";
-import { spawn } from "node:child_process";
 import { mkdtempSync, rmSync, writeFileSync } from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { after, before, describe, test } from "node:test";
-import { freePort, repo, screenshotPath, situateBin, startBrowser, stopBrowser, until } from "./harness.mjs";
+import { freePort, screenshotPath, situateBin, startBrowser, startProgram, stopBrowser, until } from "./harness.mjs";
 
 const python = process.env.SITUATE_PYTHON || "python3";
 
 /** Starts `situate demo ARGS` with the stand-in sequencer; collects its output. */
 function startDemo(sequencer, ...args) {
-  const child = spawn(situateBin, ["demo", "--sequencer", sequencer, "--python", python, ...args], {
-    cwd: repo,
-    stdio: ["ignore", "pipe", "pipe"],
-    env: { ...process.env, RUST_LOG: "warn,zenoh=error" },
-  });
-  const demo = { child, out: "", err: "", exit: null };
-  child.stdout.on("data", (d) => (demo.out += d));
-  child.stderr.on("data", (d) => (demo.err += d));
-  demo.exited = new Promise((resolve) =>
-    child.on("exit", (code, signal) => {
-      demo.exit = { code, signal };
-      resolve(demo.exit);
-    }),
-  );
-  return demo;
+  return startProgram(situateBin, ["demo", "--sequencer", sequencer, "--python", python, ...args]);
 }
 
 /** Waits for the demo to exit by itself (a generous bound turns a hang into a failure). */

@@ -207,6 +207,28 @@ export function cliDo(linkPort, ...args) {
 }
 
 /**
+ * Starts `program ARGS` in the repository (zenoh quiet); collects its output. The result has
+ * `child`, `out`, `err`, `exit` (null while it runs, then `{ code, signal }`) and `exited`.
+ */
+export function startProgram(program, args) {
+  const child = spawn(program, args, {
+    cwd: repo,
+    stdio: ["ignore", "pipe", "pipe"],
+    env: { ...process.env, RUST_LOG: "warn,zenoh=error" },
+  });
+  const p = { child, out: "", err: "", exit: null };
+  child.stdout.on("data", (d) => (p.out += d));
+  child.stderr.on("data", (d) => (p.err += d));
+  p.exited = new Promise((resolve) =>
+    child.on("exit", (code, signal) => {
+      p.exit = { code, signal };
+      resolve(p.exit);
+    }),
+  );
+  return p;
+}
+
+/**
  * Polls `f` until it returns a truthy value (or throws the last error after `timeoutMs`). The
  * bound only turns a hang into a failure: it is generous so that a loaded machine never trips it.
  */

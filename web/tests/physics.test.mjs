@@ -5,30 +5,14 @@
 // the physics puts it, on its floor (the pose itself has none), and follows it as it drives.
 
 import assert from "node:assert/strict";
-import { spawn } from "node:child_process";
 import { existsSync } from "node:fs";
 import path from "node:path";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, cliDo, freePort, openPage, repo, screenshotPath, situateBin, startBrowser, stopBrowser, until } from "./harness.mjs";
+import { cli, cliDo, freePort, openPage, repo, screenshotPath, situateBin, startBrowser, startProgram, stopBrowser, until } from "./harness.mjs";
 
 // The physics robot needs the Python package and MuJoCo: the checkout's .venv (scripts/python.sh).
 const venvPython = path.join(repo, ".venv", "bin", "python");
 const python = process.env.SITUATE_PYTHON || (existsSync(venvPython) ? venvPython : "python3");
-
-/** Starts a program; collects its output. */
-function start(program, args) {
-  const child = spawn(program, args, { cwd: repo, stdio: ["ignore", "pipe", "pipe"], env: { ...process.env, RUST_LOG: "warn,zenoh=error" } });
-  const p = { child, out: "", err: "", exit: null };
-  child.stdout.on("data", (d) => (p.out += d));
-  child.stderr.on("data", (d) => (p.err += d));
-  p.exited = new Promise((resolve) =>
-    child.on("exit", (code, signal) => {
-      p.exit = { code, signal };
-      resolve(p.exit);
-    }),
-  );
-  return p;
-}
 
 /** Stops a program with `signal`, killing it if it lingers. */
 async function stop(p, signal) {
@@ -58,10 +42,10 @@ describe("the world view of the physics robot", () => {
     linkPort = await freePort();
     while (linkPort === guiPort) linkPort = await freePort();
     const listen = `tcp/127.0.0.1:${linkPort}`;
-    robot = start(situateBin, ["run", "demo/physics.yaml", "--map", "maps/default.yaml", "--gui", `127.0.0.1:${guiPort}`, "--listen", listen]);
+    robot = startProgram(situateBin, ["run", "demo/physics.yaml", "--map", "maps/default.yaml", "--gui", `127.0.0.1:${guiPort}`, "--listen", listen]);
     await until(() => robot.err.includes("GUI on http") || robot.exit !== null, `the robot's GUI\nstderr:\n${robot.err}`, 120_000);
     assert.equal(robot.exit, null, `situate run exited\nstderr:\n${robot.err}`);
-    physics = start(python, ["-m", "situate.physics", "maps/default.yaml", "--connect", listen, "--lockstep", "/deliverybot/cycle", "--time-scale", "2"]);
+    physics = startProgram(python, ["-m", "situate.physics", "maps/default.yaml", "--connect", listen, "--lockstep", "/deliverybot/cycle", "--time-scale", "2"]);
     await until(() => physics.out.includes("physics robot in") || physics.exit !== null, `the physics robot\nstdout:\n${physics.out}\nstderr:\n${physics.err}`, 120_000);
     assert.equal(physics.exit, null, `python -m situate.physics exited\nstderr:\n${physics.err}`);
     browser = await startBrowser();
