@@ -18,7 +18,8 @@ import pytest
 from support import REPO, situate
 
 from situate.physics.building import Building
-from situate.physics.world import BaseSpec, PhysicsWorld, SonarSpec
+from situate.physics.model import BaseSpec
+from situate.physics.world import PhysicsWorld, SonarSpec
 
 # A 10 m by 6 m room on floor 0 with a door in its north wall (x 4.4..5.6) marked by barcode 10
 # at x 4.0; a box (x 6..7, y 1..2); barcode 11 on the east wall (x 10, y 3), facing west; a lobby

@@ -23,8 +23,8 @@ from typing import Any
 from support import REPO, STARTUP_S, situate, start_manager, zenoh_client
 
 from situate.physics import Building, PhysicsWorld
+from situate.physics.model import FLOOR_HEIGHT
 from situate.physics.node import PhysicsNode
-from situate.physics.world import FLOOR_HEIGHT
 from situate.ros2 import Ros2Peer
 
 ROBOT = """\

@@ -10,6 +10,7 @@ docs/physics.md. Needs the ``physics`` extra (``pip install 'situate[physics]'``
 """
 
 from situate.physics.building import Building
-from situate.physics.world import BaseSpec, Odometry, PhysicsWorld, Pose, SonarSpec
+from situate.physics.model import BaseSpec
+from situate.physics.world import Odometry, PhysicsWorld, Pose, SonarSpec
 
 __all__ = ["BaseSpec", "Building", "Odometry", "PhysicsWorld", "Pose", "SonarSpec"]

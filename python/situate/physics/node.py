@@ -45,7 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from situate.physics.world import FLOOR_HEIGHT, SONARS, PhysicsWorld
+from situate.physics.model import FLOOR_HEIGHT
+from situate.physics.world import SONARS, PhysicsWorld
 from situate.ros2 import (
     QOS_DEFAULT,
     QOS_SENSOR_DATA,
