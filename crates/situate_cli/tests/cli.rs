@@ -185,7 +185,11 @@ fn run_reports_a_yaml_syntax_error_with_its_position() {
     assert_eq!(
         lines(&stderr(&out)),
         [
-            format!("{}:3:1: error: invalid YAML: while parsing a flow sequence, expected ',' or ']'", shown(&path)),
+            format!(
+                "{}:2:9: error: missing `]` to close the `[` at line 2, column 9 (the YAML parser stopped at line 3, \
+                 column 1: while parsing a flow sequence, expected ',' or ']')",
+                shown(&path)
+            ),
             format!("{}: 1 error", shown(&path))
         ]
     );

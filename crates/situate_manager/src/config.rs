@@ -1215,7 +1215,8 @@ gui: {port: 8080}
     fn yaml_syntax_errors_are_reported_alone() {
         assert_eq!(
             error("robot: r\nskills: [a, b\n"),
-            "robot.yaml:3:1: error: invalid YAML: while parsing a flow sequence, expected ',' or ']'"
+            "robot.yaml:2:9: error: missing `]` to close the `[` at line 2, column 9 (the YAML parser stopped at line 3, \
+             column 1: while parsing a flow sequence, expected ',' or ']')"
         );
         assert_eq!(
             error("robot: r\ncycle:\n\trate_hz: 5\n"),

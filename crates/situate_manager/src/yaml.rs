@@ -445,14 +445,15 @@ pub fn parse(source: &str) -> Result<Spanned<Node>, ParseError> {
     // yaml-rust2 does not skip a byte-order mark; editors do not show one.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
     check_control_characters(source)?;
-    check_layout(source)?;
+    let mut brackets = Vec::new();
+    check_layout(source, &mut brackets)?;
     let mut parser = Parser::new_from_str(source);
     let mut stack: Vec<Frame> = Vec::new();
     let mut root: Option<Spanned<Node>> = None;
     let mut documents = 0usize;
     loop {
         let mut implicit_null = false;
-        let (event, mark) = parser.next_token().map_err(|e| scan_error(source, &e))?;
+        let (event, mark) = parser.next_token().map_err(|e| scan_error(source, &e, &brackets))?;
         let pos = Pos::from_marker(&mark);
         let done = match event {
             Event::StreamEnd => break,
@@ -606,7 +607,7 @@ enum Layout {
 ///   indentation.
 ///
 /// Lines whose only content is blanks or a comment may hold tabs.
-fn check_layout(source: &str) -> Result<(), ParseError> {
+fn check_layout(source: &str, brackets: &mut Vec<(char, Pos)>) -> Result<(), ParseError> {
     let mut mode = Layout::Plain;
     // Depth of `[` and `{`.
     let mut flow = 0usize;
@@ -735,11 +736,13 @@ fn check_layout(source: &str) -> Result<(), ParseError> {
                 }
                 '[' | '{' => {
                     flow += 1;
+                    brackets.push((c, at(i)));
                     (start, after) = (true, Some(c));
                     i += 1;
                 }
                 ']' | '}' => {
                     flow = flow.saturating_sub(1);
+                    brackets.push((c, at(i)));
                     (start, after) = (false, None);
                     i += 1;
                 }
@@ -861,12 +864,67 @@ fn tag_error(pos: Pos) -> ParseError {
     )
 }
 
+/// The flow collection a scanner error at `at` comes from not closing, if
+/// any: given the brackets [`check_layout`] found in order (outside quotes
+/// and comments), the first `[` or `{` closed by the wrong bracket before
+/// `at`, or else the innermost one still open at `at` when it was opened on
+/// an earlier line (or the scanner says it expected the closing bracket).
+fn unclosed_bracket(brackets: &[(char, Pos)], at: Pos, info: &str) -> Option<ParseError> {
+    let closer = |open: char| if open == '[' { ']' } else { '}' };
+    let mut open: Vec<(char, Pos)> = Vec::new();
+    for &(c, p) in brackets.iter().take_while(|(_, p)| (p.line, p.col) < (at.line, at.col)) {
+        match c {
+            '[' | '{' => open.push((c, p)),
+            _ => match open.pop() {
+                Some((o, q)) if closer(o) != c => {
+                    return Some(ParseError::new(
+                        q,
+                        format!(
+                            "missing `{}` to close the `{o}` at line {}, column {} (the `{c}` at line {}, column {} \
+                             comes first)",
+                            closer(o),
+                            q.line,
+                            q.col,
+                            p.line,
+                            p.col
+                        ),
+                    ));
+                }
+                _ => {}
+            },
+        }
+    }
+    let (o, q) = open.last().copied()?;
+    let expected = info.contains(&format!("'{}'", closer(o)));
+    if q.line >= at.line && !expected {
+        return None;
+    }
+    Some(ParseError::new(
+        q,
+        format!(
+            "missing `{}` to close the `{o}` at line {}, column {} (the YAML parser stopped at line {}, column {}: {info})",
+            closer(o),
+            q.line,
+            q.col,
+            at.line,
+            at.col
+        ),
+    ))
+}
+
 /// Turns a scanner error into a `ParseError`. Tabs in indentation get their
-/// own message, at the tab itself (the scanner reports the character after).
-fn scan_error(source: &str, e: &ScanError) -> ParseError {
+/// own message, at the tab itself (the scanner reports the character after);
+/// a `[` or `{` left open is named, at its own line and column (the scanner
+/// stops somewhere after it, often on the next line).
+fn scan_error(source: &str, e: &ScanError, brackets: &[(char, Pos)]) -> ParseError {
     let pos = Pos::from_marker(e.marker());
     if e.info().contains("unknown anchor") {
         return anchor_error(pos);
+    }
+    if !e.info().contains("quoted") && !e.info().contains("block scalar") && !e.info().contains("tab") {
+        if let Some(err) = unclosed_bracket(brackets, pos, e.info()) {
+            return err;
+        }
     }
     if e.info().contains("tab") {
         if let Some(line) = source.lines().nth(pos.line - 1) {
@@ -1003,10 +1061,50 @@ mod tests {
 
     #[test]
     fn syntax_errors_carry_the_scanner_position() {
-        assert_eq!(err("a: [1, 2\n"), "2:1: invalid YAML: while parsing a flow sequence, expected ',' or ']'");
+        assert_eq!(
+            err("a: [1, b: c: d]\n"),
+            "1:13: invalid YAML: while parsing a flow mapping, did not find expected ',' or '}'"
+        );
         assert_eq!(
             err("a: \"open\n"),
             "1:4: invalid YAML: while scanning a quoted scalar, found unexpected end of stream"
+        );
+    }
+
+    #[test]
+    fn a_bracket_left_open_is_named_where_it_was_opened() {
+        // The scanner stops on the next line; the `[` is on this one.
+        assert_eq!(
+            err("a: [1, 2\n"),
+            "1:4: missing `]` to close the `[` at line 1, column 4 (the YAML parser stopped at line 2, column 1: \
+             while parsing a flow sequence, expected ',' or ']')"
+        );
+        // In a block list, the next item.
+        assert_eq!(
+            err("w:\n  - [0, 0, 4.4, 0\n  - [1, 2]\n"),
+            "2:5: missing `]` to close the `[` at line 2, column 5 (the YAML parser stopped at line 3, column 5: \
+             while parsing a flow sequence, expected ',' or ']')"
+        );
+        // Closed by the wrong bracket: both places.
+        assert_eq!(
+            err("cars:\n  - {rect: [0, 0, 1, 1, door: south}\n  - {rect: [2, 0, 3, 1]}\n"),
+            "2:12: missing `]` to close the `[` at line 2, column 12 (the `}` at line 2, column 36 comes first)"
+        );
+        assert_eq!(
+            err("a: {b: 1\nc: 2\n"),
+            "1:4: missing `}` to close the `{` at line 1, column 4 (the YAML parser stopped at line 2, column 2: \
+             while parsing a flow mapping, did not find expected ',' or '}')"
+        );
+        // Brackets in quotes and comments are not brackets; a list may span lines.
+        assert_eq!(
+            err("a: '['  # [\nb: [1,\n  2]\nc: [3\n"),
+            "4:4: missing `]` to close the `[` at line 4, column 4 (the YAML parser stopped at line 5, column 1: \
+             while parsing a flow sequence, expected ',' or ']')"
+        );
+        // A quote left open inside a list is the quote's error.
+        assert_eq!(
+            err("a: [1, \"x]\n"),
+            "1:8: invalid YAML: while scanning a quoted scalar, found unexpected end of stream"
         );
     }
 
@@ -1128,7 +1226,8 @@ mod tests {
         // Tabs and fullwidth characters the file may hold do not shift what follows.
         assert_eq!(
             err("# ：\t：\na: \"：\t\"\t# \t\nb: [1, 2\n"),
-            "4:1: invalid YAML: while parsing a flow sequence, expected ',' or ']'"
+            "3:4: missing `]` to close the `[` at line 3, column 4 (the YAML parser stopped at line 4, column 1: \
+             while parsing a flow sequence, expected ',' or ']')"
         );
         assert_eq!(
             err("a: '：\t'\nb: ：\n"),
