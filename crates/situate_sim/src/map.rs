@@ -321,6 +321,43 @@ impl Map {
         out
     }
 
+    /// Every barcode of the map with the element it belongs to, named as
+    /// errors name it (`floor 0, door 1 (lab), barcode`, `floor 2, barcode 3`,
+    /// `floor 1, lobby`, `floor 4, office, barcode`, `elevator, car 2`).
+    pub fn named_barcodes(&self) -> Vec<(String, Barcode)> {
+        let mut out = Vec::new();
+        for f in &self.floors {
+            for (i, b) in f.barcodes.iter().enumerate() {
+                out.push((format!("floor {}, barcode {}", f.level, i + 1), b.clone()));
+            }
+            for (i, d) in f.doors.iter().enumerate() {
+                if let Some(b) = &d.barcode {
+                    let door = if d.name.is_empty() {
+                        format!("floor {}, door {}", f.level, i + 1)
+                    } else {
+                        format!("floor {}, door {} ({})", f.level, i + 1, d.name)
+                    };
+                    out.push((format!("{door}, barcode"), b.clone()));
+                }
+            }
+            if let Some(l) = &f.lobby {
+                let b = Barcode { id: l.barcode, at: l.button, facing: Some(l.facing), line: l.line };
+                out.push((format!("floor {}, lobby", f.level), b));
+            }
+            if let Some(o) = &f.office {
+                out.push((format!("floor {}, office, barcode", f.level), o.barcode.clone()));
+            }
+        }
+        for (k, c) in self.elevator.cars.iter().enumerate() {
+            let (at, facing) = c.panel();
+            out.push((
+                format!("elevator, car {}", k + 1),
+                Barcode { id: c.barcode, at, facing: Some(facing), line: c.line },
+            ));
+        }
+        out
+    }
+
     /// The world view for the GUI (shape in `docs/maps.md`).
     pub fn world_json(&self) -> Json {
         let seg = |s: &Seg| json!([s.a.x, s.a.y, s.b.x, s.b.y]);
@@ -474,16 +511,24 @@ impl Map {
     fn check(&self, r: &Reader<'_>) -> Result<(), MapError> {
         // Whole-map checks carry line 1: they concern several elements.
         let at = Pos::START;
-        let mut seen: BTreeMap<i64, String> = BTreeMap::new();
-        for (level, b) in self.all_barcodes() {
-            let place = match level {
-                Some(l) => format!("floor {l}"),
-                None => "the elevator".to_string(),
-            };
-            if let Some(first) = seen.insert(b.id, place.clone()) {
+        // Each id once: a second use is reported on its line, naming both elements and lines.
+        let mut named = self.named_barcodes();
+        named.sort_by_key(|(_, b)| b.line);
+        let mut seen: BTreeMap<i64, (String, usize)> = BTreeMap::new();
+        for (el, b) in named {
+            if let Some((first, line)) = seen.get(&b.id) {
                 let pos = Pos::new(b.line.max(1), 1);
-                return Err(r.err(pos, "barcodes", format!("barcode {} is used twice ({first} and {place})", b.id)));
+                return Err(r.err(
+                    pos,
+                    &el,
+                    format!(
+                        "barcode {} is used twice: by {first} on line {line} and by {el} on line {}",
+                        b.id,
+                        b.line.max(1)
+                    ),
+                ));
             }
+            seen.insert(b.id, (el, b.line.max(1)));
         }
         let m = &self.mission;
         let line = |key: &str| Pos::new(m.lines.get(key).copied().unwrap_or(1), 1);

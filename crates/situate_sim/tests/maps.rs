@@ -128,8 +128,59 @@ fn duplicate_levels_overlapping_cars_and_duplicate_barcodes_are_refused() {
     let (e, _) = broken("rect: [3.2, 4.0, 5.2, 6.0]", "rect: [2.2, 4.0, 4.2, 6.0]");
     assert!(e.contains("elevator, car 2: overlaps car 1"), "{e}");
     let (e, line) = broken("barcode: 31}", "barcode: 30}");
-    assert!(e.contains("barcode 30 is used twice (floor 0 and floor 1)"), "{e}");
-    assert_eq!(line, line_of(&small_text(), "barcode: 31}"));
+    let (first, second) = (line_of(&small_text(), "barcode: 30}"), line_of(&small_text(), "barcode: 31}"));
+    assert_eq!(
+        e,
+        format!(
+            "maps/x.yaml:{second}: floor 1, lobby: barcode 30 is used twice: by floor 0, lobby on line {first} and by \
+             floor 1, lobby on line {second}"
+        )
+    );
+    assert_eq!(line, second);
+}
+
+#[test]
+fn a_barcode_used_twice_on_one_floor_names_both_places() {
+    // Once "(floor 0 and floor 0)": now both elements and both lines.
+    let at = line_of(&small_text(), "    lobby: {button: [3.0, 3.98], facing_deg: -90, barcode: 30}");
+    let (e, line) = broken(
+        "    lobby: {button: [3.0, 3.98], facing_deg: -90, barcode: 30}",
+        "    lobby: {button: [3.0, 3.98], facing_deg: -90, barcode: 30}\n    barcodes:\n      - {id: 13, at: [0.02, 1], \
+         facing_deg: 0}\n      - {id: 13, at: [5.98, 1], facing_deg: 180}",
+    );
+    assert_eq!(
+        e,
+        format!(
+            "maps/x.yaml:{}: floor 0, barcode 2: barcode 13 is used twice: by floor 0, barcode 1 on line {} and by \
+             floor 0, barcode 2 on line {}",
+            at + 3,
+            at + 2,
+            at + 3
+        )
+    );
+    assert_eq!(line, at + 3);
+    // A car's barcode again on a floor.
+    let (e, _) = broken("{id: 10, at: [4.25, 0.02]", "{id: 202, at: [4.25, 0.02]");
+    assert!(
+        e.contains(
+            "barcode 202 is used twice: by elevator, car 2 on line 14 and by floor 0, door 1 (lab), barcode on line 26"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_bracket_left_open_is_named_at_its_line_and_column() {
+    let at = line_of(&small_text(), "- [2.8, 4, 3.2, 4]");
+    let (e, line) = broken("- [2.8, 4, 3.2, 4]", "- [2.8, 4, 3.2, 4");
+    assert_eq!(line, at);
+    assert!(
+        e.starts_with(&format!(
+            "maps/x.yaml:{at}:9: missing `]` to close the `[` at line {at}, column 9 (the YAML parser stopped at line {}",
+            at + 2
+        )),
+        "{e}"
+    );
 }
 
 #[test]
