@@ -92,6 +92,29 @@ float64[] bearing
 # How far each is from the base's centre, m.
 float64[] distance
 """,
+    "situate_msgs/msg/People": """\
+# The people walking in a simulated building now: situate's `truth.people` signal
+# (docs/robot-signals.md), a simulator's ground truth for displays and tests (no skill reads it).
+# The three arrays have one element per person.
+std_msgs/Header header
+
+# Where each person stands, m, in the building's frame (the map's).
+float64[] x
+float64[] y
+# The floor each is on (the map's level).
+int64[] floor
+""",
+    "situate_msgs/msg/Cars": """\
+# The elevator's cars now: situate's `truth.cars` signal (docs/robot-signals.md), a simulator's
+# ground truth for displays and tests (no skill reads it). The two arrays have one element per
+# car, in the map's order.
+std_msgs/Header header
+
+# Where each car is, in floors (the map's level; fractional while it moves).
+float64[] floor
+# How far each car's door is open: 0 closed, 1 open.
+float64[] door
+""",
 }
 
 

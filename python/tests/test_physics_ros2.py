@@ -251,15 +251,22 @@ def test_situate_msgs_is_the_package_a_ros_2_system_builds() -> None:
         store = get_typestore(Stores.ROS2_JAZZY)
         store.register(get_types_from_msg(text, name))
         assert type_hash(name) == store.hash_rihs01(name)
-    assert "msg/Barcodes.msg" in (package / "CMakeLists.txt").read_text()
+    built = (package / "CMakeLists.txt").read_text()
+    assert sorted(f"msg/{f.name}" for f in (package / "msg").iterdir()) == sorted(
+        f"msg/{name.rsplit('/', 1)[1]}.msg" for name in SITUATE_MSGS
+    )
+    for name in SITUATE_MSGS:
+        assert f"msg/{name.rsplit('/', 1)[1]}.msg" in built, name
 
 
-def test_the_ground_truth_topic_is_the_robots_truth_pose() -> None:
-    """``ground_truth/odom`` is the true pose (Gazebo's p3d), and demo/physics.yaml maps it.
+def test_the_ground_truth_topics_are_the_robots_truth_signals() -> None:
+    """``ground_truth/*`` are the world's truth, and demo/physics.yaml maps them.
 
-    The node publishes the robot's true pose in the building each tick (map → base_link, z the
-    floor's slab, the true speeds), and the demo's robot file makes it ``truth.pose``, the GUI's
-    world view's robot, with its floor in ``floor``: they follow the physics robot as it drives.
+    The node publishes the robot's true pose in the building each tick on ``ground_truth/odom``
+    (map → base_link, z the floor's slab, the true speeds: Gazebo's p3d), the people walking on
+    ``ground_truth/people`` and the cars on ``ground_truth/cars``; the demo's robot file makes
+    them ``truth.pose`` (with its floor in ``floor``), ``truth.people`` and ``truth.cars``, the
+    GUI's world view's signals, as the 2-D simulator writes them: they follow the world.
     """
     robot = start_manager(REPO / "demo" / "physics.yaml", "deliverybot")
     try:
@@ -282,7 +289,7 @@ def test_the_ground_truth_topic_is_the_robots_truth_pose() -> None:
                 "/ground_truth/odom", "nav_msgs/msg/Odometry", on_truth, ordered=True
             )
             peer = Ros2Peer(s, node="physics")
-            world = PhysicsWorld(Building.load(REPO / "maps" / "default.yaml"), seed=2)
+            world = PhysicsWorld(Building.load(REPO / "maps" / "default.yaml"), seed=2, people=2)
             node = PhysicsNode(world, peer, rate_hz=10, lockstep="/deliverybot/cycle")
             try:
                 # The watcher's subscription is known before the first tick is published.
@@ -294,11 +301,15 @@ def test_the_ground_truth_topic_is_the_robots_truth_pose() -> None:
                     "the watcher's subscription to /ground_truth/odom",
                 )
                 poses = [world.pose()]
+                people = [world.people()]
+                cars = [world.cars()]
                 assert poses[0].floor == -1, poses
                 for k in range(1, 101):
                     node.tick()
                     p = world.pose()
                     poses.append(p)
+                    people.append(world.people())
+                    cars.append(world.cars())
                     if k % 25:
                         continue
                     # The message of tick k: the pose and speeds the world has now.
@@ -323,13 +334,28 @@ def test_the_ground_truth_topic_is_the_robots_truth_pose() -> None:
                     assert (value["x"], value["y"]) == (then.x, then.y), (pose, then)
                     assert abs(math.remainder(value["theta"] - then.theta, 2 * math.pi)) < 1e-9
                     assert query("floor")["value"] == then.floor == -1
+                    walking = query("truth.people")
+                    assert walking["cycle"] == k - 1, walking
+                    assert walking["value"] == {
+                        "x": [x for _, x, _ in people[k - 1]],
+                        "y": [y for _, _, y in people[k - 1]],
+                        "floor": [f for f, _, _ in people[k - 1]],
+                    }, (walking, people[k - 1])
+                    shown = query("truth.cars")["value"]
+                    assert shown == {
+                        "floor": [c.position for c in cars[k - 1]],
+                        "door": [c.door for c in cars[k - 1]],
+                    }, (shown, cars[k - 1])
                 assert not watch.problems, watch.problems
             finally:
                 node.close()
                 peer.close()
                 watcher.close()
-        # The robot drove, and truth.pose followed it.
+        # The robot drove, and truth.pose followed it; people walked, on several floors.
         assert math.dist((poses[-1].x, poses[-1].y), (poses[0].x, poses[0].y)) > 0.3, poses
+        assert people[-1] != people[0], people
+        assert len({f for f, _, _ in people[0]}) > 1, people[0]
+        assert len(cars[0]) == len(Building.load(REPO / "maps" / "default.yaml").cars) > 1
     finally:
         err = robot.stop()
     assert "panicked" not in err, err

@@ -347,6 +347,7 @@ export class WorldView {
       }
     });
     // People on this floor: small circles.
+    let peopleDrawn = 0;
     if (isObject(people) && Array.isArray(people["x"]) && Array.isArray(people["y"]) && Array.isArray(people["floor"])) {
       const [px, py, pf] = [people["x"], people["y"], people["floor"]];
       c.fillStyle = "rgba(120, 60, 160, 0.7)";
@@ -355,6 +356,7 @@ export class WorldView {
         c.beginPath();
         c.arc(X(num(px[i])), Y(num(py[i])), Math.max(3 * dpr, 0.25 * scale), 0, 2 * Math.PI);
         c.fill();
+        peopleDrawn++;
       }
     }
     // The trail, the sonar rays, the robot.
@@ -372,6 +374,7 @@ export class WorldView {
     Object.assign(this.canvas.dataset, {
       labels: JSON.stringify(labels),
       trail: JSON.stringify(counts),
+      people: String(peopleDrawn),
       trailSince: this.trailSince === null ? "" : String(this.trailSince),
       floor: String(floor),
       zoom: this.zoom.toFixed(3),

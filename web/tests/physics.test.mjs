@@ -1,8 +1,10 @@
 // The world view of a ROS 2 robot: the physics robot (`python -m situate.physics`, MuJoCo, over
-// rmw_zenoh on situate's link) publishes its true pose on `ground_truth/odom`, and the delivery
-// robot of demo/physics.yaml, run by `situate run --map`, maps it onto `truth.pose` and the
-// altimeter's `/floor` onto `floor`. The GUI draws the building from the map and the robot where
-// the physics puts it, on its floor (the pose itself has none), and follows it as it drives.
+// rmw_zenoh on situate's link) publishes its true pose on `ground_truth/odom`, its people on
+// `ground_truth/people` and its cars on `ground_truth/cars`, and the delivery robot of
+// demo/physics.yaml, run by `situate run --map`, maps them onto `truth.pose`, `truth.people`
+// and `truth.cars`, and the altimeter's `/floor` onto `floor`. The GUI draws the building from
+// the map, the robot where the physics puts it, on its floor (the pose itself has none), the
+// people walking there and the cars' floors and doors, and follows the robot as it drives.
 
 import assert from "node:assert/strict";
 import { existsSync } from "node:fs";
@@ -45,7 +47,7 @@ describe("the world view of the physics robot", () => {
     robot = startProgram(situateBin, ["run", "demo/physics.yaml", "--map", "maps/default.yaml", "--gui", `127.0.0.1:${guiPort}`, "--listen", listen]);
     await until(() => robot.err.includes("GUI on http") || robot.exit !== null, `the robot's GUI\nstderr:\n${robot.err}`, 120_000);
     assert.equal(robot.exit, null, `situate run exited\nstderr:\n${robot.err}`);
-    physics = startProgram(python, ["-m", "situate.physics", "maps/default.yaml", "--connect", listen, "--lockstep", "/deliverybot/cycle", "--time-scale", "2"]);
+    physics = startProgram(python, ["-m", "situate.physics", "maps/default.yaml", "--connect", listen, "--lockstep", "/deliverybot/cycle", "--time-scale", "2", "--people", "2"]);
     await until(() => physics.out.includes("physics robot in") || physics.exit !== null, `the physics robot\nstdout:\n${physics.out}\nstderr:\n${physics.err}`, 120_000);
     assert.equal(physics.exit, null, `python -m situate.physics exited\nstderr:\n${physics.err}`);
     browser = await startBrowser();
@@ -93,6 +95,27 @@ describe("the world view of the physics robot", () => {
       });
     });
     assert.ok(ring.filter(([r, g, b]) => r > 150 && g < 90 && b < 90).length >= 5, `the robot's disc is red: ${JSON.stringify(ring)}`);
+  });
+
+  test("the people walking on the robot's floor and the cars' floors and doors are drawn", async () => {
+    const canvas = page.getByTestId("world-canvas");
+    // The people on the floor shown (the robot's, -1) are those truth.people has there.
+    const walking = await until(async () => {
+      const q = await cli(linkPort, "query", "truth.people");
+      return Array.isArray(q.value?.floor) && q.value.floor.length > 0 && q.value;
+    }, "truth.people from ground_truth/people", 120_000);
+    const here = walking.floor.filter((f) => f === -1).length;
+    assert.ok(here > 0, `people on floor -1: ${JSON.stringify(walking)}`);
+    await until(async () => Number(await canvas.getAttribute("data-people")) === here, `${here} people drawn on floor -1`);
+    // Each car of the map is labelled with its floor and its door's state, from truth.cars.
+    const cars = (await cli(linkPort, "query", "truth.cars")).value;
+    assert.ok(Array.isArray(cars.floor) && cars.floor.length === cars.door.length && cars.floor.length > 1, JSON.stringify(cars));
+    const labels = await until(async () => {
+      const ls = JSON.parse((await canvas.getAttribute("data-labels")) ?? "[]").map((l) => l.text);
+      return ls.filter((t) => t.startsWith("fl ")).length === cars.floor.length && ls;
+    }, "a floor label for every car");
+    for (let i = 1; i <= cars.floor.length; i++) assert.ok(labels.includes(`car ${i}`), `car ${i}: ${JSON.stringify(labels)}`);
+    assert.ok(labels.some((t) => t === "open" || t === "closed" || t.endsWith(" %")), `the doors' states: ${JSON.stringify(labels)}`);
   });
 
   test("the view follows the robot as the skills drive it, and its trail grows on its floor", async () => {

@@ -84,6 +84,16 @@ pub fn signal_type(ty: MsgType, ring: Option<usize>) -> SignalType {
             ("bearing".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
             ("distance".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
         ]))),
+        // A simulator's ground truth, as the 2-D simulator's `sim.truth` writes it.
+        MsgType::People => SignalType::Record(Arc::new(RecordType::new(vec![
+            ("x".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
+            ("y".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
+            ("floor".to_string(), SignalType::Array { elem: ElemType::I64, len: None }),
+        ]))),
+        MsgType::Cars => SignalType::Record(Arc::new(RecordType::new(vec![
+            ("floor".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
+            ("door".to_string(), SignalType::Array { elem: ElemType::F64, len: None }),
+        ]))),
         MsgType::Int64 => SignalType::I64,
         MsgType::Bool => SignalType::Bool,
         MsgType::String => SignalType::Str,
@@ -392,6 +402,25 @@ impl Reader {
                 }
                 self.record([Value::I64s(m.ids.into()), Value::F64s(m.bearing.into()), Value::F64s(m.distance.into())])
             }
+            MsgType::People => {
+                let m: msgs::People = msgs::decode(payload).map_err(e)?;
+                if m.x.len() != m.y.len() || m.x.len() != m.floor.len() {
+                    return Err(format!(
+                        "x, y and floor differ in length ({}, {}, {})",
+                        m.x.len(),
+                        m.y.len(),
+                        m.floor.len()
+                    ));
+                }
+                self.record([Value::F64s(m.x.into()), Value::F64s(m.y.into()), Value::I64s(m.floor.into())])
+            }
+            MsgType::Cars => {
+                let m: msgs::Cars = msgs::decode(payload).map_err(e)?;
+                if m.floor.len() != m.door.len() {
+                    return Err(format!("floor and door differ in length ({}, {})", m.floor.len(), m.door.len()));
+                }
+                self.record([Value::F64s(m.floor.into()), Value::F64s(m.door.into())])
+            }
             MsgType::Float64 => Value::F64(msgs::decode::<msgs::Float64>(payload).map_err(e)?.data),
             MsgType::Int64 => Value::I64(msgs::decode::<msgs::Int64>(payload).map_err(e)?.data),
             MsgType::Bool => Value::Bool(msgs::decode::<msgs::Bool>(payload).map_err(e)?.data),
@@ -512,6 +541,14 @@ mod tests {
                 })
                 .unwrap(),
             ),
+            (
+                MsgType::People,
+                encode(&msgs::People { x: vec![1.0], y: vec![2.0], floor: vec![3], ..Default::default() }).unwrap(),
+            ),
+            (
+                MsgType::Cars,
+                encode(&msgs::Cars { floor: vec![0.5, 4.0], door: vec![0.0, 1.0], ..Default::default() }).unwrap(),
+            ),
             (MsgType::Float64, encode(&msgs::Float64 { data: 2.5 }).unwrap()),
             (MsgType::Int64, encode(&msgs::Int64 { data: -3 }).unwrap()),
             (MsgType::Bool, encode(&msgs::Bool { data: true }).unwrap()),
@@ -526,6 +563,32 @@ mod tests {
                 assert!(reader.read(&payload[..cut]).is_err(), "{ty:?} cut at {cut}");
             }
         }
+    }
+
+    #[test]
+    fn arrays_of_different_lengths_are_a_message_that_cannot_be_read() {
+        let read = |ty: MsgType, payload: Vec<u8>| {
+            let topic = TopicConfig {
+                signal: "s".into(),
+                topic: "t".into(),
+                msg_type: ty,
+                direction: Direction::In,
+                name: None,
+                ring: None,
+                period_ms: None,
+                frame_id: None,
+                child_frame_id: None,
+                range_min: None,
+                range_max: None,
+            };
+            Reader::new(&topic, "/t", "ros2_t", String::new(), Arc::new(Inbox::default())).read(&payload)
+        };
+        let people = msgs::People { x: vec![1.0, 2.0], y: vec![2.0], floor: vec![3], ..Default::default() };
+        let err = read(MsgType::People, encode(&people).unwrap()).unwrap_err();
+        assert_eq!(err, "x, y and floor differ in length (2, 1, 1)");
+        let cars = msgs::Cars { floor: vec![0.5], door: vec![], ..Default::default() };
+        let err = read(MsgType::Cars, encode(&cars).unwrap()).unwrap_err();
+        assert_eq!(err, "floor and door differ in length (1, 0)");
     }
 
     #[test]

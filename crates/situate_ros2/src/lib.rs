@@ -538,6 +538,11 @@ pub fn to_payload_stamped(t: &TopicConfig, value: &Value, stamp: msgs::Time) -> 
             Value::Str(text) => encode(&StringMsg { data: text.to_string() }),
             _ => return None,
         },
-        MsgType::Imu | MsgType::JointState | MsgType::BatteryState | MsgType::Barcodes => return None,
+        MsgType::Imu
+        | MsgType::JointState
+        | MsgType::BatteryState
+        | MsgType::Barcodes
+        | MsgType::People
+        | MsgType::Cars => return None,
     })
 }

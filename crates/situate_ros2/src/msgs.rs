@@ -57,6 +57,14 @@ pub enum MsgType {
     /// `barcodes` record `{ids: i64[], bearing: f64[], distance: f64[]}`: a barcode reader's.
     #[serde(rename = "situate_msgs/msg/Barcodes")]
     Barcodes,
+    /// `situate_msgs/msg/People` (in only) → a simulator's `truth.people` record `{x: f64[],
+    /// y: f64[], floor: i64[]}`: the people walking in the building (ground truth, for displays).
+    #[serde(rename = "situate_msgs/msg/People")]
+    People,
+    /// `situate_msgs/msg/Cars` (in only) → a simulator's `truth.cars` record `{floor: f64[],
+    /// door: f64[]}`: each elevator car's position in floors and its door's opening 0..1.
+    #[serde(rename = "situate_msgs/msg/Cars")]
+    Cars,
     /// `std_msgs/msg/Float64` ⇄ an `f64`.
     #[serde(rename = "std_msgs/msg/Float64")]
     Float64,
@@ -73,7 +81,7 @@ pub enum MsgType {
 
 impl MsgType {
     /// Every type, for messages that list them.
-    pub const ALL: [MsgType; 14] = [
+    pub const ALL: [MsgType; 16] = [
         MsgType::Twist,
         MsgType::TwistStamped,
         MsgType::Odometry,
@@ -84,6 +92,8 @@ impl MsgType {
         MsgType::JointState,
         MsgType::BatteryState,
         MsgType::Barcodes,
+        MsgType::People,
+        MsgType::Cars,
         MsgType::Float64,
         MsgType::Int64,
         MsgType::Bool,
@@ -103,6 +113,8 @@ impl MsgType {
             MsgType::JointState => "sensor_msgs/msg/JointState",
             MsgType::BatteryState => "sensor_msgs/msg/BatteryState",
             MsgType::Barcodes => "situate_msgs/msg/Barcodes",
+            MsgType::People => "situate_msgs/msg/People",
+            MsgType::Cars => "situate_msgs/msg/Cars",
             MsgType::Float64 => "std_msgs/msg/Float64",
             MsgType::Int64 => "std_msgs/msg/Int64",
             MsgType::Bool => "std_msgs/msg/Bool",
@@ -133,8 +145,10 @@ impl MsgType {
             MsgType::Imu => "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b",
             MsgType::JointState => "RIHS01_a13ee3a330e346c9d87b5aa18d24e11690752bd33a0350f11c5882bc9179260e",
             MsgType::BatteryState => "RIHS01_4bee5dfce981c98faa6828b868307a0a73f992ed0789f374ee96c8f840e69741",
-            // From ros2/situate_msgs/msg/Barcodes.msg (checked against rosbags in test_physics_ros2.py).
+            // From ros2/situate_msgs/msg/*.msg (checked against rosbags in test_physics_ros2.py).
             MsgType::Barcodes => "RIHS01_8158355b2018e7e7259d57dacba88095bc75e52a4f153b5debb188d3c13913ea",
+            MsgType::People => "RIHS01_55fe99158076d9d56ed5b425072f64b8ba1bddb0da49b6c0366a458f90ef1a96",
+            MsgType::Cars => "RIHS01_0931a9117bfc02083261a98d8ae7c041bd578fea6e966e86ae5abedd41a2726c",
             MsgType::Float64 => "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a",
             MsgType::Int64 => "RIHS01_8cd1048c2f186b6bd9a92472dc1ce51723c0833a221e2b7aecfff111774f4b49",
             MsgType::Bool => "RIHS01_feb91e995ff9ebd09c0cb3d2aed18b11077585839fb5db80193b62d74528f6c9",
@@ -144,7 +158,15 @@ impl MsgType {
 
     /// Whether a signal can be published as this type (a topic out).
     pub fn can_publish(self) -> bool {
-        !matches!(self, MsgType::Imu | MsgType::JointState | MsgType::BatteryState | MsgType::Barcodes)
+        !matches!(
+            self,
+            MsgType::Imu
+                | MsgType::JointState
+                | MsgType::BatteryState
+                | MsgType::Barcodes
+                | MsgType::People
+                | MsgType::Cars
+        )
     }
 
     /// Whether this type can feed a signal (a topic in).
@@ -163,9 +185,12 @@ impl MsgType {
             MsgType::Int64 => "an i64",
             MsgType::Bool => "a bool",
             MsgType::String => "a string",
-            MsgType::Imu | MsgType::JointState | MsgType::BatteryState | MsgType::Barcodes => {
-                "nothing: it is read, never published"
-            }
+            MsgType::Imu
+            | MsgType::JointState
+            | MsgType::BatteryState
+            | MsgType::Barcodes
+            | MsgType::People
+            | MsgType::Cars => "nothing: it is read, never published",
         }
     }
 }
@@ -437,6 +462,23 @@ pub struct Barcodes {
     pub ids: Vec<i64>,
     pub bearing: Vec<f64>,
     pub distance: Vec<f64>,
+}
+
+/// `situate_msgs/msg/People` (`ros2/situate_msgs/msg/People.msg`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct People {
+    pub header: Header,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub floor: Vec<i64>,
+}
+
+/// `situate_msgs/msg/Cars` (`ros2/situate_msgs/msg/Cars.msg`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Cars {
+    pub header: Header,
+    pub floor: Vec<f64>,
+    pub door: Vec<f64>,
 }
 
 /// `rosgraph_msgs/msg/Clock`.

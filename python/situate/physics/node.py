@@ -13,7 +13,11 @@ What a Gazebo robot offers a ROS 2 stack, on the topics a ROS 2 robot driver use
   (`nav_msgs/msg/Odometry`: the robot's true pose in the building, map → base_link, as
   Gazebo's p3d plugin offers it: x, y, the yaw, z the floor's slab (``floor * FLOOR_HEIGHT``),
   the true forward speed and turn rate; for displays and tests, never for skills: situate's GUI
-  draws the robot from it mapped onto ``truth.pose``) and, last, ``/clock``
+  draws the robot from it mapped onto ``truth.pose``), ``ground_truth/people``
+  (`situate_msgs/msg/People`: where each person walking in the building is, and on which floor)
+  and ``ground_truth/cars`` (`situate_msgs/msg/Cars`: each car's position in floors and its door's
+  opening; ``truth.people`` and ``truth.cars`` for the GUI, as the 2-D simulator's) and, last,
+  ``/clock``
   (`rosgraph_msgs/msg/Clock`), all stamped with simulated time;
 - the arm and the speaker, as a robot driver's plain topics: subscribes to ``arm/press``
   (`std_msgs/msg/Int64`: push the button with that label, as the 2-D arm) and ``speaker/say``
@@ -81,6 +85,8 @@ class PhysicsNode:
         sonar_topic: str = "sonar",
         barcodes_topic: str = "barcodes",
         truth_topic: str = "ground_truth/odom",
+        people_topic: str = "ground_truth/people",
+        cars_topic: str = "ground_truth/cars",
         odom_frame: str = "odom",
         map_frame: str = "map",
         base_frame: str = "base_link",
@@ -124,6 +130,10 @@ class PhysicsNode:
         )
         self._odom = peer.publisher(odom_topic, "nav_msgs/msg/Odometry", *([qos] if qos else []))
         self._truth = peer.publisher(truth_topic, "nav_msgs/msg/Odometry", *([qos] if qos else []))
+        self._people = peer.publisher(
+            people_topic, "situate_msgs/msg/People", *([qos] if qos else [])
+        )
+        self._cars = peer.publisher(cars_topic, "situate_msgs/msg/Cars", *([qos] if qos else []))
         self._tf = peer.publisher("/tf", "tf2_msgs/msg/TFMessage", qos or QOS_TF)
         self._clock = peer.publisher("/clock", "rosgraph_msgs/msg/Clock", *([qos] if qos else []))
         self._counters = {
@@ -298,6 +308,25 @@ class PhysicsNode:
         )
         truth.pose.pose.position.z = pose.floor * FLOOR_HEIGHT
         self._truth.publish(truth)
+        people = self.world.people()
+        self._people.publish(
+            msg(
+                "situate_msgs/msg/People",
+                header=header(stamp_ns, self.map_frame),
+                x=np.array([p[1] for p in people], dtype=np.float64),
+                y=np.array([p[2] for p in people], dtype=np.float64),
+                floor=np.array([p[0] for p in people], dtype=np.int64),
+            )
+        )
+        cars = self.world.cars()
+        self._cars.publish(
+            msg(
+                "situate_msgs/msg/Cars",
+                header=header(stamp_ns, self.map_frame),
+                floor=np.array([c.position for c in cars], dtype=np.float64),
+                door=np.array([c.door for c in cars], dtype=np.float64),
+            )
+        )
         attempts, presses = self.world.arm
         for name, value in (
             ("arm/attempts", attempts),
@@ -354,7 +383,16 @@ class PhysicsNode:
         for e in (self._cmd, self._done, self._press_sub, self._say_sub):
             if e is not None:
                 e.close()
-        for p in (self._clock, self._odom, self._truth, self._tf, self._sonar, self._barcodes):
+        for p in (
+            self._clock,
+            self._odom,
+            self._truth,
+            self._people,
+            self._cars,
+            self._tf,
+            self._sonar,
+            self._barcodes,
+        ):
             p.close()
         for p in self._counters.values():
             p.close()
