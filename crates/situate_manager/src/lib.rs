@@ -21,6 +21,7 @@ pub mod monitor;
 pub mod registry;
 mod runner;
 pub mod spec;
+mod starved;
 pub mod supervise;
 pub mod yaml;
 

@@ -279,6 +279,9 @@ pub struct Manager {
     parts: Vec<Value>,
     /// When each instance's in-cycle body started running (for the watchdog).
     clocks: Arc<[BodyClock]>,
+    /// On the simulated clock, spawned, serial: how long the cycle thread waited for a CPU, which
+    /// does not count against a body's deadline (`crate::starved`).
+    starved: Option<Arc<crate::starved::Starvation>>,
     /// Which cycle thread owns the manager when spawned: bumped when the
     /// watchdog leaves a stuck thread behind, so that thread, if its body
     /// ever returns, knows it is no longer the cycle.
@@ -399,6 +402,7 @@ impl Manager {
             spare_frame: None,
             parts: Vec::new(),
             clocks,
+            starved: None,
             generation: 0,
             graph,
         };

@@ -411,3 +411,97 @@ fn one_slow_run_counts_once_in_a_skills_timing_timed_or_not() {
         assert!(timing.total_ns >= 400_000_000, "the slow run is counted: {timing:?}");
     }
 }
+
+/// The calling thread's CPU time, ns.
+#[cfg(target_os = "linux")]
+fn thread_cpu_ns() -> u64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: `ts` is a valid, writable timespec; the call only writes it.
+    let ok = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0;
+    assert!(ok, "no thread CPU clock");
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+/// On the simulated clock a body is held to its budget on the time it ran or blocked, not the
+/// time a busy machine kept its thread waiting for a CPU: a run that is the same every time for
+/// a seed must not be faulted on one machine and not on another
+/// (docs/decisions/0005-budgets-and-stuck-bodies.md). The robot's threads share one CPU with
+/// 80 busy threads, so a body computing 20 ms takes far longer than its 100 ms budget on the
+/// wall; it is not faulted. A body that sleeps past its budget still is.
+#[cfg(target_os = "linux")]
+#[test]
+fn on_the_simulated_clock_waiting_for_a_cpu_does_not_count_against_a_budget() {
+    use std::sync::atomic::AtomicBool;
+    if !std::path::Path::new("/proc/thread-self/schedstat").exists() {
+        // Without the kernel's scheduler statistics budgets stay wall time (the module says so).
+        eprintln!("no /proc/thread-self/schedstat: nothing to test here");
+        return;
+    }
+    // This thread, and every thread started from it (the robot's, the busy ones), on one CPU.
+    // SAFETY: the set is a valid, zeroed cpu_set_t with one CPU added; 0 is this thread.
+    unsafe {
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        libc::CPU_SET(0, &mut set);
+        assert_eq!(libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set), 0, "pinned to CPU 0");
+    }
+    let walls = Arc::new(Mutex::new(Vec::<(u64, u64)>::new()));
+    let d = with_param(decl("cruncher", SkillKind::Sync, &[], &[("y", "f64")]), "sleep", 0.0, 0.0, 1.0);
+    let (w, decl2) = (walls.clone(), d.clone());
+    let mut reg = Registry::new();
+    reg.add(SkillType::new(d, move || {
+        let w = w.clone();
+        Ok(Box::new(FnSkill::new(&decl2, move |io: &mut Io<'_>, params: &[Value]| {
+            let (start, cpu) = (Instant::now(), thread_cpu_ns());
+            if params[0].as_f64() == Some(1.0) {
+                std::thread::sleep(Duration::from_millis(500));
+            } else {
+                // 20 ms of computing (this thread's CPU time, whatever the wall says).
+                while thread_cpu_ns() - cpu < 20_000_000 {
+                    std::hint::black_box(0u64);
+                }
+            }
+            w.lock().unwrap().push((start.elapsed().as_nanos() as u64, thread_cpu_ns() - cpu));
+            io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+            Ok(())
+        })) as _)
+    }));
+    let stop = Arc::new(AtomicBool::new(false));
+    let busy: Vec<_> = (0..80)
+        .map(|_| {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    std::hint::black_box(0u64);
+                }
+            })
+        })
+        .collect();
+    let spec = simulated("starved").skill(skill("c", "cruncher").budget_ms(100.0));
+    let m = build(&spec, &reg);
+    let events = m.events();
+    let (mut handle, join) = m.spawn(true);
+    // Three runs that took over twice the budget on the wall, for 20 ms of CPU each.
+    let long =
+        |walls: &Mutex<Vec<(u64, u64)>>| walls.lock().unwrap().iter().filter(|(wall, _)| *wall > 200_000_000).count();
+    let deadline = Instant::now() + BOUND;
+    while long(&walls) < 3 {
+        let faulted = events.try_iter().find_map(|e| match e {
+            Event::SkillFaulted { skill, cause, .. } if skill == "c" => Some(cause),
+            _ => None,
+        });
+        assert_eq!(faulted, None, "faulted for waiting for a CPU; runs (wall, cpu ns): {:?}", walls.lock().unwrap());
+        assert!(Instant::now() < deadline, "the busy threads never kept the body waiting: {:?}", walls.lock().unwrap());
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(handle.skill("c").unwrap().active, "still on after runs of {:?}", walls.lock().unwrap());
+    // Sleeping is not waiting for a CPU: past the budget, the body is faulted.
+    handle.set_param("c", "sleep", Value::F64(1.0)).unwrap();
+    let cause = fault_of(&events, "c");
+    assert!(cause.contains("over its execution budget of 100 ms (`budget_ms`)"), "{cause}");
+    stop.store(true, Ordering::Relaxed);
+    for t in busy {
+        t.join().unwrap();
+    }
+    handle.request(Request::Shutdown).unwrap();
+    join.join_timeout(BOUND).ok().expect("the manager ended").unwrap();
+}

@@ -396,6 +396,13 @@ impl Manager {
     /// its outputs dropped.
     #[cold]
     fn failed_run(&mut self, i: usize, elapsed: u64, deadline_ns: u64, late: bool) -> Result<(), String> {
+        // On the simulated clock the time its thread waited for a CPU does not count: a run is
+        // late only on the time it ran or blocked (`crate::starved`).
+        let waited = match &self.starved {
+            Some(s) if late => s.since(crate::runner::coarse_ns().saturating_sub(elapsed)),
+            _ => 0,
+        };
+        let late = late && elapsed.saturating_sub(waited) > deadline_ns;
         let result = std::mem::replace(&mut self.execs[i].result, Ok(()));
         let outcome = match result {
             Err(e) => Err(e),
@@ -406,9 +413,14 @@ impl Manager {
                 } else {
                     ("execution budget", "budget_ms")
                 };
+                let ran = fmt_duration(Duration::from_nanos(elapsed.saturating_sub(waited)));
+                let waiting = if waited > 0 {
+                    format!(" (and {} waiting for a CPU)", fmt_duration(Duration::from_nanos(waited)))
+                } else {
+                    String::new()
+                };
                 Err(format!(
-                    "its body ran for {}, over its {what} of {} (`{key}`); what it produced is dropped",
-                    fmt_duration(Duration::from_nanos(elapsed)),
+                    "its body ran for {ran}{waiting}, over its {what} of {} (`{key}`); what it produced is dropped",
                     fmt_duration(Duration::from_nanos(deadline_ns))
                 ))
             }

@@ -27,8 +27,10 @@ use super::executor::run_parallel;
 use super::pacing::raise_thread_priority;
 use super::plan::{Plan, StepKind};
 use super::Manager;
+use crate::config::ClockKind;
 use crate::control::{ControlError, Envelope, Handle, Reply, Request};
 use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
+use crate::starved::Starvation;
 
 type Guard<'a> = MutexGuard<'a, Option<Manager>>;
 
@@ -50,6 +52,8 @@ struct Core {
     step_reply: Mutex<Option<Sender<Result<Reply, ControlError>>>>,
     /// A step on an external clock, and the requests that came while it runs.
     deferred: Mutex<Deferred>,
+    /// The cycle thread's waits for a CPU, sampled by the watchdog (the simulated clock, serial).
+    starved: Option<Arc<Starvation>>,
 }
 
 /// On an external clock (ROS time from a simulator), a client's `Step` runs the next cycles as
@@ -162,6 +166,11 @@ impl Manager {
             let _ = self.request(Request::Run);
         }
         let deadlines: Vec<Duration> = self.graph.instances.iter().map(|d| d.in_cycle_deadline()).collect();
+        // On the simulated clock a busy machine must not fault a body (`crate::starved`); every
+        // body runs on the cycle thread unless a pool runs them.
+        if self.clock == ClockKind::Simulated && self.pool.is_none() {
+            self.starved = Some(Arc::new(Starvation::new()));
+        }
         let core = Arc::new(Core {
             requests: rx,
             done: Mutex::new(Some(done_tx)),
@@ -172,6 +181,7 @@ impl Manager {
             pool: self.pool.clone(),
             step_reply: Mutex::new(None),
             deferred: Mutex::new(Deferred::default()),
+            starved: self.starved.clone(),
             manager: Mutex::new(Some(self)),
         });
         start_cycle_thread(&core, 0);
@@ -243,6 +253,9 @@ const UNPACED_BURST: usize = 64;
 fn serve(core: &Core, generation: u64) {
     let _guard = PanicGuard(core);
     raise_thread_priority();
+    if let Some(s) = &core.starved {
+        s.adopt_current_thread();
+    }
     let mut deadline = Instant::now();
     // When the next cycle is due, for the manager's count of late starts.
     let mut next_due: Option<Instant> = None;
@@ -652,12 +665,24 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
             return;
         }
         stale.clear();
+        if let Some(s) = &core.starved {
+            s.sample();
+        }
+        // How long the body with `mark` has run (on the simulated clock, less the time its
+        // thread waited for a CPU: `crate::starved`).
+        let ran = |clock: &BodyClock, mark: u64| {
+            let wall = clock.running_for(mark);
+            match &core.starved {
+                Some(s) => wall.saturating_sub(Duration::from_nanos(s.since(mark - 1))),
+                None => wall,
+            }
+        };
         // Marks are on the coarse clock: a body is stuck only when it
         // certainly ran past its deadline.
         let slack = Duration::from_nanos(coarse_tick_ns());
         for (i, clock) in core.clocks.iter().enumerate() {
             let mark = clock.mark();
-            if mark != 0 && clock.running_for(mark) > deadlines[i] + slack {
+            if mark != 0 && ran(clock, mark) > deadlines[i] + slack {
                 stale.push((i, mark));
             }
         }
@@ -671,7 +696,7 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
             // Still in that same run: its thread is stuck in the body.
             let clock = &core.clocks[i];
             if clock.mark() == mark {
-                let ran = clock.running_for(mark);
+                let ran = ran(clock, mark);
                 clock.forget(mark);
                 m.abandon(i, ran);
                 left = true;
