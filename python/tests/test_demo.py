@@ -75,8 +75,8 @@ def demo(
 def why(out: dict[str, Any]) -> str:
     """An outcome for a failed assertion: the skills that faulted and the end of the program's
     log first (pytest cuts a long dict's repr short, and they say why a run went another way:
-    on a loaded machine a body can overrun its wall-clock budget and be switched off), then the
-    rest."""
+    a body that computed or blocked past its budget is switched off; on the simulated clock the
+    time it waited for a CPU on a loaded machine does not count), then the rest."""
     first = ("delivered", "cycles", "skills_faulted", "sequencer_exit", "stderr")
     head = "\n".join(f"{k}: {out.get(k)!r}" for k in first)
     rest = {k: v for k, v in out.items() if k not in first}
