@@ -99,8 +99,14 @@ pub struct Floor {
     pub level: i64,
     pub name: String,
     pub walls: Vec<Seg>,
+    /// For each of `walls`, the wall element it comes from (1-based, as
+    /// written: a polyline is one element) and that element's line (0: not
+    /// from a file).
+    pub wall_refs: Vec<(usize, usize)>,
     /// Furniture and other obstacles, as closed polygons.
     pub obstacles: Vec<Vec<P2>>,
+    /// The line of each of `obstacles` (0: not from a file).
+    pub obstacle_lines: Vec<usize>,
     pub doors: Vec<Door>,
     pub barcodes: Vec<Barcode>,
     pub lobby: Option<Lobby>,
@@ -194,6 +200,8 @@ pub struct Elevator {
     /// Delay from a call to a car's arrival, s: uniform in this range.
     pub arrive_s: (f64, f64),
     pub cars: Vec<Car>,
+    /// Lines of the elevator's keys (for findings; empty: not from a file).
+    pub lines: BTreeMap<String, usize>,
 }
 
 /// One step of a route hint: what a sequencer should do next.
@@ -799,6 +807,7 @@ impl Reader<'_> {
         let mut walls = Vec::new();
         // The wall element (1-based, as written) each segment comes from.
         let mut wall_el: Vec<usize> = Vec::new();
+        let mut wall_refs: Vec<(usize, usize)> = Vec::new();
         if let Some(ws) = f.get("walls") {
             for (i, w) in self.seq(ws, &fl, "walls")?.iter().enumerate() {
                 let el = format!("{fl}, wall {}", i + 1);
@@ -829,14 +838,17 @@ impl Reader<'_> {
                     _ => walls.push(self.segment(w, &el)?),
                 }
                 wall_el.resize(walls.len(), i + 1);
+                wall_refs.resize(walls.len(), (i + 1, w.pos.line));
             }
         }
         let mut obstacles = Vec::new();
+        let mut obstacle_lines = Vec::new();
         if let Some(os) = f.get("obstacles") {
             for (i, o) in self.seq(os, &fl, "obstacles")?.iter().enumerate() {
                 let el = format!("{fl}, obstacle {}", i + 1);
                 let g = self.fields(o, &el, &["rect", "polygon", "name"])?;
                 obstacles.push(self.region(&g, &el)?);
+                obstacle_lines.push(o.pos.line);
             }
         }
         let mut doors = Vec::new();
@@ -886,7 +898,19 @@ impl Reader<'_> {
             }
             None => None,
         };
-        Ok(Floor { line: n.pos.line, level, name, walls, obstacles, doors, barcodes, lobby, office })
+        Ok(Floor {
+            line: n.pos.line,
+            level,
+            name,
+            walls,
+            wall_refs,
+            obstacles,
+            obstacle_lines,
+            doors,
+            barcodes,
+            lobby,
+            office,
+        })
     }
 
     fn range(&self, f: &Fields<'_>, key: &str, el: &str, default: (f64, f64)) -> Result<(f64, f64), MapError> {
@@ -968,7 +992,8 @@ impl Reader<'_> {
         if cars.is_empty() {
             return Err(self.err(cars_node.pos, el, "`cars` is empty"));
         }
-        Ok(Elevator { travel_s_per_floor, door_move_s, open_s, arrive_s, cars })
+        let lines = f.entries.iter().map(|(k, v)| (k.value.clone(), v.pos.line)).collect();
+        Ok(Elevator { travel_s_per_floor, door_move_s, open_s, arrive_s, cars, lines })
     }
 
     fn mission(&self, n: &N) -> Result<Mission, MapError> {
