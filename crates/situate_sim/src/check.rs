@@ -16,9 +16,19 @@
 //! - the lab door's and the office door's barcodes beside their doors (0.1 to
 //!   0.6 m from the nearer jamb), and no opening but cars' doors in the call
 //!   button's wall: what the robot relies on to find a door and to board;
-//! - route steps naming barcodes that exist on the leg's floor.
+//! - route steps naming barcodes that exist on the leg's floor, and a turn
+//!   naming the door's side between a `home` and a `pass: door`;
+//! - the start pose in the lab; `open_s` at least [`OPEN_S_MIN`]; shafts'
+//!   sizes; barcodes 1–2 cm off the wall behind them (a call button or barcode
+//!   facing its own wall is named, and what follows from it is not reported);
+//! - the geometry of corridors, from straight lines of walls: floor doors
+//!   [`DOOR_MIN`] to [`DOOR_MAX`] wide, no other opening from [`DOOR_MAX`] to
+//!   [`CORRIDOR_MIN`], parallel walls the robot passes between at least
+//!   [`CORRIDOR_MIN`] apart, clutter leaving [`CLUTTER_FREE`] free, openings
+//!   on one wall [`OPENINGS_APART`] apart.
 //!
-//! Every finding names the element and the map line it is on.
+//! Every finding names the element and the map line it is on, and its
+//! message the value found and the rule's limit.
 
 use serde_json::{json, Value as Json};
 
