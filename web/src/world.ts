@@ -1,6 +1,7 @@
 // The world view: the simulator's map (walls, obstacles, doors, barcodes, buttons, the goal office,
 // elevator cars) on the robot's floor, the robot (`truth.pose`), its sonar rays (`sonar.range`) and
-// the cars' state (`truth.cars`), the people walking on the floor shown (`truth.people`).
+// the cars' state (`truth.cars`: a car's door is open only on the floor the car is at), the people
+// walking on the floor shown (`truth.people`).
 // A `truth.pose` without `floor` (a ROS 2 ground-truth Odometry mapped onto it: x, y, theta, v, w)
 // is on the floor of the robot's `floor` signal (not drawn until that has a value), or on floor 0
 // when the robot has no `floor` signal.
@@ -317,10 +318,12 @@ export class WorldView {
         if (typeof b["label"] === "string") label(b["label"], X(num(b["x"])) + 6 * dpr, Y(num(b["y"])) + 14 * dpr, "#c0c", true);
       }
     }
-    // Elevator cars: drawn on every floor; solid when the car is at this floor.
+    // Elevator cars: drawn on every floor; solid when the car is at this floor. Its door is open
+    // only where the car is: on every other floor (and while it moves) the landing door is closed.
     const carList = this.map && Array.isArray(this.map["cars"]) ? this.map["cars"].filter(isObject) : [];
     const carFloor = isObject(cars) && Array.isArray(cars["floor"]) ? cars["floor"] : [];
     const carDoor = isObject(cars) && Array.isArray(cars["door"]) ? cars["door"] : [];
+    const carsDrawn: { id: number; floor: number | null; here: boolean; door: string | null }[] = [];
     carList.forEach((car, i) => {
       const at = num(carFloor[i], NaN);
       const here = Number.isFinite(at) && Math.abs(at - floor) < 0.05;
@@ -328,7 +331,9 @@ export class WorldView {
       c.fillStyle = here ? "rgba(70, 130, 180, 0.35)" : "rgba(70, 130, 180, 0.08)";
       c.fillRect(X(Math.min(x0, x1)), Y(Math.max(y0, y1)), Math.abs(x1 - x0) * scale, Math.abs(y1 - y0) * scale);
       const door = segs([car["door"] ?? null])[0];
-      const open = num(carDoor[i], NaN);
+      const carOpen = num(carDoor[i], NaN);
+      // The door as seen on this floor: the car's own where the car is, else the landing's (closed).
+      const open = !Number.isFinite(carOpen) ? NaN : here ? carOpen : 0;
       if (door) {
         c.strokeStyle = open > 0.5 ? "#3a7" : "#d44";
         c.lineWidth = 4 * dpr;
@@ -341,10 +346,12 @@ export class WorldView {
       // Short lines (the cars stand side by side): "car 1", its floor, its door.
       label(`car ${num(car["id"])}`, lx, ly, labelColor);
       if (Number.isFinite(at)) label(`fl ${Number.isInteger(at) ? at : at.toFixed(1)}`, lx, ly + (LABEL_PX + 3) * dpr, labelColor);
+      let state: string | null = null;
       if (door && Number.isFinite(open)) {
-        const state = open > 0.98 ? "open" : open < 0.02 ? "closed" : `${Math.round(open * 100)} %`;
+        state = open > 0.98 ? "open" : open < 0.02 ? "closed" : `${Math.round(open * 100)} %`;
         label(state, lx, ly + 2 * (LABEL_PX + 3) * dpr, open > 0.5 ? "#2a8a2a" : "#d44");
       }
+      carsDrawn.push({ id: num(car["id"]), floor: Number.isFinite(at) ? at : null, here, door: state });
     });
     // People on this floor: small circles.
     let peopleDrawn = 0;
@@ -373,6 +380,7 @@ export class WorldView {
     for (const [f, t] of this.trails) counts[String(f)] = t.length;
     Object.assign(this.canvas.dataset, {
       labels: JSON.stringify(labels),
+      cars: JSON.stringify(carsDrawn),
       trail: JSON.stringify(counts),
       people: String(peopleDrawn),
       trailSince: this.trailSince === null ? "" : String(this.trailSince),

@@ -5,8 +5,10 @@
 //! ```text
 //! cargo run -p situate_gui --example testbed -- [--gui-port N] [--link-port N] [--no-link]
 //!     [--robot FILE] [--map FILE] [--sample-hz HZ] [--no-circle] [--rate-hz HZ]
-//!     [--history-frames N] [--no-history]
+//!     [--history-frames N] [--no-history] [--cars]
 //! ```
+//! `--cars` adds a `gui.cars` device writing `truth.cars` for the fixture map's one car (its floor
+//! and door opening are parameters: a test moves the car and opens its door).
 //! Prints `GUI http://…/`, `LINK tcp/…` and then `READY` when both serve; runs until killed or
 //! until its standard input closes when `--stdin` is given.
 
@@ -19,7 +21,7 @@ use situate::manager::{Control, Manager, Request, RobotFile, RobotSpec, SkillSpe
 use situate::prelude::*;
 use situate_gui::GuiConfig;
 use situate_link::{Link, LinkConfig};
-use situate_robot::TruthPose;
+use situate_robot::{TruthCars, TruthPose};
 
 /// Moves a ground-truth pose around a circle (for the world view) and prints every `print_every`
 /// cycles (for verbose).
@@ -61,6 +63,28 @@ impl Body for Circle {
     }
 }
 
+/// The fixture map's one elevator car: its floor and door opening, as parameters.
+#[derive(Skill, Default)]
+#[skill(name = "gui.cars", kind = "device")]
+pub struct Cars {
+    /// The cars' floors and door openings.
+    #[output(signal = "truth.cars")]
+    cars: TruthCars,
+    /// The car's floor (fractional while it moves).
+    #[param(default = 0.0, min = -10.0, max = 10.0)]
+    floor: f64,
+    /// The car's door opening, 0 (closed) to 1 (open).
+    #[param(default = 0.0, min = 0.0, max = 1.0)]
+    door: f64,
+}
+
+impl Body for Cars {
+    fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        self.cars = TruthCars { floor: vec![self.floor].into(), door: vec![self.door].into() };
+        Ok(())
+    }
+}
+
 struct Options {
     gui_port: u16,
     link_port: Option<u16>,
@@ -68,6 +92,7 @@ struct Options {
     map: Option<PathBuf>,
     sample_hz: f64,
     circle: bool,
+    cars: bool,
     rate_hz: Option<f64>,
     stdin: bool,
     /// Frames the timeline keeps; `None`: no timeline.
@@ -83,6 +108,7 @@ fn parse() -> anyhow::Result<Options> {
         map: Some(root.join("examples/testbed_map.json")),
         sample_hz: 10.0,
         circle: true,
+        cars: false,
         rate_hz: None,
         stdin: false,
         history_frames: Some(situate_gui::history::DEFAULT_FRAMES),
@@ -99,6 +125,7 @@ fn parse() -> anyhow::Result<Options> {
             "--no-map" => o.map = None,
             "--sample-hz" => o.sample_hz = value()?.parse().context("--sample-hz")?,
             "--no-circle" => o.circle = false,
+            "--cars" => o.cars = true,
             "--rate-hz" => o.rate_hz = Some(value()?.parse().context("--rate-hz")?),
             "--stdin" => o.stdin = true,
             "--history-frames" => o.history_frames = Some(value()?.parse().context("--history-frames")?),
@@ -125,8 +152,12 @@ fn main() -> anyhow::Result<()> {
     }
     let mut registry = situate_toys::registry();
     registry.register::<Circle>();
+    registry.register::<Cars>();
     if o.circle {
         spec = spec.skill(SkillSpec::new("circle", "gui.circle"));
+    }
+    if o.cars {
+        spec = spec.skill(SkillSpec::new("cars", "gui.cars"));
     }
     let world = match &o.map {
         None => None,
