@@ -139,6 +139,7 @@ function start(): void {
       setText(status, text);
       status.classList.toggle("bad", !connected);
       setLinkUp(connected);
+      timeline.setConnected(connected);
       if (!connected) {
         manager.disconnected();
         setStale(true);

@@ -62,6 +62,9 @@ export class Timeline {
   private playLast = 0;
   private refreshTimer: number | null = null;
   private available = true;
+  /** Whether the link to the robot (the page's WebSocket) is up. */
+  private linkUp = false;
+  private everUp = false;
   /** The manager's period (s), from its stats: how many cycles a second of playing covers. */
   private periodS = 0.05;
 
@@ -89,7 +92,7 @@ export class Timeline {
     this.note = h("span", { class: "tl-note", "data-testid": "tl-note" });
     this.el = h(
       "footer",
-      { class: "timeline", "data-testid": "timeline", "data-mode": "live" },
+      { class: "timeline", "data-testid": "timeline", "data-mode": "live", "data-link": "down" },
       h("div", { class: "row" }, this.liveBtn, this.back, this.forward, this.play, this.speed, this.cycleEl, this.timeEl, this.spanEl, this.note),
       h("div", { class: "tl-track" }, this.slider, this.marksEl),
       this.prints,
@@ -120,6 +123,16 @@ export class Timeline {
     void this.refresh();
   }
 
+  /** The link to the robot went down (the page reconnects by itself) or came up again: the bar
+   *  never says "Live" while nothing live comes. */
+  setConnected(up: boolean): void {
+    if (up === this.linkUp) return;
+    this.linkUp = up;
+    if (up) this.everUp = true;
+    else this.stopPlaying();
+    this.setButtons();
+  }
+
   /** A new run (the robot restarted): its past is not the old one's. */
   reset(): void {
     this.stopPlaying();
@@ -147,9 +160,16 @@ export class Timeline {
 
   private setButtons(): void {
     this.el.dataset["mode"] = this.paused ? "paused" : "live";
-    setText(this.liveBtn, this.paused ? "❚❚ Paused" : "● Live");
-    this.liveBtn.title = this.paused ? "go live: back to the robot's telemetry (key P)" : "pause: look back at the robot's recent past (key P)";
-    this.liveBtn.classList.toggle("paused", this.paused);
+    this.el.dataset["link"] = this.linkUp ? "up" : "down";
+    if (!this.linkUp) {
+      setText(this.liveBtn, this.everUp ? "○ Disconnected" : "○ Connecting…");
+      this.liveBtn.title = "not connected to the robot: nothing shown is live (the page reconnects by itself)";
+    } else {
+      setText(this.liveBtn, this.paused ? "❚❚ Paused" : "● Live");
+      this.liveBtn.title = this.paused ? "go live: back to the robot's telemetry (key P)" : "pause: look back at the robot's recent past (key P)";
+    }
+    this.liveBtn.classList.toggle("disconnected", !this.linkUp);
+    this.liveBtn.classList.toggle("paused", this.paused && this.linkUp);
     document.body.classList.toggle("past", this.paused);
     setText(this.play, this.playTimer === null ? "▶ Play" : "■ Stop");
   }

@@ -38,6 +38,8 @@ describe("a robot that goes away and comes back", () => {
     assert.match(await text(page.getByTestId("stat-rate")), /Hz/);
     oldRun = await page.evaluate(() => document.body.dataset.run);
     assert.ok(oldRun, "the hello named the run");
+    assert.equal(await page.getByTestId("timeline").getAttribute("data-link"), "up");
+    assert.equal(await text(page.getByTestId("tl-live")), "● Live");
 
     await killTestbed(tb);
     await until(async () => (await text(page.getByTestId("status"))).includes("disconnected"), "the page sees the robot gone");
@@ -64,6 +66,11 @@ describe("a robot that goes away and comes back", () => {
     }
     // Local controls still work.
     assert.equal(await page.getByTestId("world-reset").isDisabled(), false);
+    // The timeline's bar does not say "Live" either.
+    const bar = page.getByTestId("timeline");
+    assert.equal(await bar.getAttribute("data-link"), "down");
+    assert.equal(await text(page.getByTestId("tl-live")), "○ Disconnected");
+    assert.ok(await page.getByTestId("tl-live").evaluate((b) => b.classList.contains("disconnected")), "drawn as disconnected (not live's colour)");
   });
 
   test("a restart on the same port is a new run: plots, trail and monitors start afresh, old events are set apart", async () => {
@@ -74,6 +81,8 @@ describe("a robot that goes away and comes back", () => {
       return run && run !== oldRun;
     }, "the page sees the new run");
     await until(async () => (await text(page.getByTestId("status"))) === "connected", "connected again");
+    await until(async () => (await page.getByTestId("timeline").getAttribute("data-link")) === "up", "the bar connected again");
+    assert.equal(await text(page.getByTestId("tl-live")), "● Live");
     const newRun = await page.evaluate(() => document.body.dataset.run);
     assert.match(await text(page.getByTestId("run-info")), new RegExp(`run ${newRun}`));
     // The new run's start, as its hello says (the same clock as the telemetry's wall time).
