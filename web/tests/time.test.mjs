@@ -3,8 +3,11 @@
 // robot itself (the `situate` CLI over the link, or the GUI server's own proxy of the link's verbs).
 
 import assert from "node:assert/strict";
+import { mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
+import os from "node:os";
+import path from "node:path";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, cliDo, closeGui, killTestbed, openGui, screenshotPath, startTestbed, until } from "./harness.mjs";
+import { cli, cliDo, closeGui, killTestbed, openGui, repo, screenshotPath, startTestbed, until } from "./harness.mjs";
 
 const text = async (locator) => (await locator.textContent()) ?? "";
 
@@ -293,5 +296,53 @@ describe("skills, monitors, the world view and the layout", () => {
     } finally {
       await narrow.close();
     }
+  });
+});
+
+describe("a skill inactive from the start", () => {
+  let tb;
+  let browser;
+  let page;
+  let dir;
+
+  before(async () => {
+    // The toy robot with wander inactive from its first cycle (`active: false`).
+    dir = mkdtempSync(path.join(os.tmpdir(), "situate-gui-inactive-"));
+    const robot = path.join(dir, "toybot.yaml");
+    const yaml = readFileSync(path.join(repo, "examples", "toybot.yaml"), "utf8");
+    const edited = yaml.replace("params: {speed: 0.2, seed: 7}", "params: {speed: 0.2, seed: 7}\n    active: false");
+    assert.notEqual(edited, yaml, "wander's entry in examples/toybot.yaml");
+    writeFileSync(robot, edited);
+    ({ tb, browser, page } = await openGui(["--robot", robot]));
+  });
+
+  after(async () => {
+    await closeGui({ tb, browser });
+    if (dir) rmSync(dir, { recursive: true, force: true });
+  });
+
+  afterEach(async (t) => {
+    if (page) await page.screenshot({ path: screenshotPath(t.name.replace(/[^a-z0-9]+/gi, "-")), fullPage: true }).catch(() => undefined);
+  });
+
+  test("a skill never switched reads 'inactive since cycle 0', as docs/gui.md says, live and paused", async () => {
+    const skills = await cli(tb.linkPort, "skills");
+    assert.equal(skills.find((s) => s.name === "wander")?.active, false, "wander inactive (over the link)");
+    // The robot ran cycles before the GUI served it: still, the GUI saw it from its first cycle.
+    const since = page.getByTestId("since-wander");
+    await until(async () => (await text(since)) !== "", "wander's since");
+    assert.equal(await text(since), "since cycle 0");
+    const panel = page.getByTestId("skill-wander");
+    if (!(await panel.evaluate((d) => d.open))) await panel.locator("summary").click();
+    await page.getByTestId("show-output-wander").check();
+    const cell = page.getByTestId("output-table-wander").locator("td.value").first();
+    await until(async () => (await cell.getAttribute("data-inactive")) !== null, "wander's output shown as inactive");
+    assert.match(await text(cell), /^inactive since cycle 0 /);
+    // Paused on the timeline: the same.
+    await page.getByTestId("tl-live").click();
+    await until(async () => (await page.getByTestId("timeline").getAttribute("data-shown")) !== null, "a past cycle shown");
+    assert.equal(await text(since), "since cycle 0");
+    await page.getByTestId("tl-live").click();
+    await until(async () => (await page.getByTestId("timeline").getAttribute("data-mode")) === "live", "live again");
   });
 });

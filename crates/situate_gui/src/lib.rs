@@ -30,7 +30,9 @@
 //! same port knows its plots, trails and events belong to the old run. Each telemetry sample carries
 //! `activity`: per skill, the cycle of the last activation change the server saw
 //! (`activation_applied`, `skill_faulted`), and `observed_from`, the cycle the server started
-//! watching at, so an inactive skill's outputs can be shown as "inactive since cycle N".
+//! watching at, so an inactive skill's outputs can be shown as "inactive since cycle N". With a
+//! [`HistoryTap`] the server has seen every change since the tap was made (before the manager
+//! ran: `observed_from` 0), the ones before the server started included.
 //!
 //! ## Timeline
 //! Given a [`HistoryTap`] ([`serve_with_history`]), the server keeps the robot's last
@@ -268,6 +270,26 @@ struct Activity {
 }
 
 impl Activity {
+    /// An activation change seen by the history's tap (which may see it after, or, from before
+    /// the server started, instead of the events thread): the latest cycle wins, and faults are
+    /// counted by the events thread only.
+    fn note_change(&mut self, event: &situate_manager::Event) {
+        use situate_manager::Event;
+        let mut at = |skill: &String, cycle: u64| {
+            let c = self.changed.entry(skill.clone()).or_insert(cycle);
+            *c = (*c).max(cycle);
+        };
+        match event {
+            Event::ActivationApplied { activated, deactivated, cycle } => {
+                for s in activated.iter().chain(deactivated) {
+                    at(s, *cycle);
+                }
+            }
+            Event::SkillFaulted { skill, cycle, .. } => at(skill, *cycle),
+            _ => {}
+        }
+    }
+
     fn note(&mut self, event: &situate_manager::Event) {
         use situate_manager::Event;
         match event {
@@ -368,6 +390,9 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
         Ok(Reply::Stats(s)) => s.cycle,
         _ => 0,
     };
+    // A tap has seen the manager's events since it was made (the history thread notes its
+    // activation changes too): the activity holds from then.
+    let observed_from = tap.as_ref().map_or(observed_from, |t| t.observed_from.min(observed_from));
     let (history, tap) = match tap {
         Some(tap) => {
             let mut h = History::new(tap.layout.clone(), config.history_frames, tap.observed_from);
@@ -405,7 +430,11 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
     threads.push(spawn("situate-gui-sampler", Box::new(move || sample::sample_loop(&s, &wake_rx, &st)))?);
     if let (Some(history), Some(tap)) = (history, tap) {
         let st = Arc::clone(&stop);
-        threads.push(spawn("situate-gui-history", Box::new(move || sample::keep_history(&history, tap, &st)))?);
+        let s = Arc::clone(&shared);
+        threads.push(spawn(
+            "situate-gui-history",
+            Box::new(move || sample::keep_history(&history, tap, &s.activity, &st)),
+        )?);
         let (s, st) = (Arc::clone(&shared), Arc::clone(&stop));
         threads.push(spawn("situate-gui-foxglove", Box::new(move || foxglove::publish(&s, &st)))?);
     }

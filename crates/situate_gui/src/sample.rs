@@ -38,8 +38,15 @@ pub(crate) fn forward_events(shared: &Shared, events: &Receiver<situate_manager:
 const HISTORY_POLL: Duration = Duration::from_millis(20);
 
 /// Drains the manager's tap and events into the history until the server stops. When the manager
-/// ends, the history stays (a finished run can still be looked back on).
-pub(crate) fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &AtomicBool) {
+/// ends, the history stays (a finished run can still be looked back on). The tap's activation
+/// changes go to `activity` too: the tap was made before the server subscribed to the events (a
+/// skill deactivated before the server started is seen).
+pub(crate) fn keep_history(
+    history: &Mutex<History>,
+    tap: HistoryTap,
+    activity: &Mutex<crate::Activity>,
+    stop: &AtomicBool,
+) {
     use crossbeam_channel::TryRecvError;
     let lock = || history.lock().unwrap_or_else(|p| p.into_inner());
     let (mut frames_open, mut events_open) = (true, true);
@@ -63,7 +70,10 @@ pub(crate) fn keep_history(history: &Mutex<History>, tap: HistoryTap, stop: &Ato
         if events_open {
             loop {
                 match tap.events.try_recv() {
-                    Ok(event) => lock().push_event(&event),
+                    Ok(event) => {
+                        lock().push_event(&event);
+                        activity.lock().unwrap_or_else(|p| p.into_inner()).note_change(&event);
+                    }
                     Err(TryRecvError::Empty) => break,
                     Err(TryRecvError::Disconnected) => {
                         events_open = false;
@@ -224,6 +234,47 @@ mod tests {
             std::thread::sleep(Duration::from_millis(10));
         };
         assert_eq!(sample["activity"]["changed"]["runaway"], applied_at, "{sample}");
+        gui.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    /// With a tap made before the manager ran, the activity holds from cycle 0: a skill never
+    /// changed is inactive since cycle 0, and a change made before the server started is seen.
+    #[test]
+    fn with_a_tap_the_activity_holds_from_the_tap_on() {
+        use situate::manager::{Manager, RobotSpec, SkillSpec};
+        let spec = RobotSpec::new("guitest")
+            .skill(SkillSpec::new("sonar", "toy.sonar"))
+            .skill(SkillSpec::new("wheels", "toy.wheels"))
+            .skill(SkillSpec::new("runaway", "toy.runaway"))
+            .skill(SkillSpec::new("wander", "toy.wander").active(false));
+        let mut manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
+        let tap = HistoryTap::new(&mut manager);
+        let (mut handle, join) = manager.spawn(false);
+        handle.step(3).expect("step");
+        handle.request(Request::Deactivate { skills: vec!["runaway".into()] }).expect("deactivate");
+        handle.step(3).expect("step");
+        let deactivated_at = match handle.request(Request::QueryStats) {
+            Ok(situate_manager::Reply::Stats(s)) => s.cycle,
+            other => panic!("stats: {other:?}"),
+        };
+        assert!(deactivated_at > 0);
+        // The server starts after the change (its own events never saw it).
+        let gui = serve_with_history(handle.clone(), GuiConfig::default(), Some(tap)).expect("serve");
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let sample = loop {
+            let sample = take_sample(&gui.shared, &mut HashSet::new());
+            if sample["activity"]["changed"]["runaway"].is_u64() {
+                break sample;
+            }
+            assert!(Instant::now() < deadline, "the change before the server never reached the sample: {sample}");
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        assert_eq!(sample["activity"]["observed_from"], 0, "{sample}");
+        let at = sample["activity"]["changed"]["runaway"].as_u64().unwrap_or(0);
+        assert!(at > 3 && at <= deactivated_at, "runaway deactivated in cycle {at}: {sample}");
+        assert!(sample["activity"]["changed"].get("wander").is_none(), "wander never changed: {sample}");
         gui.stop();
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();
