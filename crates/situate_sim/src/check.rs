@@ -30,6 +30,8 @@
 //! Every finding names the element and the map line it is on, and its
 //! message the value found and the rule's limit.
 
+use std::collections::{HashMap, HashSet};
+
 use serde_json::{json, Value as Json};
 
 use crate::geom::{cast, in_polygon, Seg, P2};
@@ -491,6 +493,74 @@ fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Finding>) {
     }
 }
 
+/// Indices of boxes (a segment's, a polygon's) bucketed on a square grid, to
+/// look only at those near a place: the corridor rules compare walls with
+/// the walls near them, so a floor of many walls costs in proportion.
+struct Buckets {
+    cell: f64,
+    count: usize,
+    cells: HashMap<(i64, i64), Vec<usize>>,
+    /// Boxes spanning more than [`Buckets::SPAN_MAX`] cells a side: near everything.
+    big: Vec<usize>,
+}
+
+impl Buckets {
+    const SPAN_MAX: f64 = 64.0;
+
+    fn new(cell: f64, boxes: &[(P2, P2)]) -> Buckets {
+        let mut b = Buckets { cell, count: boxes.len(), cells: HashMap::new(), big: Vec::new() };
+        for (i, (lo, hi)) in boxes.iter().enumerate() {
+            match b.span(*lo, *hi) {
+                Some((x0, y0, x1, y1)) => {
+                    for x in x0..=x1 {
+                        for y in y0..=y1 {
+                            b.cells.entry((x, y)).or_default().push(i);
+                        }
+                    }
+                }
+                None => b.big.push(i),
+            }
+        }
+        b
+    }
+
+    fn of_segs(cell: f64, segs: &[Seg]) -> Buckets {
+        let boxes: Vec<(P2, P2)> = segs.iter().map(|s| seg_box(s, 0.0)).collect();
+        Buckets::new(cell, &boxes)
+    }
+
+    /// The cells a box covers, if not too many.
+    fn span(&self, lo: P2, hi: P2) -> Option<(i64, i64, i64, i64)> {
+        let c = |v: f64| (v / self.cell).floor();
+        let (x0, y0, x1, y1) = (c(lo.x), c(lo.y), c(hi.x), c(hi.y));
+        let ok = [x0, y0, x1, y1].iter().all(|v| v.is_finite())
+            && x1 - x0 <= Buckets::SPAN_MAX
+            && y1 - y0 <= Buckets::SPAN_MAX;
+        ok.then_some((x0 as i64, y0 as i64, x1 as i64, y1 as i64))
+    }
+
+    /// The boxes that may meet the box `lo`..`hi`, in increasing order.
+    fn near(&self, lo: P2, hi: P2) -> Vec<usize> {
+        let Some((x0, y0, x1, y1)) = self.span(lo, hi) else { return (0..self.count).collect() };
+        let mut out = self.big.clone();
+        for x in x0..=x1 {
+            for y in y0..=y1 {
+                if let Some(v) = self.cells.get(&(x, y)) {
+                    out.extend_from_slice(v);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+}
+
+/// A segment's bounding box, grown by `r`.
+fn seg_box(s: &Seg, r: f64) -> (P2, P2) {
+    (P2::new(s.a.x.min(s.b.x) - r, s.a.y.min(s.b.y) - r), P2::new(s.a.x.max(s.b.x) + r, s.a.y.max(s.b.y) + r))
+}
+
 /// The sides of the cars' shafts (whole: a car's door is no opening in a wall line).
 fn shaft_sides(map: &Map) -> Vec<(usize, Seg)> {
     let mut out = Vec::new();
@@ -522,8 +592,9 @@ fn end_name(f: &Floor, e: End) -> String {
 /// wall element K (a polyline) has more than one segment.
 fn wall_name(f: &Floor, j: usize) -> String {
     let Some(&(k, _)) = f.wall_refs.get(j) else { return format!("wall {}", j + 1) };
-    let first = f.wall_refs.iter().position(|r| r.0 == k).unwrap_or(j);
-    let count = f.wall_refs.iter().filter(|r| r.0 == k).count();
+    // Elements come in order: the element's segments are one run.
+    let first = f.wall_refs.partition_point(|r| r.0 < k).min(j);
+    let count = f.wall_refs.partition_point(|r| r.0 <= k).saturating_sub(first);
     if count > 1 {
         format!("wall {k}, segment {}", j - first + 1)
     } else {
@@ -540,6 +611,11 @@ fn wall_name(f: &Floor, j: usize) -> String {
 fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Finding>) -> Vec<(P2, P2)> {
     let mut flagged = Vec::new();
     let shafts = shaft_sides(map);
+    let shaft_segs: Vec<Seg> = shafts.iter().map(|(_, s)| *s).collect();
+    let near_walls = Buckets::of_segs(GAP_MAX, &f.walls);
+    let near_shafts = Buckets::of_segs(GAP_MAX, &shaft_segs);
+    let door_segs: Vec<Seg> = f.doors.iter().map(|d| d.seg).collect();
+    let near_doors = Buckets::of_segs(GAP_MAX, &door_segs);
     let mut done = vec![false; f.walls.len()];
     let wall_line = |j: usize| f.wall_refs.get(j).map_or(f.line, |r| r.1);
     for i in 0..f.walls.len() {
@@ -555,16 +631,28 @@ fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Fin
         let n = P2::new(-u.y, u.x);
         let on = |s: &Seg| s.a.minus(w.a).dot(n).abs() <= 0.02 && s.b.minus(w.a).dot(n).abs() <= 0.02;
         let t = |p: P2| p.minus(w.a).dot(u);
+        // The walls and shafts' sides on this line, each within GAP_MAX of another.
         let mut iv: Vec<(f64, f64, End)> = Vec::new();
-        for (j, s) in f.walls.iter().enumerate() {
-            if on(s) {
-                done[j] = true;
-                iv.push((t(s.a).min(t(s.b)), t(s.a).max(t(s.b)), End::Wall(j)));
+        let mut todo = vec![w];
+        let mut shafts_in: HashSet<usize> = HashSet::new();
+        done[i] = true;
+        iv.push((0.0, len, End::Wall(i)));
+        while let Some(x) = todo.pop() {
+            let (lo, hi) = seg_box(&x, GAP_MAX);
+            for j in near_walls.near(lo, hi) {
+                let s = f.walls[j];
+                if !done[j] && on(&s) {
+                    done[j] = true;
+                    todo.push(s);
+                    iv.push((t(s.a).min(t(s.b)), t(s.a).max(t(s.b)), End::Wall(j)));
+                }
             }
-        }
-        for (k, s) in &shafts {
-            if on(s) {
-                iv.push((t(s.a).min(t(s.b)), t(s.a).max(t(s.b)), End::Shaft(*k)));
+            for j in near_shafts.near(lo, hi) {
+                let (k, s) = shafts[j];
+                if on(&s) && shafts_in.insert(j) {
+                    todo.push(s);
+                    iv.push((t(s.a).min(t(s.b)), t(s.a).max(t(s.b)), End::Shaft(k)));
+                }
             }
         }
         iv.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -594,7 +682,12 @@ fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Fin
             .windows(2)
             .map(|r| {
                 let (a, b) = (r[0].1, r[1].0);
-                let door = f.doors.iter().any(|d| on(&d.seg) && (a - 0.05..=b + 0.05).contains(&t(d.seg.at(0.5))));
+                let (lo, hi) = seg_box(&Seg::new(at(a), at(b)), 0.1);
+                let door = near_doors
+                    .near(lo, hi)
+                    .into_iter()
+                    .map(|k| door_segs[k])
+                    .any(|d| on(&d) && (a - 0.05..=b + 0.05).contains(&t(d.at(0.5))));
                 (a, b, door)
             })
             .collect();
@@ -692,14 +785,32 @@ fn poly_dist(p: &[P2], q: &[P2]) -> f64 {
 fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)], out: &mut Vec<Finding>) {
     let mut walls: Vec<Seg> = f.walls.clone();
     walls.extend(map.elevator.cars.iter().flat_map(Car::walls));
+    let reach_across = CORRIDOR_MAX + SLACK;
+    let near_floor_walls = Buckets::of_segs(GAP_MAX, &f.walls);
+    let near_walls = Buckets::of_segs(GAP_MAX, &walls);
+    let obstacle_boxes: Vec<(P2, P2)> = f
+        .obstacles
+        .iter()
+        .map(|o| {
+            let lo = o.iter().fold(P2::new(f64::INFINITY, f64::INFINITY), |m, v| P2::new(m.x.min(v.x), m.y.min(v.y)));
+            let hi = o
+                .iter()
+                .fold(P2::new(f64::NEG_INFINITY, f64::NEG_INFINITY), |m, v| P2::new(m.x.max(v.x), m.y.max(v.y)));
+            (lo, hi)
+        })
+        .collect();
+    let near_obstacles = Buckets::new(GAP_MAX, &obstacle_boxes);
+    let flagged_segs: Vec<Seg> = flagged.iter().map(|(a, b)| Seg::new(*a, *b)).collect();
+    let near_flagged = Buckets::of_segs(GAP_MAX, &flagged_segs);
     let wall_name = |j: usize| wall_name(f, j);
     let wall_line = |j: usize| f.wall_refs.get(j).map_or(f.line, |r| r.1);
     let obstacle_name = |k: usize| format!("floor {}, obstacle {}", f.level, k + 1);
     let obstacle_line = |k: usize| f.obstacle_lines.get(k).copied().unwrap_or(f.line);
-    // Lines already reported (a point of each line and its normal), obstacles and pairs reported.
-    let mut narrow: Vec<(P2, P2, P2)> = Vec::new();
-    let mut cluttered: Vec<usize> = Vec::new();
-    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    // Pairs of lines already reported (their direction and offsets, to the centimetre), obstacles
+    // and pairs of obstacles reported.
+    let mut narrow: HashSet<(i64, i64, i64)> = HashSet::new();
+    let mut cluttered: HashSet<usize> = HashSet::new();
+    let mut pairs: HashSet<(usize, usize)> = HashSet::new();
     let near = |p: P2, s: &Seg| p.dist(s.a) <= 0.05 || p.dist(s.b) <= 0.05;
     for i in 0..f.walls.len() {
         let wi = f.walls[i];
@@ -708,7 +819,8 @@ fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)
             continue;
         }
         let u = wi.b.minus(wi.a).scale(1.0 / len);
-        for j in i + 1..f.walls.len() {
+        let (qlo, qhi) = seg_box(&wi, reach_across);
+        for j in near_floor_walls.near(qlo, qhi).into_iter().filter(|&j| j > i) {
             let wj = f.walls[j];
             let lj = wj.len();
             if lj < OVERLAP_MIN || u.cross(wj.b.minus(wj.a).scale(1.0 / lj)).abs() > 0.02 {
@@ -729,7 +841,9 @@ fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)
             let p = wi.a.plus(u.scale((lo + hi) / 2.0));
             // Nothing between them: the first wall across is wj.
             let from = p.plus(n.scale(0.005));
-            if cast(from, n, &walls).is_none_or(|h| (h - (d - 0.005)).abs() > SLACK) {
+            let (clo, chi) = seg_box(&Seg::new(from, p.plus(n.scale(d + 0.1))), 0.01);
+            let across: Vec<Seg> = near_walls.near(clo, chi).into_iter().map(|k| walls[k]).collect();
+            if cast(from, n, &across).is_none_or(|h| (h - (d - 0.005)).abs() > SLACK) {
                 continue;
             }
             let centre = p.plus(n.scale(d / 2.0));
@@ -737,15 +851,19 @@ fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)
                 continue;
             }
             if d < CORRIDOR_MIN - SLACK {
-                let mouth =
-                    flagged.iter().any(|(a, b)| (near(*a, &wi) && near(*b, &wj)) || (near(*b, &wi) && near(*a, &wj)));
-                let seen = narrow.iter().any(|(a, b, m)| {
-                    m.cross(u).abs() < 0.02
-                        && (wi.a.minus(*a).dot(*m).abs() < SLACK && wj.a.minus(*b).dot(*m).abs() < SLACK
-                            || wi.a.minus(*b).dot(*m).abs() < SLACK && wj.a.minus(*a).dot(*m).abs() < SLACK)
-                });
-                if !mouth && !seen {
-                    narrow.push((wi.a, wj.a, n0));
+                let (mlo, mhi) = seg_box(&wi, 0.1);
+                let mouth = near_flagged
+                    .near(mlo, mhi)
+                    .into_iter()
+                    .map(|k| flagged[k])
+                    .any(|(a, b)| (near(a, &wi) && near(b, &wj)) || (near(b, &wi) && near(a, &wj)));
+                // The same two lines (walls split by doors) are reported once.
+                let angle = u.y.atan2(u.x).rem_euclid(std::f64::consts::PI);
+                let m = P2::new(-angle.sin(), angle.cos());
+                let (ci, cj) = (m.dot(wi.a), m.dot(wj.a));
+                let cm = |v: f64| (v * 100.0).round() as i64;
+                let key = (cm(angle), cm(ci.min(cj)), cm(ci.max(cj)));
+                if !mouth && narrow.insert(key) {
                     out.push(Finding::new(
                         wall_line(i),
                         format!("floor {}, {}", f.level, wall_name(i)),
@@ -762,10 +880,16 @@ fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)
                 continue;
             }
             // A corridor: the clutter in it (obstacles whose centre is between the walls, along the overlap).
-            let inside: Vec<(usize, f64)> = f
-                .obstacles
+            let strip = [wi.at(lo / len), wi.at(hi / len), wj.at(0.0), wj.at(1.0)];
+            let slo =
+                strip.iter().fold(P2::new(f64::INFINITY, f64::INFINITY), |m, v| P2::new(m.x.min(v.x), m.y.min(v.y)));
+            let shi = strip
                 .iter()
-                .enumerate()
+                .fold(P2::new(f64::NEG_INFINITY, f64::NEG_INFINITY), |m, v| P2::new(m.x.max(v.x), m.y.max(v.y)));
+            let inside: Vec<(usize, f64)> = near_obstacles
+                .near(slo, shi)
+                .into_iter()
+                .map(|k| (k, &f.obstacles[k]))
                 .filter_map(|(k, o)| {
                     let c = o.iter().fold(P2::new(0.0, 0.0), |s, v| s.plus(*v)).scale(1.0 / o.len().max(1) as f64);
                     let across = c.minus(wi.a).dot(n);
@@ -777,8 +901,7 @@ fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)
                 let o = &f.obstacles[k];
                 let edges: Vec<Seg> = o.iter().zip(o.iter().cycle().skip(1)).map(|(a, b)| Seg::new(*a, *b)).collect();
                 let free = edges.iter().map(|e| e.dist_to_seg(&far.0)).fold(f64::INFINITY, f64::min);
-                if free < CLUTTER_FREE - SLACK && !cluttered.contains(&k) {
-                    cluttered.push(k);
+                if free < CLUTTER_FREE - SLACK && cluttered.insert(k) {
                     out.push(Finding::new(
                         obstacle_line(k),
                         obstacle_name(k),
@@ -796,7 +919,7 @@ fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)
                     }
                     let between = poly_dist(o, &f.obstacles[q]);
                     if between < CLUTTER_FREE - SLACK {
-                        pairs.push((k, q));
+                        pairs.insert((k, q));
                         out.push(Finding::new(
                             obstacle_line(q),
                             obstacle_name(q),
@@ -827,18 +950,25 @@ fn turns_before_pass(map: &Map, out: &mut Vec<Finding>) {
             _ => continue,
         };
         let Some(f) = map.floor(level) else { continue };
+        // The last `home` so far, and the last `turn: left | right` since (the home's own included).
+        let mut last_home: Option<usize> = None;
+        let mut last_turn: Option<(usize, &str)> = None;
         for (p, st) in steps.iter().enumerate() {
+            let side_turn = st.turn.as_deref().filter(|t| *t == "left" || *t == "right");
+            let (h, turn) = (last_home, last_turn);
+            if st.home.is_some() {
+                (last_home, last_turn) = (Some(p), side_turn.map(|t| (p, t)));
+            } else if let Some(t) = side_turn {
+                last_turn = Some((p, t));
+            }
             if st.pass.is_none() {
                 continue;
             }
-            let Some(h) = steps[..p].iter().rposition(|s| s.home.is_some()) else { continue };
+            let Some(h) = h else { continue };
             let id = steps[h].home.unwrap_or_default();
             let el = |i: usize| format!("mission, route {leg}, step {}", i + 1);
             let at =
                 |i: usize| if steps[i].line > 0 { steps[i].line } else { m.lines.get("route").copied().unwrap_or(1) };
-            let turn = (h..p)
-                .rev()
-                .find_map(|i| steps[i].turn.as_deref().filter(|t| *t == "left" || *t == "right").map(|t| (i, t)));
             let Some((ti, turn)) = turn else {
                 out.push(Finding::new(
                     at(p),
