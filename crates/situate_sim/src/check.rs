@@ -168,7 +168,7 @@ pub fn lint(map: &Map) -> Vec<Finding> {
     let goal_floor = map.floor(m.goal_floor);
     if let Some(f) = start_floor {
         start_checks(map, f, &mut out, line("start"), button_faces_wall.contains(&f.level));
-        door_beside(f, m.lab_door_barcode, &mut out);
+        door_beside(map, f, m.lab_door_barcode, &mut out);
         start_in_lab(map, f, &mut out, line("start"));
     }
     if let Some(f) = goal_floor {
@@ -182,7 +182,7 @@ pub fn lint(map: &Map) -> Vec<Finding> {
             f.doors.iter().any(|d| outline.iter().any(|e| e.dist_to(d.seg.at(0.5)) <= 0.1))
         });
         if office_door {
-            door_beside(f, m.office_barcode, &mut out);
+            door_beside(map, f, m.office_barcode, &mut out);
             office_barcode_faces_out(f, m.office_barcode, &mut out);
         }
     }
@@ -243,7 +243,7 @@ fn nearest_door(f: &Floor, at: P2) -> Option<(usize, f64, f64)> {
 /// [`BARCODE_LINE_MAX`]), 0.1 to [`BARCODE_JAMB_MAX`] m from its nearer jamb
 /// (`docs/maps.md`, "Lab door" and "Goal floor"). The robot, lined up with
 /// the barcode, looks for its door there.
-fn door_beside(f: &Floor, id: i64, out: &mut Vec<Finding>) {
+fn door_beside(map: &Map, f: &Floor, id: i64, out: &mut Vec<Finding>) {
     let Some((el, b)) = floor_barcode(f, id) else { return };
     let Some((i, off, jamb)) = nearest_door(f, b.at) else {
         out.push(Finding::new(
@@ -254,7 +254,9 @@ fn door_beside(f: &Floor, id: i64, out: &mut Vec<Finding>) {
         return;
     };
     let mut wrong = Vec::new();
-    if off > BARCODE_LINE_MAX + SLACK {
+    // Off its wall: stand_offs says how far (once is enough).
+    let on_wall = matches!(stuck(&b, &map.static_segments(f)), Stuck::Ok);
+    if off > BARCODE_LINE_MAX + SLACK && on_wall {
         wrong.push(format!("{off:.2} m off the door's line (its wall): at most {BARCODE_LINE_MAX:.2} m"));
     }
     if !(0.1 - SLACK..=BARCODE_JAMB_MAX + SLACK).contains(&jamb) {
@@ -1463,12 +1465,27 @@ mod tests {
                  from the door's nearer jamb along its wall: 0.10 to 0.60 m"
             )]
         );
-        // 0.3 m off the door's line (and so off its wall).
+        // 0.3 m off its wall (and so off the door's line): said once, with the distance and the limit.
         let (text, f) = lint_changed("{id: 10, at: [4.25, 0.02]", "{id: 10, at: [4.25, 0.3]");
         let at = line_of(&text, "{id: 10, at: [4.25, 0.3]");
-        assert!(
-            has(&f, at, "barcode 10 marks door 1 (lab) (the nearest), but is 0.30 m off the door's line (its wall): at most 0.10 m"),
-            "{f:#?}"
+        assert_eq!(
+            rendered(&f),
+            [format!(
+                "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 is 0.30 m in front of the wall behind it: barcodes \
+                 are stuck 0.01 to 0.02 m off their wall, on the side they face"
+            )]
+        );
+        // On another wall, 0.3 m off the door's line: a wall across the lab at x = 4.0, the barcode on it.
+        let text = small()
+            .replacen("      - [5.6, 0, 6, 0]", "      - [5.6, 0, 6, 0]\n      - [4.0, 0.3, 4.0, 0.9]", 1)
+            .replacen("{id: 10, at: [4.25, 0.02], facing_deg: 90}", "{id: 10, at: [4.02, 0.3], facing_deg: 0}", 1);
+        let at = line_of(&text, "{id: 10, at: [4.02, 0.3]");
+        assert_eq!(
+            rendered(&lint_text(&text)),
+            [format!(
+                "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 marks door 1 (lab) (the nearest), but is 0.30 m \
+                 off the door's line (its wall): at most 0.10 m"
+            )]
         );
         // 0.5 m is within it.
         let (_, f) = lint_changed("{id: 10, at: [4.25, 0.02]", "{id: 10, at: [3.9, 0.02]");
