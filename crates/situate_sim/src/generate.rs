@@ -110,7 +110,9 @@ impl Options {
         within("floors", self.floors, 2, 6)?;
         within("cars", self.cars, 1, 4)?;
         within("corridor-width", self.corridor_width, 1.8, 3.0)?;
-        within("door-width", self.door_width, 0.8, 1.6)?;
+        // `situate map check`'s rules (docs/maps.md): a building outside them is never drawn, so
+        // options outside them are refused here, with the range, not after 50 failed attempts.
+        within("door-width", self.door_width, crate::check::DOOR_MIN, crate::check::DOOR_MAX)?;
         within("junctions", self.junctions, 1, 3)?;
         // The rule `situate map check` holds maps to (docs/maps.md, "Lab door").
         within("barcode-offset", self.barcode_offset, 0.1, 0.6)?;
@@ -118,7 +120,7 @@ impl Options {
             within("clutter", (c, c), 0.0, 1.0)?;
         }
         if let Some(o) = self.open_s {
-            within("open-s", o, 1.0, 600.0)?;
+            within("open-s", o, crate::check::OPEN_S_MIN, 600.0)?;
         }
         Ok(())
     }
@@ -1138,6 +1140,20 @@ impl Building {
 mod tests {
     use super::*;
     use crate::geom::P2;
+
+    #[test]
+    fn options_outside_map_checks_rules_are_refused_with_the_range() {
+        let refused = |opts: Options| match opts.validate() {
+            Err(GenError::Option { option, message }) => format!("{option}: {message}"),
+            other => panic!("accepted: {other:?}"),
+        };
+        let doors = Options { door_width: (0.8, 1.2), ..Options::default() };
+        assert_eq!(refused(doors), "door-width: 0.8..1.2 is not within 1..1.4");
+        let open = Options { open_s: Some((2.0, 3.0)), ..Options::default() };
+        assert_eq!(refused(open), "open-s: 2..3 is not within 8..600");
+        let edges = Options { door_width: (1.0, 1.4), open_s: Some((8.0, 12.0)), ..Options::default() };
+        assert!(edges.validate().is_ok());
+    }
 
     fn gen(seed: u64, opts: &Options) -> (Generated, Map) {
         let g = match generate(seed, opts) {
