@@ -39,6 +39,7 @@ export class GraphView {
   readonly el: HTMLElement;
   private readonly svgBox: HTMLElement;
   private skills: GSkill[] = [];
+  private leafTypeMap = new Map<string, string>();
   private signals: GSignal[] = [];
   private winners = new Map<string, string | null>();
   private shape = "";
@@ -95,6 +96,7 @@ export class GraphView {
       readers: strings(x["readers"]),
     }));
     this.leafNames = leaves.map((x) => x.signal);
+    this.leafTypeMap = new Map(leaves.map((x) => [x.signal, x.type]));
     // The graph is kept at leaf level (`drive.v`, `drive.w`); show the signals the skills' ports name (`drive`).
     const ports = new Set<string>();
     for (const sk of this.skills) for (const p of [...sk.inputs, ...sk.outputs]) ports.add(p);
@@ -111,6 +113,11 @@ export class GraphView {
     this.signals = [...groups.values()];
     this.shape = "";
     this.render();
+  }
+
+  /** Every signal leaf (`odom.x`, `sonar.range`) and its type (`f64`, `f32[24]`). */
+  leafTypes(): Map<string, string> {
+    return new Map(this.leafTypeMap);
   }
 
   signalNames(): string[] {

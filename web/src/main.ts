@@ -96,7 +96,7 @@ function start(): void {
         try {
           const g = await conn.request("graph");
           graph.setGraph(g);
-          plots.setSignals(graph.signalNames());
+          plots.setSignals(graph.signalNames(), graph.leafTypes());
           graphAsked = true;
         } catch (e) {
           setText(status, `graph: ${errorText(e)}`);

@@ -2,7 +2,8 @@
 // (`sonar.range[3]`); every numeric leaf of the chosen values gets a line, over a time window.
 // Drawn by uPlot. A plot can hold several signals ("add signal"), be paused (the view freezes,
 // points keep being buffered; resuming jumps to live), zoomed (drag across the plot; double-click
-// or "Live" returns to the live window), and exported as CSV (every buffered point).
+// or "Live" returns to the live window), and exported as CSV (every buffered point). An
+// expression the robot's signals cannot have (`odom.z`, `sonar.range[99]`) is refused, saying why.
 
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
@@ -26,6 +27,54 @@ export interface Source {
 }
 
 type Mode = "live" | "paused" | "zoomed";
+
+/** Why `expr` names nothing the robot has, from its signal leaves' types (`odom.x` → `f64`,
+ *  `sonar.range` → `f32[24]`), or null when it may (or the leaves are not known yet). */
+export function refusal(expr: string, leaves: Map<string, string>): string | null {
+  if (leaves.size === 0) return null;
+  const tokens: (string | number)[] = [];
+  const re = /([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]|\./gy;
+  let m: RegExpExecArray | null;
+  while ((m = re.exec(expr)) !== null) {
+    if (m[1] !== undefined) tokens.push(m[1]);
+    else if (m[2] !== undefined) tokens.push(Number(m[2]));
+  }
+  const fieldsOf = (path: string) => [...new Set([...leaves.keys()].filter((l) => l.startsWith(path + ".")).map((l) => l.slice(path.length + 1).split(/[.[]/)[0] ?? ""))];
+  let path = "";
+  /** The type of `path` when it is a leaf or an element of one; null: a record (or a namespace). */
+  let type: string | null = null;
+  for (const tok of tokens) {
+    if (path === "") {
+      path = String(tok);
+      type = leaves.get(path) ?? null;
+      // Not a known name at all: the server refuses it, with its own suggestion.
+      if (type === null && fieldsOf(path).length === 0) return null;
+      continue;
+    }
+    if (type === null) {
+      const fields = fieldsOf(path);
+      if (typeof tok === "number") return `${expr}: ${path} is a record (fields ${fields.join(", ")}), not an array: no element [${tok}]`;
+      if (!fields.includes(tok)) return `${expr}: no field ${tok} in ${path}, whose fields are ${fields.join(", ")}`;
+      path = `${path}.${tok}`;
+      type = leaves.get(path) ?? null;
+    } else {
+      // A record inside an array (or any type not spelled simply): not checked here.
+      if (type.includes("{")) return null;
+      const arr = /^(.*)\[(\d*)\]$/.exec(type);
+      if (typeof tok === "number") {
+        if (!arr) return `${expr}: ${path} is ${type}, not an array: no element [${tok}]`;
+        const n = arr[2] === "" ? null : Number(arr[2]);
+        if (n !== null && tok >= n) return `${expr}: index ${tok} is out of ${path}'s range 0..${n - 1} (${path} is ${type})`;
+        path = `${path}[${tok}]`;
+        type = arr[1] ?? "";
+      } else {
+        return `${expr}: ${path} is ${type}, which has no field ${tok}`;
+      }
+    }
+  }
+  return null;
+}
+
 
 class Plot {
   readonly el: HTMLElement;
@@ -362,6 +411,7 @@ export class Plots {
   private readonly options: HTMLDataListElement;
   private readonly error: HTMLElement;
   private known: string[] = [];
+  private leaves = new Map<string, string>();
 
   constructor(
     private readonly conn: Connection,
@@ -387,8 +437,11 @@ export class Plots {
     );
   }
 
-  setSignals(names: string[]): void {
+  /** The robot's signals (for the field's suggestions) and its leaves' types (to refuse what
+   *  none of them has). */
+  setSignals(names: string[], leaves: Map<string, string> = new Map()): void {
     this.known = names;
+    this.leaves = leaves;
     this.options.replaceChildren(...names.map((n) => h("option", { value: n })));
   }
 
@@ -407,6 +460,11 @@ export class Plots {
   private source(expr: string): Source | null {
     if (!PATH_RE.test(expr)) {
       setText(this.error, `"${expr}" is not a signal path (like odom.x or sonar.range[3])`);
+      return null;
+    }
+    const why = refusal(expr, this.leaves);
+    if (why !== null) {
+      setText(this.error, why);
       return null;
     }
     const base = this.baseOf(expr);

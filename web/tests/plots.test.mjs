@@ -218,3 +218,64 @@ describe("plots", () => {
     await until(async () => (await page.getByTestId("plot").count()) === 0, "no plot left");
   });
 });
+
+// What a plot claims is the robot's: a signal the robot cannot have is refused with the reason
+// (issue 38).
+describe("plots tell the truth", () => {
+  let tb;
+  let browser;
+  let page;
+
+  before(async () => {
+    ({ tb, browser, page } = await openGui());
+    // The signals' types come with the graph: the field's suggestions are filled from it.
+    await until(async () => (await page.locator("#signal-names option").count()) > 0, "the signals known");
+  });
+
+  after(() => closeGui({ tb, browser }));
+
+  afterEach(async (t) => {
+    if (page) await page.screenshot({ path: screenshotPath(`plots-truth-${t.name.replace(/[^a-z0-9]+/gi, "-")}`), fullPage: true }).catch(() => undefined);
+  });
+
+  const error = async () => (await page.getByTestId("plot-error").textContent()) ?? "";
+  const plotOf = (expr) => page.locator(`[data-testid=plot][data-expr="${expr}"]`);
+  const chartOf = (expr) => plotOf(expr).getByTestId("plot-canvas");
+  const json = async (locator, name) => JSON.parse((await locator.getAttribute(name)) || "{}");
+  const samples = () => page.evaluate(() => Number(document.body.dataset.samples ?? "0"));
+
+  test("a field or an element the signal does not have is refused, saying why", async () => {
+    const add = async (expr) => {
+      await page.getByTestId("plot-signal").fill(expr);
+      await page.getByTestId("plot-add").click();
+    };
+    await add("odom.z");
+    await until(async () => (await error()).includes("odom.z"), "odom.z refused");
+    assert.equal(await error(), "odom.z: no field z in odom, whose fields are x, y, theta");
+    await add("sonar.range[99]");
+    await until(async () => (await error()).includes("sonar.range[99]"), "sonar.range[99] refused");
+    assert.equal(await error(), "sonar.range[99]: index 99 is out of sonar.range's range 0..23 (sonar.range is f32[24])");
+    await add("drive.v[0]");
+    await until(async () => (await error()).includes("drive.v[0]"), "drive.v[0] refused");
+    assert.equal(await error(), "drive.v[0]: drive.v is f64, not an array: no element [0]");
+    assert.equal(await page.getByTestId("plot").count(), 0, "no plot made for them");
+
+    // What exists is taken: the last element, a record field, a whole record.
+    await add("sonar.range[23]");
+    await until(async () => (await plotOf("sonar.range[23]").count()) === 1, "sonar.range[23] plotted");
+    assert.equal(await error(), "");
+    await until(async () => (await json(chartOf("sonar.range[23]"), "data-drawn"))["sonar.range[23]"] >= 3, "sonar.range[23] drawn");
+    // The field under a plot refuses the same way.
+    const more = plotOf("sonar.range[23]").getByTestId("plot-add-signal");
+    await more.fill("odom.z");
+    await plotOf("sonar.range[23]").getByTestId("plot-add-signal-button").click();
+    await until(async () => (await error()).includes("odom.z"), "odom.z refused under a plot");
+    assert.equal(await plotOf("sonar.range[23]").getByTestId("plot-title").textContent(), "sonar.range[23]");
+    await more.fill("odom.theta");
+    await plotOf("sonar.range[23]").getByTestId("plot-add-signal-button").click();
+    await until(async () => (await json(chartOf("sonar.range[23],odom.theta"), "data-drawn"))["odom.theta"] >= 3, "odom.theta drawn beside it");
+    assert.equal(await error(), "");
+    await plotOf("sonar.range[23],odom.theta").getByTestId("plot-remove").click();
+    await until(async () => (await page.getByTestId("plot").count()) === 0, "removed");
+  });
+});
