@@ -126,7 +126,7 @@ function start(): void {
         world.keepTrail(msg["signals"], wall);
       }
       if (graphAsked && !timeline.isPaused()) graph.update(skills, msg["winners"]);
-      plots.update(wall, msg["signals"]);
+      plots.update(wall, msg["signals"], isObject(stats) ? { cycle, timeS: num(stats["time_s"]) } : null);
       document.body.dataset["samples"] = String(Number(document.body.dataset["samples"] ?? "0") + 1);
     },
     event: (e) => {

@@ -4,6 +4,7 @@
 // points keep being buffered; resuming jumps to live), zoomed (drag across the plot; double-click
 // or "Live" returns to the live window), and exported as CSV (every buffered point). An
 // expression the robot's signals cannot have (`odom.z`, `sonar.range[99]`) is refused, saying why.
+// Hovering shows each sample's cycle and robot time.
 
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
@@ -27,6 +28,12 @@ export interface Source {
 }
 
 type Mode = "live" | "paused" | "zoomed";
+
+/** The sample a telemetry message is: the robot's newest cycle and its time (s). */
+export interface SampleAt {
+  cycle: number;
+  timeS: number;
+}
 
 /** Why `expr` names nothing the robot has, from its signal leaves' types (`odom.x` → `f64`,
  *  `sonar.range` → `f32[24]`), or null when it may (or the leaves are not known yet). */
@@ -75,7 +82,6 @@ export function refusal(expr: string, leaves: Map<string, string>): string | nul
   return null;
 }
 
-
 class Plot {
   readonly el: HTMLElement;
   readonly sources: Source[] = [];
@@ -90,9 +96,14 @@ class Plot {
   private chart: uPlot | null = null;
   /** The buffer: one time column and one column per line, aligned (null: no value at that time). */
   private times: number[] = [];
+  /** Per sample, the robot's newest cycle and its time (s), when the sample said. */
+  private cycles: (number | null)[] = [];
+  private robotTimes: (number | null)[] = [];
   private readonly names: string[] = [];
   private readonly columns = new Map<string, (number | null)[]>();
   private received = 0;
+  /** The first buffered sample drawn (the legend's index 0). */
+  private viewStart = 0;
   /** When this run's first point came (wall s). */
   private since: number | null = null;
   private mode: Mode = "live";
@@ -182,6 +193,8 @@ class Plot {
   /** A new run: the old run's points go, and the view is live again. */
   clear(): void {
     this.times = [];
+    this.cycles = [];
+    this.robotTimes = [];
     this.names.length = 0;
     this.columns.clear();
     this.received = 0;
@@ -192,8 +205,9 @@ class Plot {
     this.rebuild();
   }
 
-  /** One telemetry sample: a point per numeric leaf of every source present in it. */
-  add(wall: number, signals: JsonObject): void {
+  /** One telemetry sample: a point per numeric leaf of every source present in it (`at`: the
+   *  sample's cycle and robot time, when the telemetry said). */
+  add(wall: number, signals: JsonObject, at: SampleAt | null = null): void {
     const row: [string, number][] = [];
     for (const src of this.sources) {
       const r = signals[src.base];
@@ -215,6 +229,8 @@ class Plot {
       newLines = true;
     }
     this.times.push(wall);
+    this.cycles.push(at?.cycle ?? null);
+    this.robotTimes.push(at?.timeS ?? null);
     const values = new Map(row);
     for (const name of this.names) {
       const x = values.get(name);
@@ -235,6 +251,8 @@ class Plot {
     while (drop < this.times.length && (this.times[drop] ?? now) < now - MAX_AGE_S) drop++;
     if (drop < 64) return;
     this.times.splice(0, drop);
+    this.cycles.splice(0, drop);
+    this.robotTimes.splice(0, drop);
     for (const c of this.columns.values()) c.splice(0, drop);
   }
 
@@ -308,7 +326,8 @@ class Plot {
       height: HEIGHT,
       scales: { x: { time: true }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
       axes: [axis(), { ...axis(), size: 60 }],
-      series: [{ label: "t" }, ...this.names.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length] ?? "#000", width: 1.5 }))],
+      // The legend's time: the sample's cycle and robot time (the x axis is the wall clock).
+      series: [{ label: "at", value: (_u, _v, _s, idx) => (idx === null ? "—" : this.sampleText(this.viewStart + idx)) }, ...this.names.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length] ?? "#000", width: 1.5 }))],
       cursor: {
         drag: { x: true, y: false, setScale: false },
         // Double-click: back to the live window (uPlot's own would show all the buffer).
@@ -343,6 +362,7 @@ class Plot {
     const { min, max } = this.view();
     const i0 = lowerBound(this.times, min);
     const i1 = lowerBound(this.times, max + 1e-9);
+    this.viewStart = i0;
     const data: uPlot.AlignedData = [this.times.slice(i0, i1), ...this.names.map((n) => (this.columns.get(n) ?? []).slice(i0, i1))];
     u.batch(() => {
       u.setData(data, false);
@@ -357,6 +377,18 @@ class Plot {
     const drawn: Record<string, number> = {};
     this.names.forEach((n, i) => (drawn[n] = (data[i + 1] ?? []).filter((x) => x !== null && x !== undefined).length));
     this.chartBox.dataset["drawn"] = JSON.stringify(drawn);
+  }
+
+  /** Which sample the buffer's row `i` is: its cycle and robot time, and its wall-clock time. */
+  private sampleText(i: number): string {
+    const wall = this.times[i];
+    if (wall === undefined) return "—";
+    const cycle = this.cycles[i];
+    const t = this.robotTimes[i];
+    const d = new Date(wall * 1000);
+    const two = (n: number) => String(n).padStart(2, "0");
+    const clock = `${two(d.getHours())}:${two(d.getMinutes())}:${two(d.getSeconds())}.${String(d.getMilliseconds()).padStart(3, "0")}`;
+    return cycle === null || cycle === undefined ? clock : `cycle ${cycle}, t = ${(t ?? 0).toFixed(2)} s (${clock})`;
   }
 
   /** The buffer as CSV: `t_s` (wall clock, Unix seconds) and a column per line, a row per sample. */
@@ -528,8 +560,8 @@ export class Plots {
     for (const p of this.plots) p.clear();
   }
 
-  update(wall: number, signals: Json | undefined): void {
+  update(wall: number, signals: Json | undefined, at: SampleAt | null = null): void {
     if (!isObject(signals)) return;
-    for (const p of this.plots) p.add(wall, signals);
+    for (const p of this.plots) p.add(wall, signals, at);
   }
 }

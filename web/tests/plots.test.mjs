@@ -219,8 +219,8 @@ describe("plots", () => {
   });
 });
 
-// What a plot claims is the robot's: a signal the robot cannot have is refused with the reason
-// (issue 38).
+// What a plot claims is the robot's: a signal the robot cannot have is refused with the reason,
+// and hovering names the cycle (issue 38).
 describe("plots tell the truth", () => {
   let tb;
   let browser;
@@ -276,6 +276,38 @@ describe("plots tell the truth", () => {
     await until(async () => (await json(chartOf("sonar.range[23],odom.theta"), "data-drawn"))["odom.theta"] >= 3, "odom.theta drawn beside it");
     assert.equal(await error(), "");
     await plotOf("sonar.range[23],odom.theta").getByTestId("plot-remove").click();
+    await until(async () => (await page.getByTestId("plot").count()) === 0, "removed");
+  });
+
+  test("hovering a plot shows the sample's cycle and robot time", async () => {
+    await page.getByTestId("plot-signal").fill("truth.pose.x");
+    await page.getByTestId("plot-add").click();
+    const chart = chartOf("truth.pose.x");
+    await until(async () => (await json(chart, "data-drawn"))["truth.pose.x"] >= 20, "two seconds of points");
+    await plotOf("truth.pose.x").getByTestId("plot-pause").click();
+    const over = plotOf("truth.pose.x").locator(".u-over");
+    const box = await over.boundingBox();
+    assert.ok(box && box.width > 100, `the plot area is laid out: ${JSON.stringify(box)}`);
+    const legendX = plotOf("truth.pose.x").locator(".u-legend .u-series").first().locator(".u-value");
+    const hover = async (fraction) => {
+      await page.mouse.move(box.x + box.width * fraction, box.y + box.height / 2);
+      return until(async () => {
+        const m = /^cycle (\d+), t = (\d+\.\d\d) s \(\d\d:\d\d:\d\d\.\d{3}\)$/.exec((await legendX.textContent()) ?? "");
+        return m && { cycle: Number(m[1]), t: Number(m[2]) };
+      }, `the legend names the cycle at ${fraction}`, 10_000).catch(async (e) => {
+        throw new Error(`${e.message}; the legend reads "${await legendX.textContent()}"`);
+      });
+    };
+    const a = await hover(0.97);
+    const b = await hover(0.99);
+    const stats = await cli(tb.linkPort, "stats");
+    assert.ok(a.cycle > 0 && a.cycle <= b.cycle && b.cycle <= stats.cycle, `cycles ${a.cycle} ≤ ${b.cycle} ≤ the robot's ${stats.cycle}`);
+    assert.ok(a.t <= b.t && b.t <= stats.time_s, `robot times ${a.t} ≤ ${b.t} ≤ ${stats.time_s}`);
+    // Farther left, an earlier sample: another cycle (the window holds at least two seconds).
+    const c = await hover(0.5);
+    assert.ok(c.cycle < a.cycle, `an earlier sample's cycle: ${c.cycle} < ${a.cycle}`);
+    await page.mouse.move(0, 0);
+    await plotOf("truth.pose.x").getByTestId("plot-remove").click();
     await until(async () => (await page.getByTestId("plot").count()) === 0, "removed");
   });
 });
