@@ -52,6 +52,11 @@ pub enum Request {
     QuerySignal {
         signal: String,
     },
+    /// The current values of several signals, all of one moment (between two cycles): what
+    /// [`Request::QuerySignal`] gives for each, in one request.
+    QuerySignals {
+        signals: Vec<String>,
+    },
     QuerySkill {
         skill: String,
     },
@@ -130,6 +135,8 @@ pub enum Reply {
     },
     Param(Value),
     Signal(SignalReading),
+    /// The readings of a [`Request::QuerySignals`], in its order.
+    Signals(Vec<SignalReading>),
     Skill(Box<SkillInfo>),
     Skills(Vec<SkillInfo>),
     Winners(Vec<ResourceWinner>),

@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use situate_core::{SkillKind, Value};
-use situate_manager::{Control, ControlError, Event, Registry};
+use situate_manager::{Control, ControlError, Event, Registry, Reply, Request};
 
 /// A chain declared consumer-first still runs producer-first, each in the
 /// same cycle as its producer.
@@ -27,6 +27,19 @@ fn readiness_order_follows_data_dependencies_not_declaration_order() {
     assert_eq!(m.query("c_out").unwrap().cycle, 2);
     let timing = m.skill("a").unwrap().timing;
     assert_eq!(timing.runs, 2);
+    // Several signals in one request: each as its own query gives it, in the order asked.
+    let signals = vec!["c_out".to_string(), "a_out".to_string(), "s".to_string()];
+    match m.request(Request::QuerySignals { signals: signals.clone() }).unwrap() {
+        Reply::Signals(readings) => {
+            let one_by_one: Vec<_> = signals.iter().map(|s| m.query(s).unwrap()).collect();
+            assert_eq!(readings, one_by_one);
+            assert_eq!(readings[1].value, Some(Value::F64(2.0)));
+        }
+        other => panic!("not the signals: {other:?}"),
+    }
+    let unknown = vec!["c_out".to_string(), "a_ot".to_string()];
+    let err = m.request(Request::QuerySignals { signals: unknown }).unwrap_err();
+    assert_eq!(err.to_string(), "unknown signal `a_ot` — did you mean `a_out`?");
 }
 
 #[test]

@@ -122,9 +122,7 @@ impl Lockstep {
 
     /// Publishes the topics out written since they were last published, stamped `stamp`.
     fn publish_outputs(&mut self, handle: &Handle, time: &RosTime) {
-        for topic in &mut self.topics {
-            crate::publish_if_new(handle, topic, Some(time));
-        }
+        crate::publish_new(handle, &mut self.topics, Some(time));
     }
 
     /// Says the robot has run its cycles up to ROS time `ns`.
@@ -312,6 +310,9 @@ impl Driver<'_> {
             let (Some(now), Some((a_ns, a_cycle))) = (last, anchor) else { continue };
             let target = a_cycle.saturating_add(cycles_due(a_ns, now, self.period_ns));
             owed = false;
+            // The topics out were published after the last cycle that ran (each is a query of the
+            // manager: not asked twice for the same cycle).
+            let mut published = false;
             // Ask even when nothing seems owed: a client's `step` may have moved the count.
             loop {
                 let until = if self.lockstep.is_some() {
@@ -336,6 +337,7 @@ impl Driver<'_> {
                 if ran > 0 {
                     if let Some(l) = self.lockstep.as_mut() {
                         l.publish_outputs(self.handle, self.time);
+                        published = true;
                     }
                 }
                 if self.stopping() {
@@ -352,7 +354,10 @@ impl Driver<'_> {
             }
             if !owed && unanswered {
                 if let Some(l) = self.lockstep.as_mut() {
-                    l.publish_outputs(self.handle, self.time);
+                    // Cycles a client's `step` ran (no tick ran one) have outputs to go out too.
+                    if !published {
+                        l.publish_outputs(self.handle, self.time);
+                    }
                     l.publish_done(now);
                 }
                 unanswered = false;

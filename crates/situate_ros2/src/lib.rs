@@ -360,9 +360,7 @@ fn sample_loop(
 ) {
     let mut next = Instant::now();
     while !stop.load(Ordering::SeqCst) {
-        for topic in topics.iter_mut() {
-            publish_if_new(handle, topic, stamps);
-        }
+        publish_new(handle, topics, stamps);
         next += period;
         let now = Instant::now();
         if next < now {
@@ -379,19 +377,35 @@ fn sample_loop(
     }
 }
 
-pub(crate) fn publish_if_new(handle: &Handle, topic: &mut Topic, stamps: Option<&clock::RosTime>) {
-    let reading =
-        match handle.request_timeout(Request::QuerySignal { signal: topic.config.signal.clone() }, REQUEST_TIMEOUT) {
-            Ok(Reply::Signal(r)) => r,
-            Ok(_) => return,
-            Err(e) => {
-                if !topic.warned {
-                    tracing::warn!(topic = %topic.fq_name, error = %e, "ROS 2 bridge: cannot read the signal");
-                    topic.warned = true;
-                }
-                return;
+/// Publishes each topic out whose signal was written since it was last published, stamped with
+/// ROS time (`stamps`) or else the wall clock's.
+pub(crate) fn publish_new(handle: &Handle, topics: &mut [Topic], stamps: Option<&clock::RosTime>) {
+    if topics.is_empty() {
+        return;
+    }
+    // One request for every topic's signal: each is a round trip to the cycle's thread.
+    let signals = topics.iter().map(|t| t.config.signal.clone()).collect();
+    let readings = match handle.request_timeout(Request::QuerySignals { signals }, REQUEST_TIMEOUT) {
+        Ok(Reply::Signals(r)) if r.len() == topics.len() => r,
+        other => {
+            let error = match other {
+                Err(e) => e.to_string(),
+                Ok(reply) => format!("unexpected reply {reply:?}"),
+            };
+            for topic in topics.iter_mut().filter(|t| !t.warned) {
+                tracing::warn!(topic = %topic.fq_name, %error, "ROS 2 bridge: cannot read the signal");
+                topic.warned = true;
             }
-        };
+            return;
+        }
+    };
+    for (topic, reading) in topics.iter_mut().zip(readings) {
+        publish_reading(topic, reading, stamps);
+    }
+}
+
+/// Publishes one topic's signal reading if it was written since the topic was last published.
+fn publish_reading(topic: &mut Topic, reading: situate_manager::SignalReading, stamps: Option<&clock::RosTime>) {
     let Some(value) = reading.value else { return };
     if topic.last_cycle == Some(reading.cycle) {
         return;

@@ -136,6 +136,7 @@ pub fn reply_to_json(reply: &Reply) -> Json {
         Reply::Activation { changed, at_cycle } => json!({"changed": changed, "at_cycle": at_cycle}),
         Reply::Param(v) => value_to_json(v),
         Reply::Signal(r) => reading_to_json(r),
+        Reply::Signals(list) => Json::Array(list.iter().map(reading_to_json).collect()),
         Reply::Skill(s) => skill_to_json(s),
         Reply::Skills(list) => Json::Array(list.iter().map(skill_to_json).collect()),
         Reply::Winners(w) => Json::Array(

@@ -86,6 +86,11 @@ pub(crate) fn prepare(graph: &Graph, request: &mut Request) -> Result<Option<Pre
         Request::QuerySignal { signal } if graph.signal_type(signal).is_none() => {
             return Err(unknown_signal(graph, signal));
         }
+        Request::QuerySignals { signals } => {
+            if let Some(s) = signals.iter().find(|s| graph.signal_type(s).is_none()) {
+                return Err(unknown_signal(graph, s));
+            }
+        }
         Request::AddMonitor { condition, report, .. } => return prepare_monitor(graph, condition, report).map(Some),
         Request::Step { cycles } => check_step(*cycles)?,
         _ => {}

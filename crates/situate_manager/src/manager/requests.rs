@@ -417,6 +417,9 @@ impl Manager {
                 Ok(Reply::Done)
             }
             Request::QuerySignal { signal } => self.query_signal(&signal).map(Reply::Signal),
+            Request::QuerySignals { signals } => {
+                signals.iter().map(|s| self.query_signal(s)).collect::<Result<_, _>>().map(Reply::Signals)
+            }
             Request::QuerySkill { skill } => {
                 let i = self.find(&skill)?;
                 Ok(Reply::Skill(Box::new(self.skill_info(i))))
