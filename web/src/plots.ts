@@ -2,9 +2,10 @@
 // (`sonar.range[3]`); every numeric leaf of the chosen values gets a line, over a time window.
 // Drawn by uPlot. A plot can hold several signals ("add signal"), be paused (the view freezes,
 // points keep being buffered; resuming jumps to live), zoomed (drag across the plot; double-click
-// or "Live" returns to the live window), and exported as CSV (every buffered point). An
-// expression the robot's signals cannot have (`odom.z`, `sonar.range[99]`) is refused, saying why.
-// Hovering shows each sample's cycle and robot time.
+// or "Live" returns to the live window), and exported as CSV (every buffered point).
+// A value nobody wrote for longer than its writer's rhythm is a gap, not the old value drawn
+// again. An expression the robot's signals cannot have (`odom.z`,
+// `sonar.range[99]`) is refused, saying why. Hovering shows each sample's cycle and robot time.
 
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
@@ -33,6 +34,27 @@ type Mode = "live" | "paused" | "zoomed";
 export interface SampleAt {
   cycle: number;
   timeS: number;
+}
+
+/** What is known of a source's writes: the cycle of the last write seen, and the last intervals
+ *  seen between its writes (cycles; at most RHYTHM_WRITES). */
+interface Writes {
+  cycle: number;
+  intervals: number[];
+}
+
+/** How many of a writer's last intervals between writes make its rhythm. */
+const RHYTHM_WRITES = 8;
+
+/** Whether a source's reading, last written in cycle `w`, is stale in a sample of the robot's
+ *  cycle `now`: not written for longer than its writer's own rhythm (twice the longest of its
+ *  last intervals between writes, taken as 5 cycles until two writes were seen, and 2 cycles
+ *  more). Also what is known of its writes, updated. */
+function stale(writes: Writes | undefined, w: number, now: number): [boolean, Writes] {
+  let next: Writes = writes ?? { cycle: w, intervals: [] };
+  if (writes !== undefined && w > writes.cycle) next = { cycle: w, intervals: [...writes.intervals.slice(1 - RHYTHM_WRITES), w - writes.cycle] };
+  const rhythm = next.intervals.length === 0 ? 5 : Math.max(...next.intervals);
+  return [now - w > 2 * rhythm + 2, next];
 }
 
 /** Why `expr` names nothing the robot has, from its signal leaves' types (`odom.x` → `f64`,
@@ -101,7 +123,11 @@ class Plot {
   private robotTimes: (number | null)[] = [];
   private readonly names: string[] = [];
   private readonly columns = new Map<string, (number | null)[]>();
+  /** Per source (its expression), its writes seen. */
+  private readonly writes = new Map<string, Writes>();
   private received = 0;
+  /** Values not written for longer than their writer's rhythm (gaps), per line. */
+  private readonly gaps = new Map<string, number>();
   /** The first buffered sample drawn (the legend's index 0). */
   private viewStart = 0;
   /** When this run's first point came (wall s). */
@@ -186,6 +212,7 @@ class Plot {
     const i = this.sources.findIndex((s) => s.expr === expr);
     if (i < 0 || this.sources.length === 1) return;
     this.sources.splice(i, 1);
+    this.writes.delete(expr);
     setText(this.title, this.sources.map((s) => s.expr).join(", "));
     this.el.dataset["expr"] = this.sources.map((s) => s.expr).join(",");
   }
@@ -197,6 +224,9 @@ class Plot {
     this.robotTimes = [];
     this.names.length = 0;
     this.columns.clear();
+    this.writes.clear();
+    this.gaps.clear();
+    this.chartBox.dataset["gaps"] = "{}";
     this.received = 0;
     this.since = null;
     this.chartBox.dataset["points"] = "0";
@@ -205,16 +235,23 @@ class Plot {
     this.rebuild();
   }
 
-  /** One telemetry sample: a point per numeric leaf of every source present in it (`at`: the
-   *  sample's cycle and robot time, when the telemetry said). */
+  /** One telemetry sample: a point per numeric leaf of every source present in it, a gap (null)
+   *  for a stale one (`at`: the sample's cycle and robot time, when the telemetry said). */
   add(wall: number, signals: JsonObject, at: SampleAt | null = null): void {
-    const row: [string, number][] = [];
+    const row: [string, number | null][] = [];
     for (const src of this.sources) {
       const r = signals[src.base];
       if (!isObject(r) || !("value" in r)) continue;
       const v = pick((r as JsonObject)["value"], src.path);
       if (v === undefined) continue;
-      for (const [leaf, x] of numericLeaves(v)) if (Number.isFinite(x)) row.push([src.expr + leaf, x]);
+      let old = false;
+      const w = r["cycle"];
+      if (at !== null && typeof w === "number") {
+        const [s, writes] = stale(this.writes.get(src.expr), w, at.cycle);
+        this.writes.set(src.expr, writes);
+        old = s;
+      }
+      for (const [leaf, x] of numericLeaves(v)) if (Number.isFinite(x)) row.push([src.expr + leaf, old ? null : x]);
     }
     if (row.length === 0) return;
     if (this.since === null) {
@@ -232,13 +269,20 @@ class Plot {
     this.cycles.push(at?.cycle ?? null);
     this.robotTimes.push(at?.timeS ?? null);
     const values = new Map(row);
+    let gap = false;
     for (const name of this.names) {
-      const x = values.get(name);
-      this.columns.get(name)?.push(x ?? null);
-      if (x !== undefined) this.received++;
+      // A line of no source in this sample (removed, or absent): a gap.
+      const x = values.get(name) ?? null;
+      this.columns.get(name)?.push(x);
+      if (typeof x === "number") this.received++;
+      else if (x === null && values.has(name)) {
+        this.gaps.set(name, (this.gaps.get(name) ?? 0) + 1);
+        gap = true;
+      }
     }
     this.trim(wall);
     this.chartBox.dataset["points"] = String(this.received);
+    if (gap) this.chartBox.dataset["gaps"] = JSON.stringify(Object.fromEntries(this.gaps));
     if (newLines) this.rebuild();
     else if (this.mode === "live") this.redraw();
   }
@@ -377,6 +421,10 @@ class Plot {
     const drawn: Record<string, number> = {};
     this.names.forEach((n, i) => (drawn[n] = (data[i + 1] ?? []).filter((x) => x !== null && x !== undefined).length));
     this.chartBox.dataset["drawn"] = JSON.stringify(drawn);
+    // Per line, its newest drawn cell: a number, or null (a gap).
+    const last: Record<string, number | null> = {};
+    this.names.forEach((n, i) => (last[n] = (data[i + 1] ?? [])[data[0].length - 1] ?? null));
+    this.chartBox.dataset["last"] = JSON.stringify(last);
   }
 
   /** Which sample the buffer's row `i` is: its cycle and robot time, and its wall-clock time. */

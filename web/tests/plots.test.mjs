@@ -35,6 +35,7 @@ describe("plots", () => {
   /** The drawn x range [min, max] (wall s). */
   const xRange = async () => JSON.parse((await attr("data-x-range")) || "[0, 0]");
   const drawn = async () => JSON.parse((await attr("data-drawn")) || "{}");
+  const json = async (locator, name) => JSON.parse((await locator.getAttribute(name)) || "{}");
   const windowS = async () => Number(await plot().getByTestId("plot-window").inputValue());
 
   test("several signals share one plot, each drawn as a line", async () => {
@@ -164,14 +165,24 @@ describe("plots", () => {
       const [header, ...rows] = text.trimEnd().split("\n");
       assert.equal(header, "t_s,truth.pose.x,truth.pose.y");
       assert.ok(rows.length >= 20, `rows for every sample so far: ${rows.length}`);
-      // An empty cell: no value at that time (y was added to the plot after x).
+      // An empty cell: no value at that time (y was added to the plot after x), or a gap (the
+      // circle not written for longer than its rhythm: a loaded machine may starve it).
       const parsed = rows.map((r) => r.split(",").map((c) => (c === "" ? null : Number(c))));
+      const gaps = await json(chart(), "data-gaps");
+      let [xGaps, yGaps, ySeen] = [0, 0, false];
       for (const [i, r] of parsed.entries()) {
         assert.equal(r.length, 3, `row ${i}: ${rows[i]}`);
-        assert.ok(Number.isFinite(r[0]) && Number.isFinite(r[1]), `row ${i} has a time and an x: ${rows[i]}`);
-        assert.ok(r[2] === null ? i === 0 || parsed[i - 1][2] === null : Number.isFinite(r[2]), `row ${i}: y is a number, or missing only before its first value: ${rows[i]}`);
+        assert.ok(Number.isFinite(r[0]), `row ${i} has a time: ${rows[i]}`);
+        assert.ok(r[1] === null || Number.isFinite(r[1]), `row ${i}: x is a number or a gap: ${rows[i]}`);
+        assert.ok(r[2] === null || Number.isFinite(r[2]), `row ${i}: y is a number or a gap: ${rows[i]}`);
+        if (r[1] === null) xGaps++;
+        if (r[2] !== null) ySeen = true;
+        else if (ySeen) yGaps++;
         if (i > 0) assert.ok(r[0] > parsed[i - 1][0], `times increase at row ${i}`);
       }
+      // Every empty cell after a line's first value is one of its gaps.
+      assert.ok(xGaps <= (gaps["truth.pose.x"] ?? 0) && yGaps <= (gaps["truth.pose.y"] ?? 0), `empty cells ${xGaps}, ${yGaps} vs gaps ${JSON.stringify(gaps)}`);
+      assert.ok(parsed.filter((r) => r[1] !== null).length >= 10, "x has values");
       assert.ok(parsed.filter((r) => r[2] !== null).length >= 10, "y has values");
       const last = parsed[parsed.length - 1];
       assert.ok(close(last[1], reading.value.x) && close(last[2], reading.value.y), `the last row ${rows[rows.length - 1]} is the pose over the link ${JSON.stringify(reading.value)}`);
@@ -219,8 +230,8 @@ describe("plots", () => {
   });
 });
 
-// What a plot claims is the robot's: a signal the robot cannot have is refused with the reason,
-// and hovering names the cycle (issue 38).
+// What a plot claims is the robot's: a value nobody wrote again is no point, a signal the robot
+// cannot have is refused with the reason, and hovering names the cycle (issue 38).
 describe("plots tell the truth", () => {
   let tb;
   let browser;
@@ -309,5 +320,29 @@ describe("plots tell the truth", () => {
     await page.mouse.move(0, 0);
     await plotOf("truth.pose.x").getByTestId("plot-remove").click();
     await until(async () => (await page.getByTestId("plot").count()) === 0, "removed");
+  });
+
+  test("a value nobody writes any more is a gap, not the old value drawn again", async () => {
+    await page.getByTestId("plot-signal").fill("drive.v");
+    await page.getByTestId("plot-add").click();
+    const chart = chartOf("drive.v");
+    await until(async () => (await json(chart, "data-drawn"))["drive.v"] >= 5, "drive.v drawn");
+    await cliDo(tb.linkPort, "deactivate", "runaway", "wander");
+    try {
+      // The page says nobody wrote it; soon after, drive.v's line is a gap, and stays one.
+      await until(async () => (await page.locator('[data-resource="drive.v"] [data-winner=""]').count()) === 1, "'nobody wrote it' for drive.v");
+      await until(async () => ((await json(chart, "data-gaps"))["drive.v"] ?? 0) >= 3, "gaps in drive.v's line");
+      const p0 = Number(await chart.getAttribute("data-points"));
+      const s0 = await samples();
+      await until(async () => (await samples()) >= s0 + 10, "ten more samples");
+      assert.equal(Number(await chart.getAttribute("data-points")), p0, "no point while nobody writes drive.v");
+      assert.ok((await json(chart, "data-gaps"))["drive.v"] >= 13, `a gap per sample: ${await chart.getAttribute("data-gaps")}`);
+      // The drawn line ends in a gap (null), not the value of before.
+      assert.deepEqual(await json(chart, "data-last"), { "drive.v": null }, "the newest drawn cell of drive.v");
+    } finally {
+      await cliDo(tb.linkPort, "activate", "runaway", "wander");
+    }
+    const p1 = Number(await chart.getAttribute("data-points"));
+    await until(async () => Number(await chart.getAttribute("data-points")) >= p1 + 5, "points again once written again");
   });
 });
