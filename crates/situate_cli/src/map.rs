@@ -46,6 +46,10 @@ pub(crate) enum MapCommand {
         /// No route hints in the mission.
         #[arg(long)]
         no_route: bool,
+        /// The family of buildings: 2 draws from the whole space docs/maps.md allows; 1 is the
+        /// family before issue 37, frozen (a seed gives the building it gave then).
+        #[arg(long, default_value_t = 2)]
+        family: u32,
         /// The map file to write (`-`: standard output).
         #[arg(short, long)]
         output: PathBuf,
@@ -72,6 +76,7 @@ pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
             open_s,
             barcode_offset,
             no_route,
+            family,
             output,
         } => {
             let opts = generate::Options {
@@ -84,6 +89,7 @@ pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
                 open_s,
                 barcode_offset,
                 route: !no_route,
+                family,
             };
             let g = generate::generate(seed, &opts).map_err(|e| problem(Exit::Usage, e.to_string()))?;
             if output.as_os_str() == "-" {
@@ -91,7 +97,8 @@ pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
             } else {
                 std::fs::write(&output, &g.yaml).with_context(|| format!("cannot write {}", output.display()))?;
                 if out.json {
-                    stdoutln!("{}", json!({"file": output.display().to_string(), "seed": seed}));
+                    let file = output.display().to_string();
+                    stdoutln!("{}", json!({"file": file, "seed": seed, "features": g.features.to_json()}));
                 } else {
                     eprintln!("{}: building of seed {seed} written", output.display());
                 }

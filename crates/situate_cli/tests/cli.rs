@@ -509,7 +509,24 @@ fn map_generate_then_map_check_round_trips() {
         let out = situate(["map", "check", "--json", &shown(&path)]);
         let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
         assert_eq!(j["ok"], true);
+        // With --json, what the building drew: the same as the file's comment block.
+        let out =
+            situate(["--json", "map", "generate", "--seed", &seed.to_string(), "--cars", "2..3", "-o", &shown(&path)]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let j: serde_json::Value = serde_json::from_str(stdout(&out).trim()).expect("JSON");
+        let walls = j["features"]["car_walls"].as_array().map(Vec::len);
+        assert!(matches!(walls, Some(2..=3)), "{j}");
+        let lobby = j["features"]["lobby"].as_str().unwrap_or_default().to_string();
+        assert!(first.contains(&format!("\n#   lobby: {lobby}\n")), "{j}\n{first}");
     }
+    // The family before issue 37, frozen: another building for the same seed, no car across
+    // from the call button; a family that does not exist is refused.
+    let one = situate(["map", "generate", "--seed", "3", "--family", "1", "-o", "-"]);
+    assert!(one.status.success(), "{}", stderr(&one));
+    assert!(stdout(&one).contains("\n#   lobby: facing\n"), "{}", stdout(&one));
+    assert_ne!(stdout(&one), stdout(&situate(["map", "generate", "--seed", "3", "-o", "-"])));
+    let out = situate(["map", "generate", "--seed", "1", "--family", "3", "-o", "-"]);
+    assert!(stderr(&out).contains("--family"), "{}", stderr(&out));
     // Options out of range: refused, naming the option.
     let out = situate(["map", "generate", "--seed", "1", "--cars", "7", "-o", "-"]);
     assert_no_panic(&out);

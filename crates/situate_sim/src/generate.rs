@@ -17,6 +17,15 @@ use thiserror::Error;
 use crate::check::lint;
 use crate::map::Map;
 
+mod family1;
+mod features;
+mod lobby;
+
+pub use features::{Features, NEAR_BARCODE_M};
+
+/// [`NEAR_BARCODE_M`] in cm.
+const NEAR_BARCODE: i64 = 60;
+
 /// The generator's options: each a range the seed draws from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
@@ -39,6 +48,10 @@ pub struct Options {
     pub barcode_offset: (f64, f64),
     /// Write the route hints.
     pub route: bool,
+    /// The family of buildings: 2 (the default) draws from the whole space the
+    /// docs allow; 1 is the family before issue 37, frozen (the same seed, the
+    /// same building as then).
+    pub family: u32,
 }
 
 impl Default for Options {
@@ -53,6 +66,7 @@ impl Default for Options {
             open_s: None,
             barcode_offset: (0.1, 0.6),
             route: true,
+            family: 2,
         }
     }
 }
@@ -107,6 +121,7 @@ impl Options {
             }
             Ok(())
         }
+        within("family", (self.family, self.family), 1, 2)?;
         within("floors", self.floors, 2, 6)?;
         within("cars", self.cars, 1, 4)?;
         within("corridor-width", self.corridor_width, 1.8, 3.0)?;
@@ -139,6 +154,8 @@ pub struct Generated {
     pub clutter: f64,
     /// Candidates drawn until one passed the lint (1: the first).
     pub attempts: usize,
+    /// What it drew of the cases the docs allow (also the file's comment block).
+    pub features: Features,
 }
 
 /// The most candidates drawn for one seed.
@@ -150,8 +167,8 @@ pub fn generate(seed: u64, opts: &Options) -> Result<Generated, GenError> {
     let mut rng = Rng(ChaCha8Rng::seed_from_u64(seed));
     let mut last = String::new();
     for attempt in 1..=MAX_ATTEMPTS {
-        let b = build(&mut rng, seed, opts);
-        let yaml = b.building.emit(seed, opts.route);
+        let b = if opts.family == 1 { family1::build(&mut rng, seed, opts) } else { build(&mut rng, seed, opts) };
+        let yaml = b.building.emit(seed, opts.route, &b.features);
         match Map::parse(&format!("seed-{seed}.yaml"), &yaml) {
             Err(e) => last = e.to_string(),
             Ok(map) => match lint(&map).first() {
@@ -163,6 +180,7 @@ pub fn generate(seed: u64, opts: &Options) -> Result<Generated, GenError> {
                         junctions: b.junctions,
                         clutter: b.clutter,
                         attempts: attempt,
+                        features: b.features,
                     })
                 }
             },
@@ -300,6 +318,7 @@ struct Built {
     corridor_widths: Vec<i64>,
     junctions: usize,
     clutter: f64,
+    features: Features,
 }
 
 fn turn(s: &str) -> Step {
@@ -495,6 +514,17 @@ fn features(
     (c, south_open, north_open)
 }
 
+/// The kinds of the junctions in `list`: `T` (one side) or `+` (both).
+fn junction_kinds(list: &[Feature]) -> Vec<&'static str> {
+    list.iter()
+        .filter_map(|f| match f {
+            Feature::Junction { north: true, south: true } => Some("+"),
+            Feature::Junction { .. } => Some("T"),
+            Feature::Room { .. } => None,
+        })
+        .collect()
+}
+
 fn junction_list(rng: &mut Rng, n: i64) -> Vec<Feature> {
     (0..n)
         .map(|_| match rng.int(0, 2) {
@@ -517,79 +547,36 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     let start_level = rng.int(-1, 0);
     let goal_level = start_level + nfloors - 1;
     let density = opts.clutter.unwrap_or_else(|| (rng.unit() * 30.0).round() / 100.0);
+    // The shortest open times the docs allow ([8, 12]) in one building of four, the others
+    // anywhere from there to [15, 25].
     let open_s = opts.open_s.unwrap_or_else(|| {
-        let t = rng.unit();
+        let t = if rng.int(0, 3) == 0 { 0.0 } else { rng.unit() };
         (((8.0 + 7.0 * t) * 10.0).round() / 10.0, ((12.0 + 13.0 * t) * 10.0).round() / 10.0)
     });
+    // Corridor widths: in half the buildings each drawn over the whole range, in the others
+    // all from its lower, middle or upper third (every corridor narrow, or every one wide).
+    let corridor_band;
+    let opts = &{
+        let (lo, hi) = opts.corridor_width;
+        let third = (hi - lo) / 3.0;
+        let (name, band) = match rng.int(0, 5) {
+            0 => ("narrow", (lo, lo + third)),
+            1 => ("middle", (lo + third, hi - third)),
+            2 => ("wide", (hi - third, hi)),
+            _ => ("mixed", (lo, hi)),
+        };
+        corridor_band = name;
+        Options { corridor_width: ((band.0 * 100.0).round() / 100.0, (band.1 * 100.0).round() / 100.0), ..opts.clone() }
+    };
     let off = opts.barcode_offset;
     let off_hi = cm(off.1);
 
     // --- the lobby, in its own frame (south-west corner at 0, 0) ---
     let wb = rng.cm(opts.corridor_width); // the corridor into the lobby, and its entry
     widths.push(wb);
-    let s = rng.int(180, 240);
-    let (g, m) = (40, 30);
-    let mut walls_of = vec!['N', 'N', 'E', 'W'];
-    rng.shuffle(&mut walls_of);
-    walls_of.truncate(ncars as usize);
-    let kn = walls_of.iter().filter(|&&w| w == 'N').count();
-    let stretch = 120.max(wb + 60);
-    let items: Vec<bool> = match kn {
-        0 => vec![false],
-        1 if rng.coin() => vec![true, false],
-        1 => vec![false, true],
-        _ => vec![true, false, true],
-    }; // true: a car
-    let total: i64 =
-        items.iter().map(|&c| if c { s } else { stretch }).sum::<i64>() + g * (items.len() as i64 - 1) + 2 * m;
-    let lh = rng.int(400, 500);
-    let lw = total.max(400) + rng.int(0, 60);
-    let mut x = m + (lw - total) / 2;
-    let mut cars_local: Vec<(char, CarB)> = Vec::new();
-    let mut bx = 0;
-    for &is_car in &items {
-        if is_car {
-            cars_local.push(('N', CarB { lo: (x, lh), hi: (x + s, lh + s), out: (0, -1), door: 0 }));
-            x += s + g;
-        } else {
-            bx = x + stretch / 2;
-            x += stretch + g;
-        }
-    }
-    for &w in &walls_of {
-        match w {
-            'E' => cars_local.push(('E', CarB { lo: (lw, lh - m - s), hi: (lw + s, lh - m), out: (-1, 0), door: 0 })),
-            'W' => cars_local.push(('W', CarB { lo: (-s, lh - m - s), hi: (0, lh - m), out: (1, 0), door: 0 })),
-            _ => {}
-        }
-    }
-    // Cars in the order their walls were drawn (north ones left to right).
-    let mut order: Vec<CarB> = Vec::new();
-    let mut north = cars_local.iter().filter(|(w, _)| *w == 'N').map(|(_, c)| *c);
-    for &w in &walls_of {
-        let c = match w {
-            'N' => north.next(),
-            o => cars_local.iter().find(|(x, _)| *x == o).map(|(_, c)| *c),
-        };
-        if let Some(mut c) = c {
-            c.door = rng.cm(opts.door_width).min(s - 20);
-            order.push(c);
-        }
-    }
-    let lobby_walls = |f: &mut FloorB, ox: i64, oy: i64, open: bool| {
-        let span = |w: char| -> Vec<(i64, i64)> {
-            cars_local
-                .iter()
-                .filter(|(x, _)| *x == w)
-                .map(|(_, c)| if w == 'N' { (ox + c.lo.0, ox + c.hi.0) } else { (oy + c.lo.1, oy + c.hi.1) })
-                .collect()
-        };
-        f.hwall(oy + lh, ox, ox + lw, &span('N'));
-        f.vwall(ox + lw, oy, oy + lh, &span('E'));
-        f.vwall(ox, oy, oy + lh, &span('W'));
-        let entry = if open { vec![(ox + bx - wb / 2, ox + bx - wb / 2 + wb)] } else { vec![] };
-        f.hwall(oy, ox, ox + lw, &entry);
-    };
+    let boff = rng.int(1, 2);
+    let lobby = lobby::layout(rng, ncars as usize, wb, opts.door_width, boff);
+    let ex = lobby.entry.0 + wb / 2; // the entry's centre (x, lobby frame), as the corridor's
 
     // --- the start floor (canonical: the corridor along x at y 0..w) ---
     let mut fs = FloorB { level: start_level, name: "start".into(), ..FloorB::default() };
@@ -653,6 +640,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         list.push(Feature::Room { north: rng.coin() });
     }
     rng.shuffle(&mut list);
+    let mut passed = junction_kinds(&list);
     let (mut north_gaps, mut south_gaps) = (Vec::new(), vec![(lab_x0, lab_x0 + dw)]);
     let mut next_id = 11;
     let lb = rng.int(450, 650);
@@ -670,11 +658,13 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         &mut south_gaps,
         &mut widths,
     );
-    // The junction to the lobby: north (and a south stub: a + junction).
+    // The junction to the lobby, north: a T (the corridor goes on to a dead end), a + (and a
+    // stub south) or an L (the corridor ends there).
+    let junction_lobby = ["T", "+", "L"][rng.int(0, 2) as usize];
     north_gaps.push((jx, jx + wb));
     fs.vwall(jx, w, w + lb, &[]);
     fs.vwall(jx + wb, w, w + lb, &[]);
-    if rng.coin() {
+    if junction_lobby == "+" {
         let l = rng.int(200, 350);
         let ws = rng.cm(opts.corridor_width);
         widths.push(ws);
@@ -684,16 +674,15 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         fs.hwall(-l, sx, sx + ws, &[]);
         south_gaps.push((sx, sx + ws));
     }
-    let xe = jx + wb + rng.int(200, 400);
+    let xe = if junction_lobby == "L" { jx + wb } else { jx + wb + rng.int(200, 400) };
     fs.vwall(xw, 0, w, &[]);
     fs.vwall(xe, 0, w, &[]);
     fs.hwall(w, xw, xe, &north_gaps);
     fs.hwall(0, xw, xe, &south_gaps);
     // The lobby above the corridor, its entry on the junction's corridor.
-    let (ox, oy) = (jx + wb / 2 - bx, w + lb);
-    lobby_walls(&mut fs, ox, oy, true);
-    let boff = rng.int(1, 2);
-    let button = |id: i64| Bar { id, at: (ox + bx, oy + lh - boff), facing: -90 };
+    let (ox, oy) = (jx + wb / 2 - ex, w + lb);
+    lobby::walls(&lobby, &mut fs, (ox, oy), true);
+    let button = |id: i64| Bar { id, at: (ox + lobby.button.at.0, oy + lobby.button.at.1), ..lobby.button };
     fs.lobby = Some(button(30));
     let door_gaps_s: Vec<(i64, i64)> = fs.doors.iter().map(|d| (d.a.0, d.b.0)).collect();
     let mut boxes = Vec::new();
@@ -718,18 +707,29 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         Run { horizontal: false, fixed: jx + wb, inward: -1, from: w, to: w + lb, keep_clear: vec![] },
     ];
     clutter(rng, &mut fs, &runs_s, density, &mut boxes);
-    let lab_to_lobby = vec![
+    // At an L the corridor's end wall says where to turn; at a T or a + the junction.
+    let to_lobby = if junction_lobby == "L" {
+        Step(vec![("follow", "hallway".into()), ("until", "wall".into()), ("turn", "left".into())])
+    } else {
+        junction_step("left", lab_x0 + dw / 2, jx, north_open + 1)
+    };
+    let mut lab_to_lobby = vec![
         turn("right"),
-        junction_step("left", lab_x0 + dw / 2, jx, north_open + 1),
-        Step(vec![("follow", "hallway".into()), ("until", "distance".into()), ("distance", metres(w / 2 + lb + 100))]),
-        Step(vec![("home", "30".into())]),
+        to_lobby,
+        Step(vec![
+            ("follow", "hallway".into()),
+            ("until", "distance".into()),
+            ("distance", metres(w / 2 + lb + lobby.inside)),
+        ]),
     ];
+    lab_to_lobby.extend(lobby.turn_in.map(turn));
+    lab_to_lobby.push(Step(vec![("home", "30".into())]));
 
     // --- the floors in between: the lobby, closed ---
     let mut floors = vec![fs];
     for k in 1..nfloors - 1 {
         let mut f = FloorB { level: start_level + k, ..FloorB::default() };
-        lobby_walls(&mut f, ox, oy, false);
+        lobby::walls(&lobby, &mut f, (ox, oy), false);
         f.lobby = Some(button(30 + k));
         floors.push(f);
     }
@@ -750,7 +750,9 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     gf.vwall(wb - wb / 2, y1, oy, &[]);
     let mut north_g = vec![(-wb / 2, wb - wb / 2)];
     let mut south_g: Vec<(i64, i64)> = Vec::new();
-    let uw = -wb / 2 - rng.int(200, 400);
+    // The lobby's corridor ends in a T (a dead end the other way) or an L.
+    let junction_goal = if rng.coin() { "T" } else { "L" };
+    let uw = if junction_goal == "L" { -wb / 2 } else { -wb / 2 - rng.int(200, 400) };
     let side_corridor = rng.coin();
     let njd = if side_corridor { rng.int(0, 1) } else { rng.int(1, 2) };
     let mut list = junction_list(rng, njd);
@@ -758,6 +760,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         list.push(Feature::Room { north: rng.coin() });
     }
     rng.shuffle(&mut list);
+    passed.extend(junction_kinds(&list));
     let mut next_id = 41;
     let c0 = wb - wb / 2 + rng.int(150, 250);
     let (c, south_open, _) = features(
@@ -774,14 +777,28 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         &mut widths,
     );
     let mut runs_g = Vec::new();
+    // The steps after the lobby's (mirrored with the goal corridors).
     let mut button_to_office =
-        vec![turn("back"), Step(vec![("follow", "hallway".into()), ("until", "wall".into()), ("turn", "left".into())])];
+        vec![Step(vec![("follow", "hallway".into()), ("until", "wall".into()), ("turn", "left".into())])];
     let ue;
+    // Where a box may stand beside the office barcode, on its wall: along which wall (horizontal,
+    // fixed, inward), the barcode's and the door's places along it and the office's stretch.
+    let near_barcode: (bool, i64, i64, i64, (i64, i64), (i64, i64));
+    let junction_office;
     if side_corridor {
-        // The office on a corridor going south from a junction.
+        // The office on a corridor going south from a junction: a T (the corridor along x goes on
+        // to a dead end), a + (and a stub north) or an L (it ends there).
+        junction_office = ["T", "+", "L"][rng.int(0, 2) as usize];
         let wc = rng.cm(opts.corridor_width);
         widths.push(wc);
         south_g.push((c, c + wc));
+        if junction_office == "+" {
+            let l = rng.int(200, 350).min(lb2 - 60);
+            gf.vwall(c, y1, y1 + l, &[]);
+            gf.vwall(c + wc, y1, y1 + l, &[]);
+            gf.hwall(y1 + l, c, c + wc, &[]);
+            north_g.push((c, c + wc));
+        }
         let mut rooms = vec![true];
         if rng.coin() {
             rooms.push(false);
@@ -791,6 +808,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         let mut east_gaps = Vec::new();
         let mut door_gaps = Vec::new();
         let mut found = None;
+        let mut near = None;
         for is_office in rooms {
             let dwr = rng.cm(opts.door_width);
             let rh = (dwr + 2 * (off_hi + 50)).max(350) + rng.int(0, 100);
@@ -808,6 +826,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
             door_gaps.push((d0, d0 + dwr));
             if is_office {
                 let bar = door.barcode.unwrap_or(Bar { id: 40, at: (0, 0), facing: 180 });
+                near = Some((false, c + wc, -1, bar.at.1, (d0, d0 + dwr), (yb - rh, yb)));
                 gf.office = Some(((c + wc, yb - rh), (c + wc + depth, yb), bar));
                 found = Some(DoorB { barcode: None, ..door.clone() });
             }
@@ -827,9 +846,19 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
             to: y0,
             keep_clear: door_margins(&east_gaps, &door_gaps),
         });
-        ue = c + wc + rng.int(200, 350);
-        // From the T's middle (x 0), where `until: wall` stopped.
-        button_to_office.push(junction_step("right", 0, c, south_open + 1));
+        near_barcode = near.unwrap_or((false, 0, 1, 0, (0, 0), (0, 0)));
+        if junction_office == "L" {
+            ue = c + wc;
+            button_to_office.push(Step(vec![
+                ("follow", "hallway".into()),
+                ("until", "wall".into()),
+                ("turn", "right".into()),
+            ]));
+        } else {
+            ue = c + wc + rng.int(200, 350);
+            // From the T's middle (x 0), where `until: wall` stopped.
+            button_to_office.push(junction_step("right", 0, c, south_open + 1));
+        }
         let d = found.unwrap_or_else(|| DoorB { name: String::new(), a: (0, 0), b: (0, 1), barcode: None });
         let bar = gf.office.map(|o| o.2);
         let full = DoorB { barcode: bar, ..d };
@@ -852,6 +881,8 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
             south_g.push((x0, x0 + dwr));
         }
         let bar = door.barcode.unwrap_or(Bar { id: 40, at: (0, 0), facing });
+        junction_office = "none";
+        near_barcode = (true, y, if north { -1 } else { 1 }, bar.at.0, (x0, x0 + dwr), (c, c + ow));
         gf.office = Some(((c, y.min(far)), (c + ow, y.max(far)), bar));
         gf.doors.push(DoorB { barcode: None, ..door.clone() });
         button_to_office.extend(office_steps(&door));
@@ -877,8 +908,18 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     runs_g.push(Run { horizontal: true, fixed: y0, inward: 1, from: uw, to: ue, keep_clear: south_keep });
     runs_g.push(Run { horizontal: false, fixed: -wb / 2, inward: 1, from: y1, to: oy, keep_clear: vec![] });
     runs_g.push(Run { horizontal: false, fixed: wb - wb / 2, inward: -1, from: y1, to: oy, keep_clear: vec![] });
+    // In half the buildings a box beside the office barcode, on its wall (the far side from the
+    // door), laid first: the other clutter keeps its distances from it.
     let mut boxes = Vec::new();
+    if rng.coin() {
+        box_beside(rng, &mut gf, near_barcode, &mut boxes);
+    }
     clutter(rng, &mut gf, &runs_g, density, &mut boxes);
+    let (nh, nfixed, _, np, _, _) = near_barcode;
+    let clutter_near_barcode = boxes.iter().any(|&(lo, hi, wall)| {
+        let (a, b) = if nh { (lo.0, hi.0) } else { (lo.1, hi.1) };
+        wall == (nh, nfixed) && (a - np).max(np - b).max(0) <= NEAR_BARCODE
+    });
     // Into the building's frame: x = xc ± u.
     // Mirrored about the entry's centre: its ends swap exactly.
     let (e0, e1) = (xc - wb / 2, xc - wb / 2 + wb);
@@ -900,7 +941,7 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         let (p, q) = (mp(a), mp(b));
         fg.office = Some(((p.0.min(q.0), p.1), (p.0.max(q.0), q.1), mbar(bar)));
     }
-    lobby_walls(&mut fg, ox, oy, true);
+    lobby::walls(&lobby, &mut fg, (ox, oy), true);
     fg.lobby = Some(button(30 + nfloors - 1));
     if goal_flip {
         for st in &mut button_to_office {
@@ -909,10 +950,30 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
             }
         }
     }
+    // From facing the button: towards the entry (the lobby is not mirrored with the corridors).
+    button_to_office.insert(0, turn(lobby.turn_out));
     floors.push(fg);
 
-    let cars: Vec<CarB> =
-        order.iter().map(|c| CarB { lo: (c.lo.0 + ox, c.lo.1 + oy), hi: (c.hi.0 + ox, c.hi.1 + oy), ..*c }).collect();
+    let cars: Vec<CarB> = lobby
+        .cars
+        .iter()
+        .map(|(_, c)| CarB { lo: (c.lo.0 + ox, c.lo.1 + oy), hi: (c.hi.0 + ox, c.hi.1 + oy), ..*c })
+        .collect();
+    let features = Features {
+        lobby: lobby.kind,
+        car_walls: lobby.relations.clone(),
+        open_s,
+        clutter_near_barcode,
+        corridor_band,
+        corridor_width: (
+            widths.iter().copied().min().unwrap_or(0) as f64 / 100.0,
+            widths.iter().copied().max().unwrap_or(0) as f64 / 100.0,
+        ),
+        junction_lobby,
+        junction_goal,
+        junction_office,
+        junctions_passed: passed,
+    };
     let mut b = Building {
         floors,
         cars,
@@ -925,7 +986,29 @@ fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     };
     let _ = seed;
     b.transform(rng.coin(), rng.int(0, 3));
-    Built { building: b, corridor_widths: widths, junctions: nj as usize, clutter: density }
+    Built { building: b, corridor_widths: widths, junctions: nj as usize, clutter: density, features }
+}
+
+/// A box beside a door's barcode on its wall, on the far side from the door,
+/// 5–40 cm from it along the wall and within the room's stretch of wall:
+/// `(horizontal, fixed, inward, barcode, door, stretch)` (positions along the
+/// wall). Whether there was room for it.
+fn box_beside(
+    rng: &mut Rng,
+    f: &mut FloorB,
+    (horizontal, fixed, inward, p, door, stretch): (bool, i64, i64, i64, (i64, i64), (i64, i64)),
+    boxes: &mut Vec<(Pt, Pt, (bool, i64))>,
+) -> bool {
+    let (a, d, gap) = (rng.int(20, 50), rng.int(20, 50), rng.int(5, 40));
+    let (s0, s1) = if p < door.0 { (p - gap - a, p - gap) } else { (p + gap, p + gap + a) };
+    if s0 < stretch.0 + 5 || s1 > stretch.1 - 5 {
+        return false;
+    }
+    let (n0, n1) = if inward > 0 { (fixed + 1, fixed + 1 + d) } else { (fixed - 1 - d, fixed - 1) };
+    let (lo, hi) = if horizontal { ((s0, n0), (s1, n1)) } else { ((n0, s0), (n1, s1)) };
+    boxes.push((lo, hi, (horizontal, fixed)));
+    f.obstacles.push(("box".to_string(), lo, hi));
+    true
 }
 
 /// From the office's corridor to inside it.
@@ -1035,13 +1118,14 @@ impl Building {
         self.start = (p.0, p.1, ta(self.start.2));
     }
 
-    fn emit(&self, seed: u64, route: bool) -> String {
+    fn emit(&self, seed: u64, route: bool, features: &Features) -> String {
         use std::fmt::Write as _;
         let m = metres;
         let pt = |p: Pt| format!("[{}, {}]", m(p.0), m(p.1));
         let bar = |b: &Bar| format!("{{id: {}, at: {}, facing_deg: {}}}", b.id, pt(b.at), b.facing);
         let mut s = String::new();
         let _ = writeln!(s, "# Generated by `situate map generate --seed {seed}` (format and family: docs/maps.md).");
+        s.push_str(&features.comment());
         let _ = writeln!(s, "name: generated-{seed}");
         let _ = writeln!(s, "robot_radius: 0.25\n\nelevator:\n  travel_s_per_floor: 2.0\n  door_move_s: 1.5");
         let _ = writeln!(s, "  open_s: [{}, {}]\n  arrive_s: [5, 20]\n  cars:", self.open_s.0, self.open_s.1);
@@ -1215,6 +1299,7 @@ mod tests {
                 open_s: Some((9.0, 14.0)),
                 barcode_offset: (0.2, 0.3),
                 route: seed % 2 == 0,
+                family: 2,
             };
             let (g, m) = gen(seed, &o);
             assert!((3..=4).contains(&m.floors.len()), "seed {seed}");
@@ -1289,12 +1374,24 @@ mod tests {
     #[test]
     fn routes_count_the_junctions_on_their_side() {
         for seed in 0..30 {
-            let (_, m) = gen(seed, &Options { junctions: (3, 3), ..Options::default() });
+            let (g, m) = gen(seed, &Options { junctions: (3, 3), ..Options::default() });
             let leg = &m.mission.route[0].1;
-            let count = leg[1].count.unwrap_or(0);
-            assert!((1..=3).contains(&count), "seed {seed}: count {count}");
-            assert_eq!(leg[1].side, leg[1].turn);
-            assert_eq!(leg[3].home, Some(30));
+            if g.features.junction_lobby == "L" {
+                // The corridor ends there: its end wall says where to turn.
+                assert_eq!(leg[1].until.as_deref(), Some("wall"), "seed {seed}");
+                assert!(leg[1].turn.is_some());
+            } else {
+                let count = leg[1].count.unwrap_or(0);
+                assert!((1..=3).contains(&count), "seed {seed}: count {count}");
+                assert_eq!(leg[1].side, leg[1].turn);
+            }
+            // Into the lobby, (in a corner lobby) a turn towards the button, then home on it.
+            let corner = g.features.lobby == "corner";
+            assert_eq!(leg.len(), if corner { 5 } else { 4 }, "seed {seed}");
+            assert_eq!(leg[leg.len() - 1].home, Some(30));
+            if corner {
+                assert!(leg[3].turn.is_some() && leg[3].follow.is_none(), "seed {seed}");
+            }
             assert!(leg[2].distance.is_some_and(|d| d > 4.0));
             let json = m.mission_json();
             assert_eq!(json["goal_button_barcode"], 30 + m.floors.len() as i64 - 1);
