@@ -26,6 +26,12 @@ Usage, from the repository's top directory::
 
 A set the ``situate`` program cannot build (an option it does not know) is reported as not run,
 with the reason. Failures are rerun once without ``--json`` to show the sequencer's last lines.
+
+The report's coverage table counts the generated sets' runs by the features each building drew
+(the comment block ``situate map generate`` writes at the top of the map: where the cars are
+relative to the call button, the doors' open time, a box beside the office barcode, the
+corridors' widths, the kinds of junction; docs/maps.md, "Generated buildings"), so a case the
+robot handles badly shows in the numbers even when the set as a whole meets its target.
 """
 
 from __future__ import annotations
@@ -77,6 +83,8 @@ class Case:
     extra: list[str] = field(default_factory=list)
     outcome: dict[str, Any] = field(default_factory=dict)
     tail: list[str] = field(default_factory=list)
+    #: What the generated building drew (its map's comment block); empty for a drawn map.
+    features: dict[str, str | list[str]] = field(default_factory=dict)
 
     def demo_args(self) -> list[str]:
         """The arguments of ``situate demo`` that reproduce this run (beside ``--headless``)."""
@@ -105,6 +113,125 @@ def generate(binary: Path, seed: int, out: Path, extra: list[str]) -> str | None
     if done.returncode != 0:
         return (done.stderr.strip() or done.stdout.strip() or "failed").splitlines()[0]
     return None
+
+
+def read_features(path: Path) -> dict[str, str | list[str]]:
+    """The features block at the top of a generated map: ``#   key: value`` lines."""
+    out: dict[str, str | list[str]] = {}
+    for line in path.read_text().splitlines():
+        if not line.startswith("#"):
+            break
+        m = re.match(r"#   (\w+): (.*)$", line)
+        if m is None:
+            continue
+        key, value = m.group(1), m.group(2).strip()
+        if value.startswith("[") and value.endswith("]"):
+            out[key] = [v.strip() for v in value[1:-1].split(",") if v.strip()]
+        else:
+            out[key] = value
+    return out
+
+
+#: The coverage table's rows: a feature's title, its key in the map's block and its values in
+#: order, each with its label. A list-valued feature (the cars' walls) counts a building under
+#: every value it holds; ``none`` is a building that holds none.
+COVERAGE: list[tuple[str, str, list[tuple[str, str]]]] = [
+    (
+        "lobby",
+        "lobby",
+        [("facing", "button across from the entry"), ("corner", "button beside the entry")],
+    ),
+    (
+        "cars' walls (vs the call button's)",
+        "car_walls",
+        [
+            ("same", "a car on the button's wall"),
+            ("side", "a car on a side wall"),
+            ("across", "a car across from the button"),
+            ("!same", "no car on the button's wall"),
+        ],
+    ),
+    (
+        "doors' open time (open_s)",
+        "open_s_bucket",
+        [("short", "min under 10 s"), ("medium", "min 10-13 s"), ("long", "min 13 s or more")],
+    ),
+    (
+        "clutter beside the office barcode",
+        "clutter_near_barcode",
+        [("yes", "a box within 0.6 m, on its wall"), ("no", "none")],
+    ),
+    (
+        "corridor widths",
+        "corridor_width",
+        [
+            ("narrow", "all in the range's lower third"),
+            ("middle", "all in its middle third"),
+            ("wide", "all in its upper third"),
+            ("mixed", "each over the whole range"),
+        ],
+    ),
+    ("start floor: junction to the lobby", "junction_lobby", [("T", "T"), ("+", "+"), ("L", "L")]),
+    ("goal floor: the lobby corridor's end", "junction_goal", [("T", "T"), ("L", "L")]),
+    (
+        "goal floor: junction to the office",
+        "junction_office",
+        [("none", "none (office on the cross corridor)"), ("T", "T"), ("+", "+"), ("L", "L")],
+    ),
+    (
+        "junctions passed on the way",
+        "junctions_passed",
+        [("T", "a T"), ("+", "a +"), ("none", "none")],
+    ),
+]
+
+
+def has_feature(features: dict[str, str | list[str]], key: str, value: str) -> bool:
+    """Whether a building's features hold ``value`` under ``key`` (``!v``: not ``v``)."""
+    got = features.get(key)
+    if got is None:
+        return False
+    held = got if isinstance(got, list) else [got]
+    if value.startswith("!"):
+        return value[1:] not in held
+    if value == "none" and isinstance(got, list):
+        return not held
+    return value in held
+
+
+def coverage_section(sets: dict[str, list[Case]]) -> list[str]:
+    """Delivered per feature value of the generated buildings, one column per generated set.
+
+    A value delivered below its set's target is in bold; ``-``: no building of the set has it.
+    """
+    names = [n for n, cases in sets.items() if any(c.features for c in cases)]
+    if not names:
+        return []
+    out = [
+        "## Coverage by feature of the building",
+        "",
+        "Runs delivered per feature of the generated building (what `situate map generate` "
+        'drew, from the comment block at the top of each map; docs/maps.md, "Generated '
+        'buildings"). A building counts under each value it has (cars on two kinds of wall: '
+        "under both); a rate below its set's target is in bold.",
+        "",
+        "| feature | value | " + " | ".join(names) + " |",
+        "|---|---|" + "---|" * len(names),
+    ]
+    for title, key, values in COVERAGE:
+        for k, (value, label) in enumerate(values):
+            cells = []
+            for name in names:
+                runs = [c for c in sets[name] if has_feature(c.features, key, value)]
+                ok = sum(1 for c in runs if c.outcome.get("delivered"))
+                if not runs:
+                    cells.append("-")
+                    continue
+                cell = f"{ok}/{len(runs)} ({100 * ok / len(runs):.0f} %)"
+                weak = ok < TARGETS.get(name, 0.0) * len(runs)
+                cells.append(f"**{cell}**" if weak else cell)
+            out.append(f"| {title if k == 0 else ''} | {label} | " + " | ".join(cells) + " |")
+    return [*out, ""]
 
 
 def knows(binary: Path, command: str, option: str) -> bool:
@@ -372,9 +499,9 @@ def main() -> int:
             doc.write_text(new)
             print(physics_text.split("### Physics failures")[0])
         return 0 if "**no**" not in physics_text.split("### Physics failures")[0] else 1
-    sets: dict[str, list[Case]] = {
-        "default": [Case("default", DEFAULT_SEEDS + k) for k in range(a.default)]
-    }
+    sets: dict[str, list[Case]] = {}
+    if a.default:
+        sets["default"] = [Case("default", DEFAULT_SEEDS + k) for k in range(a.default)]
     skipped: dict[str, str] = {}
     with tempfile.TemporaryDirectory(prefix="situate-delivery-") as tmp:
         hard = a.generated if a.hard is None else a.hard
@@ -401,7 +528,7 @@ def main() -> int:
                     if hard_world
                     else []
                 )
-                cases.append(Case(name, seed, path, seed, extra))
+                cases.append(Case(name, seed, path, seed, extra, features=read_features(path)))
             if cases:
                 sets[name] = cases
         everything = [c for cases in sets.values() for c in cases]
@@ -411,6 +538,8 @@ def main() -> int:
                 print(mark, end="" if n % 50 else "\n", flush=True)
         print()
         text = report(sets, skipped, time.monotonic() - started, a.jobs)
+        head, failures = text.split("## Failures", 1)
+        text = "\n".join([head.rstrip("\n"), "", *coverage_section(sets), "## Failures" + failures])
     if not physics_text:
         # Not run this time: the physics section the report has stays as it is.
         doc = ROOT / "docs" / "delivery.md"
