@@ -121,10 +121,55 @@ fn reply_json(r: Result<Reply, ControlError>) -> Json {
     }
 }
 
+/// The skills with their inputs' values: the manager's [`Request::QuerySkills`], and, asked right
+/// after it (mostly answered in the same pause between two cycles), the latest value of every signal a skill reads. An active skill's input the manager gives no
+/// value for (not written in the manager's latest cycle: a device's reading that came a cycle
+/// late, or a record input, which the running manager does not keep once the body has read it)
+/// is given the signal's latest value and `written`, the cycle that wrote it. Without this an input
+/// written every cycle read null now and then (issue 38).
+fn skills_with_inputs(h: &situate_manager::Handle) -> Json {
+    let skills = match ask(h, Request::QuerySkills) {
+        Ok(Reply::Skills(list)) => list,
+        other => return reply_json(other),
+    };
+    let mut signals: Vec<String> =
+        skills.iter().filter(|s| s.active).flat_map(|s| s.inputs.iter().map(|p| p.signal.clone())).collect();
+    signals.sort_unstable();
+    signals.dedup();
+    let latest = if signals.is_empty() {
+        Vec::new()
+    } else {
+        match ask(h, Request::QuerySignals { signals }) {
+            Ok(Reply::Signals(readings)) => readings,
+            _ => Vec::new(),
+        }
+    };
+    let reply = Reply::Skills(skills);
+    let mut out = wire::reply_to_json(&reply);
+    let Reply::Skills(skills) = reply else { return out };
+    let Some(list) = out.as_array_mut() else { return out };
+    for (info, json) in skills.iter().zip(list.iter_mut()) {
+        if !info.active {
+            continue;
+        }
+        let Some(ports) = json.get_mut("inputs").and_then(Json::as_array_mut) else { continue };
+        for (port, pj) in info.inputs.iter().zip(ports.iter_mut()) {
+            if port.value.is_some() {
+                continue;
+            }
+            if let Some(r) = latest.iter().find(|r| r.signal == port.signal && r.value.is_some()) {
+                pj["value"] = wire::opt_value_to_json(&r.value);
+                pj["written"] = json!(r.cycle);
+            }
+        }
+    }
+    out
+}
+
 fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
     let h = &shared.handle;
     let stats = reply_json(ask(h, Request::QueryStats));
-    let skills = reply_json(ask(h, Request::QuerySkills));
+    let skills = skills_with_inputs(h);
     let winners = reply_json(ask(h, Request::QueryWinners));
     let mut wanted: BTreeSet<String> =
         shared.watched.lock().unwrap_or_else(|p| p.into_inner()).values().flat_map(|v| v.iter().cloned()).collect();
