@@ -38,24 +38,27 @@ describe("the world view's cars", () => {
     }, "the car at floor 1, its door open (over the link)");
     await until(async () => (await labels()).includes("fl 1"), "the car's floor drawn");
     assert.equal(await canvas().getAttribute("data-floor"), "0", "the robot's floor is shown");
-    // On floor 0 the car is not there: its landing door is closed.
-    let ls = await labels();
-    assert.ok(ls.includes("closed") && !ls.includes("open"), `the door's label on floor 0: ${JSON.stringify(ls)}`);
+
+    // On floor 1, where the car is, its door is drawn open (once the page has the sample with
+    // the door open: the page samples the robot at its own pace).
+    await page.getByTestId("world-floor").selectOption("1");
     let drawn = await until(async () => {
       const c = await cars();
-      return c.length === 1 && c[0].floor === 1 && c;
-    }, "the car drawn on floor 0");
-    assert.deepEqual(drawn, [{ id: 1, floor: 1, here: false, door: "closed" }]);
+      return c.length === 1 && c[0].here && c[0].door === "open" && c;
+    }, "the car drawn on floor 1, where it is, its door open");
+    assert.deepEqual(drawn, [{ id: 1, floor: 1, here: true, door: "open" }]);
+    let ls = await labels();
+    assert.ok(ls.includes("open") && !ls.includes("closed"), `the door's label on floor 1: ${JSON.stringify(ls)}`);
 
-    // On floor 1, where the car is, its door is open.
-    await page.getByTestId("world-floor").selectOption("1");
+    // On floor 0 the same car (door open) is not there: its landing door is closed.
+    await page.getByTestId("world-floor").selectOption("0");
     drawn = await until(async () => {
       const c = await cars();
-      return c.length === 1 && c[0].here && c;
-    }, "the car drawn on floor 1, where it is");
-    assert.deepEqual(drawn, [{ id: 1, floor: 1, here: true, door: "open" }]);
+      return (await canvas().getAttribute("data-floor")) === "0" && c.length === 1 && c;
+    }, "floor 0 shown");
+    assert.deepEqual(drawn, [{ id: 1, floor: 1, here: false, door: "closed" }]);
     ls = await labels();
-    assert.ok(ls.includes("open") && !ls.includes("closed"), `the door's label on floor 1: ${JSON.stringify(ls)}`);
+    assert.ok(ls.includes("closed") && !ls.includes("open"), `the door's label on floor 0: ${JSON.stringify(ls)}`);
 
     // Between floors (moving) its door is closed on every floor, whatever the car's door reads.
     await cliDo(tb.linkPort, "param", "set", "cars", "floor", "0.5");
