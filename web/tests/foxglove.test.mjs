@@ -104,6 +104,80 @@ describe("Foxglove live", () => {
     client.unsubscribe(y);
   });
 
+  test("the robot's frame, pose and sonar in Foxglove's own schemas, stamped with the run's time", async () => {
+    const schemas = {
+      "foxglove/tf": "foxglove.FrameTransforms",
+      "foxglove/truth.pose": "foxglove.PoseInFrame",
+      "foxglove/odom": "foxglove.PoseInFrame",
+      "foxglove/sonar": "foxglove.LaserScan",
+    };
+    for (const [topic, name] of Object.entries(schemas)) {
+      const c = channel(topic);
+      assert.ok(c, `a channel ${topic}: ${got.channels.map((c) => c.topic).join(", ")}`);
+      assert.equal(c.schemaName, name);
+      assert.equal(c.encoding, "json");
+      assert.equal(c.schemaEncoding, "jsonschema");
+      const schema = JSON.parse(c.schema);
+      assert.equal(schema.title, name);
+      assert.deepEqual(schema.properties.timestamp?.properties ?? schema.properties.transforms.items.properties.timestamp.properties, {
+        sec: { type: "integer", minimum: 0 },
+        nsec: { type: "integer", minimum: 0, maximum: 999999999 },
+      });
+    }
+    const tf = client.subscribe(channel("foxglove/tf").id);
+    const pose = client.subscribe(channel("foxglove/truth.pose").id);
+    const sonar = client.subscribe(channel("foxglove/sonar").id);
+    const x = client.subscribe(channel("truth.pose.x").id);
+    try {
+      await until(() => on(tf).length >= 5 && on(pose).length >= 5 && on(sonar).length >= 3 && on(x).length >= 5, "messages on the Foxglove channels");
+      // Times: the run's (the wall clock at its start plus the robot's clock), not 1970.
+      const since2020 = BigInt(Date.UTC(2020, 0, 1)) * 1_000_000n;
+      const now = BigInt(Date.now()) * 1_000_000n;
+      const day = 86_400_000_000_000n;
+      const stamp = (t) => BigInt(t.sec) * 1_000_000_000n + BigInt(t.nsec);
+      for (const m of [...on(tf), ...on(pose), ...on(sonar), ...on(x)]) {
+        assert.ok(m.timestamp > since2020 && m.timestamp < now + day, `a timestamp of the run's day: ${m.timestamp}`);
+      }
+      for (const m of [...on(pose), ...on(sonar)]) assert.equal(stamp(m.body.timestamp), m.timestamp, "the message's timestamp is its receive time");
+      const t = on(tf).at(-1).body.transforms;
+      assert.equal(t.length, 1);
+      assert.equal(t[0].parent_frame_id, "world");
+      assert.equal(t[0].child_frame_id, "base_link");
+      assert.equal(stamp(t[0].timestamp), on(tf).at(-1).timestamp);
+      const scan = on(sonar).at(-1).body;
+      assert.equal(scan.frame_id, "base_link", "the ring is on the robot");
+      assert.equal(scan.ranges.length, 24);
+      assert.ok(scan.ranges.every((r) => typeof r === "number" && r > 0), JSON.stringify(scan.ranges));
+      assert.equal(scan.start_angle, 0, "sonar 0 ahead");
+      assert.ok(Math.abs(scan.end_angle - (23 * 15 * Math.PI) / 180) < 1e-9, "15° apart, counter-clockwise: sonar 23 at 345°");
+      assert.equal(on(pose).at(-1).body.frame_id, "world");
+      // Stopped, the pose of the cycle the link reads is truth.pose's.
+      await cliDo(tb.linkPort, "cycle", "stop");
+      try {
+        await until(async () => (await cli(tb.linkPort, "stats")).running === false, "the manager stopped over the link");
+        const reading = await cli(tb.linkPort, "query", "truth.pose");
+        const leaf = await until(() => on(x).find((m) => m.body.cycle === reading.cycle), `truth.pose.x of cycle ${reading.cycle}`);
+        const p = await until(() => on(pose).find((m) => m.timestamp === leaf.timestamp), `the pose of cycle ${reading.cycle}`);
+        const f = await until(() => on(tf).find((m) => m.timestamp === leaf.timestamp), `the transform of cycle ${reading.cycle}`);
+        const { x: px, y: py } = p.body.pose.position;
+        assert.ok(Math.abs(px - reading.value.x) < 1e-9 && Math.abs(py - reading.value.y) < 1e-9, `pose (${px}, ${py}), truth.pose ${JSON.stringify(reading.value)}`);
+        const q = p.body.pose.orientation;
+        const yaw = 2 * Math.atan2(q.z, q.w);
+        const diff = Math.atan2(Math.sin(yaw - reading.value.theta), Math.cos(yaw - reading.value.theta));
+        assert.ok(Math.abs(diff) < 1e-9 && q.x === 0 && q.y === 0, `orientation ${JSON.stringify(q)}, theta ${reading.value.theta}`);
+        assert.deepEqual(f.body.transforms[0].translation, p.body.pose.position, "the frame is where the pose is");
+        assert.deepEqual(f.body.transforms[0].rotation, q);
+      } finally {
+        await cliDo(tb.linkPort, "cycle", "run");
+      }
+    } finally {
+      client.unsubscribe(tf);
+      client.unsubscribe(pose);
+      client.unsubscribe(sonar);
+      client.unsubscribe(x);
+    }
+  });
+
   test("events: an activation over the link is a message on situate/events", async () => {
     const ev = client.subscribe(channel("situate/events").id);
     const skills = await cli(tb.linkPort, "skills");

@@ -4,7 +4,11 @@
 //!
 //! Every signal leaf is a channel (topic = its path, e.g. `odom.x`), plus `situate/events` for the
 //! manager's events; a message is the JSON `{"cycle": N, "value": V}` (values as the link writes
-//! them), stamped with the manager's clock at its cycle. Messages come from the [`History`]: one
+//! them). A robot with a pose and a sonar ring (`truth.pose` or `odom`, `sonar.range`) also has
+//! channels in Foxglove's own schemas ([`Schemas`]: `foxglove.FrameTransforms`,
+//! `foxglove.PoseInFrame`, `foxglove.LaserScan`), so Foxglove's 3D panel shows the robot and its
+//! sonar. Every message is stamped with the run's time: the wall clock at the run's start plus the
+//! manager's clock at its cycle (`run_epoch_ns`). Messages come from the [`History`]: one
 //! thread polls it ([`POLL`]) and sends every cycle it holds past the last one sent, so the
 //! robot's cycle pays nothing for Foxglove.
 //!
@@ -135,7 +139,194 @@ fn advertise(history: &History) -> Json {
     let event = json!({"type": "object", "properties": {"kind": {"type": "string"}, "text": {"type": "string"}}});
     channels.push(json!({"id": leaves.len() + 1, "topic": EVENTS_TOPIC, "encoding": "json",
         "schemaName": "situate.Event", "schema": message_schema(EVENTS_TOPIC, event), "schemaEncoding": "jsonschema"}));
+    for (k, known) in history_schemas(history).channels.iter().enumerate() {
+        channels.push(json!({"id": leaves.len() + 2 + k, "topic": known.topic, "encoding": "json",
+            "schemaName": known.kind.schema_name(), "schema": known.kind.schema().to_string(), "schemaEncoding": "jsonschema"}));
+    }
     json!({"op": "advertise", "channels": channels})
+}
+
+/// The frame the robot's pose places `base_link` in: `world` for the ground truth (`truth.pose`),
+/// `odom` for odometry (the frame of the start pose).
+pub const BASE_FRAME: &str = "base_link";
+
+/// What a channel in one of Foxglove's own schemas carries (its values: the leaves of
+/// [`KnownChannel::leaves`], in order).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Known {
+    /// `foxglove.FrameTransforms`: `parent` → `base_link` from `x`, `y`, `theta`.
+    Transform { parent: &'static str },
+    /// `foxglove.PoseInFrame`: the pose `x`, `y`, `theta` in `frame`.
+    Pose { frame: &'static str },
+    /// `foxglove.LaserScan`: the sonar ring in `base_link`, sonar i at i·360°/n counter-clockwise
+    /// from ahead.
+    Scan,
+}
+
+/// A channel in one of Foxglove's schemas, from the leaves of the signals it shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnownChannel {
+    pub topic: &'static str,
+    pub kind: Known,
+    pub leaves: Vec<usize>,
+}
+
+/// The channels in Foxglove's own schemas a robot's signals give (each only when its signals are
+/// there): the robot's frame `base_link` (`foxglove/tf`), its pose (`foxglove/truth.pose`,
+/// `foxglove/odom`) and the sonar ring as a laser scan (`foxglove/sonar`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Schemas {
+    pub channels: Vec<KnownChannel>,
+}
+
+impl Schemas {
+    /// From the signal leaves' paths (their index is the leaf's).
+    pub fn of<'a>(paths: impl Iterator<Item = &'a str>) -> Schemas {
+        let paths: Vec<&str> = paths.collect();
+        let leaf = |p: &str| paths.iter().position(|q| *q == p);
+        let pose = |record: &str| -> Option<Vec<usize>> {
+            ["x", "y", "theta"].iter().map(|f| leaf(&format!("{record}.{f}"))).collect()
+        };
+        let (truth, odom) = (pose("truth.pose"), pose("odom"));
+        let mut channels = Vec::new();
+        let base = truth.clone().map(|l| (l, "world")).or_else(|| odom.clone().map(|l| (l, "odom")));
+        if let Some((leaves, parent)) = base {
+            channels.push(KnownChannel { topic: "foxglove/tf", kind: Known::Transform { parent }, leaves });
+        }
+        if let Some(leaves) = truth {
+            channels.push(KnownChannel { topic: "foxglove/truth.pose", kind: Known::Pose { frame: "world" }, leaves });
+        }
+        if let Some(leaves) = odom {
+            channels.push(KnownChannel { topic: "foxglove/odom", kind: Known::Pose { frame: "odom" }, leaves });
+        }
+        if let Some(l) = leaf("sonar.range") {
+            channels.push(KnownChannel { topic: "foxglove/sonar", kind: Known::Scan, leaves: vec![l] });
+        }
+        Schemas { channels }
+    }
+}
+
+fn history_schemas(history: &History) -> Schemas {
+    Schemas::of(history.layout().leaves.iter().map(|l| l.path.as_str()))
+}
+
+/// Foxglove's `time` (`foxglove.Timestamp` in JSON): `{sec, nsec}`.
+fn time_schema(description: &str) -> Json {
+    json!({"type": "object", "title": "time", "description": description, "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999}}})
+}
+
+fn vector3_schema(description: &str) -> Json {
+    let n = |d: &str| json!({"type": "number", "description": d});
+    json!({"title": "foxglove.Vector3", "description": description, "type": "object", "properties": {
+        "x": n("x coordinate length"), "y": n("y coordinate length"), "z": n("z coordinate length")}})
+}
+
+fn quaternion_schema(description: &str) -> Json {
+    let n = |d: &str| json!({"type": "number", "description": d});
+    json!({"title": "foxglove.Quaternion", "description": description, "type": "object", "properties": {
+        "x": n("x value"), "y": n("y value"), "z": n("z value"), "w": n("w value")}})
+}
+
+fn pose_schema(description: &str) -> Json {
+    json!({"title": "foxglove.Pose", "description": description, "type": "object", "properties": {
+        "position": vector3_schema("Point denoting position in 3D space"),
+        "orientation": quaternion_schema("Quaternion denoting orientation in 3D space")}})
+}
+
+impl Known {
+    /// The schema's name, as Foxglove knows it.
+    pub fn schema_name(self) -> &'static str {
+        match self {
+            Known::Transform { .. } => "foxglove.FrameTransforms",
+            Known::Pose { .. } => "foxglove.PoseInFrame",
+            Known::Scan => "foxglove.LaserScan",
+        }
+    }
+
+    /// The JSON Schema Foxglove publishes for it (its fields, types and titles).
+    pub fn schema(self) -> Json {
+        let string = |d: &str| json!({"type": "string", "description": d});
+        let number = |d: &str| json!({"type": "number", "description": d});
+        let numbers = |d: &str| json!({"type": "array", "items": {"type": "number"}, "description": d});
+        let (description, properties) = match self {
+            Known::Transform { .. } => (
+                "An array of FrameTransform messages",
+                json!({"transforms": {"type": "array", "description": "Array of transforms", "items": {
+                    "title": "foxglove.FrameTransform",
+                    "description": "A transform between two reference frames in 3D space",
+                    "type": "object",
+                    "properties": {
+                        "timestamp": time_schema("Timestamp of transform"),
+                        "parent_frame_id": string("Name of the parent frame"),
+                        "child_frame_id": string("Name of the child frame"),
+                        "translation": vector3_schema("Translation component of the transform"),
+                        "rotation": quaternion_schema("Rotation component of the transform")}}}}),
+            ),
+            Known::Pose { .. } => (
+                "A timestamped pose for an object or reference frame in 3D space",
+                json!({
+                    "timestamp": time_schema("Timestamp of pose"),
+                    "frame_id": string("Frame of reference for pose position and orientation"),
+                    "pose": pose_schema("Pose in 3D space")}),
+            ),
+            Known::Scan => (
+                "A single scan from a planar laser range-finder",
+                json!({
+                    "timestamp": time_schema("Timestamp of scan"),
+                    "frame_id": string("Frame of reference"),
+                    "pose": pose_schema("Origin of scan relative to frame of reference"),
+                    "start_angle": number("Bearing of first point, in radians"),
+                    "end_angle": number("Bearing of last point, in radians"),
+                    "ranges": numbers("Distance of detections from origin; assumed to be at equally-spaced angles between `start_angle` and `end_angle`"),
+                    "intensities": numbers("Intensity of detections")}),
+            ),
+        };
+        json!({"title": self.schema_name(), "description": description, "type": "object", "properties": properties})
+    }
+
+    /// The message of `values` (its leaves' values, in order) at `stamp_ns` (Unix nanoseconds).
+    pub fn message(self, stamp_ns: u64, values: &[Value]) -> Json {
+        let timestamp = json!({"sec": stamp_ns / 1_000_000_000, "nsec": stamp_ns % 1_000_000_000});
+        let num = |i: usize| match values.get(i) {
+            Some(Value::F64(x)) if x.is_finite() => *x,
+            Some(Value::I64(x)) => *x as f64,
+            _ => 0.0,
+        };
+        let (x, y, theta) = (num(0), num(1), num(2));
+        // A turn of theta about z.
+        let rotation = json!({"x": 0.0, "y": 0.0, "z": (theta / 2.0).sin(), "w": (theta / 2.0).cos()});
+        let position = json!({"x": x, "y": y, "z": 0.0});
+        match self {
+            Known::Transform { parent } => json!({"transforms": [{"timestamp": timestamp,
+                "parent_frame_id": parent, "child_frame_id": BASE_FRAME, "translation": position, "rotation": rotation}]}),
+            Known::Pose { frame } => {
+                json!({"timestamp": timestamp, "frame_id": frame, "pose": {"position": position, "orientation": rotation}})
+            }
+            Known::Scan => {
+                let ranges: Vec<Json> = match values.first() {
+                    Some(Value::F32s(r)) => r.iter().map(|v| finite(f64::from(*v))).collect(),
+                    Some(Value::F64s(r)) => r.iter().map(|v| finite(*v)).collect(),
+                    _ => vec![],
+                };
+                let step = if ranges.is_empty() { 0.0 } else { std::f64::consts::TAU / ranges.len() as f64 };
+                let end = step * ranges.len().saturating_sub(1) as f64;
+                json!({"timestamp": timestamp, "frame_id": BASE_FRAME,
+                    "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+                    "start_angle": 0.0, "end_angle": end, "ranges": ranges, "intensities": []})
+            }
+        }
+    }
+}
+
+/// A number, or null for one JSON cannot hold (NaN, an infinity).
+fn finite(v: f64) -> Json {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Json::Null
+    }
 }
 
 /// The bytes a message takes in a queue.
@@ -399,13 +590,33 @@ pub struct Cursor {
 /// A message taken from the history, encoded once the history's lock is released (values are
 /// shared, so taking them is cheap).
 enum Pending {
-    Value { channel: u32, cycle: u64, time_s: f64, value: Value },
-    Mark { channel: u32, cycle: u64, time_s: f64, kind: &'static str, text: String },
+    Value {
+        channel: u32,
+        cycle: u64,
+        time_s: f64,
+        value: Value,
+    },
+    Mark {
+        channel: u32,
+        cycle: u64,
+        time_s: f64,
+        kind: &'static str,
+        text: String,
+    },
+    /// A message in one of Foxglove's schemas ([`Schemas`]), of the values of one cycle.
+    Known {
+        channel: u32,
+        time_s: f64,
+        kind: Known,
+        values: Vec<Value>,
+    },
 }
 
 impl Pending {
-    /// The channel, the timestamp and the JSON payload.
-    fn encode(self) -> (u32, u64, Bytes) {
+    /// The channel, the timestamp (`epoch_ns` + the manager's clock, Unix nanoseconds) and the
+    /// JSON payload.
+    fn encode(self, epoch_ns: u64) -> (u32, u64, Bytes) {
+        let stamp = |time_s: f64| epoch_ns.saturating_add(nanos(time_s));
         let (channel, time_s, body) = match self {
             Pending::Value { channel, cycle, time_s, value } => {
                 (channel, time_s, json!({"cycle": cycle, "value": wire::value_to_json(&value)}))
@@ -413,8 +624,9 @@ impl Pending {
             Pending::Mark { channel, cycle, time_s, kind, text } => {
                 (channel, time_s, json!({"cycle": cycle, "value": {"kind": kind, "text": text}}))
             }
+            Pending::Known { channel, time_s, kind, values } => (channel, time_s, kind.message(stamp(time_s), &values)),
         };
-        (channel, nanos(time_s), Bytes::from(body.to_string()))
+        (channel, stamp(time_s), Bytes::from(body.to_string()))
     }
 }
 
@@ -432,6 +644,24 @@ fn collect(history: &History, cursor: &mut Cursor, wanted: &[u32]) -> Vec<Pendin
         }
         for (cycle, v) in history.values_after(channel as usize - 1, cursor.cycle) {
             out.push(Pending::Value { channel, cycle, time_s: time_of(cycle), value: v.clone() });
+        }
+    }
+    for (k, known) in history_schemas(history).channels.iter().enumerate() {
+        let channel = events + 1 + k as u32;
+        if !wanted.contains(&channel) {
+            continue;
+        }
+        // The cycles any of its leaves was written in, each sent once with the values then.
+        let mut cycles: Vec<u64> =
+            known.leaves.iter().flat_map(|&l| history.values_after(l, cursor.cycle).map(|(c, _)| c)).collect();
+        cycles.sort_unstable();
+        cycles.dedup();
+        for cycle in cycles {
+            let values: Option<Vec<Value>> =
+                known.leaves.iter().map(|&l| history.value_at(l, cycle).map(|(_, v)| v.clone())).collect();
+            if let Some(values) = values {
+                out.push(Pending::Known { channel, time_s: time_of(cycle), kind: known.kind, values });
+            }
         }
     }
     // Marks: those after the last mark cycle sent, and the late ones at it.
@@ -483,6 +713,7 @@ fn deliver(clients: &[Arc<Client>], out: &[(u32, u64, Bytes)]) {
 /// `stop`. With no client it only moves its cursor (a new subscriber gets what comes next).
 pub(crate) fn publish(shared: &Shared, stop: &AtomicBool) {
     let Some(history) = shared.history.as_ref() else { return };
+    let epoch_ns = run_epoch_ns(shared);
     let mut cursor = Cursor::default();
     let mut first = true;
     // Every parameter's value at the last poll, while a client follows any.
@@ -504,7 +735,7 @@ pub(crate) fn publish(shared: &Shared, stop: &AtomicBool) {
             let h = history.lock().unwrap_or_else(|p| p.into_inner());
             collect(&h, &mut cursor, &wanted)
         };
-        let out: Vec<(u32, u64, Bytes)> = pending.into_iter().map(Pending::encode).collect();
+        let out: Vec<(u32, u64, Bytes)> = pending.into_iter().map(|p| p.encode(epoch_ns)).collect();
         if !out.is_empty() || !clients.is_empty() {
             deliver(&clients, &out);
         }
@@ -526,6 +757,19 @@ pub(crate) fn publish(shared: &Shared, stop: &AtomicBool) {
             params = None;
         }
         std::thread::sleep(POLL);
+    }
+}
+
+/// The run's start on the wall clock (Unix nanoseconds): when the manager's clock read 0, taken as
+/// the wall-clock time now less the manager's clock now (the server starts with the robot, so on
+/// the simulated clock too this is about when the run began). Foxglove's timestamps are this plus
+/// the manager's clock at the cycle: the run's own time, on the calendar (not 1970).
+fn run_epoch_ns(shared: &Shared) -> u64 {
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+    let now = u64::try_from(now.as_nanos()).unwrap_or(u64::MAX);
+    match ask(&shared.handle, Request::QueryStats) {
+        Ok(Reply::Stats(s)) => now.saturating_sub(nanos(s.time_s)),
+        _ => nanos(shared.run.started_unix_s),
     }
 }
 
@@ -590,7 +834,8 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
     let (advertised, channel_count, known) = {
         let h = history.lock().unwrap_or_else(|p| p.into_inner());
         let known: Vec<String> = parameter_values(&h).into_iter().map(|(n, _)| n).collect();
-        (advertise(&h), h.layout().leaves.len() as u32 + 1, known)
+        let count = h.layout().leaves.len() + 1 + history_schemas(&h).channels.len();
+        (advertise(&h), count as u32, known)
     };
     let Some((client, mut rx)) = shared.foxglove.join(QUEUE) else {
         let m = status(ERROR, &format!("too many Foxglove clients (at most {MAX_CLIENTS})"));
@@ -822,7 +1067,7 @@ mod tests {
         for c in 1..=3 {
             h.push_frame(frame(c, vec![(0, Value::F64(c as f64)), (1, Value::F64(0.5))]));
         }
-        let out: Vec<_> = collect(&h, &mut cursor, &[1]).into_iter().map(Pending::encode).collect();
+        let out: Vec<_> = collect(&h, &mut cursor, &[1]).into_iter().map(|p| p.encode(0)).collect();
         let cycles: Vec<Json> = out
             .iter()
             .map(|(ch, _, p)| {
@@ -842,7 +1087,7 @@ mod tests {
         assert!(collect(&h, &mut cursor, &[1]).is_empty(), "nothing new");
         h.push_frame(frame(4, vec![(0, Value::F64(4.0))]));
         h.push_event(&Event::ManagerStopped { cycle: 4 });
-        let out: Vec<_> = collect(&h, &mut cursor, &[1, 2, 3]).into_iter().map(Pending::encode).collect();
+        let out: Vec<_> = collect(&h, &mut cursor, &[1, 2, 3]).into_iter().map(|p| p.encode(0)).collect();
         let topics: Vec<u32> = out.iter().map(|(c, _, _)| *c).collect();
         assert_eq!(topics, vec![1, 3], "x at cycle 4 and the event (sonar.range was not written): {out:?}");
         let event: Json = serde_json::from_slice(&out[1].2).expect("JSON");
@@ -1004,11 +1249,12 @@ mod tests {
         h.push_frame(frame(1, vec![(0, Value::F64(1.0))]));
         let a = advertise(&h);
         let channels = a["channels"].as_array().expect("channels");
-        assert_eq!(channels.len(), 3);
+        assert_eq!(channels.len(), 4);
         assert_eq!(channels[0]["topic"], "odom.x");
         assert_eq!(channels[0]["id"], 1);
         assert_eq!(channels[2]["topic"], EVENTS_TOPIC);
-        for c in channels {
+        assert_eq!(channels[3]["topic"], "foxglove/sonar", "sonar.range as a laser scan too");
+        for c in &channels[..3] {
             assert_eq!(c["encoding"], "json");
             assert_eq!(c["schemaEncoding"], "jsonschema");
             let schema: Json = serde_json::from_str(c["schema"].as_str().expect("a string")).expect("JSON");
@@ -1017,5 +1263,92 @@ mod tests {
         let x: Json = serde_json::from_str(channels[0]["schema"].as_str().unwrap_or("")).expect("JSON");
         assert_eq!(x["properties"]["value"]["anyOf"][0]["type"], "number");
         assert_eq!(value_schema(Some(&Value::I64s(vec![1].into())))["items"]["type"], "integer");
+    }
+
+    #[test]
+    fn the_robot_frame_pose_and_sonar_are_published_in_foxgloves_schemas() {
+        let paths = [
+            "truth.pose.x",
+            "truth.pose.y",
+            "truth.pose.theta",
+            "truth.pose.floor",
+            "sonar.range",
+            "odom.x",
+            "odom.y",
+            "odom.theta",
+        ];
+        let leaves = paths.iter().map(|p| LeafLayout { path: p.to_string(), writers: vec![] }).collect();
+        let mut h = History::new(Layout { leaves, skills: vec![] }, 100, 0);
+        let known = history_schemas(&h);
+        let topics: Vec<_> = known.channels.iter().map(|c| (c.topic, c.kind.schema_name())).collect();
+        assert_eq!(
+            topics,
+            vec![
+                ("foxglove/tf", "foxglove.FrameTransforms"),
+                ("foxglove/truth.pose", "foxglove.PoseInFrame"),
+                ("foxglove/odom", "foxglove.PoseInFrame"),
+                ("foxglove/sonar", "foxglove.LaserScan")
+            ]
+        );
+        assert_eq!(known.channels[0].kind, Known::Transform { parent: "world" }, "the ground truth places the robot");
+        let odom_only = Schemas::of(["odom.x", "odom.y", "odom.theta"].into_iter());
+        assert_eq!(odom_only.channels[0].kind, Known::Transform { parent: "odom" });
+        assert!(Schemas::of(["odom.x", "odom.y"].into_iter()).channels.is_empty(), "no theta, no pose");
+        // The advertisement: the leaves, the events, then these, with Foxglove's schemas.
+        let a = advertise(&h);
+        let channels = a["channels"].as_array().expect("channels");
+        assert_eq!(channels.len(), paths.len() + 1 + 4);
+        let scan = &channels[paths.len() + 4];
+        assert_eq!(
+            (scan["topic"].as_str(), scan["id"].as_u64()),
+            (Some("foxglove/sonar"), Some(paths.len() as u64 + 5))
+        );
+        assert_eq!(scan["schemaEncoding"], "jsonschema");
+        let schema: Json = serde_json::from_str(scan["schema"].as_str().unwrap_or("")).expect("JSON");
+        assert_eq!(schema["title"], "foxglove.LaserScan");
+        assert_eq!(schema["properties"]["timestamp"]["properties"]["nsec"]["maximum"], 999_999_999);
+        let tf: Json = serde_json::from_str(channels[paths.len() + 1]["schema"].as_str().unwrap_or("")).expect("JSON");
+        assert_eq!(tf["properties"]["transforms"]["items"]["properties"]["child_frame_id"]["type"], "string");
+        // Messages: one per cycle a pose leaf was written in, with the values of that cycle.
+        let ring: Vec<f32> = (0..24).map(|i| 1.0 + i as f32 / 10.0).collect();
+        h.push_frame(frame(
+            1,
+            vec![
+                (0, Value::F64(2.0)),
+                (1, Value::F64(3.0)),
+                (2, Value::F64(std::f64::consts::FRAC_PI_2)),
+                (4, Value::F32s(ring.into())),
+            ],
+        ));
+        h.push_frame(frame(2, vec![(2, Value::F64(0.0))]));
+        let base = paths.len() as u32 + 2;
+        let mut cursor = Cursor::default();
+        let epoch = 1_700_000_000_000_000_000;
+        let out: Vec<_> =
+            collect(&h, &mut cursor, &[base, base + 1, base + 3]).into_iter().map(|p| p.encode(epoch)).collect();
+        let ids: Vec<u32> = out.iter().map(|o| o.0).collect();
+        assert_eq!(ids, vec![base, base, base + 1, base + 1, base + 3], "tf and pose at cycles 1 and 2, the scan at 1");
+        let msg = |k: usize| serde_json::from_slice::<Json>(&out[k].2).expect("JSON");
+        let tf1 = msg(0);
+        let t = &tf1["transforms"][0];
+        assert_eq!((t["parent_frame_id"].as_str(), t["child_frame_id"].as_str()), (Some("world"), Some(BASE_FRAME)));
+        assert_eq!((t["translation"]["x"].as_f64(), t["translation"]["y"].as_f64()), (Some(2.0), Some(3.0)));
+        let half = (std::f64::consts::FRAC_PI_4).sin();
+        assert!((t["rotation"]["z"].as_f64().unwrap_or(0.0) - half).abs() < 1e-12, "{t}");
+        assert_eq!(
+            out[0].1, 1_700_000_000_050_000_000,
+            "the run's start on the wall clock + the manager's clock at cycle 1"
+        );
+        assert_eq!(t["timestamp"], json!({"sec": 1_700_000_000u64, "nsec": 50_000_000}));
+        let pose2 = msg(3);
+        assert_eq!(pose2["frame_id"], "world");
+        assert_eq!(pose2["pose"]["position"]["x"], 2.0, "x at cycle 2 is the one of cycle 1 (written then)");
+        assert_eq!(pose2["pose"]["orientation"]["w"], 1.0, "theta 0 at cycle 2");
+        let scan = msg(4);
+        assert_eq!(scan["frame_id"], BASE_FRAME);
+        assert_eq!(scan["ranges"].as_array().map(Vec::len), Some(24));
+        assert_eq!(scan["start_angle"], 0.0);
+        assert!((scan["end_angle"].as_f64().unwrap_or(0.0) - 23.0 * 15f64.to_radians()).abs() < 1e-12, "{scan}");
+        assert!((scan["ranges"][3].as_f64().unwrap_or(0.0) - 1.3).abs() < 1e-6);
     }
 }
