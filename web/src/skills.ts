@@ -267,7 +267,13 @@ function portTable(ports: Json | undefined, testid: string, inactive: string | n
           h("td", { class: "mono" }, str(p["signal"])),
           h("td", { class: "dim" }, str(p["type"])),
           inactive === null
-            ? h("td", { class: "mono value", "data-value": JSON.stringify(p["value"] ?? null) }, show(p["value"]))
+            ? h(
+                "td",
+                { class: "mono value", "data-value": JSON.stringify(p["value"] ?? null) },
+                show(p["value"]),
+                // An input not written in the manager's latest cycle: its latest value, and when.
+                typeof p["written"] === "number" ? h("span", { class: "dim", "data-written": String(p["written"]) }, ` (written at cycle ${p["written"]})`) : null,
+              )
             : h(
                 "td",
                 { class: "mono value inactive-value", "data-value": JSON.stringify(p["value"] ?? null), "data-inactive": "" },
