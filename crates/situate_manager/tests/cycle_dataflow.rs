@@ -262,3 +262,30 @@ fn skill_queries_show_inputs_outputs_parameters_and_timing() {
     assert_eq!(stats.active, vec!["s", "a"]);
     assert!((stats.time_s - 0.02).abs() < 1e-12, "simulated time advances by the period");
 }
+
+/// A running (spawned) manager hands bodies copies of their inputs and drops them after the
+/// run; what a skill read in the last cycle is still shown, a record input as a record (it read
+/// null for every record input).
+#[test]
+fn a_running_robot_shows_what_each_input_read_a_record_too() {
+    use situate_core::record_value;
+    let pose = record_value(vec![("x", Value::F64(1.5)), ("y", Value::F64(-2.0))]);
+    let mut reg = Registry::new();
+    reg.add(constant("pose_src", "{x: f64, y: f64}", pose.clone()));
+    reg.add(constant("num_src", "f64", Value::F64(7.0)));
+    reg.add(fn_type(
+        decl("reader", SkillKind::Sync, &[("pose", "{x: f64, y: f64}"), ("n", "f64")], &[]),
+        |_, _| Ok(()),
+    ));
+    let spec = simulated("reads")
+        .skill(skill("p", "pose_src").remap("out", "pose"))
+        .skill(skill("n", "num_src").remap("out", "n"))
+        .skill(skill("r", "reader"));
+    let (mut handle, join) = build(&spec, &reg).spawn(false);
+    handle.step(3).unwrap();
+    let inputs = handle.skill("r").unwrap().inputs;
+    let read: Vec<_> = inputs.iter().map(|p| (p.name.as_str(), p.value.clone())).collect();
+    assert_eq!(read, vec![("pose", Some(pose)), ("n", Some(Value::F64(7.0)))]);
+    handle.request(situate_manager::Request::Shutdown).unwrap();
+    join.join_timeout(BOUND).ok().expect("the manager ended").unwrap();
+}

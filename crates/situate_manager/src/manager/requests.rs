@@ -530,13 +530,25 @@ impl Manager {
 }
 
 impl Manager {
-    /// What a plain input read in the last cycle when the serial executor
-    /// lent it the slot's value (its buffer then holds nothing after the run).
+    /// What an input read in the last cycle when its buffer holds nothing after the run (the
+    /// serial executor lent it the slot's value; a spawned manager hands bodies copies and
+    /// drops them): its slots' values, when every one was written in that cycle (any time, for
+    /// an async skill), a record put together from its fields' slots.
     fn lent_input(&self, i: usize, port: &crate::graph::PortBinding) -> Option<Value> {
-        let [leaf] = port.leaves[..] else { return None };
-        let slot = &self.slots[leaf];
-        let fresh = slot.stamp == self.cycle || self.graph.instances[i].kind == situate_core::SkillKind::Async;
-        (self.insts[i].active && fresh).then(|| slot.value.clone()).flatten()
+        if !self.insts[i].active || port.leaves.is_empty() {
+            return None;
+        }
+        let any_time = self.graph.instances[i].kind == situate_core::SkillKind::Async;
+        if !port.leaves.iter().all(|&l| any_time || self.slots[l].stamp == self.cycle) {
+            return None;
+        }
+        match port.leaves[..] {
+            [leaf] if !matches!(port.ty, situate_core::SignalType::Record(_)) => self.slots[leaf].value.clone(),
+            _ => {
+                let slots = &self.slots;
+                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
+            }
+        }
     }
 }
 
