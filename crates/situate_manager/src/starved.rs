@@ -50,13 +50,16 @@ impl Starvation {
         }
     }
 
-    /// The calling thread runs the bodies from now on (a new cycle thread).
+    /// The calling thread runs the bodies from now on (a new cycle thread). Its first sample is
+    /// taken now, before it runs a body: on a machine so busy that the watchdog itself rarely
+    /// runs, the first body still has a sample from before its start to count from.
     pub fn adopt_current_thread(&self) {
         #[cfg(target_os = "linux")]
         {
             // SAFETY: gettid has no preconditions and cannot fail.
             let tid = i64::from(unsafe { libc::gettid() });
             self.tid.store(tid, Ordering::Release);
+            self.sample();
         }
     }
 
