@@ -32,6 +32,7 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from signal import SIGHUP, SIGINT, SIGTERM, Signals
+from signal import signal as set_signal_handler
 from typing import Any
 
 from link import (
@@ -797,9 +798,17 @@ async def _main_stopping_on_signals(argv: Sequence[str] | None) -> int:
         task.cancel()
 
     loop = asyncio.get_running_loop()
+
+    def on_signal(sig: int, _frame: object) -> None:
+        # A plain handler, not `loop.add_signal_handler`: that one makes the signal write to the
+        # loop's wakeup pipe, and a signal landing while `asyncio.run` closes the loop (the demo
+        # passes Ctrl-C on as SIGTERM) printed a traceback ("Bad file descriptor").
+        with contextlib.suppress(RuntimeError):  # the loop is closed: the run is ending anyway
+            loop.call_soon_threadsafe(stop, sig)
+
     for sig in (SIGTERM, SIGHUP):
-        with contextlib.suppress(NotImplementedError, AttributeError):  # not on Windows
-            loop.add_signal_handler(sig, stop, sig)
+        with contextlib.suppress(ValueError, AttributeError):  # not on Windows
+            set_signal_handler(sig, on_signal)
     return await main(argv)
 
 
