@@ -392,33 +392,17 @@ impl Reader {
             }
             MsgType::Barcodes => {
                 let m: msgs::Barcodes = msgs::decode(payload).map_err(e)?;
-                if m.ids.len() != m.bearing.len() || m.ids.len() != m.distance.len() {
-                    return Err(format!(
-                        "ids, bearing and distance differ in length ({}, {}, {})",
-                        m.ids.len(),
-                        m.bearing.len(),
-                        m.distance.len()
-                    ));
-                }
+                same_lengths(&[("ids", m.ids.len()), ("bearing", m.bearing.len()), ("distance", m.distance.len())])?;
                 self.record([Value::I64s(m.ids.into()), Value::F64s(m.bearing.into()), Value::F64s(m.distance.into())])
             }
             MsgType::People => {
                 let m: msgs::People = msgs::decode(payload).map_err(e)?;
-                if m.x.len() != m.y.len() || m.x.len() != m.floor.len() {
-                    return Err(format!(
-                        "x, y and floor differ in length ({}, {}, {})",
-                        m.x.len(),
-                        m.y.len(),
-                        m.floor.len()
-                    ));
-                }
+                same_lengths(&[("x", m.x.len()), ("y", m.y.len()), ("floor", m.floor.len())])?;
                 self.record([Value::F64s(m.x.into()), Value::F64s(m.y.into()), Value::I64s(m.floor.into())])
             }
             MsgType::Cars => {
                 let m: msgs::Cars = msgs::decode(payload).map_err(e)?;
-                if m.floor.len() != m.door.len() {
-                    return Err(format!("floor and door differ in length ({}, {})", m.floor.len(), m.door.len()));
-                }
+                same_lengths(&[("floor", m.floor.len()), ("door", m.door.len())])?;
                 self.record([Value::F64s(m.floor.into()), Value::F64s(m.door.into())])
             }
             MsgType::Float64 => Value::F64(msgs::decode::<msgs::Float64>(payload).map_err(e)?.data),
@@ -468,6 +452,18 @@ fn publisher(gid: Option<[u8; 16]>) -> String {
         Some(g) => format!("publisher {}", g.iter().map(|b| format!("{b:02x}")).collect::<String>()),
         None => "a publisher with no rmw_zenoh attachment".into(),
     }
+}
+
+/// Parallel arrays of a message must be of one length: else `x, y and floor differ in length
+/// (2, 1, 1)`.
+fn same_lengths(arrays: &[(&str, usize)]) -> Result<(), String> {
+    if arrays.windows(2).all(|w| w[0].1 == w[1].1) {
+        return Ok(());
+    }
+    let names: Vec<&str> = arrays.iter().map(|a| a.0).collect();
+    let lens: Vec<String> = arrays.iter().map(|a| a.1.to_string()).collect();
+    let (last, first) = names.split_last().unwrap_or((&"", &[]));
+    Err(format!("{} and {last} differ in length ({})", first.join(", "), lens.join(", ")))
 }
 
 /// `pkg::msg::dds_::Name_` → `pkg/msg/Name`.
