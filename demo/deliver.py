@@ -44,7 +44,7 @@ from link import (
     bearing_of,
     wrap,
 )
-from routes import RouteSequencer
+from routes import RouteSequencer, way_made_expr
 
 import situate
 
@@ -194,6 +194,8 @@ class Delivery(RouteSequencer):
         self.button_pose: Pose | None = None
         #: Patrols so far: each starts the other way along the button's wall from the last.
         self.patrols = 0
+        #: The way the robot came into this floor's lobby (odometry frame), if a route led it.
+        self.entry_heading: float | None = None
 
     async def leave_lab(self) -> None:
         """Phases 1 to 3: out of the lab."""
@@ -259,6 +261,8 @@ class Delivery(RouteSequencer):
             stop_before_home=self.m.call_button_barcode,
             heading=self.passed_heading,  # the leg begins facing out of the lab door
         )
+        # The way into the lobby: its entry is behind the robot as it came in.
+        self.entry_heading = self.followed_heading
 
     @property
     def button_here(self) -> int:
@@ -348,6 +352,21 @@ class Delivery(RouteSequencer):
             along = wrap(b.theta + first - (await self.odom()).theta)
         else:
             along = -math.pi / 2 if self.patrols % 2 == 0 else math.pi / 2
+        # The lobby's walls that may hold cars: all but the entry's (docs/maps.md, "Lobby").
+        # Entered along the button's wall (the entry in a wall beside it), the patrol does not
+        # walk that wall both ways (one way leads out through the entry) but round the other
+        # three: along the button's wall away from the entry, along the wall across from the
+        # entry, along the wall across from the button to the entry's wall, and back the
+        # same way to the button. Each leg ends at the wall ahead; the last one where the
+        # button was pushed.
+        legs: list[float] = []
+        if b is not None and self.entry_heading is not None:
+            t = self.entry_heading
+            if abs(math.cos(wrap(t - b.theta))) < 0.5:
+                u = wrap(b.theta + math.pi)
+                legs = [t, u, wrap(t + math.pi), t, wrap(u + math.pi), wrap(t + math.pi)]
+                along = wrap(t - (await self.odom()).theta)
+        leg = 0
         self.patrols += 1
         if not await self.turn(along, keep=["runaway"]):
             return False
@@ -371,7 +390,8 @@ class Delivery(RouteSequencer):
         # other way, not only after the robot came to it and turned back there.
         ranges = await self.sonar()
         o = await self.odom()
-        for i in (0, SONARS // 2):
+        # (Round three walls, the one behind is towards the entry.)
+        for i in (0,) if legs else (0, SONARS // 2):
             if seen_wall_ends_at(ranges, i):
                 toward = wrap(o.theta + bearing_of(i))
                 r = ranges[i]
@@ -396,23 +416,34 @@ class Delivery(RouteSequencer):
                 restart=afresh,
             )
             afresh = ["detect_door", "watch_openings", "identify_car"]
-            got = await self.wait(
+            conditions = [
                 "door.left || door.right",
                 "car > 0",
                 "sonar.range[0] < 0.75 && abs(odom.v) < 0.03",
                 "opened.seen",
-                within=deadline - self.t,
-            )
-            if got == 4:
+            ]
+            if legs and leg == len(legs) - 1 and b is not None:
+                # Back along the button's wall: as far as the button (the entry is beyond).
+                conditions.append(f"{way_made_expr(b, legs[leg])} > 0.0")
+            got = await self.wait(*conditions, within=deadline - self.t)
+            if got == len(conditions):
                 break
-            if got == 2:
-                await self.say("    end of the lobby: turning back")
+            if got in (2, 4):
                 o = await self.odom()
-                ahead = (await self.sonar())[0]
-                walls.append(
-                    (o.x + ahead * math.cos(o.theta), o.y + ahead * math.sin(o.theta), o.theta)
-                )
-                if not await self.turn(math.pi, keep=["runaway"]):
+                # The wall ahead, unless it is the entry's (the way out of the lobby).
+                if got == 2 and not (legs and abs(wrap(legs[leg] - legs[-1])) < 0.1):
+                    ahead = (await self.sonar())[0]
+                    walls.append(
+                        (o.x + ahead * math.cos(o.theta), o.y + ahead * math.sin(o.theta), o.theta)
+                    )
+                if legs:
+                    leg = (leg + 1) % len(legs)
+                    await self.say("    end of the lobby's wall: along the next one")
+                    turned = await self.turn(wrap(legs[leg] - o.theta), keep=["runaway"])
+                else:
+                    await self.say("    end of the lobby: turning back")
+                    turned = await self.turn(math.pi, keep=["runaway"])
+                if not turned:
                     return False
                 continue
             if got == 1:
@@ -483,7 +514,8 @@ class Delivery(RouteSequencer):
                 # closing. On with the patrol.
                 await self.say("    no car behind that opening: patrolling on")
                 await self.restore_lobby_patrol()
-                if await self.turn(-bearing, keep=["runaway"]):
+                back = wrap(legs[leg] - (await self.odom()).theta) if legs else -bearing
+                if await self.turn(back, keep=["runaway"]):
                     continue
                 break
             if got == 0:
@@ -584,6 +616,7 @@ class Delivery(RouteSequencer):
         self.here = self.to
         self.button_pose = None
         self.patrols = 0
+        self.entry_heading = None
 
     async def to_office(self) -> None:
         """Phases 11 to 13: the route hints from the car to the office, then deliver."""

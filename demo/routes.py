@@ -566,6 +566,7 @@ class RouteSequencer(Sequencer):
         ``heading`` is the way the leg begins facing, in the odometry frame (default: the robot's).
         """
         pending_home: int | None = None
+        self.followed_heading = None
         # The way the leg begins facing: ``heading`` (odometry) when the caller knows it (out
         # through the door just passed, however the robot ended up turned), else the robot's.
         self.corridor_heading = (await self.odom()).theta if heading is None else heading
@@ -577,6 +578,8 @@ class RouteSequencer(Sequencer):
             ok = True
             if step.get("follow"):
                 ok = await self.follow(step)
+                # The way the leg went last (into a lobby: the way in, from its entry).
+                self.followed_heading = self.corridor_heading
             if ok and step.get("home") is not None:
                 pending_home = int(step["home"])
                 if on_home is not None:

@@ -72,6 +72,8 @@ class Sequencer(Link):
         self.wall_fix: tuple[float, float, float] | None = None
         #: The odometry heading the last door was passed at (out through it).
         self.passed_heading: float | None = None
+        #: The heading the route planned for its last `follow` step (odometry frame).
+        self.followed_heading: float | None = None
 
     # ----- behaviours the phases share -------------------------------------------------
 
