@@ -101,6 +101,11 @@ OPENED_ON_WALL_M = 0.4
 FACE_DOOR_M = 0.85
 #: Abreast of a door that opened within this (along its wall), the robot only turns to it, m.
 ABREAST_M = 0.35
+#: Calls for a car made at least, and at most while the mission has time left for the rest.
+CALLS_MIN = 6
+CALLS_MAX = 20
+#: Time the mission keeps for the ride, the way to the office and the message after boarding, s.
+AFTER_BOARDING_S = 600.0
 #: An end wall of the lobby is taken from the sonars only nearer than this (their reach is 4 m), m.
 END_WALL_SEEN_M = 3.6
 
@@ -272,7 +277,11 @@ class Delivery(RouteSequencer):
     async def call_and_board(self) -> None:
         """Phases 5 to 7: call a car, wait for it, identify it, enter it (calling again)."""
         button = self.button_here
-        for _attempt in range(6):
+        # Each call brings a car picked at random, which may open where the patrol is not:
+        # calling again is worth it while the mission has time left for the rest of it.
+        for attempt in range(CALLS_MAX):
+            if attempt >= CALLS_MIN and self.t > self.limit_s - AFTER_BOARDING_S:
+                break
             await self.phase(5, f"homing on the call button (barcode {button})")
             facing = False
             if self.button_pose is not None:
