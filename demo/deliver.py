@@ -44,7 +44,7 @@ from link import (
     bearing_of,
     wrap,
 )
-from routes import RouteSequencer, way_made_expr
+from routes import RouteSequencer, way_made, way_made_expr
 
 import situate
 
@@ -80,6 +80,7 @@ NORMAL = {
     ("home", "stop_distance"): 1.0,
     ("turn", "max_turn"): 1.2,
     ("detect_door", "confirm"): 2,
+    ("watch_openings", "confirm"): 2,
     ("track_barcode", "hold"): 15,
     ("fit_wall", "bearing_deg"): 0.0,
     ("fit_wall", "half_angle_deg"): 80.0,
@@ -101,6 +102,11 @@ OPENED_ON_WALL_M = 0.4
 FACE_DOOR_M = 0.85
 #: Abreast of a door that opened within this (along its wall), the robot only turns to it, m.
 ABREAST_M = 0.35
+#: Along a side wall of a lobby entered facing the button, the patrol stops this short of
+#: where the route left the robot inside (the entry is beyond), m; it goes there only if that
+#: is this much deeper than the patrol line along the button's wall, m.
+SIDE_LEG_SHORT_M = 0.3
+SIDE_LEG_MIN_M = 0.8
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -199,8 +205,10 @@ class Delivery(RouteSequencer):
         self.button_pose: Pose | None = None
         #: Patrols so far: each starts the other way along the button's wall from the last.
         self.patrols = 0
-        #: The way the robot came into this floor's lobby (odometry frame), if a route led it.
+        #: The way the robot came into this floor's lobby (odometry frame), if a route led it,
+        #: and where the route left it inside.
         self.entry_heading: float | None = None
+        self.entered_at: Pose | None = None
 
     async def leave_lab(self) -> None:
         """Phases 1 to 3: out of the lab."""
@@ -268,6 +276,7 @@ class Delivery(RouteSequencer):
         )
         # The way into the lobby: its entry is behind the robot as it came in.
         self.entry_heading = self.followed_heading
+        self.entered_at = await self.odom()
 
     @property
     def button_here(self) -> int:
@@ -331,6 +340,9 @@ class Delivery(RouteSequencer):
         """The parameters of the lobby patrol (a crowded lobby: nearer to things)."""
         await self.set("runaway", "safe_distance", 0.15)
         await self.set("follow_hallway", "speed", 0.8)
+        # A missed echo reads the sonars' reach: two in a row on one sonar, about once in
+        # 40 s of the ring's readings, looked like a door opening; three, hardly ever.
+        await self.set("watch_openings", "confirm", 3)
 
     async def wait_for_car(self) -> bool:
         """Patrols the lobby along the cars until a car's door opens, identifies it, enters."""
@@ -361,20 +373,49 @@ class Delivery(RouteSequencer):
             along = wrap(b.theta + first - (await self.odom()).theta)
         else:
             along = -math.pi / 2 if self.patrols % 2 == 0 else math.pi / 2
-        # The lobby's walls that may hold cars: all but the entry's (docs/maps.md, "Lobby").
-        # Entered along the button's wall (the entry in a wall beside it), the patrol does not
-        # walk that wall both ways (one way leads out through the entry) but round the other
-        # three: along the button's wall away from the entry, along the wall across from the
-        # entry, along the wall across from the button to the entry's wall, and back the
-        # same way to the button. Each leg ends at the wall ahead; the last one where the
-        # button was pushed.
-        legs: list[float] = []
+        # The lobby's walls that may hold cars: all but the entry's (docs/maps.md, "Lobby"),
+        # anywhere along them. The patrol goes along each, leg by leg (a heading, what ends
+        # the leg besides the wall ahead, whether the wall ahead may hold a car):
+        # - entered along the button's wall (the entry in a wall beside it): not that wall
+        #   both ways (one way leads out through the entry) but round the other three: along
+        #   the button's wall away from the entry, along the wall across from the entry,
+        #   along the wall across from the button to the entry's wall, and back the same way
+        #   to the button;
+        # - entered facing the button's wall (the entry across from it): along the button's
+        #   wall, turning back at the side walls (the doors of cars at the corners in sight);
+        #   every other call (from the second) also along each side wall towards the entry,
+        #   as deep as the route came in (the entry is beyond), and back.
+        legs: list[tuple[float, str | None, bool]] = []
         if b is not None and self.entry_heading is not None:
             t = self.entry_heading
+            u = wrap(b.theta + math.pi)
+            depth = way_made_expr(b, u)
+            back = wrap(t + math.pi)
             if abs(math.cos(wrap(t - b.theta))) < 0.5:
-                u = wrap(b.theta + math.pi)
-                legs = [t, u, wrap(t + math.pi), t, wrap(u + math.pi), wrap(t + math.pi)]
+                level = f"{way_made_expr(b, back)} > 0.0"
+                legs = [
+                    (t, None, True),
+                    (u, None, True),
+                    (back, None, False),
+                    (t, None, True),
+                    (wrap(u + math.pi), None, True),
+                    (back, level, True),
+                ]
                 along = wrap(t - (await self.odom()).theta)
+            elif self.entered_at is not None and self.patrols % 2 == 1:
+                inside = way_made(self.entered_at, b, u) - SIDE_LEG_SHORT_M
+                if inside > PATROL_BACK_M + SIDE_LEG_MIN_M:
+                    t1 = wrap(b.theta + first)
+                    deep = f"{depth} > {inside!r}"
+                    shallow = f"{depth} < {PATROL_BACK_M!r}"
+                    legs = [
+                        (t1, None, True),
+                        (u, deep, False),
+                        (wrap(u + math.pi), shallow, True),
+                        (wrap(t1 + math.pi), None, True),
+                        (u, deep, False),
+                        (wrap(u + math.pi), shallow, True),
+                    ]
         leg = 0
         self.patrols += 1
         if not await self.turn(along, keep=["runaway"]):
@@ -431,16 +472,15 @@ class Delivery(RouteSequencer):
                 "sonar.range[0] < 0.75 && abs(odom.v) < 0.03",
                 "opened.seen",
             ]
-            if legs and leg == len(legs) - 1 and b is not None:
-                # Back along the button's wall: as far as the button (the entry is beyond).
-                conditions.append(f"{way_made_expr(b, legs[leg])} > 0.0")
+            if legs and legs[leg][1] is not None:
+                conditions.append(str(legs[leg][1]))
             got = await self.wait(*conditions, within=deadline - self.t)
             if got == len(conditions):
                 break
             if got in (2, 4):
                 o = await self.odom()
                 # The wall ahead, unless it is the entry's (the way out of the lobby).
-                if got == 2 and not (legs and abs(wrap(legs[leg] - legs[-1])) < 0.1):
+                if got == 2 and (not legs or legs[leg][2]):
                     ahead = (await self.sonar())[0]
                     walls.append(
                         (o.x + ahead * math.cos(o.theta), o.y + ahead * math.sin(o.theta), o.theta)
@@ -448,7 +488,7 @@ class Delivery(RouteSequencer):
                 if legs:
                     leg = (leg + 1) % len(legs)
                     await self.say("    end of the lobby's wall: along the next one")
-                    turned = await self.turn(wrap(legs[leg] - o.theta), keep=["runaway"])
+                    turned = await self.turn(wrap(legs[leg][0] - o.theta), keep=["runaway"])
                 else:
                     await self.say("    end of the lobby: turning back")
                     turned = await self.turn(math.pi, keep=["runaway"])
@@ -508,6 +548,7 @@ class Delivery(RouteSequencer):
                 self.prefetch("door", "odom")  # the turn reads the odometry
                 bearing = float((await self.value("door"))["bearing"])
             await self.phase(6, "a car's door opened: facing it, reading which car it is")
+            heading = (await self.odom()).theta  # the patrol's, to go on with it
             if not await self.turn(bearing, keep=["runaway", "identify_car"]):
                 continue
             await self.set("runaway", "safe_distance", 0.1)
@@ -523,8 +564,8 @@ class Delivery(RouteSequencer):
                 # closing. On with the patrol.
                 await self.say("    no car behind that opening: patrolling on")
                 await self.restore_lobby_patrol()
-                back = wrap(legs[leg] - (await self.odom()).theta) if legs else -bearing
-                if await self.turn(back, keep=["runaway"]):
+                again = wrap(legs[leg][0] - (await self.odom()).theta) if legs else -bearing
+                if await self.turn(again, keep=["runaway"]):
                     continue
                 break
             if got == 0:
@@ -550,10 +591,20 @@ class Delivery(RouteSequencer):
                 return True
             if self.debug:
                 await self.say(f"      car {self.car} target {await self.value('target')}")
+            if self.car == 0 and not await self.enclosed():
+                # No car's panel seen on the way, and no car round the robot: nothing opened
+                # there after all (a missed echo, someone walking off). On with the patrol.
+                await self.say("    no car there: patrolling on")
+                await self.restore_lobby_patrol()
+                again = legs[leg][0] if legs else heading
+                if await self.turn(wrap(again - (await self.odom()).theta), keep=["runaway"]):
+                    continue
+                break
             await self.say("    the car left before the robot got in")
             break
         await self.restore("runaway", "safe_distance")
         await self.restore("follow_hallway", "speed")
+        await self.restore("watch_openings", "confirm")
         return False
 
     async def ride(self) -> None:
@@ -626,6 +677,7 @@ class Delivery(RouteSequencer):
         self.button_pose = None
         self.patrols = 0
         self.entry_heading = None
+        self.entered_at = None
 
     async def to_office(self) -> None:
         """Phases 11 to 13: the route hints from the car to the office, then deliver."""
