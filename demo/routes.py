@@ -19,6 +19,8 @@ from sequencing import DOOR_STANDOFF, WALL_AHEAD_M, Sequencer, door_hint
 
 #: Following for a distance: the time in which some way must be made, s.
 FOLLOW_SLICE_S = 20.0
+#: A wall ahead this near (sonar, from the centre) where no way is made is the corridor's end, m.
+DEAD_END_M = 1.2
 #: Following to a wall: turned off the way by more than this (rad) and this far to its side
 #: (m), the robot has gone round a corner into a side corridor.
 SIDE_EXIT_RAD = math.radians(60)
@@ -123,7 +125,7 @@ class RouteSequencer(Sequencer):
         if until == "barcode":
             code = int(step["barcode"])
             await self.set("track_barcode", "id", code)
-            return await self.follow_until(f"target.seen && target.id == {code}", 180)
+            return await self.follow_until(f"target.seen && target.id == {code}", 180, barcode=code)
         if until == "wall":
             return await self.follow_to_wall()
         detector, signal = (
@@ -339,12 +341,18 @@ class RouteSequencer(Sequencer):
         await self.set("fit_wall", "half_angle_deg", 45.0)
         return await self.wall_stays()
 
-    async def follow_until(self, condition: str, within: float) -> bool:
+    async def follow_until(
+        self, condition: str, within: float, *, barcode: int | None = None
+    ) -> bool:
         """Follows the hallway (barcode tracking on) until ``condition`` holds.
 
         Making less than 0.5 m of way along the route's heading in ``FOLLOW_SLICE_S``
         (pushed into a doorway by someone coming the other way, with a jamb beside it), the
         robot faces the way, moves to the corridor's middle (`recentre`) and goes on.
+        Following until ``barcode`` is in view, it first looks round for it: a box beside a
+        barcode on its wall hides its face from a robot coming from that side (docs/maps.md,
+        "Clutter"), which passes it unread; at the corridor's end (a wall ahead) it follows
+        the corridor back, towards the barcode's face.
         """
         o = await self.odom()
         heading = o.theta if self.corridor_heading is None else self.corridor_heading
@@ -360,6 +368,28 @@ class RouteSequencer(Sequencer):
             if made > best + 0.5:
                 best = made
                 continue
+            if barcode is not None:
+                if await self.look_round(barcode):
+                    return True
+                await self.turn(wrap(heading - (await self.odom()).theta))
+                if (await self.sonar())[0] < DEAD_END_M:
+                    await self.say(
+                        f"    the corridor ends, barcode {barcode} unseen: back along it"
+                    )
+                    heading = wrap(heading + math.pi)
+                    self.corridor_heading = heading
+                    await self.turn(math.pi)
+                    await self.use(
+                        "runaway",
+                        "avoid",
+                        "follow_hallway",
+                        "track_barcode",
+                        restart=["follow_hallway"],
+                    )
+                    o = await self.odom()
+                    best = 0.0
+                    continue
+                here = await self.odom()
             await self.say(f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle")
             await self.turn(wrap(heading - here.theta))
             await self.recentre(heading)
