@@ -196,35 +196,8 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             cast.live.join(", "),
             cast.players.len()
         );
-        match &outcome.first {
-            None if identical => stdoutln!("identical: every cycle matches the recording"),
-            None if outcome.dropped > 0 => stdoutln!(
-                "not identical: the recording lacks {} cycles, dropped while recording ({}){}; {} of {} cycles \
-                 replayed match",
-                outcome.dropped,
-                ranges_text(&outcome.dropped_ranges),
-                match outcome.stopped_before {
-                    Some(c) => format!(", so the replay stopped before cycle {c}"),
-                    None => String::new(),
-                },
-                outcome.matched,
-                outcome.cycles
-            ),
-            None => stdoutln!("nothing to compare: the recording has no cycles"),
-            Some(d) => {
-                stdoutln!("differs from {d}");
-                if !d.others.is_empty() {
-                    stdoutln!("  also differing in that cycle: {}", d.others.join(", "));
-                }
-                stdoutln!("{} of {} cycles match", outcome.matched, outcome.cycles);
-                if outcome.dropped > 0 {
-                    stdoutln!(
-                        "and the recording lacks {} cycles, dropped while recording ({})",
-                        outcome.dropped,
-                        ranges_text(&outcome.dropped_ranges)
-                    );
-                }
-            }
+        for line in verdict(&outcome, identical) {
+            stdoutln!("{line}");
         }
         if let Some(r) = &recording {
             stdout!("{}", crate::robot::recording_text(r));
@@ -232,9 +205,58 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     }
     let code = if identical { Exit::Ok.code() } else { Exit::Failure.code() };
     if let Some((listen, layout, manager)) = gui_manager {
-        serve_gui(&rec, manager, listen, &args.gui_allow_host, layout, frames_rx, events, outcome.cycles, out)?;
+        let replay = situate_gui::ReplayInfo {
+            file: args.file.display().to_string(),
+            summary: verdict(&outcome, identical).join("; "),
+            events: rec.events.iter().map(|(_, e)| e.clone()).collect(),
+        };
+        let gui = GuiReplay { listen, allowed_hosts: &args.gui_allow_host, layout, replay };
+        serve_gui(&rec, manager, gui, frames_rx, events, outcome.cycles, out)?;
     }
     Ok(code)
+}
+
+/// How the replay compared with the recording, a line or a few.
+fn verdict(outcome: &replay::Outcome, identical: bool) -> Vec<String> {
+    match &outcome.first {
+        None if identical => vec!["identical: every cycle matches the recording".to_string()],
+        None if outcome.dropped > 0 => vec![format!(
+            "not identical: the recording lacks {} cycles, dropped while recording ({}){}; {} of {} cycles replayed \
+             match",
+            outcome.dropped,
+            ranges_text(&outcome.dropped_ranges),
+            match outcome.stopped_before {
+                Some(c) => format!(", so the replay stopped before cycle {c}"),
+                None => String::new(),
+            },
+            outcome.matched,
+            outcome.cycles
+        )],
+        None => vec!["nothing to compare: the recording has no cycles".to_string()],
+        Some(d) => {
+            let mut lines = vec![format!("differs from {d}")];
+            if !d.others.is_empty() {
+                lines.push(format!("  also differing in that cycle: {}", d.others.join(", ")));
+            }
+            lines.push(format!("{} of {} cycles match", outcome.matched, outcome.cycles));
+            if outcome.dropped > 0 {
+                lines.push(format!(
+                    "and the recording lacks {} cycles, dropped while recording ({})",
+                    outcome.dropped,
+                    ranges_text(&outcome.dropped_ranges)
+                ));
+            }
+            lines
+        }
+    }
+}
+
+/// Where and how a replay's GUI serves.
+struct GuiReplay<'a> {
+    listen: std::net::SocketAddr,
+    allowed_hosts: &'a [String],
+    layout: situate_gui::Layout,
+    replay: situate_gui::ReplayInfo,
 }
 
 /// Cycle ranges as `cycles 5-50, cycle 60, cycles 70-80`, the first ten.
@@ -253,13 +275,10 @@ fn ranges_text(ranges: &[(u64, u64)]) -> String {
 
 /// Serves the GUI on the replayed robot, stopped after its last cycle, its
 /// timeline holding the replay, until Ctrl-C.
-#[allow(clippy::too_many_arguments)]
 fn serve_gui(
     rec: &Recording,
     manager: Manager,
-    listen: std::net::SocketAddr,
-    allowed_hosts: &[String],
-    layout: situate_gui::Layout,
+    gui: GuiReplay<'_>,
     frames: crossbeam_channel::Receiver<situate::manager::Frame>,
     events: crossbeam_channel::Receiver<situate::manager::Event>,
     cycles: u64,
@@ -272,9 +291,15 @@ fn serve_gui(
         .unwrap_or(usize::MAX)
         .saturating_add(16)
         .clamp(situate_gui::history::DEFAULT_FRAMES, situate_gui::history::MAX_FRAMES);
-    let allowed_hosts = allowed_hosts.to_vec();
-    let config =
-        situate_gui::GuiConfig { listen, world, history_frames, allowed_hosts, ..situate_gui::GuiConfig::default() };
+    let GuiReplay { listen, allowed_hosts, layout, replay } = gui;
+    let config = situate_gui::GuiConfig {
+        listen,
+        world,
+        history_frames,
+        allowed_hosts: allowed_hosts.to_vec(),
+        replay: Some(replay),
+        ..situate_gui::GuiConfig::default()
+    };
     let tap = situate_gui::HistoryTap::from_channels(layout, frames, events, 0);
     let gui = situate_gui::serve_with_history(handle.clone(), config, Some(tap))
         .map_err(|e| problem(Exit::Failure, format!("starting the GUI on {listen}: {e}")))?;

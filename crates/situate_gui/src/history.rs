@@ -43,6 +43,9 @@ pub enum HistoryError {
     /// The cycle is outside the window kept.
     #[error("cycle {cycle} is not in the history (it holds cycles {first}..={last})")]
     NotHeld { cycle: u64, first: u64, last: u64 },
+    /// No leaf of the robot is, or is inside, this signal.
+    #[error("no signal {0} in this robot's history")]
+    UnknownSignal(String),
 }
 
 /// One port of a skill: the leaves that make its value.
@@ -230,6 +233,9 @@ pub struct History {
     params: Vec<Vec<Track<Value>>>,
     skill_index: HashMap<String, usize>,
     marks: VecDeque<Mark>,
+    /// Whether the events given to [`History::push_event`] are marks too (a replay's are not:
+    /// its marks are the recording's, [`History::push_recorded_event`]).
+    events_mark: bool,
     /// Frames the source lost (a tap's full queue).
     dropped: u64,
 }
@@ -256,6 +262,7 @@ impl History {
                 .collect(),
             skill_index: skills.iter().enumerate().map(|(i, s)| (s.name.clone(), i)).collect(),
             marks: VecDeque::new(),
+            events_mark: true,
             dropped: 0,
             layout,
         }
@@ -442,6 +449,75 @@ impl History {
             }
             Event::Print { .. } => return,
         };
+        if self.events_mark {
+            self.insert_mark(cycle, kind, text);
+        }
+    }
+
+    /// Whether the events given to [`History::push_event`] are marked on the timeline (default
+    /// yes). A replay's timeline marks what the recording holds instead
+    /// ([`History::push_recorded_event`]): the replayed manager's own events (only its live
+    /// skills' changes) would show a part of the run twice and the rest not at all.
+    pub fn set_events_mark(&mut self, on: bool) {
+        self.events_mark = on;
+    }
+
+    /// A mark for an event as a recording holds it: the link's JSON of the event
+    /// (`docs/protocol.md`, "Events"), `kind` among its members. The skills' state is not
+    /// changed (a replay's comes from the replayed cycles). Prints and events without a cycle
+    /// (but `worker_failed`, marked at the newest cycle held) are not marks.
+    pub fn push_recorded_event(&mut self, event: &Json) {
+        let s = |key: &str| event.get(key).and_then(Json::as_str).unwrap_or("?").to_string();
+        let names = |key: &str| -> String {
+            let list = event.get(key).and_then(Json::as_array).map(Vec::as_slice).unwrap_or_default();
+            list.iter().filter_map(Json::as_str).collect::<Vec<_>>().join(", ")
+        };
+        let kind_name = event.get("kind").and_then(Json::as_str).unwrap_or("");
+        let last_cycle = self.frames.back().map(|f| f.cycle).unwrap_or(self.observed_from);
+        let cycle = match (event.get("cycle").and_then(Json::as_u64), kind_name) {
+            (Some(c), _) => c,
+            (None, "worker_failed") => last_cycle,
+            (None, _) => return,
+        };
+        let (kind, text) = match kind_name {
+            "activation_applied" => {
+                let (on, off) = (names("activated"), names("deactivated"));
+                let mut parts = Vec::new();
+                if !on.is_empty() {
+                    parts.push(format!("activated {on}"));
+                }
+                if !off.is_empty() {
+                    parts.push(format!("deactivated {off}"));
+                }
+                ("activation", parts.join("; "))
+            }
+            "param_changed" => {
+                let value = event.get("value").map(Json::to_string).unwrap_or_default();
+                ("param", format!("{}.{} = {value}", s("skill"), s("param")))
+            }
+            "priority_changed" => {
+                let p = event.get("priority").map(Json::to_string).unwrap_or_default();
+                ("priority", format!("{} priority = {p}", s("skill")))
+            }
+            "skill_faulted" => ("fault", format!("{} faulted: {}", s("skill"), s("cause"))),
+            "monitor_fired" => ("monitor", format!("monitor {} fired: {}", event["monitor"], s("condition"))),
+            "monitor_cancelled" => {
+                let why = match event.get("reason").and_then(Json::as_str) {
+                    Some("forced") => "cancelled by another session",
+                    Some("session_ended") => "gone with its session",
+                    _ => "cancelled",
+                };
+                ("monitor", format!("monitor {} {why}: {}", event["monitor"], s("condition")))
+            }
+            "manager_started" => ("manager", "the cycle started".to_string()),
+            "manager_stopped" => ("manager", "the cycle stopped".to_string()),
+            "worker_failed" => ("worker", format!("worker {} failed ({}): {}", s("thread"), s("cause"), s("action"))),
+            _ => return,
+        };
+        self.insert_mark(cycle, kind, text);
+    }
+
+    fn insert_mark(&mut self, cycle: u64, kind: &'static str, text: String) {
         let text = if text.chars().count() > MARK_TEXT {
             format!("{}…", text.chars().take(MARK_TEXT).collect::<String>())
         } else {
@@ -537,6 +613,60 @@ impl History {
             }
         }
         (!leaves.is_empty()).then_some((oldest, Json::Object(record)))
+    }
+
+    /// `history_series`: `signals` over the whole span held, on the robot's time: at most
+    /// `max_points` cycles, evenly spread over the frames held (every frame when they are fewer),
+    /// the last frame always among them. For each: `cycles`, `times` (the manager's clock, s) and,
+    /// per signal, `values` (its latest value at or before the cycle, records assembled; null
+    /// before its first write) and `written` (the cycle that value was written in), so a reader
+    /// tells a stale value from a fresh one.
+    pub fn series_json(&self, signals: &[String], max_points: usize) -> Result<Json, HistoryError> {
+        let leaves: Vec<Vec<usize>> = signals
+            .iter()
+            .map(|name| {
+                let leaves = self.leaves_of(name);
+                if leaves.is_empty() {
+                    Err(HistoryError::UnknownSignal(name.clone()))
+                } else {
+                    Ok(leaves)
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let n = self.frames.len();
+        if n == 0 {
+            return Err(HistoryError::Empty);
+        }
+        let step = n.div_ceil(max_points.max(2));
+        let mut picked: Vec<&FrameMeta> = self.frames.iter().step_by(step).collect();
+        if let Some(last) = self.frames.back() {
+            if picked.last().is_none_or(|f| f.cycle != last.cycle) {
+                picked.push(last);
+            }
+        }
+        let mut series = Map::new();
+        for (name, leaves) in signals.iter().zip(&leaves) {
+            let (mut values, mut written) = (Vec::with_capacity(picked.len()), Vec::with_capacity(picked.len()));
+            for f in &picked {
+                match self.assemble(leaves, name, f.cycle) {
+                    Some((c, v)) => {
+                        values.push(v);
+                        written.push(json!(c));
+                    }
+                    None => {
+                        values.push(Json::Null);
+                        written.push(Json::Null);
+                    }
+                }
+            }
+            series.insert(name.clone(), json!({"values": values, "written": written}));
+        }
+        Ok(json!({
+            "cycles": picked.iter().map(|f| f.cycle).collect::<Vec<_>>(),
+            "times": picked.iter().map(|f| f.time_s).collect::<Vec<_>>(),
+            "frames": n,
+            "signals": series,
+        }))
     }
 
     /// The leaves making the signal `name` (the leaf itself, or a record's fields).
@@ -731,6 +861,33 @@ mod tests {
 
     fn frame(cycle: u64, values: Vec<(usize, Value)>) -> Frame {
         Frame { cycle, time_s: cycle as f64 * 0.01, values: values.into(), prints: vec![], winners: vec![] }
+    }
+
+    #[test]
+    fn a_series_spans_the_whole_history_on_robot_time_records_assembled_and_says_when_each_value_was_written() {
+        let mut h = History::new(layout(), 100, 0);
+        assert_eq!(h.series_json(&["pose".into()], 10), Err(HistoryError::Empty));
+        for c in 1..=50 {
+            // pose.y is written every other cycle: its value then is the one of the cycle before.
+            let mut values = vec![(0, Value::F64(c as f64))];
+            if c % 2 == 1 {
+                values.push((1, Value::F64(-(c as f64))));
+            }
+            h.push_frame(frame(c, values));
+        }
+        let all = h.series_json(&["pose".into(), "pose.x".into()], 100).expect("series");
+        assert_eq!(all["cycles"].as_array().map(Vec::len), Some(50), "every frame when they are fewer: {all}");
+        assert_eq!(all["times"][9], json!(0.1));
+        assert_eq!(all["signals"]["pose"]["values"][9], json!({"x": 10.0, "y": -9.0}));
+        assert_eq!(all["signals"]["pose"]["written"][9], json!(9), "the oldest leaf's write");
+        assert_eq!(all["signals"]["pose.x"]["values"][9], json!(10.0));
+        let few = h.series_json(&["pose.x".into()], 10).expect("series");
+        let cycles: Vec<u64> = few["cycles"].as_array().expect("cycles").iter().filter_map(Json::as_u64).collect();
+        assert_eq!(cycles, vec![1, 6, 11, 16, 21, 26, 31, 36, 41, 46, 50], "spread, the last among them");
+        assert_eq!(h.series_json(&["pose.z".into()], 10), Err(HistoryError::UnknownSignal("pose.z".into())));
+        // Before its first write a signal is null.
+        let cmd = h.series_json(&["cmd".into()], 10).expect("series");
+        assert_eq!(cmd["signals"]["cmd"]["values"][0], Json::Null);
     }
 
     #[test]

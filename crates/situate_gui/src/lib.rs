@@ -132,7 +132,30 @@ pub struct GuiConfig {
     /// [`DEFAULT_WS_IDLE_TIMEOUT`]; pinged every third of it). Also the longest a send to it may
     /// wait for the client to read.
     pub ws_idle_timeout: Duration,
+    /// Set when the robot served is a replay of a recording (`situate replay --gui`): the pages
+    /// say so, the requests that would change the robot are refused (it ran the recording to its
+    /// end; there is nothing live to change), and the timeline's marks are the recording's events.
+    pub replay: Option<ReplayInfo>,
 }
+
+/// What a replay's GUI says of the recording it replays ([`GuiConfig::replay`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayInfo {
+    /// The recording, as the user named it.
+    pub file: String,
+    /// One line on how the replay compared (`identical: every cycle matches the recording`).
+    pub summary: String,
+    /// The recording's events, in order, each the link's JSON of it (`docs/protocol.md`,
+    /// "Events"): the timeline's marks and the page's event log.
+    pub events: Vec<Json>,
+}
+
+/// The verbs a replay's GUI refuses: each would change the robot, and a replay's robot has run
+/// its recording to the end.
+const CHANGING_VERBS: [&str; 9] =
+    ["activate", "deactivate", "set_param", "set_priority", "set_verbose", "monitor_add", "run", "stop", "step"];
+/// The most recorded events one `replay_events` reply carries (the newest).
+const REPLAY_EVENTS: usize = 2000;
 
 impl Default for GuiConfig {
     fn default() -> Self {
@@ -146,6 +169,7 @@ impl Default for GuiConfig {
             max_connections: DEFAULT_MAX_CONNECTIONS,
             header_timeout: DEFAULT_HEADER_TIMEOUT,
             ws_idle_timeout: DEFAULT_WS_IDLE_TIMEOUT,
+            replay: None,
         }
     }
 }
@@ -328,6 +352,8 @@ struct Shared {
     watched: Mutex<HashMap<u64, Vec<String>>>,
     /// The robot's recent past, when the server was given a tap.
     history: Option<Arc<Mutex<History>>>,
+    /// The recording replayed, when the robot is a replay ([`GuiConfig::replay`]).
+    replay: Option<ReplayInfo>,
     /// The Foxglove clients (`/foxglove`).
     foxglove: foxglove::Hub,
     telemetry: broadcast::Sender<Utf8Bytes>,
@@ -397,6 +423,10 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
         Some(tap) => {
             let mut h = History::new(tap.layout.clone(), config.history_frames, tap.observed_from);
             h.set_byte_budget(config.history_bytes);
+            if let Some(replay) = &config.replay {
+                h.set_events_mark(false);
+                replay.events.iter().for_each(|e| h.push_recorded_event(e));
+            }
             (Some(Arc::new(Mutex::new(h))), Some(tap))
         }
         None => (None, None),
@@ -413,6 +443,7 @@ pub fn serve_with_history(handle: Handle, config: GuiConfig, tap: Option<History
         next_client: AtomicU64::new(1),
         watched: Mutex::new(HashMap::new()),
         history: history.clone(),
+        replay: config.replay,
         foxglove: foxglove::Hub::default(),
         telemetry: broadcast::channel(16).0,
         events: broadcast::channel(1024).0,
@@ -589,6 +620,7 @@ pub(crate) mod tests {
             next_client: AtomicU64::new(1),
             watched: Mutex::new(HashMap::new()),
             history: None,
+            replay: None,
             foxglove: foxglove::Hub::default(),
             telemetry: broadcast::channel(4).0,
             events: broadcast::channel(4).0,

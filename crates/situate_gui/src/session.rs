@@ -19,7 +19,7 @@ use crate::serve::{Beat, Keepalive};
 use crate::{ask, HistoryError, Shared, MAX_MESSAGE, WORLD_SIGNALS};
 
 /// The GUI's own verbs, besides the link's.
-const GUI_VERBS: [&str; 3] = ["watch", "history", "history_frame"];
+const GUI_VERBS: [&str; 5] = ["watch", "history", "history_frame", "history_series", "replay_events"];
 
 /// A browser's WebSocket must come from a page of this server (no cross-site WebSocket): a
 /// request with an `Origin` header is accepted only when its host is the request's `Host`
@@ -61,6 +61,9 @@ pub(crate) fn hello_message(shared: &Shared, client: u64) -> Json {
             json!({"frames": h.capacity(), "bytes": h.byte_budget()})
         }),
         "outcome": shared.outcome.lock().unwrap_or_else(|p| p.into_inner()).clone(),
+        "replay": shared.replay.as_ref().map(|r| json!({
+            "file": r.file, "summary": r.summary, "events": r.events.len(),
+        })),
     })
 }
 
@@ -193,11 +196,28 @@ pub(crate) fn handle_message(shared: &Shared, client: u64, text: &str) -> Json {
     if verb == "watch" {
         return watch_signals(shared, client, &id, &args);
     }
-    if verb == "history" || verb == "history_frame" {
+    if verb == "history" || verb == "history_frame" || verb == "history_series" {
         return history_request(shared, verb, &id, &args);
     }
     if verb == "telemetry" {
         return error_reply(&id, "bad_request", "the GUI samples telemetry itself: use `watch` to choose signals");
+    }
+    if verb == "replay_events" {
+        return replay_events(shared, &id);
+    }
+    if let Some(replay) = &shared.replay {
+        if crate::CHANGING_VERBS.contains(&verb) {
+            return error_reply(
+                &id,
+                "unavailable",
+                &format!(
+                    "`{verb}`: this is a replay of {}: its robot ran the recording to the end and nothing on it \
+                     can be changed. Play the recording on the timeline; to run it with another parameter or \
+                     skill, replay it again (`situate replay FILE --set …` or `--robot …`)",
+                    replay.file
+                ),
+            );
+        }
     }
     // A tab's monitors belong to its own session, whatever it says; `force` (cancel another
     // session's monitor) is the GUI's own argument, sent once the page asked its user.
@@ -274,6 +294,9 @@ fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json 
         let summary = history.lock().unwrap_or_else(|p| p.into_inner()).summary_json();
         return json!({"type": "reply", "id": id, "ok": summary});
     }
+    if verb == "history_series" {
+        return history_series(history, id, args);
+    }
     let Some(cycle) = args.get("cycle").and_then(Json::as_u64) else {
         return error_reply(id, "bad_request", "`history_frame`: argument `cycle` must be a whole number ≥ 0");
     };
@@ -281,7 +304,59 @@ fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json 
     match frame {
         Ok(frame) => json!({"type": "reply", "id": id, "ok": frame}),
         Err(e @ HistoryError::Empty) => error_reply(id, "unavailable", &e.to_string()),
-        Err(e @ HistoryError::NotHeld { .. }) => error_reply(id, "bad_request", &e.to_string()),
+        Err(e @ (HistoryError::NotHeld { .. } | HistoryError::UnknownSignal(_))) => {
+            error_reply(id, "bad_request", &e.to_string())
+        }
+    }
+}
+
+/// `replay_events`: a replay's recorded events (the newest [`crate::REPLAY_EVENTS`]), each the
+/// link's JSON of it; `unavailable` when the robot is not a replay.
+fn replay_events(shared: &Shared, id: &Json) -> Json {
+    let Some(replay) = &shared.replay else {
+        return error_reply(id, "unavailable", "`replay_events`: the robot is not a replay of a recording");
+    };
+    let skip = replay.events.len().saturating_sub(crate::REPLAY_EVENTS);
+    json!({"type": "reply", "id": id, "ok": {
+        "events": &replay.events[skip..], "total": replay.events.len(),
+    }})
+}
+
+/// The most signals one `history_series` asks for, and the most points it may ask for.
+const SERIES_SIGNALS: usize = 32;
+const SERIES_POINTS: u64 = 20_000;
+
+/// `history_series {signals, max_points}`: signals over the whole timeline (robot time).
+fn history_series(history: &std::sync::Mutex<crate::History>, id: &Json, args: &Json) -> Json {
+    let usage = "`history_series`: argument `signals` must be a list of 1 to 32 signal names";
+    let Some(list) = args.get("signals").and_then(Json::as_array) else {
+        return error_reply(id, "bad_request", usage);
+    };
+    let signals: Option<Vec<String>> =
+        list.iter().map(|s| s.as_str().filter(|n| !n.is_empty() && n.len() <= 200).map(String::from)).collect();
+    let Some(signals) = signals.filter(|s| !s.is_empty() && s.len() <= SERIES_SIGNALS) else {
+        return error_reply(id, "bad_request", usage);
+    };
+    let max_points = match args.get("max_points") {
+        None => 2000,
+        Some(m) => match m.as_u64().filter(|m| (2..=SERIES_POINTS).contains(m)) {
+            Some(m) => m as usize,
+            None => {
+                return error_reply(
+                    id,
+                    "bad_request",
+                    &format!(
+                    "`history_series`: argument `max_points` must be a whole number in 2..={SERIES_POINTS}, got {m}"
+                ),
+                )
+            }
+        },
+    };
+    let series = history.lock().unwrap_or_else(|p| p.into_inner()).series_json(&signals, max_points);
+    match series {
+        Ok(s) => json!({"type": "reply", "id": id, "ok": s}),
+        Err(e @ HistoryError::Empty) => error_reply(id, "unavailable", &e.to_string()),
+        Err(e) => error_reply(id, "bad_request", &e.to_string()),
     }
 }
 
@@ -472,6 +547,85 @@ mod tests {
         let plain = shared(handle.clone());
         let r = handle_message(&plain, 1, r#"{"id": 5, "verb": "history"}"#);
         assert_eq!(r["error"]["kind"], "unavailable", "{r}");
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_replays_gui_says_so_refuses_every_change_and_marks_the_recordings_events() {
+        let spec = RobotSpec::new("guitest")
+            .skill(SkillSpec::new("sonar", "toy.sonar"))
+            .skill(SkillSpec::new("wander", "toy.wander").active(false));
+        let mut manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
+        let tap = HistoryTap::new(&mut manager);
+        let (mut handle, join) = manager.spawn(false);
+        let recorded = vec![
+            json!({"kind": "activation_applied", "activated": ["wander"], "deactivated": [], "cycle": 3}),
+            json!({"kind": "monitor_fired", "monitor": 7, "condition": "sonar.front < 0.25", "cycle": 5,
+                   "time_s": 0.25, "values": {}, "held": 1}),
+            json!({"kind": "print", "skill": "wander", "line": "hi", "cycle": 5}),
+        ];
+        let replay = crate::ReplayInfo {
+            file: "run.mcap".into(),
+            summary: "identical: every cycle matches the recording".into(),
+            events: recorded.clone(),
+        };
+        let config = GuiConfig { replay: Some(replay), ..GuiConfig::default() };
+        let gui = serve_with_history(handle.clone(), config, Some(tap)).expect("serve");
+        handle.step(8).expect("step");
+        // The replayed robot's own activation is not marked: the recording's is.
+        handle.request(Request::Activate { skills: vec!["wander".into()], with_providers: false }).expect("activate");
+        handle.step(2).expect("step");
+        let hello = hello_message(&gui.shared, 1);
+        assert_eq!(hello["replay"]["file"], "run.mcap", "{hello}");
+        assert_eq!(hello["replay"]["events"], 3, "{hello}");
+        assert!(hello["verbs"].as_array().is_some_and(|v| v.contains(&json!("replay_events"))), "{hello}");
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let summary = loop {
+            let r = handle_message(&gui.shared, 1, r#"{"id": 1, "verb": "history"}"#);
+            if r["ok"]["last_cycle"].as_u64() >= Some(10) {
+                break r["ok"].clone();
+            }
+            assert!(Instant::now() < deadline, "the history never caught up: {r}");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let marks: Vec<_> = summary["marks"]
+            .as_array()
+            .expect("marks")
+            .iter()
+            .map(|m| (m["cycle"].as_u64().unwrap_or(0), m["text"].as_str().unwrap_or("").to_string()))
+            .collect();
+        assert_eq!(
+            marks,
+            vec![(3, "activated wander".to_string()), (5, "monitor 7 fired: sonar.front < 0.25".to_string())],
+            "{summary}"
+        );
+        let events = handle_message(&gui.shared, 1, r#"{"id": 2, "verb": "replay_events"}"#);
+        assert_eq!(events["ok"]["events"], json!(recorded), "{events}");
+        for (verb, args) in [
+            ("run", "{}"),
+            ("step", r#"{"cycles": 1}"#),
+            ("activate", r#"{"skills": ["wander"]}"#),
+            ("set_param", r#"{"skill": "wander", "param": "speed", "value": 1.0}"#),
+            ("monitor_add", r#"{"condition": "cycle > 1"}"#),
+        ] {
+            let r = handle_message(&gui.shared, 1, &format!(r#"{{"id": 3, "verb": "{verb}", "args": {args}}}"#));
+            assert_eq!(r["error"]["kind"], "unavailable", "{verb}: {r}");
+            let message = r["error"]["message"].as_str().unwrap_or("");
+            assert!(message.contains("a replay of run.mcap"), "{verb}: {message}");
+        }
+        let stats = match handle.request(Request::QueryStats).expect("stats") {
+            situate_manager::Reply::Stats(s) => s,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(stats.cycle, 10, "no refused request reached the robot");
+        let r = handle_message(&gui.shared, 1, r#"{"id": 4, "verb": "query", "args": {"signal": "cycle"}}"#);
+        assert!(r.get("error").is_none() || r["error"]["kind"] != "unavailable", "queries are answered: {r}");
+        // A live robot's GUI has no recording to give.
+        let plain = shared(handle.clone());
+        let r = handle_message(&plain, 1, r#"{"id": 5, "verb": "replay_events"}"#);
+        assert_eq!(r["error"]["kind"], "unavailable", "{r}");
+        drop(gui);
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();
     }
