@@ -86,18 +86,55 @@ export function errorText(e: unknown): string {
 // ----- the link's state: controls that need it, values that go stale without it ---------------
 
 let linkUp = false;
+/** The recording replayed, when the robot is a replay (its hello's `replay`): nothing on it can
+ *  be changed. */
+let replayOf: string | null = null;
+
+type Control = HTMLButtonElement | HTMLInputElement | HTMLSelectElement;
+
+function enable(el: Control): void {
+  const changes = el.dataset["robot"] !== undefined;
+  el.disabled = !linkUp || (changes && replayOf !== null);
+  if (changes) {
+    if (replayOf !== null) {
+      el.dataset["title"] ??= el.title;
+      el.title = `a replay of ${replayOf}: its robot ran the recording to the end, nothing on it can be changed (replay it again with --set or --robot)`;
+    } else if (el.dataset["title"] !== undefined) {
+      el.title = el.dataset["title"];
+      delete el.dataset["title"];
+    }
+  }
+}
 
 /** Marks a control that sends requests: disabled while the robot is not connected. */
-export function linkControl<T extends HTMLButtonElement | HTMLInputElement | HTMLSelectElement>(el: T): T {
+export function linkControl<T extends Control>(el: T): T {
   el.dataset["link"] = "";
-  el.disabled = !linkUp;
+  enable(el);
   return el;
+}
+
+/** Marks a control that changes the robot (activation, parameters, the cycle): disabled while the
+ *  robot is not connected, and in a replay. */
+export function robotControl<T extends Control>(el: T): T {
+  el.dataset["robot"] = "";
+  return linkControl(el);
 }
 
 /** Enables or disables every control that needs the robot. */
 export function setLinkUp(up: boolean): void {
   linkUp = up;
-  for (const el of document.querySelectorAll<HTMLButtonElement | HTMLInputElement | HTMLSelectElement>("[data-link]")) el.disabled = !up;
+  for (const el of document.querySelectorAll<Control>("[data-link]")) enable(el);
+}
+
+/** The robot is a replay of `file` (null: a live robot): the controls that change it are off. */
+export function setReplay(file: string | null): void {
+  replayOf = file;
+  for (const el of document.querySelectorAll<Control>("[data-link]")) enable(el);
+}
+
+/** The recording replayed, or null for a live robot. */
+export function replayFile(): string | null {
+  return replayOf;
 }
 
 /** A panel title's note, filled while the panel's values are stale ("last seen at cycle N, t s ago"). */

@@ -7,7 +7,7 @@
 
 import "./style.css";
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
-import { errorText, h, num, setLinkUp, setText, staleNote, str } from "./dom";
+import { errorText, h, num, replayFile, setLinkUp, setReplay, setText, staleNote, str } from "./dom";
 import { GraphView } from "./graph";
 import { EventLog, Monitors } from "./monitors";
 import { Plots } from "./plots";
@@ -27,6 +27,7 @@ function start(): void {
   const runInfo = h("span", { class: "run", "data-testid": "run-info" }, "");
   const staleBanner = h("div", { class: "banner bad", "data-testid": "stale-banner" });
   const outcome = h("div", { class: "banner", hidden: true, "data-testid": "outcome" });
+  const replayBanner = h("div", { class: "banner replay", hidden: true, "data-testid": "replay-banner" });
   const proto = location.protocol === "https:" ? "wss:" : "ws:";
   let graphAsked = false;
   let runId: string | null = null;
@@ -91,6 +92,32 @@ function start(): void {
       document.body.dataset["run"] = id;
       setText(runInfo, `run ${id} · started ${clock(started)}`);
       showOutcome(msg["outcome"]);
+      const replay = msg["replay"];
+      if (isObject(replay) && replayFile() === null) {
+        // A replay: say so everywhere, and show the recording's events (they happened before
+        // this page connected).
+        const file = str(replay["file"]);
+        setReplay(file);
+        setText(status, "connected to a replay (not live)");
+        document.body.dataset["mode"] = "replay";
+        setText(replayBanner, `Replay of ${file}: ${str(replay["summary"])}. Nothing here is live: Play (on the timeline, or Run) plays the recording; the controls that would change the robot are off.`);
+        replayBanner.hidden = false;
+        document.title = `situate · replay of ${file}`;
+        timeline.setReplay(file);
+        manager.setReplay(timeline.player);
+        plots.setRecording();
+        void (async () => {
+          try {
+            const r = await conn.request("replay_events");
+            const list = isObject(r) && Array.isArray(r["events"]) ? r["events"] : [];
+            const total = isObject(r) ? num(r["total"]) : list.length;
+            for (const e of list) if (isObject(e)) events.add(e);
+            events.note(`the events recorded in ${file}, newest first${total > list.length ? ` (the newest ${list.length} of ${total})` : ""}:`);
+          } catch (e) {
+            events.note(`the recording's events: ${errorText(e)}`);
+          }
+        })();
+      }
       world.setMap(msg["world"]);
       void (async () => {
         try {
@@ -124,6 +151,7 @@ function start(): void {
         world.update(msg["signals"], wall);
       } else {
         world.keepTrail(msg["signals"], wall);
+        if (pastFrame) showPastSkills(pastFrame);
       }
       if (graphAsked && !timeline.isPaused()) graph.update(skills, msg["winners"]);
       plots.update(wall, msg["signals"], isObject(stats) ? { cycle, timeS: num(stats["time_s"]) } : null);
@@ -136,7 +164,8 @@ function start(): void {
     },
     outcome: (o) => showOutcome(o),
     status: (connected, text) => {
-      setText(status, text);
+      const file = replayFile();
+      setText(status, connected && file !== null ? `${text} to a replay (not live)` : text);
       status.classList.toggle("bad", !connected);
       setLinkUp(connected);
       timeline.setConnected(connected);
@@ -153,16 +182,29 @@ function start(): void {
   const world = new WorldView(staleNote());
   const monitors = new Monitors(conn, staleNote());
   const events = new EventLog();
+  /** The timeline's frame shown while paused: the skill panels show it over each live sample (the
+   *  buttons, which act on the robot now, follow the live state). */
+  let pastFrame: JsonObject | null = null;
+  const showPastSkills = (frame: JsonObject) => {
+    const cycle = num(frame["cycle"]);
+    const file = replayFile();
+    const note = file === null ? `at cycle ${cycle} (paused: not live)` : `at cycle ${cycle} (replay of ${file}: not live)`;
+    const past = skillsAt(live?.skills ?? [], frame);
+    panels.update(past, cycle, frame["activity"], frame["winners"], note);
+    return { cycle, note, past };
+  };
   const timeline = new Timeline(conn, {
     show: (frame) => {
-      const cycle = num(frame["cycle"]);
-      const note = `at cycle ${cycle} (paused: not live)`;
-      const past = skillsAt(live?.skills ?? [], frame);
-      panels.update(past, cycle, frame["activity"], frame["winners"], note);
+      pastFrame = frame;
+      const { note, past } = showPastSkills(frame);
       world.showPast(frame["signals"], note);
       if (graphAsked) graph.update(past, frame["winners"]);
+      plots.playhead(num(frame["time_s"]));
     },
+    span: () => plots.refill(),
     live: () => {
+      pastFrame = null;
+      plots.playhead(null);
       if (!live) return;
       panels.update(live.skills, live.cycle, live.activity, live.winners);
       world.update(live.signals, live.wall);
@@ -176,6 +218,7 @@ function start(): void {
   root.append(
     h("header", {}, h("h1", {}, "situate"), robot, runInfo, status),
     staleBanner,
+    replayBanner,
     outcome,
     h("main", {}, h("div", { class: "col" }, manager.el, panels.el, monitors.el), h("div", { class: "col" }, world.el, plots.el, graph.el, events.el)),
     timeline.el,

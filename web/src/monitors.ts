@@ -4,7 +4,7 @@
 // offers Resume (the link's `run`).
 
 import { Connection, isObject, RefusedError, type Json, type JsonObject } from "./conn";
-import { errorText, h, linkControl, num, setText, show, str } from "./dom";
+import { errorText, h, linkControl, num, robotControl, setText, show, str } from "./dom";
 
 const EVENT_LINES = 300;
 /** How often the monitor list is asked for again. */
@@ -31,7 +31,7 @@ export class Monitors {
     const cond = h("input", { type: "text", class: "wide", placeholder: "condition, e.g. sonar.range[0] < 0.3", "data-testid": "monitor-condition" });
     const mode = h("select", { "data-testid": "monitor-mode" }, h("option", { value: "once" }, "once"), h("option", { value: "edge" }, "edge"), h("option", { value: "level" }, "level"));
     const pause = h("input", { type: "checkbox", "data-testid": "monitor-pause" });
-    const add = linkControl(h("button", { "data-testid": "monitor-add" }, "Add monitor"));
+    const add = robotControl(h("button", { "data-testid": "monitor-add" }, "Add monitor"));
     add.addEventListener("click", async () => {
       try {
         const reply = await this.conn.request("monitor_add", { condition: cond.value, mode: mode.value, pause: pause.checked });
@@ -166,7 +166,7 @@ export class Monitors {
       this.paused.replaceChildren();
       return;
     }
-    const resume = linkControl(h("button", { "data-testid": "monitor-resume" }, "Resume"));
+    const resume = robotControl(h("button", { "data-testid": "monitor-resume" }, "Resume"));
     resume.addEventListener("click", async () => {
       try {
         await this.conn.request("run");
@@ -199,6 +199,12 @@ export class EventLog {
     delete rest["cycle"];
     const line = h("div", { class: `logline ev-${kind}`, "data-kind": kind }, h("span", { class: "dim" }, `cycle ${num(e["cycle"])} `), h("strong", {}, kind), ` ${show(rest, 300)}`);
     this.list.prepend(line);
+    this.trim();
+  }
+
+  /** A line of the log's own (not an event), e.g. what the lines after it are. */
+  note(text: string): void {
+    this.list.prepend(h("div", { class: "logline log-note", "data-kind": "note" }, text));
     this.trim();
   }
 

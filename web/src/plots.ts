@@ -137,6 +137,14 @@ class Plot {
   private frozenEnd = 0;
   private zoom: { min: number; max: number } = { min: 0, max: 0 };
   private draws = 0;
+  /** A replay's plot: the whole recording on the robot's time (the x axis: its clock, s), from
+   *  the timeline (`history_series`), and a playhead at the timeline's cycle. */
+  private recording = false;
+  /** While the recording's points are added (no redraw per point). */
+  private bulk = false;
+  private playheadT: number | null = null;
+  private readonly liveButton: HTMLButtonElement;
+  private readonly windowSelect: HTMLSelectElement;
   private readonly resizer = new ResizeObserver(() => this.resize());
   private readonly scheme = window.matchMedia("(prefers-color-scheme: dark)");
   private readonly onScheme = () => this.rebuild();
@@ -163,6 +171,8 @@ class Plot {
     this.pauseButton.addEventListener("click", () => (this.mode === "live" ? this.pause() : this.goLive()));
     const live = h("button", { "data-testid": "plot-reset", title: "back to the live window (after a zoom or a pause)" }, "Live");
     live.addEventListener("click", () => this.goLive());
+    this.liveButton = live;
+    this.windowSelect = win;
     const csv = h("button", { "data-testid": "plot-csv", title: "download every buffered point as CSV" }, "CSV");
     // The y axis fits the lines drawn (autoscale) unless both ends are given.
     const yEnd = (which: string) => {
@@ -280,11 +290,59 @@ class Plot {
         gap = true;
       }
     }
-    this.trim(wall);
+    if (!this.recording) this.trim(wall);
     this.chartBox.dataset["points"] = String(this.received);
     if (gap) this.chartBox.dataset["gaps"] = JSON.stringify(Object.fromEntries(this.gaps));
+    if (this.bulk) return;
     if (newLines) this.rebuild();
     else if (this.mode === "live") this.redraw();
+  }
+
+  /** Shows a recording (a replay's timeline): `series` is a `history_series` reply for this
+   *  plot's signals, its points on the robot's time; stale values are gaps by the same rule as
+   *  live. Live samples are no longer taken. */
+  setSeries(series: JsonObject): void {
+    this.clear();
+    this.recording = true;
+    this.chartBox.dataset["state"] = "recording";
+    this.el.dataset["recording"] = "";
+    setText(this.liveButton, "All");
+    this.liveButton.title = "the whole recording again (after a zoom)";
+    this.pauseButton.hidden = true;
+    this.windowSelect.hidden = true;
+    const nums = (j: Json | undefined) => (Array.isArray(j) ? j.map((x) => (typeof x === "number" ? x : null)) : []);
+    const cycles = nums(series["cycles"]);
+    const times = nums(series["times"]);
+    const bySignal = isObject(series["signals"]) ? series["signals"] : {};
+    this.bulk = true;
+    cycles.forEach((cycle, i) => {
+      const t = times[i];
+      if (cycle === null || t === null || t === undefined) return;
+      const at: JsonObject = {};
+      for (const [name, sig] of Object.entries(bySignal)) {
+        if (!isObject(sig)) continue;
+        const value = Array.isArray(sig["values"]) ? sig["values"][i] : null;
+        const written = Array.isArray(sig["written"]) ? sig["written"][i] : null;
+        if (value !== null && value !== undefined && typeof written === "number") at[name] = { value, cycle: written };
+      }
+      this.add(t, at, { cycle, timeS: t });
+    });
+    this.bulk = false;
+    this.chartBox.dataset["series"] = String(cycles.length);
+    this.rebuild();
+  }
+
+  /** The timeline's cycle, at robot time `t` (null: none shown), drawn as a vertical line. */
+  setPlayhead(t: number | null): void {
+    if (!this.recording || t === this.playheadT) return;
+    this.playheadT = t;
+    this.chartBox.dataset["playhead"] = t === null ? "" : String(t);
+    this.chart?.redraw(false, false);
+  }
+
+  /** Whether this plot shows a recording (no live samples). */
+  isRecording(): boolean {
+    return this.recording;
   }
 
   /** Bounded memory: at most MAX_ROWS points per line, none older than MAX_AGE_S. */
@@ -307,13 +365,14 @@ class Plot {
   /** The x range to show. */
   private view(): { min: number; max: number } {
     if (this.mode === "zoomed") return this.zoom;
+    if (this.recording) return { min: this.times[0] ?? 0, max: this.last() };
     const end = this.mode === "paused" ? this.frozenEnd : this.last();
     return { min: end - this.windowS, max: end };
   }
 
   private setMode(mode: Mode): void {
     this.mode = mode;
-    this.chartBox.dataset["state"] = mode;
+    this.chartBox.dataset["state"] = this.recording && mode === "live" ? "recording" : mode;
     setText(this.pauseButton, mode === "live" ? "Pause" : "Resume");
   }
 
@@ -368,8 +427,8 @@ class Plot {
     const opts: uPlot.Options = {
       width,
       height: HEIGHT,
-      scales: { x: { time: true }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
-      axes: [axis(), { ...axis(), size: 60 }],
+      scales: { x: { time: !this.recording }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
+      axes: [this.recording ? { ...axis(), label: "robot time (s)" } : axis(), { ...axis(), size: 60 }],
       // The legend's time: the sample's cycle and robot time (the x axis is the wall clock).
       series: [{ label: "at", value: (_u, _v, _s, idx) => (idx === null ? "—" : this.sampleText(this.viewStart + idx)) }, ...this.names.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length] ?? "#000", width: 1.5 }))],
       cursor: {
@@ -385,6 +444,23 @@ class Plot {
             const max = u.posToVal(u.select.left + u.select.width, "x");
             u.setSelect({ left: 0, top: 0, width: 0, height: 0 }, false);
             this.zoomTo(min, max);
+          },
+        ],
+        draw: [
+          (u) => {
+            // The timeline's cycle, in a replay.
+            const t = this.playheadT;
+            if (t === null) return;
+            const x = u.valToPos(t, "x", true);
+            const ctx = u.ctx;
+            ctx.save();
+            ctx.strokeStyle = fg;
+            ctx.lineWidth = 2 * (window.devicePixelRatio || 1);
+            ctx.beginPath();
+            ctx.moveTo(x, u.bbox.top);
+            ctx.lineTo(x, u.bbox.top + u.bbox.height);
+            ctx.stroke();
+            ctx.restore();
           },
         ],
         setScale: [
@@ -433,16 +509,18 @@ class Plot {
     if (wall === undefined) return "—";
     const cycle = this.cycles[i];
     const t = this.robotTimes[i];
+    if (this.recording) return `cycle ${cycle ?? "—"}, t = ${(t ?? 0).toFixed(2)} s`;
     const d = new Date(wall * 1000);
     const two = (n: number) => String(n).padStart(2, "0");
     const clock = `${two(d.getHours())}:${two(d.getMinutes())}:${two(d.getSeconds())}.${String(d.getMilliseconds()).padStart(3, "0")}`;
     return cycle === null || cycle === undefined ? clock : `cycle ${cycle}, t = ${(t ?? 0).toFixed(2)} s (${clock})`;
   }
 
-  /** The buffer as CSV: `t_s` (wall clock, Unix seconds) and a column per line, a row per sample. */
+  /** The buffer as CSV: `t_s` (wall clock, Unix seconds; a recording's: the robot's time) and a
+   *  column per line, a row per sample. */
   csv(): string {
     const quote = (s: string) => (/[",\n]/.test(s) ? `"${s.replace(/"/g, '""')}"` : s);
-    const lines = [["t_s", ...this.names].map(quote).join(",")];
+    const lines = [[this.recording ? "robot_t_s" : "t_s", ...this.names].map(quote).join(",")];
     this.times.forEach((t, i) => {
       lines.push([String(t), ...this.names.map((n) => {
         const v = this.columns.get(n)?.[i];
@@ -492,6 +570,9 @@ export class Plots {
   private readonly error: HTMLElement;
   private known: string[] = [];
   private leaves = new Map<string, string>();
+  /** A replay: plots show the recording (the timeline's) on the robot's time. */
+  private recording = false;
+  private playheadT: number | null = null;
 
   constructor(
     private readonly conn: Connection,
@@ -561,6 +642,7 @@ export class Plots {
       await this.watch();
       setText(this.error, "");
       this.list.append(plot.el);
+      if (this.recording) await this.fill(plot);
       // Another signal may have been typed while the server answered: keep it.
       if (this.input.value.trim() === expr) this.input.value = "";
     } catch (e) {
@@ -582,6 +664,7 @@ export class Plots {
     try {
       await this.watch();
       setText(this.error, "");
+      if (this.recording) await this.fill(plot);
     } catch (e) {
       plot.removeSource(expr);
       await this.watch().catch(() => undefined);
@@ -603,13 +686,43 @@ export class Plots {
     await this.conn.request("watch", { signals });
   }
 
+  /** The robot is a replay: every plot shows the whole recording on the robot's time (asked
+   *  again with `refill` when the timeline grows). */
+  setRecording(): void {
+    this.recording = true;
+    this.el.dataset["recording"] = "";
+    const help = this.el.querySelector(".plot-help");
+    if (help) setText(help, "a replay: each plot shows the whole recording on the robot's time, the line at the timeline's cycle; drag across a plot: zoom; double-click or All: the whole recording");
+    this.refill();
+  }
+
+  /** Asks for every plot's series again (the timeline holds more cycles). */
+  refill(): void {
+    if (!this.recording) return;
+    for (const p of this.plots) void this.fill(p).catch((e: unknown) => setText(this.error, errorText(e)));
+  }
+
+  private async fill(p: Plot): Promise<void> {
+    const signals = [...new Set(p.sources.map((s) => s.base))];
+    const series = await this.conn.request("history_series", { signals, max_points: 4000 });
+    if (!isObject(series) || !this.plots.includes(p)) return;
+    p.setSeries(series);
+    p.setPlayhead(this.playheadT);
+  }
+
+  /** The timeline's cycle shown, at robot time `t` (null: live), on every recording's plot. */
+  playhead(t: number | null): void {
+    this.playheadT = t;
+    for (const p of this.plots) p.setPlayhead(t);
+  }
+
   /** A new run: every plot starts again empty. */
   clear(): void {
     for (const p of this.plots) p.clear();
   }
 
   update(wall: number, signals: Json | undefined, at: SampleAt | null = null): void {
-    if (!isObject(signals)) return;
+    if (!isObject(signals) || this.recording) return;
     for (const p of this.plots) p.add(wall, signals, at);
   }
 }

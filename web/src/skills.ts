@@ -1,7 +1,7 @@
 // The manager panel (paper: the skill manager window) and one panel per skill (the skill window).
 
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
-import { errorText, h, linkControl, num, setText, show, str } from "./dom";
+import { errorText, h, linkControl, num, replayFile, robotControl, setText, show, str } from "./dom";
 
 const LOG_LINES = 200;
 
@@ -10,8 +10,19 @@ function keep(list: HTMLElement, line: string): void {
   while (list.childElementCount > LOG_LINES) list.lastElementChild?.remove();
 }
 
+/** What Run, Stop and Step drive in a replay: the timeline's playing, not the robot (which ran
+ *  the recording to its end). */
+export interface Player {
+  play(): void;
+  stop(): void;
+  step(cycles: number): void;
+}
+
 export class ManagerPanel {
   readonly el: HTMLElement;
+  private player: Player | null = null;
+  private readonly runBtn: HTMLButtonElement;
+  private readonly stopBtn: HTMLButtonElement;
   private readonly fields = new Map<string, HTMLElement>();
   private readonly switches: HTMLElement;
   private readonly switchMap = new Map<string, HTMLInputElement>();
@@ -26,6 +37,8 @@ export class ManagerPanel {
     const stepCount = h("input", { type: "number", min: 1, max: 1000000, value: 1, step: 1, "data-testid": "step-count", class: "short" });
     const run = linkControl(h("button", { "data-testid": "run" }, "Run"));
     const stop = linkControl(h("button", { "data-testid": "stop" }, "Stop"));
+    this.runBtn = run;
+    this.stopBtn = stop;
     const step = linkControl(h("button", { "data-testid": "step" }, "Step"));
     run.addEventListener("click", () => void this.act("run", {}));
     stop.addEventListener("click", () => void this.act("stop", {}));
@@ -67,7 +80,24 @@ export class ManagerPanel {
     );
   }
 
+  /** The robot is a replay: Run plays the recording on the timeline (at its speed) and stops at
+   *  its end, Stop stops playing, Step steps the timeline. */
+  setReplay(player: Player): void {
+    this.player = player;
+    setText(this.runBtn, "▶ Play recording");
+    this.runBtn.title = "play the recording on the timeline, at the timeline's speed, to its end";
+    this.stopBtn.title = "stop playing the recording";
+  }
+
   private async act(verb: string, args: JsonObject): Promise<void> {
+    const player = this.player;
+    if (player) {
+      if (verb === "run") player.play();
+      else if (verb === "stop") player.stop();
+      else if (verb === "step") player.step(num(args["cycles"], 1));
+      setText(this.error, "");
+      return;
+    }
     try {
       await this.conn.request(verb, args);
       setText(this.error, "");
@@ -102,7 +132,7 @@ export class ManagerPanel {
       }
       this.last = { cycle, wall };
       const us = (ns: Json | undefined) => `${(num(ns) / 1000).toFixed(1)} µs`;
-      this.set("state", stats["running"] === true ? "running" : "stopped");
+      this.set("state", this.player ? `a replay: the robot ran the recording to cycle ${cycle} and stopped` : stats["running"] === true ? "running" : "stopped");
       this.set("cycle", String(cycle));
       // The manager's own measure when it runs (over its last ~20 cycles), else the samples'.
       const measured = num(stats["rate_hz"]);
@@ -118,7 +148,7 @@ export class ManagerPanel {
       const name = str(s["name"]);
       let box = this.switchMap.get(name);
       if (!box) {
-        const input = linkControl(h("input", { type: "checkbox", "data-testid": `switch-${name}` }));
+        const input = robotControl(h("input", { type: "checkbox", "data-testid": `switch-${name}` }));
         input.addEventListener("change", () => {
           const verb = input.checked ? "activate" : "deactivate";
           void this.act(verb, { skills: [name] });
@@ -159,7 +189,7 @@ class ParamEditor {
     const max = spec["max"];
     const id = `param-${skill}-${name}`;
     if (this.type === "bool") {
-      this.input = linkControl(h("input", { type: "checkbox", "data-testid": id }));
+      this.input = robotControl(h("input", { type: "checkbox", "data-testid": id }));
     } else if (this.type === "i64" || this.type === "f64") {
       this.input = h("input", {
         type: "number",
@@ -176,7 +206,7 @@ class ParamEditor {
     // Typed and not yet set: live updates leave it alone (clicking Set moves the focus off
     // the input before the click is handled, and an update in between would undo the edit).
     this.input.addEventListener("input", () => (this.edited = true));
-    const set = linkControl(h("button", { "data-testid": `${id}-set` }, "Set"));
+    const set = robotControl(h("button", { "data-testid": `${id}-set`, title: "set it on the robot now" }, "Set"));
     set.addEventListener("click", () => void this.submit());
     this.input.addEventListener("keydown", (e) => {
       if (e.key === "Enter") void this.submit();
@@ -311,6 +341,12 @@ class SkillPanel {
   private readonly prints: HTMLElement;
   private readonly error: HTMLElement;
   private active = false;
+  /** Whether the skill is active on the robot now (what Activate/Deactivate acts on), also while
+   *  the panel shows a past cycle. */
+  private liveActive = false;
+  /** The last info shown, and its "inactive since": shown again at once when a box is ticked. */
+  private lastInfo: JsonObject | null = null;
+  private lastInactive: string | null = null;
   private lastParams: [string, Json][] = [];
   private lastCycle = 0;
   private priorityEdited = false;
@@ -324,7 +360,7 @@ class SkillPanel {
     this.state = h("span", { class: "state", "data-testid": `state-${n}` });
     this.since = h("span", { class: "since", "data-testid": `since-${n}` });
     this.head = h("summary", {}, h("strong", {}, n), ` ${str(info["type_name"])} · ${str(info["kind"])} `, this.state, " ", this.since);
-    this.activate = linkControl(h("button", { "data-testid": `activate-${n}` }, "Activate"));
+    this.activate = robotControl(h("button", { "data-testid": `activate-${n}` }, "Activate"));
     this.activate.addEventListener("click", () => void this.toggle());
     this.error = h("div", { class: "error", "data-testid": `skill-error-${n}` });
     // The priority decides contention over a resource; the manager applies a change from the next cycle.
@@ -333,7 +369,7 @@ class SkillPanel {
     // As with parameters: a typed priority stays until it is set.
     this.priority.addEventListener("input", () => (this.priorityEdited = true));
     this.priorityError = h("span", { class: "error", "data-testid": `priority-${n}-error` });
-    const setPriority = linkControl(h("button", { "data-testid": `priority-${n}-set` }, "Set"));
+    const setPriority = robotControl(h("button", { "data-testid": `priority-${n}-set`, title: "set it on the robot now" }, "Set"));
     setPriority.addEventListener("click", () => void this.submitPriority());
     this.priority.addEventListener("keydown", (e) => {
       if (e.key === "Enter") void this.submitPriority();
@@ -354,7 +390,7 @@ class SkillPanel {
     const [so, sol] = toggle("show output", `show-output-${n}`);
     const [lp, lpl] = toggle("log parameters", `log-params-${n}`);
     const [vb, vbl] = toggle("verbose", `verbose-${n}`);
-    linkControl(vb);
+    robotControl(vb);
     this.showData = sd;
     this.showInput = si;
     this.showOutput = so;
@@ -365,9 +401,19 @@ class SkillPanel {
     this.outputBox = h("div", { hidden: true, "data-testid": `outputs-${n}` });
     this.paramLog = h("div", { class: "log", hidden: true, "data-testid": `param-log-${n}` });
     this.prints = h("div", { class: "log", hidden: true, "data-testid": `prints-${n}` });
-    sd.addEventListener("change", () => (this.dataBox.hidden = !sd.checked));
-    si.addEventListener("change", () => (this.inputBox.hidden = !si.checked));
-    so.addEventListener("change", () => (this.outputBox.hidden = !so.checked));
+    // Ticked: filled at once from what is shown now (live or the timeline's cycle).
+    sd.addEventListener("change", () => {
+      this.dataBox.hidden = !sd.checked;
+      this.renderBoxes();
+    });
+    si.addEventListener("change", () => {
+      this.inputBox.hidden = !si.checked;
+      this.renderBoxes();
+    });
+    so.addEventListener("change", () => {
+      this.outputBox.hidden = !so.checked;
+      this.renderBoxes();
+    });
     lp.addEventListener("change", () => {
       this.paramLog.hidden = !lp.checked;
       if (lp.checked) {
@@ -392,12 +438,13 @@ class SkillPanel {
       this.paramLog,
       this.prints,
     );
+    this.el.addEventListener("toggle", () => this.renderBoxes());
     this.update(info);
   }
 
   private async toggle(): Promise<void> {
     try {
-      await this.conn.request(this.active ? "deactivate" : "activate", { skills: [this.name] });
+      await this.conn.request(this.liveActive ? "deactivate" : "activate", { skills: [this.name] });
       setText(this.error, "");
     } catch (e) {
       setText(this.error, errorText(e));
@@ -442,7 +489,14 @@ class SkillPanel {
     setText(this.since, inactive === null ? "" : inactive.replace(/^inactive /, ""));
     this.el.classList.toggle("active", this.active);
     this.el.classList.toggle("faulted", typeof fault === "string");
-    setText(this.activate, this.active ? "Deactivate" : "Activate");
+    // Paused on the timeline the panel shows a past cycle, but the button acts on the robot now:
+    // it says so, and follows the skill's state now (`live_active`, from `skillsAt`).
+    const past = typeof info["live_active"] === "boolean";
+    this.liveActive = past ? info["live_active"] === true : this.active;
+    setText(this.activate, `${this.liveActive ? "Deactivate" : "Activate"}${past ? " now" : ""}`);
+    if (replayFile() === null) {
+      this.activate.title = past ? `acts on the robot now (${this.liveActive ? "active" : "inactive"} now), not on the cycle shown` : "";
+    }
     if (!this.priorityEdited && document.activeElement !== this.priority && this.priorityError.textContent === "") {
       this.priority.value = String(num(info["priority"]));
     }
@@ -461,7 +515,16 @@ class SkillPanel {
       this.params.get(str(p["name"]))?.update(p);
       this.lastParams.push([str(p["name"]), p["value"] ?? null]);
     }
-    if (!this.el.open) return;
+    this.lastInfo = info;
+    this.lastInactive = inactive;
+    this.renderBoxes();
+  }
+
+  /** The data, input and output boxes ticked, from the last info shown. */
+  private renderBoxes(): void {
+    const info = this.lastInfo;
+    const inactive = this.lastInactive;
+    if (!info || !this.el.open) return;
     if (this.showData.checked) {
       const params: JsonObject = {};
       for (const p of Array.isArray(info["params"]) ? info["params"] : []) if (isObject(p)) params[str(p["name"])] = p["value"] ?? null;

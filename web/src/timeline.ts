@@ -12,6 +12,8 @@ export interface PastView {
   show(frame: JsonObject): void;
   /** Back to the live telemetry. */
   live(): void;
+  /** The span held changed (a replay's timeline fills as the history takes the replayed cycles). */
+  span?(first: number, last: number): void;
 }
 
 interface Mark {
@@ -27,7 +29,7 @@ interface Span {
   lastT: number;
 }
 
-const SPEEDS = [0.25, 1, 4];
+const SPEEDS = [0.25, 1, 4, 16, 64];
 /** How often the span and the marks are asked for (ms). */
 const REFRESH_MS = 1000;
 /** Marks closer than this share one button (a fraction of the bar). */
@@ -67,6 +69,9 @@ export class Timeline {
   private everUp = false;
   /** The manager's period (s), from its stats: how many cycles a second of playing covers. */
   private periodS = 0.05;
+  /** The recording, when the robot is a replay: the bar only ever shows its past. */
+  private replayOf: string | null = null;
+  private readonly replayEl: HTMLElement;
 
   constructor(
     private readonly conn: Connection,
@@ -79,7 +84,7 @@ export class Timeline {
     this.forward = linkControl(h("button", { "data-testid": "tl-forward", title: "one cycle forward (key →)" }, "1 ▶"));
     this.forward.addEventListener("click", () => void this.step(1));
     this.play = linkControl(h("button", { "data-testid": "tl-play", title: "play the past at the chosen speed" }, "▶ Play"));
-    this.play.addEventListener("click", () => void (this.playTimer === null ? this.startPlaying() : this.stopPlaying()));
+    this.play.addEventListener("click", () => this.togglePlaying());
     this.speed = h("select", { "data-testid": "tl-speed", title: "playing speed" }, ...SPEEDS.map((s) => h("option", { value: String(s) }, `${s}×`)));
     this.speed.value = "1";
     this.slider = linkControl(h("input", { type: "range", min: 0, max: 0, step: 1, value: 0, class: "tl-slider", "data-testid": "tl-slider", "aria-label": "cycle" }));
@@ -90,10 +95,11 @@ export class Timeline {
     this.spanEl = h("span", { class: "dim", "data-testid": "tl-span" }, "");
     this.prints = h("div", { class: "tl-prints mono", "data-testid": "tl-prints" });
     this.note = h("span", { class: "tl-note", "data-testid": "tl-note" });
+    this.replayEl = h("span", { class: "tl-replay", "data-testid": "tl-replay", hidden: true });
     this.el = h(
       "footer",
       { class: "timeline", "data-testid": "timeline", "data-mode": "live", "data-link": "down" },
-      h("div", { class: "row" }, this.liveBtn, this.back, this.forward, this.play, this.speed, this.cycleEl, this.timeEl, this.spanEl, this.note),
+      h("div", { class: "row" }, this.replayEl, this.liveBtn, this.back, this.forward, this.play, this.speed, this.cycleEl, this.timeEl, this.spanEl, this.note),
       h("div", { class: "tl-track" }, this.slider, this.marksEl),
       this.prints,
     );
@@ -110,7 +116,8 @@ export class Timeline {
     if (!this.available || this.liveBtn.disabled) return;
     if (e.key === "p" || e.key === "P") {
       e.preventDefault();
-      void (this.paused ? this.goLive() : this.pause());
+      if (this.replayOf !== null) this.togglePlaying();
+      else void (this.paused ? this.goLive() : this.pause());
     } else if (e.key === "ArrowLeft" || e.key === "ArrowRight") {
       e.preventDefault();
       void this.step(e.key === "ArrowLeft" ? -1 : 1);
@@ -143,6 +150,31 @@ export class Timeline {
     this.available = true;
     if (this.paused) this.goLive();
     void this.refresh();
+  }
+
+  /** The robot is a replay of `file`: the bar shows only the recording (there is nothing live),
+   *  from its first cycle; Play plays it to its end. */
+  setReplay(file: string): void {
+    this.replayOf = file;
+    this.el.dataset["replay"] = file;
+    setText(this.replayEl, `Replay of ${file}`);
+    this.replayEl.title = "the timeline holds the recording's cycles as replayed; nothing here is live";
+    this.replayEl.hidden = false;
+    this.liveBtn.hidden = true;
+    this.setButtons();
+    void this.refresh();
+  }
+
+  /** What the manager panel's Run, Stop and Step do in a replay. */
+  readonly player = {
+    play: (): void => this.startPlaying(),
+    stop: (): void => this.stopPlaying(),
+    step: (cycles: number): void => void this.step(cycles),
+  };
+
+  private togglePlaying(): void {
+    if (this.playTimer === null) this.startPlaying();
+    else this.stopPlaying();
   }
 
   /** Whether the panels that follow the timeline show the past. */
@@ -193,12 +225,19 @@ export class Timeline {
       setText(this.spanEl, "no cycle recorded yet");
       return;
     }
+    const before = this.span;
     this.span = { first: num(reply["first_cycle"]), last: num(reply["last_cycle"]), firstT: num(reply["first_time_s"]), lastT: num(reply["last_time_s"]) };
+    if (before?.first !== this.span.first || before.last !== this.span.last) this.view.span?.(this.span.first, this.span.last);
     const dropped = num(reply["dropped"]);
     setText(this.spanEl, `holds cycles ${this.span.first}–${this.span.last}${dropped > 0 ? ` (${dropped} lost)` : ""}`);
     this.slider.min = String(this.span.first);
     this.slider.max = String(this.span.last);
-    if (!this.paused) this.slider.value = String(this.span.last);
+    if (this.replayOf !== null && !this.paused) {
+      // A replay opens at the recording's first cycle, ready to play.
+      this.enterPaused();
+      this.selected = this.span.first;
+      void this.seek(this.span.first);
+    } else if (!this.paused) this.slider.value = String(this.span.last);
     else if (this.selected < this.span.first) void this.seek(this.span.first);
     this.marks = (Array.isArray(reply["marks"]) ? reply["marks"] : []).filter(isObject).map((m) => ({ cycle: num(m["cycle"]), kind: str(m["kind"]), text: str(m["text"]) }));
     this.drawMarks();
@@ -271,9 +310,10 @@ export class Timeline {
     this.setButtons();
   }
 
-  /** Back to live telemetry. */
+  /** Back to live telemetry (never in a replay: there is none). */
   goLive(): void {
     this.stopPlaying();
+    if (this.replayOf !== null) return;
     this.paused = false;
     this.epoch++;
     this.wanted = null;
@@ -408,6 +448,8 @@ export function skillsAt(live: JsonObject[], frame: JsonObject): JsonObject[] {
     const copy: JsonObject = {
       ...s,
       active: p["active"] ?? null,
+      // What the activation button acts on: the skill now, not at the cycle shown.
+      live_active: s["active"] === true,
       faulted: p["faulted"] ?? null,
       params: (Array.isArray(s["params"]) ? s["params"] : []).filter(isObject).map((x) => ({ ...x, value: params.get(str(x["name"]))?.["value"] ?? x["value"] ?? null })),
       inputs: overlay("inputs"),

@@ -162,7 +162,16 @@ describe("the timeline", () => {
     await until(async () => (await graphWander.getAttribute("data-active")) === "true", "wander active in the graph the cycle before");
     // The robot itself was not touched by looking back.
     assert.equal(Object.fromEntries((await cli(tb.linkPort, "skills")).map((s) => [s.name, s])).wander.active, false);
-    await cli(tb.linkPort, "activate", "wander");
+    // The panel shows wander active then, but its button acts on the robot now, where wander is
+    // inactive: it offers to activate it, and says "now".
+    if (!(await page.getByTestId("skill-wander").evaluate((d) => d.open))) await page.getByTestId("skill-wander").locator("summary").click();
+    const button = page.getByTestId("activate-wander");
+    await until(async () => (await text(button)) === "Activate now", "the button offers what the robot now allows");
+    assert.match((await button.getAttribute("title")) ?? "", /acts on the robot now \(inactive now\)/);
+    await button.click();
+    await until(async () => Object.fromEntries((await cli(tb.linkPort, "skills")).map((s) => [s.name, s])).wander.active === true, "wander activated on the robot by the paused page");
+    await until(async () => (await text(button)) === "Deactivate now", "the button follows the robot now");
+    assert.equal(await shown(), cycle - 1, "the page stayed on the cycle shown");
   });
 
   test("keys: P pauses and goes live, the arrows step one cycle", async () => {
