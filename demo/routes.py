@@ -262,7 +262,7 @@ class RouteSequencer(Sequencer):
 
         ahead = (
             f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
-            f" && wall.distance < {WALL_AHEAD_M}"
+            f" && wall.distance < {WALL_AHEAD_M} && {await self.front_on_wall()}"
         )
 
         async def watch_ahead() -> None:

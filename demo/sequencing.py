@@ -398,20 +398,29 @@ class Sequencer(Link):
         """
         await self.use("runaway", "fit_wall")
         await self.wait("abs(odom.v) < 0.02 && abs(odom.w) < 0.05", within=3)
+        front = await self.front_sonars()
         looks = round(WALL_STAYS_S / 0.5)
         for _window in range(3):
             seen: list[float] = []
             for _ in range(looks):
                 self.send("step", cycles=5)
+                self.prefetch("wall", "sonar.range")
                 wall = await self.value("wall")
                 square = abs(float(wall["normal"])) < math.radians(25)
                 near = float(wall["distance"]) < WALL_AHEAD_M + 0.1
-                if wall["seen"] and int(wall["inliers"]) >= 5 and square and near:
+                ranges = await self.sonar()
+                d = float(wall["distance"])
+                # Hit straight ahead too: not boxes on both walls with the way open between.
+                on = all(ranges[k] < d * f + 0.25 for k, f in front)
+                if wall["seen"] and int(wall["inliers"]) >= 5 and square and near and on:
                     seen.append(float(wall["distance"]))
             middle = sorted(seen)[len(seen) // 2] if seen else 0.0
             steady = sum(abs(d - middle) < 0.08 for d in seen)
             if self.debug:
-                await self.say(f"      wall looks: {steady} of {looks} steady, {len(seen)} seen")
+                await self.say(
+                    f"      wall looks: {steady} of {looks} steady, {len(seen)} seen"
+                    f" (last {dict(wall)}, front {(await self.sonar())[:2]})"
+                )
             if steady >= 0.6 * looks:
                 return True
             if steady <= 0.2 * looks:
@@ -646,6 +655,28 @@ class Sequencer(Link):
         """The sonar nearest ahead that `std.sonar_filter` does not take to be dead."""
         health = await self.value("sonar.health")
         return live_sonar_ahead(int(health["mask"]) if health else 0)
+
+    async def front_sonars(self) -> list[tuple[int, float]]:
+        """The live sonars within 15° of ahead, each with its slack on a wall's distance.
+
+        They must all read a wall fitted across the way (`std.fit_wall`'s ``wall``): at most
+        ``wall.distance * f + 0.25`` (``f``: seen aslant, up to 25° off square).
+
+        A wall across the way is hit straight ahead; boxes on both walls, staggered (1.2 m or
+        more apart on the diagonal: docs/maps.md, "Clutter"), line up across the way for the
+        sonars beside, with the way open between them. A dead sonar is left out (the sonar
+        filter fills it in from its neighbours, which may see the boxes).
+        """
+        health = await self.value("sonar.health")
+        dead = int(health["mask"]) if health else 0
+        return [(k, f) for k, f in ((0, 1.15), (1, 1.4), (SONARS - 1, 1.4)) if not dead >> k & 1]
+
+    async def front_on_wall(self) -> str:
+        """`front_sonars` as a condition of the monitor language."""
+        parts = [
+            f"sonar.range[{k}] < wall.distance * {f!r} + 0.25" for k, f in await self.front_sonars()
+        ]
+        return " && ".join(parts) if parts else "true"
 
     async def enclosed(self) -> bool:
         """Whether walls are near all round (inside a car: all but the door's sonars)."""
