@@ -52,6 +52,9 @@ def test_a_recorded_delivery_reads_back_with_the_mcap_reader(tmp_path: Path) -> 
         assert len(summary.channels) == rec["channels"]
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
         period_s = float(meta["situate"]["period_s"])
+        # Message times are Unix time: the run's start plus the manager's clock.
+        origin_ns = int(meta["situate"]["time_origin_unix_ns"])
+        assert 1.7e18 < origin_ns < 4.1e18, origin_ns
         assert meta["situate"]["robot"] == "deliverybot"
 
         per_topic: dict[str, list[tuple[int, dict[str, Any]]]] = defaultdict(list)
@@ -68,11 +71,13 @@ def test_a_recorded_delivery_reads_back_with_the_mcap_reader(tmp_path: Path) -> 
         assert topic in topics, sorted(topics)
     for topic in ["situate/events/activation_applied", "situate/prints", "situate/winners"]:
         assert topic in topics, sorted(topics)
-    # Every message carries its cycle; its log time is the manager's (simulated) clock at it.
+    # Every message carries its cycle; its log time is the run's start plus the manager's
+    # (simulated) clock at it.
     for topic, messages in per_topic.items():
         for log_time, data in messages:
             assert 1 <= data["cycle"] <= out["cycles"], (topic, data)
-            assert log_time == pytest.approx(data["cycle"] * period_s * 1e9, abs=1e3), (topic, data)
+            clock_ns = log_time - origin_ns
+            assert clock_ns == pytest.approx(data["cycle"] * period_s * 1e9, abs=1e3), (topic, data)
     # The sonar ring, read every cycle but the first (readings arrive for the next cycle).
     ranges = per_topic["sonar.range"]
     assert len(ranges) >= out["cycles"] - 1

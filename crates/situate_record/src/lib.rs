@@ -38,8 +38,13 @@
 //!   the robot), and at the end one `situate_drops`: `dropped_cycles` (how
 //!   many) and `ranges` (which: a JSON list of `[first, last]`).
 //!
-//! A message's `log_time` and `publish_time` are the manager's clock at the
-//! cycle (simulated or wall) in nanoseconds; the cycle is in every message.
+//! A message's `log_time` and `publish_time` are Unix time in nanoseconds:
+//! the wall-clock time the run started at (the metadata's
+//! `time_origin_unix_ns`: when the recording started, less the manager's
+//! clock then) plus the manager's clock at the cycle (simulated or wall), so
+//! a tool showing them (Foxglove) shows the run's date and time of day, and
+//! the manager's clock is `log_time - time_origin_unix_ns`. The cycle is in
+//! every message.
 //! The file is chunked (zstd) and indexed, so a reader can seek by time.
 
 mod encode;
@@ -71,6 +76,9 @@ pub const QUEUE_FRAMES: usize = 4096;
 /// The metadata record written when the recording ends: which cycles it
 /// lacks (`dropped_cycles`, `ranges`).
 pub const DROPS_METADATA: &str = "situate_drops";
+/// The `situate` metadata's key for the run's start in Unix time (ns): every message's `log_time`
+/// is it plus the manager's clock at the message's cycle.
+pub const TIME_ORIGIN_METADATA: &str = "time_origin_unix_ns";
 
 /// The topic of the gap markers: cycles dropped while recording.
 pub const GAPS_TOPIC: &str = "situate/gaps";
@@ -248,6 +256,13 @@ impl Recorder {
             .unwrap_or_default(),
         );
         meta.insert("situate_version".to_string(), env!("CARGO_PKG_VERSION").to_string());
+        // The run's start in Unix time: now, less the manager's clock now (0 before its first
+        // cycle; the time run so far when recording a running robot).
+        let now_ns = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+        let origin_ns = now_ns.saturating_sub(stats.as_ref().map_or(0, |s| nanos(s.time_s)));
+        meta.insert(TIME_ORIGIN_METADATA.to_string(), origin_ns.to_string());
         writer
             .write_metadata(&mcap::records::Metadata { name: "situate".to_string(), metadata: meta })
             .map_err(|source| mcap_error(path, source))?;
@@ -286,6 +301,7 @@ impl Recorder {
             buf: Vec::new(),
             sequence: HashMap::new(),
             period_s,
+            origin_ns,
             times: std::collections::VecDeque::new(),
             summary: Summary { path: path.to_path_buf(), ..Summary::default() },
         };
@@ -350,6 +366,8 @@ struct Writing {
     buf: Vec<u8>,
     sequence: HashMap<u16, u32>,
     period_s: f64,
+    /// The run's start in Unix time (ns), added to the manager's clock in every message's time.
+    origin_ns: u64,
     /// The recent frames' cycles and times, for the time of events (an
     /// event may be read after frames of later cycles).
     times: std::collections::VecDeque<(u64, f64)>,
@@ -659,8 +677,8 @@ impl Writing {
         let header = mcap::records::MessageHeader {
             channel_id: channel,
             sequence: *sequence,
-            log_time: time_ns,
-            publish_time: time_ns,
+            log_time: self.origin_ns.saturating_add(time_ns),
+            publish_time: self.origin_ns.saturating_add(time_ns),
         };
         self.writer.write_to_known_channel(&header, bytes).map_err(|source| mcap_error(&self.path, source))?;
         self.summary.messages += 1;

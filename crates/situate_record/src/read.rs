@@ -549,6 +549,19 @@ impl Reader {
             }
         }
         let meta = |key: &str| format!("the metadata record `situate`, `{key}`");
+        // Message times are Unix time (the run's start plus the manager's clock); a recording
+        // made before they were has no origin, and its times are the manager's clock already.
+        if let Some(o) = self.rec.metadata.get(crate::TIME_ORIGIN_METADATA) {
+            let Ok(origin) = o.parse::<u64>() else {
+                return Err(self.bad(format!(
+                    "{}: `{o}` is not a time in nanoseconds since 1970 (a whole number)",
+                    meta(crate::TIME_ORIGIN_METADATA)
+                )));
+            };
+            for c in self.rec.cycles.values_mut() {
+                c.time_ns = c.time_ns.saturating_sub(origin);
+            }
+        }
         if let Some(p) = self.rec.metadata.get("period_s") {
             let ok = p.parse::<f64>().ok().filter(|p| p.is_finite() && *p > 0.0 && *p <= 86_400.0);
             if ok.is_none() {

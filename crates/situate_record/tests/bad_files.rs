@@ -167,6 +167,28 @@ fn a_period_that_is_not_a_number_is_refused_naming_it() {
 }
 
 #[test]
+fn a_time_origin_that_is_not_a_time_is_refused_naming_it() {
+    let src = recording("origin-src");
+    let dst = temp("origin");
+    for bad in ["-1", "1.5e18", "yesterday", "18446744073709551616"] {
+        rewrite(
+            &src,
+            &dst,
+            |name, m| {
+                if name == "situate" {
+                    m.insert("time_origin_unix_ns".into(), bad.into());
+                }
+            },
+            |_, _| {},
+        );
+        let text = refused(&dst);
+        assert!(text.contains("`time_origin_unix_ns`") && text.contains(&format!("`{bad}`")), "{text}");
+    }
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
+
+#[test]
 fn recorded_parameter_sets_that_are_not_json_are_refused_naming_them() {
     let src = recording("sets-src");
     let dst = temp("sets");

@@ -1,6 +1,7 @@
 //! A recording read back with the `mcap` crate: one channel per signal leaf
 //! written, one per kind of event, JSON Schemas, a message per cycle with its
-//! cycle and the manager's clock as `log_time`.
+//! cycle, and as `log_time` the run's start in Unix time plus the manager's
+//! clock.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -57,7 +58,13 @@ fn manager_on(clock: ClockKind) -> Manager {
 fn a_recording_has_a_channel_per_written_leaf_and_per_event_kind_read_back_with_mcap() {
     let path = temp("channels");
     let mut m = manager();
+    let unix_ns = || {
+        let d = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).expect("after 1970");
+        u64::try_from(d.as_nanos()).expect("ns fit")
+    };
+    let before = unix_ns();
     let recorder = Recorder::start(&path, &mut m).unwrap_or_else(|e| panic!("{e}"));
+    let after = unix_ns();
     m.run_cycles(10);
     m.request(Request::Activate { skills: vec!["c2".into()], with_providers: false }).unwrap();
     m.run_cycles(10);
@@ -68,6 +75,12 @@ fn a_recording_has_a_channel_per_written_leaf_and_per_event_kind_read_back_with_
     assert_eq!(summary.cycles, Some((1, 20)), "{summary:?}");
 
     let bytes = std::fs::read(&path).unwrap();
+    // The run's start in Unix time: when the recording started (the manager had run no cycle).
+    let summary_section = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let index = summary_section.metadata_indexes.iter().find(|m| m.name == "situate").expect("the situate metadata");
+    let metadata = mcap::read::metadata(&bytes, index).unwrap();
+    let origin: u64 = metadata.metadata["time_origin_unix_ns"].parse().unwrap();
+    assert!((before..=after).contains(&origin), "{before} <= {origin} <= {after}");
     let mut per_topic: BTreeMap<String, Vec<(u64, serde_json::Value)>> = BTreeMap::new();
     for message in mcap::MessageStream::new(&bytes).unwrap() {
         let message = message.unwrap();
@@ -84,14 +97,15 @@ fn a_recording_has_a_channel_per_written_leaf_and_per_event_kind_read_back_with_
     assert!(topics.contains(&"count") && topics.contains(&"ramp"), "{topics:?}");
     assert!(topics.contains(&"situate/prints"), "{topics:?}");
 
-    // One message per cycle, the cycle in it, the manager's clock as log time.
+    // One message per cycle, the cycle in it, the run's start plus the manager's clock as log
+    // time (Foxglove shows the run's date, not 1970).
     let count = &per_topic["count"];
     assert_eq!(count.len(), 20);
     for (k, (log_time, data)) in count.iter().enumerate() {
         let cycle = k as u64 + 1;
         assert_eq!(data["cycle"], cycle);
         assert_eq!(data["value"], cycle as f64);
-        assert_eq!(*log_time, cycle * 100_000_000, "cycle {cycle} at {} s", cycle as f64 * 0.1);
+        assert_eq!(*log_time, origin + cycle * 100_000_000, "cycle {cycle} at {} s", cycle as f64 * 0.1);
     }
     // Non-finite floats as the link writes them, and the schema allows them.
     assert_eq!(per_topic["ramp"][0].1["value"], serde_json::json!([0.0, 1.0, "nan"]));
@@ -99,7 +113,10 @@ fn a_recording_has_a_channel_per_written_leaf_and_per_event_kind_read_back_with_
     assert_eq!(print.len(), 1, "{print:?}");
     assert_eq!(print[0].1["line"], "three");
     assert_eq!(print[0].1["cycle"], 3);
-    assert_eq!(print[0].0, 300_000_000, "an event at its cycle's time");
+    assert_eq!(print[0].0, origin + 300_000_000, "an event at its cycle's time");
+    // Read back, a cycle's time is the manager's clock again.
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rec.cycles[&5].time_ns, 500_000_000);
 
     // Who holds the resource `count`, when that changes; the activation event.
     let winners: Vec<(u64, String)> = per_topic["situate/winners"]
@@ -111,7 +128,7 @@ fn a_recording_has_a_channel_per_written_leaf_and_per_event_kind_read_back_with_
     assert_eq!(activations.len(), 1, "{activations:?}");
     assert_eq!(activations[0].1["activated"], serde_json::json!(["c2"]));
     assert_eq!(activations[0].1["cycle"], 11);
-    assert_eq!(activations[0].0, 1_100_000_000);
+    assert_eq!(activations[0].0, origin + 1_100_000_000);
 
     // Indexed: the summary section lists the channels and counts the messages.
     let index = mcap::Summary::read(&bytes).unwrap().expect("a summary section");
