@@ -480,9 +480,12 @@ fn on_the_simulated_clock_waiting_for_a_cpu_does_not_count_against_a_budget() {
     let m = build(&spec, &reg);
     let events = m.events();
     let (mut handle, join) = m.spawn(true);
-    // Three runs that took over twice the budget on the wall, for 20 ms of CPU each.
+    // Three runs that took over one and a half budgets on the wall (a deadline of 100 ms would
+    // fault them), for 20 ms of CPU each. How long the busy threads keep the body waiting depends
+    // on the kernel's grouping of threads and on the load beside the test: under the flake hunt's
+    // busy loops the runs took 175-200 ms, not the 1.6 s of a fair share among 81 threads.
     let long =
-        |walls: &Mutex<Vec<(u64, u64)>>| walls.lock().unwrap().iter().filter(|(wall, _)| *wall > 200_000_000).count();
+        |walls: &Mutex<Vec<(u64, u64)>>| walls.lock().unwrap().iter().filter(|(wall, _)| *wall > 150_000_000).count();
     let deadline = Instant::now() + BOUND;
     while long(&walls) < 3 {
         let faulted = events.try_iter().find_map(|e| match e {
