@@ -281,6 +281,10 @@ class RouteSequencer(Sequencer):
                 if held == 0:
                     facing = (await self.odom()).theta
                     if abs(wrap(facing - along)) < math.radians(30):
+                        # Square to the way, not to where avoidance turned the robot (round
+                        # clutter, a box on each wall then lines up across its view).
+                        if abs(wrap(facing - along)) > math.radians(8):
+                            await self.turn(wrap(along - facing))
                         if await self.wall_stays():
                             return True
                         await self.use("runaway", "avoid", "follow_hallway", "fit_wall")

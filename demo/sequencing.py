@@ -28,6 +28,9 @@ DOOR_STANDOFF = 0.9
 #: Openings wider than this are not a door; a door is taken to be DOOR_WIDTH wide, m.
 MAX_DOOR_WIDTH = 1.6
 DOOR_WIDTH = 1.1
+#: A raw sonar reading under this is an echo (the device reads 4 m for none), m.
+ECHO_M = 3.9
+ALL_SONARS = (1 << SONARS) - 1
 #: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
 WALL_AHEAD_M = 1.2
 #: How long to wait in front of a door that shows no opening (closed doors open again), s.
@@ -74,6 +77,8 @@ class Sequencer(Link):
         self.passed_heading: float | None = None
         #: The heading the route planned for its last `follow` step (odometry frame).
         self.followed_heading: float | None = None
+        #: Sonars that heard an echo in the run (bit k: sonar k), noted after each turn.
+        self.echoed = 0
 
     # ----- behaviours the phases share -------------------------------------------------
 
@@ -89,6 +94,8 @@ class Sequencer(Link):
             f"abs(odom.theta - {goal + k * 2 * math.pi:.4f}) < 0.15" for k in (-1, 0, 1)
         )
         done = await self.wait(f"({near}) && abs(odom.w) < 0.1", within=5 + abs(angle) / 0.4)
+        if self.echoed != ALL_SONARS:
+            await self.note_echoes()
         return done == 0
 
     async def home_on(
@@ -404,11 +411,11 @@ class Sequencer(Link):
             seen: list[float] = []
             for _ in range(looks):
                 self.send("step", cycles=5)
-                self.prefetch("wall", "sonar.range")
+                self.prefetch("wall", "sonar.raw")
                 wall = await self.value("wall")
                 square = abs(float(wall["normal"])) < math.radians(25)
                 near = float(wall["distance"]) < WALL_AHEAD_M + 0.1
-                ranges = await self.sonar()
+                ranges = [float(r) for r in await self.value("sonar.raw")]
                 d = float(wall["distance"])
                 # Hit straight ahead too: not boxes on both walls with the way open between.
                 on = all(ranges[k] < d * f + 0.25 for k, f in front)
@@ -664,19 +671,28 @@ class Sequencer(Link):
 
         A wall across the way is hit straight ahead; boxes on both walls, staggered (1.2 m or
         more apart on the diagonal: docs/maps.md, "Clutter"), line up across the way for the
-        sonars beside, with the way open between them. A dead sonar is left out (the sonar
-        filter fills it in from its neighbours, which may see the boxes).
+        sonars beside, with the way open between them. The readings are the device's
+        (`sonar.raw`): the sonar filter takes a sonar looking down a long corridor past
+        clutter for dead and fills it in from its neighbours, which see the clutter. A sonar
+        that never heard an echo in the run (`note_echoes`) is dead (docs/maps.md: a dead
+        sonar hears none) and left out.
         """
-        health = await self.value("sonar.health")
-        dead = int(health["mask"]) if health else 0
-        return [(k, f) for k, f in ((0, 1.15), (1, 1.4), (SONARS - 1, 1.4)) if not dead >> k & 1]
+        await self.note_echoes()
+        return [(k, f) for k, f in ((0, 1.15), (1, 1.4), (SONARS - 1, 1.4)) if self.echoed >> k & 1]
 
     async def front_on_wall(self) -> str:
         """`front_sonars` as a condition of the monitor language."""
         parts = [
-            f"sonar.range[{k}] < wall.distance * {f!r} + 0.25" for k, f in await self.front_sonars()
+            f"sonar.raw[{k}] < wall.distance * {f!r} + 0.25" for k, f in await self.front_sonars()
         ]
         return " && ".join(parts) if parts else "true"
+
+    async def note_echoes(self) -> None:
+        """Notes which sonars hear an echo now (`echoed`): those are alive."""
+        raw = await self.value("sonar.raw")
+        for k, r in enumerate(raw or []):
+            if float(r) < ECHO_M:
+                self.echoed |= 1 << k
 
     async def enclosed(self) -> bool:
         """Whether walls are near all round (inside a car: all but the door's sonars)."""
