@@ -107,6 +107,9 @@ ABREAST_M = 0.35
 #: is this much deeper than the patrol line along the button's wall, m.
 SIDE_LEG_SHORT_M = 0.3
 SIDE_LEG_MIN_M = 0.8
+#: Out of the lab, a wall ahead nearer than this is the corridor's far wall (corridors are at
+#: most 3 m wide; the robot stops about 1.1 m past the door's line), m.
+FAR_WALL_M = 2.5
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -260,10 +263,38 @@ class Delivery(RouteSequencer):
                 self.wall_fix = await self.barcode_wall(m.lab_door_barcode)
             await self.phase(3, "looking for the door opening and passing the lab door")
             if await self.pass_door(m.lab_door_barcode, None) and await self.beyond_wall():
+                await self.square_the_way_out()
                 return
             await self.say("    could not pass the door: looking again")
             await self.escape(5)
         raise PhaseFailed("could not leave the lab")
+
+    async def square_the_way_out(self) -> None:
+        """Takes the way out of the lab square to the corridor's far wall, just ahead.
+
+        The route's first turn is from the way the robot came out (docs/maps.md, "Route
+        steps"); passed aslant (the door's normal misjudged, someone in the way), that way is
+        off by as much, and so is every turn after it. The corridor's far wall, fitted by
+        sonar, faces the lab's door (the corridor runs along the lab's wall).
+        """
+        if self.passed_heading is None:
+            return
+        await self.set("fit_wall", "bearing_deg", 0.0)
+        await self.set("fit_wall", "half_angle_deg", 60.0)
+        try:
+            wall = await self.clue("fit_wall", "wall", keep=["runaway"])
+        finally:
+            await self.restore("fit_wall", "bearing_deg")
+            await self.restore("fit_wall", "half_angle_deg")
+        if wall is None or float(wall["distance"]) > FAR_WALL_M:
+            return
+        o = await self.odom()
+        out = wrap(o.theta + float(wall["normal"]))
+        if abs(wrap(out - self.passed_heading)) < math.radians(60):
+            if self.debug:
+                off = math.degrees(wrap(out - self.passed_heading))
+                await self.say(f"      the way out squared to the far wall: {off:+.0f}°")
+            self.passed_heading = out
 
     async def to_lobby(self) -> None:
         """Phase 4: the route hints from the lab door to the elevator lobby."""

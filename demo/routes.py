@@ -314,6 +314,22 @@ class RouteSequencer(Sequencer):
                     best = made
                     renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
                     deadline = min(renewed, began + WALL_LONGEST_S)
+                elif held == 2:
+                    # No way made in a whole slice (turned into a doorway beside the way):
+                    # facing the way again from the corridor's middle, on.
+                    await self.say(
+                        f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle"
+                    )
+                    await self.turn(wrap(along - o.theta))
+                    await self.recentre(along)
+                    await watch_ahead()
+                    await self.use(
+                        "runaway",
+                        "avoid",
+                        "follow_hallway",
+                        "fit_wall",
+                        restart=["follow_hallway", "fit_wall"],
+                    )
             return False
         finally:
             await self.restore("fit_wall", "bearing_deg")
