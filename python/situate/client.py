@@ -372,6 +372,18 @@ class Robot:
         """Makes a skill's prints arrive as :class:`~situate.Print` events (or stop)."""
         await self.request("set_verbose", skill=skill, verbose=verbose)
 
+    async def phase(self, text: str, client: str | None = None) -> None:
+        """Says which phase or step of its mission the sequencer is in (``"leaving the lab"``).
+
+        The robot's GUI shows it on its timeline's mission lane, recordings keep it, and it
+        arrives as a :class:`~situate.Phase` event. One line of 1 to 200 characters, else
+        :class:`~situate.Invalid`. ``client`` names the sequencer (shown with it).
+        """
+        if client is None:
+            await self.request("phase", text=text)
+        else:
+            await self.request("phase", text=text, client=client)
+
     # ----- parameters ------------------------------------------------------------
 
     async def set_param(self, skill: str, param: str, value: Any) -> None:

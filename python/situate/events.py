@@ -166,6 +166,18 @@ class WorkerFailed:
 
 
 @dataclass(frozen=True)
+class Phase:
+    """A sequencer said which phase of its mission it is in (``Robot.phase``), from ``cycle`` on.
+
+    ``client`` is the name the sequencer gave itself, or ``None``.
+    """
+
+    text: str
+    client: str | None
+    cycle: int
+
+
+@dataclass(frozen=True)
 class OtherEvent:
     """An event of a kind this version of the package does not know, kept whole."""
 
@@ -184,6 +196,7 @@ Event = Union[
     ManagerStarted,
     ManagerStopped,
     WorkerFailed,
+    Phase,
     OtherEvent,
 ]
 """Any event a manager publishes."""
@@ -250,6 +263,13 @@ def parse_event(data: dict[str, Any]) -> Event:
         if kind == "worker_failed":
             return WorkerFailed(
                 thread=str(data["thread"]), cause=str(data["cause"]), action=str(data["action"])
+            )
+        if kind == "phase":
+            client = data.get("client")
+            return Phase(
+                text=str(data["text"]),
+                client=None if client is None else str(client),
+                cycle=int(data["cycle"]),
             )
     except (KeyError, TypeError, ValueError, AttributeError):
         pass

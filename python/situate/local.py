@@ -124,6 +124,13 @@ class LocalRobot:
         """Makes a skill's prints arrive as :class:`~situate.Print` events (or stop)."""
         self.request("set_verbose", skill=skill, verbose=verbose)
 
+    def phase(self, text: str, client: str | None = None) -> None:
+        """Says which phase of its mission the program is in (see ``Robot.phase``)."""
+        if client is None:
+            self.request("phase", text=text)
+        else:
+            self.request("phase", text=text, client=client)
+
     def query(self, signal: str) -> Reading:
         """A signal's value at the end of the last cycle."""
         return Reading.from_json(self.request("query", signal=signal))

@@ -193,6 +193,27 @@ def test_activation_and_parameter_changes_are_events(toybot: Manager) -> None:
     run(main())
 
 
+def test_a_sequencers_phase_is_an_event_from_the_next_cycle(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            async with robot.events("phase") as stream:
+                before = (await robot.stats()).cycle
+                await robot.phase("leaving the lab", client="deliver")
+                await robot.phase("riding the car")
+                events = await take(stream, 2)
+            assert events == [
+                situate.Phase(text="leaving the lab", client="deliver", cycle=before + 1),
+                situate.Phase(text="riding the car", client=None, cycle=before + 1),
+            ]
+            with pytest.raises(situate.Invalid, match="one line without control characters"):
+                await robot.phase("two\nlines")
+            with pytest.raises(situate.Invalid, match="1 to 200 characters, got 201"):
+                await robot.phase("x" * 201)
+
+    run(main())
+
+
 def test_drain_takes_what_has_arrived_without_waiting(toybot: Manager) -> None:
     async def main() -> None:
         async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:

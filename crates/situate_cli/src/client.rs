@@ -57,6 +57,17 @@ pub(crate) enum ClientCommand {
         #[command(flatten)]
         remote: Remote,
     },
+    /// Say which phase of its mission a sequencer is in (`phase "leaving the lab"`): shown on the
+    /// GUI's timeline, recorded, and sent as a `phase` event (for shell sequencers and tests).
+    Phase {
+        /// One line, 1 to 200 characters.
+        text: String,
+        /// The name the sequencer gives itself, shown with the phase.
+        #[arg(long)]
+        client: Option<String>,
+        #[command(flatten)]
+        remote: Remote,
+    },
     /// A running robot's parameters: `param get SKILL PARAM`, `param set SKILL PARAM VALUE`,
     /// `param dump` (every value, as a file `param load` reads), `param load FILE`.
     Param {
@@ -266,6 +277,15 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
         ClientCommand::Deactivate { names, remote } => client_verb(&remote, |c, robot| {
             let r = c.request(robot, "deactivate", &json!({"skills": names}))?;
             out.result(&r, || change_text(&r, "deactivated"));
+            Ok(())
+        }),
+        ClientCommand::Phase { text, client, remote } => client_verb(&remote, |c, robot| {
+            let args = match &client {
+                Some(name) => json!({"text": text, "client": name}),
+                None => json!({"text": text}),
+            };
+            let r = c.request(robot, "phase", &args)?;
+            out.result(&r, || format!("phase: {text}"));
             Ok(())
         }),
         ClientCommand::Param { action } => param(action, out),

@@ -195,11 +195,20 @@ fn value_bytes(v: &Value) -> usize {
         }
 }
 
+/// A phase's mark: its text, and who said it when the client gave a name (`deliver: leaving the
+/// lab`).
+fn phase_text(text: &str, client: Option<&str>) -> String {
+    match client {
+        Some(c) if !c.is_empty() => format!("{c}: {text}"),
+        _ => text.to_string(),
+    }
+}
+
 /// An event on the timeline.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mark {
     pub cycle: u64,
-    /// `activation`, `param`, `fault`, `monitor`, `manager` or `worker`.
+    /// `activation`, `param`, `priority`, `fault`, `monitor`, `manager`, `worker` or `phase`.
     pub kind: &'static str,
     pub text: String,
 }
@@ -447,6 +456,7 @@ impl History {
             Event::WorkerFailed { thread, cause, action } => {
                 (last_cycle, "worker", format!("worker {thread} failed ({cause}): {action}"))
             }
+            Event::Phase { text, client, cycle } => (*cycle, "phase", phase_text(text, client.as_deref())),
             Event::Print { .. } => return,
         };
         if self.events_mark {
@@ -512,6 +522,7 @@ impl History {
             "manager_started" => ("manager", "the cycle started".to_string()),
             "manager_stopped" => ("manager", "the cycle stopped".to_string()),
             "worker_failed" => ("worker", format!("worker {} failed ({}): {}", s("thread"), s("cause"), s("action"))),
+            "phase" => ("phase", phase_text(&s("text"), event.get("client").and_then(Json::as_str))),
             _ => return,
         };
         self.insert_mark(cycle, kind, text);

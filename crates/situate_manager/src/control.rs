@@ -120,9 +120,20 @@ pub enum Request {
     Tick {
         until: u64,
     },
+    /// The sequencer says which phase or step of its mission it is in (`leaving the lab`): a
+    /// [`Event::Phase`] from the next cycle on, shown on the GUI's timeline, recorded, replayed.
+    /// At most [`MAX_PHASE_TEXT`] characters, none of them a control character.
+    Phase {
+        text: String,
+        /// A name the client gives itself (`deliver`); not an identity.
+        client: Option<String>,
+    },
     /// End the manager's thread (from a [`Handle`]).
     Shutdown,
 }
+
+/// The longest a [`Request::Phase`]'s text may be, in characters.
+pub const MAX_PHASE_TEXT: usize = 200;
 
 /// The answer to a [`Request`].
 #[derive(Debug, Clone, PartialEq)]
@@ -271,6 +282,12 @@ pub enum Event {
         thread: String,
         cause: String,
         action: String,
+    },
+    /// The sequencer's mission entered a phase ([`Request::Phase`]), from `cycle` on.
+    Phase {
+        text: String,
+        client: Option<String>,
+        cycle: u64,
     },
 }
 

@@ -28,7 +28,7 @@ pub mod yaml;
 pub use config::{ClockKind, ExecutorKind, RobotFile};
 pub use control::{
     CancelReason, Control, ControlError, Event, Handle, ManagerStats, MonitorInfo, Pending, PortInfo, Reply, Request,
-    ResourceWinner, SignalReading, SkillInfo, SkillTiming,
+    ResourceWinner, SignalReading, SkillInfo, SkillTiming, MAX_PHASE_TEXT,
 };
 pub use frame::{Frame, FrameValues};
 pub use graph::Graph;

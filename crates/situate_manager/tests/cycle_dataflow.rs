@@ -244,6 +244,32 @@ fn a_rejected_parameter_leaves_the_old_value() {
 }
 
 #[test]
+fn a_sequencers_phase_is_an_event_from_the_next_cycle_and_a_text_that_is_not_one_line_is_refused() {
+    let reg = Registry::new();
+    let mut m = build(&simulated("phases"), &reg);
+    let events = m.events();
+    m.step(3).unwrap();
+    let phase = |text: &str| Request::Phase { text: text.into(), client: Some("deliver".into()) };
+    assert_eq!(m.request(phase("leaving the lab")).unwrap(), Reply::Done);
+    let phases: Vec<Event> = events.try_iter().filter(|e| matches!(e, Event::Phase { .. })).collect();
+    assert_eq!(phases, vec![Event::Phase { text: "leaving the lab".into(), client: Some("deliver".into()), cycle: 4 }]);
+    for (text, says) in [
+        ("", "1 to 200 characters, got 0"),
+        (&"x".repeat(201) as &str, "1 to 200 characters, got 201"),
+        ("two\nlines", "control characters, got '\\n'"),
+    ] {
+        let err = m.request(phase(text)).unwrap_err();
+        assert!(matches!(err, ControlError::Invalid(_)), "{err:?}");
+        assert!(err.to_string().contains(says), "{text:?}: {err}");
+    }
+    assert_eq!(
+        events.try_iter().filter(|e| matches!(e, Event::Phase { .. })).count(),
+        0,
+        "a refused phase is no event"
+    );
+}
+
+#[test]
 fn skill_queries_show_inputs_outputs_parameters_and_timing() {
     let log = log();
     let mut reg = Registry::new();

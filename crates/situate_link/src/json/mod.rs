@@ -39,6 +39,7 @@ pub const VERBS: &[&str] = &[
     "run",
     "stop",
     "step",
+    "phase",
 ];
 
 /// A request the link could not even hand to the manager.

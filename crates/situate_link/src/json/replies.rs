@@ -195,6 +195,9 @@ pub fn event_to_json(e: &Event) -> (&'static str, Json) {
         Event::WorkerFailed { thread, cause, action } => {
             ("worker_failed", json!({"kind": "worker_failed", "thread": thread, "cause": cause, "action": action}))
         }
+        Event::Phase { text, client, cycle } => {
+            ("phase", json!({"kind": "phase", "text": text, "client": client, "cycle": cycle}))
+        }
     }
 }
 

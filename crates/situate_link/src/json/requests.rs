@@ -519,6 +519,11 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
         "run" => Decoded::Manager(Request::Run),
         "stop" => Decoded::Manager(Request::Stop),
         "step" => Decoded::Manager(Request::Step { cycles: a.integer("cycles", 1, 1_000_000)? as u64 }),
+        "phase" => {
+            let text = a.string("text")?;
+            let client = if a.has("client") { Some(a.string("client")?) } else { None };
+            Decoded::Manager(Request::Phase { text, client })
+        }
         _ => unreachable!("verbs are checked above"),
     };
     a.finish()?;
@@ -601,6 +606,10 @@ mod tests {
             decode_request("deactivate", br#"{"skills": ["wander"]}"#).unwrap(),
             Decoded::Manager(Request::Deactivate { skills: vec!["wander".into()] })
         );
+        assert_eq!(
+            decode_request("phase", br#"{"text": "leaving the lab", "client": "deliver"}"#).unwrap(),
+            Decoded::Manager(Request::Phase { text: "leaving the lab".into(), client: Some("deliver".into()) })
+        );
     }
 
     #[test]
@@ -614,6 +623,8 @@ mod tests {
             ("set_priority", r#"{"skill": "r", "priority": "2"}"#, "priority", "an integer in ["),
             ("set_priority", r#"{"skill": "r", "priority": 1e400}"#, "priority", "an integer in ["),
             ("set_verbose", r#"{"skill": "r", "verbose": 1}"#, "verbose", "true or false"),
+            ("phase", r#"{"text": 1}"#, "text", "a string"),
+            ("phase", r#"{"text": "a", "client": true}"#, "client", "a string"),
             ("query", r#"{"signal": ["odom"]}"#, "signal", "a string"),
             ("skill", r#"{"skill": 1}"#, "skill", "a string"),
             ("monitor_add", r#"{"condition": 1}"#, "condition", "a string"),

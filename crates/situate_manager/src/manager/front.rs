@@ -93,9 +93,29 @@ pub(crate) fn prepare(graph: &Graph, request: &mut Request) -> Result<Option<Pre
         }
         Request::AddMonitor { condition, report, .. } => return prepare_monitor(graph, condition, report).map(Some),
         Request::Step { cycles } => check_step(*cycles)?,
+        Request::Phase { text, .. } => check_phase(text)?,
         _ => {}
     }
     Ok(None)
+}
+
+/// A phase's text: 1 to [`crate::control::MAX_PHASE_TEXT`] characters, no control character
+/// (one line on a timeline).
+pub(crate) fn check_phase(text: &str) -> Result<(), ControlError> {
+    let n = text.chars().count();
+    if n == 0 || n > crate::control::MAX_PHASE_TEXT {
+        return Err(ControlError::Invalid(format!(
+            "`phase`: the text must be 1 to {} characters, got {n}",
+            crate::control::MAX_PHASE_TEXT
+        )));
+    }
+    if let Some(c) = text.chars().find(|c| c.is_control()) {
+        return Err(ControlError::Invalid(format!(
+            "`phase`: the text must be one line without control characters, got {:?} in it",
+            c
+        )));
+    }
+    Ok(())
 }
 
 /// [`prepare`], the compiled monitor boxed (it travels in the request queue).

@@ -416,6 +416,11 @@ impl Manager {
                 self.insts[i].verbose = verbose;
                 Ok(Reply::Done)
             }
+            Request::Phase { text, client } => {
+                super::front::check_phase(&text)?;
+                self.bus.send(Event::Phase { text, client, cycle: self.cycle + 1 });
+                Ok(Reply::Done)
+            }
             Request::QuerySignal { signal } => self.query_signal(&signal).map(Reply::Signal),
             Request::QuerySignals { signals } => {
                 signals.iter().map(|s| self.query_signal(s)).collect::<Result<_, _>>().map(Reply::Signals)
