@@ -53,6 +53,11 @@ export class Timeline {
   private span: Span | null = null;
   private marks: Mark[] = [];
   private marksKey = "";
+  /** The sequencer's phases (`phase` marks), drawn on the mission lane, not as marks. */
+  private phases: Mark[] = [];
+  private laneKey = "";
+  private readonly lane: HTMLElement;
+  private readonly phaseEl: HTMLElement;
   /** The cycle asked for while paused (the one shown is in the bar's `data-shown`). */
   private selected = 0;
   private inFlight = false;
@@ -96,11 +101,14 @@ export class Timeline {
     this.prints = h("div", { class: "tl-prints mono", "data-testid": "tl-prints" });
     this.note = h("span", { class: "tl-note", "data-testid": "tl-note" });
     this.replayEl = h("span", { class: "tl-replay", "data-testid": "tl-replay", hidden: true });
+    this.lane = h("div", { class: "tl-lane", "data-testid": "tl-lane", title: "the mission: the phases the sequencer said (robot.phase)" });
+    this.phaseEl = h("span", { class: "tl-phase", "data-testid": "tl-phase" });
     this.el = h(
       "footer",
       { class: "timeline", "data-testid": "timeline", "data-mode": "live", "data-link": "down" },
-      h("div", { class: "row" }, this.replayEl, this.liveBtn, this.back, this.forward, this.play, this.speed, this.cycleEl, this.timeEl, this.spanEl, this.note),
+      h("div", { class: "row" }, this.replayEl, this.liveBtn, this.back, this.forward, this.play, this.speed, this.cycleEl, this.timeEl, this.spanEl, this.phaseEl, this.note),
       h("div", { class: "tl-track" }, this.slider, this.marksEl),
+      this.lane,
       this.prints,
     );
     this.setButtons();
@@ -239,8 +247,12 @@ export class Timeline {
       void this.seek(this.span.first);
     } else if (!this.paused) this.slider.value = String(this.span.last);
     else if (this.selected < this.span.first) void this.seek(this.span.first);
-    this.marks = (Array.isArray(reply["marks"]) ? reply["marks"] : []).filter(isObject).map((m) => ({ cycle: num(m["cycle"]), kind: str(m["kind"]), text: str(m["text"]) }));
+    const all = (Array.isArray(reply["marks"]) ? reply["marks"] : []).filter(isObject).map((m) => ({ cycle: num(m["cycle"]), kind: str(m["kind"]), text: str(m["text"]) }));
+    this.marks = all.filter((m) => m.kind !== "phase");
+    this.phases = all.filter((m) => m.kind === "phase");
     this.drawMarks();
+    this.drawLane();
+    if (!this.paused) this.showPhase(this.span.last);
   }
 
   /** One button per group of nearby marks, placed along the slider (moved, not made again, while
@@ -287,6 +299,42 @@ export class Timeline {
         return b;
       }),
     );
+  }
+
+  /** The mission lane: each phase the sequencer said, from its cycle to the next phase's (or the
+   *  span's end), labelled; clicking one shows its first cycle. */
+  private drawLane(): void {
+    const span = this.span;
+    if (!span) return;
+    const width = Math.max(1, span.last - span.first);
+    const pct = (cycle: number) => ((Math.min(span.last, Math.max(span.first, cycle)) - span.first) / width) * 100;
+    const segments = this.phases
+      .map((p, i) => ({ p, end: this.phases[i + 1]?.cycle ?? span.last + 1 }))
+      .filter(({ p, end }) => end > span.first && p.cycle <= span.last);
+    this.lane.hidden = segments.length === 0;
+    const key = JSON.stringify([span.first, span.last, segments.map(({ p, end }) => [p.cycle, end, p.text])]);
+    if (key === this.laneKey) return;
+    this.laneKey = key;
+    this.lane.replaceChildren(
+      ...segments.map(({ p, end }) => {
+        const left = pct(p.cycle);
+        const right = pct(end);
+        const title = `cycle ${p.cycle}: ${p.text}`;
+        const b = h("button", { class: "tl-seg", "data-testid": "tl-phase-seg", "data-cycle": p.cycle, "data-text": p.text, title, "aria-label": title }, p.text);
+        b.style.left = `${left}%`;
+        b.style.width = `${Math.max(0.3, right - left)}%`;
+        b.addEventListener("click", () => void this.jump(Math.max(span.first, p.cycle)));
+        return b;
+      }),
+    );
+  }
+
+  /** The phase the mission was in at `cycle`, on the bar. */
+  private showPhase(cycle: number): void {
+    let at: Mark | undefined;
+    for (const p of this.phases) if (p.cycle <= cycle) at = p;
+    setText(this.phaseEl, at ? `mission: ${at.text}` : "");
+    this.phaseEl.title = at ? `since cycle ${at.cycle}` : "";
   }
 
   /** Pauses at the newest cycle held. */
@@ -386,6 +434,7 @@ export class Timeline {
     this.el.dataset["shown"] = String(cycle);
     setText(this.cycleEl, `cycle ${cycle}${frame["exact"] === false ? " (no frame: the last before it)" : ""}`);
     setText(this.timeEl, `t = ${num(frame["time_s"]).toFixed(2)} s`);
+    this.showPhase(cycle);
     const prints = (Array.isArray(frame["prints"]) ? frame["prints"] : []).filter(isObject);
     setText(this.prints, prints.length === 0 ? "" : `prints of cycle ${cycle}: ${prints.map((p) => `${str(p["skill"])}: ${str(p["line"])}`).join(" · ")}`);
     setText(this.note, "");

@@ -174,6 +174,37 @@ describe("the timeline", () => {
     assert.equal(await shown(), cycle - 1, "the page stayed on the cycle shown");
   });
 
+  test("the mission lane: the sequencer's phases as spans, the phase shown with the cycle, a click on one shows its start", async () => {
+    await goLive();
+    const phase = async (text) => {
+      await cli(tb.linkPort, "phase", text, "--client", "seq");
+      await until(async () => (await page.locator(`[data-testid="tl-phase-seg"][data-text="seq: ${text}"]`).count()) === 1, `"${text}" on the lane`);
+    };
+    await phase("leaving the lab");
+    const seen = await samples();
+    await until(async () => (await samples()) >= seen + 5, "five more live samples");
+    await phase("riding the car");
+    await until(async () => (await text(page.getByTestId("tl-phase"))) === "mission: seq: riding the car", "the live phase on the bar");
+    const segs = page.getByTestId("tl-phase-seg");
+    const first = Number(await segs.nth(0).getAttribute("data-cycle"));
+    const second = Number(await segs.nth(1).getAttribute("data-cycle"));
+    assert.ok(second > first, `the phases in order: ${first} < ${second}`);
+    // Not marks: the lane holds them.
+    assert.equal(await page.locator('[data-testid="tl-mark"][data-kind="phase"]').count(), 0);
+    // The first phase's span ends where the second begins.
+    const a = await segs.nth(0).boundingBox();
+    const b = await segs.nth(1).boundingBox();
+    assert.ok(a && b && Math.abs(a.x + a.width - b.x) < 3, `adjacent spans: ${JSON.stringify([a, b])}`);
+    await segs.nth(0).click();
+    await until(async () => (await mode()) === "paused" && (await shown()) === first, `paused at the first phase's cycle ${first}`);
+    assert.equal(await text(page.getByTestId("tl-phase")), "mission: seq: leaving the lab");
+    await page.getByTestId("tl-back").click();
+    await until(async () => (await shown()) === first - 1, "the cycle before the first phase");
+    assert.equal(await text(page.getByTestId("tl-phase")), "", "no phase before the first");
+    // The event log has them too, as the link sends them.
+    assert.ok((await page.getByTestId("event-log").locator('[data-kind="phase"]').count()) >= 2);
+  });
+
   test("keys: P pauses and goes live, the arrows step one cycle", async () => {
     await goLive();
     await page.locator("body").click({ position: { x: 5, y: 5 } });
