@@ -376,7 +376,12 @@ class Link:
         print(f"[{await self.now():7.1f} s] {text}{extra}", flush=True)
 
     async def phase(self, number: int, text: str) -> None:
-        """The progress line of phase ``number`` of the narrative."""
+        """The progress line of phase ``number`` of the narrative, also told to the robot.
+
+        The robot's GUI shows it on its mission lane, recordings keep it; it is sent with the
+        next requests, no round trip of its own.
+        """
         self.phase_no = number
         self.phase_text = text
+        self.send("phase", text=f"phase {number}: {text}"[:200], client="deliver")
         await self.say(f"phase {number}: {text}")
