@@ -7,6 +7,8 @@ import { Connection, isObject, RefusedError, type Json, type JsonObject } from "
 import { errorText, h, linkControl, num, robotControl, setText, show, str } from "./dom";
 
 const EVENT_LINES = 300;
+/** How long another session's pause must last before the panel shows it (ms). */
+const SEQUENCER_PAUSE_MS = 1500;
 /** How often the monitor list is asked for again. */
 const MONITOR_REFRESH_MS = 2000;
 
@@ -15,8 +17,12 @@ export class Monitors {
   private readonly list: HTMLElement;
   private readonly error: HTMLElement;
   private readonly paused: HTMLElement;
-  /** The monitors that pause the cycle, with their conditions (a `once` one leaves the list when it fires). */
-  private readonly pausing = new Map<number, string>();
+  /** The monitors that pause the cycle, with their conditions and owners (a `once` one leaves
+   *  the list when it fires). */
+  private readonly pausing = new Map<number, { condition: string; owner: string }>();
+  /** A pause by another session's monitor is shown only once it has lasted this long: a
+   *  sequencer pauses the cycle to act between two cycles and runs it again itself. */
+  private pauseTimer: number | null = null;
   /** The monitors fired since the cycle last started (their events may come before `monitor_add`'s reply). */
   private fired: { monitor: number; condition: string; cycle: number }[] = [];
   /** Whether the cycle stopped (`manager_stopped`) since it last started. */
@@ -35,7 +41,7 @@ export class Monitors {
     add.addEventListener("click", async () => {
       try {
         const reply = await this.conn.request("monitor_add", { condition: cond.value, mode: mode.value, pause: pause.checked });
-        if (pause.checked && isObject(reply)) this.pausing.set(num(reply["monitor"]), cond.value);
+        if (pause.checked && isObject(reply)) this.pausing.set(num(reply["monitor"]), { condition: cond.value, owner: "this tab" });
         this.check();
         setText(this.error, "");
         cond.value = "";
@@ -95,11 +101,11 @@ export class Monitors {
     }
     const rows = (Array.isArray(list) ? list : []).filter(isObject).map((m) => {
       const id = num(m["monitor"]);
+      const owner = this.owner(m);
       if (m["pause"] === true && !this.pausing.has(id)) {
-        this.pausing.set(id, str(m["condition"]));
+        this.pausing.set(id, { condition: str(m["condition"]), owner });
         this.check();
       }
-      const owner = this.owner(m);
       const mine = owner === "this tab";
       const cancel = linkControl(h("button", { title: mine ? "cancel this tab's monitor" : `cancel ${owner}'s monitor (asks first)` }, "Cancel"));
       cancel.addEventListener("click", async () => {
@@ -161,45 +167,106 @@ export class Monitors {
   }
 
   private showPaused(f: { monitor: number; condition: string; cycle: number } | null): void {
+    if (this.pauseTimer !== null) window.clearTimeout(this.pauseTimer);
+    this.pauseTimer = null;
     if (!f) {
       this.paused.hidden = true;
       this.paused.replaceChildren();
       return;
     }
+    const owner = this.pausing.get(f.monitor)?.owner ?? "this tab";
+    if (owner !== "this tab") {
+      // Another session's pause (a sequencer's): said only when it lasts, and said as theirs.
+      this.pauseTimer = window.setTimeout(() => {
+        this.pauseTimer = null;
+        if (!this.stopped) return;
+        const resume = robotControl(h("button", { "data-testid": "monitor-resume", title: `${owner} runs the cycle again itself; resume only if it seems stuck` }, "Resume anyway"));
+        resume.addEventListener("click", () => void this.resume());
+        this.paused.replaceChildren(
+          h("strong", {}, `The cycle is paused by ${owner}'s monitor ${f.monitor}`),
+          ` (${f.condition}, fired at cycle ${f.cycle}): ${owner} stops the cycle to act between two cycles, and runs it again when done. `,
+          resume,
+        );
+        this.paused.dataset["owner"] = owner;
+        this.paused.hidden = false;
+      }, SEQUENCER_PAUSE_MS);
+      return;
+    }
     const resume = robotControl(h("button", { "data-testid": "monitor-resume" }, "Resume"));
-    resume.addEventListener("click", async () => {
-      try {
-        await this.conn.request("run");
-        setText(this.error, "");
-      } catch (e) {
-        setText(this.error, errorText(e));
-      }
-    });
+    resume.addEventListener("click", () => void this.resume());
     this.paused.replaceChildren(h("strong", {}, `The cycle is paused by monitor ${f.monitor}`), ` (${f.condition}, fired at cycle ${f.cycle}) `, resume);
+    this.paused.dataset["owner"] = owner;
     this.paused.hidden = false;
+  }
+
+  private async resume(): Promise<void> {
+    try {
+      await this.conn.request("run");
+      setText(this.error, "");
+    } catch (e) {
+      setText(this.error, errorText(e));
+    }
   }
 }
 
+/** The kinds of event the log's filter offers from the start (others are added as they come). */
+const KNOWN_KINDS = ["phase", "activation_applied", "param_changed", "priority_changed", "skill_faulted", "monitor_fired", "monitor_cancelled", "manager_started", "manager_stopped", "worker_failed", "print"];
+
+/** The event log, a console like rqt_console's: every event as it comes (newest first), filtered
+ *  by kind (a toggle per kind), by skill and by text; the filter hides lines, it drops none. */
 export class EventLog {
   readonly el: HTMLElement;
   private readonly list: HTMLElement;
-  private readonly prints: HTMLInputElement;
+  private readonly kinds: HTMLElement;
+  private readonly kindBoxes = new Map<string, HTMLInputElement>();
+  private readonly skill: HTMLSelectElement;
+  private readonly text: HTMLInputElement;
+  private readonly count: HTMLElement;
+  private readonly skills = new Set<string>();
 
   constructor() {
-    this.prints = h("input", { type: "checkbox", checked: true });
     this.list = h("div", { class: "log events", "data-testid": "event-log" });
-    this.el = h("section", { class: "panel", id: "events" }, h("h2", {}, "Events"), h("label", {}, this.prints, " show prints"), this.list);
+    this.kinds = h("div", { class: "row log-kinds", "data-testid": "event-kinds" });
+    this.skill = h("select", { "data-testid": "event-skill", title: "only the events of this skill" }, h("option", { value: "" }, "every skill"));
+    this.text = h("input", { type: "search", placeholder: "filter: text in the event", "data-testid": "event-text", class: "wide" });
+    this.count = h("span", { class: "dim", "data-testid": "event-count" });
+    for (const k of KNOWN_KINDS) this.kindBox(k);
+    this.skill.addEventListener("change", () => this.apply());
+    this.text.addEventListener("input", () => this.apply());
+    this.el = h("section", { class: "panel", id: "events" }, h("h2", {}, "Events"), this.kinds, h("div", { class: "row" }, this.skill, this.text, this.count), this.list);
+  }
+
+  /** The toggle of one kind (made when the kind is first seen). */
+  private kindBox(kind: string): HTMLInputElement {
+    let box = this.kindBoxes.get(kind);
+    if (!box) {
+      box = h("input", { type: "checkbox", checked: true, "data-testid": `event-kind-${kind}` });
+      box.addEventListener("change", () => this.apply());
+      this.kindBoxes.set(kind, box);
+      this.kinds.append(h("label", { class: "toggle", title: `show ${kind} events` }, box, ` ${kind.replace(/_/g, " ")}`));
+    }
+    return box;
   }
 
   add(e: JsonObject): void {
     const kind = str(e["kind"]);
-    if (kind === "print" && !this.prints.checked) return;
+    this.kindBox(kind);
+    const skill = typeof e["skill"] === "string" ? e["skill"] : "";
+    const skills = [skill, ...(Array.isArray(e["activated"]) ? e["activated"] : []), ...(Array.isArray(e["deactivated"]) ? e["deactivated"] : [])].filter((x): x is string => typeof x === "string" && x !== "");
+    for (const s of skills) {
+      if (this.skills.has(s)) continue;
+      this.skills.add(s);
+      this.skill.append(h("option", { value: s }, s));
+    }
     const rest: JsonObject = { ...e };
     delete rest["kind"];
     delete rest["cycle"];
-    const line = h("div", { class: `logline ev-${kind}`, "data-kind": kind }, h("span", { class: "dim" }, `cycle ${num(e["cycle"])} `), h("strong", {}, kind), ` ${show(rest, 300)}`);
+    const cycle = typeof e["cycle"] === "number" ? `cycle ${e["cycle"]} ` : "";
+    const line = h("div", { class: `logline ev-${kind}`, "data-kind": kind, "data-skills": skills.join(" ") }, h("span", { class: "dim" }, cycle), h("strong", {}, kind), ` ${show(rest, 300)}`);
+    this.show(line);
     this.list.prepend(line);
     this.trim();
+    this.counted();
   }
 
   /** A line of the log's own (not an event), e.g. what the lines after it are. */
@@ -213,6 +280,32 @@ export class EventLog {
     for (const line of this.list.children) line.classList.add("old-run");
     this.list.prepend(h("div", { class: "logline run-separator", "data-kind": "new_run", "data-testid": "run-separator" }, text));
     this.trim();
+  }
+
+  /** Whether a line passes the filter (the log's own lines always do). */
+  private passes(line: Element): boolean {
+    const kind = line.getAttribute("data-kind") ?? "";
+    if (kind === "note" || kind === "new_run") return true;
+    if (this.kindBoxes.get(kind)?.checked === false) return false;
+    const skill = this.skill.value;
+    if (skill !== "" && !(line.getAttribute("data-skills") ?? "").split(" ").includes(skill)) return false;
+    const text = this.text.value.trim().toLowerCase();
+    return text === "" || (line.textContent ?? "").toLowerCase().includes(text);
+  }
+
+  private show(line: HTMLElement): void {
+    line.hidden = !this.passes(line);
+  }
+
+  private apply(): void {
+    for (const line of this.list.children) if (line instanceof HTMLElement) this.show(line);
+    this.counted();
+  }
+
+  private counted(): void {
+    const events = [...this.list.children].filter((l) => !["note", "new_run"].includes(l.getAttribute("data-kind") ?? ""));
+    const shown = events.filter((l) => !(l as HTMLElement).hidden).length;
+    setText(this.count, shown === events.length ? `${events.length} events` : `showing ${shown} of ${events.length} events`);
   }
 
   private trim(): void {

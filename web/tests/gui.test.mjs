@@ -212,6 +212,33 @@ describe("situate GUI", () => {
     await until(async () => ((await page.getByTestId("monitor-error").textContent()) ?? "").includes("column"), "the condition's error");
   });
 
+  test("the event log filters by kind, by skill and by text, hiding lines, dropping none", async () => {
+    const log = page.getByTestId("event-log");
+    const visible = (kind) => log.locator(`[data-kind="${kind}"]:visible`).count();
+    await cli(tb.linkPort, "deactivate", "wander");
+    await cli(tb.linkPort, "activate", "wander");
+    await cli(tb.linkPort, "phase", "filter test", "--client", "t");
+    await until(async () => (await visible("activation_applied")) >= 2 && (await visible("phase")) >= 1, "the events in the log");
+    // By kind: activations hidden, the rest still shown, and said so.
+    await page.getByTestId("event-kind-activation_applied").uncheck();
+    assert.equal(await visible("activation_applied"), 0);
+    assert.ok((await visible("phase")) >= 1);
+    assert.match((await page.getByTestId("event-count").textContent()) ?? "", /^showing \d+ of \d+ events$/);
+    await page.getByTestId("event-kind-activation_applied").check();
+    assert.ok((await visible("activation_applied")) >= 2, "shown again: none was dropped");
+    // By skill: only the events naming wander.
+    await page.getByTestId("event-skill").selectOption("wander");
+    assert.ok((await visible("activation_applied")) >= 2);
+    assert.equal(await visible("phase"), 0, "a phase names no skill");
+    await page.getByTestId("event-skill").selectOption("");
+    // By text.
+    await page.getByTestId("event-text").fill("filter test");
+    assert.equal(await visible("activation_applied"), 0);
+    assert.equal(await visible("phase"), 1);
+    await page.getByTestId("event-text").fill("");
+    assert.ok((await visible("activation_applied")) >= 2);
+  });
+
   test("a sequencer's monitor shows its owner and is cancelled only after asking; the sequencer is told", async () => {
     // A sequencer (the CLI's `monitor`, its own session) waits on a monitor that never fires.
     const seq = spawn(situateBin, ["monitor", "cycle < 0", "--mode", "level", "--connect", `tcp/127.0.0.1:${tb.linkPort}`], {

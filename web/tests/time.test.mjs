@@ -3,11 +3,12 @@
 // robot itself (the `situate` CLI over the link, or the GUI server's own proxy of the link's verbs).
 
 import assert from "node:assert/strict";
+import { spawn } from "node:child_process";
 import { mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { after, afterEach, before, describe, test } from "node:test";
-import { cli, cliDo, closeGui, killTestbed, openGui, repo, screenshotPath, startTestbed, until } from "./harness.mjs";
+import { cli, cliDo, closeGui, killTestbed, openGui, repo, screenshotPath, situateBin, startTestbed, until } from "./harness.mjs";
 
 const text = async (locator) => (await locator.textContent()) ?? "";
 
@@ -207,6 +208,32 @@ describe("skills, monitors, the world view and the layout", () => {
     await until(async () => (await cli(tb.linkPort, "stats")).running === true, "resumed (over the link)");
     await until(async () => !(await paused.isVisible()), "the pause note gone");
     await page.getByTestId("monitor-pause").uncheck();
+  });
+
+  test("a sequencer's pause is said as its own, and only once it lasts", async () => {
+    await until(async () => (await cli(tb.linkPort, "stats")).running === true, "running");
+    // A sequencer (the CLI's `monitor`, its own session) pauses the cycle and does not resume it.
+    const seq = spawn(situateBin, ["monitor", "odom.x < 1000", "--mode", "level", "--pause", "--connect", `tcp/127.0.0.1:${tb.linkPort}`], {
+      stdio: ["ignore", "pipe", "pipe"],
+      env: { ...process.env, RUST_LOG: "error" },
+    });
+    try {
+      await until(async () => (await cli(tb.linkPort, "stats")).running === false, "the sequencer's monitor paused the cycle");
+      const paused = page.getByTestId("monitor-paused");
+      await until(async () => (await paused.isVisible()) && /paused by .+'s monitor \d+/.test(await text(paused)), "the page says whose monitor paused the cycle");
+      assert.match(await text(paused), /runs it again when done/);
+      assert.notEqual(await paused.getAttribute("data-owner"), "this tab");
+      assert.equal(await text(page.getByTestId("monitor-resume")), "Resume anyway");
+    } finally {
+      // The sequencer goes, and its monitor with its session; then the cycle runs again.
+      const exited = new Promise((resolve) => (seq.exitCode !== null ? resolve() : seq.once("exit", resolve)));
+      seq.kill("SIGINT");
+      await exited;
+      await until(async () => !(await cli(tb.linkPort, "monitors")).some((m) => m.condition === "odom.x < 1000"), "the sequencer's monitor gone with it");
+      await cliDo(tb.linkPort, "cycle", "run");
+    }
+    await until(async () => (await cli(tb.linkPort, "stats")).running === true, "running again");
+    await until(async () => !(await page.getByTestId("monitor-paused").isVisible()), "the pause note gone once the cycle runs");
   });
 
   test("the world view zooms, pans, resets, keeps a trail per floor and follows the robot's floor", async () => {

@@ -130,6 +130,10 @@ pub(crate) enum ClientCommand {
         /// Stop after this many events (default: 1 for once, else until interrupted).
         #[arg(long)]
         count: Option<u64>,
+        /// Also stop the cycle at the end of each cycle the monitor fires in (`cycle run`
+        /// resumes it), as a sequencer's pausing monitor does.
+        #[arg(long)]
+        pause: bool,
         #[command(flatten)]
         remote: Remote,
     },
@@ -329,13 +333,13 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
             });
             Ok(())
         }),
-        ClientCommand::Monitor { condition, any, mode, count, remote } => client_verb(&remote, |c, robot| {
+        ClientCommand::Monitor { condition, any, mode, count, pause, remote } => client_verb(&remote, |c, robot| {
             // `monitor_fired`, and `monitor_cancelled`: someone else may cancel it (the GUI, forced).
             let (_sub, events) = c.subscribe(robot, "events/**")?;
             let (args, shown) = match &condition {
-                Some(condition) => (json!({"condition": condition, "mode": mode}), condition.clone()),
+                Some(condition) => (json!({"condition": condition, "mode": mode, "pause": pause}), condition.clone()),
                 None => (
-                    json!({"any": any, "mode": mode}),
+                    json!({"any": any, "mode": mode, "pause": pause}),
                     any.iter().enumerate().map(|(i, c)| format!("[{i}] {c}")).collect::<Vec<_>>().join("; "),
                 ),
             };
