@@ -704,7 +704,7 @@ export class Plots {
 
   private async fill(p: Plot): Promise<void> {
     const signals = [...new Set(p.sources.map((s) => s.base))];
-    const series = await this.conn.request("history_series", { signals, max_points: 4000 });
+    const series = await this.conn.request("history_series", { signals, max_points: 2000 });
     if (!isObject(series) || !this.plots.includes(p)) return;
     p.setSeries(series);
     p.setPlayhead(this.playheadT);
