@@ -9,6 +9,7 @@ import "./style.css";
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
 import { errorText, h, num, replayFile, setLinkUp, setReplay, setText, staleNote, str } from "./dom";
 import { GraphView } from "./graph";
+import * as layout from "./layout";
 import { EventLog, Monitors } from "./monitors";
 import { Plots } from "./plots";
 import { ManagerPanel, SkillPanels } from "./skills";
@@ -28,6 +29,30 @@ function start(): void {
   const staleBanner = h("div", { class: "banner bad", "data-testid": "stale-banner" });
   const outcome = h("div", { class: "banner", hidden: true, "data-testid": "outcome" });
   const replayBanner = h("div", { class: "banner replay", hidden: true, "data-testid": "replay-banner" });
+  const share = h("button", { "data-testid": "share", title: "copy a link to this page as laid out now: its plots, open panels and the cycle shown" }, "Copy link");
+  const shareNote = h("span", { class: "dim", "data-testid": "share-note" });
+  /** The layout is restored once, from the address or storage, when the first hello's graph is
+   *  known; until then (and while it is restored) nothing is saved over it. */
+  let layoutReady = false;
+  let saveTimer: number | null = null;
+  const saveNow = () => {
+    if (saveTimer !== null) window.clearTimeout(saveTimer);
+    saveTimer = null;
+    if (layoutReady) layout.save({ plots: plots.layout(), open: panels.openPanels(), cycle: timeline.shownCycle() });
+  };
+  // At most a few saves a second (playing the timeline shows ten cycles a second).
+  const saveLayout = () => {
+    saveTimer ??= window.setTimeout(saveNow, 250);
+  };
+  share.addEventListener("click", async () => {
+    saveNow();
+    try {
+      await navigator.clipboard.writeText(location.href);
+      setText(shareNote, "link copied");
+    } catch {
+      setText(shareNote, location.href);
+    }
+  });
   const proto = location.protocol === "https:" ? "wss:" : "ws:";
   let graphAsked = false;
   let runId: string | null = null;
@@ -125,6 +150,16 @@ function start(): void {
           graph.setGraph(g);
           plots.setSignals(graph.signalNames(), graph.leafTypes());
           graphAsked = true;
+          if (!layoutReady) {
+            const start = layout.initial();
+            if (start) {
+              panels.setOpen(start.open);
+              await plots.restore(start.plots);
+              if (start.cycle !== null) timeline.seekWhenHeld(start.cycle);
+            }
+            layoutReady = true;
+            saveNow();
+          }
         } catch (e) {
           setText(status, `graph: ${errorText(e)}`);
         }
@@ -211,12 +246,15 @@ function start(): void {
       if (graphAsked) graph.update(live.skills, live.winners);
     },
   });
+  plots.onChange = saveLayout;
+  panels.onChange = saveLayout;
+  timeline.onChange = saveLayout;
   conn.onOpen = () => {
     void plots.watch().catch(() => undefined);
     timeline.start();
   };
   root.append(
-    h("header", {}, h("h1", {}, "situate"), robot, runInfo, status),
+    h("header", {}, h("h1", {}, "situate"), robot, runInfo, status, share, shareNote),
     staleBanner,
     replayBanner,
     outcome,

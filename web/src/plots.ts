@@ -572,6 +572,8 @@ export class Plots {
   private leaves = new Map<string, string>();
   /** A replay: plots show the recording (the timeline's) on the robot's time. */
   private recording = false;
+  /** Called when the plots or their signals change (the page's layout is saved). */
+  onChange: () => void = () => {};
   private playheadT: number | null = null;
 
   constructor(
@@ -642,6 +644,7 @@ export class Plots {
       await this.watch();
       setText(this.error, "");
       this.list.append(plot.el);
+      this.onChange();
       if (this.recording) await this.fill(plot);
       // Another signal may have been typed while the server answered: keep it.
       if (this.input.value.trim() === expr) this.input.value = "";
@@ -664,6 +667,7 @@ export class Plots {
     try {
       await this.watch();
       setText(this.error, "");
+      this.onChange();
       if (this.recording) await this.fill(plot);
     } catch (e) {
       plot.removeSource(expr);
@@ -677,7 +681,26 @@ export class Plots {
     if (i >= 0) this.plots.splice(i, 1);
     p.el.remove();
     p.destroy();
+    this.onChange();
     await this.watch().catch(() => undefined);
+  }
+
+  /** The plots shown, each its expressions in order (the page's layout). */
+  layout(): string[][] {
+    return this.plots.map((p) => p.sources.map((s) => s.expr));
+  }
+
+  /** Shows the plots of a layout (after those shown: each plot's first expression makes it, the
+   *  others are added to it); one the robot cannot have is refused as when typed. */
+  async restore(groups: string[][]): Promise<void> {
+    for (const group of groups) {
+      const [first, ...rest] = group;
+      if (first === undefined) continue;
+      await this.add(first);
+      const plot = this.plots.find((p) => p.sources[0]?.expr === first);
+      if (!plot) continue;
+      for (const expr of rest) await this.addTo(plot, expr);
+    }
   }
 
   /** Tells the server which signals this tab needs (after a reconnection too). */

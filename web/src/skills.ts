@@ -570,6 +570,10 @@ export class SkillPanels {
   private readonly resourcesTitle: HTMLElement;
   private readonly pastNote: HTMLElement;
   private resourcesKey = "";
+  /** Panels to open once they exist (a layout restored before the first telemetry). */
+  private toOpen = new Set<string>();
+  /** Called when a panel is opened or closed (the page's layout is saved). */
+  onChange: () => void = () => {};
 
   constructor(
     private readonly conn: Connection,
@@ -611,10 +615,26 @@ export class SkillPanels {
         const panel = new SkillPanel(this.conn, s);
         this.panels.set(name, panel);
         this.list.append(panel.el);
+        if (this.toOpen.delete(name)) panel.el.open = true;
+        panel.el.addEventListener("toggle", () => this.onChange());
         panel.update(s, cycle, since);
       }
     }
     this.showResources(winners, past !== null);
+  }
+
+  /** The skill panels open (the page's layout). */
+  openPanels(): string[] {
+    return [...this.panels].filter(([, p]) => p.el.open).map(([name]) => name);
+  }
+
+  /** Opens these skills' panels (now, or when they are made). */
+  setOpen(names: string[]): void {
+    for (const n of names) {
+      const p = this.panels.get(n);
+      if (p) p.el.open = true;
+      else this.toOpen.add(n);
+    }
   }
 
   /** Every resource (a signal leaf with several writers), its writers and who wins it now. */

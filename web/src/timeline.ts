@@ -74,6 +74,10 @@ export class Timeline {
   private everUp = false;
   /** The manager's period (s), from its stats: how many cycles a second of playing covers. */
   private periodS = 0.05;
+  /** A cycle to show once the timeline holds it (a layout's), or null. */
+  private pendingCycle: number | null = null;
+  /** Called when the cycle shown changes, or the bar goes live (the page's layout is saved). */
+  onChange: () => void = () => {};
   /** The recording, when the robot is a replay: the bar only ever shows its past. */
   private replayOf: string | null = null;
   private readonly replayEl: HTMLElement;
@@ -185,6 +189,18 @@ export class Timeline {
     else this.stopPlaying();
   }
 
+  /** The cycle shown while paused, or null while live (the page's layout). */
+  shownCycle(): number | null {
+    const shown = this.el.dataset["shown"];
+    return this.paused && shown !== undefined ? Number(shown) : null;
+  }
+
+  /** Shows `cycle` once the timeline holds it (a layout's, restored as the page opens). */
+  seekWhenHeld(cycle: number): void {
+    this.pendingCycle = cycle;
+    void this.refresh();
+  }
+
   /** Whether the panels that follow the timeline show the past. */
   isPaused(): boolean {
     return this.paused;
@@ -240,7 +256,15 @@ export class Timeline {
     setText(this.spanEl, `holds cycles ${this.span.first}–${this.span.last}${dropped > 0 ? ` (${dropped} lost)` : ""}`);
     this.slider.min = String(this.span.first);
     this.slider.max = String(this.span.last);
-    if (this.replayOf !== null && !this.paused) {
+    const pending = this.pendingCycle;
+    if (pending !== null && pending >= this.span.first && pending <= this.span.last) {
+      this.pendingCycle = null;
+      void this.jump(pending);
+    } else if (pending !== null && !this.paused && this.replayOf === null) {
+      // Not held (any more): said, and the bar stays live.
+      this.pendingCycle = null;
+      setText(this.note, `cycle ${pending} is not on the timeline (it holds ${this.span.first}–${this.span.last})`);
+    } else if (this.replayOf !== null && !this.paused) {
       // A replay opens at the recording's first cycle, ready to play.
       this.enterPaused();
       this.selected = this.span.first;
@@ -371,6 +395,7 @@ export class Timeline {
     if (this.span) this.slider.value = String(this.span.last);
     this.setButtons();
     this.view.live();
+    this.onChange();
   }
 
   private async step(d: number): Promise<void> {
@@ -435,6 +460,7 @@ export class Timeline {
     setText(this.cycleEl, `cycle ${cycle}${frame["exact"] === false ? " (no frame: the last before it)" : ""}`);
     setText(this.timeEl, `t = ${num(frame["time_s"]).toFixed(2)} s`);
     this.showPhase(cycle);
+    this.onChange();
     const prints = (Array.isArray(frame["prints"]) ? frame["prints"] : []).filter(isObject);
     setText(this.prints, prints.length === 0 ? "" : `prints of cycle ${cycle}: ${prints.map((p) => `${str(p["skill"])}: ${str(p["line"])}`).join(" · ")}`);
     setText(this.note, "");
