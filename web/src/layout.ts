@@ -1,7 +1,7 @@
 // The page's layout: the plots shown (each its signals), the skill panels open, and the cycle the
 // timeline shows when paused. Kept in the page's address (`#plots=odom.x,odom.y|sonar.range[3]&
-// open=wander&cycle=1234`), so a reload keeps it and the address can be shared, and in the
-// browser's storage, so a page opened without one gets the last layout back.
+// open=wander&cycle=1234`), so a reload keeps it and the address can be shared. Not in the
+// browser's storage: a second tab opened on the robot starts empty, not with another tab's plots.
 
 export interface Layout {
   /** Each plot's expressions, in order. */
@@ -12,7 +12,6 @@ export interface Layout {
   cycle: number | null;
 }
 
-const STORAGE_KEY = "situate.layout";
 /** What a layout may hold at most (a hand-made address is bounded too). */
 const MAX_PLOTS = 32;
 const MAX_PER_PLOT = 24;
@@ -46,24 +45,13 @@ export function decode(fragment: string | null): Layout | null {
   return { plots, open, cycle };
 }
 
-/** Keeps `layout` in the address (replacing it: no history entry per change) and in storage. */
+/** Keeps `layout` in the address (replacing it: no history entry per change). */
 export function save(layout: Layout): void {
   const fragment = encode(layout);
   history.replaceState(null, "", fragment === "" ? `${location.pathname}${location.search}` : `#${fragment}`);
-  try {
-    localStorage.setItem(STORAGE_KEY, fragment);
-  } catch {
-    // Storage refused (private mode, full): the address still holds it.
-  }
 }
 
-/** The layout to start with: the address's, else the one stored last, else none. */
+/** The layout to start with: the address's, or none. */
 export function initial(): Layout | null {
-  let stored: string | null = null;
-  try {
-    stored = localStorage.getItem(STORAGE_KEY);
-  } catch {
-    stored = null;
-  }
-  return decode(location.hash) ?? decode(stored);
+  return decode(location.hash);
 }

@@ -382,17 +382,24 @@ class Plot {
     this.redraw();
   }
 
-  goLive(): void {
+  /** Back to the live window (a recording's plot: the whole recording); the other plots follow. */
+  goLive(emit = true): void {
     this.setMode("live");
     this.redraw();
+    if (emit) this.onView(null);
   }
 
-  private zoomTo(min: number, max: number): void {
+  /** Shows only `min`..`max` on the x axis; the other plots follow (their x axes are linked). */
+  zoomTo(min: number, max: number, emit = true): void {
     if (!(max > min)) return;
     this.zoom = { min, max };
     this.setMode("zoomed");
     this.redraw();
+    if (emit) this.onView({ min, max });
   }
+
+  /** Called when the user zooms this plot (or returns it to live: null): the others follow. */
+  onView: (view: { min: number; max: number } | null) => void = () => {};
 
   /** Both ends given (min < max): a fixed y range; otherwise autoscale. */
   private setY(): void {
@@ -639,6 +646,14 @@ export class Plots {
     const src = this.source(expr);
     if (!src) return;
     const plot = new Plot(src, (p) => void this.remove(p), (p, e) => this.addTo(p, e));
+    // Zoom and pan are linked: every plot shows the time range the user chose on one.
+    plot.onView = (view) => {
+      for (const other of this.plots) {
+        if (other === plot || other.isRecording() !== plot.isRecording()) continue;
+        if (view === null) other.goLive(false);
+        else other.zoomTo(view.min, view.max, false);
+      }
+    };
     this.plots.push(plot);
     try {
       await this.watch();

@@ -56,7 +56,7 @@ describe("the page's layout", () => {
 
   test("the address opened in a fresh browser shows the same page; a malformed part is left out", async () => {
     const url = await page.evaluate(() => location.href);
-    const fresh = await startBrowser(); // a profile of its own: nothing stored
+    const fresh = await startBrowser(); // another browser: the address is all it has
     try {
       const other = await openPage(fresh, url);
       await until(async () => JSON.stringify(await plotsShown(other)) === JSON.stringify(["odom.x,odom.y", "sonar.range[3]"]), "the shared plots");

@@ -100,13 +100,34 @@ describe("a recording replayed into the GUI", () => {
   test("plots show the whole recording on the robot's time, a line at the cycle shown", async () => {
     await page.getByTestId("plot-signal").fill("odom.x");
     await page.getByTestId("plot-add").click();
-    const canvas = page.getByTestId("plot-canvas");
+    const canvas = page.getByTestId("plot-canvas").first();
     await until(async () => (await canvas.getAttribute("data-state")) === "recording" && Number(await canvas.getAttribute("data-series")) === CYCLES, "the recording's 400 cycles in the plot");
     const drawn = JSON.parse((await canvas.getAttribute("data-drawn")) ?? "{}");
     assert.ok(drawn["odom.x"] >= CYCLES - 2, `odom.x drawn over the recording: ${JSON.stringify(drawn)}`);
     const [min, max] = JSON.parse((await canvas.getAttribute("data-x-range")) ?? "[]");
     // The robot's time (simulated, 20 Hz): cycle 1 at 0.05 s to cycle 400 at 20 s, not the wall clock.
     assert.ok(min >= 0 && min < 0.2 && Math.abs(max - CYCLES * 0.05) < 0.2, `x: the robot's time, ${min}..${max}`);
+    // A second plot; a zoom on one is the other's too (their time axes are linked).
+    await page.getByTestId("plot-signal").fill("drive.v");
+    await page.getByTestId("plot-add").click();
+    const second = page.getByTestId("plot-canvas").nth(1);
+    await until(async () => Number(await second.getAttribute("data-series")) === CYCLES, "the second plot over the recording");
+    // The plot area, in the middle of the window (not under the timeline's bar at its bottom).
+    const over = page.getByTestId("plot").first().locator(".u-over");
+    await over.evaluate((e) => e.scrollIntoView({ block: "center" }));
+    const box = await over.boundingBox();
+    const y = box.y + box.height / 2;
+    await page.mouse.move(box.x + box.width * 0.3, y);
+    await page.mouse.down();
+    await page.mouse.move(box.x + box.width * 0.45, y, { steps: 4 });
+    await page.mouse.move(box.x + box.width * 0.6, y, { steps: 4 });
+    await page.mouse.up();
+    await until(async () => (await canvas.getAttribute("data-state")) === "zoomed" && (await second.getAttribute("data-state")) === "zoomed", "both plots zoomed");
+    const [z0, z1] = JSON.parse((await canvas.getAttribute("data-x-range")) ?? "[]");
+    assert.ok(z0 > min && z1 < max, `zoomed in: ${z0}..${z1}`);
+    await until(async () => (await second.getAttribute("data-x-range")) === (await canvas.getAttribute("data-x-range")), "the second plot on the same range");
+    await page.getByTestId("plot-reset").nth(1).click();
+    await until(async () => (await canvas.getAttribute("data-state")) === "recording", "All on one: both show the whole recording again");
     await page.getByTestId("tl-forward").click();
     await until(async () => (await shown()) === 2, "cycle 2 shown");
     const t2 = Number(/t = ([\d.]+) s/.exec(await text(page.getByTestId("tl-time")))?.[1]);
