@@ -110,6 +110,19 @@ SIDE_LEG_MIN_M = 0.8
 #: Out of the lab, a wall ahead nearer than this is the corridor's far wall (corridors are at
 #: most 3 m wide; the robot stops about 1.1 m past the door's line), m.
 FAR_WALL_M = 2.5
+#: The patrol looks this often for a door standing open in a known wall of the lobby, s.
+OPEN_POLL_S = 0.3
+#: A known wall is watched this near (along a sonar's axis), m; an opening must read this much
+#: farther than the wall (a car is at least 1.8 m deep), m; and lie this far inside the
+#: lobby's other walls (not a corner's), m.
+OPEN_SEEN_M = 3.4
+#: A sonar reading this far heard no echo (its reach is 4 m), m.
+NO_ECHO_M = 3.95
+OPEN_BEYOND_M = 1.0
+OPEN_INSIDE_M = 0.4
+#: Beyond the depth a route left the robot inside a lobby entered facing the button, nothing
+#: is a car's door (the entry's wall is 1 m on in generated buildings), m.
+ENTRY_BEYOND_M = 0.5
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -117,6 +130,50 @@ CALLS_MAX = 20
 AFTER_BOARDING_S = 600.0
 #: An end wall of the lobby is taken from the sonars only nearer than this (their reach is 4 m), m.
 END_WALL_SEEN_M = 3.6
+
+
+def dist(a: tuple[float, float, float], b: tuple[float, float, float]) -> float:
+    """The distance between two places (x, y, …), m."""
+    return math.hypot(a[0] - b[0], a[1] - b[1])
+
+
+def open_in_walls(
+    o: Pose,
+    ranges: Sequence[float],
+    walls: Sequence[tuple[float, float, float]],
+    bounds: Sequence[tuple[float, float, float]],
+) -> tuple[float, float, float] | None:
+    """Where a sonar reads through one of the lobby's known ``walls``: a door open in it.
+
+    Each wall is a point and its normal (towards it), odometry frame. A sonar whose axis meets
+    a wall within 60° of square, nearer than `OPEN_SEEN_M`, at a point inside the lobby
+    (short of every other wall and bound in ``bounds``), but that reads `OPEN_BEYOND_M`
+    farther, sees through it: its whole cone passes an opening there. Returns the point and
+    the wall's normal, the nearest such; None if there is none.
+    """
+    best: tuple[float, float, float] | None = None
+    best_range = math.inf
+    for i, r in enumerate(ranges):
+        a = o.theta + bearing_of(i)
+        ca, sa = math.cos(a), math.sin(a)
+        for wx, wy, wn in walls:
+            cn, sn = math.cos(wn), math.sin(wn)
+            square = ca * cn + sa * sn
+            if square < 0.5:
+                continue
+            expect = ((wx - o.x) * cn + (wy - o.y) * sn) / square
+            # (Farther than the sonars' reach less the car's depth: no echo at all.)
+            if not 0.3 < expect < OPEN_SEEN_M or r < min(expect + OPEN_BEYOND_M, NO_ECHO_M):
+                continue
+            px, py = o.x + expect * ca, o.y + expect * sa
+            inside = all(
+                (px - bx) * math.cos(bn) + (py - by) * math.sin(bn) < -OPEN_INSIDE_M
+                for bx, by, bn in bounds
+                if abs(wrap(bn - wn)) > 0.5
+            )
+            if inside and expect < best_range:
+                best, best_range = (px, py, wn), expect
+    return best
 
 
 def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
@@ -417,12 +474,14 @@ class Delivery(RouteSequencer):
         #   every other call (from the second) also along each side wall towards the entry,
         #   as deep as the route came in (the entry is beyond), and back.
         legs: list[tuple[float, str | None, bool]] = []
+        corner = False
         if b is not None and self.entry_heading is not None:
             t = self.entry_heading
             u = wrap(b.theta + math.pi)
             depth = way_made_expr(b, u)
             back = wrap(t + math.pi)
             if abs(math.cos(wrap(t - b.theta))) < 0.5:
+                corner = True
                 level = f"{way_made_expr(b, back)} > 0.0"
                 legs = [
                     (t, None, True),
@@ -480,23 +539,34 @@ class Delivery(RouteSequencer):
         if self.debug:
             looks = [round(ranges[k % SONARS], 2) for k in (-1, 0, 1, 11, 12, 13)]
             await self.say(f"      walls known: {len(walls)} (sonars {looks})")
+        # What else bounds the lobby (the entry's wall, or how deep the route came in): a
+        # way seen open beyond it is no car's door.
+        bounds = list(walls)
+        if b is not None and self.entered_at is not None and not corner:
+            into = wrap(b.theta + math.pi)
+            far = way_made(self.entered_at, b, into) + ENTRY_BEYOND_M
+            bounds.append((b.x + far * math.cos(into), b.y + far * math.sin(into), into))
         deadline = self.t + 60
         afresh = ["detect_door", "watch_openings", "identify_car"]
+        polled = False
+        last_open: tuple[float, float, float] | None = None
         while self.t < deadline:
             # A door opening beside the robot (either wall: cars may be on any), or a car's
             # panel barcode in view ahead through its open door.
             # Any door that opens within the sonars' reach, face-on (behind the robot just
             # turned back at an end, or across the lobby), is seen at once too
             # (`std.watch_openings`), not only when the patrol passes it.
-            await self.use(
-                "runaway",
-                "follow_hallway",
-                "detect_door",
-                "watch_openings",
-                "identify_car",
-                restart=afresh,
-            )
-            afresh = ["detect_door", "watch_openings", "identify_car"]
+            if not polled:
+                await self.use(
+                    "runaway",
+                    "follow_hallway",
+                    "detect_door",
+                    "watch_openings",
+                    "identify_car",
+                    restart=afresh,
+                )
+                afresh = ["detect_door", "watch_openings", "identify_car"]
+            polled = False
             conditions = [
                 "door.left || door.right",
                 "car > 0",
@@ -505,17 +575,36 @@ class Delivery(RouteSequencer):
             ]
             if legs and legs[leg][1] is not None:
                 conditions.append(str(legs[leg][1]))
-            got = await self.wait(*conditions, within=deadline - self.t)
+            got = await self.wait(*conditions, within=min(OPEN_POLL_S, deadline - self.t))
+            spot: tuple[float, float, float] | None = None
             if got == len(conditions):
-                break
+                if self.t >= deadline:
+                    break
+                # A door already open (it opened while the robot turned, or where the watch
+                # cannot see a reading jump): a sonar reads through a known wall of the
+                # lobby. Twice in a row at one place (not a missed echo).
+                polled = True
+                seen = open_in_walls(await self.odom(), await self.sonar(), walls, bounds)
+                if seen is None or last_open is None or dist(seen, last_open) > 0.5:
+                    last_open = seen
+                    continue
+                if self.debug:
+                    await self.say(f"      open in a known wall at ({seen[0]:.2f}, {seen[1]:.2f})")
+                spot, last_open, got = seen, None, 3
             if got in (2, 4):
                 o = await self.odom()
-                # The wall ahead, unless it is the entry's (the way out of the lobby).
-                if got == 2 and (not legs or legs[leg][2]):
+                # The wall ahead, unless it is the entry's (the way out of the lobby): that
+                # only bounds it.
+                if got == 2:
                     ahead = (await self.sonar())[0]
-                    walls.append(
-                        (o.x + ahead * math.cos(o.theta), o.y + ahead * math.sin(o.theta), o.theta)
+                    end = (
+                        o.x + ahead * math.cos(o.theta),
+                        o.y + ahead * math.sin(o.theta),
+                        o.theta,
                     )
+                    if not legs or legs[leg][2]:
+                        walls.append(end)
+                    bounds.append(end)
                 if legs:
                     leg = (leg + 1) % len(legs)
                     await self.say("    end of the lobby's wall: along the next one")
@@ -532,6 +621,9 @@ class Delivery(RouteSequencer):
                 await self.use("runaway", "track_barcode")
                 self.send("step", cycles=1)
                 bearing = float((await self.value("target"))["bearing"])
+            elif got == 3 and spot is not None:
+                o = await self.odom()
+                px, py, on = spot[0], spot[1], [spot[2]]
             elif got == 3:
                 self.prefetch("opened", "odom")  # the turn reads the odometry
                 opened = await self.value("opened")
@@ -564,6 +656,7 @@ class Delivery(RouteSequencer):
                     # The watch starts afresh; the door detector keeps the walls it tracks.
                     afresh = ["watch_openings"]
                     continue
+            if got == 3:
                 gx, gy = px - FACE_DOOR_M * math.cos(on[0]), py - FACE_DOOR_M * math.sin(on[0])
                 # Abreast of the door already (it opened beside the robot), the robot only
                 # turns to face it: entering works from a little farther off the wall too.
@@ -575,7 +668,7 @@ class Delivery(RouteSequencer):
                     await self.goto(gx, gy, within=10, speed=0.5, reverse_within=1.5)
                     await self.restore_lobby_patrol()
                 bearing = wrap(on[0] - (await self.odom()).theta)
-            else:
+            elif got == 0:
                 self.prefetch("door", "odom")  # the turn reads the odometry
                 bearing = float((await self.value("door"))["bearing"])
             await self.phase(6, "a car's door opened: facing it, reading which car it is")
@@ -606,6 +699,21 @@ class Delivery(RouteSequencer):
             # Inside? Walls all round but for the door (the sonars), and the car's own
             # barcode on the panel, near once the robot looks round.
             self.car = int(await self.value("car")) or self.car
+            if self.car == 0 and not await self.enclosed():
+                # Stopped short of an opening with no panel read (come at it off its middle,
+                # a jamb ahead): while the way ahead is open, to its middle and in again.
+                for _again in range(2):
+                    if not await self.centre_on_opening():
+                        break
+                    await self.use("runaway", "enter_car", "identify_car", restart=["enter_car"])
+                    await self.wait("car_entered", within=15)
+                    self.car = int(await self.value("car")) or self.car
+                    if await self.enclosed():
+                        if self.car == 0:
+                            await self.use("identify_car")
+                            self.send("step", cycles=3)
+                            self.car = int(await self.value("car"))
+                        break
             code = m.car_barcode_first + self.car - 1
             if self.car > 0 and not await self.enclosed():
                 # Stopped short: aslant in the doorway, a jamb ahead. While the car's panel
@@ -637,6 +745,30 @@ class Delivery(RouteSequencer):
         await self.restore("follow_hallway", "speed")
         await self.restore("watch_openings", "confirm")
         return False
+
+    async def centre_on_opening(self) -> bool:
+        """Facing an opening in a wall just ahead: sideways to its middle. False if none.
+
+        The sonars within 45° of ahead that read well past the nearest of them (the wall, the
+        jambs) see through the opening; its middle is between the outermost of them, where
+        they cross the wall's line.
+        """
+        ranges = await self.sonar()
+        ahead = [k % SONARS for k in range(-3, 4)]
+        wall = min(ranges[k] * math.cos(bearing_of(k)) for k in ahead)
+        through = [
+            wall * math.tan(bearing_of(k))
+            for k in ahead
+            if ranges[k] * math.cos(bearing_of(k)) > wall + OPEN_BEYOND_M
+        ]
+        if not through or wall > OPEN_SEEN_M:
+            return False
+        shift = (min(through) + max(through)) / 2
+        if self.debug:
+            await self.say(f"      an opening {wall:.2f} m ahead, {shift:+.2f} m to the left")
+        if abs(shift) > 0.08:
+            await self.shift_sideways(shift, (await self.odom()).theta)
+        return True
 
     async def ride(self) -> None:
         """Phases 8 to 10: push the goal floor, ride, leave the car."""
