@@ -145,6 +145,11 @@ class Plot {
   private playheadT: number | null = null;
   private readonly liveButton: HTMLButtonElement;
   private readonly windowSelect: HTMLSelectElement;
+  /** XY: the plot's second line against its first (`odom.y` against `odom.x`), over the same
+   *  time range, on a canvas of its own. */
+  private xy = false;
+  private readonly xyToggle: HTMLInputElement;
+  private readonly xyCanvas: HTMLCanvasElement;
   private readonly resizer = new ResizeObserver(() => this.resize());
   private readonly scheme = window.matchMedia("(prefers-color-scheme: dark)");
   private readonly onScheme = () => this.rebuild();
@@ -196,11 +201,16 @@ class Plot {
     this.addInput.addEventListener("keydown", (e) => {
       if (e.key === "Enter") addSignal();
     });
+    this.xyToggle = h("input", { type: "checkbox", "data-testid": "plot-xy", disabled: true });
+    this.xyToggle.addEventListener("change", () => this.setXY(this.xyToggle.checked));
+    const xyLabel = h("label", { class: "toggle", title: "the second line against the first (e.g. odom.y against odom.x): a plot of two lines" }, this.xyToggle, " XY");
+    this.xyCanvas = h("canvas", { class: "plot-xy", "data-testid": "plot-xy-canvas", hidden: true });
     this.el = h(
       "div",
       { class: "plot", "data-testid": "plot", "data-expr": first.expr },
-      h("div", { class: "row" }, this.title, win, this.pauseButton, live, csv, remove),
+      h("div", { class: "row" }, this.title, win, this.pauseButton, live, csv, xyLabel, remove),
       this.chartBox,
+      this.xyCanvas,
       h("div", { class: "row" }, this.addInput, addButton, this.yMin, this.yMax),
     );
     this.resizer.observe(this.chartBox);
@@ -482,8 +492,100 @@ class Plot {
     this.redraw();
   }
 
+  /** XY on or off (on only with two lines). */
+  private setXY(on: boolean): void {
+    this.xy = on && this.names.length === 2;
+    this.xyToggle.checked = this.xy;
+    this.xyCanvas.hidden = !this.xy;
+    this.chartBox.hidden = this.xy;
+    this.el.dataset["xy"] = this.xy ? "on" : "off";
+    if (!this.xy) this.resize();
+    this.redraw();
+  }
+
+  /** The second line against the first over rows `i0`..`i1`: a polyline through the rows where
+   *  both have a value (a gap in either breaks it), the newest point marked. */
+  private drawXY(i0: number, i1: number): void {
+    const [xName, yName] = this.names;
+    const xs = (xName !== undefined ? this.columns.get(xName) : undefined) ?? [];
+    const ys = (yName !== undefined ? this.columns.get(yName) : undefined) ?? [];
+    const dpr = window.devicePixelRatio || 1;
+    const width = Math.max(100, Math.floor(this.el.clientWidth));
+    const c = this.xyCanvas;
+    c.style.width = `${width}px`;
+    c.style.height = `${HEIGHT}px`;
+    c.width = Math.floor(width * dpr);
+    c.height = Math.floor(HEIGHT * dpr);
+    const ctx = c.getContext("2d");
+    if (!ctx) return;
+    ctx.scale(dpr, dpr);
+    const pts: ([number, number] | null)[] = [];
+    let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
+    for (let i = i0; i < i1; i++) {
+      const x = xs[i];
+      const y = ys[i];
+      if (typeof x !== "number" || typeof y !== "number") {
+        pts.push(null);
+        continue;
+      }
+      pts.push([x, y]);
+      [x0, x1, y0, y1] = [Math.min(x0, x), Math.max(x1, x), Math.min(y0, y), Math.max(y1, y)];
+    }
+    const n = pts.filter((p) => p !== null).length;
+    this.el.dataset["xyPoints"] = String(n);
+    const fg = cssVar("--canvas-fg", "#333");
+    const grid = cssVar("--canvas-grid", "#ccc");
+    const pad = { l: 60, r: 12, t: 10, b: 30 };
+    const w = width - pad.l - pad.r;
+    const hgt = HEIGHT - pad.t - pad.b;
+    ctx.strokeStyle = grid;
+    ctx.strokeRect(pad.l, pad.t, w, hgt);
+    ctx.fillStyle = fg;
+    ctx.font = "12px sans-serif";
+    ctx.fillText(`${yName ?? ""} against ${xName ?? ""}`, pad.l + 4, pad.t + 14);
+    if (n === 0) return;
+    // Equal margins; a degenerate range (a constant) gets a unit's width.
+    const span = (a: number, b: number) => (b - a > 1e-12 ? b - a : 1);
+    const [sx, sy] = [span(x0, x1), span(y0, y1)];
+    const px = (x: number) => pad.l + ((x - x0) / sx) * w;
+    const py = (y: number) => pad.t + hgt - ((y - y0) / sy) * hgt;
+    ctx.fillText(x0.toPrecision(4), pad.l, HEIGHT - 8);
+    ctx.fillText(x1.toPrecision(4), pad.l + w - 40, HEIGHT - 8);
+    ctx.fillText(y1.toPrecision(4), 4, pad.t + 10);
+    ctx.fillText(y0.toPrecision(4), 4, pad.t + hgt);
+    ctx.strokeStyle = COLORS[0] ?? "#1f77b4";
+    ctx.lineWidth = 1.5;
+    ctx.beginPath();
+    let pen = false;
+    let last: [number, number] | null = null;
+    for (const p of pts) {
+      if (p === null) {
+        pen = false;
+        continue;
+      }
+      if (pen) ctx.lineTo(px(p[0]), py(p[1]));
+      else ctx.moveTo(px(p[0]), py(p[1]));
+      pen = true;
+      last = p;
+    }
+    ctx.stroke();
+    if (last) {
+      ctx.fillStyle = COLORS[1] ?? "#d62728";
+      ctx.beginPath();
+      ctx.arc(px(last[0]), py(last[1]), 4, 0, 2 * Math.PI);
+      ctx.fill();
+    }
+  }
+
   /** Draws the view: the buffered points inside it (copied: the buffer keeps growing). */
   private redraw(): void {
+    this.xyToggle.disabled = this.names.length !== 2;
+    if (this.xy && this.names.length !== 2) this.setXY(false);
+    if (this.xy) {
+      const v = this.view();
+      this.drawXY(lowerBound(this.times, v.min), lowerBound(this.times, v.max + 1e-9));
+      return;
+    }
     const u = this.chart;
     if (!u) return;
     const { min, max } = this.view();

@@ -170,4 +170,20 @@ describe("a recording replayed into the GUI", () => {
     await until(async () => (await shown()) === value - 1, `cycle ${value - 1} shown`);
     assert.equal(await text(page.getByTestId("tl-cycle")), `cycle ${value - 1}`);
   });
+  test("an XY plot draws a plot's second line against its first", async () => {
+    await page.getByTestId("plot-signal").fill("odom.x");
+    await page.getByTestId("plot-add").click();
+    const plot = page.getByTestId("plot").last();
+    await until(async () => Number(await plot.getByTestId("plot-canvas").getAttribute("data-series")) === CYCLES, "the plot over the recording");
+    assert.ok(await plot.getByTestId("plot-xy").isDisabled(), "XY needs two lines");
+    await plot.getByTestId("plot-add-signal").fill("odom.y");
+    await plot.getByTestId("plot-add-signal-button").click();
+    await until(async () => !(await plot.getByTestId("plot-xy").isDisabled()), "XY offered with two lines");
+    await plot.getByTestId("plot-xy").check();
+    await until(async () => (await plot.getAttribute("data-xy")) === "on" && Number(await plot.getAttribute("data-xy-points")) >= CYCLES - 2, "odom.y against odom.x over the recording");
+    assert.ok(await plot.getByTestId("plot-xy-canvas").isVisible());
+    assert.ok(await plot.getByTestId("plot-canvas").isHidden(), "the time plot gives way");
+    await plot.getByTestId("plot-xy").uncheck();
+    await until(async () => (await plot.getAttribute("data-xy")) === "off" && (await plot.getByTestId("plot-canvas").isVisible()), "back to the time plot");
+  });
 });
