@@ -214,6 +214,16 @@ class DiffDriveBase:
         with self._lock:
             return self._ticks
 
+    def publish_clock(self) -> None:
+        """Publishes ``/clock`` at the time now again (no tick), as a paused simulator does: a
+        keep-last ``/clock`` dropped under congestion is superseded by the next one, and once the
+        clock stopped there is no next one."""
+        if self._clock is None:
+            return
+        with self._lock:
+            stamp_ns = self._time_ns(self._ticks)
+        self._clock.publish(msg("rosgraph_msgs/msg/Clock", clock=time_msg(stamp_ns)))
+
     @property
     def now_ns(self) -> int:
         """The robot's time now (ns since its start, plus `sim_start_ns`)."""

@@ -167,6 +167,18 @@ class PhysicsNode:
         with self._lock:
             return self._ticks
 
+    def publish_clock(self) -> None:
+        """Publishes ``/clock`` at the time now again, as a paused simulator keeps doing.
+
+        ``/clock`` is a keep-last topic: its publisher drops a message under congestion (as
+        rmw_zenoh's keep-last publishers do), and a later one supersedes it. Once the clock has
+        stopped there is no later one; a robot that missed the last catches up when it is sent
+        again (Gazebo keeps publishing ``/clock`` while paused). Runs no tick.
+        """
+        with self._lock:
+            tick = self._ticks
+        self._clock.publish(self._clock_msg(round(tick * 1e9 / self.rate_hz)))
+
     @property
     def commands_received(self) -> int:
         """Commands that came."""
