@@ -111,7 +111,7 @@ SIDE_LEG_MIN_M = 0.8
 #: most 3 m wide; the robot stops about 1.1 m past the door's line), m.
 FAR_WALL_M = 2.5
 #: The patrol looks this often for a door standing open in a known wall of the lobby, s.
-OPEN_POLL_S = 0.3
+OPEN_POLL_S = 0.5
 #: A known wall is watched this near (along a sonar's axis), m; an opening must read this much
 #: farther than the wall (a car is at least 1.8 m deep), m; and lie this far inside the
 #: lobby's other walls (not a corner's), m.
@@ -586,6 +586,7 @@ class Delivery(RouteSequencer):
                 # cannot see a reading jump): a sonar reads through a known wall of the
                 # lobby. Twice in a row at one place (not a missed echo).
                 polled = True
+                self.prefetch("odom", "sonar.range")  # one round trip for both
                 seen = open_in_walls(await self.odom(), await self.sonar(), walls, bounds)
                 if seen is None or last_open is None or dist(seen, last_open) > 0.5:
                     last_open = seen
