@@ -680,9 +680,12 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
         // Marks are on the coarse clock: a body is stuck only when it
         // certainly ran past its deadline.
         let slack = Duration::from_nanos(coarse_tick_ns());
+        // A thread waiting for a CPU right now has a wait the kernel has not counted yet
+        // (`crate::starved`): its bodies are judged once it has run again.
+        let waiting = core.starved.as_ref().is_some_and(|s| s.waiting_now());
         for (i, clock) in core.clocks.iter().enumerate() {
             let mark = clock.mark();
-            if mark != 0 && ran(clock, mark) > deadlines[i] + slack {
+            if mark != 0 && !waiting && ran(clock, mark) > deadlines[i] + slack {
                 stale.push((i, mark));
             }
         }
