@@ -399,8 +399,7 @@ impl History {
     /// Adds one of the manager's events: activations, faults and parameter changes change the
     /// skills' state from their cycle on; every event but a print is a mark.
     pub fn push_event(&mut self, event: &Event) {
-        let last_cycle = self.frames.back().map(|f| f.cycle).unwrap_or(self.observed_from);
-        let (cycle, kind, text) = match event {
+        match event {
             Event::ActivationApplied { activated, deactivated, cycle } => {
                 for name in activated {
                     if let Some(&i) = self.skill_index.get(name) {
@@ -413,14 +412,6 @@ impl History {
                         self.active[i].push(*cycle, false);
                     }
                 }
-                let mut parts = Vec::new();
-                if !activated.is_empty() {
-                    parts.push(format!("activated {}", activated.join(", ")));
-                }
-                if !deactivated.is_empty() {
-                    parts.push(format!("deactivated {}", deactivated.join(", ")));
-                }
-                (*cycle, "activation", parts.join("; "))
             }
             Event::ParamChanged { skill, param, value, cycle } => {
                 if let Some(&i) = self.skill_index.get(skill) {
@@ -428,39 +419,18 @@ impl History {
                         self.params[i][p].push(*cycle, value.clone());
                     }
                 }
-                (*cycle, "param", format!("{skill}.{param} = {}", value_to_json(value)))
-            }
-            Event::PriorityChanged { skill, priority, cycle } => {
-                (*cycle, "priority", format!("{skill} priority = {priority}"))
             }
             Event::SkillFaulted { skill, cause, cycle } => {
                 if let Some(&i) = self.skill_index.get(skill) {
                     self.active[i].push(*cycle, false);
                     self.faulted[i].push(*cycle, Some(cause.clone()));
                 }
-                (*cycle, "fault", format!("{skill} faulted: {cause}"))
             }
-            Event::MonitorFired { monitor, condition, cycle, .. } => {
-                (*cycle, "monitor", format!("monitor {monitor} fired: {condition}"))
-            }
-            Event::MonitorCancelled { monitor, condition, reason, cycle, .. } => {
-                let why = match reason {
-                    situate_manager::CancelReason::Owner => "cancelled",
-                    situate_manager::CancelReason::Forced => "cancelled by another session",
-                    situate_manager::CancelReason::SessionEnded => "gone with its session",
-                };
-                (*cycle, "monitor", format!("monitor {monitor} {why}: {condition}"))
-            }
-            Event::ManagerStarted { cycle } => (*cycle, "manager", "the cycle started".to_string()),
-            Event::ManagerStopped { cycle } => (*cycle, "manager", "the cycle stopped".to_string()),
-            Event::WorkerFailed { thread, cause, action } => {
-                (last_cycle, "worker", format!("worker {thread} failed ({cause}): {action}"))
-            }
-            Event::Phase { text, client, cycle } => (*cycle, "phase", phase_text(text, client.as_deref())),
-            Event::Print { .. } => return,
-        };
-        if self.events_mark {
-            self.insert_mark(cycle, kind, text);
+            _ => {}
+        }
+        if self.events_mark && !matches!(event, Event::Print { .. }) {
+            // One description of an event as a mark, live or recorded: from its link JSON.
+            self.mark_event(&situate_link::json::event_to_json(event).1);
         }
     }
 
@@ -477,6 +447,11 @@ impl History {
     /// changed (a replay's comes from the replayed cycles). Prints and events without a cycle
     /// (but `worker_failed`, marked at the newest cycle held) are not marks.
     pub fn push_recorded_event(&mut self, event: &Json) {
+        self.mark_event(event);
+    }
+
+    /// Marks an event given as the link's JSON of it (see [`History::push_recorded_event`]).
+    fn mark_event(&mut self, event: &Json) {
         let s = |key: &str| event.get(key).and_then(Json::as_str).unwrap_or("?").to_string();
         let names = |key: &str| -> String {
             let list = event.get(key).and_then(Json::as_array).map(Vec::as_slice).unwrap_or_default();
