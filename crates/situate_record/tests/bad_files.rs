@@ -144,48 +144,37 @@ fn a_cycle_far_past_the_recorded_ones_is_refused_naming_it() {
     let _ = std::fs::remove_file(&src);
 }
 
-#[test]
-fn a_period_that_is_not_a_number_is_refused_naming_it() {
-    let src = recording("nan-src");
-    let dst = temp("nan");
-    for bad in ["nan", "inf", "-0.01", "0", "1e300", "ten"] {
+/// Each of `bads` as the `situate` metadata's `key` makes a file refused, naming the key and the
+/// value.
+fn each_refused_as_metadata(name: &str, key: &str, bads: &[&str]) {
+    let src = recording(&format!("{name}-src"));
+    let dst = temp(name);
+    for bad in bads {
         rewrite(
             &src,
             &dst,
-            |name, m| {
-                if name == "situate" {
-                    m.insert("period_s".into(), bad.into());
+            |record, m| {
+                if record == "situate" {
+                    m.insert(key.into(), (*bad).into());
                 }
             },
             |_, _| {},
         );
         let text = refused(&dst);
-        assert!(text.contains("`period_s`") && text.contains(&format!("`{bad}`")), "{text}");
+        assert!(text.contains(&format!("`{key}`")) && text.contains(&format!("`{bad}`")), "{text}");
     }
     let _ = std::fs::remove_file(&dst);
     let _ = std::fs::remove_file(&src);
 }
 
 #[test]
+fn a_period_that_is_not_a_number_is_refused_naming_it() {
+    each_refused_as_metadata("nan", "period_s", &["nan", "inf", "-0.01", "0", "1e300", "ten"]);
+}
+
+#[test]
 fn a_time_origin_that_is_not_a_time_is_refused_naming_it() {
-    let src = recording("origin-src");
-    let dst = temp("origin");
-    for bad in ["-1", "1.5e18", "yesterday", "18446744073709551616"] {
-        rewrite(
-            &src,
-            &dst,
-            |name, m| {
-                if name == "situate" {
-                    m.insert("time_origin_unix_ns".into(), bad.into());
-                }
-            },
-            |_, _| {},
-        );
-        let text = refused(&dst);
-        assert!(text.contains("`time_origin_unix_ns`") && text.contains(&format!("`{bad}`")), "{text}");
-    }
-    let _ = std::fs::remove_file(&dst);
-    let _ = std::fs::remove_file(&src);
+    each_refused_as_metadata("origin", "time_origin_unix_ns", &["-1", "1.5e18", "yesterday", "18446744073709551616"]);
 }
 
 #[test]
