@@ -11,6 +11,7 @@ import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
 import { Connection, isObject, type Json, type JsonObject } from "./conn";
 import { cssVar, errorText, h, linkControl, numericLeaves, pick, setText } from "./dom";
+import { drawXY } from "./xy";
 
 const COLORS = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
 /** Lines per plot, at most. */
@@ -140,6 +141,8 @@ class Plot {
   /** A replay's plot: the whole recording on the robot's time (the x axis: its clock, s), from
    *  the timeline (`history_series`), and a playhead at the timeline's cycle. */
   private recording = false;
+  /** `history_series` asks made for this plot (`Plots.fill`: only the latest is shown). */
+  fills = 0;
   /** While the recording's points are added (no redraw per point). */
   private bulk = false;
   private playheadT: number | null = null;
@@ -503,78 +506,12 @@ class Plot {
     this.redraw();
   }
 
-  /** The second line against the first over rows `i0`..`i1`: a polyline through the rows where
-   *  both have a value (a gap in either breaks it), the newest point marked. */
+  /** The second line against the first over rows `i0`..`i1` (see `xy.ts`). */
   private drawXY(i0: number, i1: number): void {
     const [xName, yName] = this.names;
-    const xs = (xName !== undefined ? this.columns.get(xName) : undefined) ?? [];
-    const ys = (yName !== undefined ? this.columns.get(yName) : undefined) ?? [];
-    const dpr = window.devicePixelRatio || 1;
-    const width = Math.max(100, Math.floor(this.el.clientWidth));
-    const c = this.xyCanvas;
-    c.style.width = `${width}px`;
-    c.style.height = `${HEIGHT}px`;
-    c.width = Math.floor(width * dpr);
-    c.height = Math.floor(HEIGHT * dpr);
-    const ctx = c.getContext("2d");
-    if (!ctx) return;
-    ctx.scale(dpr, dpr);
-    const pts: ([number, number] | null)[] = [];
-    let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
-    for (let i = i0; i < i1; i++) {
-      const x = xs[i];
-      const y = ys[i];
-      if (typeof x !== "number" || typeof y !== "number") {
-        pts.push(null);
-        continue;
-      }
-      pts.push([x, y]);
-      [x0, x1, y0, y1] = [Math.min(x0, x), Math.max(x1, x), Math.min(y0, y), Math.max(y1, y)];
-    }
-    const n = pts.filter((p) => p !== null).length;
+    const column = (name: string | undefined) => (name !== undefined ? this.columns.get(name) : undefined) ?? [];
+    const n = drawXY(this.xyCanvas, Math.max(100, Math.floor(this.el.clientWidth)), HEIGHT, { name: xName ?? "", values: column(xName) }, { name: yName ?? "", values: column(yName) }, i0, i1, COLORS);
     this.el.dataset["xyPoints"] = String(n);
-    const fg = cssVar("--canvas-fg", "#333");
-    const grid = cssVar("--canvas-grid", "#ccc");
-    const pad = { l: 60, r: 12, t: 10, b: 30 };
-    const w = width - pad.l - pad.r;
-    const hgt = HEIGHT - pad.t - pad.b;
-    ctx.strokeStyle = grid;
-    ctx.strokeRect(pad.l, pad.t, w, hgt);
-    ctx.fillStyle = fg;
-    ctx.font = "12px sans-serif";
-    ctx.fillText(`${yName ?? ""} against ${xName ?? ""}`, pad.l + 4, pad.t + 14);
-    if (n === 0) return;
-    // Equal margins; a degenerate range (a constant) gets a unit's width.
-    const span = (a: number, b: number) => (b - a > 1e-12 ? b - a : 1);
-    const [sx, sy] = [span(x0, x1), span(y0, y1)];
-    const px = (x: number) => pad.l + ((x - x0) / sx) * w;
-    const py = (y: number) => pad.t + hgt - ((y - y0) / sy) * hgt;
-    ctx.fillText(x0.toPrecision(4), pad.l, HEIGHT - 8);
-    ctx.fillText(x1.toPrecision(4), pad.l + w - 40, HEIGHT - 8);
-    ctx.fillText(y1.toPrecision(4), 4, pad.t + 10);
-    ctx.fillText(y0.toPrecision(4), 4, pad.t + hgt);
-    ctx.strokeStyle = COLORS[0] ?? "#1f77b4";
-    ctx.lineWidth = 1.5;
-    ctx.beginPath();
-    let pen = false;
-    let last: [number, number] | null = null;
-    for (const p of pts) {
-      if (p === null) {
-        pen = false;
-        continue;
-      }
-      if (pen) ctx.lineTo(px(p[0]), py(p[1]));
-      else ctx.moveTo(px(p[0]), py(p[1]));
-      pen = true;
-      last = p;
-    }
-    ctx.stroke();
-    if (last) {
-      ctx.fillStyle = COLORS[1] ?? "#d62728";
-      ctx.beginPath();
-      ctx.arc(px(last[0]), py(last[1]), 4, 0, 2 * Math.PI);
-      ctx.fill();
-    }
   }
 
   /** Draws the view: the buffered points inside it (copied: the buffer keeps growing). */
@@ -844,8 +781,11 @@ export class Plots {
 
   private async fill(p: Plot): Promise<void> {
     const signals = [...new Set(p.sources.map((s) => s.base))];
+    // Only the latest ask counts: an earlier one answered later (a plot's first signal, then a
+    // second added before the first reply) would put back a series without the new signal.
+    const ask = ++p.fills;
     const series = await this.conn.request("history_series", { signals, max_points: 2000 });
-    if (!isObject(series) || !this.plots.includes(p)) return;
+    if (!isObject(series) || !this.plots.includes(p) || ask !== p.fills) return;
     p.setSeries(series);
     p.setPlayhead(this.playheadT);
   }

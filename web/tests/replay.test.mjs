@@ -171,8 +171,10 @@ describe("a recording replayed into the GUI", () => {
     assert.equal(await text(page.getByTestId("tl-cycle")), `cycle ${value - 1}`);
   });
   test("an XY plot draws a plot's second line against its first", async () => {
+    const before = await page.getByTestId("plot").count();
     await page.getByTestId("plot-signal").fill("odom.x");
     await page.getByTestId("plot-add").click();
+    await until(async () => (await page.getByTestId("plot").count()) === before + 1, "the new plot");
     const plot = page.getByTestId("plot").last();
     await until(async () => Number(await plot.getByTestId("plot-canvas").getAttribute("data-series")) === CYCLES, "the plot over the recording");
     assert.ok(await plot.getByTestId("plot-xy").isDisabled(), "XY needs two lines");
