@@ -1,7 +1,9 @@
 //! `situate replay FILE`: a recording fed back through the robot rebuilt
 //! from its robot file (`situate_record::replay`): devices, and skills not
 //! chosen to run live, played from the recording; the live skills' code run
-//! now; every cycle compared with the recording.
+//! now; every cycle compared with the recording. With `--view`, nothing is
+//! re-simulated: every skill plays, on a robot built from the wiring the
+//! recording holds (`situate_record::wiring`), no robot file needed.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -49,6 +51,11 @@ pub(crate) struct ReplayArgs {
     /// Record the replay to this MCAP file.
     #[arg(long, value_name = "FILE")]
     pub(crate) record: Option<PathBuf>,
+    /// Re-simulate nothing: every skill plays its outputs from the recording, on a robot built
+    /// from the wiring the recording holds. Needs neither the robot file nor any skill's code, so
+    /// it opens a recording made elsewhere (with --gui: to step, seek and plot it).
+    #[arg(long, conflicts_with_all = ["live", "robot", "record"])]
+    pub(crate) view: bool,
     /// Parameters over the recording's own `--set`s.
     #[command(flatten)]
     pub(crate) compose: Compose,
@@ -57,9 +64,13 @@ pub(crate) struct ReplayArgs {
 pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
     let started = Instant::now();
     let rec = Recording::open(&args.file).map_err(|e| problem(Exit::BadFile, e.to_string()))?;
+    if args.view && !args.compose.set.is_empty() {
+        return Err(problem(Exit::Usage, "--view plays every skill from the recording: a --set would change nothing"));
+    }
     match rec.span() {
         None => {}
-        Some((first, _)) if first > 1 => {
+        // A viewer runs no skill's code, so it needs no memory from before the first cycle.
+        Some((first, _)) if first > 1 && !args.view => {
             return Err(problem(
                 Exit::BadFile,
                 format!(
@@ -80,46 +91,16 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             ranges_text(&rec.dropped)
         ));
     }
-    let robot = match (&args.robot, rec.metadata.get("robot_file")) {
-        (Some(r), _) => r.clone(),
-        (None, Some(r)) => PathBuf::from(r),
-        (None, None) => {
-            return Err(problem(
-                Exit::Usage,
-                format!("{}: the recording names no robot file; give one with --robot", args.file.display()),
-            ))
-        }
-    };
-    if rec.metadata.get("clock").is_some_and(|c| c == "wall") {
-        out.warn(format_args!(
-            "warning: {} was recorded on the wall clock: skills that read the time will differ (docs/recording.md, \"Replay\")",
-            args.file.display()
-        ));
-    }
-    // Checked when the recording was read: a `sets` that is not a list of
-    // strings is a bad file there, not silently none here.
-    let compose = Compose { set: rec.sets.iter().chain(args.compose.set.iter()).cloned().collect() };
-    let Loaded { mut spec, remote, file: robot_file, ros2, .. } = load(&robot, &compose)?;
-    let (mut registry, _world) = registry_for(&robot_file, program_registry(ext)?, ext, &SimOverrides::default())
-        .map_err(|errors| bad_file(&robot, &errors))?;
-    // The ROS 2 topics in are devices: they play back from the recording.
-    crate::ros2::add_devices(&mut spec, &mut registry, ros2.as_ref());
-    // What makes a run repeatable (docs/recording.md, "Replay").
-    spec.clock = ClockKind::Simulated;
-    spec.executor = ExecutorKind::Serial;
-    if let Some(p) = rec.period_s() {
-        spec.period_s = p;
-    }
-    let live = (!args.live.is_empty()).then_some(args.live.as_slice());
-    let cast = replay::cast(&mut spec, &mut registry, &remote, live).map_err(|e| problem(Exit::Usage, e))?;
-    let mut manager =
-        Manager::build(&spec, &registry).map_err(|e| problem(Exit::BadFile, format!("{}: {e}", robot.display())))?;
+    let Built { mut manager, cast, robot, compose, changes } =
+        if args.view { view(&args, &rec)? } else { rebuild(&args, &rec, ext, out)? };
     let tape = replay::build_tape(&rec, manager.graph(), &cast.players)
         .map_err(|e| problem(Exit::BadFile, format!("{}: {e}", args.file.display())))?;
     let _ = cast.tape.set(tape);
     let recorder = match &args.record {
         Some(path) => {
-            let mut meta = crate::robot::recording_metadata(&robot, &compose.set, ClockKind::Simulated, None);
+            // Not with --view (clap refuses the pair): a rebuilt robot has its file.
+            let robot = robot.as_deref().unwrap_or(std::path::Path::new(""));
+            let mut meta = crate::robot::recording_metadata(robot, &compose.set, ClockKind::Simulated, None);
             for key in ["world", "seed", "map_file"] {
                 if let Some(v) = rec.metadata.get(key) {
                     meta.insert(key.to_string(), v.clone());
@@ -132,7 +113,9 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
         }
         None => None,
     };
-    let (from, to) = (args.from.unwrap_or(0), args.to.unwrap_or(u64::MAX));
+    // A viewer may open a recording started on a running robot: compare from its first cycle.
+    let first = if args.view { rec.span().map_or(0, |s| s.0) } else { 0 };
+    let (from, to) = (args.from.unwrap_or(0).max(first), args.to.unwrap_or(u64::MAX));
     if from > to {
         return Err(problem(Exit::Usage, format!("--from {from} is after --to {to}")));
     }
@@ -146,7 +129,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     let (frames_tx, frames_rx) = crossbeam_channel::unbounded();
     let layout = gui_listen.map(|_| situate_gui::Layout::of(manager.graph()));
     let events = manager.events();
-    let outcome = replay::run_window(&rec, &mut manager, &cast.live, from, to, |frame, _| {
+    let outcome = replay::run_window(&rec, &mut manager, &changes, from, to, |frame, _| {
         if layout.is_some() {
             let _ = frames_tx.send(frame.clone());
         }
@@ -171,6 +154,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             json!({
                 "recording": args.file,
                 "robot_file": robot,
+            "view": args.view,
                 "cycles": outcome.cycles,
                 "first_cycle": span.map(|s| s.0.max(from)),
                 "last_cycle": span.map(|s| s.1.min(to)),
@@ -187,15 +171,25 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
             })
         );
     } else {
-        stdoutln!(
-            "replayed {} cycles of {} in {:.2} s: {} live ({}), {} played from the recording",
-            outcome.cycles,
-            args.file.display(),
-            started.elapsed().as_secs_f64(),
-            cast.live.len(),
-            cast.live.join(", "),
-            cast.players.len()
-        );
+        if args.view {
+            stdoutln!(
+                "viewed {} cycles of {} in {:.2} s: every skill ({}) played from the recording, nothing re-simulated",
+                outcome.cycles,
+                args.file.display(),
+                started.elapsed().as_secs_f64(),
+                cast.players.len()
+            );
+        } else {
+            stdoutln!(
+                "replayed {} cycles of {} in {:.2} s: {} live ({}), {} played from the recording",
+                outcome.cycles,
+                args.file.display(),
+                started.elapsed().as_secs_f64(),
+                cast.live.len(),
+                cast.live.join(", "),
+                cast.players.len()
+            );
+        }
         for line in verdict(&outcome, identical) {
             stdoutln!("{line}");
         }
@@ -205,15 +199,92 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     }
     let code = if identical { Exit::Ok.code() } else { Exit::Failure.code() };
     if let Some((listen, layout, manager)) = gui_manager {
+        let mut summary = verdict(&outcome, identical).join("; ");
+        if args.view {
+            summary = format!("viewed from the file alone, nothing re-simulated ({summary})");
+        }
         let replay = situate_gui::ReplayInfo {
             file: args.file.display().to_string(),
-            summary: verdict(&outcome, identical).join("; "),
+            summary,
             events: rec.events.iter().map(|(_, e)| e.clone()).collect(),
         };
         let gui = GuiReplay { listen, allowed_hosts: &args.gui_allow_host, layout, replay };
         serve_gui(&rec, manager, gui, frames_rx, events, outcome.cycles, out)?;
     }
     Ok(code)
+}
+
+/// The robot a replay runs, and what it needs besides.
+struct Built {
+    manager: Manager,
+    cast: replay::Cast,
+    /// The robot file it was rebuilt from (`None`: a viewer, built from the recording).
+    robot: Option<PathBuf>,
+    /// The `--set`s it was built with (the recording's, then the command line's).
+    compose: Compose,
+    /// The skills whose recorded activations and parameter changes are applied.
+    changes: Vec<String>,
+}
+
+/// The robot rebuilt from its robot file, every skill that can run here live
+/// (or those of `--live`), devices and the rest played.
+fn rebuild(args: &ReplayArgs, rec: &Recording, ext: &Extensions, out: Out) -> anyhow::Result<Built> {
+    let robot = match (&args.robot, rec.metadata.get("robot_file")) {
+        (Some(r), _) => r.clone(),
+        (None, Some(r)) => PathBuf::from(r),
+        (None, None) => {
+            return Err(problem(
+                Exit::Usage,
+                format!("{}: the recording names no robot file; give one with --robot", args.file.display()),
+            ))
+        }
+    };
+    if !robot.exists() && args.robot.is_none() {
+        return Err(problem(
+            Exit::BadFile,
+            format!(
+                "{}: the robot file the recording names, {}, is gone: give one with --robot, or view the recording \
+                 without re-simulating it (--view)",
+                args.file.display(),
+                robot.display()
+            ),
+        ));
+    }
+    if rec.metadata.get("clock").is_some_and(|c| c == "wall") {
+        out.warn(format_args!(
+            "warning: {} was recorded on the wall clock: skills that read the time will differ (docs/recording.md, \"Replay\")",
+            args.file.display()
+        ));
+    }
+    // Checked when the recording was read: a `sets` that is not a list of
+    // strings is a bad file there, not silently none here.
+    let compose = Compose { set: rec.sets.iter().chain(args.compose.set.iter()).cloned().collect() };
+    let Loaded { mut spec, remote, file: robot_file, ros2, .. } = load(&robot, &compose)?;
+    let (mut registry, _world) = registry_for(&robot_file, program_registry(ext)?, ext, &SimOverrides::default())
+        .map_err(|errors| bad_file(&robot, &errors))?;
+    // The ROS 2 topics in are devices: they play back from the recording.
+    crate::ros2::add_devices(&mut spec, &mut registry, ros2.as_ref());
+    // What makes a run repeatable (docs/recording.md, "Replay").
+    spec.clock = ClockKind::Simulated;
+    spec.executor = ExecutorKind::Serial;
+    if let Some(p) = rec.period_s() {
+        spec.period_s = p;
+    }
+    let live = (!args.live.is_empty()).then_some(args.live.as_slice());
+    let cast = replay::cast(&mut spec, &mut registry, &remote, live).map_err(|e| problem(Exit::Usage, e))?;
+    let manager =
+        Manager::build(&spec, &registry).map_err(|e| problem(Exit::BadFile, format!("{}: {e}", robot.display())))?;
+    Ok(Built { manager, changes: cast.live.clone(), cast, robot: Some(robot), compose })
+}
+
+/// The robot rebuilt from the recording's wiring alone: every skill a
+/// player, following its recorded activations and parameter changes.
+fn view(args: &ReplayArgs, rec: &Recording) -> anyhow::Result<Built> {
+    let situate_record::wiring::View { spec, registry, cast } = situate_record::wiring::view(rec)
+        .map_err(|e| problem(Exit::BadFile, format!("{}: {e}", args.file.display())))?;
+    let manager = Manager::build(&spec, &registry)
+        .map_err(|e| problem(Exit::BadFile, format!("{}: the recorded wiring: {e}", args.file.display())))?;
+    Ok(Built { manager, changes: cast.players.clone(), cast, robot: None, compose: Compose::default() })
 }
 
 /// How the replay compared with the recording, a line or a few.

@@ -102,3 +102,79 @@ fn replay_refuses_a_damaged_recording_as_a_bad_file_naming_where() {
     let message = refused(Path::new("/dev/zero"));
     assert!(message.contains("not a regular file"), "{message}");
 }
+
+/// `path`'s bytes with the first `from` replaced by `to` (the same length),
+/// the data section's CRC set to 0 ("not computed", as MCAP allows).
+fn patched(path: &Path, from: &str, to: &str) -> PathBuf {
+    assert_eq!(from.len(), to.len());
+    let mut bytes = std::fs::read(path).unwrap();
+    let at = bytes
+        .windows(from.len())
+        .position(|w| w == from.as_bytes())
+        .unwrap_or_else(|| panic!("no {from:?} in the file"));
+    bytes[at..at + from.len()].copy_from_slice(to.as_bytes());
+    let mut pos = 8;
+    while bytes[pos] != 0x0F {
+        pos += 9 + u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().unwrap()) as usize;
+    }
+    bytes[pos + 9..pos + 13].fill(0);
+    let out = path.with_file_name(format!("patched-{}.mcap", to.len()));
+    std::fs::write(&out, bytes).unwrap();
+    out
+}
+
+#[test]
+fn a_recording_whose_robot_file_is_gone_is_viewed_from_its_own_wiring() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dir.path().join("robot.yaml");
+    std::fs::copy(TOYBOT, &robot).unwrap();
+    let rec = dir.path().join("toy.mcap");
+    let (r, f) = (robot.to_str().unwrap(), rec.to_str().unwrap());
+    let out = situate(["run", r, "--clock", "simulated", "--cycles", "300", "--no-link", "--no-gui", "--record", f]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    std::fs::remove_file(&robot).unwrap();
+
+    // A re-simulation needs the robot file, and says so, naming the way out.
+    let out = replay(&[f]);
+    let err = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("robot.yaml, is gone") && err.contains("--view"), "{err}");
+
+    // A viewer does not: every skill plays, and every cycle is the recording's.
+    let out = replay(&[f, "--view"]);
+    let result = json_of(&out);
+    assert_eq!(out.status.code(), Some(0), "{result}\n{}", stderr(&out));
+    assert_eq!((result["view"].as_bool(), result["identical"].as_bool()), (Some(true), Some(true)), "{result}");
+    assert_eq!((result["cycles"].as_u64(), result["matched"].as_u64()), (Some(300), Some(300)), "{result}");
+    let mut played: Vec<&str> = result["played"].as_array().unwrap().iter().filter_map(|s| s.as_str()).collect();
+    played.sort_unstable();
+    assert_eq!(played, ["runaway", "sonar", "wander", "wheels"], "{result}");
+    assert_eq!(result["live"], serde_json::json!([]), "{result}");
+
+    // It re-simulates nothing, so it takes nothing that would.
+    for extra in [["--live", "wander"], ["--robot", TOYBOT], ["--set", "wander.speed=0.3"]] {
+        let mut args = vec![f, "--view"];
+        args.extend_from_slice(&extra);
+        let out = replay(&args);
+        assert_eq!(out.status.code(), Some(2), "--view {extra:?}: {}", stderr(&out));
+    }
+
+    // A recording without the wiring (made before it was recorded) or with a
+    // wiring that cannot be read is a bad file, and the error says what.
+    // (An MCAP metadata key is its length, 4 bytes little-endian, then its bytes.)
+    let old = patched(&rec, "\u{6}\0\0\0wiring", "\u{6}\0\0\0wirinG");
+    let out = replay(&[old.to_str().unwrap(), "--view"]);
+    let err = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("holds no robot wiring"), "{err}");
+    let bad = patched(&rec, "\"kind\":\"sync\"", "\"kind\":\"sink\"");
+    let out = replay(&[bad.to_str().unwrap(), "--view"]);
+    let err = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("`wiring`: skill 2 (`runaway`): `kind`")
+            && err.contains("sink")
+            && err.contains("not sync, async or device"),
+        "{err}"
+    );
+}

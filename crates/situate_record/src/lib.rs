@@ -33,9 +33,10 @@
 //! - `situate/gaps`: cycles dropped while recording (wall clock only), one
 //!   message per run of them, `{"cycle": first, "last", "count"}`, written
 //!   as soon as the writer sees the gap (the cycles after it) or at the end;
-//! - a metadata record `situate` (robot, period, leaves, and what the caller
-//!   adds: the robot file and its `--set`s, so `situate replay` can rebuild
-//!   the robot), and at the end one `situate_drops`: `dropped_cycles` (how
+//! - a metadata record `situate` (robot, period, leaves, the robot's wiring
+//!   ([`wiring`]: each skill's ports, parameters and state, so a viewer needs
+//!   no robot file), and what the caller adds: the robot file and its
+//!   `--set`s, so `situate replay` can rebuild the robot), and at the end one `situate_drops`: `dropped_cycles` (how
 //!   many) and `ranges` (which: a JSON list of `[first, last]`).
 //!
 //! A message's `log_time` and `publish_time` are Unix time in nanoseconds:
@@ -52,6 +53,7 @@ pub mod hash;
 pub mod read;
 pub mod replay;
 mod schema;
+pub mod wiring;
 
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
@@ -243,7 +245,15 @@ impl Recorder {
                 _ => None,
             },
         };
+        // The skills' wiring and state now, so a viewer needs no robot file (`wiring`).
+        let wired = match &mut source {
+            Source::Manager(m) => m.request(Request::QuerySkills).ok(),
+            Source::Handle(h, timeout) => h.request_timeout(Request::QuerySkills, *timeout).ok(),
+        };
         let mut meta = metadata;
+        if let Some(Reply::Skills(wired)) = wired {
+            meta.insert(wiring::WIRING_METADATA.to_string(), wiring::to_json(&wired).to_string());
+        }
         meta.insert("robot".to_string(), robot);
         if let Some(stats) = &stats {
             meta.insert("period_s".to_string(), stats.period_s.to_string());

@@ -282,3 +282,62 @@ fn a_recording_that_lacks_cycles_replays_up_to_the_first_and_is_never_identical(
     assert_eq!(outcome.stopped_before, Some(5));
     assert!(!outcome.identical(), "{outcome:?}");
 }
+
+/// Runs a viewer of `rec` (every skill a player, built from the recording's
+/// wiring alone) from cycle `from`, stopping after `to`; its manager after.
+fn view(rec: &Recording, from: u64, to: u64) -> (Outcome, Manager) {
+    let situate_record::wiring::View { spec, registry, cast } =
+        situate_record::wiring::view(rec).unwrap_or_else(|e| panic!("{e}"));
+    let mut m = Manager::build(&spec, &registry).unwrap_or_else(|e| panic!("{e}"));
+    let tape = build_tape(rec, m.graph(), &cast.players).unwrap_or_else(|e| panic!("{e}"));
+    assert!(cast.tape.set(tape).is_ok());
+    let outcome = situate_record::replay::run_window(rec, &mut m, &cast.players, from, to, |_, _| {});
+    (outcome, m)
+}
+
+fn skill(m: &mut Manager, name: &str) -> situate::manager::control::SkillInfo {
+    match m.request(Request::QuerySkills) {
+        Ok(situate::manager::Reply::Skills(s)) => s.into_iter().find(|s| s.name == name).expect("the skill"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_viewer_built_from_the_recording_alone_reproduces_it_with_the_skills_state() {
+    let rec = record("view");
+    // Every cycle, from the wiring alone: no registry of the robot's skills.
+    let (outcome, mut m) = view(&rec, 0, u64::MAX);
+    assert_eq!((outcome.cycles, outcome.matched, outcome.first), (80, 80, None));
+    // The skills' state follows the recording: `high` switched off again,
+    // its gain changed, `low`'s priority raised, `filter`'s alpha as set.
+    let high = skill(&mut m, "high");
+    assert!(!high.active);
+    assert_eq!(high.params.iter().find(|(p, _)| p.name == "gain").map(|(_, v)| v.clone()), Some(Value::F64(3.0)));
+    let gain = high.params.iter().find(|(p, _)| p.name == "gain").map(|(p, _)| p.clone()).expect("gain");
+    assert_eq!((gain.default.clone(), gain.min, gain.max), (Value::F64(1.0), Some(-10.0), Some(10.0)));
+    assert_eq!(skill(&mut m, "low").priority, 10);
+    assert_eq!(skill(&mut m, "filter").params[0].1, Value::F64(0.5));
+    // Stopped while `high` held `cmd`, the viewer shows it on.
+    let (outcome, mut m) = view(&rec, 0, 40);
+    assert_eq!((outcome.cycles, outcome.matched), (40, 40));
+    assert!(skill(&mut m, "high").active);
+}
+
+#[test]
+fn a_recording_started_on_a_running_robot_is_viewed_from_its_first_cycle() {
+    let path = temp("midrun");
+    let mut m = Manager::build(&spec(0.5), &registry()).unwrap_or_else(|e| panic!("{e}"));
+    m.run_cycles(30);
+    m.request(Request::Activate { skills: vec!["high".into()], with_providers: false }).unwrap();
+    let recorder = Recorder::start(&path, &mut m).unwrap_or_else(|e| panic!("{e}"));
+    m.run_cycles(25);
+    drop(m);
+    recorder.finish().unwrap_or_else(|e| panic!("{e}"));
+    let rec = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(rec.span(), Some((31, 55)));
+    // The wiring holds the state when the recording started: `high` on.
+    let (outcome, mut m) = view(&rec, 31, u64::MAX);
+    assert_eq!((outcome.cycles, outcome.matched, outcome.first), (25, 25, None));
+    assert!(skill(&mut m, "high").active);
+}
