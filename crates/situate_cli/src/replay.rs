@@ -56,6 +56,10 @@ pub(crate) struct ReplayArgs {
     /// it opens a recording made elsewhere (with --gui: to step, seek and plot it).
     #[arg(long, conflicts_with_all = ["live", "robot", "record"])]
     pub(crate) view: bool,
+    /// Read a recording cut short (a robot killed while recording: no summary at its end) up to
+    /// its last complete cycle. Such a replay is never called identical.
+    #[arg(long)]
+    pub(crate) recover: bool,
     /// Parameters over the recording's own `--set`s.
     #[command(flatten)]
     pub(crate) compose: Compose,
@@ -63,7 +67,11 @@ pub(crate) struct ReplayArgs {
 
 pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> anyhow::Result<u8> {
     let started = Instant::now();
-    let rec = Recording::open(&args.file).map_err(|e| problem(Exit::BadFile, e.to_string()))?;
+    let rec = if args.recover { Recording::open_cut_short(&args.file) } else { Recording::open(&args.file) }
+        .map_err(|e| problem(Exit::BadFile, e.to_string()))?;
+    if let Some(cut) = &rec.cut_short {
+        out.warn(format_args!("warning: {}: {cut}; the replay cannot say the run is identical", args.file.display()));
+    }
     if args.view && !args.compose.set.is_empty() {
         return Err(problem(Exit::Usage, "--view plays every skill from the recording: a --set would change nothing"));
     }
@@ -146,7 +154,8 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
         Ok(r) => r,
         Err(e) => return Err(problem(Exit::Failure, format!("--record: {e}"))),
     };
-    let identical = outcome.identical();
+    // What a file cut short lost is unknown: its replay is never identical.
+    let identical = outcome.identical() && rec.cut_short.is_none();
     let span = rec.span();
     if out.json {
         stdoutln!(
@@ -164,6 +173,8 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                 "dropped_cycles": outcome.dropped,
                 "dropped_ranges": outcome.dropped_ranges,
                 "stopped_before": outcome.stopped_before,
+                "cut_short": rec.cut_short.as_ref().map(|c| json!({"at_byte": c.at_byte, "file_bytes": c.file_bytes,
+                    "last_cycle": c.last_cycle, "cycles_dropped": c.cycles_dropped, "reason": c.reason})),
                 "live": cast.live,
                 "played": cast.players,
                 "wall_s": started.elapsed().as_secs_f64(),
@@ -190,7 +201,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
                 cast.players.len()
             );
         }
-        for line in verdict(&outcome, identical) {
+        for line in verdict(&outcome, identical, rec.cut_short.as_ref()) {
             stdoutln!("{line}");
         }
         if let Some(r) = &recording {
@@ -199,7 +210,7 @@ pub(crate) fn replay_command(args: ReplayArgs, ext: &Extensions, out: Out) -> an
     }
     let code = if identical { Exit::Ok.code() } else { Exit::Failure.code() };
     if let Some((listen, layout, manager)) = gui_manager {
-        let mut summary = verdict(&outcome, identical).join("; ");
+        let mut summary = verdict(&outcome, identical, rec.cut_short.as_ref()).join("; ");
         if args.view {
             summary = format!("viewed from the file alone, nothing re-simulated ({summary})");
         }
@@ -288,7 +299,24 @@ fn view(args: &ReplayArgs, rec: &Recording) -> anyhow::Result<Built> {
 }
 
 /// How the replay compared with the recording, a line or a few.
-fn verdict(outcome: &replay::Outcome, identical: bool) -> Vec<String> {
+fn verdict(outcome: &replay::Outcome, identical: bool, cut: Option<&situate_record::read::CutShort>) -> Vec<String> {
+    let mut lines = compared(outcome, identical);
+    if let Some(cut) = cut {
+        let cut_line = format!("the recording was {cut}");
+        if outcome.first.is_none() && outcome.dropped == 0 {
+            lines = vec![format!(
+                "not identical: {cut_line}; {} of {} cycles replayed match",
+                outcome.matched, outcome.cycles
+            )];
+        } else {
+            lines.push(format!("and {cut_line}"));
+        }
+    }
+    lines
+}
+
+/// How the cycles replayed compared with the recording's.
+fn compared(outcome: &replay::Outcome, identical: bool) -> Vec<String> {
     match &outcome.first {
         None if identical => vec!["identical: every cycle matches the recording".to_string()],
         None if outcome.dropped > 0 => vec![format!(

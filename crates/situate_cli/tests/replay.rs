@@ -178,3 +178,46 @@ fn a_recording_whose_robot_file_is_gone_is_viewed_from_its_own_wiring() {
         "{err}"
     );
 }
+
+#[test]
+fn a_robot_killed_while_recording_leaves_a_file_whose_cycles_can_be_viewed() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("crash.mcap");
+    let f = rec.to_str().unwrap();
+    let mut robot = std::process::Command::new(env!("CARGO_BIN_EXE_situate"))
+        .args(["run", TOYBOT, "--clock", "simulated", "--cycles", "100000000", "--no-link", "--no-gui", "--record", f])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Killed (SIGKILL: no clean-up at all) once a few chunks are on disk.
+    let bound = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while std::fs::metadata(&rec).map_or(0, |m| m.len()) < 400_000 {
+        assert!(std::time::Instant::now() < bound, "the recording did not grow to 400 kB in 120 s");
+        assert!(robot.try_wait().unwrap().is_none(), "the robot stopped by itself");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    robot.kill().unwrap();
+    robot.wait().unwrap();
+
+    // As it is, the file is refused, and the refusal names the way to read it.
+    let out = replay(&[f, "--view"]);
+    let err = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("cut short") && err.contains("--recover"), "{err}");
+    // Read up to its last complete cycle: every cycle kept matches, and the
+    // result is never "identical".
+    for extra in [&["--view"][..], &[][..]] {
+        let mut args = vec![f, "--recover"];
+        args.extend_from_slice(extra);
+        let out = replay(&args);
+        let result = json_of(&out);
+        assert_eq!(out.status.code(), Some(1), "{result}\n{}", stderr(&out));
+        assert_eq!(result["identical"], false, "{result}");
+        let cut = &result["cut_short"];
+        let last = cut["last_cycle"].as_u64().expect("a last complete cycle");
+        assert!(last > 100, "{result}");
+        assert_eq!((result["cycles"].as_u64(), result["matched"].as_u64()), (Some(last), Some(last)), "{result}");
+        assert!(cut["reason"].as_str().is_some_and(|r| !r.is_empty()), "{result}");
+    }
+}

@@ -13,8 +13,10 @@
 //! summary's CRCs and the summary's message count must agree with what was
 //! read; and the cycles must follow one another, but for those the file
 //! marks as dropped. A file cut short (a robot killed while recording) has
-//! no summary: it is refused, saying where it ends. Each problem is named
-//! with where it is (the record and its byte offset, the cycle).
+//! no summary: [`Recording::open`] refuses it, saying where it ends;
+//! [`Recording::open_cut_short`] reads it up to its last complete cycle and
+//! says what it lost ([`CutShort`]). Each problem is named with where it is
+//! (the record and its byte offset, the cycle).
 
 use std::borrow::Cow;
 use std::collections::{BTreeMap, HashMap};
@@ -82,8 +84,47 @@ pub struct Recording {
     pub keyframes: BTreeMap<u64, State>,
     /// Messages read, all channels.
     pub messages: u64,
+    /// Read from a file cut short ([`Recording::open_cut_short`]): where it
+    /// ends and what was kept. `None`: a complete file.
+    pub cut_short: Option<CutShort>,
     /// `winners` by resource: (cycle, skill), by cycle.
     holders: BTreeMap<String, Vec<(u64, String)>>,
+}
+
+/// What a recording cut short (a robot killed while recording, a full disk)
+/// kept and lost. Its end is in the last chunk that was not written whole,
+/// and the last cycle written before it may lack a message (the writer puts
+/// a cycle's leaves, then its fingerprint, keyframe and winners), so the
+/// cycles kept end one before the last one begun.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CutShort {
+    /// Where the readable records end (the file's size past them).
+    pub at_byte: u64,
+    pub file_bytes: u64,
+    /// The last cycle kept (`None`: none was complete).
+    pub last_cycle: Option<u64>,
+    /// Cycles begun in the file but not kept (the last one or two).
+    pub cycles_dropped: u64,
+    /// Why the file ends there, as the reader found it.
+    pub reason: String,
+}
+
+impl std::fmt::Display for CutShort {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "cut short at byte {} of {} (not finished: the robot was killed, or its disk filled): ",
+            self.at_byte, self.file_bytes
+        )?;
+        match self.last_cycle {
+            Some(c) => write!(f, "read up to cycle {c}, the last complete one")?,
+            None => write!(f, "no complete cycle in it")?,
+        }
+        if self.cycles_dropped > 0 {
+            write!(f, " ({} later cycle(s) begun but incomplete, left out)", self.cycles_dropped)?;
+        }
+        Ok(())
+    }
 }
 
 /// Every leaf's latest value at a cycle: path → (the cycle it was written
@@ -95,6 +136,20 @@ impl Recording {
     /// [`MAX_FILE_BYTES`] (a device, a pipe or a directory is refused
     /// before anything is read).
     pub fn open(path: &Path) -> Result<Recording, ReadError> {
+        Recording::open_with(path, false)
+    }
+
+    /// [`Recording::open`], but a file cut short (no data end, summary or
+    /// footer: a robot killed while recording) is read up to its last
+    /// complete cycle, and [`Recording::cut_short`] says where it ended and
+    /// what was left out. A complete file reads as with `open`. Damage that
+    /// is not a cut (a CRC that does not match, a chunk that lies about its
+    /// size) is refused as with `open`.
+    pub fn open_cut_short(path: &Path) -> Result<Recording, ReadError> {
+        Recording::open_with(path, true)
+    }
+
+    fn open_with(path: &Path, recover: bool) -> Result<Recording, ReadError> {
         let io = |source| ReadError::Io { path: path.to_path_buf(), source };
         let bad = |message: String| ReadError::Bad { path: path.to_path_buf(), message };
         let file = std::fs::File::open(path).map_err(io)?;
@@ -113,12 +168,24 @@ impl Recording {
         // as it was.
         let mut bytes = Vec::with_capacity(len as usize);
         file.take(len).read_to_end(&mut bytes).map_err(io)?;
-        Recording::from_bytes(path, &bytes)
+        Recording::read_bytes(path, &bytes, recover)
     }
 
     /// Reads a recording held in memory (`path` names it in errors).
     pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Recording, ReadError> {
+        Recording::read_bytes(path, bytes, false)
+    }
+
+    /// [`Recording::from_bytes`], reading a recording cut short as
+    /// [`Recording::open_cut_short`] does.
+    pub fn from_bytes_cut_short(path: &Path, bytes: &[u8]) -> Result<Recording, ReadError> {
+        Recording::read_bytes(path, bytes, true)
+    }
+
+    fn read_bytes(path: &Path, bytes: &[u8], recover: bool) -> Result<Recording, ReadError> {
         let mut reader = Reader {
+            recover,
+            cut: None,
             rec: Recording { path: path.to_path_buf(), ..Recording::default() },
             channels: HashMap::new(),
             chunks: 0,
@@ -128,7 +195,11 @@ impl Recording {
             statistics: None,
         };
         reader.read(bytes)?;
-        reader.finish()
+        let mut rec = reader.finish()?;
+        if let Some(cut) = &mut rec.cut_short {
+            cut.file_bytes = bytes.len() as u64;
+        }
+        Ok(rec)
     }
 
     /// The cycle period the recording was made with, s (checked when the
@@ -246,6 +317,10 @@ struct Reader {
     /// The `situate_drops` record: how many, which.
     drops: Option<(u64, Vec<(u64, u64)>)>,
     statistics: Option<mcap::records::Statistics>,
+    /// Whether a file cut short is read up to where it ends.
+    recover: bool,
+    /// Where such a file ended: (byte, why).
+    cut: Option<(usize, String)>,
 }
 
 impl Reader {
@@ -261,9 +336,21 @@ impl Reader {
         }
         // Where the data section ends and the summary starts, once seen.
         let mut summary_start: Option<usize> = None;
+        // Where the records read so far end (a file cut short ends there).
+        let mut end = mcap::MAGIC.len();
         for record in records(bytes, mcap::MAGIC.len()) {
-            let (k, at, opcode, body) =
-                record.map_err(|m| self.bad(format!("{m}: the file is cut short or damaged")))?;
+            let (k, at, opcode, body) = match record {
+                Ok(r) => r,
+                Err(m) if self.recover && summary_start.is_none() => {
+                    self.cut = Some((end, m));
+                    return Ok(());
+                }
+                Err(m) => {
+                    return Err(self
+                        .bad(format!("{m}: the file is cut short or damaged (--recover reads the cycles before it)")))
+                }
+            };
+            end = at + 9 + body.len();
             let place = || format!("record {k} at byte {at} ({})", record_name(opcode));
             let parse = |this: &Self| {
                 mcap::parse_record(opcode, body).map_err(|e| this.bad(format!("{}: {e}: a damaged file", place())))
@@ -341,11 +428,17 @@ impl Reader {
                 _ => return Err(self.bad(format!("{}: not a record a recording holds here: a damaged file", place()))),
             }
         }
+        let missing = if summary_start.is_some() { "footer" } else { "data end record, summary and footer" };
+        if self.recover {
+            // The data section was read whole when the summary began: only the
+            // index is lost, and nothing of the run.
+            self.cut = Some((end, format!("the file ends without its {missing}")));
+            return Ok(());
+        }
         Err(self.bad(format!(
-            "the file ends at byte {} without its {}: it was cut short (a recording that was not finished, such as \
-             a robot killed while recording)",
+            "the file ends at byte {} without its {missing}: it was cut short (a recording that was not finished, \
+             such as a robot killed while recording; --recover reads the cycles it holds)",
             bytes.len(),
-            if summary_start.is_some() { "footer" } else { "data end record, summary and footer" }
         )))
     }
 
@@ -540,7 +633,10 @@ impl Reader {
         if self.rec.metadata.is_empty() {
             return Err(self.bad("no `situate` metadata record: not a recording made by situate".into()));
         }
-        if let Some(s) = &self.statistics {
+        if let Some((at, reason)) = self.cut.take() {
+            self.trim_cut(at, reason);
+        }
+        if let Some(s) = self.statistics.as_ref().filter(|_| self.rec.cut_short.is_none()) {
             if s.message_count != self.rec.messages || u64::from(s.chunk_count) != self.chunks {
                 return Err(self.bad(format!(
                     "the summary counts {} messages in {} chunks, the data section holds {} in {}: a damaged file",
@@ -616,6 +712,25 @@ impl Reader {
         }
         self.rec.holders = by_resource(&self.rec.winners);
         Ok(self.rec)
+    }
+
+    /// A file cut short at byte `at`: the last cycle begun may lack its
+    /// fingerprint, keyframe or winners, so the cycles kept end one before it;
+    /// what is later (cycles, events, winners, keyframes) is left out.
+    fn trim_cut(&mut self, at: usize, reason: String) {
+        let begun = self.rec.cycles.keys().next_back().copied();
+        let last = begun.and_then(|b| self.rec.cycles.range(..b).next_back().map(|(&c, _)| c));
+        let keep = |c: u64| last.is_some_and(|l| c <= l);
+        let before = self.rec.cycles.len() as u64;
+        self.rec.cycles.retain(|&c, _| keep(c));
+        let cycles_dropped = before - self.rec.cycles.len() as u64;
+        let cycle_of = |j: &Json| j.get("cycle").and_then(Json::as_u64).unwrap_or(0);
+        self.rec.events.retain(|(_, j)| keep(cycle_of(j)));
+        self.rec.winners.retain(|&(c, _, _)| keep(c));
+        self.rec.keyframes.retain(|&c, _| keep(c));
+        self.gaps.retain(|&(first, _)| keep(first));
+        self.rec.cut_short =
+            Some(CutShort { at_byte: at as u64, file_bytes: 0, last_cycle: last, cycles_dropped, reason });
     }
 
     /// Whether the cycles `first..=last` are all marked dropped.

@@ -270,3 +270,57 @@ fn a_device_or_a_directory_is_refused_before_it_is_read() {
     }
     assert!(refused(&std::env::temp_dir()).contains("not a regular file"));
 }
+
+#[test]
+fn a_file_cut_short_is_read_up_to_its_last_complete_cycle_when_asked() {
+    let src = recording("recover-src");
+    let bytes = std::fs::read(&src).unwrap();
+    let whole = Recording::open(&src).unwrap_or_else(|e| panic!("{e}"));
+    assert!(whole.cut_short.is_none());
+    // Read whole, a complete file is what `open` reads.
+    let same = Recording::open_cut_short(&src).unwrap_or_else(|e| panic!("{e}"));
+    assert!(same.cut_short.is_none());
+    assert_eq!(same.span(), whole.span());
+    let chunks = chunk_offsets(&bytes);
+    assert!(chunks.len() >= 2, "{} chunks", chunks.len());
+    let dst = temp("recover");
+    // Cut inside the second chunk, at the first chunk's end, and past the
+    // data section (the summary lost, the data whole).
+    let data_end = bytes.len() - 8 - 9 - 20; // the footer, its magic: inside the summary
+    for (cut, whole_data) in [(chunks[1] + 100, false), (chunks[1], false), (data_end, true)] {
+        std::fs::write(&dst, &bytes[..cut]).unwrap();
+        assert!(refused(&dst).contains("--recover"), "{cut}: the refusal names the way to read it");
+        let rec = Recording::open_cut_short(&dst).unwrap_or_else(|e| panic!("{cut}: {e}"));
+        let info = rec.cut_short.clone().expect("said to be cut short");
+        assert_eq!(info.file_bytes, cut as u64);
+        assert!(info.at_byte <= cut as u64);
+        let (first, last) = rec.span().expect("cycles kept");
+        assert_eq!(first, 1);
+        assert_eq!(Some(last), info.last_cycle);
+        if whole_data {
+            // Every cycle but the last, which may lack a message.
+            assert_eq!((last, info.cycles_dropped), (CYCLES - 1, 1), "{info:?}");
+        } else {
+            assert!(last < CYCLES - 1 && last > 100, "{cut}: {last}");
+        }
+        // The cycles kept are the recording's, fingerprints and values.
+        for (c, cycle) in &rec.cycles {
+            let w = &whole.cycles[c];
+            assert_eq!((cycle.hash, &cycle.leaves), (w.hash, &w.leaves), "cycle {c}");
+        }
+        assert!(rec.events.iter().all(|(_, e)| e["cycle"].as_u64().is_some_and(|c| c <= last)));
+        assert!(rec.keyframes.keys().all(|&k| k <= last));
+        assert_eq!(rec.metadata, whole.metadata, "the metadata is at the file's start");
+    }
+    // Damage that is not a cut is refused as before.
+    let mut flipped = bytes[..chunks[1] + 100].to_vec();
+    flipped[chunks[0] + 9 + 60] ^= 0x55;
+    std::fs::write(&dst, &flipped).unwrap();
+    let text = match Recording::open_cut_short(&dst) {
+        Err(ReadError::Bad { message, .. }) => message,
+        other => panic!("a damaged chunk read: {:?}", other.map(|r| r.span())),
+    };
+    assert!(text.contains(&format!("at byte {} (chunk)", chunks[0])), "{text}");
+    let _ = std::fs::remove_file(&dst);
+    let _ = std::fs::remove_file(&src);
+}
