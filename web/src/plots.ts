@@ -1,8 +1,12 @@
 // Live plots of signals the user chooses: a signal, a record field (`odom.x`) or an array element
-// (`sonar.range[3]`); every numeric leaf of the chosen values gets a line, over a time window.
+// (`sonar.range[3]`); every numeric leaf of the chosen values gets a line, over a time window of
+// the robot's own time (its clock, simulated or not; a point per cycle sampled, none while the
+// robot stands still; the wall clock only for a telemetry that does not say the robot's time).
 // Drawn by uPlot. A plot can hold several signals ("add signal"), be paused (the view freezes,
 // points keep being buffered; resuming jumps to live), zoomed (drag across the plot; double-click
-// or "Live" returns to the live window), and exported as CSV (every buffered point).
+// or "Live" returns to the live window), panned (◀ ▶, or the wheel with Shift, or sideways),
+// linked (a zoom or a pan on one is every plot's), and exported as CSV (every buffered point).
+// The timeline's cycle, when it shows one, is a vertical line on every plot of the robot's time.
 // A value nobody wrote for longer than its writer's rhythm is a gap, not the old value drawn
 // again. An expression the robot's signals cannot have (`odom.z`,
 // `sonar.range[99]`) is refused, saying why. Hovering shows each sample's cycle and robot time.
@@ -30,6 +34,10 @@ export interface Source {
 }
 
 type Mode = "live" | "paused" | "zoomed";
+
+/** A plot's x axis: the robot's time (s, its clock) or, when the telemetry does not say it, the
+ *  wall clock (Unix s). */
+type Axis = "robot" | "wall";
 
 /** The sample a telemetry message is: the robot's newest cycle and its time (s). */
 export interface SampleAt {
@@ -119,9 +127,13 @@ class Plot {
   private chart: uPlot | null = null;
   /** The buffer: one time column and one column per line, aligned (null: no value at that time). */
   private times: number[] = [];
-  /** Per sample, the robot's newest cycle and its time (s), when the sample said. */
+  /** Per sample, the robot's newest cycle and its time (s), when the sample said, and when it came
+   *  (wall s). */
   private cycles: (number | null)[] = [];
   private robotTimes: (number | null)[] = [];
+  private walls: number[] = [];
+  /** The x axis, set by the first sample of a run (null: none yet). */
+  private axis: Axis | null = null;
   private readonly names: string[] = [];
   private readonly columns = new Map<string, (number | null)[]>();
   /** Per source (its expression), its writes seen. */
@@ -182,6 +194,10 @@ class Plot {
     this.liveButton = live;
     this.windowSelect = win;
     const csv = h("button", { "data-testid": "plot-csv", title: "download every buffered point as CSV" }, "CSV");
+    const panBack = h("button", { "data-testid": "plot-pan-back", title: "earlier: move the view back by half its width (or Shift + wheel)" }, "◀");
+    panBack.addEventListener("click", () => this.pan(-0.5));
+    const panForward = h("button", { "data-testid": "plot-pan-forward", title: "later: move the view on by half its width (or Shift + wheel)" }, "▶");
+    panForward.addEventListener("click", () => this.pan(0.5));
     // The y axis fits the lines drawn (autoscale) unless both ends are given.
     const yEnd = (which: string) => {
       const el = h("input", { type: "number", step: "any", placeholder: `y ${which}`, title: `y axis ${which} (empty: autoscale)`, "data-testid": `plot-y-${which}`, class: "plot-y" });
@@ -211,13 +227,24 @@ class Plot {
     this.el = h(
       "div",
       { class: "plot", "data-testid": "plot", "data-expr": first.expr },
-      h("div", { class: "row" }, this.title, win, this.pauseButton, live, csv, xyLabel, remove),
+      h("div", { class: "row" }, this.title, win, this.pauseButton, panBack, panForward, live, csv, xyLabel, remove),
       this.chartBox,
       this.xyCanvas,
       h("div", { class: "row" }, this.addInput, addButton, this.yMin, this.yMax),
     );
     this.resizer.observe(this.chartBox);
     this.scheme.addEventListener("change", this.onScheme);
+    // Sideways (a trackpad's), or Shift + wheel: pan. The plain wheel scrolls the page.
+    this.chartBox.addEventListener(
+      "wheel",
+      (e) => {
+        const d = Math.abs(e.deltaX) > Math.abs(e.deltaY) ? e.deltaX : e.shiftKey ? e.deltaY : 0;
+        if (d === 0 || this.times.length === 0) return;
+        e.preventDefault();
+        this.pan(Math.max(-0.5, Math.min(0.5, d / Math.max(1, this.chartBox.clientWidth))));
+      },
+      { passive: false },
+    );
   }
 
   has(expr: string): boolean {
@@ -245,6 +272,8 @@ class Plot {
     this.times = [];
     this.cycles = [];
     this.robotTimes = [];
+    this.walls = [];
+    this.axis = null;
     this.names.length = 0;
     this.columns.clear();
     this.writes.clear();
@@ -259,8 +288,17 @@ class Plot {
   }
 
   /** One telemetry sample: a point per numeric leaf of every source present in it, a gap (null)
-   *  for a stale one (`at`: the sample's cycle and robot time, when the telemetry said). */
+   *  for a stale one (`at`: the sample's cycle and robot time, when the telemetry said). On the
+   *  robot's time, a sample of a cycle already drawn adds nothing (the robot stood still). */
   add(wall: number, signals: JsonObject, at: SampleAt | null = null): void {
+    const axis: Axis = this.axis ?? (at !== null || this.recording ? "robot" : "wall");
+    if (axis === "robot") {
+      if (at === null) return;
+      const lastCycle = this.cycles[this.cycles.length - 1];
+      const lastT = this.times[this.times.length - 1];
+      if (lastCycle === at.cycle || (lastT !== undefined && at.timeS <= lastT)) return;
+    }
+    const x = axis === "robot" && at !== null ? at.timeS : wall;
     const row: [string, number | null][] = [];
     for (const src of this.sources) {
       const r = signals[src.base];
@@ -277,6 +315,10 @@ class Plot {
       for (const [leaf, x] of numericLeaves(v)) if (Number.isFinite(x)) row.push([src.expr + leaf, old ? null : x]);
     }
     if (row.length === 0) return;
+    if (this.axis === null) {
+      this.axis = axis;
+      this.chartBox.dataset["axis"] = axis;
+    }
     if (this.since === null) {
       this.since = wall;
       this.chartBox.dataset["since"] = String(wall);
@@ -288,9 +330,11 @@ class Plot {
       this.columns.set(name, new Array<number | null>(this.times.length).fill(null));
       newLines = true;
     }
-    this.times.push(wall);
+    this.times.push(x);
     this.cycles.push(at?.cycle ?? null);
     this.robotTimes.push(at?.timeS ?? null);
+    this.walls.push(wall);
+    if (at !== null) this.chartBox.dataset["cycle"] = String(at.cycle);
     const values = new Map(row);
     let gap = false;
     for (const name of this.names) {
@@ -303,7 +347,7 @@ class Plot {
         gap = true;
       }
     }
-    if (!this.recording) this.trim(wall);
+    if (!this.recording) this.trim(x);
     this.chartBox.dataset["points"] = String(this.received);
     if (gap) this.chartBox.dataset["gaps"] = JSON.stringify(Object.fromEntries(this.gaps));
     if (this.bulk) return;
@@ -345,9 +389,11 @@ class Plot {
     this.rebuild();
   }
 
-  /** The timeline's cycle, at robot time `t` (null: none shown), drawn as a vertical line. */
+  /** The timeline's cycle, at robot time `t` (null: none shown), drawn as a vertical line (on a
+   *  plot of the robot's time). */
   setPlayhead(t: number | null): void {
-    if (!this.recording || t === this.playheadT) return;
+    if (t !== null && !this.onRobotTime()) t = null;
+    if (t === this.playheadT) return;
     this.playheadT = t;
     this.chartBox.dataset["playhead"] = t === null ? "" : String(t);
     this.chart?.redraw(false, false);
@@ -356,6 +402,11 @@ class Plot {
   /** Whether this plot shows a recording (no live samples). */
   isRecording(): boolean {
     return this.recording;
+  }
+
+  /** Whether its x axis is the robot's time (a recording's always is). */
+  onRobotTime(): boolean {
+    return this.recording || this.axis === "robot";
   }
 
   /** Bounded memory: at most MAX_ROWS points per line, none older than MAX_AGE_S. */
@@ -368,6 +419,7 @@ class Plot {
     this.times.splice(0, drop);
     this.cycles.splice(0, drop);
     this.robotTimes.splice(0, drop);
+    this.walls.splice(0, drop);
     for (const c of this.columns.values()) c.splice(0, drop);
   }
 
@@ -411,7 +463,14 @@ class Plot {
     if (emit) this.onView({ min, max });
   }
 
-  /** Called when the user zooms this plot (or returns it to live: null): the others follow. */
+  /** Moves the view by `fraction` of its width (negative: earlier); the other plots follow. */
+  pan(fraction: number): void {
+    const v = this.view();
+    const d = (v.max - v.min) * fraction;
+    this.zoomTo(v.min + d, v.max + d);
+  }
+
+  /** Called when the user zooms or pans this plot (or returns it to live: null): the others follow. */
   onView: (view: { min: number; max: number } | null) => void = () => {};
 
   /** Both ends given (min < max): a fixed y range; otherwise autoscale. */
@@ -447,9 +506,9 @@ class Plot {
     const opts: uPlot.Options = {
       width,
       height: HEIGHT,
-      scales: { x: { time: !this.recording }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
-      axes: [this.recording ? { ...axis(), label: "robot time (s)" } : axis(), { ...axis(), size: 60 }],
-      // The legend's time: the sample's cycle and robot time (the x axis is the wall clock).
+      scales: { x: { time: !this.onRobotTime() }, ...(this.yFixed ? { y: { auto: false, range: this.yFixed } } : {}) },
+      axes: [this.onRobotTime() ? { ...axis(), label: "robot time (s)" } : axis(), { ...axis(), size: 60 }],
+      // The legend's time: the sample's cycle and robot time (and, live, when it was sampled).
       series: [{ label: "at", value: (_u, _v, _s, idx) => (idx === null ? "—" : this.sampleText(this.viewStart + idx)) }, ...this.names.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length] ?? "#000", width: 1.5 }))],
       cursor: {
         drag: { x: true, y: false, setScale: false },
@@ -468,7 +527,7 @@ class Plot {
         ],
         draw: [
           (u) => {
-            // The timeline's cycle, in a replay.
+            // The timeline's cycle (a replay's, or a live robot's paused timeline).
             const t = this.playheadT;
             if (t === null) return;
             const x = u.valToPos(t, "x", true);
@@ -551,7 +610,7 @@ class Plot {
 
   /** Which sample the buffer's row `i` is: its cycle and robot time, and its wall-clock time. */
   private sampleText(i: number): string {
-    const wall = this.times[i];
+    const wall = this.walls[i];
     if (wall === undefined) return "—";
     const cycle = this.cycles[i];
     const t = this.robotTimes[i];
@@ -562,13 +621,14 @@ class Plot {
     return cycle === null || cycle === undefined ? clock : `cycle ${cycle}, t = ${(t ?? 0).toFixed(2)} s (${clock})`;
   }
 
-  /** The buffer as CSV: `t_s` (wall clock, Unix seconds; a recording's: the robot's time) and a
-   *  column per line, a row per sample. */
+  /** The buffer as CSV, a row per sample: on the robot's time `robot_t_s` (its clock) and `cycle`,
+   *  else `t_s` (the wall clock, Unix seconds); then a column per line. */
   csv(): string {
     const quote = (s: string) => (/[",\n]/.test(s) ? `"${s.replace(/"/g, '""')}"` : s);
-    const lines = [[this.recording ? "robot_t_s" : "t_s", ...this.names].map(quote).join(",")];
+    const robot = this.onRobotTime();
+    const lines = [[...(robot ? ["robot_t_s", "cycle"] : ["t_s"]), ...this.names].map(quote).join(",")];
     this.times.forEach((t, i) => {
-      lines.push([String(t), ...this.names.map((n) => {
+      lines.push([String(t), ...(robot ? [String(this.cycles[i] ?? "")] : []), ...this.names.map((n) => {
         const v = this.columns.get(n)?.[i];
         return v === null || v === undefined ? "" : String(v);
       })].join(","));
@@ -640,7 +700,7 @@ export class Plots {
       { class: "panel live", id: "plots" },
       h("h2", {}, "Plots", stale),
       h("div", { class: "row" }, this.input, this.options, add),
-      h("p", { class: "dim plot-help" }, "drag across a plot: zoom; double-click or Live: back to live"),
+      h("p", { class: "dim plot-help" }, "x: the robot's time; drag across a plot: zoom; ◀ ▶ or Shift + wheel: pan; double-click or Live: back to live"),
       this.error,
       this.list,
     );
@@ -688,7 +748,8 @@ export class Plots {
     // Zoom and pan are linked: every plot shows the time range the user chose on one.
     plot.onView = (view) => {
       for (const other of this.plots) {
-        if (other === plot || other.isRecording() !== plot.isRecording()) continue;
+        // Only plots on the same time: the robot's (live or recorded), or the wall clock.
+        if (other === plot || other.isRecording() !== plot.isRecording() || other.onRobotTime() !== plot.onRobotTime()) continue;
         if (view === null) other.goLive(false);
         else other.zoomTo(view.min, view.max, false);
       }
@@ -769,7 +830,7 @@ export class Plots {
     this.recording = true;
     this.el.dataset["recording"] = "";
     const help = this.el.querySelector(".plot-help");
-    if (help) setText(help, "a replay: each plot shows the whole recording on the robot's time, the line at the timeline's cycle; drag across a plot: zoom; double-click or All: the whole recording");
+    if (help) setText(help, "a replay: each plot shows the whole recording on the robot's time, the line at the timeline's cycle; drag across a plot: zoom; ◀ ▶ or Shift + wheel: pan; double-click or All: the whole recording");
     this.refill();
   }
 
@@ -790,7 +851,7 @@ export class Plots {
     p.setPlayhead(this.playheadT);
   }
 
-  /** The timeline's cycle shown, at robot time `t` (null: live), on every recording's plot. */
+  /** The timeline's cycle shown, at robot time `t` (null: live), on every plot of the robot's time. */
   playhead(t: number | null): void {
     this.playheadT = t;
     for (const p of this.plots) p.setPlayhead(t);

@@ -32,7 +32,7 @@ describe("plots", () => {
   const chart = () => page.getByTestId("plot-canvas").first();
   const attr = async (name) => (await chart().getAttribute(name)) ?? "";
   const points = async () => Number(await attr("data-points"));
-  /** The drawn x range [min, max] (wall s). */
+  /** The drawn x range [min, max] (the robot's time, s). */
   const xRange = async () => JSON.parse((await attr("data-x-range")) || "[0, 0]");
   const drawn = async () => JSON.parse((await attr("data-drawn")) || "{}");
   const json = async (locator, name) => JSON.parse((await locator.getAttribute(name)) || "{}");
@@ -156,14 +156,18 @@ describe("plots", () => {
     try {
       await until(async () => (await cli(tb.linkPort, "stats")).running === false, "the manager stopped over the link");
       const reading = await cli(tb.linkPort, "query", "truth.pose");
+      const stopped = await cli(tb.linkPort, "stats");
+      // The last cycle is sampled; then nothing more is drawn (the robot's time stands still).
+      await until(async () => Number(await attr("data-cycle")) === stopped.cycle, `the stopped robot's cycle ${stopped.cycle} sampled`);
       const p0 = await points();
-      // Three samples (two points each) taken after the stop.
-      await until(async () => (await points()) >= p0 + 6, "samples of the stopped robot");
+      const samples = Number(await page.evaluate(() => document.body.dataset.samples ?? "0"));
+      await until(async () => Number(await page.evaluate(() => document.body.dataset.samples ?? "0")) >= samples + 3, "three more samples of the stopped robot");
+      assert.equal(await points(), p0, "no point while the robot stands still");
       const [download] = await Promise.all([page.waitForEvent("download", { timeout: 60_000 }), plot().getByTestId("plot-csv").click()]);
       assert.match(download.suggestedFilename(), /^plot-truth\.pose\.x\+truth\.pose\.y-.*\.csv$/);
       const text = await readFile(await download.path(), "utf8");
       const [header, ...rows] = text.trimEnd().split("\n");
-      assert.equal(header, "t_s,truth.pose.x,truth.pose.y");
+      assert.equal(header, "robot_t_s,cycle,truth.pose.x,truth.pose.y");
       assert.ok(rows.length >= 20, `rows for every sample so far: ${rows.length}`);
       // An empty cell: no value at that time (y was added to the plot after x), or a gap (the
       // circle not written for longer than its rhythm: a loaded machine may starve it).
@@ -171,14 +175,18 @@ describe("plots", () => {
       const gaps = await json(chart(), "data-gaps");
       let [xGaps, yGaps, ySeen] = [0, 0, false];
       for (const [i, r] of parsed.entries()) {
+        // Drop the cycle column: [time, x, y] as before, the cycle checked here.
+        const cycle = r.splice(1, 1)[0];
         assert.equal(r.length, 3, `row ${i}: ${rows[i]}`);
         assert.ok(Number.isFinite(r[0]), `row ${i} has a time: ${rows[i]}`);
+        assert.ok(Number.isInteger(cycle) && cycle > 0, `row ${i} has a cycle: ${rows[i]}`);
         assert.ok(r[1] === null || Number.isFinite(r[1]), `row ${i}: x is a number or a gap: ${rows[i]}`);
         assert.ok(r[2] === null || Number.isFinite(r[2]), `row ${i}: y is a number or a gap: ${rows[i]}`);
         if (r[1] === null) xGaps++;
         if (r[2] !== null) ySeen = true;
         else if (ySeen) yGaps++;
-        if (i > 0) assert.ok(r[0] > parsed[i - 1][0], `times increase at row ${i}`);
+        if (i > 0) assert.ok(r[0] > parsed[i - 1][0] && cycle > parsed[i - 1][3], `times and cycles increase at row ${i}`);
+        r.push(cycle);
       }
       // Every empty cell after a line's first value is one of its gaps.
       assert.ok(xGaps <= (gaps["truth.pose.x"] ?? 0) && yGaps <= (gaps["truth.pose.y"] ?? 0), `empty cells ${xGaps}, ${yGaps} vs gaps ${JSON.stringify(gaps)}`);
@@ -188,8 +196,8 @@ describe("plots", () => {
       assert.ok(close(last[1], reading.value.x) && close(last[2], reading.value.y), `the last row ${rows[rows.length - 1]} is the pose over the link ${JSON.stringify(reading.value)}`);
       // The pose moved before the stop: the rows are samples, not one value repeated.
       assert.ok(new Set(parsed.map((r) => r[1])).size > 3, "x varies over the rows");
-      // t_s is the wall clock (Unix seconds) of each sample, as on the plot's x axis.
-      assert.ok(Math.abs(last[0] - Date.now() / 1000) < 120, `t_s is wall-clock time: ${last[0]}`);
+      // robot_t_s is the robot's clock at the sample's cycle, as on the plot's x axis.
+      assert.ok(close(last[0], stopped.time_s) && last[3] === stopped.cycle, `the last row is the stopped robot's cycle ${stopped.cycle} at t = ${stopped.time_s}: ${rows[rows.length - 1]}`);
     } finally {
       await cliDo(tb.linkPort, "cycle", "run");
     }
@@ -349,5 +357,55 @@ describe("plots tell the truth", () => {
     }
     const p1 = Number(await chart.getAttribute("data-points"));
     await until(async () => Number(await chart.getAttribute("data-points")) >= p1 + 5, "points again once written again");
+  });
+
+  test("live plots are on the robot's time; ◀ ▶ pan every plot together; the timeline's cycle is a line on them", async () => {
+    for (const expr of ["truth.pose.theta", "truth.pose.y"]) {
+      await page.getByTestId("plot-signal").fill(expr);
+      await page.getByTestId("plot-add").click();
+      await until(async () => (await json(chartOf(expr), "data-drawn"))[expr] >= 10, `${expr} drawn`);
+      assert.equal(await chartOf(expr).getAttribute("data-axis"), "robot");
+    }
+    const [first, second] = [chartOf("truth.pose.theta"), chartOf("truth.pose.y")];
+    const range = async (c) => JSON.parse((await c.getAttribute("data-x-range")) || "[0, 0]");
+    // The x axis is the robot's clock (seconds since it started, not the wall clock's 1.8e9):
+    // the view ends at a sampled cycle's time, at or before the robot's time now.
+    const [lo, hi] = await range(first);
+    const stats = await cli(tb.linkPort, "stats");
+    assert.ok(hi > 0 && hi <= stats.time_s + 1e-9 && sameSpan(hi - lo, Number(await plotOf("truth.pose.theta").getByTestId("plot-window").inputValue())), `x ${lo}..${hi}, the robot at ${stats.time_s} s`);
+    // ◀: half a window back, on both plots (their time axes are linked).
+    await plotOf("truth.pose.theta").getByTestId("plot-pan-back").click();
+    await until(async () => (await first.getAttribute("data-state")) === "zoomed" && (await second.getAttribute("data-state")) === "zoomed", "both plots moved off live");
+    const [b0, b1] = await range(first);
+    assert.ok(b1 < hi && sameSpan(b1 - b0, hi - lo), `half a window earlier: ${b0}..${b1} (was ${lo}..${hi})`);
+    await until(async () => JSON.stringify(await range(second)) === JSON.stringify([b0, b1]), "the second plot on the same range");
+    // ▶ on the other plot: half a window on again, on both.
+    await plotOf("truth.pose.y").getByTestId("plot-pan-forward").click();
+    await until(async () => Math.abs((await range(first))[1] - (b1 + (b1 - b0) / 2)) < 1e-6, "the first plot moved on with the second");
+    // Shift + wheel pans too.
+    const before = (await range(first))[0];
+    const over = plotOf("truth.pose.theta").locator(".u-over");
+    await over.hover();
+    await page.keyboard.down("Shift");
+    await page.mouse.wheel(0, -200);
+    await page.keyboard.up("Shift");
+    await until(async () => (await range(first))[0] < before, "Shift + wheel moved the view earlier");
+    await plotOf("truth.pose.theta").getByTestId("plot-reset").click();
+    await until(async () => (await first.getAttribute("data-state")) === "live" && (await second.getAttribute("data-state")) === "live", "both live again");
+    // The timeline paused at a cycle: a line at its time on both plots; live again, no line.
+    const bar = page.getByTestId("timeline");
+    await page.getByTestId("tl-live").click();
+    await until(async () => (await bar.getAttribute("data-mode")) === "paused" && (await bar.getAttribute("data-shown")) !== null, "the timeline paused");
+    const t = await until(async () => {
+      const m = /t = ([\d.]+) s/.exec((await page.getByTestId("tl-time").textContent()) ?? "");
+      return m && Number(m[1]);
+    }, "the time of the cycle shown");
+    for (const c of [first, second]) {
+      await until(async () => Math.abs(Number(await c.getAttribute("data-playhead")) - t) < 0.01, `a line at t = ${t} s`);
+    }
+    await page.getByTestId("tl-live").click();
+    await until(async () => (await bar.getAttribute("data-mode")) === "live", "the timeline live");
+    for (const c of [first, second]) await until(async () => (await c.getAttribute("data-playhead")) === "", "no line when live");
+    for (const expr of ["truth.pose.theta", "truth.pose.y"]) await plotOf(expr).getByTestId("plot-remove").click();
   });
 });
