@@ -7,6 +7,9 @@
 // or "Live" returns to the live window), panned (◀ ▶, or the wheel with Shift, or sideways),
 // linked (a zoom or a pan on one is every plot's), and exported as CSV (every buffered point).
 // The timeline's cycle, when it shows one, is a vertical line on every plot of the robot's time.
+// A plot may also draw a formula of the condition language over signals (`abs(drive.w) * 2`,
+// `odom.x > 1`, true as 1): the server computes it from the same cycle's values, live and over a
+// recording, and a value of it is a gap as soon as one of its signals is.
 // A value nobody wrote for longer than its writer's rhythm is a gap, not the old value drawn
 // again. An expression the robot's signals cannot have (`odom.z`,
 // `sonar.range[99]`) is refused, saying why. Hovering shows each sample's cycle and robot time.
@@ -26,12 +29,18 @@ const MAX_AGE_S = 300;
 const HEIGHT = 200;
 const PATH_RE = /^[A-Za-z_][A-Za-z0-9_.]*(\[\d+\]|\.[A-Za-z_][A-Za-z0-9_]*)*$/;
 
-/** A chosen expression and the signal queried for it (`odom.x` reads `.x` of `odom`). */
+/** A chosen expression and the signal queried for it (`odom.x` reads `.x` of `odom`); or a formula
+ *  of the condition language (`abs(drive.w) * 2`), a derived series the server computes and sends
+ *  under its own text (`base`: the formula, `path` empty). */
 export interface Source {
   expr: string;
   base: string;
   path: string;
+  formula: boolean;
 }
+
+/** The longest formula the server takes, in bytes (characters here: a bound, not an exact check). */
+const MAX_FORMULA = 500;
 
 type Mode = "live" | "paused" | "zoomed";
 
@@ -655,6 +664,14 @@ class Plot {
   }
 }
 
+/** What to ask the server for, for `sources`: the signals, and the formulas, each once. */
+function watched(sources: Source[]): { signals: string[]; formulas: string[] } {
+  return {
+    signals: [...new Set(sources.filter((s) => !s.formula).map((s) => s.base))],
+    formulas: [...new Set(sources.filter((s) => s.formula).map((s) => s.expr))],
+  };
+}
+
 /** The first index whose time is at least `t` (times ascending). */
 function lowerBound(times: number[], t: number): number {
   let lo = 0;
@@ -687,7 +704,7 @@ export class Plots {
     stale: HTMLElement,
   ) {
     this.options = h("datalist", { id: "signal-names" });
-    this.input = h("input", { type: "text", list: "signal-names", placeholder: "signal, e.g. odom.x or sonar.range[3]", "data-testid": "plot-signal", class: "wide" });
+    this.input = h("input", { type: "text", list: "signal-names", placeholder: "a signal (odom.x, sonar.range[3]) or a formula (abs(drive.w) * 2)", "data-testid": "plot-signal", class: "wide" });
     const add = linkControl(h("button", { "data-testid": "plot-add" }, "Add plot"));
     add.addEventListener("click", () => void this.add(this.input.value.trim()));
     this.input.addEventListener("keydown", (e) => {
@@ -700,7 +717,7 @@ export class Plots {
       { class: "panel live", id: "plots" },
       h("h2", {}, "Plots", stale),
       h("div", { class: "row" }, this.input, this.options, add),
-      h("p", { class: "dim plot-help" }, "x: the robot's time; drag across a plot: zoom; ◀ ▶ or Shift + wheel: pan; double-click or Live: back to live"),
+      h("p", { class: "dim plot-help" }, "a signal, or a formula of the condition language (abs(drive.w) * 2); x: the robot's time; drag across a plot: zoom; ◀ ▶ or Shift + wheel: pan; double-click or Live: back to live"),
       this.error,
       this.list,
     );
@@ -728,8 +745,12 @@ export class Plots {
 
   private source(expr: string): Source | null {
     if (!PATH_RE.test(expr)) {
-      setText(this.error, `"${expr}" is not a signal path (like odom.x or sonar.range[3])`);
-      return null;
+      // A formula: the server compiles it (and says what is wrong, at which column).
+      if (expr.length > MAX_FORMULA) {
+        setText(this.error, `a formula of ${expr.length} characters: at most ${MAX_FORMULA}`);
+        return null;
+      }
+      return { expr, base: expr, path: "", formula: true };
     }
     const why = refusal(expr, this.leaves);
     if (why !== null) {
@@ -737,7 +758,7 @@ export class Plots {
       return null;
     }
     const base = this.baseOf(expr);
-    return { expr, base, path: expr.slice(base.length) };
+    return { expr, base, path: expr.slice(base.length), formula: false };
   }
 
   async add(expr: string): Promise<void> {
@@ -820,8 +841,7 @@ export class Plots {
 
   /** Tells the server which signals this tab needs (after a reconnection too). */
   async watch(): Promise<void> {
-    const signals = [...new Set(this.plots.flatMap((p) => p.sources.map((s) => s.base)))];
-    await this.conn.request("watch", { signals });
+    await this.conn.request("watch", watched(this.plots.flatMap((p) => p.sources)));
   }
 
   /** The robot is a replay: every plot shows the whole recording on the robot's time (asked
@@ -841,11 +861,11 @@ export class Plots {
   }
 
   private async fill(p: Plot): Promise<void> {
-    const signals = [...new Set(p.sources.map((s) => s.base))];
+    const { signals, formulas } = watched(p.sources);
     // Only the latest ask counts: an earlier one answered later (a plot's first signal, then a
     // second added before the first reply) would put back a series without the new signal.
     const ask = ++p.fills;
-    const series = await this.conn.request("history_series", { signals, max_points: 2000 });
+    const series = await this.conn.request("history_series", { signals, formulas, max_points: 2000 });
     if (!isObject(series) || !this.plots.includes(p) || ask !== p.fills) return;
     p.setSeries(series);
     p.setPlayhead(this.playheadT);

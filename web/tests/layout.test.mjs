@@ -71,4 +71,15 @@ describe("the page's layout", () => {
       await stopBrowser(fresh);
     }
   });
+
+  test("a formula's own commas and bars are escaped in the address, and come back whole", async () => {
+    const formula = "min(sonar.range[0], sonar.range[1]) > 0.5 || odom.x > 1";
+    await page.getByTestId("plot-signal").fill(formula);
+    await page.getByTestId("plot-add").click();
+    await until(async () => (await plotsShown(page)).includes(formula), "the formula's plot");
+    await until(async () => ((await hash(page)).get("plots") ?? "").endsWith("|min(sonar.range[0]%2C sonar.range[1]) > 0.5 %7C%7C odom.x > 1"), "the formula escaped in the address");
+    await page.reload();
+    await page.getByTestId("status").filter({ hasText: "connected" }).waitFor({ timeout: 60_000 });
+    await until(async () => JSON.stringify(await plotsShown(page)) === JSON.stringify(["odom.x,odom.y", "sonar.range[3]", formula]), "the formula whole after a reload");
+  });
 });

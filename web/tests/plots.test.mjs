@@ -408,4 +408,29 @@ describe("plots tell the truth", () => {
     for (const c of [first, second]) await until(async () => (await c.getAttribute("data-playhead")) === "", "no line when live");
     for (const expr of ["truth.pose.theta", "truth.pose.y"]) await plotOf(expr).getByTestId("plot-remove").click();
   });
+
+  test("a formula is plotted as a derived series, its value the server's from the same cycle; a wrong one is refused, naming the column", async () => {
+    await page.getByTestId("plot-signal").fill("abs(truth.pose.x) * 2 + 1");
+    await page.getByTestId("plot-add").click();
+    const f = chartOf("abs(truth.pose.x) * 2 + 1");
+    await until(async () => (await json(f, "data-drawn"))["abs(truth.pose.x) * 2 + 1"] >= 5, "the formula drawn");
+    await cliDo(tb.linkPort, "cycle", "stop");
+    try {
+      await until(async () => (await cli(tb.linkPort, "stats")).running === false, "the manager stopped over the link");
+      const stopped = await cli(tb.linkPort, "stats");
+      const pose = await cli(tb.linkPort, "query", "truth.pose");
+      await until(async () => Number(await f.getAttribute("data-cycle")) === stopped.cycle, "the stopped cycle sampled");
+      const last = (await json(f, "data-last"))["abs(truth.pose.x) * 2 + 1"];
+      assert.ok(close(last, Math.abs(pose.value.x) * 2 + 1), `the formula's value ${last}, from x = ${pose.value.x}`);
+    } finally {
+      await cliDo(tb.linkPort, "cycle", "run");
+    }
+    // A name the robot does not have: refused by the server, at its column; no plot is made.
+    const before = await page.getByTestId("plot").count();
+    await page.getByTestId("plot-signal").fill("truth.pose.x + truth.pos.y");
+    await page.getByTestId("plot-add").click();
+    await until(async () => /formula `truth\.pose\.x \+ truth\.pos\.y`: column 16: unknown signal `truth\.pos\.y`/.test((await page.getByTestId("plot-error").textContent()) ?? ""), "the formula refused, with its column");
+    assert.equal(await page.getByTestId("plot").count(), before);
+    await plotOf("abs(truth.pose.x) * 2 + 1").getByTestId("plot-remove").click();
+  });
 });

@@ -188,4 +188,13 @@ describe("a recording replayed into the GUI", () => {
     await plot.getByTestId("plot-xy").uncheck();
     await until(async () => (await plot.getAttribute("data-xy")) === "off" && (await plot.getByTestId("plot-canvas").isVisible()), "back to the time plot");
   });
+
+  test("a formula plots over the whole recording, computed from each cycle's values", async () => {
+    await page.getByTestId("plot-signal").fill("odom.x * 2 - 1");
+    await page.getByTestId("plot-add").click();
+    const canvas = page.locator('[data-testid=plot][data-expr="odom.x * 2 - 1"]').getByTestId("plot-canvas");
+    await until(async () => (await canvas.getAttribute("data-state")) === "recording" && Number(await canvas.getAttribute("data-series")) === CYCLES, "the recording's cycles in the formula's plot");
+    const drawn = JSON.parse((await canvas.getAttribute("data-drawn")) ?? "{}");
+    assert.ok(drawn["odom.x * 2 - 1"] >= CYCLES - 2, `the formula drawn over the recording: ${JSON.stringify(drawn)}`);
+  });
 });

@@ -607,7 +607,12 @@ impl History {
     /// per signal, `values` (its latest value at or before the cycle, records assembled; null
     /// before its first write) and `written` (the cycle that value was written in), so a reader
     /// tells a stale value from a fresh one.
-    pub fn series_json(&self, signals: &[String], max_points: usize) -> Result<Json, HistoryError> {
+    pub fn series_json(
+        &self,
+        signals: &[String],
+        formulas: &[std::sync::Arc<crate::formula::Derived>],
+        max_points: usize,
+    ) -> Result<Json, HistoryError> {
         let leaves: Vec<Vec<usize>> = signals
             .iter()
             .map(|name| {
@@ -646,6 +651,27 @@ impl History {
                 }
             }
             series.insert(name.clone(), json!({"values": values, "written": written}));
+        }
+        // A derived series: its value at each point from its leaves' values then.
+        for f in formulas {
+            let leaves: Vec<Option<usize>> =
+                f.leaves().iter().map(|p| self.layout.leaves.iter().position(|l| &l.path == p)).collect();
+            let (mut values, mut written) = (Vec::with_capacity(picked.len()), Vec::with_capacity(picked.len()));
+            for frame in &picked {
+                let at: Vec<Option<(u64, &Value)>> =
+                    leaves.iter().map(|l| l.and_then(|l| self.value_at(l, frame.cycle))).collect();
+                match f.eval(&at) {
+                    Some((c, v)) => {
+                        values.push(json!(v));
+                        written.push(json!(c));
+                    }
+                    None => {
+                        values.push(Json::Null);
+                        written.push(Json::Null);
+                    }
+                }
+            }
+            series.insert(f.source().to_string(), json!({"values": values, "written": written, "formula": true}));
         }
         Ok(json!({
             "cycles": picked.iter().map(|f| f.cycle).collect::<Vec<_>>(),
@@ -852,7 +878,7 @@ mod tests {
     #[test]
     fn a_series_spans_the_whole_history_on_robot_time_records_assembled_and_says_when_each_value_was_written() {
         let mut h = History::new(layout(), 100, 0);
-        assert_eq!(h.series_json(&["pose".into()], 10), Err(HistoryError::Empty));
+        assert_eq!(h.series_json(&["pose".into()], &[], 10), Err(HistoryError::Empty));
         for c in 1..=50 {
             // pose.y is written every other cycle: its value then is the one of the cycle before.
             let mut values = vec![(0, Value::F64(c as f64))];
@@ -861,18 +887,18 @@ mod tests {
             }
             h.push_frame(frame(c, values));
         }
-        let all = h.series_json(&["pose".into(), "pose.x".into()], 100).expect("series");
+        let all = h.series_json(&["pose".into(), "pose.x".into()], &[], 100).expect("series");
         assert_eq!(all["cycles"].as_array().map(Vec::len), Some(50), "every frame when they are fewer: {all}");
         assert_eq!(all["times"][9], json!(0.1));
         assert_eq!(all["signals"]["pose"]["values"][9], json!({"x": 10.0, "y": -9.0}));
         assert_eq!(all["signals"]["pose"]["written"][9], json!(9), "the oldest leaf's write");
         assert_eq!(all["signals"]["pose.x"]["values"][9], json!(10.0));
-        let few = h.series_json(&["pose.x".into()], 10).expect("series");
+        let few = h.series_json(&["pose.x".into()], &[], 10).expect("series");
         let cycles: Vec<u64> = few["cycles"].as_array().expect("cycles").iter().filter_map(Json::as_u64).collect();
         assert_eq!(cycles, vec![1, 6, 11, 16, 21, 26, 31, 36, 41, 46, 50], "spread, the last among them");
-        assert_eq!(h.series_json(&["pose.z".into()], 10), Err(HistoryError::UnknownSignal("pose.z".into())));
+        assert_eq!(h.series_json(&["pose.z".into()], &[], 10), Err(HistoryError::UnknownSignal("pose.z".into())));
         // Before its first write a signal is null.
-        let cmd = h.series_json(&["cmd".into()], 10).expect("series");
+        let cmd = h.series_json(&["cmd".into()], &[], 10).expect("series");
         assert_eq!(cmd["signals"]["cmd"]["values"][0], Json::Null);
     }
 

@@ -74,6 +74,7 @@ use serde_json::{json, Value as Json};
 use situate_manager::{ControlError, Handle, Reply, Request};
 use tokio::sync::{broadcast, watch};
 
+pub mod formula;
 pub mod foxglove;
 pub mod history;
 mod hosts;
@@ -336,6 +337,13 @@ impl Activity {
 }
 
 /// What every connection shares.
+/// What one tab plots: signals by name, and derived series (formulas).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Watched {
+    signals: Vec<String>,
+    formulas: Vec<Arc<formula::Derived>>,
+}
+
 struct Shared {
     handle: Handle,
     run: RunInfo,
@@ -348,8 +356,8 @@ struct Shared {
     ws_idle: Duration,
     clients: AtomicUsize,
     next_client: AtomicU64,
-    /// Per connected tab, the signals it watches.
-    watched: Mutex<HashMap<u64, Vec<String>>>,
+    /// Per connected tab, the signals and formulas it watches.
+    watched: Mutex<HashMap<u64, Watched>>,
     /// The robot's recent past, when the server was given a tap.
     history: Option<Arc<Mutex<History>>>,
     /// The recording replayed, when the robot is a replay ([`GuiConfig::replay`]).

@@ -4,7 +4,7 @@
 
 use std::collections::{BTreeSet, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::Receiver;
@@ -12,6 +12,7 @@ use serde_json::{json, Value as Json};
 use situate_link::json as wire;
 use situate_manager::{ControlError, Reply, Request};
 
+use crate::formula::Derived;
 use crate::{ask, History, HistoryTap, Shared, WORLD_SIGNALS};
 
 /// Forwards the manager's events to every tab (while one is connected) and notes each skill's
@@ -171,8 +172,14 @@ fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
     let stats = reply_json(ask(h, Request::QueryStats));
     let skills = skills_with_inputs(h);
     let winners = reply_json(ask(h, Request::QueryWinners));
-    let mut wanted: BTreeSet<String> =
-        shared.watched.lock().unwrap_or_else(|p| p.into_inner()).values().flat_map(|v| v.iter().cloned()).collect();
+    let (mut wanted, formulas) = {
+        let watched = shared.watched.lock().unwrap_or_else(|p| p.into_inner());
+        let signals: BTreeSet<String> = watched.values().flat_map(|w| w.signals.iter().cloned()).collect();
+        let mut formulas: Vec<Arc<Derived>> = watched.values().flat_map(|w| w.formulas.iter().cloned()).collect();
+        formulas.sort_by(|a, b| a.source().cmp(b.source()));
+        formulas.dedup_by(|a, b| a.source() == b.source());
+        (signals, formulas)
+    };
     wanted.extend(WORLD_SIGNALS.iter().map(|s| s.to_string()));
     let mut signals = serde_json::Map::new();
     for name in wanted {
@@ -195,10 +202,52 @@ fn take_sample(shared: &Shared, absent: &mut HashSet<String>) -> Json {
             }
         }
     }
+    derive(h, &formulas, &mut signals);
     let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default().as_secs_f64();
     let activity = shared.activity.lock().unwrap_or_else(|p| p.into_inner()).to_json();
     json!({"type": "telemetry", "wall_s": now, "run": shared.run.id, "stats": stats, "skills": skills,
         "winners": winners, "signals": signals, "activity": activity})
+}
+
+/// The derived series watched, each under its own text in the sample's `signals`: `{signal,
+/// value, cycle, formula: true}`, the value from the leaves' latest values (null when one has
+/// none), the cycle the oldest of them was written in. One query reads every leaf they need.
+fn derive(h: &situate_manager::Handle, formulas: &[Arc<Derived>], signals: &mut serde_json::Map<String, Json>) {
+    if formulas.is_empty() {
+        return;
+    }
+    let mut leaves: Vec<String> = formulas.iter().flat_map(|f| f.leaves().iter().cloned()).collect();
+    leaves.sort_unstable();
+    leaves.dedup();
+    let readings = match ask(h, Request::QuerySignals { signals: leaves.clone() }) {
+        Ok(Reply::Signals(r)) => r,
+        Ok(_) => return,
+        Err(e) => {
+            for f in formulas {
+                signals.insert(f.source().to_string(), wire::control_error(&e));
+            }
+            return;
+        }
+    };
+    for f in formulas {
+        let values: Vec<Option<(u64, &situate_core::Value)>> = f
+            .leaves()
+            .iter()
+            .map(|l| {
+                let k = leaves.binary_search(l).ok()?;
+                let r = readings.get(k)?;
+                r.value.as_ref().map(|v| (r.cycle, v))
+            })
+            .collect();
+        let (cycle, value) = match f.eval(&values) {
+            Some((c, v)) => (json!(c), json!(v)),
+            None => (Json::Null, Json::Null),
+        };
+        signals.insert(
+            f.source().to_string(),
+            json!({"signal": f.source(), "value": value, "cycle": cycle, "formula": true}),
+        );
+    }
 }
 
 #[cfg(test)]
@@ -320,6 +369,91 @@ mod tests {
         let at = sample["activity"]["changed"]["runaway"].as_u64().unwrap_or(0);
         assert!(at > 3 && at <= deactivated_at, "runaway deactivated in cycle {at}: {sample}");
         assert!(sample["activity"]["changed"].get("wander").is_none(), "wander never changed: {sample}");
+        gui.stop();
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_watched_formula_is_in_the_sample_under_its_text_from_the_values_of_that_cycle() {
+        let (mut handle, join) = robot();
+        let s = shared(handle.clone());
+        // Refused, each with its reason: a name the robot lacks (the column), a string, too many.
+        let r = handle_message(
+            &s,
+            7,
+            r#"{"id": 1, "verb": "watch", "args": {"signals": [], "formulas": ["abs(odom.q) + 1"]}}"#,
+        );
+        let message = r["error"]["message"].as_str().unwrap_or_default();
+        assert!(
+            r["error"]["kind"] == "bad_request"
+                && message.contains("formula `abs(odom.q) + 1`: column 5: unknown signal `odom.q`"),
+            "{r}"
+        );
+        let many = json!({"id": 2, "verb": "watch", "args": {"formulas": vec!["odom.x"; 9]}}).to_string();
+        let r = handle_message(&s, 7, &many);
+        assert!(r["error"]["message"].as_str().unwrap_or_default().contains("at most 8 formulas"), "{r}");
+        let r = handle_message(
+            &s,
+            7,
+            r#"{"id": 3, "verb": "watch", "args": {"signals": ["odom"], "formulas": ["abs(odom.x) + 1", "odom.x > odom.y"]}}"#,
+        );
+        assert_eq!(r["ok"]["formulas"], json!(["abs(odom.x) + 1", "odom.x > odom.y"]), "{r}");
+        let sample = step_until(&mut handle, &s, |sample| sample["signals"]["abs(odom.x) + 1"]["value"].is_number());
+        let odom = &sample["signals"]["odom"];
+        let (x, y) = (odom["value"]["x"].as_f64().expect("x"), odom["value"]["y"].as_f64().expect("y"));
+        let f = &sample["signals"]["abs(odom.x) + 1"];
+        assert_eq!(
+            (f["value"].as_f64(), &f["cycle"], &f["formula"]),
+            (Some(x.abs() + 1.0), &odom["cycle"], &json!(true)),
+            "{sample}"
+        );
+        assert_eq!(
+            sample["signals"]["odom.x > odom.y"]["value"].as_f64(),
+            Some(if x > y { 1.0 } else { 0.0 }),
+            "{sample}"
+        );
+        let _ = handle.request(Request::Shutdown);
+        let _ = join.join();
+    }
+
+    #[test]
+    fn a_formula_over_the_timeline_is_its_value_at_each_cycle() {
+        let (mut handle, join) = robot();
+        let layout = Layout::of(handle.graph());
+        let x = handle.graph().leaf_index["odom.x"];
+        let (frames_tx, frames) = crossbeam_channel::bounded(4);
+        let (_events_tx, events) = crossbeam_channel::bounded(4);
+        let tap = HistoryTap::from_channels(layout, frames, events, 0);
+        let gui = serve_with_history(handle.clone(), GuiConfig::default(), Some(tap)).expect("serve");
+        for cycle in 1..=10u64 {
+            // odom.x written every other cycle: the formula's value then is the one of the cycle before.
+            let values = if cycle % 2 == 1 { vec![(x, situate_core::Value::F64(cycle as f64))] } else { vec![] };
+            let frame = situate_manager::Frame {
+                cycle,
+                time_s: cycle as f64 / 10.0,
+                values: values.into(),
+                prints: vec![],
+                winners: vec![],
+            };
+            frames_tx.send(frame).expect("the history takes frames");
+        }
+        let ask = r#"{"id": 1, "verb": "history_series", "args": {"formulas": ["odom.x * 2"], "max_points": 100}}"#;
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let r = loop {
+            let r = handle_message(&gui.shared, 1, ask);
+            if r["ok"]["cycles"].as_array().is_some_and(|c| c.len() == 10) {
+                break r;
+            }
+            assert!(Instant::now() < deadline, "the frames never arrived: {r}");
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        let series = &r["ok"]["signals"]["odom.x * 2"];
+        assert_eq!(series["values"], json!([2.0, 2.0, 6.0, 6.0, 10.0, 10.0, 14.0, 14.0, 18.0, 18.0]), "{r}");
+        assert_eq!(series["written"], json!([1, 1, 3, 3, 5, 5, 7, 7, 9, 9]), "{r}");
+        let bad = r#"{"id": 2, "verb": "history_series", "args": {"formulas": ["odom.x *"]}}"#;
+        let r = handle_message(&gui.shared, 1, bad);
+        assert_eq!(r["error"]["kind"], "bad_request", "{r}");
         gui.stop();
         let _ = handle.request(Request::Shutdown);
         let _ = join.join();

@@ -15,6 +15,7 @@ use situate_link::json as wire;
 use situate_manager::{Reply, Request};
 use tokio::sync::broadcast;
 
+use crate::formula::Derived;
 use crate::serve::{Beat, Keepalive};
 use crate::{ask, HistoryError, Shared, MAX_MESSAGE, WORLD_SIGNALS};
 
@@ -295,7 +296,7 @@ fn history_request(shared: &Shared, verb: &str, id: &Json, args: &Json) -> Json 
         return json!({"type": "reply", "id": id, "ok": summary});
     }
     if verb == "history_series" {
-        return history_series(history, id, args);
+        return history_series(shared, history, id, args);
     }
     let Some(cycle) = args.get("cycle").and_then(Json::as_u64) else {
         return error_reply(id, "bad_request", "`history_frame`: argument `cycle` must be a whole number ≥ 0");
@@ -326,17 +327,27 @@ fn replay_events(shared: &Shared, id: &Json) -> Json {
 const SERIES_SIGNALS: usize = 32;
 const SERIES_POINTS: u64 = 20_000;
 
-/// `history_series {signals, max_points}`: signals over the whole timeline (robot time).
-fn history_series(history: &std::sync::Mutex<crate::History>, id: &Json, args: &Json) -> Json {
-    let usage = "`history_series`: argument `signals` must be a list of 1 to 32 signal names";
-    let Some(list) = args.get("signals").and_then(Json::as_array) else {
+/// `history_series {signals, formulas, max_points}`: signals (and derived series) over the whole
+/// timeline (robot time).
+fn history_series(shared: &Shared, history: &std::sync::Mutex<crate::History>, id: &Json, args: &Json) -> Json {
+    let usage = "`history_series`: argument `signals` must be a list of at most 32 signal names, `formulas` one \
+                 of at most 8 formulas, and one of them not empty";
+    let signals: Option<Vec<String>> = match args.get("signals") {
+        None => Some(Vec::new()),
+        Some(list) => list.as_array().and_then(|list| {
+            list.iter().map(|s| s.as_str().filter(|n| !n.is_empty() && n.len() <= 200).map(String::from)).collect()
+        }),
+    };
+    let Some(signals) = signals.filter(|s| s.len() <= SERIES_SIGNALS) else {
         return error_reply(id, "bad_request", usage);
     };
-    let signals: Option<Vec<String>> =
-        list.iter().map(|s| s.as_str().filter(|n| !n.is_empty() && n.len() <= 200).map(String::from)).collect();
-    let Some(signals) = signals.filter(|s| !s.is_empty() && s.len() <= SERIES_SIGNALS) else {
-        return error_reply(id, "bad_request", usage);
+    let formulas = match formulas_arg(shared, args, "history_series") {
+        Ok(f) => f,
+        Err(message) => return error_reply(id, "bad_request", &message),
     };
+    if signals.is_empty() && formulas.is_empty() {
+        return error_reply(id, "bad_request", usage);
+    }
     let max_points = match args.get("max_points") {
         None => 2000,
         Some(m) => match m.as_u64().filter(|m| (2..=SERIES_POINTS).contains(m)) {
@@ -352,7 +363,7 @@ fn history_series(history: &std::sync::Mutex<crate::History>, id: &Json, args: &
             }
         },
     };
-    let series = history.lock().unwrap_or_else(|p| p.into_inner()).series_json(&signals, max_points);
+    let series = history.lock().unwrap_or_else(|p| p.into_inner()).series_json(&signals, &formulas, max_points);
     match series {
         Ok(s) => json!({"type": "reply", "id": id, "ok": s}),
         Err(e @ HistoryError::Empty) => error_reply(id, "unavailable", &e.to_string()),
@@ -360,10 +371,33 @@ fn history_series(history: &std::sync::Mutex<crate::History>, id: &Json, args: &
     }
 }
 
-/// `watch`: the signals this tab plots (a list of signal names, at most 32).
+/// The `formulas` argument of `verb` (absent: none), each compiled against the robot's wiring: at
+/// most [`crate::formula::MAX_FORMULAS`]; the first that does not compile is the error.
+fn formulas_arg(shared: &Shared, args: &Json, verb: &str) -> Result<Vec<Arc<Derived>>, String> {
+    let Some(list) = args.get("formulas") else { return Ok(Vec::new()) };
+    let list = list.as_array().ok_or_else(|| format!("`{verb}`: argument `formulas` must be a list of strings"))?;
+    if list.len() > crate::formula::MAX_FORMULAS {
+        return Err(format!("`{verb}`: at most {} formulas, got {}", crate::formula::MAX_FORMULAS, list.len()));
+    }
+    list.iter()
+        .map(|f| {
+            let source = f.as_str().filter(|s| !s.trim().is_empty());
+            let source = source.ok_or_else(|| format!("`{verb}`: every formula must be a non-empty string"))?;
+            Derived::compile(source, shared.handle.graph()).map(Arc::new)
+        })
+        .collect()
+}
+
+/// `watch`: the signals this tab plots (a list of signal names, at most 32), and its derived series
+/// (`formulas`, at most 8, each sent in the telemetry's `signals` under its own text).
 fn watch_signals(shared: &Shared, client: u64, id: &Json, args: &Json) -> Json {
-    let Some(list) = args.get("signals").and_then(Json::as_array) else {
-        return error_reply(id, "bad_request", "`watch`: argument `signals` must be a list of strings");
+    let empty = Vec::new();
+    let list = match args.get("signals") {
+        None => &empty,
+        Some(list) => match list.as_array() {
+            Some(list) => list,
+            None => return error_reply(id, "bad_request", "`watch`: argument `signals` must be a list of strings"),
+        },
     };
     let mut signals = Vec::new();
     for s in list {
@@ -380,8 +414,15 @@ fn watch_signals(shared: &Shared, client: u64, id: &Json, args: &Json) -> Json {
             return with_id(wire::control_error(&e), id);
         }
     }
-    shared.watched.lock().unwrap_or_else(|p| p.into_inner()).insert(client, signals.clone());
-    json!({"type": "reply", "id": id, "ok": {"signals": signals}})
+    let formulas = match formulas_arg(shared, args, "watch") {
+        Ok(f) => f,
+        Err(message) => return error_reply(id, "bad_request", &message),
+    };
+    let sources: Vec<&str> = formulas.iter().map(|f| f.source()).collect();
+    let reply = json!({"type": "reply", "id": id, "ok": {"signals": signals, "formulas": sources}});
+    let watched = crate::Watched { signals, formulas };
+    shared.watched.lock().unwrap_or_else(|p| p.into_inner()).insert(client, watched);
+    reply
 }
 
 #[cfg(test)]

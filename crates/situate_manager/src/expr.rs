@@ -190,35 +190,10 @@ pub struct Condition {
 impl Condition {
     /// Parses and type-checks `source`, resolving its names with `resolver`.
     pub fn compile(source: &str, resolver: &dyn Resolver) -> Result<Condition, ExprError> {
-        if source.len() > MAX_SOURCE_BYTES {
-            return Err(ExprError {
-                column: 1,
-                message: format!("the condition is too long: {} bytes, at most {MAX_SOURCE_BYTES}", source.len()),
-            });
-        }
-        let toks = lex(source)?;
-        let mut p = Parser {
-            src: source,
-            toks,
-            pos: 0,
-            depth: 0,
-            resolver,
-            program: Program::default(),
-            ref_names: Vec::new(),
-            fixed: Vec::new(),
-        };
-        if p.peek().tok == Tok::End {
-            return Err(p.err(0, "the condition is empty"));
-        }
-        let e = p.parse_expr()?;
-        if p.peek().tok != Tok::End {
-            return Err(p.unexpected("an operator or the end of the condition"));
-        }
-        if e.ty != Ty::Bool {
-            return Err(p.err(e.at, format!("a monitor condition must be true or false, this is {}", e.ty.name())));
-        }
-        p.program.root = e.node;
-        Ok(Condition { source: source.to_string(), program: p.program, ref_names: p.ref_names })
+        let (program, ref_names, _) = compile_program(source, resolver, |ty| {
+            (ty != Ty::Bool).then(|| format!("a monitor condition must be true or false, this is {}", ty.name()))
+        })?;
+        Ok(Condition { source: source.to_string(), program, ref_names })
     }
 
     /// The source it was compiled from.
@@ -248,6 +223,96 @@ impl Condition {
     /// range, NaN compared): the caller treats None as "does not hold".
     pub fn eval(&self, lookup: &dyn Lookup) -> Option<bool> {
         self.program.bool_at(self.program.root, lookup)
+    }
+}
+
+/// Parses and type-checks `source` (a condition or a formula), resolving its
+/// names with `resolver`; `want` refuses the whole expression's type with a
+/// message (None: accepted).
+fn compile_program(
+    source: &str,
+    resolver: &dyn Resolver,
+    want: impl Fn(Ty) -> Option<String>,
+) -> Result<(Program, Vec<String>, Ty), ExprError> {
+    if source.len() > MAX_SOURCE_BYTES {
+        return Err(ExprError {
+            column: 1,
+            message: format!("the condition is too long: {} bytes, at most {MAX_SOURCE_BYTES}", source.len()),
+        });
+    }
+    let toks = lex(source)?;
+    let mut p = Parser {
+        src: source,
+        toks,
+        pos: 0,
+        depth: 0,
+        resolver,
+        program: Program::default(),
+        ref_names: Vec::new(),
+        fixed: Vec::new(),
+    };
+    if p.peek().tok == Tok::End {
+        return Err(p.err(0, "the condition is empty"));
+    }
+    let e = p.parse_expr()?;
+    if p.peek().tok != Tok::End {
+        return Err(p.unexpected("an operator or the end of the condition"));
+    }
+    if let Some(message) = want(e.ty) {
+        return Err(p.err(e.at, message));
+    }
+    p.program.root = e.node;
+    Ok((p.program, p.ref_names, e.ty))
+}
+
+/// A compiled formula: an expression of the condition language whose value is
+/// a number (or a bool, read as 1 or 0), such as `abs(drive.w) * 2`,
+/// `odom.x * odom.x + odom.y * odom.y` or `sonar.range[0] < 0.25`: a derived
+/// series to plot. The same grammar, types and missing-value rules as a
+/// [`Condition`].
+#[derive(Debug, Clone)]
+pub struct Formula {
+    source: String,
+    program: Program,
+    ref_names: Vec<String>,
+    boolean: bool,
+}
+
+impl Formula {
+    /// Parses and type-checks `source`, resolving its names with `resolver`:
+    /// it must be a number or a bool.
+    pub fn compile(source: &str, resolver: &dyn Resolver) -> Result<Formula, ExprError> {
+        let (program, ref_names, ty) = compile_program(source, resolver, |ty| {
+            (!matches!(ty, Ty::Num | Ty::Bool))
+                .then(|| format!("a formula to plot must be a number or true/false, this is {}", ty.name()))
+        })?;
+        Ok(Formula { source: source.to_string(), program, ref_names, boolean: ty == Ty::Bool })
+    }
+
+    /// The source it was compiled from.
+    pub fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// The resolved ids it reads, each once, in first-use order.
+    pub fn refs(&self) -> &[usize] {
+        &self.program.refs
+    }
+
+    /// The dotted names, same order as refs().
+    pub fn ref_names(&self) -> &[String] {
+        &self.ref_names
+    }
+
+    /// Its value (a bool as 1 or 0), or None when a value it needs is missing
+    /// or the result is not a finite number.
+    pub fn eval(&self, lookup: &dyn Lookup) -> Option<f64> {
+        let v = if self.boolean {
+            f64::from(u8::from(self.program.bool_at(self.program.root, lookup)?))
+        } else {
+            self.program.num_at(self.program.root, lookup)?
+        };
+        v.is_finite().then_some(v)
     }
 }
 
@@ -1286,6 +1351,35 @@ mod tests {
             self.reads.set(self.reads.get() + 1);
             self.vals.iter().find(|(i, _)| *i == id).map(|(_, v)| v)
         }
+    }
+
+    #[test]
+    fn a_formula_is_a_number_or_a_bool_read_as_one_or_zero() {
+        let sigs = Sigs(signals());
+        let f = |src: &str| Formula::compile(src, &sigs).unwrap_or_else(|e| panic!("{src}: {e}"));
+        let vals = standard();
+        assert_eq!(f("abs(odom.speed) * 2").eval(&vals), Some(1.5));
+        assert_eq!(f("sonar.range[1] + barcode.id").eval(&vals), Some(3.25));
+        assert_eq!(f("pose.x").eval(&vals), Some(1.5));
+        assert_eq!(f("sonar.range[0] < 0.25").eval(&vals), Some(0.0));
+        assert_eq!(f("sonar.ok && barcode.id == 3").eval(&vals), Some(1.0));
+        // Missing (no value, out of range) and not finite (a division by zero): no point.
+        assert_eq!(f("sonar.range[7] * 2").eval(&vals), None);
+        assert_eq!(f("pose.x + 1").eval(&Vals::default()), None);
+        assert_eq!(f("odom.speed / 0").eval(&vals), None);
+        let formula = f("min(pose.x, odom.speed)");
+        assert_eq!(formula.source(), "min(pose.x, odom.speed)");
+        assert_eq!(formula.ref_names(), ["pose.x", "odom.speed"]);
+        assert_eq!(formula.refs(), [id("pose.x"), id("odom.speed")]);
+        // What is not a number nor a bool is refused, naming the type and the column.
+        let e = Formula::compile("label", &sigs).unwrap_err();
+        assert_eq!(e.column, 1);
+        assert!(e.message.contains("must be a number or true/false, this is a string"), "{e}");
+        let e = Formula::compile("odom.speed + lable", &sigs).unwrap_err();
+        assert_eq!(e.column, 14);
+        assert!(e.message.contains("unknown signal `lable`"), "{e}");
+        // A condition is still only a bool.
+        assert!(Condition::compile("odom.speed", &sigs).is_err());
     }
 
     fn standard() -> Vals {
