@@ -66,7 +66,7 @@ function start(): void {
   const showStale = () => {
     const text = lastSeen ? `last seen at cycle ${lastSeen.cycle}, ${Math.round((performance.now() - lastSeen.at) / 1000)} s ago` : "never seen";
     for (const note of document.querySelectorAll(".stale-note")) setText(note, text);
-    setText(staleBanner, `Not connected to the robot: the values below are not live (${text}). Reconnecting…`);
+    setText(staleBanner, `Not connected to the robot: the values below are not live (${text}). Reconnecting… The timeline's marks and the event log stay; the cycles behind them were in the robot's process. If it died, a run recorded with --record opens again, up to its last complete cycle: situate replay FILE --view --recover --gui.`);
   };
   const setStale = (stale: boolean) => {
     document.body.classList.toggle("stale", stale);

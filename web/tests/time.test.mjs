@@ -64,6 +64,8 @@ describe("a robot that goes away and comes back", () => {
       return true;
     }, "every live panel: last seen at cycle N, t ≥ 2 s ago");
     assert.match(await text(page.getByTestId("stale-banner")), /not live/);
+    // Where the run's cycles are now, if the robot died: its recording, opened from the file.
+    assert.match(await text(page.getByTestId("stale-banner")), /situate replay FILE --view --recover --gui/);
     // Controls that need the robot are disabled, not failing on click.
     for (const id of ["run", "stop", "step", "switch-wander", "monitor-add", "plot-add"]) {
       assert.equal(await page.getByTestId(id).isDisabled(), true, `${id} is disabled`);
