@@ -167,6 +167,8 @@ class Plot {
   /** While the recording's points are added (no redraw per point). */
   private bulk = false;
   private playheadT: number | null = null;
+  /** The timeline's cycle's time as last asked, drawn or not (a plot's axis may not be known yet). */
+  private askedPlayhead: number | null = null;
   private readonly liveButton: HTMLButtonElement;
   private readonly windowSelect: HTMLSelectElement;
   /** XY: the plot's second line against its first (`odom.y` against `odom.x`), over the same
@@ -247,10 +249,13 @@ class Plot {
     this.chartBox.addEventListener(
       "wheel",
       (e) => {
-        const d = Math.abs(e.deltaX) > Math.abs(e.deltaY) ? e.deltaX : e.shiftKey ? e.deltaY : 0;
-        if (d === 0 || this.times.length === 0) return;
+        const raw = Math.abs(e.deltaX) > Math.abs(e.deltaY) ? e.deltaX : e.shiftKey ? e.deltaY : 0;
+        if (raw === 0 || this.times.length === 0) return;
         e.preventDefault();
-        this.pan(Math.max(-0.5, Math.min(0.5, d / Math.max(1, this.chartBox.clientWidth))));
+        // In pixels, whatever the browser counts in (lines: Firefox's wheel; pages).
+        const width = Math.max(1, this.chartBox.clientWidth);
+        const d = raw * (e.deltaMode === WheelEvent.DOM_DELTA_LINE ? 16 : e.deltaMode === WheelEvent.DOM_DELTA_PAGE ? width : 1);
+        this.pan(Math.max(-0.5, Math.min(0.5, d / width)));
       },
       { passive: false },
     );
@@ -327,6 +332,8 @@ class Plot {
     if (this.axis === null) {
       this.axis = axis;
       this.chartBox.dataset["axis"] = axis;
+      // A cycle the timeline showed before the axis was known: its line now.
+      this.setPlayhead(this.askedPlayhead);
     }
     if (this.since === null) {
       this.since = wall;
@@ -401,6 +408,7 @@ class Plot {
   /** The timeline's cycle, at robot time `t` (null: none shown), drawn as a vertical line (on a
    *  plot of the robot's time). */
   setPlayhead(t: number | null): void {
+    this.askedPlayhead = t;
     if (t !== null && !this.onRobotTime()) t = null;
     if (t === this.playheadT) return;
     this.playheadT = t;
@@ -472,8 +480,10 @@ class Plot {
     if (emit) this.onView({ min, max });
   }
 
-  /** Moves the view by `fraction` of its width (negative: earlier); the other plots follow. */
+  /** Moves the view by `fraction` of its width (negative: earlier); the other plots follow. An
+   *  empty plot has no time to move along. */
   pan(fraction: number): void {
+    if (this.times.length === 0) return;
     const v = this.view();
     const d = (v.max - v.min) * fraction;
     this.zoomTo(v.min + d, v.max + d);
@@ -776,6 +786,8 @@ export class Plots {
       }
     };
     this.plots.push(plot);
+    // The timeline's cycle, if it shows one, drawn once the plot knows its time axis.
+    plot.setPlayhead(this.playheadT);
     try {
       await this.watch();
       setText(this.error, "");

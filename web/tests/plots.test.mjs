@@ -403,6 +403,11 @@ describe("plots tell the truth", () => {
     for (const c of [first, second]) {
       await until(async () => Math.abs(Number(await c.getAttribute("data-playhead")) - t) < 0.01, `a line at t = ${t} s`);
     }
+    // A plot added while the timeline is paused has the line too, once it knows its time axis.
+    await page.getByTestId("plot-signal").fill("truth.pose.x");
+    await page.getByTestId("plot-add").click();
+    await until(async () => Math.abs(Number(await chartOf("truth.pose.x").getAttribute("data-playhead")) - t) < 0.01, "the line on the plot added while paused");
+    await plotOf("truth.pose.x").getByTestId("plot-remove").click();
     await page.getByTestId("tl-live").click();
     await until(async () => (await bar.getAttribute("data-mode")) === "live", "the timeline live");
     for (const c of [first, second]) await until(async () => (await c.getAttribute("data-playhead")) === "", "no line when live");

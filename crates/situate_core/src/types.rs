@@ -92,7 +92,7 @@ impl SignalType {
 
     /// Parses the textual form (see the module docs).
     pub fn parse(text: &str) -> Result<SignalType, TypeParseError> {
-        let mut p = TypeParser { s: text.as_bytes(), pos: 0 };
+        let mut p = TypeParser { s: text.as_bytes(), pos: 0, depth: 0 };
         p.skip_ws();
         let t = p.parse_type()?;
         p.skip_ws();
@@ -135,9 +135,15 @@ pub struct TypeParseError {
     pub message: String,
 }
 
+/// The deepest nesting of records a type may have (a type comes from files and the network: its
+/// parser recurses once per level).
+pub const MAX_TYPE_DEPTH: usize = 32;
+
 struct TypeParser<'a> {
     s: &'a [u8],
     pos: usize,
+    /// Records open around the position.
+    depth: usize,
 }
 
 impl TypeParser<'_> {
@@ -172,6 +178,10 @@ impl TypeParser<'_> {
     fn parse_type(&mut self) -> Result<SignalType, TypeParseError> {
         self.skip_ws();
         if self.eat(b'{') {
+            self.depth += 1;
+            if self.depth > MAX_TYPE_DEPTH {
+                return Err(self.err(&format!("records nest too deeply (more than {MAX_TYPE_DEPTH} levels)")));
+            }
             let mut fields: Vec<(String, SignalType)> = Vec::new();
             loop {
                 self.skip_ws();
@@ -196,6 +206,7 @@ impl TypeParser<'_> {
                 }
                 return Err(self.err("expected `,` or `}`"));
             }
+            self.depth -= 1;
             return Ok(SignalType::Record(Arc::new(RecordType::new(fields))));
         }
         let start = self.pos;
@@ -267,6 +278,17 @@ mod tests {
             let t = SignalType::parse(text).unwrap();
             assert_eq!(t.to_string(), text);
         }
+    }
+
+    #[test]
+    fn records_nested_past_the_limit_are_an_error_not_a_stack_overflow() {
+        let nested = |n: usize| format!("{}f64{}", "{a: ".repeat(n), "}".repeat(n));
+        assert!(SignalType::parse(&nested(MAX_TYPE_DEPTH)).is_ok());
+        let e = SignalType::parse(&nested(MAX_TYPE_DEPTH + 1)).unwrap_err();
+        assert!(e.message.contains("nest too deeply"), "{e}");
+        // A hundred thousand levels, as a hostile file may hold: refused at the limit.
+        let e = SignalType::parse(&"{a:".repeat(100_000)).unwrap_err();
+        assert!(e.column <= 3 * (MAX_TYPE_DEPTH + 1), "refused at the limit, not at the end: {e}");
     }
 
     #[test]

@@ -61,6 +61,10 @@ impl Derived {
         if source.len() > MAX_FORMULA_BYTES {
             return Err(format!("a formula of {} bytes: at most {MAX_FORMULA_BYTES}", source.len()));
         }
+        // Sent under its own text beside the signals: a signal's name is the signal, not a formula.
+        if graph.leaf_index.contains_key(source.trim()) || graph.records.contains_key(source.trim()) {
+            return Err(format!("`{source}` is a signal: watch it as one (`signals`), not as a formula"));
+        }
         Formula::compile(source, &Leaves(graph))
             .map(|formula| Derived { formula })
             .map_err(|e| format!("formula `{source}`: {e}"))
@@ -76,8 +80,11 @@ impl Derived {
     }
 
     /// Its value from its leaves' (written cycle, value), in the order of
-    /// [`Derived::leaves`]; with the oldest cycle among them. `None`: a leaf
-    /// it needs has no value, or the result is not a finite number.
+    /// [`Derived::leaves`]; with the oldest cycle among those that have one.
+    /// `None`: it has no value (a leaf it needs has none, an index is out of
+    /// range, the result is not a finite number), or none of its leaves has
+    /// a value (`a || true` has a value though `a` has none, by the
+    /// language's rules; with no leaf written at all it is not plotted).
     pub fn eval(&self, values: &[Option<(u64, &Value)>]) -> Option<(u64, f64)> {
         let refs: Vec<Option<&Value>> = values.iter().map(|v| v.map(|(_, v)| v)).collect();
         let v = self.formula.eval(&Refs { ids: self.formula.refs(), values: &refs })?;
@@ -105,8 +112,10 @@ mod tests {
         assert_eq!(d.eval(&[Some((7, &x)), None]), None, "a leaf without a value: no point");
         let e = Derived::compile("odom.z * 2", g).unwrap_err();
         assert!(e.starts_with("formula `odom.z * 2`: column 1: unknown signal `odom.z`"), "{e}");
-        let e = Derived::compile("odom", g).unwrap_err();
+        let e = Derived::compile("odom * 2", g).unwrap_err();
         assert!(e.contains("column 1") && e.contains("record"), "{e}");
         assert!(Derived::compile(&"1+".repeat(300), g).unwrap_err().contains("at most 500"));
+        // A signal's own name is not a formula (it would stand in the signal's place in a sample).
+        assert!(Derived::compile("odom.x", g).unwrap_err().contains("is a signal"));
     }
 }

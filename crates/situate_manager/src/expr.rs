@@ -190,7 +190,7 @@ pub struct Condition {
 impl Condition {
     /// Parses and type-checks `source`, resolving its names with `resolver`.
     pub fn compile(source: &str, resolver: &dyn Resolver) -> Result<Condition, ExprError> {
-        let (program, ref_names, _) = compile_program(source, resolver, |ty| {
+        let (program, ref_names, _) = compile_program(source, resolver, "condition", |ty| {
             (ty != Ty::Bool).then(|| format!("a monitor condition must be true or false, this is {}", ty.name()))
         })?;
         Ok(Condition { source: source.to_string(), program, ref_names })
@@ -232,12 +232,13 @@ impl Condition {
 fn compile_program(
     source: &str,
     resolver: &dyn Resolver,
+    noun: &'static str,
     want: impl Fn(Ty) -> Option<String>,
 ) -> Result<(Program, Vec<String>, Ty), ExprError> {
     if source.len() > MAX_SOURCE_BYTES {
         return Err(ExprError {
             column: 1,
-            message: format!("the condition is too long: {} bytes, at most {MAX_SOURCE_BYTES}", source.len()),
+            message: format!("the {noun} is too long: {} bytes, at most {MAX_SOURCE_BYTES}", source.len()),
         });
     }
     let toks = lex(source)?;
@@ -250,13 +251,14 @@ fn compile_program(
         program: Program::default(),
         ref_names: Vec::new(),
         fixed: Vec::new(),
+        noun,
     };
     if p.peek().tok == Tok::End {
-        return Err(p.err(0, "the condition is empty"));
+        return Err(p.err(0, format!("the {noun} is empty")));
     }
     let e = p.parse_expr()?;
     if p.peek().tok != Tok::End {
-        return Err(p.unexpected("an operator or the end of the condition"));
+        return Err(p.unexpected(&format!("an operator or the end of the {noun}")));
     }
     if let Some(message) = want(e.ty) {
         return Err(p.err(e.at, message));
@@ -282,7 +284,7 @@ impl Formula {
     /// Parses and type-checks `source`, resolving its names with `resolver`:
     /// it must be a number or a bool.
     pub fn compile(source: &str, resolver: &dyn Resolver) -> Result<Formula, ExprError> {
-        let (program, ref_names, ty) = compile_program(source, resolver, |ty| {
+        let (program, ref_names, ty) = compile_program(source, resolver, "formula", |ty| {
             (!matches!(ty, Ty::Num | Ty::Bool))
                 .then(|| format!("a formula to plot must be a number or true/false, this is {}", ty.name()))
         })?;
@@ -864,6 +866,8 @@ struct Parser<'s, 'r> {
     /// Name nodes of fixed-length arrays: their name and length, so that a
     /// constant index beyond the end is refused where it is written.
     fixed: Vec<(u32, String, usize)>,
+    /// What is parsed, for messages: "condition" or "formula".
+    noun: &'static str,
 }
 
 type PResult<T> = Result<T, ExprError>;
@@ -891,7 +895,7 @@ impl Parser<'_, '_> {
 
     fn describe(&self, t: &Token) -> String {
         if t.tok == Tok::End {
-            return "the end of the condition".to_string();
+            return format!("the end of the {}", self.noun);
         }
         let text = self.src.get(t.start..t.end).unwrap_or("?");
         if text.chars().count() > 24 {
@@ -915,7 +919,7 @@ impl Parser<'_, '_> {
         if self.program.nodes.len() >= MAX_NODES {
             return Err(self.err(
                 at,
-                format!("the condition is too large: more than {MAX_NODES} parts (names, literals, operators)"),
+                format!("the {} is too large: more than {MAX_NODES} parts (names, literals, operators)", self.noun),
             ));
         }
         self.program.nodes.push(node);
@@ -926,7 +930,7 @@ impl Parser<'_, '_> {
     fn enter(&mut self, at: usize) -> PResult<()> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(self.err(at, format!("the condition nests too deeply (more than {MAX_DEPTH} levels)")));
+            return Err(self.err(at, format!("the {} nests too deeply (more than {MAX_DEPTH} levels)", self.noun)));
         }
         Ok(())
     }
@@ -1378,6 +1382,9 @@ mod tests {
         let e = Formula::compile("odom.speed + lable", &sigs).unwrap_err();
         assert_eq!(e.column, 14);
         assert!(e.message.contains("unknown signal `lable`"), "{e}");
+        // Its messages say formula, not condition.
+        assert!(Formula::compile("", &sigs).unwrap_err().message.contains("the formula is empty"));
+        assert!(Formula::compile("(pose.x", &sigs).unwrap_err().message.contains("the end of the formula"));
         // A condition is still only a bool.
         assert!(Condition::compile("odom.speed", &sigs).is_err());
     }

@@ -55,7 +55,7 @@ pub mod replay;
 mod schema;
 pub mod wiring;
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -74,6 +74,11 @@ pub use schema::{leaf_schema, message_schema};
 
 /// Frames the cycle may get ahead of the file by (at 100 Hz, 40 s).
 pub const QUEUE_FRAMES: usize = 4096;
+
+/// The cycle an event names (`None`: it names none).
+fn event_cycle(event: &Event) -> Option<u64> {
+    event_to_json(event).1.get("cycle").and_then(Json::as_u64)
+}
 
 /// The metadata record written when the recording ends: which cycles it
 /// lacks (`dropped_cycles`, `ranges`).
@@ -245,6 +250,12 @@ impl Recorder {
                 _ => None,
             },
         };
+        // A running robot's events first: a change made while the wiring is read is then in
+        // the events (a manager not spawned changes only when its owner asks).
+        let early_events = match &source {
+            Source::Handle(h, _) => Some(h.events()),
+            Source::Manager(_) => None,
+        };
         // The skills' wiring and state now, so a viewer needs no robot file (`wiring`).
         let wired = match &mut source {
             Source::Manager(m) => m.request(Request::QuerySkills).ok(),
@@ -284,7 +295,7 @@ impl Recorder {
             Source::Manager(m) => (m.tap(tap_options), m.events()),
             Source::Handle(h, timeout) => {
                 // Events first: none of the tapped cycles' is missed.
-                let events = h.events();
+                let events = early_events.unwrap_or_else(|| h.events());
                 let tap = h
                     .tap(tap_options, timeout)
                     .map_err(|e| RecordError::Robot { path: path.to_path_buf(), message: e.to_string() })?;
@@ -402,6 +413,10 @@ impl Writing {
                 *hold = None;
             }
         };
+        // Events come before their cycle's frame (the manager sends them first); each is written
+        // right after the frame of its cycle, so a file cut short (a robot killed) holds the
+        // events of every cycle it holds.
+        let mut pending: VecDeque<Event> = VecDeque::new();
         loop {
             wait(&mut hold);
             let mut open = true;
@@ -409,6 +424,12 @@ impl Writing {
                 match tap.frames.try_recv() {
                     Ok(frame) => {
                         self.frame(&frame)?;
+                        pending.extend(events.try_iter());
+                        while pending.front().is_some_and(|e| event_cycle(e).is_none_or(|c| c <= frame.cycle)) {
+                            if let Some(e) = pending.pop_front() {
+                                self.event(&e)?;
+                            }
+                        }
                         tap.give_back(frame);
                     }
                     Err(TryRecvError::Empty) => break,
@@ -422,7 +443,8 @@ impl Writing {
             wait(&mut hold);
             // After the frames sent before them: an event is timed by its
             // cycle, from the frames around it.
-            while let Ok(event) = events.try_recv() {
+            pending.extend(events.try_iter());
+            for event in pending.drain(..) {
                 self.event(&event)?;
             }
             if !open {

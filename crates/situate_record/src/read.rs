@@ -319,8 +319,8 @@ struct Reader {
     statistics: Option<mcap::records::Statistics>,
     /// Whether a file cut short is read up to where it ends.
     recover: bool,
-    /// Where such a file ended: (byte, why).
-    cut: Option<(usize, String)>,
+    /// Where such a file ended: (byte, why, whether its data section was whole).
+    cut: Option<(usize, String, bool)>,
 }
 
 impl Reader {
@@ -341,8 +341,8 @@ impl Reader {
         for record in records(bytes, mcap::MAGIC.len()) {
             let (k, at, opcode, body) = match record {
                 Ok(r) => r,
-                Err(m) if self.recover && summary_start.is_none() => {
-                    self.cut = Some((end, m));
+                Err(m) if self.recover => {
+                    self.cut = Some((end, m, summary_start.is_some()));
                     return Ok(());
                 }
                 Err(m) => {
@@ -350,6 +350,12 @@ impl Reader {
                         .bad(format!("{m}: the file is cut short or damaged (--recover reads the cycles before it)")))
                 }
             };
+            // A power cut leaves blocks of zeros where the last writes were to go.
+            if self.recover && opcode == 0 && bytes[at..].iter().all(|&b| b == 0) {
+                let reason = format!("the rest of the file, {} bytes from byte {at}, is zeros", bytes.len() - at);
+                self.cut = Some((at, reason, summary_start.is_some()));
+                return Ok(());
+            }
             end = at + 9 + body.len();
             let place = || format!("record {k} at byte {at} ({})", record_name(opcode));
             let parse = |this: &Self| {
@@ -432,7 +438,7 @@ impl Reader {
         if self.recover {
             // The data section was read whole when the summary began: only the
             // index is lost, and nothing of the run.
-            self.cut = Some((end, format!("the file ends without its {missing}")));
+            self.cut = Some((end, format!("the file ends without its {missing}"), summary_start.is_some()));
             return Ok(());
         }
         Err(self.bad(format!(
@@ -630,11 +636,17 @@ impl Reader {
 
     /// Checks what was read as a whole, and indexes it.
     fn finish(mut self) -> Result<Recording, ReadError> {
+        if let Some((at, reason, whole)) = self.cut.take() {
+            if self.rec.metadata.is_empty() {
+                return Err(self.bad(format!(
+                    "cut short at byte {at} before its `situate` metadata record was whole ({reason}): nothing of \
+                     the run can be read"
+                )));
+            }
+            self.trim_cut(at, reason, whole);
+        }
         if self.rec.metadata.is_empty() {
             return Err(self.bad("no `situate` metadata record: not a recording made by situate".into()));
-        }
-        if let Some((at, reason)) = self.cut.take() {
-            self.trim_cut(at, reason);
         }
         if let Some(s) = self.statistics.as_ref().filter(|_| self.rec.cut_short.is_none()) {
             if s.message_count != self.rec.messages || u64::from(s.chunk_count) != self.chunks {
@@ -715,11 +727,14 @@ impl Reader {
     }
 
     /// A file cut short at byte `at`: the last cycle begun may lack its
-    /// fingerprint, keyframe or winners, so the cycles kept end one before it;
-    /// what is later (cycles, events, winners, keyframes) is left out.
-    fn trim_cut(&mut self, at: usize, reason: String) {
+    /// fingerprint, keyframe, winners or events, so the cycles kept end one
+    /// before it; what is later (cycles, events, winners, keyframes) is left
+    /// out. When its data section is whole (the cut is in the summary after
+    /// it), every cycle is kept.
+    fn trim_cut(&mut self, at: usize, reason: String, whole: bool) {
         let begun = self.rec.cycles.keys().next_back().copied();
-        let last = begun.and_then(|b| self.rec.cycles.range(..b).next_back().map(|(&c, _)| c));
+        let last =
+            if whole { begun } else { begun.and_then(|b| self.rec.cycles.range(..b).next_back().map(|(&c, _)| c)) };
         let keep = |c: u64| last.is_some_and(|l| c <= l);
         let before = self.rec.cycles.len() as u64;
         self.rec.cycles.retain(|&c, _| keep(c));

@@ -284,11 +284,19 @@ fn a_file_cut_short_is_read_up_to_its_last_complete_cycle_when_asked() {
     let chunks = chunk_offsets(&bytes);
     assert!(chunks.len() >= 2, "{} chunks", chunks.len());
     let dst = temp("recover");
-    // Cut inside the second chunk, at the first chunk's end, and past the
-    // data section (the summary lost, the data whole).
-    let data_end = bytes.len() - 8 - 9 - 20; // the footer, its magic: inside the summary
-    for (cut, whole_data) in [(chunks[1] + 100, false), (chunks[1], false), (data_end, true)] {
-        std::fs::write(&dst, &bytes[..cut]).unwrap();
+    // Cut inside the second chunk, at the first chunk's end, inside it with
+    // zeros after (a power cut's unwritten blocks), and past the data section
+    // (the summary lost, the data whole): at the footer, and inside it.
+    let footer = bytes.len() - 8 - 9 - 20; // the footer record (20 bytes) and the closing magic
+    let zeros = |cut: usize| [&bytes[..cut], &[0u8; 4096][..]].concat();
+    for (cut, file, whole_data) in [
+        (chunks[1] + 100, bytes[..chunks[1] + 100].to_vec(), false),
+        (chunks[1], bytes[..chunks[1]].to_vec(), false),
+        (chunks[1] + 100 + 4096, zeros(chunks[1] + 100), false),
+        (footer, bytes[..footer].to_vec(), true),
+        (footer + 3, bytes[..footer + 3].to_vec(), true),
+    ] {
+        std::fs::write(&dst, &file).unwrap();
         assert!(refused(&dst).contains("--recover"), "{cut}: the refusal names the way to read it");
         let rec = Recording::open_cut_short(&dst).unwrap_or_else(|e| panic!("{cut}: {e}"));
         let info = rec.cut_short.clone().expect("said to be cut short");
@@ -298,8 +306,9 @@ fn a_file_cut_short_is_read_up_to_its_last_complete_cycle_when_asked() {
         assert_eq!(first, 1);
         assert_eq!(Some(last), info.last_cycle);
         if whole_data {
-            // Every cycle but the last, which may lack a message.
-            assert_eq!((last, info.cycles_dropped), (CYCLES - 1, 1), "{info:?}");
+            // The data section whole: every cycle.
+            assert_eq!((last, info.cycles_dropped), (CYCLES, 0), "{info:?}");
+            assert_eq!(rec.events.len(), whole.events.len());
         } else {
             assert!(last < CYCLES - 1 && last > 100, "{cut}: {last}");
         }
@@ -311,6 +320,18 @@ fn a_file_cut_short_is_read_up_to_its_last_complete_cycle_when_asked() {
         assert!(rec.events.iter().all(|(_, e)| e["cycle"].as_u64().is_some_and(|c| c <= last)));
         assert!(rec.keyframes.keys().all(|&k| k <= last));
         assert_eq!(rec.metadata, whole.metadata, "the metadata is at the file's start");
+    }
+    // Cut inside the metadata record at the file's start: nothing to read, and said so.
+    let mut pos = 8;
+    while bytes[pos] != 0x0C {
+        pos += 9 + u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().unwrap()) as usize;
+    }
+    std::fs::write(&dst, &bytes[..pos + 40]).unwrap();
+    match Recording::open_cut_short(&dst) {
+        Err(ReadError::Bad { message, .. }) => {
+            assert!(message.contains("before its `situate` metadata record was whole"), "{message}")
+        }
+        other => panic!("a file cut in its metadata read: {:?}", other.map(|r| r.span())),
     }
     // Damage that is not a cut is refused as before.
     let mut flipped = bytes[..chunks[1] + 100].to_vec();

@@ -326,3 +326,60 @@ fn a_running_simulated_robot_recorded_through_its_handle_waits_for_a_slow_writer
     assert_eq!(last - first + 1, summary.frames, "no cycle missing: {summary:?}");
     assert_eq!(summary.dropped, 0, "{summary:?}");
 }
+
+#[test]
+fn each_cycles_events_follow_its_frame_so_a_file_cut_short_keeps_the_events_of_the_cycles_it_holds() {
+    let path = temp("events-in-order");
+    let mut m = manager();
+    // The writer let read only now and then: each round reads the hundreds of cycles queued
+    // meanwhile, as when a fast simulated robot outruns it.
+    let (release, hold) = crossbeam_channel::bounded::<()>(0);
+    let options = Options { queue_frames: 512, hold: Some(hold) };
+    let recorder =
+        Recorder::start_with_options(&path, &mut m, BTreeMap::new(), options).unwrap_or_else(|e| panic!("{e}"));
+    let runner = std::thread::spawn(move || {
+        for k in 0..8000u64 {
+            if k % 7 == 3 {
+                let skills = vec!["c2".to_string()];
+                let request = if (k / 7) % 2 == 0 {
+                    Request::Activate { skills, with_providers: false }
+                } else {
+                    Request::Deactivate { skills }
+                };
+                m.request(request).unwrap_or_else(|e| panic!("{e}"));
+            }
+            m.cycle();
+        }
+    });
+    while !runner.is_finished() {
+        let _ = release.send_timeout((), std::time::Duration::from_millis(10));
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    runner.join().expect("the robot ran");
+    let finishing = std::thread::spawn(move || recorder.finish());
+    while !finishing.is_finished() {
+        let _ = release.send_timeout((), std::time::Duration::from_millis(10));
+    }
+    finishing.join().expect("the writer").unwrap_or_else(|e| panic!("{e}"));
+    let bytes = std::fs::read(&path).unwrap();
+    let whole = Recording::open(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(whole.span(), Some((1, 8000)));
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let chunks: Vec<usize> = summary.chunk_indexes.iter().map(|c| c.chunk_start_offset as usize).collect();
+    assert!(chunks.len() >= 2, "{} chunks", chunks.len());
+    let cycle_of = |e: &serde_json::Value| e["cycle"].as_u64().unwrap_or(0);
+    // Cut inside each chunk after the first: the cycles kept have every event they had.
+    let cut = path.with_extension("cut.mcap");
+    for &at in &chunks[1..] {
+        std::fs::write(&cut, &bytes[..at + 100]).unwrap();
+        let rec = Recording::open_cut_short(&cut).unwrap_or_else(|e| panic!("{e}"));
+        let last = rec.cut_short.as_ref().and_then(|c| c.last_cycle).expect("cycles kept");
+        let expected: Vec<_> = whole.events.iter().filter(|(_, e)| cycle_of(e) <= last).collect();
+        let kept: Vec<_> = rec.events.iter().collect();
+        assert!(expected.len() > 100, "{} events up to cycle {last}", expected.len());
+        assert_eq!(kept.len(), expected.len(), "the events of the cycles kept, up to cycle {last}");
+        assert_eq!(kept, expected);
+    }
+    let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_file(&cut);
+}
