@@ -61,7 +61,12 @@ describe("the page's layout", () => {
       const other = await openPage(fresh, url);
       await until(async () => JSON.stringify(await plotsShown(other)) === JSON.stringify(["odom.x,odom.y", "sonar.range[3]"]), "the shared plots");
       const cycle = Number((await hash(page)).get("cycle"));
-      await until(async () => Number(await other.getByTestId("timeline").getAttribute("data-shown")) === cycle, "the shared cycle");
+      // On a timeout, say what the bar showed (its mode, the cycle shown, its note, its span).
+      const bar = other.getByTestId("timeline");
+      const state = async () => `mode ${await bar.getAttribute("data-mode")}, shown ${await bar.getAttribute("data-shown")}, note "${await text(other.getByTestId("tl-note")).catch(() => "?")}", ${await text(other.getByTestId("tl-span")).catch(() => "?")}, status "${await text(other.getByTestId("status")).catch(() => "?")}"`;
+      await until(async () => Number(await bar.getAttribute("data-shown")) === cycle, "the shared cycle").catch(async (e) => {
+        throw new Error(`${e.message} ${cycle}: ${await state()}`);
+      });
       // A hand-made address: a cycle that is no number is ignored, the plot still comes.
       const base = url.split("#")[0];
       const odd = await openPage(fresh, `${base}#plots=odom.theta&cycle=soon`);
