@@ -55,6 +55,11 @@ describe("the page's layout", () => {
   });
 
   test("the address opened in a fresh browser shows the same page; a malformed part is left out", async () => {
+    // The address is saved a moment after a change (at most a few times a second; later on a
+    // loaded machine): share it once it names the cycle shown, as a user copying it would.
+    const shown = await page.getByTestId("timeline").getAttribute("data-shown");
+    assert.ok(shown !== null, "the first page shows a cycle");
+    await until(async () => (await hash(page)).get("cycle") === shown, `the address names cycle ${shown}`);
     const url = await page.evaluate(() => location.href);
     const fresh = await startBrowser(); // another browser: the address is all it has
     try {
