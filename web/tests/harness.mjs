@@ -228,6 +228,36 @@ export function startProgram(program, args) {
   return p;
 }
 
+/** Runs `situate ARGS` in the repository to its end (two minutes at most); resolves with its output. */
+export function runSituate(...args) {
+  return new Promise((resolve, reject) => {
+    execFile(situateBin, args, { cwd: repo, timeout: 120_000 }, (err, stdout, stderr) => {
+      if (err) reject(new Error(`situate ${args.join(" ")}: ${err.message}\n${stderr}`));
+      else resolve(stdout);
+    });
+  });
+}
+
+/** Starts `situate replay FILE ARGS --gui` on a free port and waits until it serves; the result is
+ *  `startProgram`'s, with the GUI's `url`. */
+export async function startReplayGui(file, args = []) {
+  const port = await freePort();
+  const p = startProgram(situateBin, ["replay", file, ...args, "--gui", `127.0.0.1:${port}`]);
+  await until(async () => p.err.includes("GUI on http") || p.exit !== null, `situate replay ${args.join(" ")} to serve its GUI`);
+  if (p.exit !== null) throw new Error(`situate replay exited: ${p.out}\n${p.err}`);
+  p.url = `http://127.0.0.1:${port}/`;
+  return p;
+}
+
+/** Stops a program `startProgram` started: SIGINT, and SIGKILL if it is still there 10 s later. */
+export async function stopProgram(p) {
+  if (!p || p.exit !== null) return;
+  p.child.kill("SIGINT");
+  const timer = setTimeout(() => p.child.kill("SIGKILL"), 10_000);
+  await p.exited;
+  clearTimeout(timer);
+}
+
 /**
  * Polls `f` until it returns a truthy value (or throws the last error after `timeoutMs`). The
  * bound only turns a hang into a failure: it is generous so that a loaded machine never trips it.

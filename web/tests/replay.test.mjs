@@ -6,57 +6,34 @@
 // not asserted (timed assertions are flaky on a shared machine).
 
 import assert from "node:assert/strict";
-import { spawn, execFile } from "node:child_process";
 import { mkdtempSync, rmSync } from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { after, before, describe, test } from "node:test";
-import { freePort, openPage, repo, screenshotPath, situateBin, startBrowser, stopBrowser, until } from "./harness.mjs";
+import { openPage, runSituate, screenshotPath, startBrowser, startReplayGui, stopBrowser, stopProgram, until } from "./harness.mjs";
 
 const CYCLES = 400;
 const text = async (locator) => (await locator.textContent()) ?? "";
 
-function run(...args) {
-  return new Promise((resolve, reject) => {
-    execFile(situateBin, args, { cwd: repo, timeout: 120_000 }, (err, stdout, stderr) => {
-      if (err) reject(new Error(`situate ${args.join(" ")}: ${err.message}\n${stderr}`));
-      else resolve(stdout);
-    });
-  });
-}
-
 describe("a recording replayed into the GUI", () => {
   let dir;
-  let child;
-  let out = "";
-  let err = "";
+  let replay;
   let browser;
   let page;
 
   before(async () => {
     dir = mkdtempSync(path.join(os.tmpdir(), "situate-replay-gui-"));
     const file = path.join(dir, "toy.mcap");
-    await run("run", "examples/toybot.yaml", "--clock", "simulated", "--cycles", String(CYCLES), "--no-link", "--record", file);
-    const port = await freePort();
-    child = spawn(situateBin, ["replay", file, "--gui", `127.0.0.1:${port}`], { cwd: repo, stdio: ["ignore", "pipe", "pipe"] });
-    child.stdout.on("data", (d) => (out += d));
-    child.stderr.on("data", (d) => (err += d));
-    await until(async () => err.includes("GUI on http") || child.exitCode !== null, "the replay's GUI to start");
-    assert.equal(child.exitCode, null, `situate replay exited: ${out}\n${err}`);
+    await runSituate("run", "examples/toybot.yaml", "--clock", "simulated", "--cycles", String(CYCLES), "--no-link", "--record", file);
+    replay = await startReplayGui(file);
     browser = await startBrowser();
-    page = await openPage(browser, `http://127.0.0.1:${port}/`, { panels: false });
+    page = await openPage(browser, replay.url, { panels: false });
   });
 
   after(async () => {
     if (page) await page.screenshot({ path: screenshotPath("replay-gui"), fullPage: true }).catch(() => undefined);
     await stopBrowser(browser).catch(() => undefined);
-    if (child && child.exitCode === null) {
-      const exited = new Promise((resolve) => child.once("exit", resolve));
-      child.kill("SIGINT");
-      const timer = setTimeout(() => child.kill("SIGKILL"), 10_000);
-      await exited;
-      clearTimeout(timer);
-    }
+    await stopProgram(replay);
     if (dir) rmSync(dir, { recursive: true, force: true });
   });
 
@@ -67,7 +44,7 @@ describe("a recording replayed into the GUI", () => {
   };
 
   test("the replay matched its recording, and the timeline holds every replayed cycle", async () => {
-    assert.match(out, /identical: every cycle matches the recording/);
+    assert.match(replay.out, /identical: every cycle matches the recording/);
     await until(async () => /holds cycles 1–400/.test(await text(page.getByTestId("tl-span"))), "cycles 1–400 on the timeline");
   });
 

@@ -3,30 +3,18 @@
 // plots of the whole recording, built from the wiring the recording holds.
 
 import assert from "node:assert/strict";
-import { spawn, execFile } from "node:child_process";
 import { copyFileSync, mkdtempSync, rmSync } from "node:fs";
 import os from "node:os";
 import path from "node:path";
 import { after, before, describe, test } from "node:test";
-import { freePort, openPage, repo, screenshotPath, situateBin, startBrowser, stopBrowser, until } from "./harness.mjs";
+import { openPage, repo, runSituate, screenshotPath, startBrowser, startReplayGui, stopBrowser, stopProgram, until } from "./harness.mjs";
 
 const CYCLES = 300;
 const text = async (locator) => (await locator.textContent()) ?? "";
 
-function run(...args) {
-  return new Promise((resolve, reject) => {
-    execFile(situateBin, args, { cwd: repo, timeout: 120_000 }, (err, stdout, stderr) => {
-      if (err) reject(new Error(`situate ${args.join(" ")}: ${err.message}\n${stderr}`));
-      else resolve(stdout);
-    });
-  });
-}
-
 describe("a recording viewed without its robot", () => {
   let dir;
-  let child;
-  let out = "";
-  let err = "";
+  let replay;
   let browser;
   let page;
 
@@ -35,36 +23,25 @@ describe("a recording viewed without its robot", () => {
     const robot = path.join(dir, "robot.yaml");
     copyFileSync(path.join(repo, "examples", "toybot.yaml"), robot);
     const file = path.join(dir, "toy.mcap");
-    await run("run", robot, "--clock", "simulated", "--cycles", String(CYCLES), "--no-link", "--no-gui", "--record", file);
+    await runSituate("run", robot, "--clock", "simulated", "--cycles", String(CYCLES), "--no-link", "--no-gui", "--record", file);
     rmSync(robot);
-    const port = await freePort();
-    child = spawn(situateBin, ["replay", file, "--view", "--gui", `127.0.0.1:${port}`], { cwd: repo, stdio: ["ignore", "pipe", "pipe"] });
-    child.stdout.on("data", (d) => (out += d));
-    child.stderr.on("data", (d) => (err += d));
-    await until(async () => err.includes("GUI on http") || child.exitCode !== null, "the viewer's GUI to start");
-    assert.equal(child.exitCode, null, `situate replay --view exited: ${out}\n${err}`);
+    replay = await startReplayGui(file, ["--view"]);
     browser = await startBrowser();
-    page = await openPage(browser, `http://127.0.0.1:${port}/`, { panels: false });
+    page = await openPage(browser, replay.url, { panels: false });
   });
 
   after(async () => {
     if (page) await page.screenshot({ path: screenshotPath("viewer-gui"), fullPage: true }).catch(() => undefined);
     await stopBrowser(browser).catch(() => undefined);
-    if (child && child.exitCode === null) {
-      const exited = new Promise((resolve) => child.once("exit", resolve));
-      child.kill("SIGINT");
-      const timer = setTimeout(() => child.kill("SIGKILL"), 10_000);
-      await exited;
-      clearTimeout(timer);
-    }
+    await stopProgram(replay);
     if (dir) rmSync(dir, { recursive: true, force: true });
   });
 
   const shown = async () => Number(await page.getByTestId("timeline").getAttribute("data-shown"));
 
   test("the page says the file is viewed, nothing re-simulated, and holds every cycle", async () => {
-    assert.match(out, new RegExp(`viewed ${CYCLES} cycles .*nothing re-simulated`));
-    assert.match(out, /identical: every cycle matches the recording/);
+    assert.match(replay.out, new RegExp(`viewed ${CYCLES} cycles .*nothing re-simulated`));
+    assert.match(replay.out, /identical: every cycle matches the recording/);
     await until(async () => !(await page.getByTestId("replay-banner").isHidden()), "the banner");
     assert.match(await text(page.getByTestId("replay-banner")), /Replay of .*toy\.mcap: viewed from the file alone, nothing re-simulated/);
     await until(async () => new RegExp(`holds cycles 1–${CYCLES}`).test(await text(page.getByTestId("tl-span"))), "every cycle on the timeline");
