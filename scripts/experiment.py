@@ -43,12 +43,26 @@ DESIGNS = ("sequenced", "reactive")
 #: ``plain``: the building alone; ``hard``: with the delivery's hard set (``hard_args``).
 CONDITIONS = ("plain", "hard")
 KS = (1, 2, 4, 8)
-#: Each design's program, measured for the design-cost table (paths from the repository top).
-#: The link layer both designs run on (demo/link.py) is counted for neither.
+#: Each design's program, measured for the design-cost table (paths from the repository top): the
+#: modules of its subpackage of demo/courier. What both designs run on is counted for neither:
+#: the link (courier/link.py), the geometry (courier/geometry.py), the mission and what both
+#: read the building with (courier/mission.py), and the program that starts either
+#: (courier/main.py, with the entry files demo/deliver.py and demo/reactive.py).
 DESIGN_SOURCES: dict[str, tuple[str, ...]] = {
-    "sequenced": ("demo/deliver.py", "demo/sequencing.py", "demo/routes.py"),
-    "reactive": ("demo/reactive.py", "demo/reactive_route.py", "demo/reactive_car.py"),
+    "sequenced": (
+        "demo/courier/sequenced/delivery.py",
+        "demo/courier/sequenced/behaviours.py",
+        "demo/courier/sequenced/routes.py",
+    ),
+    "reactive": (
+        "demo/courier/reactive/rules.py",
+        "demo/courier/reactive/route.py",
+        "demo/courier/reactive/car.py",
+        "demo/courier/reactive/state.py",
+    ),
 }
+#: The reactive design's rule list, whose rules are counted.
+RULES_SOURCE = "demo/courier/reactive/rules.py"
 RUNS_FILE = "experiment-runs.jsonl"
 
 
@@ -274,7 +288,7 @@ def design_cost(root: Path, designs: Iterable[str]) -> dict[str, dict[str, Any]]
         files = {f: count_loc((root / f).read_text()) for f in DESIGN_SOURCES.get(d, ())}
         entry: dict[str, Any] = {"files": files, "loc": sum(files.values())}
         if d == "reactive":
-            entry.update(count_rules((root / "demo" / "reactive.py").read_text()))
+            entry.update(count_rules((root / RULES_SOURCE).read_text()))
         cost[d] = entry
     return cost
 

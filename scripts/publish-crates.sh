@@ -36,7 +36,8 @@ check() {
     say "$crate: $(wc -l <<<"$list") files, including $*"
 }
 check situate_gui web-dist/index.html
-check situate_cli data/demo/robot.yaml data/demo/deliver.py data/maps/default.yaml \
+check situate_cli data/demo/robot.yaml data/demo/deliver.py data/demo/courier/main.py \
+    data/demo/courier/sequenced/delivery.py data/demo/courier/reactive/rules.py data/maps/default.yaml \
     data/cmake/situateConfig.cmake data/include/situate.h data/include/situate.hpp
 
 case $MODE in

@@ -1,7 +1,7 @@
 """The situate link to the robot, as a mission's sequencer and the reactive robot use it.
 
-The mechanics under both of the experiment's designs (`sequencing.Sequencer`, the sequenced
-robot's behaviours, and `reactive.Reactive`, the rule list), in `Link`:
+The mechanics under both of the experiment's designs (`sequenced.behaviours.Sequencer`, the
+sequenced robot's behaviours, and `reactive.rules.Reactive`, the rule list), in `Link`:
 
 - the link, used so that a run on the simulated clock replays exactly: the robot's program acts
   only at the cycle a monitor fired (monitors registered with ``pause``), requests that change
@@ -11,8 +11,7 @@ robot's behaviours, and `reactive.Reactive`, the rule list), in `Link`:
 - switching skills (`use`: the active set), parameters (`set`, `restore`), reading values
   (`value`, `odom`, `sonar`); progress lines (`say`, `phase`).
 
-Beside it, what both read the robot with: its odometry pose (`Pose`, `wrap`) and its sonar
-ring (`SONARS`, `bearing_of`).
+What both read the robot with, its odometry pose and its sonar ring, is `geometry`'s.
 """
 
 from __future__ import annotations
@@ -22,15 +21,14 @@ import contextlib
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 from typing import Any
+
+from courier.geometry import Pose
 
 import situate
 from situate.events import MonitorFired, SkillFaulted
 
-#: The sonars of the robot's ring (sonar 0 ahead, counter-clockwise).
-SONARS = 24
 #: A skill that faults (a body over its budget on a loaded machine, say) is switched on again,
 #: unless it faulted this many times within FAULT_WINDOW_S (simulated): then the mission fails.
 FAULTS_IN_WINDOW = 5
@@ -49,52 +47,6 @@ class PhaseFailed(Exception):
 
 class OutOfTime(Exception):
     """The mission's time limit passed."""
-
-
-@dataclass
-class Pose:
-    """An odometry pose."""
-
-    x: float
-    y: float
-    theta: float
-
-
-def wrap(a: float) -> float:
-    """``a`` wrapped into (-pi, pi]."""
-    a = math.fmod(a, 2 * math.pi)
-    if a > math.pi:
-        a -= 2 * math.pi
-    elif a <= -math.pi:
-        a += 2 * math.pi
-    return a
-
-
-def bearing_of(i: int) -> float:
-    """Bearing of sonar ``i`` in the robot frame (sonar 0 ahead, counter-clockwise)."""
-    return wrap(i * 2 * math.pi / SONARS)
-
-
-def sonar_toward(bearing: float) -> int:
-    """The sonar whose axis is nearest ``bearing`` (rad, robot frame)."""
-    return round(wrap(bearing) / (2 * math.pi / SONARS)) % SONARS
-
-
-def live_sonar_ahead(dead_mask: int) -> int:
-    """The sonar nearest ahead that is not dead (bit i of ``dead_mask``: sonar i is dead).
-
-    `std.sonar_filter` fills a dead sonar in with the nearer of its neighbours' readings: in
-    a car facing its door, those see the jambs, and the door never reads open. Sonar 0 if
-    all are dead.
-    """
-    live = [k for k in range(SONARS) if not dead_mask >> k & 1]
-    return min(live, key=lambda k: abs(bearing_of(k))) if live else 0
-
-
-def mean_heading(headings: Iterable[float]) -> float:
-    """The circular mean of ``headings`` (rad): right across the ±pi seam too."""
-    hs = list(headings)
-    return math.atan2(sum(math.sin(h) for h in hs), sum(math.cos(h) for h in hs))
 
 
 class Link:

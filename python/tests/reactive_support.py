@@ -11,11 +11,12 @@ from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "demo"))  # the demo's modules import each other by name
+sys.path.insert(0, str(REPO / "demo"))  # the demo's package, `courier`, is there
 
-from deliver import Mission  # noqa: E402
-from link import SONARS, Pose  # noqa: E402
-from reactive import Reactive, Senses  # noqa: E402
+from courier.geometry import SONARS, Pose  # noqa: E402
+from courier.mission import Mission  # noqa: E402
+from courier.reactive.rules import Reactive  # noqa: E402
+from courier.reactive.state import Senses  # noqa: E402
 
 ROUTE: dict[str, list[dict[str, Any]]] = {
     "button_to_office": [

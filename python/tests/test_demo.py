@@ -1,4 +1,4 @@
-"""The delivery demo (demo/deliver.py) on the simulated robot, through `situate demo`.
+"""The delivery demo (demo/deliver.py: demo/courier) on the simulated robot, via `situate demo`.
 
 Runs the `situate` program ($SITUATE_BIN, else the package's console script next to this
 interpreter: the release build `scripts/python.sh` installs): a headless sample of seeds of the
@@ -9,6 +9,7 @@ assertions: outcomes are read from the simulator's ground truth (`--json`).
 
 from __future__ import annotations
 
+import ast
 import importlib.util
 import json
 import math
@@ -222,7 +223,7 @@ def test_a_task_the_building_cannot_hold_is_refused_naming_the_stop() -> None:
 
 @needs_bin
 def test_the_reactive_robot_delivers_without_a_sequencer() -> None:
-    # The experiment's baseline (demo/reactive.py): a rule list every cycle, no phases.
+    # The experiment's baseline (demo/courier/reactive): a rule list every cycle, no phases.
     out = demo(1, extra=["--mode", "reactive"])
     assert out["delivered"], why(out)
     assert out["mode"] == "reactive"
@@ -326,19 +327,83 @@ def test_a_seed_replays_exactly() -> None:
 # ----- the sequencer's own geometry, without a robot ----------------------------------------
 
 
-def _deliver() -> ModuleType:
-    sys.path.insert(0, str(ROOT / "demo"))  # deliver.py imports the modules beside it
-    spec = importlib.util.spec_from_file_location("deliver", ROOT / "demo" / "deliver.py")
+def _demo_on_path() -> None:
+    """Puts demo/ on the path: the package `courier` is there, beside the entry programs."""
+    if str(ROOT / "demo") not in sys.path:
+        sys.path.insert(0, str(ROOT / "demo"))
+
+
+def _entry(name: str) -> ModuleType:
+    """Imports the entry program demo/NAME.py as `situate demo` runs it (the package beside it)."""
+    _demo_on_path()
+    spec = importlib.util.spec_from_file_location(name, ROOT / "demo" / f"{name}.py")
     assert spec is not None
     assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    sys.modules["deliver"] = module  # dataclasses look their module up
     spec.loader.exec_module(module)
     return module
 
 
+def test_the_entry_programs_run_the_package() -> None:
+    _demo_on_path()
+    from courier.main import run
+
+    # Imported, they only name the package's program (run as a program, they run it).
+    assert _entry("deliver").run is run
+    assert _entry("reactive").run is run
+
+
+def _imports(path: Path, package: str) -> set[str]:
+    """The modules ``path`` imports (every import: also under TYPE_CHECKING, in functions)."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                base = ".".join([*up, base] if base else up)
+            found.add(base)
+            found.update(f"{base}.{a.name}" for a in node.names)
+    return found
+
+
+def test_no_module_of_the_demo_imports_one_that_imports_it_back() -> None:
+    demo = ROOT / "demo"
+    modules: dict[str, Path] = {}
+    for path in demo.rglob("*.py"):
+        parts = list(path.relative_to(demo).with_suffix("").parts)
+        modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        graph[name] = {m for m in _imports(path, package) if m in modules and m != name}
+    # The two designs share the link, the geometry and the mission, never each other's modules.
+    for a, b in (("sequenced", "reactive"), ("reactive", "sequenced")):
+        crossing = {
+            m: i
+            for m in graph
+            for i in graph[m]
+            if m.startswith(f"courier.{a}") and i.startswith(f"courier.{b}")
+        }
+        assert not crossing, f"the {a} design imports the {b} one's modules: {crossing}"
+    # No circle: every module reaches only modules that do not reach it.
+    for start in graph:
+        seen: set[str] = set()
+        todo = list(graph[start])
+        while todo:
+            m = todo.pop()
+            assert m != start, f"{start} imports itself back (through {sorted(seen)})"
+            if m not in seen:
+                seen.add(m)
+                todo.extend(graph[m])
+
+
 def test_mission_reads_the_maps_mission_section() -> None:
-    d = _deliver()
+    _demo_on_path()
+    from courier.mission import Mission
+
     text = json.dumps(
         {
             "start": {"floor": -1, "x": 1.5, "y": 1.5, "theta": 0.0},
@@ -352,37 +417,41 @@ def test_mission_reads_the_maps_mission_section() -> None:
             "route": {"car_to_office": [{"turn": "right"}, {"home": 40}]},
         }
     )
-    m = d.Mission.from_json(text)
+    m = Mission.from_json(text)
     assert (m.goal_floor, m.start_floor, m.cars, m.message) == (4, -1, 4, "Hi")
     assert m.route["car_to_office"][1] == {"home": 40}
 
 
 def test_heading_off_holds_exactly_outside_the_allowed_range_also_where_it_wraps() -> None:
-    d = _deliver()
-    seq = sys.modules["routes"]
+    _demo_on_path()
+    from courier.geometry import wrap
+    from courier.sequenced.routes import heading_off
+
     for along_deg in (0, 45, 150, 179, -179, -120, 180):
         along = math.radians(along_deg)
-        cond = seq.heading_off(along, math.radians(60))
+        cond = heading_off(along, math.radians(60))
         # The monitor language's operators, as Python (the condition reads odom.theta only).
         as_python = cond.replace("&&", " and ").replace("||", " or ").replace("odom.theta", "t")
         for probe_deg in range(-179, 181, 7):
             t = math.radians(probe_deg)
-            off = abs(d.wrap(t - along)) > math.radians(60)
+            off = abs(wrap(t - along)) > math.radians(60)
             assert eval(as_python, {}, {"t": t}) == off, (along_deg, probe_deg, cond)
 
 
 def test_side_walls_are_the_nearest_square_to_each_side_and_corners_count_only_when_asked() -> None:
-    _deliver()
-    seq = sys.modules["routes"]
+    _demo_on_path()
+    from courier.geometry import SONARS, bearing_of
+    from courier.sequenced.routes import side_walls
+
     ranges = []
-    for i in range(seq.SONARS):
-        b = seq.bearing_of(i)
+    for i in range(SONARS):
+        b = bearing_of(i)
         across = math.sin(b)
         ranges.append(4.0 if abs(across) < 0.25 else (0.9 if across > 0 else 1.1) / abs(across))
-    left, right = seq.side_walls(ranges)
+    left, right = side_walls(ranges)
     assert (round(left, 6), round(right, 6)) == (0.9, 1.1)
     # A corner 0.5 m away at 30° to the left: a wall of the way for recentring (30°-150°),
     # none for the corridor's width (60°-120° only).
     ranges[2] = 0.5
-    assert math.isclose(seq.side_walls(ranges)[0], 0.25)
-    assert math.isclose(seq.side_walls(ranges, 30.0)[0], 0.9)
+    assert math.isclose(side_walls(ranges)[0], 0.25)
+    assert math.isclose(side_walls(ranges, 30.0)[0], 0.9)

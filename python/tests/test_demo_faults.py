@@ -1,4 +1,4 @@
-"""The demo's link layer (demo/link.py) against a skill that faults.
+"""The demo's link layer (demo/courier/link.py) against a skill that faults.
 
 A fault switches a skill off (the manager's guard against a body over its budget, which a busy
 machine can cause in a healthy skill). A sequencer that waits for that skill's output must not
@@ -21,9 +21,9 @@ from support import Manager, run
 import situate
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "demo"))  # the demo's modules import each other by name
+sys.path.insert(0, str(REPO / "demo"))  # the demo's package, `courier`, is there
 
-from link import EVENT_KINDS, Link, PhaseFailed  # noqa: E402
+from courier.link import EVENT_KINDS, Link, PhaseFailed  # noqa: E402
 
 SKILLS = """
 import situate

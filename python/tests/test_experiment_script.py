@@ -176,9 +176,9 @@ def _results() -> dict[str, Any]:
             "skipped": [{"seed": 50001, "reason": "fewer than 3 floors"}],
         },
         "design_cost": {
-            "sequenced": {"files": {"demo/deliver.py": 10}, "loc": 10},
+            "sequenced": {"files": {"demo/courier/sequenced/delivery.py": 10}, "loc": 10},
             "reactive": {
-                "files": {"demo/reactive.py": 5},
+                "files": {"demo/courier/reactive/rules.py": 5},
                 "loc": 5,
                 "rules": 3,
                 "condition_methods": 2,
@@ -199,8 +199,8 @@ def test_render_report_keeps_the_reading_and_regenerates_the_rest() -> None:
     assert f"{rep.READING_OPEN}\n{rep.READING_PLACEHOLDER}\n{rep.READING_CLOSE}" in first
     assert "1 because fewer than 3 floors" in first
     assert "| sequenced | 2 | 2/2 | 100% |" in first
-    assert "| reactive | `demo/reactive.py` 5" in first
-    assert "the link layer, `demo/link.py`, is shared by both designs" in first
+    assert "| reactive | `demo/courier/reactive/rules.py` 5" in first
+    assert "what both designs run on is counted for neither" in first
     assert "| 3 | 2 (+1 inline) |" in first
     hand = first.replace(rep.READING_PLACEHOLDER, "Sequencing wins at k = 8.")
     second = rep.render_report(_results(), rep.reading_section(hand), TASK_CLASS)
@@ -254,8 +254,14 @@ def test_design_cost_of_the_repositorys_designs() -> None:
     cost = exp.design_cost(ROOT, ["sequenced", "reactive"])
     assert set(cost["sequenced"]["files"]) == set(exp.DESIGN_SOURCES["sequenced"])
     assert cost["sequenced"]["loc"] == sum(cost["sequenced"]["files"].values())
-    # The link layer both run on is counted for neither.
-    assert all("demo/link.py" not in c["files"] for c in cost.values())
+    # Each design's files are its subpackage's modules, all of them; what both run on (the
+    # link, the geometry, the mission, the program) is counted for neither.
+    for design in ("sequenced", "reactive"):
+        package = ROOT / "demo" / "courier" / design
+        modules = {str(p.relative_to(ROOT)) for p in package.glob("*.py") if p.stem != "__init__"}
+        assert set(cost[design]["files"]) == modules, design
+    shared = ("link.py", "geometry.py", "mission.py", "main.py")
+    assert not any(f.endswith(shared) for c in cost.values() for f in c["files"])
     assert cost["reactive"]["rules"] >= 5
     assert cost["reactive"]["condition_methods"] >= 5
 

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from support import free_port, situate, situate_program
+from support import REPO, free_port, situate, situate_program
 
 import situate as situate_pkg
 from situate import _cli
@@ -40,6 +40,8 @@ def test_the_demo_maps_and_examples_ship_with_the_package() -> None:
     data = _cli.data_dir()
     assert data is not None, "the wheel ships situate/_data (scripts/package-data.sh)"
     shipped = ["demo/robot.yaml", "demo/deliver.py", "maps/small.yaml", "examples/toybot.yaml"]
+    # The program is the package beside demo/deliver.py: every module of it ships.
+    shipped += [str(p.relative_to(REPO)) for p in (REPO / "demo" / "courier").rglob("*.py")]
     shipped += ["cmake/situateConfig.cmake", "include/situate.h", "include/situate.hpp"]
     for path in shipped:
         assert (data / path).is_file(), path
@@ -165,8 +167,6 @@ def test_the_sbom_names_local_crates_by_relative_paths(tmp_path: Path) -> None:
 def test_the_published_crates_carry_the_web_app_demo_and_cmake_package() -> None:
     # A published crate cannot reach ../../web/dist or ../../demo: the script copies them in
     # and checks each package's file list (`cargo package --list`, no build).
-    from support import REPO
-
     if shutil.which("cargo") is None:
         pytest.skip("cargo is not installed here")
     result = subprocess.run(

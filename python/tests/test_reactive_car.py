@@ -1,4 +1,4 @@
-"""The reactive robot's car rules (demo/reactive_car.py): the lobby's walls, calling, leaving.
+"""The reactive robot's car rules (demo/courier/reactive/car.py): lobby walls, calls, leaving.
 
 Pure tests on made-up senses (`reactive_support`): no link, no simulator. Each case is one
 that a run on a generated building went wrong on (decision 0008, sixth round).
@@ -9,9 +9,9 @@ from __future__ import annotations
 import math
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
-from link import SONARS, Pose
-from reactive import BUTTON_LAST_M, Reactive
-from reactive_car import END_WALL_FROM_M, PATROL_END_M, PATROL_HALF_M
+from courier.geometry import SONARS, Pose
+from courier.reactive.car import END_WALL_FROM_M, PATROL_END_M, PATROL_HALF_M
+from courier.reactive.rules import BUTTON_LAST_M, Reactive
 from reactive_support import robot, senses
 
 # The button's wall is the line x = 0.5 (the robot called from the origin, facing +x); the

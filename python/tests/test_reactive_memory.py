@@ -1,4 +1,4 @@
-"""The reactive robot's memory (demo/reactive.py): beliefs it must drop, stalls it must notice.
+"""The reactive robot's memory (demo/courier/reactive): beliefs it must drop, stalls it must notice.
 
 Pure tests of `Reactive.remember` and the rules' actions on made-up senses: no link, no
 simulator (the controller is built without a robot; nothing here sends anything). The
@@ -11,13 +11,14 @@ import math
 from typing import Any
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
-from link import SONARS, Pose, wrap
-from reactive import DOOR_PUSHES, SIGHTING_SHORT_M, STUCK_S, Reactive
-from reactive_car import PANEL_LOST_S, PATROL_MAX_M
-from reactive_route import DOOR_STANDOFF, RouteState
+from courier.geometry import SONARS, Pose, wrap
+from courier.mission import HINT_DOOR_ASIDE_M
+from courier.reactive.car import PANEL_LOST_S, PATROL_MAX_M
+from courier.reactive.route import DOOR_STANDOFF
+from courier.reactive.rules import DOOR_PUSHES, SIGHTING_SHORT_M, STUCK_S, Reactive
+from courier.reactive.state import RouteState
 from reactive_support import robot as _robot
 from reactive_support import senses as _senses
-from sequencing import HINT_DOOR_ASIDE_M
 
 
 def test_a_car_whose_panel_never_shows_is_no_car() -> None:

@@ -1,6 +1,6 @@
 """The reactive robot's rules for calling a car, getting in, riding and getting out.
 
-`demo/reactive.py` holds the rule list; its rules from "leave car" to "push call" take their
+`rules` holds the rule list; its rules from "leave car" to "push call" take their
 conditions and actions from `CarRider`, mixed into the controller as `RouteFollower` is.
 What the rules keep about cars (called on which floor and when, the car door seen opening,
 in a car, the floor pushed) is in the controller's `Memory`; `CarRider.remember_car` updates
@@ -10,15 +10,12 @@ it from each cycle's senses.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from deliver import OPENED_ON_WALL_M, seen_wall_ends_at
-from link import Pose, bearing_of, mean_heading, sonar_toward, wrap
-from reactive_route import PUSH_M, Action, goto, turn
-
-if TYPE_CHECKING:
-    from deliver import Mission
-    from reactive import Memory, Senses
+from courier.geometry import Pose, bearing_of, mean_heading, sonar_toward, wrap
+from courier.mission import OPENED_ON_WALL_M, Mission, seen_wall_ends_at
+from courier.reactive.route import PUSH_M, Action, goto, turn
+from courier.reactive.state import Memory, Senses
 
 #: Waiting for a car longer than this after calling, the robot calls again, s.
 CALL_AGAIN_S = 45.0
@@ -84,7 +81,7 @@ class CarRider:
     """Calls a car, gets in, rides and gets out; mixed into the reactive controller.
 
     It uses the controller's memory, mission and rule in charge, and two of its helpers
-    (declared below, defined by `reactive.Reactive`).
+    (declared below, defined by `rules.Reactive`).
     """
 
     mem: Memory

@@ -1,6 +1,6 @@
 """The reactive robot's route-leg follower, and the actions its rules and it return.
 
-`demo/reactive.py` holds the rule list; the rules "to office" and "to lobby" act through
+`rules` holds the rule list; the rules "to office" and "to lobby" act through
 `RouteFollower.route_action`, which follows one leg of the map's route (docs/maps.md, route
 steps) a step at a time. What it keeps is a `RouteState` in the robot's memory: the leg and
 the step it is at (decision 0008 allows a route step counter), and where along the step it
@@ -11,14 +11,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from link import Pose, wrap
-from sequencing import HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M, WALL_AHEAD_M, door_hint
-
-if TYPE_CHECKING:
-    from deliver import Mission
-    from reactive import Memory, Senses
+from courier.geometry import wrap
+from courier.mission import HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M, WALL_AHEAD_M, Mission, door_hint
+from courier.reactive.state import Memory, RouteState, Senses
 
 #: The office route starts this far square in front of the goal floor's button, m.
 BUTTON_STANDOFF_M = 1.0
@@ -97,61 +94,6 @@ def turn(
     return Action(skills, {("turn", "angle"): off}, key=(key, t // every))
 
 
-@dataclass
-class RouteState:
-    """Where the robot is on a route leg (docs/maps.md, route steps)."""
-
-    leg: str
-    step: int = 0
-    stage: str = "start"
-    start: Pose | None = None
-    count: int = 0
-    last_side: bool = False
-    heading: float | None = None
-    turn_goal: float | None = None
-    #: Before the leg: the point square in front of where it starts (odometry).
-    square_at: tuple[float, float] | None = None
-    #: The step squared up at last (-1: none).
-    squared: int = -1
-    #: How far along the step the last opening was counted, m.
-    counted_at: float | None = None
-    #: Turning back to the way (it faced the wrong way along the corridor).
-    turning_back: bool = False
-    #: The most way made on this step so far, m.
-    best_went: float = 0.0
-    #: Where the robot was each time it had made `TRAIL_STEP_M` more way on this step than ever
-    #: before (way made, x, y; odometry), and when it last did: unsticking goes back along it.
-    trail: list[tuple[float, float, float]] = field(default_factory=list)
-    progress_at: float = 0.0
-    #: Since when a wall has been across the way (None: none now), and when it last was.
-    wall_since: float | None = None
-    wall_seen: float = 0.0
-    #: Squared before a door: the corridor's heading before squaring (`heading` is then the
-    #: wall's normal); a "door again" homes and squares along it again. None: not squared.
-    along: float | None = None
-    #: The door's last give-up handled (`Memory.door_given_up_at`), and whether the route's
-    #: hint was tried for this door.
-    given_up: float = -1e9
-    hinted: bool = False
-    #: Homing on a barcode: where it was last seen and its wall's normal, towards the wall
-    #: (odometry; None: not seen), and since when it is out of view (None: in view).
-    code_at: tuple[float, float, float] | None = None
-    code_lost_at: float | None = None
-
-    def square_before(
-        self, s: Senses, barcode: tuple[float, float], heading: float, standoff: float
-    ) -> None:
-        """Squares up next: facing `heading`, `standoff` in front of a barcode.
-
-        `barcode` is where it is seen: (bearing, distance).
-        """
-        at = s.pose.theta + barcode[0]
-        cx = s.pose.x + barcode[1] * math.cos(at)
-        cy = s.pose.y + barcode[1] * math.sin(at)
-        self.heading, self.stage = heading, "square"
-        self.square_at = (cx - standoff * math.cos(heading), cy - standoff * math.sin(heading))
-
-
 def squared_here(r: RouteState, s: Senses) -> bool:
     """Whether the robot stands where it squared up in front of a barcode, facing its wall."""
     if r.square_at is None or r.heading is None:
@@ -181,7 +123,7 @@ class RouteFollower:
     """Follows the current route leg (`Memory.route`); mixed into the reactive controller.
 
     It uses the controller's memory, mission and a few of its actions (declared below, defined
-    by `reactive.Reactive`).
+    by `rules.Reactive`).
     """
 
     mem: Memory

@@ -23,32 +23,39 @@ closes, the rule that fits the new situation takes over. Perception is always on
 Handling every task in one program means the conditions name the next stop: its floor,
 and whether it is a lobby or the office. Adding a task kind means new rules, or new
 terms in the old ones; `docs/experiment.md` counts them.
+
+Beside the rule list: what the robot senses and keeps (`state`), its route follower
+(`route`) and its rules for cars (`car`), mixed into `Reactive`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
-from deliver import NORMAL, SKILLS, Mission, Stop
-from link import SONARS, Link, OutOfTime, Pose, live_sonar_ahead, mean_heading, wrap
-from reactive_car import CODE_ON_WALL_M, CarRider, wall_through
-from reactive_route import (
+import situate
+from courier.geometry import SONARS, Pose, mean_heading, wrap
+from courier.link import Link, OutOfTime
+from courier.mission import (
+    DOOR_BESIDE_BARCODE_M,
+    DOOR_WAIT_S,
+    NORMAL,
+    SKILLS,
+    Mission,
+    Stop,
+)
+from courier.reactive.car import CODE_ON_WALL_M, CarRider, wall_through
+from courier.reactive.route import (
     DOOR_STANDOFF,
     HOMED_M,
     PUSH_M,
     Action,
     RouteFollower,
-    RouteState,
     goto,
     turn,
 )
-from sequencing import DOOR_BESIDE_BARCODE_M
-from sequencing import DOOR_WAIT_S as SEQUENCED_DOOR_WAIT_S
-
-import situate
+from courier.reactive.state import UNSTICK_M, UNSTICK_S, Memory, RouteState, Senses
 
 #: Skills every rule may read: on all the time.
 PERCEPTION = (
@@ -90,11 +97,6 @@ SETTINGS = {
 }
 #: Homing to push a call button, the robot goes this last bit without runaway, m.
 BUTTON_LAST_M = 1.0
-#: Side sonars reading farther than this see a corridor's mouth abeam, m.
-MOUTH_M = 2.6
-#: In front of a barcode, the robot waits this long for the door beside it to show, s: as
-#: long as the sequenced robot (a door closed now and then stays closed up to a minute).
-DOOR_WAIT_S = SEQUENCED_DOOR_WAIT_S
 #: A door placed anew is the same door only this near where it was first placed (m), and
 #: facing this near the same way (rad).
 DOOR_MOVED_M = 1.0
@@ -133,9 +135,6 @@ DOOR_SQUARE_RAD = math.radians(25)
 #: long legitimately: slowly up to the button, waiting at a door.)
 MOVING_RULES = ("search", "home on lab door", "to lab door")
 STUCK_S = 60.0
-#: Unsticking: towards the freest way, at most this far, for at most this long (m, s).
-UNSTICK_M = 2.0
-UNSTICK_S = 15.0
 #: Following a corridor and no new way made for `STUCK_S`, the robot goes back to where it was
 #: when it had made this much less way (m), for at most this long (s), then follows on.
 TRAIL_BACK_M = 1.0
@@ -144,142 +143,6 @@ TRAIL_UNSTICK_S = 30.0
 #: it, m, for at most this long, s.
 SIGHTING_SHORT_M = 1.5
 SIGHTING_S = 60.0
-
-
-@dataclass
-class Senses:
-    """What the robot senses in one cycle (the skills' outputs and the devices')."""
-
-    t: float
-    pose: Pose
-    sonar: list[float]
-    barcodes: dict[int, tuple[float, float]]  # id: (bearing, distance)
-    floor: int
-    presses: int
-    said: int
-    junction: dict[str, Any]
-    door: dict[str, Any]
-    opened: dict[str, Any]
-    car: int
-    opening: dict[str, Any]
-    wall: dict[str, Any]
-    door_passed: bool
-    car_entered: bool
-    car_exited: bool
-    #: The sonars `std.sonar_filter` takes to be dead (bit i: sonar i).
-    dead: int = 0
-
-    def ahead(self) -> int:
-        """The sonar to read what is straight ahead with: the live one nearest ahead."""
-        return live_sonar_ahead(self.dead)
-
-    def enclosed(self, *, tight: bool = False) -> bool:
-        """Walls near all round (inside a car: all but the door's sonars; ``tight``: all)."""
-        return sum(1 for r in self.sonar if r < 1.9) >= SONARS - (1 if tight else 6)
-
-    def open_abeam(self, side: str) -> bool:
-        """Whether two neighbouring sonars abeam on ``side``, or ahead of it, read far: a mouth.
-
-        The sonars from 30 degrees ahead of abeam to abeam (not those behind it: they see an
-        opening already passed, an alcove say, after the step's blind distance).
-        """
-        mid = SONARS // 4 if side == "left" else 3 * SONARS // 4
-        ahead = range(-2, 1) if side == "left" else range(0, 3)
-        far = [self.sonar[(mid + k) % SONARS] > MOUTH_M for k in ahead]
-        return any(a and b for a, b in zip(far, far[1:], strict=False))
-
-    def sees(self, barcode: int, within: float = 5.0) -> bool:
-        """Whether ``barcode`` is in view within ``within`` m."""
-        return barcode in self.barcodes and self.barcodes[barcode][1] <= within
-
-
-@dataclass
-class Memory:
-    """The little state the reactive robot keeps (all else is sensed anew every cycle)."""
-
-    made: int = 0
-    said_at_start: int = 0
-    out_of_lab: bool = False
-    in_car: bool = False
-    #: In a car, when its panel was last seen (or the car entered), simulated time.
-    panel_seen_at: float = 0.0
-    pressed_floor: int | None = None
-    #: The simulated time the call button was pushed on this floor (None: not called).
-    called_at: float | None = None
-    presses_seen: int = 0
-    #: The floor whose call button was seen since arriving on it (the lobby is reached).
-    lobby_seen_on: int | None = None
-    in_office: bool = False
-    #: The last car door seen opening: (time, bearing in the odometry frame).
-    opened: tuple[float, float] | None = None
-    #: The point in front of that door (odometry), and how far the robot has got with it.
-    car_goal: tuple[float, float] | None = None
-    enter_stage: str = ""
-    #: When the robot faced the car's door it went to (None: not yet), simulated time.
-    faced_at: float | None = None
-    #: Route legs done, and the step the current one is at.
-    legs_done: set[str] = field(default_factory=set)
-    route: RouteState | None = None
-    #: A door being passed: the point in front of it and the heading through (odometry).
-    door_goal: tuple[float, float, float] | None = None
-    door_stage: str = ""
-    door_fixes: int = 0
-    #: Where that door was last placed from in front of it (the point in front of it and the
-    #: heading through); after stopping short in it, a new placement must be near this one.
-    door_first: tuple[float, float, float] | None = None
-    door_after_pass: bool = False
-    #: Stopped in the doorway: how often it went on since the door was placed, and when it
-    #: stopped last (simulated time).
-    door_pushes: int = 0
-    door_blocked_at: float = 0.0
-    #: The door's placements of the last cycles: (time, the point in front, the heading through).
-    door_seen: list[tuple[float, tuple[float, float, float]]] = field(default_factory=list)
-    door_waiting_since: float | None = None
-    door_given_up_at: float = -1e9
-    passed_heading: float | None = None
-    turned_in_car: bool = False
-    #: In a car, the heading out through its door (odometry).
-    door_heading: float | None = None
-    #: Riding, facing the car's door: how far ahead it is (its reading while shut), m; where
-    #: the robot began to leave the car (odometry), and whether `std.leave_car` stopped short.
-    car_door_ahead: float = 1.2
-    leave_from: tuple[float, float] | None = None
-    exit_stopped: bool = False
-    #: Per floor, where the call button was last seen from near (odometry).
-    button_seen_from: dict[int, Pose] = field(default_factory=dict)
-    #: Per floor, where the call button was last seen, and from where (odometry).
-    button_at: dict[int, tuple[tuple[float, float], tuple[float, float]]] = field(
-        default_factory=dict
-    )
-    #: Where the call button was pushed from (odometry), to wait for a car a step back.
-    called_from: Pose | None = None
-    #: The floor a car was called on (until the robot leaves a car): only there can it be in one.
-    called_on: int | None = None
-    #: The lobby's walls a car's door may be in, found on the floor called on: the button's
-    #: (key 0) and the walls at its ends (1: to the left facing the button's wall, -1: to the
-    #: right); each a point on it and the heading towards it (odometry).
-    lobby_walls: dict[int, tuple[float, float, float]] = field(default_factory=dict)
-    #: The patrol waiting for a car: its leg (even: to the left facing the button's wall), and
-    #: since when (simulated time).
-    patrol_leg: int = 0
-    patrol_since: float = 0.0
-    #: The call button's wall as fitted in the last few seconds: (time, its normal's heading).
-    button_walls: list[tuple[float, float]] = field(default_factory=list)
-    #: Where the robot was when it last got 1 m away from the place before, and when
-    #: (odometry, simulated time); unsticking: where to, and since when.
-    moved_from: tuple[float, float, float] | None = None
-    unstick_to: tuple[float, float] | None = None
-    unstick_since: float = 0.0
-    #: How long unsticking may take, s; back along a route leg (avoiding what is in the way).
-    unstick_for: float = UNSTICK_S
-    unstick_back: bool = False
-    #: Where the lab door's barcode was last seen (odometry), and from where.
-    lab_door_at: tuple[float, float] | None = None
-    lab_door_from: tuple[float, float] = (0.0, 0.0)
-    #: The lab door barcode's wall as fitted: its normal's headings (odometry), the last few.
-    lab_door_walls: list[float] = field(default_factory=list)
-    #: Whether the robot lined up in front of the lab door's barcode since it last gave up.
-    door_lined_up: bool = False
 
 
 class Reactive(CarRider, RouteFollower, Link):

@@ -1,12 +1,12 @@
-"""The sequenced robot's shared behaviours, on top of the link (`link.Link`).
+"""The sequenced robot's shared behaviours, on top of the link (`courier.link.Link`).
 
-A mission (such as `deliver.py`) is a short narrative of phases. `link.Link` gives it the
+A mission (such as `delivery`) is a short narrative of phases. `courier.link.Link` gives it the
 means to drive the robot: waits on the robot's clock, switching skills, parameters, reading
 values. `Sequencer` adds the behaviours built of the standard skills (`std.*`, see
 crates/situate_skills) that any mission of the mobile robot needs: turning, homing on a
 barcode, driving to a point of the odometry frame, lining up with a barcode on a wall,
 passing the door ahead, searching for a barcode, getting unstuck. The interpreter of route
-hints (docs/maps.md) is `routes.py`, over this.
+hints (docs/maps.md) is `routes`, over this.
 
 Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the door in it
 `std.locate_door`'s `opening`; the sequencer activates them and reads their outputs.
@@ -15,12 +15,19 @@ Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the do
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
-from link import SONARS, Link, bearing_of, live_sonar_ahead, sonar_toward, wrap
-
 import situate
+from courier.geometry import SONARS, bearing_of, live_sonar_ahead, sonar_toward, wrap
+from courier.link import Link
+from courier.mission import (
+    DOOR_BESIDE_BARCODE_M,
+    DOOR_WAIT_S,
+    HINT_DOOR_AHEAD_M,
+    HINT_DOOR_ASIDE_M,
+    WALL_AHEAD_M,
+)
 
 ROBOT_RADIUS = 0.25
 #: How far in front of a door the robot lines up before passing it, m.
@@ -31,25 +38,8 @@ DOOR_WIDTH = 1.1
 #: A raw sonar reading under this is an echo (the device reads 4 m for none), m.
 ECHO_M = 3.9
 ALL_SONARS = (1 << SONARS) - 1
-#: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
-WALL_AHEAD_M = 1.2
-#: How long to wait in front of a door that shows no opening (closed doors open again), s.
-DOOR_WAIT_S = 75.0
-#: A door's nearer jamb is at most this far from its barcode (docs/maps.md: 0.1 to 0.6 m), with
-#: the slack of placing a jamb by sonar; an opening farther off is some other way, m.
-DOOR_BESIDE_BARCODE_M = 1.0
-#: No opening in sight after `DOOR_WAIT_S`, the door is taken to be where the route's hint
-#: (its last turn: left or right) says: its centre this far ahead and to that side, m.
-HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M = 1.0, 0.75
 #: How long a wall across the way must stay put while the robot stands (people move on), s.
 WALL_STAYS_S = 6.0
-
-
-def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
-    """The route's hint for the door of step ``n``: the last turn before it (docs/maps.md)."""
-    return next((str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None)
-
-
 #: Through a door: this far beyond the wall's line, m.
 BEYOND_WALL_M = 0.4
 #: Wandering between two looks round, s.

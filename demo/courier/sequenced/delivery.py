@@ -7,8 +7,8 @@ interpreter), pushes the call button, patrols the lobby until a car's door opens
 car it is, enters, pushes the goal floor, waits for it, leaves, follows the corridor to the
 office's barcode and says its message inside the office.
 
-The means are beside this file: the link, skill switching and waits in ``link.py``, the
-behaviours shared by phases in ``sequencing.py``, the route interpreter in ``routes.py``; the
+The means are beside this module: the behaviours shared by phases in `behaviours`, the route
+interpreter in `routes`, over the link (skill switching and waits) of `courier.link`; the
 perceiving is done by skills (`std.locate_door`, `std.fit_wall`, the detectors and trackers).
 Every wait has a time-out on the robot's clock, and failed phases are retried a bounded number
 of times.
@@ -17,77 +17,30 @@ of times.
 never off; the sequencer sets the same parameters and waits on the same monitors, and the
 skills' priorities alone decide who drives.
 
-Run it through ``situate demo`` (which starts the simulated robot and passes the arguments).
+Run it through ``situate demo`` (which starts the simulated robot and runs demo/deliver.py).
 """
 
 from __future__ import annotations
 
-import argparse
-import asyncio
-import contextlib
-import json
 import math
-import os
-import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from signal import SIGHUP, SIGINT, SIGTERM, Signals
-from signal import signal as set_signal_handler
 from typing import Any
 
-from link import (
-    EVENT_KINDS,
-    SONARS,
-    OutOfTime,
-    PhaseFailed,
-    Pose,
-    bearing_of,
-    wrap,
-)
-from routes import RouteSequencer, way_made, way_made_expr
-
 import situate
+from courier.geometry import SONARS, Pose, bearing_of, wrap
+from courier.link import PhaseFailed
+from courier.mission import (
+    NORMAL,
+    OPENED_ON_WALL_M,
+    SKILLS,
+    Mission,
+    Stop,
+    seen_wall_ends_at,
+)
+from courier.sequenced.routes import RouteSequencer, way_made, way_made_expr
 
 #: The phases, in mission order (``--from``/``--to`` pick a stretch of them).
 PHASES = ("lab", "corridor", "lobby", "ride", "office")
-
-#: Every skill of demo/robot.yaml.
-SKILLS = (
-    "runaway",
-    "avoid",
-    "wander",
-    "follow_hallway",
-    "turn",
-    "home",
-    "home_position",
-    "track_barcode",
-    "detect_door",
-    "detect_intersection",
-    "identify_car",
-    "pass_door",
-    "push_button",
-    "enter_car",
-    "leave_car",
-    "say",
-)
-
-#: Skill parameters that the sequencer changes in some phase, with their value elsewhere.
-NORMAL = {
-    ("runaway", "safe_distance"): 0.3,
-    ("avoid", "distance"): 0.6,
-    ("avoid", "stop_distance"): 0.2,
-    ("follow_hallway", "speed"): 0.4,
-    ("home", "stop_distance"): 1.0,
-    ("turn", "max_turn"): 1.2,
-    ("detect_door", "confirm"): 2,
-    ("watch_openings", "confirm"): 2,
-    ("track_barcode", "hold"): 15,
-    ("fit_wall", "bearing_deg"): 0.0,
-    ("fit_wall", "half_angle_deg"): 80.0,
-    ("locate_door", "wall_distance"): 0.0,
-    ("locate_door", "wall_normal_deg"): 0.0,
-    ("locate_door", "max_width"): 1.8,
-}
 
 #: Time to get out of the lab before giving up, s.
 LAB_BUDGET_S = 900.0
@@ -96,8 +49,6 @@ BUTTON_STANDOFF_M = 0.45
 #: From where the button was pushed, back this far to patrol the lobby: about the middle of a
 #: car door on a wall next to the button's (docs/maps.md, "Lobby"), m.
 PATROL_BACK_M = 0.85
-#: A way that opened in the lobby is a car's door only this near an end wall found, m.
-OPENED_ON_WALL_M = 0.4
 #: In front of a car's door that opened, this far from its wall, before entering, m.
 FACE_DOOR_M = 0.85
 #: Abreast of a door that opened within this (along its wall), the robot only turns to it, m.
@@ -130,8 +81,6 @@ CALLS_MIN = 6
 CALLS_MAX = 20
 #: Time the mission keeps for the ride, the way to the office and the message after boarding, s.
 AFTER_BOARDING_S = 600.0
-#: An end wall of the lobby is taken from the sonars only nearer than this (their reach is 4 m), m.
-END_WALL_SEEN_M = 3.6
 
 
 def dist(a: tuple[float, float, float], b: tuple[float, float, float]) -> float:
@@ -176,82 +125,6 @@ def open_in_walls(
             if inside and expect < best_range:
                 best, best_range = (px, py, wn), expect
     return best
-
-
-def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
-    """Whether sonar ``i`` reads a wall across its axis (not someone standing there).
-
-    A wall square to the axis reads nearer than `END_WALL_SEEN_M` in sonar ``i`` and about
-    that over the cosine of 15° in both neighbours (a person, some 0.4 m across, fills
-    one sonar's view from 1.5 m on; the neighbours then read past them).
-    """
-    r = ranges[i]
-    if r >= END_WALL_SEEN_M:
-        return False
-    expect = r / math.cos(math.radians(15))
-    return all(abs(ranges[(i + k) % SONARS] - expect) < 0.3 for k in (-1, 1))
-
-
-@dataclass
-class Mission:
-    """The mission section of the map (`Map::mission_json`)."""
-
-    goal_floor: int
-    start_floor: int
-    lab_door_barcode: int
-    call_button_barcode: int
-    office_barcode: int
-    car_barcode_first: int
-    cars: int
-    message: str
-    route: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
-    #: The goal floor's call button barcode (where the `button_to_office` route starts).
-    goal_button_barcode: int | None = None
-    #: Each floor's call button barcode, for the floors with a lobby.
-    lobbies: dict[int, int] = field(default_factory=dict)
-
-    @staticmethod
-    def from_json(text: str) -> Mission:
-        """Reads the JSON of `Map::mission_json`."""
-        m = json.loads(text)
-        return Mission(
-            goal_floor=int(m["goal_floor"]),
-            start_floor=int(m["start"]["floor"]),
-            lab_door_barcode=int(m["lab_door_barcode"]),
-            call_button_barcode=int(m["call_button_barcode"]),
-            office_barcode=int(m["office_barcode"]),
-            car_barcode_first=int(m["car_barcode_first"]),
-            cars=int(m.get("cars", 4)),
-            message=str(m.get("message") or "Hello!"),
-            route={str(k): list(v) for k, v in (m.get("route") or {}).items()},
-            goal_button_barcode=(
-                int(m["goal_button_barcode"]) if m.get("goal_button_barcode") is not None else None
-            ),
-            lobbies={int(x["floor"]): int(x["barcode"]) for x in m.get("lobbies") or []},
-        )
-
-
-#: A stop of a task: ``("office", goal floor)`` or ``("lobby", floor)``.
-Stop = tuple[str, int]
-
-
-def parse_task(text: str, mission: Mission) -> list[Stop]:
-    """The stops of ``--task`` (``office,lobby:3``: see ``situate_sim::task``), checked."""
-    stops: list[Stop] = []
-    for i, part in enumerate(p.strip() for p in text.split(",")):
-        kind, _, floor = part.partition(":")
-        if part == "office":
-            stops.append(("office", mission.goal_floor))
-        elif kind == "lobby" and floor.strip().lstrip("-").isdigit():
-            stops.append(("lobby", int(floor)))
-        else:
-            raise ValueError(f"task {text!r}: stop {i + 1} {part!r}: expected office or lobby:N")
-    for kind, level in stops:
-        if kind == "lobby" and level not in mission.lobbies:
-            raise ValueError(f"task {text!r}: floor {level} has no lobby")
-    if ("office", mission.goal_floor) in stops[:-1]:
-        raise ValueError(f"task {text!r}: the office must be the last stop (no route leads back)")
-    return stops
 
 
 class Delivery(RouteSequencer):
@@ -960,140 +833,3 @@ class Delivery(RouteSequencer):
         await self.say("mission complete")
         if self.debug:
             print(f"round trips to the robot: {self.round_trips}")
-
-
-async def main(argv: Sequence[str] | None = None) -> int:
-    """Parses the arguments `situate demo` passes, runs the mission; the exit status."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--connect", default=os.environ.get("SITUATE_CONNECT", "tcp/127.0.0.1:7447"))
-    p.add_argument("--robot", default=None)
-    p.add_argument("--mode", choices=["sequenced", "all-active", "reactive"], default="sequenced")
-    p.add_argument("--limit-s", type=float, default=1800.0, help="give up after this (simulated)")
-    p.add_argument("--mission", required=True, help="the map's mission section, as JSON")
-    p.add_argument(
-        "--from",
-        dest="first",
-        choices=PHASES,
-        default=os.environ.get("DELIVER_FROM") or PHASES[0],
-        help="start at this phase (the scenario maps start the robot there; env DELIVER_FROM)",
-    )
-    p.add_argument(
-        "--to",
-        dest="last",
-        choices=PHASES,
-        default=os.environ.get("DELIVER_TO") or PHASES[-1],
-        help="stop after this phase (env DELIVER_TO)",
-    )
-    p.add_argument(
-        "--task",
-        default="office",
-        help="stops where the message is said, in order: office, lobby:FLOOR (comma-separated)",
-    )
-    p.add_argument("--quiet", action="store_true")
-    p.add_argument("--seed", type=int, default=1, help="seeds the wander paths (the run's seed)")
-    a = p.parse_args(argv)
-    mission = Mission.from_json(a.mission)
-    try:
-        stops = parse_task(a.task, mission)
-    except ValueError as e:
-        p.error(str(e))
-    async with situate.connect(a.robot, endpoint=a.connect, timeout=30) as robot:
-        if a.mode == "reactive":
-            return await run_reactive(robot, mission, stops, a)
-        seq = Delivery(robot, mission, mode=a.mode, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
-        try:
-            await seq.run(a.first, a.last, stops)
-        except (PhaseFailed, OutOfTime) as e:
-            await seq.say(f"mission failed: {e}")
-            with contextlib.suppress(situate.SituateError):
-                await robot.stop()
-            return 1
-        except (asyncio.CancelledError, KeyboardInterrupt):
-            # Interrupted (`run`): one line, whatever --quiet says, and the cycle stopped.
-            where = f" in phase {seq.phase_no} ({seq.phase_text})" if seq.phase_no else ""
-            name = Signals(INTERRUPTED.get("signal", SIGINT)).name
-            print(f"[{seq.t:7.1f} s] interrupted ({name}){where}, message not delivered")
-            INTERRUPTED["said"] = 1
-            with contextlib.suppress(situate.SituateError, asyncio.TimeoutError):
-                await asyncio.wait_for(robot.stop(), 2)
-            raise
-        with contextlib.suppress(situate.SituateError):
-            await robot.stop()
-    return 0
-
-
-async def run_reactive(
-    robot: situate.Robot, mission: Mission, stops: list[Stop], a: argparse.Namespace
-) -> int:
-    """The experiment's reactive robot (`reactive.py`) on the same task; the exit status."""
-    from reactive import Reactive
-
-    seq = Reactive(robot, mission, stops, limit_s=a.limit_s, quiet=a.quiet, seed=a.seed)
-    try:
-        async with robot.events(*EVENT_KINDS) as stream:
-            seq.stream = stream  # read for faults only (`Link.take_faults`)
-            await seq.run_task()
-    except (OutOfTime, PhaseFailed) as e:
-        await seq.say(f"mission failed: {e}")
-        with contextlib.suppress(situate.SituateError):
-            await robot.stop()
-        return 1
-    with contextlib.suppress(situate.SituateError):
-        await robot.stop()
-    return 0
-
-
-#: How the run was interrupted: ``signal`` (its number) and whether the outcome was ``said``.
-INTERRUPTED: dict[str, int] = {}
-
-
-async def _main_stopping_on_signals(argv: Sequence[str] | None) -> int:
-    """:func:`main`, cancelled by SIGTERM or SIGHUP as by Ctrl-C (``asyncio.run``'s own)."""
-    task = asyncio.current_task()
-    assert task is not None
-
-    def stop(sig: int) -> None:
-        if "signal" in INTERRUPTED:  # a second one: at once
-            sys.stdout.flush()
-            os._exit(128 + sig)
-        INTERRUPTED["signal"] = sig
-        task.cancel()
-
-    loop = asyncio.get_running_loop()
-
-    def on_signal(sig: int, _frame: object) -> None:
-        # A plain handler, not `loop.add_signal_handler`: that one makes the signal write to the
-        # loop's wakeup pipe, and a signal landing while `asyncio.run` closes the loop (the demo
-        # passes Ctrl-C on as SIGTERM) printed a traceback ("Bad file descriptor").
-        with contextlib.suppress(RuntimeError):  # the loop is closed: the run is ending anyway
-            loop.call_soon_threadsafe(stop, sig)
-
-    for sig in (SIGTERM, SIGHUP):
-        with contextlib.suppress(ValueError, AttributeError):  # not on Windows
-            set_signal_handler(sig, on_signal)
-    return await main(argv)
-
-
-def run(argv: Sequence[str] | None = None) -> int:
-    """Runs :func:`main`; the exit status.
-
-    Ctrl-C, SIGTERM and SIGHUP end the mission with one line (the time and the phase) and
-    status 128 + the signal's number (130 for Ctrl-C), without a traceback; a second signal
-    ends the program at once.
-    """
-    try:
-        return asyncio.run(_main_stopping_on_signals(argv))
-    except (KeyboardInterrupt, asyncio.CancelledError):
-        sig = INTERRUPTED.get("signal", SIGINT)
-        if not INTERRUPTED.get("said"):
-            print(f"interrupted ({Signals(sig).name}) before the mission started")
-        return 128 + sig
-
-
-if __name__ == "__main__":
-    status = run()
-    # The link is closed and the output written: leave without the interpreter's teardown
-    # (collecting every object, stopping Zenoh's threads: some 30 ms of a headless run).
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(status)

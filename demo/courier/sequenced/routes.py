@@ -1,7 +1,7 @@
 """The route interpreter: route hints of a map (docs/maps.md, "Route steps") followed by a robot.
 
 `RouteSequencer` adds to `Sequencer` (the behaviours every mission shares, over the link of
-`link.Link`) what following a route takes: following a hallway until a junction, a door, a
+`courier.link.Link`) what following a route takes: following a hallway until a junction, a door, a
 barcode, a wall or a distance (`follow`), with the fall-backs each needs when people, clutter
 or odometry get in the way (a junction looked for on the way back and probed for, a wall
 found round a corner, way made measured along the route's heading); turning at a junction
@@ -14,8 +14,10 @@ import math
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from typing import Any
 
-from link import SONARS, PhaseFailed, Pose, bearing_of, wrap
-from sequencing import DOOR_STANDOFF, WALL_AHEAD_M, Sequencer, door_hint
+from courier.geometry import SONARS, Pose, bearing_of, wrap
+from courier.link import PhaseFailed
+from courier.mission import WALL_AHEAD_M, door_hint
+from courier.sequenced.behaviours import DOOR_STANDOFF, Sequencer
 
 #: Following for a distance: the time in which some way must be made, s.
 FOLLOW_SLICE_S = 20.0

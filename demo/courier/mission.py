@@ -1,0 +1,155 @@
+"""The mission, and what both designs of the robot's program share about the building.
+
+The mission is the map's `mission:` section (`Mission`), and the task the stops where the
+message is said (`Stop`, `parse_task`). Both designs drive the same skills of demo/robot.yaml
+(`SKILLS`), from the same parameters (`NORMAL`), and read the building the same way where
+they agree: how near a wall ahead ends a corridor, where a door is beside its barcode, how long
+a closed door is waited for, where the route's hint puts a door (`door_hint`), which way that
+opened in a lobby is a car's door, and which sonar reading is a wall rather than someone
+standing there (`seen_wall_ends_at`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from courier.geometry import SONARS
+
+#: Every skill of demo/robot.yaml.
+SKILLS = (
+    "runaway",
+    "avoid",
+    "wander",
+    "follow_hallway",
+    "turn",
+    "home",
+    "home_position",
+    "track_barcode",
+    "detect_door",
+    "detect_intersection",
+    "identify_car",
+    "pass_door",
+    "push_button",
+    "enter_car",
+    "leave_car",
+    "say",
+)
+
+#: Skill parameters that the sequencer changes in some phase, with their value elsewhere.
+NORMAL = {
+    ("runaway", "safe_distance"): 0.3,
+    ("avoid", "distance"): 0.6,
+    ("avoid", "stop_distance"): 0.2,
+    ("follow_hallway", "speed"): 0.4,
+    ("home", "stop_distance"): 1.0,
+    ("turn", "max_turn"): 1.2,
+    ("detect_door", "confirm"): 2,
+    ("watch_openings", "confirm"): 2,
+    ("track_barcode", "hold"): 15,
+    ("fit_wall", "bearing_deg"): 0.0,
+    ("fit_wall", "half_angle_deg"): 80.0,
+    ("locate_door", "wall_distance"): 0.0,
+    ("locate_door", "wall_normal_deg"): 0.0,
+    ("locate_door", "max_width"): 1.8,
+}
+
+#: `until: wall` ends with the wall ahead this near (from the robot's centre), m.
+WALL_AHEAD_M = 1.2
+#: How long a robot waits in front of a door that shows no opening (closed doors open again: one
+#: closed now and then stays closed up to a minute), s.
+DOOR_WAIT_S = 75.0
+#: A door's nearer jamb is at most this far from its barcode (docs/maps.md: 0.1 to 0.6 m), with
+#: the slack of placing a jamb by sonar; an opening farther off is some other way, m.
+DOOR_BESIDE_BARCODE_M = 1.0
+#: No opening in sight after `DOOR_WAIT_S`, the door is taken to be where the route's hint
+#: (its last turn: left or right) says: its centre this far ahead and to that side, m.
+HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M = 1.0, 0.75
+#: A way that opened in the lobby is a car's door only this near an end wall found, m.
+OPENED_ON_WALL_M = 0.4
+#: An end wall of the lobby is taken from the sonars only nearer than this (their reach is 4 m), m.
+END_WALL_SEEN_M = 3.6
+
+
+def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
+    """The route's hint for the door of step ``n``: the last turn before it (docs/maps.md)."""
+    return next((str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None)
+
+
+def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
+    """Whether sonar ``i`` reads a wall across its axis (not someone standing there).
+
+    A wall square to the axis reads nearer than `END_WALL_SEEN_M` in sonar ``i`` and about
+    that over the cosine of 15° in both neighbours (a person, some 0.4 m across, fills
+    one sonar's view from 1.5 m on; the neighbours then read past them).
+    """
+    r = ranges[i]
+    if r >= END_WALL_SEEN_M:
+        return False
+    expect = r / math.cos(math.radians(15))
+    return all(abs(ranges[(i + k) % SONARS] - expect) < 0.3 for k in (-1, 1))
+
+
+@dataclass
+class Mission:
+    """The mission section of the map (`Map::mission_json`)."""
+
+    goal_floor: int
+    start_floor: int
+    lab_door_barcode: int
+    call_button_barcode: int
+    office_barcode: int
+    car_barcode_first: int
+    cars: int
+    message: str
+    route: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    #: The goal floor's call button barcode (where the `button_to_office` route starts).
+    goal_button_barcode: int | None = None
+    #: Each floor's call button barcode, for the floors with a lobby.
+    lobbies: dict[int, int] = field(default_factory=dict)
+
+    @staticmethod
+    def from_json(text: str) -> Mission:
+        """Reads the JSON of `Map::mission_json`."""
+        m = json.loads(text)
+        return Mission(
+            goal_floor=int(m["goal_floor"]),
+            start_floor=int(m["start"]["floor"]),
+            lab_door_barcode=int(m["lab_door_barcode"]),
+            call_button_barcode=int(m["call_button_barcode"]),
+            office_barcode=int(m["office_barcode"]),
+            car_barcode_first=int(m["car_barcode_first"]),
+            cars=int(m.get("cars", 4)),
+            message=str(m.get("message") or "Hello!"),
+            route={str(k): list(v) for k, v in (m.get("route") or {}).items()},
+            goal_button_barcode=(
+                int(m["goal_button_barcode"]) if m.get("goal_button_barcode") is not None else None
+            ),
+            lobbies={int(x["floor"]): int(x["barcode"]) for x in m.get("lobbies") or []},
+        )
+
+
+#: A stop of a task: ``("office", goal floor)`` or ``("lobby", floor)``.
+Stop = tuple[str, int]
+
+
+def parse_task(text: str, mission: Mission) -> list[Stop]:
+    """The stops of ``--task`` (``office,lobby:3``: see ``situate_sim::task``), checked."""
+    stops: list[Stop] = []
+    for i, part in enumerate(p.strip() for p in text.split(",")):
+        kind, _, floor = part.partition(":")
+        if part == "office":
+            stops.append(("office", mission.goal_floor))
+        elif kind == "lobby" and floor.strip().lstrip("-").isdigit():
+            stops.append(("lobby", int(floor)))
+        else:
+            raise ValueError(f"task {text!r}: stop {i + 1} {part!r}: expected office or lobby:N")
+    for kind, level in stops:
+        if kind == "lobby" and level not in mission.lobbies:
+            raise ValueError(f"task {text!r}: floor {level} has no lobby")
+    if ("office", mission.goal_floor) in stops[:-1]:
+        raise ValueError(f"task {text!r}: the office must be the last stop (no route leads back)")
+    return stops
