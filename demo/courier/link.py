@@ -24,9 +24,8 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from courier.geometry import Pose
-
 import situate
+from courier.geometry import Pose
 from situate.events import MonitorFired, SkillFaulted
 
 #: A skill that faults (a body over its budget on a loaded machine, say) is switched on again,
