@@ -14,6 +14,7 @@ import importlib.util
 import json
 import math
 import os
+import random
 import subprocess
 import sys
 from collections.abc import Sequence
@@ -455,3 +456,27 @@ def test_side_walls_are_the_nearest_square_to_each_side_and_corners_count_only_w
     ranges[2] = 0.5
     assert math.isclose(side_walls(ranges)[0], 0.25)
     assert math.isclose(side_walls(ranges, 30.0)[0], 0.9)
+
+
+def test_pose_methods_are_the_formulas_they_replaced_to_the_last_bit() -> None:
+    # A run replays exactly only while every projection keeps its operations and their order.
+    _demo_on_path()
+    from courier.geometry import Pose, wrap
+
+    rng = random.Random(36)
+    for _ in range(5000):
+        x, y, th, px, py = (rng.uniform(-60.0, 60.0) for _ in range(5))
+        th = rng.choice([th, math.pi, -math.pi, 0.0, wrap(th)])
+        h, d = rng.uniform(-7.0, 7.0), rng.uniform(-5.0, 5.0)
+        p = Pose(x, y, th)
+        c, s = math.cos(th), math.sin(th)
+        assert p.turn_to(h) == wrap(h - th)
+        assert p.heading_of(h) == wrap(th + h)
+        assert p.bearing_to(px, py) == wrap(math.atan2(py - y, px - x) - th)
+        assert p.along(px, py, h) == (px - x) * math.cos(h) + (py - y) * math.sin(h)
+        assert p.across(px, py) == -(px - x) * s + (py - y) * c
+        assert p.ahead(-d) == (x - d * c, y - d * s)  # "back d": the same float as "- d *"
+        assert p.seen_at(h, d) == (x + d * math.cos(th + h), y + d * math.sin(th + h))
+        assert p.from_robot(px, py) == (x + c * px - s * py, y + s * px + c * py)
+        # abs of a heading difference is the same either way round (follow_to_wall's check).
+        assert abs(wrap(h - th)) == abs(wrap(th - h))

@@ -183,7 +183,7 @@ class CarRider:
             normal = float(s.wall["normal"]) if s.wall.get("seen") else 0.0
             m.door_heading = wrap(s.pose.theta + normal + math.pi)
         look = s.ahead()
-        off = wrap(m.door_heading - bearing_of(look) - s.pose.theta)
+        off = s.pose.turn_to(m.door_heading - bearing_of(look))
         if not m.turned_in_car and abs(off) > 0.08:
             return turn(off, "turn in car", s.t, runaway=True)
         m.turned_in_car = True
@@ -218,7 +218,7 @@ class CarRider:
                 return goto(gx, gy, ("to car", m.opened), speed=0.6)
             m.enter_stage = "face"
         if m.enter_stage == "face":
-            off = wrap(m.opened[1] - s.pose.theta)
+            off = s.pose.turn_to(m.opened[1])
             if abs(off) > 0.08:
                 return turn(off, ("face car", m.opened), s.t)
             o = s.opening
@@ -275,7 +275,7 @@ class CarRider:
         reach = PATROL_HALF_M
         end = self.mem.lobby_walls.get(side)
         if end is not None:
-            to_end = (end[0] - b.x) * math.cos(way) + (end[1] - b.y) * math.sin(way)
+            to_end = b.along(end[0], end[1], way)
             reach = max(PATROL_MIN_M, min(PATROL_MAX_M, to_end - PATROL_END_M))
         n = (math.cos(b.theta), math.sin(b.theta))
         x = b.x - PATROL_OFF_M * n[0] + reach * math.cos(way)
@@ -313,11 +313,7 @@ class CarRider:
                 m.called_on = s.floor
                 b = m.called_from
                 # The button's wall holds nothing but cars' doors (docs/maps.md, "Lobby").
-                m.lobby_walls[0] = (
-                    b.x + PUSH_M * math.cos(b.theta),
-                    b.y + PUSH_M * math.sin(b.theta),
-                    b.theta,
-                )
+                m.lobby_walls[0] = (*b.ahead(PUSH_M), b.theta)
             elif self.rule_name == "push floor":
                 m.pressed_floor = self.stop_floor()
                 m.turned_in_car, m.door_heading = False, None
@@ -327,7 +323,7 @@ class CarRider:
             self.find_end_walls(s)
         fresh = m.opened is not None and s.t - m.opened[0] < CAR_ENTER_S
         if s.opened.get("seen") and m.called_at is not None and not m.in_car and not fresh:
-            bearing = wrap(s.pose.theta + float(s.opened.get("bearing", 0.0)))
+            bearing = s.pose.heading_of(float(s.opened.get("bearing", 0.0)))
             before = float(s.opened.get("before", 1.0))
             placed = self.place_car_door(s.pose, bearing, before)
             if placed is not None:
@@ -398,7 +394,7 @@ class CarRider:
             return
         fitted = wall_through(b, s.wall, CODE_ON_WALL_M)
         if fitted is not None:
-            m.button_walls.append((s.t, wrap(s.pose.theta + fitted)))
+            m.button_walls.append((s.t, s.pose.heading_of(fitted)))
 
     def button_wall(self, s: Senses) -> float:
         """The call button's wall, having pushed it: its normal's heading (odometry).
@@ -412,7 +408,7 @@ class CarRider:
         if seen:
             return mean_heading(h for _, h in seen)
         fitted = float(s.wall.get("normal", 0.0)) if s.wall.get("seen") else 0.0
-        return wrap(s.pose.theta + (fitted if abs(fitted) < BUTTON_WALL_RAD else 0.0))
+        return s.pose.heading_of(fitted if abs(fitted) < BUTTON_WALL_RAD else 0.0)
 
     def find_end_walls(self, s: Senses) -> None:
         """Notes the walls at the ends of the button's wall, as the sonars along it read them.
@@ -432,7 +428,7 @@ class CarRider:
             near = s.sonar[i] < END_WALL_FROM_M  # someone near fills three sonars' view
             if abs(off) < END_WALL_AIM_RAD and not near and seen_wall_ends_at(s.sonar, i):
                 r = s.sonar[i]
-                m.lobby_walls[side] = (p.x + r * math.cos(way), p.y + r * math.sin(way), way)
+                m.lobby_walls[side] = (*p.ahead(r, way), way)
 
     def place_car_door(
         self, pose: Pose, bearing: float, before: float
@@ -450,7 +446,7 @@ class CarRider:
         wall is not known yet, the best guess is a door on it at the shut reading.
         """
         c, sn = math.cos(bearing), math.sin(bearing)
-        door = (pose.x + before * c, pose.y + before * sn)
+        door = pose.ahead(before, bearing)
         b = self.mem.called_from
         if b is None:
             return door, bearing
@@ -460,14 +456,13 @@ class CarRider:
             towards = c * n[0] + sn * n[1]
             if towards <= 0.1:
                 continue
-            reach = ((wx - pose.x) * n[0] + (wy - pose.y) * n[1]) / towards
+            reach = pose.along(wx, wy, wn) / towards
             off = abs(reach - before) * towards
             if off < OPENED_ON_WALL_M and (best is None or off < best[0]):
                 best = (off, reach, wn)
         if best is not None:
-            return (pose.x + best[1] * c, pose.y + best[1] * sn), best[2]
-        n = (math.cos(b.theta), math.sin(b.theta))
-        side = 1 if (door[0] - pose.x) * -n[1] + (door[1] - pose.y) * n[0] > 0 else -1
+            return pose.ahead(best[1], bearing), best[2]
+        side = 1 if pose.across(door[0], door[1], b.theta) > 0 else -1
         if side in self.mem.lobby_walls:
             return None
         return door, wrap(b.theta + side * math.pi / 2)

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from courier.geometry import wrap
+from courier.geometry import Pose, wrap
 from courier.mission import HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M, WALL_AHEAD_M, Mission, door_hint
 from courier.reactive.state import Memory, RouteState, Senses
 
@@ -99,7 +99,7 @@ def squared_here(r: RouteState, s: Senses) -> bool:
     if r.square_at is None or r.heading is None:
         return False
     near = math.hypot(s.pose.x - r.square_at[0], s.pose.y - r.square_at[1]) < SQUARED_HERE_M
-    return near and abs(wrap(r.heading - s.pose.theta)) < SQUARED_HERE_RAD
+    return near and abs(s.pose.turn_to(r.heading)) < SQUARED_HERE_RAD
 
 
 def code_sighting(
@@ -116,7 +116,7 @@ def code_sighting(
         return None
     at = s.pose.theta + barcode[0]
     n = wrap(heading + (math.pi / 2 if wrap(at - heading) > 0 else -math.pi / 2))
-    return (s.pose.x + barcode[1] * math.cos(at), s.pose.y + barcode[1] * math.sin(at), n)
+    return (*s.pose.seen_at(barcode[0], barcode[1]), n)
 
 
 class RouteFollower:
@@ -164,7 +164,7 @@ class RouteFollower:
             normal = float(s.wall.get("normal", 0.0))
             if b is not None and b[1] < PUSH_M + 0.15 and abs(b[0]) < 0.25:
                 if s.wall.get("seen") and abs(normal) < 0.7:
-                    r.square_before(s, b, wrap(s.pose.theta + normal), BUTTON_STANDOFF_M)
+                    r.square_before(s, b, s.pose.heading_of(normal), BUTTON_STANDOFF_M)
                     return Action(("runaway",), key=("squaring", r.leg))
                 return Action(("runaway",), key=("fitting the wall", r.leg, s.t // 3))
             if b is None:
@@ -178,7 +178,7 @@ class RouteFollower:
             gx, gy = r.square_at
             if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.12:
                 return goto(gx, gy, ("square", r.leg, r.step), reverse_within=1.5)
-            off = wrap(r.heading - s.pose.theta)
+            off = s.pose.turn_to(r.heading)
             if abs(off) > 0.06:
                 return turn(off, ("square turn", r.leg, r.step), s.t)
             r.stage, r.squared = "start", r.step
@@ -249,7 +249,7 @@ class RouteFollower:
             if r.heading is not None:
                 # Going back along the corridor (avoidance turned the robot round someone):
                 # the hallway follower would take it back the way it came. Turn to the way.
-                off = wrap(r.heading - s.pose.theta)
+                off = s.pose.turn_to(r.heading)
                 went = self.way_made(r, s)
                 r.best_went = max(r.best_went, went)
                 if went < r.best_went - LOST_WAY_M and abs(off) > WRONG_WAY_RAD:
@@ -278,7 +278,7 @@ class RouteFollower:
                 ]
                 base = r.heading if r.heading is not None else s.pose.theta
                 r.turn_goal = wrap(base + angle)
-            off = wrap(r.turn_goal - s.pose.theta)
+            off = s.pose.turn_to(r.turn_goal)
             if abs(off) > 0.05 and r.stage != "into":
                 return turn(off, ("route turn", r.step), s.t)
             r.heading = r.turn_goal
@@ -288,8 +288,7 @@ class RouteFollower:
                 if r.stage != "into":
                     r.stage, r.start = "into", s.pose
                 assert r.start is not None
-                gx = r.start.x + INTO_MOUTH_M * math.cos(r.heading)
-                gy = r.start.y + INTO_MOUTH_M * math.sin(r.heading)
+                gx, gy = r.start.ahead(INTO_MOUTH_M, r.heading)
                 if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.15 and s.sonar[0] > 0.6:
                     return goto(gx, gy, ("into mouth", r.step))
         return self.next_step(r, s)
@@ -312,7 +311,7 @@ class RouteFollower:
         gx, gy = bx - LOST_CODE_M * math.cos(n), by - LOST_CODE_M * math.sin(n)
         if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.2:
             return goto(gx, gy, ("to lost barcode", code, round(gx, 1), round(gy, 1)), avoid=True)
-        off = wrap(n - s.pose.theta)
+        off = s.pose.turn_to(n)
         if abs(off) > 0.1:
             return turn(off, ("face lost barcode", code), s.t)
         r.code_at = None
@@ -326,8 +325,7 @@ class RouteFollower:
         """
         h = r.heading if r.heading is not None else s.pose.theta
         ax, ay = HINT_DOOR_AHEAD_M - DOOR_STANDOFF, side * HINT_DOOR_ASIDE_M
-        c, sn = math.cos(h), math.sin(h)
-        goal = (s.pose.x + c * ax - sn * ay, s.pose.y + sn * ax + c * ay, h)
+        goal = (*Pose(s.pose.x, s.pose.y, h).from_robot(ax, ay), h)  # here, facing h
         m = self.mem
         m.door_goal, m.door_stage, m.door_first = goal, "goto", goal
         m.door_fixes, m.door_pushes, m.door_after_pass = 0, 0, False
@@ -390,10 +388,9 @@ class RouteFollower:
     def way_made(self, r: RouteState, s: Senses) -> float:
         """How far along the step's heading the robot got (round someone and back: none), m."""
         assert r.start is not None
-        dx, dy = s.pose.x - r.start.x, s.pose.y - r.start.y
         if r.heading is None:
-            return math.hypot(dx, dy)
-        return dx * math.cos(r.heading) + dy * math.sin(r.heading)
+            return math.hypot(s.pose.x - r.start.x, s.pose.y - r.start.y)
+        return r.start.along(s.pose.x, s.pose.y, r.heading)
 
     def wall_across(self, r: RouteState, s: Senses) -> bool:
         """A wall across the way ahead (not clutter, nor a side wall avoidance turned to).
@@ -404,7 +401,7 @@ class RouteFollower:
         corridor the sonars 15 and 30 degrees off the way see down it; someone standing in
         the way is too narrow to reach the sonars 30 degrees off it.
         """
-        rel = wrap(r.heading - s.pose.theta) if r.heading is not None else 0.0
+        rel = s.pose.turn_to(r.heading) if r.heading is not None else 0.0
         n = len(s.sonar)
         i = round(rel / (2 * math.pi / n)) % n
         way = [s.sonar[(i + k) % n] for k in range(-2, 3)]

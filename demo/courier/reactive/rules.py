@@ -427,7 +427,7 @@ class Reactive(CarRider, RouteFollower, Link):
         gx, gy = bx - short * (bx - fx) / max(far, 1e-6), by - short * (by - fy) / max(far, 1e-6)
         if math.hypot(s.pose.x - gx, s.pose.y - gy) > 0.3 and s.t - self.rule_since < SIGHTING_S:
             return goto(gx, gy, (f"to {what}", bx, by), avoid=True)
-        off = wrap(math.atan2(by - s.pose.y, bx - s.pose.x) - s.pose.theta)
+        off = s.pose.bearing_to(bx, by)
         if abs(off) > 0.1:
             return turn(off, (f"face {what}", bx, by), s.t)
         return None
@@ -540,7 +540,7 @@ class Reactive(CarRider, RouteFollower, Link):
             else:
                 return goto(gx, gy, ("door goto", m.door_goal))
         if m.door_stage == "face":
-            off = wrap(heading - s.pose.theta)
+            off = s.pose.turn_to(heading)
             if abs(off) > 0.06:
                 return turn(off, ("door face", m.door_goal), s.t)
             m.door_stage = "check"
@@ -567,7 +567,7 @@ class Reactive(CarRider, RouteFollower, Link):
         tx, ty = bx - LINE_UP_M * math.cos(n), by - LINE_UP_M * math.sin(n)
         if math.hypot(s.pose.x - tx, s.pose.y - ty) > 0.12:
             return goto(tx, ty, ("line up", round(tx, 2), round(ty, 2)))
-        off = wrap(n - s.pose.theta)
+        off = s.pose.turn_to(n)
         if abs(off) > 0.06:
             return turn(off, ("line up face", round(n, 2)), s.t)
         return None
@@ -583,8 +583,7 @@ class Reactive(CarRider, RouteFollower, Link):
         m, o = self.mem, s.opening
         normal, cx, cy = float(o["normal"]), float(o["x"]), float(o["y"])
         ax, ay = cx - DOOR_STANDOFF * math.cos(normal), cy - DOOR_STANDOFF * math.sin(normal)
-        c, sn = math.cos(s.pose.theta), math.sin(s.pose.theta)
-        now = (s.pose.x + c * ax - sn * ay, s.pose.y + sn * ax + c * ay, s.pose.theta + normal)
+        now = (*s.pose.from_robot(ax, ay), s.pose.theta + normal)
         m.door_seen = [(t, g) for t, g in m.door_seen if s.t - t < DOOR_FIX_S + 0.05]
         m.door_seen.append((s.t, now))
         # A cycle without the opening breaks the run (`pass_door_action` calls this only
@@ -620,8 +619,7 @@ class Reactive(CarRider, RouteFollower, Link):
         m = self.mem
         if not s.door_passed or m.door_stage != "pass" or m.door_goal is None:
             return False
-        gx, gy, heading = m.door_goal
-        went = (s.pose.x - gx) * math.cos(heading) + (s.pose.y - gy) * math.sin(heading)
+        went = Pose(*m.door_goal).along(s.pose.x, s.pose.y)
         if went >= DOOR_STANDOFF + 0.4:
             m.door_goal, m.door_stage, m.door_fixes, m.door_first = None, "", 0, None
             m.door_after_pass = False
@@ -646,14 +644,11 @@ class Reactive(CarRider, RouteFollower, Link):
         if b is not None and not m.in_car:
             if b[1] < 1.6 and abs(b[0]) < 0.3:
                 m.button_seen_from[s.floor] = s.pose
-            a = s.pose.theta + b[0]
-            at = (s.pose.x + b[1] * math.cos(a), s.pose.y + b[1] * math.sin(a))
-            m.button_at[s.floor] = (at, (s.pose.x, s.pose.y))
+            m.button_at[s.floor] = (s.pose.seen_at(b[0], b[1]), (s.pose.x, s.pose.y))
         self.watch_progress(s)
         d = s.barcodes.get(self.m.lab_door_barcode)
         if d is not None and not m.out_of_lab:
-            a = s.pose.theta + d[0]
-            m.lab_door_at = (s.pose.x + d[1] * math.cos(a), s.pose.y + d[1] * math.sin(a))
+            m.lab_door_at = s.pose.seen_at(d[0], d[1])
             m.lab_door_from = (s.pose.x, s.pose.y)
             near = LAB_WALL_FROM_M <= d[1] <= LAB_WALL_SEEN_M
             fitted = wall_through(d, s.wall, CODE_ON_WALL_M) if near else None
@@ -706,7 +701,7 @@ class Reactive(CarRider, RouteFollower, Link):
         i = max(range(SONARS), key=lambda j: free[j])
         go = max(0.3, min(UNSTICK_M, free[i] - 0.6))
         a = p.theta + 2 * math.pi * i / SONARS
-        m.unstick_to, m.unstick_since = (p.x + go * math.cos(a), p.y + go * math.sin(a)), s.t
+        m.unstick_to, m.unstick_since = p.ahead(go, a), s.t
         m.unstick_for, m.unstick_back = UNSTICK_S, False
         if self.debug:
             print(f"[{s.t:7.1f} s]   stuck: {go:.1f} m towards {math.degrees(a):.0f} deg")
@@ -798,9 +793,8 @@ def beside_barcode(
     The barcode is on the opening's line (`DOOR_OFF_BARCODE_WALL_M`), and the opening's near
     jamb is within `DOOR_BESIDE_BARCODE_M` of it along the wall (docs/maps.md: 0.1 to 0.6 m).
     """
-    gx, gy, h = goal
-    dx = code[0] - (gx + DOOR_STANDOFF * math.cos(h))
-    dy = code[1] - (gy + DOOR_STANDOFF * math.sin(h))
-    across = dx * math.cos(h) + dy * math.sin(h)
-    along = abs(-dx * math.sin(h) + dy * math.cos(h)) - width / 2
+    # The opening's centre, facing through it.
+    door = Pose(*Pose(*goal).ahead(DOOR_STANDOFF), goal[2])
+    across = door.along(code[0], code[1])  # off the opening's line
+    along = abs(door.across(code[0], code[1])) - width / 2  # along it, past the near jamb
     return abs(across) < DOOR_OFF_BARCODE_WALL_M and along < DOOR_BESIDE_BARCODE_M

@@ -203,8 +203,6 @@ class RouteState:
 
         `barcode` is where it is seen: (bearing, distance).
         """
-        at = s.pose.theta + barcode[0]
-        cx = s.pose.x + barcode[1] * math.cos(at)
-        cy = s.pose.y + barcode[1] * math.sin(at)
+        cx, cy = s.pose.seen_at(barcode[0], barcode[1])
         self.heading, self.stage = heading, "square"
         self.square_at = (cx - standoff * math.cos(heading), cy - standoff * math.sin(heading))

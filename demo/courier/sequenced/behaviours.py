@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import situate
-from courier.geometry import SONARS, bearing_of, live_sonar_ahead, sonar_toward, wrap
+from courier.geometry import SONARS, Pose, bearing_of, live_sonar_ahead, sonar_toward, wrap
 from courier.link import Link
 from courier.mission import (
     DOOR_BESIDE_BARCODE_M,
@@ -136,7 +136,7 @@ class Sequencer(Link):
                 await self.sidestep(bearing, keep=["track_barcode"])
                 # Face where the barcode was (odometry) before homing on.
                 o = await self.odom()
-                await self.turn(wrap(math.atan2(py - o.y, px - o.x) - o.theta), keep=["runaway"])
+                await self.turn(o.bearing_to(px, py), keep=["runaway"])
                 continue
             break
         if got and self.debug:
@@ -160,9 +160,7 @@ class Sequencer(Link):
             go = max(0.0, min(1.0, max(left, right) - 0.7))
             o = await self.odom()
             if go > 0.1:
-                await self.goto(
-                    o.x + go * math.cos(o.theta), o.y + go * math.sin(o.theta), within=10
-                )
+                await self.goto(*o.ahead(go), within=10)
         finally:
             await self.restore("runaway", "safe_distance")
 
@@ -206,9 +204,7 @@ class Sequencer(Link):
 
     async def to_frame(self, x: float, y: float) -> tuple[float, float]:
         """A point of the robot frame in the odometry frame."""
-        o = await self.odom()
-        c, s = math.cos(o.theta), math.sin(o.theta)
-        return o.x + c * x - s * y, o.y + s * x + c * y
+        return (await self.odom()).from_robot(x, y)
 
     async def line_up(self, barcode: int, standoff: float) -> bool:
         """From in view of ``barcode`` on a wall: to ``standoff`` m straight in front of it.
@@ -248,7 +244,7 @@ class Sequencer(Link):
                 gx, gy = px - standoff * math.cos(n), py - standoff * math.sin(n)
                 if not await self.goto(gx, gy, within=30):
                     return False
-                if not await self.turn(wrap(n - (await self.odom()).theta)):
+                if not await self.turn((await self.odom()).turn_to(n)):
                     return False
                 if await self.barcode_ahead(barcode, standoff):
                     self.wall_fix = (px, py, wrap(n))
@@ -289,8 +285,7 @@ class Sequencer(Link):
             return None
         o = await self.odom()
         bearing, distance = float(t["bearing"]), float(t["distance"])
-        px = o.x + distance * math.cos(o.theta + bearing)
-        py = o.y + distance * math.sin(o.theta + bearing)
+        px, py = o.seen_at(bearing, distance)
         # Looking towards the barcode first; a door beside it may hide most of that wall from
         # the sonars, so then wider. The wall must be the barcode's: it lies on its line.
         normal: float | None = None  # in the odometry frame
@@ -303,7 +298,7 @@ class Sequencer(Link):
                     continue
                 w = await self.odom()
                 n = w.theta + float(wall["normal"])
-                along = (px - w.x) * math.cos(n) + (py - w.y) * math.sin(n)
+                along = w.along(px, py, n)
                 # Along the corridor the route followed or across it (docs/maps.md): a line
                 # fitted through a door's jamb, the room beyond and someone standing by is not.
                 square = self.corridor_heading is None or any(
@@ -345,9 +340,9 @@ class Sequencer(Link):
         """
         self.prefetch("odom")
         w = await self.odom()
-        lateral = -(px - w.x) * math.sin(axis) + (py - w.y) * math.cos(axis)
+        lateral = w.across(px, py, axis)
         side = axis + math.copysign(math.pi / 2, lateral)
-        ahead = (px - w.x) * math.cos(axis) + (py - w.y) * math.sin(axis)
+        ahead = w.along(px, py, axis)
         by = await self.wall_towards(side)
         on_side = by is not None and abs(wrap(by[0] - side)) < math.radians(20)
         on_side = on_side and by is not None and abs(by[1] - abs(lateral)) < 0.35
@@ -372,7 +367,7 @@ class Sequencer(Link):
         Its normal in the odometry frame and its distance; None if none.
         """
         o = await self.odom()
-        await self.set("fit_wall", "bearing_deg", math.degrees(wrap(direction - o.theta)))
+        await self.set("fit_wall", "bearing_deg", math.degrees(o.turn_to(direction)))
         await self.set("fit_wall", "half_angle_deg", 50.0)
         try:
             wall = await self.clue("fit_wall", "wall")
@@ -381,7 +376,7 @@ class Sequencer(Link):
             await self.restore("fit_wall", "half_angle_deg")
         if wall is None:
             return None
-        return wrap(o.theta + float(wall["normal"])), float(wall["distance"])
+        return o.heading_of(float(wall["normal"])), float(wall["distance"])
 
     async def wall_stays(self) -> bool:
         """Whether the wall `std.fit_wall` sees ahead stays put while the robot stands.
@@ -433,9 +428,9 @@ class Sequencer(Link):
         """
         if self.wall_fix is None:
             return True
-        px, py, normal = self.wall_fix
+        wall = Pose(*self.wall_fix)  # a point of the wall and its normal
         o = await self.odom()
-        beyond = (o.x - px) * math.cos(normal) + (o.y - py) * math.sin(normal)
+        beyond = wall.along(o.x, o.y)
         if beyond < BEYOND_WALL_M:
             await self.say(f"    not through the wall ({beyond:+.1f} m): again")
             return False
@@ -452,8 +447,8 @@ class Sequencer(Link):
         if self.wall_fix is not None:
             px, py, normal = self.wall_fix
             o = await self.odom()
-            distance = (px - o.x) * math.cos(normal) + (py - o.y) * math.sin(normal)
-            bearing = wrap(normal - o.theta)
+            distance = o.along(px, py, normal)
+            bearing = o.turn_to(normal)
             if 0.3 < distance < 3.0 and abs(bearing) < math.radians(80):
                 known = (distance, math.degrees(bearing))
         if known is not None:
@@ -476,9 +471,7 @@ class Sequencer(Link):
             return None
         px, py, _normal = self.wall_fix
         o = await self.odom()
-        dx, dy = px - o.x, py - o.y
-        ahead = dx * math.cos(o.theta) + dy * math.sin(o.theta)
-        across = -dx * math.sin(o.theta) + dy * math.cos(o.theta)
+        ahead, across = o.along(px, py), o.across(px, py)
         return across if 0.2 < ahead < 3.0 and abs(across) < 2.0 else None
 
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
@@ -530,15 +523,14 @@ class Sequencer(Link):
         # The point DOOR_STANDOFF in front of the opening's centre, in the odometry frame.
         ax = centre[0] - DOOR_STANDOFF * math.cos(normal)
         ay = centre[1] - DOOR_STANDOFF * math.sin(normal)
-        c, s = math.cos(pose.theta), math.sin(pose.theta)
-        gx, gy = pose.x + c * ax - s * ay, pose.y + s * ax + c * ay
+        gx, gy = pose.from_robot(ax, ay)
         heading = pose.theta + normal
         await self.set("runaway", "safe_distance", 0.12)
         try:
             if not await self.goto(gx, gy):
                 return False
             here = await self.odom()
-            if not await self.turn(wrap(heading - here.theta)):
+            if not await self.turn(here.turn_to(heading)):
                 return False
             start = await self.odom()
             went = 0.0
@@ -548,8 +540,8 @@ class Sequencer(Link):
                     # people walk about): they move on; the robot waits, then goes on.
                     await self.say("    someone in the way through the door: waiting")
                     here = await self.odom()
-                    if abs(wrap(start.theta - here.theta)) > 0.2:  # pushed aside meanwhile
-                        await self.turn(wrap(start.theta - here.theta))
+                    if abs(here.turn_to(start.theta)) > 0.2:  # pushed aside meanwhile
+                        await self.turn(here.turn_to(start.theta))
                     await self.use("runaway")
                     await self.wait(f"sonar.range[0] > {ROBOT_RADIUS + 0.9}", within=10)
                 await self.set("pass_door", "distance", DOOR_STANDOFF + 1.1 - went)
@@ -558,9 +550,7 @@ class Sequencer(Link):
                     return False
                 # Through? Well beyond the wall line along the heading, not stopped at it.
                 end = await self.odom()
-                went = (end.x - start.x) * math.cos(start.theta) + (end.y - start.y) * math.sin(
-                    start.theta
-                )
+                went = start.along(end.x, end.y)
                 # Stopped short, but in the doorway already (some way past the standoff):
                 # it was someone beyond, not the jambs.
                 if went >= DOOR_STANDOFF + 0.3 or went < DOOR_STANDOFF - 0.3:
@@ -623,9 +613,7 @@ class Sequencer(Link):
             o = await self.odom()
             go = max(0.0, min(1.2, free[best] - 0.8))
             if go > 0.1:
-                await self.goto(
-                    o.x + go * math.cos(o.theta), o.y + go * math.sin(o.theta), within=10
-                )
+                await self.goto(*o.ahead(go), within=10)
         finally:
             await self.restore("runaway", "safe_distance")
 
@@ -643,8 +631,8 @@ class Sequencer(Link):
             await self.turn(side, keep=["runaway"])
             o = await self.odom()
             d = abs(offset)
-            await self.goto(o.x + d * math.cos(o.theta), o.y + d * math.sin(o.theta), within=10)
-            await self.turn(wrap(o.theta - side - (await self.odom()).theta), keep=["runaway"])
+            await self.goto(*o.ahead(d), within=10)
+            await self.turn((await self.odom()).turn_to(o.theta - side), keep=["runaway"])
         finally:
             await self.set("runaway", "safe_distance", 0.1)  # still in the car
 

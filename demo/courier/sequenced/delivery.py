@@ -37,7 +37,7 @@ from courier.mission import (
     Stop,
     seen_wall_ends_at,
 )
-from courier.sequenced.routes import RouteSequencer, way_made, way_made_expr
+from courier.sequenced.routes import RouteSequencer, way_made_expr
 
 #: The phases, in mission order (``--from``/``--to`` pick a stretch of them).
 PHASES = ("lab", "corridor", "lobby", "ride", "office")
@@ -112,13 +112,13 @@ def open_in_walls(
             square = ca * cn + sa * sn
             if square < 0.5:
                 continue
-            expect = ((wx - o.x) * cn + (wy - o.y) * sn) / square
+            expect = o.along(wx, wy, wn) / square
             # (Farther than the sonars' reach less the car's depth: no echo at all.)
             if not 0.3 < expect < OPEN_SEEN_M or r < min(expect + OPEN_BEYOND_M, NO_ECHO_M):
                 continue
-            px, py = o.x + expect * ca, o.y + expect * sa
+            px, py = o.ahead(expect, a)
             inside = all(
-                (px - bx) * math.cos(bn) + (py - by) * math.sin(bn) < -OPEN_INSIDE_M
+                Pose(bx, by, bn).along(px, py) < -OPEN_INSIDE_M
                 for bx, by, bn in bounds
                 if abs(wrap(bn - wn)) > 0.5
             )
@@ -169,11 +169,7 @@ class Delivery(RouteSequencer):
             self.prefetch("target", "odom")
             seen_from = await self.odom()
             t = await self.value("target")
-            heading = seen_from.theta + float(t["bearing"])
-            code = (
-                seen_from.x + float(t["distance"]) * math.cos(heading),
-                seen_from.y + float(t["distance"]) * math.sin(heading),
-            )
+            code = seen_from.seen_at(float(t["bearing"]), float(t["distance"]))
             if not await self.home_on(m.lab_door_barcode, stop):
                 # Lost near the wall, seen too obliquely to read: back to where it was seen
                 # from, facing it, and square in front of it from there.
@@ -181,9 +177,7 @@ class Delivery(RouteSequencer):
                 await self.set("runaway", "safe_distance", 0.15)
                 if await self.goto(seen_from.x, seen_from.y, within=30):
                     o = await self.odom()
-                    await self.turn(
-                        wrap(math.atan2(code[1] - o.y, code[0] - o.x) - o.theta), keep=["runaway"]
-                    )
+                    await self.turn(o.bearing_to(code[0], code[1]), keep=["runaway"])
                 await self.restore("runaway", "safe_distance")
                 if not await self.line_up(m.lab_door_barcode, stop):
                     await self.say("    the barcode was lost (or the way blocked): looking again")
@@ -221,7 +215,7 @@ class Delivery(RouteSequencer):
         if wall is None or float(wall["distance"]) > FAR_WALL_M:
             return
         o = await self.odom()
-        out = wrap(o.theta + float(wall["normal"]))
+        out = o.heading_of(float(wall["normal"]))
         if abs(wrap(out - self.passed_heading)) < math.radians(60):
             if self.debug:
                 off = math.degrees(wrap(out - self.passed_heading))
@@ -260,12 +254,10 @@ class Delivery(RouteSequencer):
                 # Called before: back to where the button was pushed, by odometry (in the
                 # lobby, across open floor: at the patrol's speed).
                 b = self.button_pose
-                back = (b.x - 0.9 * math.cos(b.theta), b.y - 0.9 * math.sin(b.theta))
+                back = b.ahead(-0.9)
                 await self.set("runaway", "safe_distance", 0.15)
                 if await self.goto(*back, within=60, speed=0.6):
-                    facing = await self.turn(
-                        wrap(b.theta - (await self.odom()).theta), keep=["runaway"]
-                    )
+                    facing = await self.turn((await self.odom()).turn_to(b.theta), keep=["runaway"])
                 await self.restore("runaway", "safe_distance")
             await self.set("track_barcode", "id", button)
             await self.use("runaway", "avoid", "track_barcode")
@@ -319,12 +311,10 @@ class Delivery(RouteSequencer):
             # wall (next to the button's wall) is then straight ahead at each end, its panel in
             # view through its open door the whole way towards it; a car on the button's wall
             # passes beside, its door seen by the side sonars.
-            c, s = math.cos(b.theta), math.sin(b.theta)
             # Backwards: turning round to drive there and round again to patrol took some
             # 8 s of a car's 15 to 35 s from the call to its door closing.
             await self.goto(
-                b.x - PATROL_BACK_M * c,
-                b.y - PATROL_BACK_M * s,
+                *b.ahead(-PATROL_BACK_M),
                 within=30,
                 speed=0.5,
                 reverse_within=1.5,
@@ -333,7 +323,7 @@ class Delivery(RouteSequencer):
             # door stays open only a few seconds is missed while the robot patrols the other
             # side, on every call if the robot always went the same way first.
             first = -math.pi / 2 if self.patrols % 2 == 0 else math.pi / 2
-            along = wrap(b.theta + first - (await self.odom()).theta)
+            along = (await self.odom()).turn_to(b.theta + first)
         else:
             along = -math.pi / 2 if self.patrols % 2 == 0 else math.pi / 2
         # The lobby's walls that may hold cars: all but the entry's (docs/maps.md, "Lobby"),
@@ -355,7 +345,7 @@ class Delivery(RouteSequencer):
             u = wrap(b.theta + math.pi)
             depth = way_made_expr(b, u)
             back = wrap(t + math.pi)
-            if abs(math.cos(wrap(t - b.theta))) < 0.5:
+            if abs(math.cos(b.turn_to(t))) < 0.5:
                 corner = True
                 level = f"{way_made_expr(b, back)} > 0.0"
                 legs = [
@@ -366,9 +356,9 @@ class Delivery(RouteSequencer):
                     (wrap(u + math.pi), None, True),
                     (back, level, True),
                 ]
-                along = wrap(t - (await self.odom()).theta)
+                along = (await self.odom()).turn_to(t)
             elif self.entered_at is not None and self.patrols % 2 == 1:
-                inside = way_made(self.entered_at, b, u) - SIDE_LEG_SHORT_M
+                inside = b.along(self.entered_at.x, self.entered_at.y, u) - SIDE_LEG_SHORT_M
                 if inside > PATROL_BACK_M + SIDE_LEG_MIN_M:
                     t1 = wrap(b.theta + first)
                     deep = f"{depth} > {inside!r}"
@@ -399,7 +389,7 @@ class Delivery(RouteSequencer):
             # The button's wall holds nothing but cars (docs/maps.md, "Lobby"): a way that
             # opens on it is a car's door, one the patrol may be walking away from.
             r = BUTTON_STANDOFF_M
-            walls.append((b.x + r * math.cos(b.theta), b.y + r * math.sin(b.theta), b.theta))
+            walls.append((*b.ahead(r), b.theta))
         # The end walls in sonar reach from where the patrol begins, ahead and behind: a car's
         # door on the one behind (a short lobby) is seen opening while the robot walks the
         # other way, not only after the robot came to it and turned back there.
@@ -408,9 +398,9 @@ class Delivery(RouteSequencer):
         # (Round three walls, the one behind is towards the entry.)
         for i in (0,) if legs else (0, SONARS // 2):
             if seen_wall_ends_at(ranges, i):
-                toward = wrap(o.theta + bearing_of(i))
+                toward = o.heading_of(bearing_of(i))
                 r = ranges[i]
-                walls.append((o.x + r * math.cos(toward), o.y + r * math.sin(toward), toward))
+                walls.append((*o.ahead(r, toward), toward))
         if self.debug:
             looks = [round(ranges[k % SONARS], 2) for k in (-1, 0, 1, 11, 12, 13)]
             await self.say(f"      walls known: {len(walls)} (sonars {looks})")
@@ -419,8 +409,8 @@ class Delivery(RouteSequencer):
         bounds = list(walls)
         if b is not None and self.entered_at is not None and not corner:
             into = wrap(b.theta + math.pi)
-            far = way_made(self.entered_at, b, into) + ENTRY_BEYOND_M
-            bounds.append((b.x + far * math.cos(into), b.y + far * math.sin(into), into))
+            far = b.along(self.entered_at.x, self.entered_at.y, into) + ENTRY_BEYOND_M
+            bounds.append((*b.ahead(far, into), into))
         deadline = self.t + 60
         afresh = ["detect_door", "watch_openings", "identify_car"]
         polled = False
@@ -473,18 +463,14 @@ class Delivery(RouteSequencer):
                 # only bounds it.
                 if got == 2:
                     ahead = (await self.sonar())[0]
-                    end = (
-                        o.x + ahead * math.cos(o.theta),
-                        o.y + ahead * math.sin(o.theta),
-                        o.theta,
-                    )
+                    end = (*o.ahead(ahead), o.theta)
                     if not legs or legs[leg][2]:
                         walls.append(end)
                     bounds.append(end)
                 if legs:
                     leg = (leg + 1) % len(legs)
                     await self.say("    end of the lobby's wall: along the next one")
-                    turned = await self.turn(wrap(legs[leg][0] - o.theta), keep=["runaway"])
+                    turned = await self.turn(o.turn_to(legs[leg][0]), keep=["runaway"])
                 else:
                     await self.say("    end of the lobby: turning back")
                     turned = await self.turn(math.pi, keep=["runaway"])
@@ -505,13 +491,11 @@ class Delivery(RouteSequencer):
                 opened = await self.value("opened")
                 bearing = float(opened["bearing"])
                 o = await self.odom()
-                at = o.theta + bearing
-                px = o.x + float(opened["before"]) * math.cos(at)
-                py = o.y + float(opened["before"]) * math.sin(at)
+                px, py = o.seen_at(bearing, float(opened["before"]))
                 on = [
                     wn
                     for wx, wy, wn in walls
-                    if abs((px - wx) * math.cos(wn) + (py - wy) * math.sin(wn)) < OPENED_ON_WALL_M
+                    if abs(Pose(wx, wy, wn).along(px, py)) < OPENED_ON_WALL_M
                 ]
                 # A door opening ahead on the wall the patrol walks along is the door
                 # detector's: it sees it beside the robot a moment later, face-on, and the
@@ -533,17 +517,17 @@ class Delivery(RouteSequencer):
                     afresh = ["watch_openings"]
                     continue
             if got == 3:
-                gx, gy = px - FACE_DOOR_M * math.cos(on[0]), py - FACE_DOOR_M * math.sin(on[0])
+                gx, gy = Pose(px, py, on[0]).ahead(-FACE_DOOR_M)  # in front of the door
                 # Abreast of the door already (it opened beside the robot), the robot only
                 # turns to face it: entering works from a little farther off the wall too.
-                abreast = abs(-(gx - o.x) * math.sin(on[0]) + (gy - o.y) * math.cos(on[0]))
-                off_wall = (px - o.x) * math.cos(on[0]) + (py - o.y) * math.sin(on[0])
+                abreast = abs(o.across(gx, gy, on[0]))
+                off_wall = o.along(px, py, on[0])
                 if abreast > ABREAST_M or not 0.6 < off_wall < 1.6:
                     await self.set("runaway", "safe_distance", 0.12)
                     # Backwards if the door is just behind (the robot walked past it).
                     await self.goto(gx, gy, within=10, speed=0.5, reverse_within=1.5)
                     await self.restore_lobby_patrol()
-                bearing = wrap(on[0] - (await self.odom()).theta)
+                bearing = (await self.odom()).turn_to(on[0])
             elif got == 0:
                 self.prefetch("door", "odom")  # the turn reads the odometry
                 bearing = float((await self.value("door"))["bearing"])
@@ -563,7 +547,7 @@ class Delivery(RouteSequencer):
                 # closing. On with the patrol.
                 await self.say("    no car behind that opening: patrolling on")
                 await self.restore_lobby_patrol()
-                again = wrap(legs[leg][0] - (await self.odom()).theta) if legs else -bearing
+                again = (await self.odom()).turn_to(legs[leg][0]) if legs else -bearing
                 if await self.turn(again, keep=["runaway"]):
                     continue
                 break

@@ -60,13 +60,11 @@ def farther_than(o: Pose, metres: float) -> str:
     return f"{dx} * {dx} + {dy} * {dy} > {metres * metres!r}"
 
 
-def way_made(o: Pose, start: Pose, heading: float) -> float:
-    """The way from ``start`` to ``o`` along ``heading`` (negative: behind), m."""
-    return (o.x - start.x) * math.cos(heading) + (o.y - start.y) * math.sin(heading)
-
-
 def way_made_expr(start: Pose, heading: float) -> str:
-    """`way_made` from ``start`` of the robot's odometry, in the monitor language."""
+    """The way made from ``start`` along ``heading``, in the monitor language.
+
+    What `Pose.along` of ``start`` says of the robot's odometry (negative: behind), m.
+    """
     c, s = math.cos(heading), math.sin(heading)
     return f"(odom.x - {start.x!r}) * {c!r} + (odom.y - {start.y!r}) * {s!r}"
 
@@ -185,9 +183,7 @@ class RouteSequencer(Sequencer):
         # Best effort: someone standing there may keep the robot from the very middle,
         # and the turn and the next corridor's following work from near it too.
         if abs(forward) > 0.1:
-            await self.goto(
-                o.x + forward * math.cos(along), o.y + forward * math.sin(along), within=10
-            )
+            await self.goto(*o.ahead(forward, along), within=10)
 
     async def junction_on_the_way_back(self, look_from: Pose, side: str) -> bool:
         """The junction on ``side`` the detector missed going on, looked for coming back.
@@ -203,10 +199,10 @@ class RouteSequencer(Sequencer):
         back = wrap(along + math.pi)
         other = "right" if side == "left" else "left"
         await self.say(f"      no junction seen on the {side}: looking for it on the way back")
-        if not await self.turn(wrap(back - (await self.odom()).theta)):
+        if not await self.turn((await self.odom()).turn_to(back)):
             return False
         o = await self.odom()
-        todo = way_made(o, look_from, along) + 2.5
+        todo = look_from.along(o.x, o.y, along) + 2.5
         if todo > 0.5:
             await self.use(
                 "runaway",
@@ -224,7 +220,7 @@ class RouteSequencer(Sequencer):
                 junction: dict[str, Any] = await self.value("junction") or {}
                 centre = float(junction.get("centre", 0.0))
                 here = await self.odom()
-                at = way_made(here, look_from, along)
+                at = look_from.along(here.x, here.y, along)
                 if math.isfinite(centre):
                     at -= centre
                 if self.debug:
@@ -232,7 +228,7 @@ class RouteSequencer(Sequencer):
                 if at > -JUNCTION_DRIFT_M:
                     await self.junction_centre(back)
                     return True
-        await self.turn(wrap(along - (await self.odom()).theta))
+        await self.turn((await self.odom()).turn_to(along))
         return False
 
     async def follow_to_wall(self) -> bool:
@@ -281,12 +277,12 @@ class RouteSequencer(Sequencer):
                 within = min(FOLLOW_SLICE_S, deadline - self.t)
                 held = await self.wait(ahead, side_exit(start, along), within=within)
                 if held == 0:
-                    facing = (await self.odom()).theta
-                    if abs(wrap(facing - along)) < math.radians(30):
+                    off = (await self.odom()).turn_to(along)
+                    if abs(off) < math.radians(30):
                         # Square to the way, not to where avoidance turned the robot (round
                         # clutter, a box on each wall then lines up across its view).
-                        if abs(wrap(facing - along)) > math.radians(8):
-                            await self.turn(wrap(along - facing))
+                        if abs(off) > math.radians(8):
+                            await self.turn(off)
                         if await self.wall_stays():
                             return True
                         await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
@@ -311,7 +307,7 @@ class RouteSequencer(Sequencer):
                     await watch_ahead()
                     await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
                 o = await self.odom()
-                made = way_made(o, start, along)
+                made = start.along(o.x, o.y, along)
                 if made > best + 0.5:
                     best = made
                     renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
@@ -322,7 +318,7 @@ class RouteSequencer(Sequencer):
                     await self.say(
                         f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle"
                     )
-                    await self.turn(wrap(along - o.theta))
+                    await self.turn(o.turn_to(along))
                     await self.recentre(along)
                     await watch_ahead()
                     await self.use(
@@ -345,11 +341,10 @@ class RouteSequencer(Sequencer):
         corridor) is driven up to and must stay put (`wall_stays`).
         """
         o = await self.odom()
-        c, s = math.cos(along), math.sin(along)
-        made = way_made(o, start, along)
+        made = start.along(o.x, o.y, along)
         await self.say("    turned into a side corridor: back onto the way, looking for its end")
-        await self.goto(start.x + made * c, start.y + made * s, within=30)
-        await self.turn(wrap(along - (await self.odom()).theta))
+        await self.goto(*start.ahead(made, along), within=30)
+        await self.turn((await self.odom()).turn_to(along))
         wall = await self.wall_towards(along)
         if self.debug:
             await self.say(f"      wall towards the way: {wall}")
@@ -358,7 +353,7 @@ class RouteSequencer(Sequencer):
         go = wall[1] - (WALL_AHEAD_M - 0.3)
         if go > 0.1:
             o = await self.odom()
-            await self.goto(o.x + go * c, o.y + go * s, within=20)
+            await self.goto(*o.ahead(go, along), within=20)
         await self.set("fit_wall", "bearing_deg", 0.0)
         await self.set("fit_wall", "half_angle_deg", 45.0)
         return await self.wall_stays()
@@ -386,14 +381,14 @@ class RouteSequencer(Sequencer):
             if await self.wait(condition, within=slice_s) == 0:
                 return True
             here = await self.odom()
-            made = way_made(here, o, heading)
+            made = o.along(here.x, here.y, heading)
             if made > best + 0.5:
                 best = made
                 continue
             if barcode is not None:
                 if await self.look_round(barcode):
                     return True
-                await self.turn(wrap(heading - (await self.odom()).theta))
+                await self.turn((await self.odom()).turn_to(heading))
                 if (await self.sonar())[0] < DEAD_END_M:
                     await self.say(
                         f"    the corridor ends, barcode {barcode} unseen: back along it"
@@ -413,7 +408,7 @@ class RouteSequencer(Sequencer):
                     continue
                 here = await self.odom()
             await self.say(f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle")
-            await self.turn(wrap(heading - here.theta))
+            await self.turn(here.turn_to(heading))
             await self.recentre(heading)
             await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
             best = made
@@ -441,21 +436,20 @@ class RouteSequencer(Sequencer):
             axis = look_from.theta if self.corridor_heading is None else self.corridor_heading
         turn = math.pi / 2 if side == "left" else -math.pi / 2
         await self.say(f"      no junction seen: probing for it on the {side}")
-        c, s = math.cos(axis), math.sin(axis)
         made = way_made_expr(look_from, axis)
         for along in at:
             here = await self.odom()
-            if way_made(here, look_from, axis) < along - 0.3:
+            if look_from.along(here.x, here.y, axis) < along - 0.3:
                 # On to it by following the corridor: it keeps to the middle and goes round
                 # people, where a point drawn by odometry after a long way may be off the
                 # middle, near a wall the robot cannot come close to.
-                await self.turn(wrap(axis - here.theta))
+                await self.turn(here.turn_to(axis))
                 await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
                 if await self.wait(f"{made} > {along!r}", within=30) != 0:
                     continue
-            elif not await self.goto(look_from.x + along * c, look_from.y + along * s, within=30):
+            elif not await self.goto(*look_from.ahead(along, axis), within=30):
                 continue
-            if not await self.turn(wrap(axis + turn - (await self.odom()).theta)):
+            if not await self.turn((await self.odom()).turn_to(axis + turn)):
                 continue
             # The farthest each sonar reads over a few seconds: people walking in the side
             # corridor move on, its walls do not.
@@ -472,7 +466,7 @@ class RouteSequencer(Sequencer):
             # tenths after a long corridor): one of them open, the other not blocked at once.
             pair = sorted((ranges[1], ranges[-1]))
             if ranges[0] > PROBE_OPEN_M and pair[1] > PROBE_OPEN_M - 0.6 and pair[0] > 0.7:
-                await self.turn(wrap(axis - (await self.odom()).theta))
+                await self.turn((await self.odom()).turn_to(axis))
                 return True
         return False
 
@@ -498,7 +492,7 @@ class RouteSequencer(Sequencer):
             if await self.wait(f"{made_expr} > {metres!r}", within=within) == 0:
                 return True
             o = await self.odom()
-            made = way_made(o, start, heading)
+            made = start.along(o.x, o.y, heading)
             if made > best + 0.5:
                 best = made
                 continue
@@ -512,7 +506,7 @@ class RouteSequencer(Sequencer):
                 ranges = [round(r, 2) for r in await self.sonar()]
                 await self.say(f"      drive {drive} pose {o} sonar {ranges}")
             await self.goto(start.x, start.y, within=40)
-            await self.turn(wrap(heading - (await self.odom()).theta))
+            await self.turn((await self.odom()).turn_to(heading))
             await self.recentre(heading)
             await self.use("runaway", "avoid", "follow_hallway", restart=["follow_hallway"])
             best = 0.0
@@ -560,7 +554,7 @@ class RouteSequencer(Sequencer):
             side = "left" if turned > 0 else "right"
             at = Pose(here.x, here.y, axis)
             if await self.probe_junction(at, side, at=MOUTH_PROBE_AT_M, axis=axis):
-                await self.turn(wrap(heading - (await self.odom()).theta))
+                await self.turn((await self.odom()).turn_to(heading))
             return
         if fix is None or float(fix["width"]) < 1.0 or float(fix["wall"]) > 2.0:
             return
@@ -599,7 +593,7 @@ class RouteSequencer(Sequencer):
         await self.set("runaway", "safe_distance", 0.12)
         try:
             await self.goto(x, y, within=15)
-            await self.turn(wrap(heading - (await self.odom()).theta))
+            await self.turn((await self.odom()).turn_to(heading))
         finally:
             await self.restore("runaway", "safe_distance")
 
@@ -675,9 +669,10 @@ class RouteSequencer(Sequencer):
                 # From the heading the route planned (the last turn's, or the robot's where the
                 # leg began or after homing), not from wherever following a corridor and
                 # stepping into a junction left it facing: errors do not add up turn by turn.
-                here = (await self.odom()).theta
-                goal = (here if self.corridor_heading is None else self.corridor_heading) + angle
-                ok = await self.turn(wrap(goal - here))
+                here = await self.odom()
+                planned = here.theta if self.corridor_heading is None else self.corridor_heading
+                goal = planned + angle
+                ok = await self.turn(here.turn_to(goal))
                 self.corridor_heading = goal
                 if ok and step.get("until") == "junction" and angle != math.pi:
                     await self.into_mouth(goal, angle)
