@@ -14,4 +14,6 @@ pub use decl::{ParamSpec, ParamType, ParamValue, ParamValueError, PortSpec, Skil
 pub use names::{did_you_mean, param_suggestion, suggestion};
 pub use skill::{Body, Context, Declare, FnSkill, Io, Skill, SkillError, SkillMaker, SkillType};
 pub use types::{ElemType, RecordType, SignalType, TypeParseError};
+#[doc(hidden)]
+pub use value::{fill_field, record_fields_to_fill, record_names, record_of};
 pub use value::{record_type, record_value, RecordValue, SignalValue, Value, ValueRef};

@@ -489,9 +489,49 @@ fixed_array_signal!(f32, F32s, ElemType::F32);
 fixed_array_signal!(f64, F64s, ElemType::F64);
 fixed_array_signal!(i64, I64s, ElemType::I64);
 
-/// Builds a record value from field values; used by `#[derive(Record)]`.
+/// Builds a record value from field values.
 pub fn record_value(fields: Vec<(&'static str, Value)>) -> Value {
     Value::Record(Arc::new(RecordValue { fields: fields.into_iter().map(|(n, v)| (Arc::from(n), v)).collect() }))
+}
+
+/// A record type's field names, made once and then shared by every value
+/// of it (`#[derive(Record)]`'s glue: a value costs no allocation per name).
+#[doc(hidden)]
+pub fn record_names(cell: &'static std::sync::OnceLock<Box<[Arc<str>]>>, names: &[&str]) -> &'static [Arc<str>] {
+    cell.get_or_init(|| names.iter().map(|&n| Arc::from(n)).collect())
+}
+
+/// A record value of the fields `names` (from [`record_names`]) with
+/// `values`, in that order (`#[derive(Record)]`'s glue).
+#[doc(hidden)]
+pub fn record_of<const N: usize>(names: &[Arc<str>], values: [Value; N]) -> Value {
+    Value::Record(Arc::new(RecordValue { fields: names.iter().cloned().zip(values).collect() }))
+}
+
+/// The fields of the record in an output buffer, to be written in place,
+/// when the buffer holds a spare record (see
+/// [`Skill::fills_outputs`](crate::Skill::fills_outputs)) that nobody else
+/// holds and that has exactly the fields `names`, in that order; else
+/// `None` (`#[derive(Record)]`'s glue).
+#[doc(hidden)]
+#[inline]
+pub fn record_fields_to_fill<'o>(output: &'o mut Option<Value>, names: &[&str]) -> Option<&'o mut [(Arc<str>, Value)]> {
+    let Some(Value::Record(record)) = output else { return None };
+    let record = Arc::get_mut(record)?;
+    let same = record.fields.len() == names.len() && record.fields.iter().zip(names).all(|((n, _), m)| &**n == *m);
+    same.then_some(&mut record.fields[..])
+}
+
+/// Writes a record's field in place, its old value the spare
+/// ([`SignalValue::into_output`]; `#[derive(Record)]`'s glue).
+#[doc(hidden)]
+#[inline]
+pub fn fill_field<T: SignalValue>(value: T, field: &mut Value) {
+    let mut out = Some(std::mem::replace(field, Value::Bool(false)));
+    value.into_output(&mut out);
+    if let Some(v) = out {
+        *field = v;
+    }
 }
 
 /// Builds a record type from field types; used by `#[derive(Record)]`.

@@ -28,6 +28,8 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
     let mut types = Vec::new();
     let mut reads = Vec::new();
     let mut writes = Vec::new();
+    let mut names = Vec::new();
+    let mut fills = Vec::new();
     for (i, f) in fields.named.iter().enumerate() {
         let Some(field) = &f.ident else { continue };
         let name = field.unraw().to_string();
@@ -46,7 +48,9 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
                 }
             )?
         });
-        writes.push(quote!((#name, #into(self.#field))));
+        writes.push(quote!(#into(self.#field)));
+        fills.push(quote!(#core::fill_field(self.#field, &mut #record[#i].1);));
+        names.push(name);
     }
 
     let binding = if reads.is_empty() { quote!(_) } else { quote!(#record) };
@@ -67,7 +71,24 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
             }
 
             fn into_value(self) -> #core::Value {
-                #core::record_value(::std::vec![#(#writes),*])
+                static NAMES: ::std::sync::OnceLock<::std::boxed::Box<[::std::sync::Arc<str>]>> =
+                    ::std::sync::OnceLock::new();
+                let names = #core::record_names(&NAMES, &[#(#names),*]);
+                #core::record_of(names, [#(#writes),*])
+            }
+
+            /// Written in place into a spare record of this type that nobody
+            /// else holds (no allocation), else made anew.
+            fn into_output(self, output: &mut ::core::option::Option<#core::Value>) {
+                if let ::core::option::Option::Some(#record) = #core::record_fields_to_fill(output, &[#(#names),*]) {
+                    let _ = &#record;
+                    #(#fills)*
+                    return;
+                }
+                if let ::core::option::Option::Some(spare) = output.take() {
+                    #core::value::recycle(spare);
+                }
+                *output = ::core::option::Option::Some(self.into_value());
             }
         }
     })
