@@ -304,3 +304,84 @@ fn a_steady_cycle_of_c_skills_allocates_nothing() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(allocated, 0);
 }
+
+/// Steers the toy wheel base from the sonar ring and the pose: an array
+/// and a record in, a record out.
+#[derive(Skill, Default)]
+#[skill(name = "alloc.steer")]
+struct Steer {
+    #[input(signal = "sonar.range")]
+    range: [f32; 24],
+    #[input]
+    odom: situate_toys::Pose,
+    #[output]
+    drive: situate_toys::Drive,
+}
+
+impl Body for Steer {
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        let ahead = f64::from(self.range[0]);
+        self.drive = situate_toys::Drive { v: 0.1 * ahead.min(1.0), w: 0.5 - 0.1 * self.odom.theta.sin() };
+        Ok(())
+    }
+}
+
+/// A robot with devices: the toy sonar ring (a `[f32; 24]` reading) and
+/// wheel base (a record command in, a record pose out), and a skill that
+/// steers it from both readings.
+fn robot_with_devices(clock: ClockKind) -> Manager {
+    let mut registry = Registry::new();
+    situate_toys::register(&mut registry);
+    registry.register::<Steer>();
+    let spec = RobotSpec::new("devices")
+        .clock(clock)
+        .period_s(0.01)
+        .executor(ExecutorKind::Serial, None)
+        .skill(SkillSpec::new("sonar", "toy.sonar"))
+        .skill(SkillSpec::new("wheels", "toy.wheels"))
+        .skill(SkillSpec::new("steer", "alloc.steer"));
+    match Manager::build(&spec, &registry) {
+        Ok(m) => m,
+        Err(e) => panic!("build failed:\n{e}"),
+    }
+}
+
+#[test]
+fn a_steady_cycle_of_a_robot_with_lockstep_devices_allocates_nothing() {
+    let _serial = one_at_a_time();
+    // The simulated clock: the devices' exchanges run in the cycle, on this thread.
+    let mut m = robot_with_devices(ClockKind::Simulated);
+    for _ in 0..3 {
+        m.cycle();
+    }
+    for signal in ["sonar.range", "odom", "drive"] {
+        assert!(written(&mut m, signal), "{signal} was not written");
+    }
+    assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0, "1000 cycles with lockstep devices allocated");
+    // The robot moved: the cycles ran the devices and the skill.
+    let Ok(Reply::Signal(odom)) = m.request(Request::QuerySignal { signal: "odom.x".into() }) else {
+        panic!("no odom.x")
+    };
+    assert!(odom.value.as_ref().and_then(Value::as_f64).is_some_and(|x| x != 0.0), "the base did not move: {odom:?}");
+}
+
+#[test]
+fn a_steady_cycle_of_a_spawned_robot_with_lockstep_devices_allocates_nothing() {
+    let _serial = one_at_a_time();
+    use situate::manager::control::Control;
+    let m = robot_with_devices(ClockKind::Simulated);
+    let (mut handle, joiner) = m.spawn(false);
+    let mut step = |cycles: u64| {
+        let before = ALL_ALLOCATIONS.load(std::sync::atomic::Ordering::Relaxed);
+        if let Err(e) = handle.request(Request::Step { cycles }) {
+            panic!("step refused: {e}");
+        }
+        ALL_ALLOCATIONS.load(std::sync::atomic::Ordering::Relaxed) - before
+    };
+    step(200);
+    // As in `a_steady_cycle_of_a_spawned_manager_allocates_nothing`.
+    let extra = (0..20).map(|_| step(501).saturating_sub(step(1))).min();
+    assert_eq!(extra, Some(0), "500 steady cycles of a spawned robot with devices allocated");
+    drop(handle);
+    assert!(joiner.join_timeout(std::time::Duration::from_secs(60)).is_ok(), "the manager did not end");
+}

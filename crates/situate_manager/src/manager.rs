@@ -20,11 +20,14 @@
 //! active set changes, so inactive skills cost nothing per cycle.
 //!
 //! This module holds the manager, its build, activation and faults. The
-//! rest, by concern: `cycle` (one cycle step by step), `plan` (the compiled
-//! schedule), `slots` (leaf slots and arbitration), `executor` (serial and
-//! parallel), `pacing` (`run_cycles`, speed, the cycle thread's priority),
-//! `requests` and `front` (the control API), `spawned` (threads, serving,
-//! watchdog).
+//! rest, by concern: `walk` (a cycle's walk of the plan, written once for
+//! both ways a manager runs: here, and spawned), `cycle` (the cycle's
+//! steps around the walk: boundary, devices, monitors, statistics), `plan`
+//! (the compiled schedule), `slots` (leaf slots and arbitration),
+//! `executor` (serial and parallel; bodies run in place), `pacing`
+//! (`run_cycles`, speed, the cycle thread's priority), `requests` and
+//! `front` (the control API), `spawned` (threads, serving, watchdog; bodies
+//! run outside the lock).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -50,6 +53,7 @@ mod plan;
 mod requests;
 mod slots;
 mod spawned;
+mod walk;
 pub use executor::PARALLEL_WORTH_NS;
 pub(crate) use front::prepare_boxed as prepare;
 use front::PreparedMonitor;
@@ -144,8 +148,12 @@ struct Inst {
     prints: VecDeque<(u64, String)>,
     last_outputs: Vec<Option<Value>>,
     worker: Option<Worker>,
-    /// Readings of a lockstep dskill, taken at the next cycle's start.
-    lockstep_readings: Vec<Option<Value>>,
+    /// The outputs of a body that does not run in the walk of the plan,
+    /// until they are committed: a lockstep dskill's readings (from its
+    /// device exchange at the end of a cycle to the start of the next), or
+    /// what a threaded body produced, taken from its mailbox. One entry per
+    /// output, kept so that taking them allocates nothing.
+    taken: Vec<Option<Value>>,
     /// Its body was left behind (it ran past its deadline and may never
     /// return): a fresh one is made when it is activated again, once the
     /// one left behind has returned (see [`Manager::still_running`]).
@@ -323,7 +331,7 @@ impl Manager {
                 prints: VecDeque::new(),
                 last_outputs: vec![None; def.outputs.len()],
                 worker,
-                lockstep_readings: vec![None; def.outputs.len()],
+                taken: vec![None; def.outputs.len()],
                 abandoned: false,
                 behind_worker: None,
                 params_from: 0,

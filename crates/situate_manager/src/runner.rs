@@ -341,7 +341,7 @@ pub(crate) struct Mailbox {
     pub outputs: Vec<Option<Value>>,
     /// Which outputs a run produced since the cycle last took them: a value
     /// is fresh in one cycle only, like a sync skill's (see
-    /// [`Mailbox::take_fresh`]).
+    /// [`Mailbox::take_fresh_into`]).
     pub fresh: Vec<bool>,
     /// When the body started the run it is in now (`None`: between runs).
     pub busy_since: Option<Instant>,
@@ -357,13 +357,13 @@ pub(crate) struct Mailbox {
 }
 
 impl Mailbox {
-    /// The outputs produced since the last call (the others `None`).
-    pub fn take_fresh(&mut self) -> Vec<Option<Value>> {
-        self.outputs
-            .iter()
-            .zip(self.fresh.iter_mut())
-            .map(|(v, fresh)| if std::mem::take(fresh) { v.clone() } else { None })
-            .collect()
+    /// The outputs produced since the last call into `into` (one entry per
+    /// output; the others `None`): a buffer the cycle keeps, so taking them
+    /// allocates nothing.
+    pub fn take_fresh_into(&mut self, into: &mut [Option<Value>]) {
+        for ((v, fresh), out) in self.outputs.iter().zip(self.fresh.iter_mut()).zip(into.iter_mut()) {
+            *out = if std::mem::take(fresh) { v.clone() } else { None };
+        }
     }
 }
 

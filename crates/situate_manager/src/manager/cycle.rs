@@ -10,12 +10,12 @@ use situate_core::value::recycle;
 use situate_core::{SignalType, Value};
 
 use super::plan::{Plan, Step, StepKind};
-use super::slots::{assemble, Slot};
+use super::slots::{assemble_into, Slot};
 use super::{fmt_duration, Frame, Inst, Manager, RefTarget, TIMING_SAMPLE};
 use crate::config::ClockKind;
 use crate::control::{Event, Request};
 use crate::expr::Lookup;
-use crate::runner::{coarse_ns, coarse_tick_ns, Stamp, WorkerStats};
+use crate::runner::{coarse_ns, coarse_tick_ns, WorkerStats};
 
 impl Manager {
     pub(super) fn compile_schedule(&mut self) {
@@ -41,52 +41,10 @@ impl Manager {
         }
     }
 
-    /// Runs one cycle.
+    /// Runs one cycle (the steps in the parent module's docs; the walk
+    /// itself is `walk::cycle`, shared with the spawned manager).
     pub fn cycle(&mut self) {
-        self.begin_cycle();
-        let plan = std::mem::take(&mut self.schedule);
-        let mut ready = std::mem::take(&mut self.ready);
-        if self.pool.is_none() {
-            // Serial: one pass, levels make no difference (see `run_serial`).
-            // An untimed cycle's coarse start is the first body's too.
-            let t = (!self.cycle_timed).then_some(Stamp::Coarse(self.cycle_start_coarse));
-            self.run_serial(&plan, 0..plan.steps.len(), t);
-        } else {
-            // The coarse clock's reading at the end of the last body, carried
-            // to the next one (see `run_serial`).
-            let mut t = None;
-            for level in 0..plan.levels.len() {
-                let Some(steps) = plan.level(level) else { break };
-                if plan.parallel_level(level) {
-                    // A level that may go parallel gathers copies of its
-                    // inputs, runs them all, then commits in order.
-                    self.prepare_steps(&plan, level, &mut ready);
-                    self.run_ready(&plan, &ready);
-                    for &k in &ready {
-                        self.finish_step(&plan, k);
-                    }
-                    t = None;
-                } else {
-                    // Each step committed as it runs.
-                    t = self.run_serial(&plan, steps, t);
-                }
-            }
-        }
-        self.ready = ready;
-        self.schedule = plan;
-        self.prepare_exchanges();
-        let exchanging = std::mem::take(&mut self.exchanging);
-        if !exchanging.is_empty() {
-            let mut t = Stamp::now(true);
-            for &d in &exchanging {
-                t = self.execs[d].run(self.cycle, self.time_s, t, None);
-            }
-        }
-        for &d in &exchanging {
-            self.finish_exchange(d);
-        }
-        self.exchanging = exchanging;
-        self.end_cycle();
+        let _ = super::walk::cycle(&mut super::executor::InPlace(self));
     }
 
     /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
@@ -333,17 +291,19 @@ impl Manager {
                 let s = &self.slots[l];
                 s.value.is_some() && (!fresh || s.stamp == cycle)
             });
-            exec.inputs[p] = if !present {
+            let input = &mut exec.inputs[p];
+            if !present {
                 if !port.optional {
                     return false;
                 }
-                None
+                *input = None;
             } else if port.leaves.len() == 1 && !matches!(port.ty, SignalType::Record(_)) {
-                self.slots[port.leaves[0]].value.clone()
+                input.clone_from(&self.slots[port.leaves[0]].value);
             } else {
+                // A record: written into the last one in place (see `assemble_into`).
                 let slots = &self.slots;
-                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
-            };
+                assemble_into(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()), input);
+            }
         }
         true
     }
@@ -488,7 +448,8 @@ impl Manager {
         let ready = self.gather(i, false);
         let Some(worker) = self.insts[i].worker.as_ref() else { return };
         let shared = Arc::clone(&worker.shared);
-        let (outputs, fault, prints, busy) = {
+        let mut outputs = std::mem::take(&mut self.insts[i].taken);
+        let (fault, prints, busy) = {
             let mut mb = shared.lock();
             if ready {
                 for (slot, v) in mb.inputs.iter_mut().zip(&self.execs[i].inputs) {
@@ -498,25 +459,41 @@ impl Manager {
                 mb.cycle = self.cycle;
                 mb.time_s = self.time_s;
             }
-            (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
+            mb.take_fresh_into(&mut outputs);
+            (mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
         };
         shared.notify();
-        self.threaded_results(i, outputs, fault, prints, busy);
+        self.threaded_results(i, &mut outputs, fault, prints, busy);
+        outputs.fill(None);
+        self.insts[i].taken = outputs;
     }
 
     /// dskill readings at the start of a cycle: those produced since the
-    /// last cycle took them.
+    /// last cycle took them (from its mailbox; a lockstep one's are already
+    /// in `taken`).
     pub(super) fn take_readings(&mut self, d: usize) {
-        let (outputs, fault, prints, busy) = match self.insts[d].worker.as_ref() {
+        let mut outputs = std::mem::take(&mut self.insts[d].taken);
+        let (fault, prints, busy) = match self.insts[d].worker.as_ref() {
             Some(worker) => {
                 let mut mb = worker.shared.lock();
-                (mb.take_fresh(), mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
+                mb.take_fresh_into(&mut outputs);
+                (mb.fault.take(), std::mem::take(&mut mb.prints), (mb.busy_since, Some(mb.stats)))
             }
-            None => {
-                (self.insts[d].lockstep_readings.iter_mut().map(Option::take).collect(), None, Vec::new(), (None, None))
-            }
+            None => (None, Vec::new(), (None, None)),
         };
-        self.threaded_results(d, outputs, fault, prints, busy);
+        self.threaded_results(d, &mut outputs, fault, prints, busy);
+        if self.insts[d].worker.is_none() {
+            // A lockstep device's body gets back the records its readings
+            // replaced (see `commit`), to write the next ones in place.
+            for (spare, out) in outputs.iter_mut().zip(self.execs[d].outputs.iter_mut()) {
+                if out.is_none() {
+                    *out = spare.take();
+                }
+            }
+        }
+        // Committed (or dropped with a fault): nothing is carried over.
+        outputs.fill(None);
+        self.insts[d].taken = outputs;
     }
 
     /// `busy` is when the body's current run began and the worker's run
@@ -525,7 +502,7 @@ impl Manager {
     pub(super) fn threaded_results(
         &mut self,
         i: usize,
-        mut outputs: Vec<Option<Value>>,
+        outputs: &mut [Option<Value>],
         fault: Option<String>,
         prints: Vec<String>,
         busy: (Option<Instant>, Option<WorkerStats>),
@@ -552,7 +529,7 @@ impl Manager {
                 return;
             }
         }
-        if let Err(cause) = self.commit(i, &mut outputs) {
+        if let Err(cause) = self.commit(i, outputs) {
             self.fault(i, cause);
         }
     }
@@ -569,12 +546,13 @@ impl Manager {
         let cycle = self.cycle;
         for (p, port) in def.inputs.iter().enumerate() {
             let fresh = port.leaves.iter().all(|&l| self.slots[l].stamp == cycle && self.slots[l].value.is_some());
-            self.execs[d].inputs[p] = if fresh {
+            let input = &mut self.execs[d].inputs[p];
+            if fresh {
                 let slots = &self.slots;
-                assemble(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()))
+                assemble_into(&port.ty, &mut port.leaves.iter().filter_map(|&l| slots[l].value.as_ref()), input);
             } else {
-                None
-            };
+                *input = None;
+            }
         }
         match self.insts[d].worker.as_ref() {
             Some(worker) => {
@@ -597,7 +575,7 @@ impl Manager {
     pub(super) fn finish_exchange(&mut self, d: usize) {
         let outcome = self.account(d);
         let exec = &mut self.execs[d];
-        for (slot, out) in self.insts[d].lockstep_readings.iter_mut().zip(&mut exec.outputs) {
+        for (slot, out) in self.insts[d].taken.iter_mut().zip(&mut exec.outputs) {
             if let Some(v) = out.take() {
                 *slot = Some(v);
             }

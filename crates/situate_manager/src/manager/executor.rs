@@ -1,16 +1,49 @@
-//! The executors of a level's ready steps: serial (in order, plain inputs
-//! lent from their slots) and parallel (the cycle's thread and the pool
-//! take the bodies one by one, never two sharing a claim at once).
+//! The executors: serial (steps in order, plain inputs lent from their
+//! slots) and parallel (the cycle's thread and the pool take a level's
+//! bodies one by one, never two sharing a claim at once); and how a
+//! manager not spawned runs its bodies ([`InPlace`], for the walk in
+//! `walk`).
 
 use std::sync::{Arc, Mutex};
 
-use situate_core::value::recycle;
-
-use super::plan::{Plan, Step, StepKind};
-use super::slots::Slot;
+use super::plan::Plan;
+use super::walk::Bodies;
 use super::Manager;
 use crate::config::ExecutorKind;
 use crate::runner::{Exec, Stamp};
+
+/// The bodies of a manager run on the caller's thread ([`Manager::cycle`]):
+/// each in place in the manager, nothing watching (no body can be left
+/// behind, so a body may read its inputs where they are).
+pub(super) struct InPlace<'m>(pub &'m mut Manager);
+
+impl Bodies for InPlace<'_> {
+    const LENDS: bool = true;
+
+    #[inline(always)]
+    fn manager(&mut self) -> Option<&mut Manager> {
+        Some(self.0)
+    }
+
+    #[inline(always)]
+    fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
+        let m = &mut *self.0;
+        let input = in_place.map(|leaf| &m.slots[leaf].value);
+        Some(m.execs[i].run_on(input, m.cycle, m.time_s, start, None))
+    }
+
+    fn run_batch(&mut self, batch: &[usize]) -> Option<()> {
+        let m = &mut *self.0;
+        let (cycle, time_s) = (m.cycle, m.time_s);
+        let Some(pool) = &m.pool else { return Some(()) };
+        let jobs: Vec<Mutex<&mut Exec>> = pick_mut(&mut m.execs, batch).into_iter().map(Mutex::new).collect();
+        run_parallel(pool, &jobs, |job| {
+            let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
+            exec.run(cycle, time_s, Stamp::now(true), None);
+        });
+        Some(())
+    }
+}
 
 /// A level's expected work (from its skills' last timed runs) from which
 /// the parallel executor hands it to the pool; below, the cycle's thread
@@ -58,151 +91,6 @@ impl Manager {
         }
         // What the other threads could take off the cycle's thread.
         total - longest >= PARALLEL_WORTH_NS / 2 && total >= PARALLEL_WORTH_NS
-    }
-
-    /// Runs a level's ready steps, their inputs gathered as copies: on the
-    /// pool when worth it ([`Manager::worth_parallel`]), else in order.
-    pub(super) fn run_ready(&mut self, plan: &Plan, ready: &[usize]) {
-        let (cycle, time_s) = (self.cycle, self.time_s);
-        if self.worth_parallel(plan, ready) {
-            for batch in self.batches(plan, ready) {
-                let Some(pool) = &self.pool else { return };
-                let jobs: Vec<Mutex<&mut Exec>> =
-                    pick_mut(&mut self.execs, &batch).into_iter().map(Mutex::new).collect();
-                run_parallel(pool, &jobs, |job| {
-                    let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
-                    exec.run(cycle, time_s, Stamp::now(true), None);
-                });
-            }
-        } else {
-            let sampled = self.sampled;
-            let mut t = Stamp::now(sampled);
-            for &k in ready {
-                let step = &plan.steps[k];
-                let precise = sampled || step.precise;
-                if precise != matches!(t, Stamp::Precise(_)) {
-                    t = Stamp::now(precise);
-                }
-                t = self.execs[step.inst].run(cycle, time_s, t, None);
-            }
-        }
-    }
-
-    /// The serial executor on the plan's steps `steps`: one level, or, with
-    /// no pool, all of them in one pass (the steps are in topological order,
-    /// level after level). Each step in order has its inputs checked and
-    /// gathered (a plain step's lent: see [`Manager::lend_inputs`], or read
-    /// in place from its one slot), runs at once, and has its outputs
-    /// committed at once. The same as running each level whole and
-    /// committing after it: no step of a level reads what another one of it
-    /// writes (it would be a level later), arbitration does not depend on
-    /// the order of commits, and a lent input is back in its slot before the
-    /// next step looks. Committing at once touches each step's data while it
-    /// is still in the cache, and leaves no list of ready steps to walk again.
-    ///
-    /// `t`: a clock reading to time the first body from, `None` to read the
-    /// clock; returns the reading at the end of the last body (`None` if
-    /// none ran, or when the next body needs a fresh one). Back to back
-    /// bodies on the coarse clock share a reading, so each costs one clock
-    /// read (its commit is counted in the next body's coarse time, well
-    /// within a tick). An exact reading is never shared: a timed body's
-    /// exact time holds no commits; nor is one after a fault.
-    pub(super) fn run_serial(
-        &mut self,
-        plan: &Plan,
-        steps: std::ops::Range<usize>,
-        mut t: Option<Stamp>,
-    ) -> Option<Stamp> {
-        let (cycle, time_s, sampled) = (self.cycle, self.time_s, self.sampled);
-        for k in steps {
-            let step = &plan.steps[k];
-            let fresh = match step.kind {
-                StepKind::AsyncThreaded => {
-                    self.exchange_async(step.inst);
-                    // Not the time of a body: the next one reads the clock.
-                    t = None;
-                    continue;
-                }
-                StepKind::AsyncInCycle => false,
-                StepKind::Sync => true,
-            };
-            // One plain input, present: the body reads it where it is.
-            let in_place = match step.one_input {
-                Some(leaf) => {
-                    let slot = &self.slots[leaf];
-                    slot.value.is_some() && (!fresh || slot.stamp == cycle)
-                }
-                None => false,
-            };
-            let lent = step.plain_ins && !in_place;
-            let ready_now =
-                in_place || if lent { self.lend_inputs(plan, step, fresh) } else { self.gather(step.inst, fresh) };
-            if !ready_now {
-                continue;
-            }
-            let precise = sampled || step.precise;
-            let start = match t {
-                Some(t) if precise == matches!(t, Stamp::Precise(_)) => t,
-                _ => Stamp::now(precise),
-            };
-            let exec = &mut self.execs[step.inst];
-            let input = match step.one_input {
-                Some(leaf) if in_place => Some(&self.slots[leaf].value),
-                _ => None,
-            };
-            let end = exec.run_on(input, cycle, time_s, start, None);
-            if lent {
-                // Back to their slots, swapped (see `lend_inputs`).
-                let ins = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
-                for (port, input) in ins.iter().zip(exec.inputs.iter_mut()) {
-                    if input.is_some() {
-                        std::mem::swap(input, &mut self.slots[port.leaf].value);
-                        if input.is_some() {
-                            if let Some(old) = input.take() {
-                                recycle(old);
-                            }
-                        }
-                    }
-                }
-            }
-            let ok = self.finish_step(plan, k);
-            t = match end {
-                Stamp::Coarse(_) if ok => Some(end),
-                _ => None,
-            };
-        }
-        t
-    }
-
-    /// Lends a plain step its inputs if it is ready: each present input is
-    /// moved from its slot into the body's buffer (no reference counting;
-    /// nothing else reads a slot while a serial level runs), to be put
-    /// back after the run. `fresh`: as in [`Manager::gather_step`]. Returns
-    /// whether the step is ready (if not, nothing was moved).
-    #[inline]
-    fn lend_inputs(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
-        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
-        let cycle = self.cycle;
-        let slots = &mut self.slots;
-        let present = |slot: &Slot| slot.value.is_some() && (!fresh || slot.stamp == cycle);
-        if !ports.iter().all(|port| port.optional || present(&slots[port.leaf])) {
-            return false;
-        }
-        let exec = &mut self.execs[step.inst];
-        // Values are swapped between slot and buffer, never moved through a
-        // temporary (whose copy in halves stalls the load that follows).
-        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
-            if input.is_some() {
-                if let Some(old) = input.take() {
-                    recycle(old);
-                }
-            }
-            let slot = &mut slots[port.leaf];
-            if present(slot) {
-                std::mem::swap(input, &mut slot.value);
-            }
-        }
-        true
     }
 
     /// The executor in use (parallel falls back to serial if no pool could be made).

@@ -155,7 +155,14 @@ impl Manager {
                 }
             }
             if let Some(old) = self.insts[i].last_outputs[p].replace(value) {
-                recycle(old);
+                if matches!(old, Value::Record(_)) {
+                    // The output's buffer is empty (its value was taken
+                    // above): the record it replaces goes there, a spare
+                    // for a body that fills its outputs to write in place.
+                    outputs[p] = Some(old);
+                } else {
+                    recycle(old);
+                }
             }
         }
         drop(leaf_values);
@@ -261,6 +268,53 @@ pub(super) fn assemble<'v>(ty: &SignalType, leaves: &mut impl Iterator<Item = &'
         }
         _ => leaves.next().cloned(),
     }
+}
+
+/// [`assemble`] into `into`: a record there that nobody else holds, of
+/// the same fields, is written in place (nothing allocated); anything else
+/// is replaced. `None` in `into` when the leaves run out.
+pub(super) fn assemble_into<'v>(
+    ty: &SignalType,
+    leaves: &mut impl Iterator<Item = &'v Value>,
+    into: &mut Option<Value>,
+) {
+    let filled = match into {
+        Some(value) => fill(ty, leaves, value),
+        None => false,
+    };
+    if !filled {
+        *into = assemble(ty, leaves);
+    }
+}
+
+/// Writes the leaves into `value` in place if it is a record of `ty`'s
+/// shape that nobody else holds; false (nothing taken from `leaves`) if not.
+fn fill<'v>(ty: &SignalType, leaves: &mut impl Iterator<Item = &'v Value>, value: &mut Value) -> bool {
+    let (SignalType::Record(rt), Value::Record(rv)) = (ty, &mut *value) else { return false };
+    let Some(rv) = Arc::get_mut(rv) else { return false };
+    if !same_shape(rt, rv) {
+        return false;
+    }
+    for ((_, fty), (_, field)) in rt.fields.iter().zip(rv.fields.iter_mut()) {
+        if matches!(fty, SignalType::Record(_)) {
+            if fill(fty, leaves, field) {
+                continue;
+            }
+            let Some(v) = assemble(fty, leaves) else { return false };
+            *field = v;
+        } else {
+            let Some(v) = leaves.next() else { return false };
+            field.clone_from(v);
+        }
+    }
+    true
+}
+
+/// Whether a record value has exactly the type's fields, in order (not
+/// looking into nested records: [`fill`] does as it goes).
+fn same_shape(rt: &situate_core::RecordType, rv: &situate_core::RecordValue) -> bool {
+    rt.fields.len() == rv.fields.len()
+        && rt.fields.iter().zip(&rv.fields).all(|((tn, _), (vn, _))| tn.as_str() == &**vn)
 }
 
 /// Splits a value of type `ty` into leaf values in flattened order; false if

@@ -25,7 +25,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 
 use super::executor::run_parallel;
 use super::pacing::raise_thread_priority;
-use super::plan::{Plan, StepKind};
+use super::walk::{self, Bodies};
 use super::Manager;
 use crate::config::ClockKind;
 use crate::control::{ControlError, Envelope, Handle, Reply, Request};
@@ -489,153 +489,60 @@ fn serve_one<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64, envelope: En
     }
 }
 
-/// One cycle with every body run outside the lock. `None`: this thread was
-/// left behind while a body ran.
-///
-/// The plan is held by this thread for the cycle (out of the manager): the
-/// watchdog, should it leave a body behind, marks the schedule to be
-/// compiled again, so the next cycle thread never runs without one.
-fn cycle<'a>(core: &'a Core, mut g: Guard<'a>, generation: u64) -> Option<Guard<'a>> {
-    let m = current(&mut g, generation)?;
-    m.begin_cycle();
-    let plan = std::mem::take(&mut m.schedule);
-    let mut ready = std::mem::take(&mut m.ready);
-    if core.pool.is_none() {
-        // Serial: one pass, levels make no difference (see `Manager::run_serial`).
-        let t = (!m.cycle_timed).then_some(Stamp::Coarse(m.cycle_start_coarse));
-        g = run_steps(core, g, generation, &plan, 0..plan.steps.len(), t, true)?.0;
-    } else {
-        let mut t = None;
-        for level in 0..plan.levels.len() {
-            let Some(steps) = plan.level(level) else { break };
-            let m = current(&mut g, generation)?;
-            if plan.parallel_level(level) {
-                // Copies of the inputs gathered for the level, run (on the
-                // pool when worth it), then committed in order.
-                m.prepare_steps(&plan, level, &mut ready);
-                if m.worth_parallel(&plan, &ready) {
-                    g = run_batches(core, g, generation, &plan, &ready)?;
-                } else {
-                    g = run_steps(core, g, generation, &plan, ready.iter().copied(), None, false)?.0;
-                }
-                let m = current(&mut g, generation)?;
-                for &k in &ready {
-                    m.finish_step(&plan, k);
-                }
-                t = None;
-            } else {
-                (g, t) = run_steps(core, g, generation, &plan, steps, t, true)?;
-            }
-        }
-    }
-    let m = current(&mut g, generation)?;
-    m.ready = ready;
-    m.schedule = plan;
-    m.prepare_exchanges();
-    let exchanging = std::mem::take(&mut m.exchanging);
-    for &d in &exchanging {
-        let m = current(&mut g, generation)?;
-        let (cycle, time_s) = (m.cycle, m.time_s);
-        let mut exec = std::mem::take(&mut m.execs[d]);
-        drop(g);
-        exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[d]));
-        g = core.lock();
-        // Left behind: the body's late result is dropped with it.
-        current(&mut g, generation)?.execs[d] = exec;
-    }
-    let m = current(&mut g, generation)?;
-    for &d in &exchanging {
-        m.finish_exchange(d);
-    }
-    m.exchanging = exchanging;
-    m.end_cycle();
-    Some(g)
+/// One cycle with every body run outside the lock (the walk is
+/// `walk::cycle`). `None`: this thread was left behind while a body ran.
+fn cycle<'a>(core: &'a Core, g: Guard<'a>, generation: u64) -> Option<Guard<'a>> {
+    let mut bodies = OnThreads { core, g: Some(g), generation };
+    walk::cycle(&mut bodies)?;
+    bodies.g
 }
 
-/// Runs the plan's steps `steps` one after the other, each body with the
-/// lock let go, as `Manager::run_serial` does on the cycle's own thread:
-/// each step's inputs checked and gathered, its body run, its outputs
-/// committed at once (`commit`; false when the caller commits the level's
-/// steps itself, with their inputs already gathered). `t` and the returned
-/// reading: the coarse clock's reading carried from one body to the next
-/// (see `Manager::run_serial`).
+/// The bodies of a spawned manager: each taken out of the manager and run
+/// with its lock let go, its [`BodyClock`] showing the watchdog when it
+/// started; then the lock is taken back and the body returned, unless this
+/// thread was left behind meanwhile (its late result is then dropped with
+/// it).
 ///
-/// A body gets copies of its inputs (a reference count each), not the slot's
-/// values lent or read in place: a body left behind holds its copies, and
-/// its inputs' slots keep their values. The copies are dropped as soon as the
-/// body returns, so the buffers they share are again the slots' own when
-/// their producers next write them (reused, nothing allocated).
-fn run_steps<'a>(
+/// A body gets copies of its inputs (a reference count each), not the
+/// slots' values lent or read in place: a body left behind holds its
+/// copies, and its inputs' slots keep their values.
+struct OnThreads<'a> {
     core: &'a Core,
-    mut g: Guard<'a>,
+    /// `Some` but while a body runs.
+    g: Option<Guard<'a>>,
     generation: u64,
-    plan: &Plan,
-    steps: impl Iterator<Item = usize>,
-    mut t: Option<Stamp>,
-    commit: bool,
-) -> Option<(Guard<'a>, Option<Stamp>)> {
-    for k in steps {
-        let step = &plan.steps[k];
-        let i = step.inst;
-        let m = current(&mut g, generation)?;
-        if commit {
-            let fresh = match step.kind {
-                StepKind::AsyncThreaded => {
-                    m.exchange_async(i);
-                    t = None;
-                    continue;
-                }
-                StepKind::AsyncInCycle => false,
-                StepKind::Sync => true,
-            };
-            if !m.gather_step(plan, step, fresh) {
-                continue;
-            }
-        }
-        let precise = m.sampled || step.precise;
-        let start = match t {
-            Some(t) if precise == matches!(t, Stamp::Precise(_)) => t,
-            _ => Stamp::now(precise),
-        };
+}
+
+impl Bodies for OnThreads<'_> {
+    const LENDS: bool = false;
+
+    #[inline(always)]
+    fn manager(&mut self) -> Option<&mut Manager> {
+        current(self.g.as_mut()?, self.generation)
+    }
+
+    fn run(&mut self, i: usize, _in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
+        let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
         let mut exec = std::mem::take(&mut m.execs[i]);
-        drop(g);
-        let end = exec.run(cycle, time_s, start, Some(&core.clocks[i]));
-        for input in &mut exec.inputs {
-            *input = None;
-        }
-        g = core.lock();
-        // Left behind: the body's late result is dropped with it.
-        let m = current(&mut g, generation)?;
-        m.execs[i] = exec;
-        let ok = !commit || m.finish_step(plan, k);
-        t = match end {
-            Stamp::Coarse(_) if ok && commit => Some(end),
-            _ => None,
-        };
+        self.g = None;
+        let end = exec.run(cycle, time_s, start, Some(&self.core.clocks[i]));
+        self.g = Some(self.core.lock());
+        self.manager()?.execs[i] = exec;
+        Some(end)
     }
-    Some((g, t))
-}
 
-/// Runs a level on the parallel executor, batch by batch; each body goes
-/// back to the manager as soon as it returns, so one stuck body holds no
-/// other.
-fn run_batches<'a>(
-    core: &'a Core,
-    mut g: Guard<'a>,
-    generation: u64,
-    plan: &Plan,
-    ready: &[usize],
-) -> Option<Guard<'a>> {
-    let pool = core.pool.as_ref()?;
-    let m = current(&mut g, generation)?;
-    let batches = m.batches(plan, ready);
-    for batch in batches {
-        let m = current(&mut g, generation)?;
+    /// Batch by batch; each body goes back to the manager as soon as it
+    /// returns, so one stuck body holds no other.
+    fn run_batch(&mut self, batch: &[usize]) -> Option<()> {
+        let core = self.core;
+        let pool = core.pool.as_ref()?;
+        let generation = self.generation;
+        let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
         let jobs: Vec<(usize, Mutex<Exec>)> =
             batch.iter().map(|&i| (i, Mutex::new(std::mem::take(&mut m.execs[i])))).collect();
-        drop(g);
+        self.g = None;
         run_parallel(pool, &jobs, |(i, job)| {
             let mut exec = std::mem::take(&mut *job.lock().unwrap_or_else(|p| p.into_inner()));
             exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[*i]));
@@ -644,10 +551,10 @@ fn run_batches<'a>(
                 m.execs[*i] = exec;
             }
         });
-        g = core.lock();
-        current(&mut g, generation)?;
+        self.g = Some(core.lock());
+        self.manager()?;
+        Some(())
     }
-    Some(g)
 }
 
 /// Watches the bodies running on cycle threads; leaves behind one past its

@@ -1,0 +1,267 @@
+//! One cycle's walk over the plan, written once for both ways a manager
+//! runs: [`Manager::cycle`] on the caller's thread, and the spawned
+//! manager's cycle thread (`spawned`), which lets go of the manager's lock
+//! while each body runs so that a watchdog can leave a stuck one behind.
+//!
+//! What differs between the two is only how a body runs, behind
+//! [`Bodies`]; the walk — which steps are ready, how their inputs are
+//! gathered, how each run is timed and committed, the levels, the parallel
+//! batches, the devices' exchanges — is here, once.
+
+use situate_core::value::recycle;
+use situate_core::Value;
+
+use super::plan::{Plan, Step, StepKind};
+use super::slots::Slot;
+use super::Manager;
+use crate::runner::Stamp;
+
+/// How the bodies of a cycle run.
+pub(super) trait Bodies {
+    /// Whether a body may read its inputs where they are: lent from their
+    /// slots or read in place. Only where no body can be left behind still
+    /// holding them; otherwise each body gets copies (a reference count
+    /// each), dropped as soon as it returns.
+    const LENDS: bool;
+
+    /// The manager; `None` once this thread is no longer its cycle (a body
+    /// it ran was left behind).
+    fn manager(&mut self) -> Option<&mut Manager>;
+
+    /// Runs instance `i`'s body once on its gathered inputs, or on the
+    /// value in slot `in_place` (only when [`Bodies::LENDS`]), timed from
+    /// `start`: the time it ended, on `start`'s clock, or `None` when this
+    /// thread was left behind while it ran.
+    fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp>;
+
+    /// Runs the bodies of `batch` (instances that share no claim, their
+    /// inputs gathered) at the same time, on the pool. `None` as for
+    /// [`Bodies::run`].
+    fn run_batch(&mut self, batch: &[usize]) -> Option<()>;
+}
+
+/// Runs one cycle (the steps of [`Manager::cycle`]). `None`: this thread
+/// was left behind during it, and the cycle is abandoned where it stood.
+///
+/// The plan is out of the manager while the cycle walks it: should the
+/// walk be left behind, the watchdog marks the schedule to be compiled
+/// again, so the next cycle never runs without one.
+pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
+    let m = b.manager()?;
+    m.begin_cycle();
+    let plan = std::mem::take(&mut m.schedule);
+    let mut ready = std::mem::take(&mut m.ready);
+    if m.pool.is_none() {
+        // Serial: one pass, levels make no difference (see `run_steps`).
+        // An untimed cycle's coarse start is the first body's too.
+        let t = (!m.cycle_timed).then_some(Stamp::Coarse(m.cycle_start_coarse));
+        run_steps(b, &plan, 0..plan.steps.len(), t)?;
+    } else {
+        // The coarse clock's reading at the end of the last body, carried
+        // to the next one (see `run_steps`).
+        let mut t = None;
+        for level in 0..plan.levels.len() {
+            let Some(steps) = plan.level(level) else { break };
+            if plan.parallel_level(level) {
+                run_level(b, &plan, level, &mut ready)?;
+                t = None;
+            } else {
+                // Each step committed as it runs.
+                t = run_steps(b, &plan, steps, t)?;
+            }
+        }
+    }
+    let m = b.manager()?;
+    m.ready = ready;
+    m.schedule = plan;
+    m.prepare_exchanges();
+    let exchanging = std::mem::take(&mut m.exchanging);
+    if !exchanging.is_empty() {
+        let mut t = Stamp::now(true);
+        for &d in &exchanging {
+            t = b.run(d, None, t)?;
+        }
+    }
+    let m = b.manager()?;
+    for &d in &exchanging {
+        m.finish_exchange(d);
+    }
+    m.exchanging = exchanging;
+    m.end_cycle();
+    Some(())
+}
+
+/// The plan's steps `steps` one after the other: one level, or, with no
+/// pool, all of them in one pass (the steps are in topological order, level
+/// after level). Each step in order has its inputs checked and gathered (a
+/// plain step's lent, or read in place from its one slot, when the bodies
+/// [lend](Bodies::LENDS)), runs at once, and has its outputs committed at
+/// once. The same as running each level whole and committing after it: no
+/// step of a level reads what another one of it writes (it would be a level
+/// later), arbitration does not depend on the order of commits, and a lent
+/// input is back in its slot before the next step looks. Committing at once
+/// touches each step's data while it is still in the cache, and leaves no
+/// list of ready steps to walk again.
+///
+/// `t`: a clock reading to time the first body from, `None` to read the
+/// clock; returns the reading at the end of the last body (`None` if none
+/// ran, or when the next body needs a fresh one). Back to back bodies on the
+/// coarse clock share a reading, so each costs one clock read (its commit is
+/// counted in the next body's coarse time, well within a tick). An exact
+/// reading is never shared: a timed body's exact time holds no commits; nor
+/// is one after a fault. The outer `None`: left behind.
+#[inline(always)]
+fn run_steps<B: Bodies>(
+    b: &mut B,
+    plan: &Plan,
+    steps: std::ops::Range<usize>,
+    mut t: Option<Stamp>,
+) -> Option<Option<Stamp>> {
+    for k in steps {
+        let step = &plan.steps[k];
+        let m = b.manager()?;
+        let fresh = match step.kind {
+            StepKind::AsyncThreaded => {
+                m.exchange_async(step.inst);
+                // Not the time of a body: the next one reads the clock.
+                t = None;
+                continue;
+            }
+            StepKind::AsyncInCycle => false,
+            StepKind::Sync => true,
+        };
+        // One plain input, present: the body reads it where it is.
+        let in_place = match step.one_input {
+            Some(leaf) if B::LENDS => {
+                let slot = &m.slots[leaf];
+                slot.value.is_some() && (!fresh || slot.stamp == m.cycle)
+            }
+            _ => false,
+        };
+        let lent = B::LENDS && step.plain_ins && !in_place;
+        let ready_now =
+            in_place || if lent { m.lend_inputs(plan, step, fresh) } else { m.gather_step(plan, step, fresh) };
+        if !ready_now {
+            continue;
+        }
+        let start = m.start_of(t, step);
+        let end = b.run(step.inst, if in_place { step.one_input } else { None }, start)?;
+        let m = b.manager()?;
+        if lent {
+            m.return_lent(plan, step);
+        } else if !in_place {
+            m.drop_copies(step.inst);
+        }
+        let ok = m.finish_step(plan, k);
+        t = match end {
+            Stamp::Coarse(_) if ok => Some(end),
+            _ => None,
+        };
+    }
+    Some(t)
+}
+
+/// A level that may go parallel: copies of its steps' inputs gathered, its
+/// ready bodies run (on the pool when worth it, see
+/// [`Manager::worth_parallel`], else in order), then committed in order.
+fn run_level<B: Bodies>(b: &mut B, plan: &Plan, level: usize, ready: &mut Vec<usize>) -> Option<()> {
+    let m = b.manager()?;
+    m.prepare_steps(plan, level, ready);
+    if m.worth_parallel(plan, ready) {
+        for batch in m.batches(plan, ready) {
+            b.run_batch(&batch)?;
+        }
+    } else {
+        let mut t = None;
+        for &k in ready.iter() {
+            let step = &plan.steps[k];
+            let start = b.manager()?.start_of(t, step);
+            t = Some(b.run(step.inst, None, start)?);
+        }
+    }
+    let m = b.manager()?;
+    for &k in ready.iter() {
+        m.drop_copies(plan.steps[k].inst);
+        m.finish_step(plan, k);
+    }
+    Some(())
+}
+
+impl Manager {
+    /// The clock reading to time `step`'s body from: `t`, the end of the
+    /// body before, when it is on the clock this one needs (exact in a
+    /// sampled cycle or for a short deadline, else coarse); else now.
+    #[inline(always)]
+    fn start_of(&self, t: Option<Stamp>, step: &Step) -> Stamp {
+        let precise = self.sampled || step.precise;
+        match t {
+            Some(t) if precise == matches!(t, Stamp::Precise(_)) => t,
+            _ => Stamp::now(precise),
+        }
+    }
+
+    /// Lends a plain step its inputs if it is ready: each present input is
+    /// moved from its slot into the body's buffer (no reference counting;
+    /// nothing else reads a slot while a serial level runs), to be put back
+    /// after the run ([`Manager::return_lent`]). `fresh`: as in
+    /// [`Manager::gather_step`]. Returns whether the step is ready (if not,
+    /// nothing was moved).
+    #[inline]
+    fn lend_inputs(&mut self, plan: &Plan, step: &Step, fresh: bool) -> bool {
+        let ports = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        let cycle = self.cycle;
+        let slots = &mut self.slots;
+        let present = |slot: &Slot| slot.value.is_some() && (!fresh || slot.stamp == cycle);
+        if !ports.iter().all(|port| port.optional || present(&slots[port.leaf])) {
+            return false;
+        }
+        let exec = &mut self.execs[step.inst];
+        // Values are swapped between slot and buffer, never moved through a
+        // temporary (whose copy in halves stalls the load that follows).
+        for (port, input) in ports.iter().zip(exec.inputs.iter_mut()) {
+            if input.is_some() {
+                if let Some(old) = input.take() {
+                    recycle(old);
+                }
+            }
+            let slot = &mut slots[port.leaf];
+            if present(slot) {
+                std::mem::swap(input, &mut slot.value);
+            }
+        }
+        true
+    }
+
+    /// Puts a step's lent inputs back in their slots, swapped (see
+    /// [`Manager::lend_inputs`]).
+    #[inline]
+    fn return_lent(&mut self, plan: &Plan, step: &Step) {
+        let ins = &plan.ins[step.ins.0 as usize..step.ins.1 as usize];
+        for (port, input) in ins.iter().zip(self.execs[step.inst].inputs.iter_mut()) {
+            if input.is_some() {
+                std::mem::swap(input, &mut self.slots[port.leaf].value);
+                if input.is_some() {
+                    if let Some(old) = input.take() {
+                        recycle(old);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Drops the copies of its inputs a body was given, as soon as it has
+    /// returned: the buffers they share are then again their slots' own
+    /// when their producers next write them (reused, nothing allocated). A
+    /// record made for the body is kept, to be written in place the next
+    /// time (`slots::assemble_into`).
+    #[inline]
+    fn drop_copies(&mut self, i: usize) {
+        for input in &mut self.execs[i].inputs {
+            if input.is_some() && !matches!(input, Some(Value::Record(_))) {
+                if let Some(old) = input.take() {
+                    recycle(old);
+                }
+            }
+        }
+    }
+}
