@@ -318,6 +318,7 @@ pub struct PortInfo {
 /// runs took. The cycle times a sample of the runs of in-cycle bodies (one
 /// cycle in [`TIMING_SAMPLE`](crate::manager::TIMING_SAMPLE), and every
 /// run of a body with a short deadline); threaded bodies are timed at each run.
+/// The manager keeps its cycles' timing in one too (see [`ManagerStats`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SkillTiming {
     pub runs: u64,
@@ -347,6 +348,21 @@ impl SkillTiming {
     pub fn add_untimed(&mut self, runs: u64, coarse_ns: u64) {
         self.runs += runs;
         self.total_ns = self.total_ns.saturating_add(coarse_ns);
+    }
+
+    /// The mean of the runs timed exactly (0 with none).
+    pub fn mean_timed_ns(&self) -> f64 {
+        if self.timed_runs == 0 {
+            0.0
+        } else {
+            self.total_ns as f64 / self.timed_runs as f64
+        }
+    }
+
+    /// A run not counted, seen (on the coarse clock) to take `elapsed_ns`:
+    /// only the maximum may change.
+    pub fn seen(&mut self, elapsed_ns: u64) {
+        self.max_ns = self.max_ns.max(elapsed_ns);
     }
 
     /// Counts one run timed exactly.

@@ -223,12 +223,9 @@ pub struct Manager {
     /// cycle. The others are timed on the coarse clock, for the maximum.
     cycle_timed: bool,
     running: bool,
-    /// The last timed cycle's time.
-    last_cycle_ns: u64,
-    max_cycle_ns: u64,
-    /// The timed cycles' time, in all, and how many there were.
-    total_cycle_ns: u64,
-    timed_cycles: u64,
+    /// The cycles' timing, as a skill's: the timed cycles counted
+    /// ([`SkillTiming::record`]), the others seen only for the maximum.
+    cycle_timing: SkillTiming,
     overruns: u64,
     /// Per resource leaf: who won it, counted at the end of every cycle.
     tallies: Vec<Tally>,
@@ -374,10 +371,7 @@ impl Manager {
             cycle_start_coarse: 0,
             cycle_timed: false,
             running: false,
-            last_cycle_ns: 0,
-            max_cycle_ns: 0,
-            total_cycle_ns: 0,
-            timed_cycles: 0,
+            cycle_timing: SkillTiming::default(),
             overruns: 0,
             tallies: graph
                 .leaves

@@ -307,19 +307,17 @@ fn run_body_into(
     }
 }
 
-/// Runs a body, turning a panic into an error.
+/// Runs a body, turning a panic into an error ([`run_body_into`] for a
+/// caller that keeps no outcome of its own).
 pub(crate) fn run_body(
     skill: &mut dyn Skill,
     inputs: &[Option<Value>],
     outputs: &mut [Option<Value>],
     cx: &mut Context,
 ) -> Result<(), String> {
-    let mut io = Io { inputs, outputs, cx };
-    match catch_unwind(AssertUnwindSafe(|| skill.step(&mut io))) {
-        Ok(Ok(())) => Ok(()),
-        Ok(Err(e)) => Err(e.message),
-        Err(panic) => Err(format!("panicked: {}", panic_message(&*panic))),
-    }
+    let mut result = Ok(());
+    run_body_into(skill, inputs, outputs, cx, &mut result);
+    result
 }
 
 use crate::supervise::panic_message;

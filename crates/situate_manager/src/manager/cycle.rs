@@ -143,14 +143,11 @@ impl Manager {
         if !self.cycle_timed {
             // Between samples: the coarse clock catches a long cycle.
             let elapsed = coarse_ns().saturating_sub(self.cycle_start_coarse);
-            self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
+            self.cycle_timing.seen(elapsed);
             return;
         }
         let elapsed = self.cycle_start.elapsed().as_nanos() as u64;
-        self.last_cycle_ns = elapsed;
-        self.max_cycle_ns = self.max_cycle_ns.max(elapsed);
-        self.total_cycle_ns += elapsed;
-        self.timed_cycles += 1;
+        self.cycle_timing.record(elapsed);
         if self.clock == ClockKind::Wall && elapsed as f64 > self.period_s * 1e9 {
             self.overruns += 1;
         }

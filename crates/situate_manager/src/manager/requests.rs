@@ -254,13 +254,9 @@ impl Manager {
             time_s: self.time_s,
             running: self.running,
             period_s: self.period_s,
-            last_cycle_ns: self.last_cycle_ns,
-            mean_cycle_ns: if self.timed_cycles == 0 {
-                0.0
-            } else {
-                self.total_cycle_ns as f64 / self.timed_cycles as f64
-            },
-            max_cycle_ns: self.max_cycle_ns,
+            last_cycle_ns: self.cycle_timing.last_ns,
+            mean_cycle_ns: self.cycle_timing.mean_timed_ns(),
+            max_cycle_ns: self.cycle_timing.max_ns,
             overruns: self.overruns,
             late_starts: self.late_starts,
             request_hold_ns: self.request_hold_ns,
