@@ -237,8 +237,7 @@ class RouteFollower:
                     r.step, r.squared, r.start, r.stage = homes[-1], -1, None, "start"
                     # Homing again along the corridor, not the wall's normal squaring set.
                     r.heading = r.along if r.along is not None else r.heading
-                    self.mem.door_goal, self.mem.door_stage = None, ""
-                    self.mem.door_first, self.mem.door_after_pass = None, False
+                    self.mem.door_dropped()
                     return Action(("runaway",), key=("door again", s.t))
             return self.pass_door_action(s)
         if r.stage == "follow" and step.get("follow"):
@@ -326,10 +325,7 @@ class RouteFollower:
         h = r.heading if r.heading is not None else s.pose.theta
         ax, ay = HINT_DOOR_AHEAD_M - DOOR_STANDOFF, side * HINT_DOOR_ASIDE_M
         goal = (*Pose(s.pose.x, s.pose.y, h).from_robot(ax, ay), h)  # here, facing h
-        m = self.mem
-        m.door_goal, m.door_stage, m.door_first = goal, "goto", goal
-        m.door_fixes, m.door_pushes, m.door_after_pass = 0, 0, False
-        m.door_waiting_since = None
+        self.mem.door_placed(goal, by_hint=True)
 
     def step_until_met(self, step: dict[str, Any], r: RouteState, s: Senses) -> bool:
         """Whether a follow step's `until` holds (counting openings as they pass)."""

@@ -482,7 +482,7 @@ class Reactive(CarRider, RouteFollower, Link):
             o = s.opening
             lateral = abs(float(o.get("y", 0.0))) if o.get("seen") else 0.0
             if lateral > 0.15 and m.door_fixes < 3:
-                m.door_goal = None
+                m.door_place_anew()
             else:
                 m.door_stage = "pass"
         if m.door_goal is None:
@@ -509,7 +509,7 @@ class Reactive(CarRider, RouteFollower, Link):
                 if self.debug:
                     print(f"[{s.t:7.1f} s]   an opening off barcode {m.lab_door_at}: not its door")
                 if walls and not m.door_lined_up:
-                    m.door_stage, m.door_waiting_since = "line up", None
+                    m.door_lining_up()
                     if (step := self.lining_up(s)) is not None:
                         return step
                 return self.wait_for_opening(s)
@@ -526,14 +526,10 @@ class Reactive(CarRider, RouteFollower, Link):
                 # placed from in front: an opening elsewhere is another (the corridor seen
                 # from the doorway, a door across it), and going through it is no way in.
                 return self.wait_for_opening(s)
-            m.door_waiting_since = None
-            m.door_fixes += 1
-            m.door_pushes = 0
-            m.door_goal, m.door_stage = goal, "goto"
-            if not m.door_after_pass:
-                m.door_first = goal
-            m.door_after_pass = False
-        gx, gy, heading = m.door_goal
+            m.door_placed(goal)
+            gx, gy, heading = goal
+        else:
+            gx, gy, heading = m.door_goal
         if m.door_stage == "goto":
             if math.hypot(s.pose.x - gx, s.pose.y - gy) < 0.12:
                 m.door_stage = "face"
@@ -551,7 +547,7 @@ class Reactive(CarRider, RouteFollower, Link):
         """The line-up's next action; once lined up (None), the stage ends, and not again."""
         step = self.line_up_on_lab_door(s)
         if step is None:
-            self.mem.door_stage, self.mem.door_lined_up = "", True
+            self.mem.door_line_up_done()
         return step
 
     def line_up_on_lab_door(self, s: Senses) -> Action | None:
@@ -609,9 +605,7 @@ class Reactive(CarRider, RouteFollower, Link):
             m.door_waiting_since = s.t
         elif s.t - m.door_waiting_since > DOOR_WAIT_S:
             # No door here after all (or shut for long): leave it, look again later.
-            m.door_given_up_at, m.door_waiting_since, m.door_first = s.t, None, None
-            m.door_lined_up = False
-            m.door_after_pass = False
+            m.door_given_up(s.t)
         return Action(("runaway",), key="wait for opening")
 
     def through_door(self, s: Senses) -> bool:
@@ -621,18 +615,16 @@ class Reactive(CarRider, RouteFollower, Link):
             return False
         went = Pose(*m.door_goal).along(s.pose.x, s.pose.y)
         if went >= DOOR_STANDOFF + 0.4:
-            m.door_goal, m.door_stage, m.door_fixes, m.door_first = None, "", 0, None
-            m.door_after_pass = False
+            m.door_through()
             return True
         if went >= DOOR_STANDOFF - 0.3 and m.door_pushes < DOOR_PUSHES:
             # Stopped in the doorway: someone beyond, not the jambs (as the sequenced robot
             # reads it). Placed anew from in there, the door would be anything; so the robot
             # waits for the way ahead to clear, and goes on.
-            m.door_pushes += 1
-            m.door_stage, m.door_blocked_at = "blocked", s.t
+            m.door_blocked(s.t)
             return False
         # Stopped short (someone in the way, a jamb): place the door anew and go again.
-        m.door_goal, m.door_stage, m.door_after_pass = None, "", True
+        m.door_stopped_short()
         return False
 
     # ----- memory updates from what was sensed -------------------------------------------------

@@ -154,6 +154,63 @@ class Memory:
     #: Whether the robot lined up in front of the lab door's barcode since it last gave up.
     door_lined_up: bool = False
 
+    # ----- the door being passed: each change of it that is more than a step ----------------
+    # (`rules.Reactive` steps the stage itself, from goto to face, check and pass, notes when
+    # it began waiting for an opening, `door_waiting_since`, and its sightings, `door_seen`.)
+
+    def door_placed(self, goal: tuple[float, float, float], *, by_hint: bool = False) -> None:
+        """The door is at ``goal`` (the point in front of it, the heading through): to it.
+
+        Placed from the opening seen, it is one more fix; after stopping short in the doorway
+        the first placement stays, which a new one must be near (`door_first`). Placed by the
+        route's hint, it starts afresh.
+        """
+        if by_hint:
+            self.door_fixes, self.door_first = 0, goal
+        else:
+            self.door_fixes += 1
+            if not self.door_after_pass:
+                self.door_first = goal
+        self.door_goal, self.door_stage = goal, "goto"
+        self.door_pushes, self.door_after_pass, self.door_waiting_since = 0, False, None
+
+    def door_place_anew(self) -> None:
+        """In front of the door, its opening not straight ahead: placed anew from here."""
+        self.door_goal = None
+
+    def door_through(self) -> None:
+        """Through the door, beyond its line: the next door starts afresh."""
+        self.door_goal, self.door_stage, self.door_fixes, self.door_first = None, "", 0, None
+        self.door_after_pass = False
+
+    def door_blocked(self, t: float) -> None:
+        """Stopped in the doorway at time ``t`` (someone beyond): wait, then on through it."""
+        self.door_pushes += 1
+        self.door_stage, self.door_blocked_at = "blocked", t
+
+    def door_stopped_short(self) -> None:
+        """Stopped short of the doorway: placed anew from here, near where it was first."""
+        self.door_goal, self.door_stage, self.door_after_pass = None, "", True
+
+    def door_dropped(self) -> None:
+        """The route goes back to the door's barcode, to home and square up again."""
+        self.door_goal, self.door_stage = None, ""
+        self.door_first, self.door_after_pass = None, False
+
+    def door_given_up(self, t: float) -> None:
+        """No door showed in time, at time ``t``: left alone a while, then looked for anew."""
+        self.door_given_up_at, self.door_waiting_since, self.door_first = t, None, None
+        self.door_lined_up = False
+        self.door_after_pass = False
+
+    def door_lining_up(self) -> None:
+        """An opening off the lab door's barcode: lining up square in front of the barcode."""
+        self.door_stage, self.door_waiting_since = "line up", None
+
+    def door_line_up_done(self) -> None:
+        """Lined up in front of the lab door's barcode: not again until the door is given up."""
+        self.door_stage, self.door_lined_up = "", True
+
 
 @dataclass
 class RouteState:
