@@ -11,6 +11,7 @@
 
 pub mod config;
 pub mod control;
+mod handle;
 pub mod expr;
 pub mod frame;
 pub mod graph;

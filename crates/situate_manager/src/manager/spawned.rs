@@ -28,7 +28,8 @@ use super::pacing::raise_thread_priority;
 use super::walk::{self, Bodies};
 use super::Manager;
 use crate::config::ClockKind;
-use crate::control::{ControlError, Envelope, Handle, Reply, Request};
+use crate::control::{ControlError, Handle, Reply, Request};
+use crate::handle::Envelope;
 use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
 use crate::starved::Starvation;
 
