@@ -12,7 +12,9 @@
 pub mod config;
 pub mod control;
 mod handle;
-pub mod expr;
+/// The condition language of monitors: the crate `situate_expr`, here under
+/// the path it has always had.
+pub use situate_expr as expr;
 pub mod frame;
 pub mod graph;
 pub mod include;

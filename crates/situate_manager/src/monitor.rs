@@ -36,7 +36,7 @@
 
 use std::fmt;
 
-use crate::expr::{Condition, Lookup};
+use situate_expr::{Condition, Lookup};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MonitorMode {

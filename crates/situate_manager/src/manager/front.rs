@@ -12,10 +12,10 @@
 use std::cell::RefCell;
 
 use situate_core::{suggestion, SignalType};
+use situate_expr::{Condition, Resolver};
 
 use super::RefTarget;
 use crate::control::{ControlError, Request};
-use crate::expr::{Condition, Resolver};
 use crate::graph::Graph;
 use crate::monitor::{MonitorCondition, MAX_ANY_CONDITIONS};
 
