@@ -8,7 +8,7 @@
 //! once one of them is no longer written.
 
 use situate_core::{SignalType, Value};
-use situate_manager::expr::{Formula, Lookup, Resolver};
+use situate_expr::{Formula, Lookup, Resolver};
 use situate_manager::graph::Graph;
 
 /// The most formulas one tab plots.
