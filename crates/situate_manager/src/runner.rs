@@ -143,6 +143,23 @@ impl Exec {
     }
 }
 
+impl Exec {
+    /// Drops the copies of its inputs the body was given, as soon as it has
+    /// returned: the buffers they share are then again their slots' own
+    /// when their producers next write them (reused, nothing allocated). A
+    /// record made for the body is kept, to be written in place the next
+    /// time (`slots::assemble_into`). (Dropped, not recycled: a copy is
+    /// never the only holder of its buffer, its slot holds it too.)
+    #[inline(always)]
+    pub fn drop_copies(&mut self) {
+        for input in &mut self.inputs {
+            if input.is_some() && !matches!(input, Some(Value::Record(_))) {
+                *input = None;
+            }
+        }
+    }
+}
+
 /// A time read from one of two clocks: exact, or the kernel's coarse
 /// monotonic clock (the time of its last tick: about 3 ns to read instead
 /// of 25–30, to within [`coarse_tick_ns`]).

@@ -522,12 +522,15 @@ impl Bodies for OnThreads<'_> {
         current(self.g.as_mut()?, self.generation)
     }
 
+    #[inline(always)]
     fn run(&mut self, i: usize, _in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
         let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
         let mut exec = std::mem::take(&mut m.execs[i]);
         self.g = None;
         let end = exec.run(cycle, time_s, start, Some(&self.core.clocks[i]));
+        // Its copies of the inputs let go of at once, outside the lock.
+        exec.drop_copies();
         self.g = Some(self.core.lock());
         self.manager()?.execs[i] = exec;
         Some(end)

@@ -9,7 +9,6 @@
 //! batches, the devices' exchanges — is here, once.
 
 use situate_core::value::recycle;
-use situate_core::Value;
 
 use super::plan::{Plan, Step, StepKind};
 use super::slots::Slot;
@@ -149,8 +148,9 @@ fn run_steps<B: Bodies>(
         let m = b.manager()?;
         if lent {
             m.return_lent(plan, step);
-        } else if !in_place {
-            m.drop_copies(step.inst);
+        } else if B::LENDS && !in_place {
+            // (Bodies that do not lend drop their copies themselves.)
+            m.execs[step.inst].drop_copies();
         }
         let ok = m.finish_step(plan, k);
         t = match end {
@@ -181,7 +181,7 @@ fn run_level<B: Bodies>(b: &mut B, plan: &Plan, level: usize, ready: &mut Vec<us
     }
     let m = b.manager()?;
     for &k in ready.iter() {
-        m.drop_copies(plan.steps[k].inst);
+        m.execs[plan.steps[k].inst].drop_copies();
         m.finish_step(plan, k);
     }
     Some(())
@@ -244,22 +244,6 @@ impl Manager {
                     if let Some(old) = input.take() {
                         recycle(old);
                     }
-                }
-            }
-        }
-    }
-
-    /// Drops the copies of its inputs a body was given, as soon as it has
-    /// returned: the buffers they share are then again their slots' own
-    /// when their producers next write them (reused, nothing allocated). A
-    /// record made for the body is kept, to be written in place the next
-    /// time (`slots::assemble_into`).
-    #[inline]
-    fn drop_copies(&mut self, i: usize) {
-        for input in &mut self.execs[i].inputs {
-            if input.is_some() && !matches!(input, Some(Value::Record(_))) {
-                if let Some(old) = input.take() {
-                    recycle(old);
                 }
             }
         }
