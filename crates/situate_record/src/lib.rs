@@ -423,13 +423,7 @@ impl Writing {
             loop {
                 match tap.frames.try_recv() {
                     Ok(frame) => {
-                        self.frame(&frame)?;
-                        pending.extend(events.try_iter());
-                        while pending.front().is_some_and(|e| event_cycle(e).is_none_or(|c| c <= frame.cycle)) {
-                            if let Some(e) = pending.pop_front() {
-                                self.event(&e)?;
-                            }
-                        }
+                        self.frame_and_events(&frame, &mut pending, &events)?;
                         tap.give_back(frame);
                     }
                     Err(TryRecvError::Empty) => break,
@@ -455,11 +449,14 @@ impl Writing {
                 Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
             }
         }
-        // What is queued still goes in, frames first (events name their cycle).
+        // What is queued still goes in, each frame followed by its cycle's events as in a
+        // round (a stop can come with hundreds of frames queued: their events written after all
+        // of them were lost from a file cut among them), then the events left.
         while let Ok(frame) = tap.frames.try_recv() {
-            self.frame(&frame)?;
+            self.frame_and_events(&frame, &mut pending, &events)?;
         }
-        while let Ok(event) = events.try_recv() {
+        pending.extend(events.try_iter());
+        for event in pending.drain(..) {
             self.event(&event)?;
         }
         // The cycles lost after the last one written (those between were
@@ -597,6 +594,25 @@ impl Writing {
             self.times.pop_front();
         }
         self.times.push_back((frame.cycle, frame.time_s));
+        Ok(())
+    }
+
+    /// Writes a frame, then the events read so far of its cycle and the cycles before it: the
+    /// manager sends a cycle's events before its frame, so they are all there, and a file cut
+    /// short after them holds them.
+    fn frame_and_events(
+        &mut self,
+        frame: &Frame,
+        pending: &mut VecDeque<Event>,
+        events: &Receiver<Event>,
+    ) -> Result<(), RecordError> {
+        self.frame(frame)?;
+        pending.extend(events.try_iter());
+        while pending.front().is_some_and(|e| event_cycle(e).is_none_or(|c| c <= frame.cycle)) {
+            if let Some(e) = pending.pop_front() {
+                self.event(&e)?;
+            }
+        }
         Ok(())
     }
 
