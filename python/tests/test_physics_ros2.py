@@ -98,11 +98,13 @@ def test_the_standard_skills_drive_the_physics_robot_through_ros_2(tmp_path: Pat
                 node.stop()
                 assert not node.cmd_problems, node.cmd_problems
 
-                # One cycle per tick of the robot's clock, none skipped, none doubled. The clock
-                # stopped: its last /clock is sent again while waiting, as a paused simulator
-                # does (a keep-last /clock may be dropped under load: the flake hunt saw cycle 37
-                # of 39 ticks when the last one was). The same time again runs no cycle, so a
-                # doubled cycle still shows.
+                # One cycle per tick of the robot's clock, none skipped, none doubled: the
+                # first tick anchors the robot's time 0, even when the robot's clock thread
+                # looks late and finds two ticks come (the flake hunt saw cycle 36 of 38 ticks
+                # before the driver kept the first). The clock stopped: its last /clock is sent
+                # again while waiting, as a paused simulator does (a keep-last /clock may be
+                # dropped under load: the hunt saw cycle 37 of 39 ticks when the last one was).
+                # The same time again runs no cycle, so a doubled cycle still shows.
                 def caught_up() -> bool:
                     node.publish_clock()
                     return bool(stats()["cycle"] == node.ticks - 1)

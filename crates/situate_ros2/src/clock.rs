@@ -17,7 +17,9 @@
 //! no clock): the robot does not run the hours of cycles such a jump would owe.
 //!
 //! Messages are read on a Zenoh thread (the bounded CDR reader; one that cannot be read is
-//! counted and ignored) and handed to the driver's thread through a latest-value slot; the
+//! counted and ignored) and handed to the driver's thread through a slot that keeps the first
+//! and the last message since the driver last looked (`Heard`): a driver that wakes late, on a
+//! loaded machine, still anchors at the first message the robot heard, not at a later one. The
 //! driver asks the manager for the cycles with `Tick` requests (at most [`MAX_STEP`] at once, so
 //! a long jump of the clock leaves the robot answering between them).
 //!
@@ -80,9 +82,17 @@ pub struct ClockStats {
     pub resets: u64,
 }
 
+/// The `/clock` messages since the driver last looked, and whether it is to stop.
+#[derive(Debug, Default)]
+struct Heard {
+    /// The first message's time and the last's (the same when one came).
+    times: Option<(i64, i64)>,
+    stop: bool,
+}
+
 #[derive(Default)]
 struct Shared {
-    latest: Mutex<(Option<i64>, bool)>,
+    latest: Mutex<Heard>,
     wake: Condvar,
     messages: AtomicU64,
     undecodable: AtomicU64,
@@ -188,7 +198,8 @@ impl ClockDriver {
                         t.ns.store(ns, Ordering::Release);
                         t.known.store(true, Ordering::Release);
                         let mut latest = s.latest.lock().unwrap_or_else(|p| p.into_inner());
-                        latest.0 = Some(ns);
+                        let first = latest.times.map_or(ns, |(first, _)| first);
+                        latest.times = Some((first, ns));
                         s.wake.notify_one();
                     }
                     Err(e) => {
@@ -239,7 +250,7 @@ impl Drop for ClockDriver {
     fn drop(&mut self) {
         {
             let mut latest = self.shared.latest.lock().unwrap_or_else(|p| p.into_inner());
-            latest.1 = true;
+            latest.stop = true;
             self.shared.wake.notify_one();
         }
         if let Some(t) = self.thread.take() {
@@ -251,6 +262,46 @@ impl Drop for ClockDriver {
 /// The cycles owed at ROS time `now_ns`, with `anchor_ns` the robot's time 0.
 pub fn cycles_due(anchor_ns: i64, now_ns: i64, period_ns: i64) -> u64 {
     u64::try_from((now_ns.saturating_sub(anchor_ns)) / period_ns.max(1)).unwrap_or(0)
+}
+
+/// Where the robot's cycles stand against ROS time: the anchor (ROS time `.0` is the robot's
+/// cycle `.1`) and the last time heard.
+#[derive(Debug, Default)]
+struct Anchor {
+    at: Option<(i64, u64)>,
+    last: Option<i64>,
+}
+
+impl Anchor {
+    /// Messages came, `first` to `now` (the driver may look once for several), while the
+    /// robot's count is `cycle`. The first message ever (or the first after a reset) anchors
+    /// the count: a driver that looks late still owes the cycles from it. A step back, or a
+    /// jump forward of more than [`MAX_JUMP_S`], re-anchors at the time after it (moved to the
+    /// count then, so the count stays continuous); that step is returned.
+    fn hear(&mut self, first: i64, now: i64, cycle: u64) -> Option<(i64, i64)> {
+        let wild = |from: i64, to: i64| !(0..=MAX_JUMP_S * 1_000_000_000).contains(&to.saturating_sub(from));
+        let mut reset = None;
+        let mut from_here = first;
+        if let Some(l) = self.last.filter(|&l| wild(l, first)) {
+            reset = Some((l, first));
+        }
+        if wild(first, now) {
+            reset = Some((first, now));
+            from_here = now;
+        }
+        if reset.is_some() {
+            self.at = None;
+        }
+        self.last = Some(now);
+        self.at.get_or_insert((from_here, cycle));
+        reset
+    }
+
+    /// The last time heard and the robot's cycle count it owes, once a message came.
+    fn target(&self, period_ns: i64) -> Option<(i64, u64)> {
+        let (now, (a_ns, a_cycle)) = (self.last?, self.at?);
+        Some((now, a_cycle.saturating_add(cycles_due(a_ns, now, period_ns))))
+    }
 }
 
 /// While cycles are owed and the robot is stopped, it is asked again this often (a client's
@@ -269,17 +320,15 @@ struct Driver<'a> {
 
 /// What a wait for the next thing to do found.
 enum Woken {
-    Clock(i64),
+    /// `/clock` messages came: the first one's time and the last one's.
+    Clock(i64, i64),
     Look,
     Stop,
 }
 
 impl Driver<'_> {
     fn run(mut self) {
-        // The anchor: ROS time `.0` is the robot's cycle `.1`. Moved (to the cycle count then)
-        // when the clock resets, so the count stays continuous.
-        let mut anchor: Option<(i64, u64)> = None;
-        let mut last: Option<i64> = None;
+        let mut anchor = Anchor::default();
         // The manager's cycle count, as its last reply said.
         let mut cycle = match self.handle.request_timeout(Request::QueryStats, Duration::from_secs(30)) {
             Ok(situate_manager::Reply::Stats(s)) => s.cycle,
@@ -292,23 +341,16 @@ impl Driver<'_> {
             match self.wait(owed) {
                 Woken::Stop => return,
                 Woken::Look => {}
-                Woken::Clock(now) => {
-                    if let Some(l) = last {
-                        let jump = now.saturating_sub(l);
-                        if !(0..=MAX_JUMP_S * 1_000_000_000).contains(&jump) {
-                            self.shared.resets.fetch_add(1, Ordering::Relaxed);
-                            let how = if jump < 0 { "went back" } else { "jumped forward" };
-                            tracing::warn!(from_ns = l, to_ns = now, "ROS time {how}: the cycle goes on from here");
-                            anchor = None;
-                        }
+                Woken::Clock(first, now) => {
+                    if let Some((from, to)) = anchor.hear(first, now, cycle) {
+                        self.shared.resets.fetch_add(1, Ordering::Relaxed);
+                        let how = if to < from { "went back" } else { "jumped forward" };
+                        tracing::warn!(from_ns = from, to_ns = to, "ROS time {how}: the cycle goes on from here");
                     }
-                    last = Some(now);
-                    anchor.get_or_insert((now, cycle));
                     unanswered = true;
                 }
             }
-            let (Some(now), Some((a_ns, a_cycle))) = (last, anchor) else { continue };
-            let target = a_cycle.saturating_add(cycles_due(a_ns, now, self.period_ns));
+            let Some((now, target)) = anchor.target(self.period_ns) else { continue };
             owed = false;
             // The topics out were published after the last cycle that ran (each is a query of the
             // manager: not asked twice for the same cycle).
@@ -366,18 +408,18 @@ impl Driver<'_> {
     }
 
     fn stopping(&self) -> bool {
-        self.shared.latest.lock().unwrap_or_else(|p| p.into_inner()).1
+        self.shared.latest.lock().unwrap_or_else(|p| p.into_inner()).stop
     }
 
     /// Waits for a `/clock` message, or (`owed`) a `ManagerStarted` event or [`OWED_POLL`].
     fn wait(&self, owed: bool) -> Woken {
         let mut latest = self.shared.latest.lock().unwrap_or_else(|p| p.into_inner());
         loop {
-            if latest.1 {
+            if latest.stop {
                 return Woken::Stop;
             }
-            if let Some(ns) = latest.0.take() {
-                return Woken::Clock(ns);
+            if let Some((first, last)) = latest.times.take() {
+                return Woken::Clock(first, last);
             }
             if owed {
                 // Drained without holding the lock long: events are few (a start, a stop, prints).
@@ -413,5 +455,38 @@ mod tests {
         assert_eq!(cycles_due(0, 10_000_000, p), 1);
         assert_eq!(cycles_due(5, 1_000_000_005, p), 100);
         assert_eq!(cycles_due(100, 50, p), 0, "before the anchor: none");
+    }
+
+    const MS: i64 = 1_000_000;
+
+    #[test]
+    fn a_driver_that_looks_late_anchors_at_the_first_message_the_robot_heard() {
+        // Ticks at 100 ms and 200 ms came before the driver looked (a loaded machine): the
+        // robot heard 100 ms first, so at 200 ms it owes one cycle, as if it had looked at once.
+        let mut a = Anchor::default();
+        assert_eq!(a.target(100 * MS), None, "no message: nothing owed");
+        assert_eq!(a.hear(100 * MS, 200 * MS, 0), None);
+        assert_eq!(a.target(100 * MS), Some((200 * MS, 1)));
+        let mut at_once = Anchor::default();
+        at_once.hear(100 * MS, 100 * MS, 0);
+        at_once.hear(200 * MS, 200 * MS, 0);
+        assert_eq!(at_once.target(100 * MS), a.target(100 * MS));
+    }
+
+    #[test]
+    fn a_step_back_or_a_long_jump_re_anchors_where_the_count_is() {
+        let mut a = Anchor::default();
+        a.hear(0, 500 * MS, 0);
+        assert_eq!(a.target(100 * MS), Some((500 * MS, 5)));
+        // Back to 0 among the messages of one look: anchored at the time after the step.
+        assert_eq!(a.hear(600 * MS, 0, 5), Some((600 * MS, 0)));
+        assert_eq!(a.target(100 * MS), Some((0, 5)), "runs on from cycle 5, never backwards");
+        // A jump of an hour between looks: re-anchored at the first message after it.
+        let hour = 3600 * 1000 * MS;
+        assert_eq!(a.hear(hour, hour + 300 * MS, 5), Some((0, hour)));
+        assert_eq!(a.target(100 * MS), Some((hour + 300 * MS, 8)));
+        // Steady steps never re-anchor.
+        assert_eq!(a.hear(hour + 400 * MS, hour + 900 * MS, 8), None);
+        assert_eq!(a.target(100 * MS), Some((hour + 900 * MS, 14)));
     }
 }
