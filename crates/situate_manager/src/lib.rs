@@ -6,10 +6,10 @@
 //! - [`manager`]: the cycle, the executors, the control API's handling;
 //! - [`control`]: requests, replies, events, handles;
 //! - [`expr`] and [`monitor`]: monitor conditions;
-//! - [`config`] and [`yaml`]: robot files, with positions for every error;
-//! - [`spec`]: a robot as plain data, from a file or from code.
+//! - [`config`], [`yaml`], [`include`], [`manifest`] and [`spec`]: robot
+//!   files and a robot as plain data, the crate `situate_robotfile`, here
+//!   under the paths they have always had.
 
-pub mod config;
 pub mod control;
 mod handle;
 /// The condition language of monitors: the crate `situate_expr`, here under
@@ -17,16 +17,15 @@ mod handle;
 pub use situate_expr as expr;
 pub mod frame;
 pub mod graph;
-pub mod include;
 pub mod manager;
-pub mod manifest;
 pub mod monitor;
 pub mod registry;
 mod runner;
-pub mod spec;
 mod starved;
 pub mod supervise;
-pub mod yaml;
+/// The robot-file front end: the crate `situate_robotfile`, here under the
+/// paths it has always had.
+pub use situate_robotfile::{config, include, manifest, spec, yaml};
 
 pub use config::{ClockKind, ExecutorKind, RobotFile};
 pub use control::{

@@ -72,7 +72,7 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
                         errors.push((port.pos, format!("a port name may have at most {MAX_NAME_CHARS} characters")));
                         continue;
                     }
-                    if !crate::graph::is_identifier(&port.value) {
+                    if !crate::config::is_identifier(&port.value) {
                         errors.push((port.pos, format!("port name `{}` is not an identifier", port.value)));
                         continue;
                     }

@@ -175,11 +175,11 @@ pub struct RobotSpec {
     pub clock: ClockKind,
     pub executor: ExecutorKind,
     pub threads: Option<usize>,
-    /// Default execution budget of a sync cskill's run, ms (see
-    /// [`crate::graph::default_budget`] when not given).
+    /// Default execution budget of a sync cskill's run, ms (the skill
+    /// manager's `graph::default_budget` when not given).
     pub budget_ms: Option<f64>,
-    /// Default liveness deadline of a threaded body's run, ms (see
-    /// [`crate::graph::default_liveness`]).
+    /// Default liveness deadline of a threaded body's run, ms (the skill
+    /// manager's `graph::default_liveness` when not given).
     pub liveness_ms: Option<f64>,
     pub skills: Vec<SkillSpec>,
     /// The robot file it came from, for messages.
@@ -292,7 +292,9 @@ impl RobotSpec {
         }
     }
 
-    pub(crate) fn diag(&self, severity: Severity, pos: Option<Pos>, message: String) -> Diagnostic {
+    /// A diagnostic at `pos`, naming the file the position is in (this
+    /// robot's file, or one it includes).
+    pub fn diag(&self, severity: Severity, pos: Option<Pos>, message: String) -> Diagnostic {
         let file = match pos {
             Some(p) if p.src > 0 => self.sources.get(p.src).cloned().or_else(|| self.file.clone()),
             _ => self.file.clone(),
