@@ -13,30 +13,17 @@ use std::path::{Path, PathBuf};
 use situate_core::names::suggestion;
 use situate_core::value::Value;
 
+pub use crate::error::ConfigError;
+use crate::include::base_dir;
 pub use crate::include::{LoadOptions, SourceFile};
+use crate::limits::{DEADLINE_RANGE, PERIOD_RANGE, RATE_RANGE};
+pub use crate::limits::{
+    DEFAULT_RATE_HZ, MAX_DEADLINE_MS, MAX_ENTRIES, MAX_NAME_CHARS, MAX_RATE_HZ, MAX_ROBOT_FILE_BYTES, MAX_THREADS,
+    MIN_PERIOD_MS, MIN_RATE_HZ,
+};
+pub use crate::names::{is_identifier, is_robot_name, is_signal_name};
 use crate::yaml;
 pub use crate::yaml::{Node, Pos, Spanned};
-
-/// The default cycle rate.
-pub const DEFAULT_RATE_HZ: f64 = 20.0;
-/// The fastest cycle rate a robot file may ask for.
-pub const MAX_RATE_HZ: f64 = 100_000.0;
-/// The slowest cycle rate: one cycle a day.
-pub const MIN_RATE_HZ: f64 = 1.0 / 86_400.0;
-/// The longest period, execution budget, liveness deadline or remote
-/// timeout: a day, in ms.
-pub const MAX_DEADLINE_MS: f64 = 86_400_000.0;
-/// The shortest period: that of the fastest cycle, in ms.
-pub const MIN_PERIOD_MS: f64 = 1000.0 / MAX_RATE_HZ;
-
-/// What `rate_hz` accepts, in messages.
-const RATE_RANGE: &str = "a number > 0 and ≤ 100000";
-/// What `period_ms` accepts, in messages.
-const PERIOD_RANGE: &str = "a number from 0.01 to 86400000 (10 µs to a day)";
-/// What `budget_ms`, `liveness_ms` and `timeout_ms` accept, in messages.
-const DEADLINE_RANGE: &str = "a number > 0 and ≤ 86400000 (a day)";
-/// The largest parallel executor pool.
-pub const MAX_THREADS: usize = 64;
 
 const TOP_KEYS: &[&str] =
     &["robot", "include", "cycle", "libraries", "python", "simulator", "devices", "skills", "link", "gui", "ros2"];
@@ -54,50 +41,6 @@ const ENTRY_KEYS: &[&str] = &[
     "params",
     "remap",
 ];
-
-/// The largest robot file (and remote skill manifest file) read: 1 MiB.
-pub const MAX_ROBOT_FILE_BYTES: u64 = 1 << 20;
-/// The most entries `devices:` and `skills:` may hold together.
-pub const MAX_ENTRIES: usize = 1024;
-/// The longest name (robot, entry, type, parameter, port, signal), in
-/// characters.
-pub const MAX_NAME_CHARS: usize = 256;
-
-/// One error in a robot file: `FILE:LINE:COL: error: message`, or
-/// `FILE: error: message` for the file as a whole (line and column 0).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}{}: error: {message}", at(*.line, *.col))]
-pub struct ConfigError {
-    pub file: String,
-    pub line: usize,
-    pub col: usize,
-    pub message: String,
-}
-
-/// `:LINE:COL`, or nothing for line 0.
-fn at(line: usize, col: usize) -> String {
-    if line == 0 {
-        String::new()
-    } else {
-        format!(":{line}:{col}")
-    }
-}
-
-impl ConfigError {
-    pub fn new(file: &str, pos: Pos, message: impl Into<String>) -> ConfigError {
-        ConfigError { file: file.to_string(), line: pos.line, col: pos.col, message: message.into() }
-    }
-
-    /// An error about the file as a whole (it cannot be read, it is too
-    /// large): no position.
-    pub fn whole_file(file: &str, message: impl Into<String>) -> ConfigError {
-        ConfigError { file: file.to_string(), line: 0, col: 0, message: message.into() }
-    }
-
-    pub fn pos(&self) -> Pos {
-        Pos::new(self.line, self.col)
-    }
-}
 
 /// Which clock drives the cycle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -412,15 +355,6 @@ impl RobotFile {
     }
 }
 
-/// The absolute directory of the robot file named `file` (relative to the
-/// current directory when `file` is).
-pub(crate) fn base_dir(file: &str) -> PathBuf {
-    let file = Path::new(file);
-    let dir = file.parent().unwrap_or(Path::new(""));
-    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
-    std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf())
-}
-
 /// The keys of Zenoh's configuration whose values are file paths (TLS keys
 /// and certificates, the user/password dictionary, public-key files).
 pub const ZENOH_PATH_KEYS: &[&str] = &[
@@ -460,23 +394,6 @@ fn resolve_zenoh_paths(node: &mut Node, dir: &Path, zenoh: bool) {
         }
         _ => {}
     }
-}
-
-/// `[A-Za-z_][A-Za-z0-9_]*`
-pub fn is_identifier(s: &str) -> bool {
-    let mut chars = s.chars();
-    chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
-}
-
-/// Identifiers joined by dots: `sonar.range`.
-pub fn is_signal_name(s: &str) -> bool {
-    s.split('.').all(is_identifier)
-}
-
-/// `[A-Za-z0-9_-]+`
-pub fn is_robot_name(s: &str) -> bool {
-    !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
 }
 
 /// Walks the node tree, collecting errors.

@@ -24,13 +24,10 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::config::{ConfigError, MAX_ROBOT_FILE_BYTES};
+use crate::error::ConfigError;
+use crate::limits::MAX_ROBOT_FILE_BYTES;
+pub use crate::limits::{MAX_INCLUDE_DEPTH, MAX_SOURCE_FILES};
 use crate::yaml::{self, Node, Pos, Spanned};
-
-/// The deepest chain of includes (a file including a file including …).
-pub const MAX_INCLUDE_DEPTH: usize = 16;
-/// The most files one robot file may read, itself and all it includes.
-pub const MAX_SOURCE_FILES: usize = 64;
 
 /// One file a robot file was read from: the file itself, or one it
 /// includes.
@@ -77,7 +74,7 @@ impl<'a> Composer<'a> {
     /// merged in; `None` when the file itself cannot be parsed. Errors are
     /// left in `errors`.
     pub(crate) fn compose(file: &str, source: &str, options: LoadOptions<'a>) -> (Option<Spanned<Node>>, Composer<'a>) {
-        let dir = crate::config::base_dir(file);
+        let dir = base_dir(file);
         let mut cx = Composer {
             sources: vec![SourceFile { file: file.to_string(), dir, included_at: None }],
             errors: Vec::new(),
@@ -219,6 +216,15 @@ impl<'a> Composer<'a> {
             _ => None,
         }
     }
+}
+
+/// The absolute directory of the robot file named `file` (relative to the
+/// current directory when `file` is).
+pub(crate) fn base_dir(file: &str) -> PathBuf {
+    let file = Path::new(file);
+    let dir = file.parent().unwrap_or(Path::new(""));
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf())
 }
 
 /// A path as shown: `common/../lab.yaml` as `lab.yaml` (lexically: `x/..`

@@ -6,14 +6,23 @@
 //! - [`config`]: robot files, their sections and shape checks;
 //! - [`include`]: `include:` and `${ENV}` substitution;
 //! - [`manifest`]: a skill's declaration written as data;
-//! - [`spec`]: a robot as plain data, from a file or from code.
+//! - [`spec`]: a robot as plain data, from a file or from code;
+//! - [`limits`], [`names`] and [`error`]: what a file may hold, what a name
+//!   may be, and the error of a robot file.
+//!
+//! The modules form layers, each using only those above it: `yaml`,
+//! `limits` and `names`; `error`; `include` and `manifest`; `config`;
+//! `spec`.
 //!
 //! Whether skill types, parameters and signals exist and fit together is
 //! checked by the skill manager (`situate_manager`), which re-exports these
 //! modules under the paths they had there.
 
 pub mod config;
+pub mod error;
 pub mod include;
+pub mod limits;
 pub mod manifest;
+pub mod names;
 pub mod spec;
 pub mod yaml;

@@ -15,15 +15,12 @@
 
 use situate_core::{suggestion, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillKind, Value};
 
-use crate::config::{Node, Spanned, MAX_NAME_CHARS};
-use crate::yaml::Pos;
+use crate::limits::MAX_NAME_CHARS;
+pub use crate::limits::{MAX_PORTS, MAX_TYPE_CHARS};
+use crate::names::{is_identifier, is_signal_name};
+use crate::yaml::{Node, Pos, Spanned};
 
 const MANIFEST_KEYS: &[&str] = &["doc", "priority", "inputs", "outputs", "params"];
-
-/// The most inputs, outputs or parameters a manifest may declare (each).
-pub const MAX_PORTS: usize = 256;
-/// The longest port type (`{x: f64, y: f64}`), in characters.
-pub const MAX_TYPE_CHARS: usize = 1024;
 const PARAM_KEYS: &[&str] = &["type", "default", "min", "max", "unit", "doc"];
 /// A port's keys in its long form (outputs: the first three).
 const PORT_KEYS: &[&str] = &["type", "signal", "doc", "optional"];
@@ -72,7 +69,7 @@ pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) ->
                         errors.push((port.pos, format!("a port name may have at most {MAX_NAME_CHARS} characters")));
                         continue;
                     }
-                    if !crate::config::is_identifier(&port.value) {
+                    if !is_identifier(&port.value) {
                         errors.push((port.pos, format!("port name `{}` is not an identifier", port.value)));
                         continue;
                     }
@@ -153,7 +150,7 @@ fn port_spec(name: &str, node: &Spanned<Node>, output: bool) -> Result<PortSpec,
                                 format!("port `{name}`: a signal name may have at most {MAX_NAME_CHARS} characters"),
                             ))
                         }
-                        Some(s) if crate::config::is_signal_name(s) => signal = Some(s.to_string()),
+                        Some(s) if is_signal_name(s) => signal = Some(s.to_string()),
                         _ => {
                             return Err((
                                 value.pos,

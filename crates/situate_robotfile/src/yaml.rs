@@ -28,8 +28,7 @@ use situate_core::value::Value;
 use yaml_rust2::parser::{Event, Parser};
 use yaml_rust2::scanner::{Marker, ScanError, TScalarStyle};
 
-/// The deepest nesting of lists and mappings a robot file may use.
-pub const MAX_DEPTH: usize = 64;
+pub use crate::limits::MAX_DEPTH;
 
 /// A position in a source file; line and column both start at 1. Columns
 /// count characters (not bytes). `src` says which file: 0 for the file
