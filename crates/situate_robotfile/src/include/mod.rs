@@ -21,6 +21,9 @@
 //! so errors name the included file's own line; a missing or unreadable
 //! included file, and a cycle of includes, are errors at the `include:`
 //! item. The format is documented in `docs/robot-files.md`.
+//!
+//! This file reads the files and composes them; `merge.rs` holds the merge
+//! rules and `env.rs` the `${NAME}` substitution.
 
 use std::path::{Path, PathBuf};
 
@@ -28,6 +31,12 @@ use crate::error::ConfigError;
 use crate::limits::MAX_ROBOT_FILE_BYTES;
 pub use crate::limits::{MAX_INCLUDE_DEPTH, MAX_SOURCE_FILES};
 use crate::yaml::{self, Node, Pos, Spanned};
+
+mod env;
+mod merge;
+
+pub use env::{substitute_env, EnvLookup};
+use merge::merge;
 
 /// One file a robot file was read from: the file itself, or one it
 /// includes.
@@ -43,9 +52,6 @@ pub struct SourceFile {
     /// file itself.
     pub included_at: Option<Pos>,
 }
-
-/// Looks an environment variable up: its value, `None` when unset.
-pub type EnvLookup<'a> = &'a dyn Fn(&str) -> Option<String>;
 
 /// How a robot file is read.
 #[derive(Clone, Copy, Default)]
@@ -247,149 +253,6 @@ fn tidy(path: &Path) -> String {
     out.iter().collect::<PathBuf>().display().to_string()
 }
 
-/// `over` merged onto `base`: later wins (see the module's documentation).
-fn merge(mut base: Entries, over: Entries) -> Entries {
-    for (key, value) in over {
-        let Some(slot) = base.iter_mut().find(|(k, _)| k.value == key.value) else {
-            base.push((key, value));
-            continue;
-        };
-        let earlier = std::mem::replace(&mut slot.1, Spanned::new(Node::Null, value.pos));
-        slot.1 = match (key.value.as_str(), earlier.value, value.value) {
-            ("devices" | "skills", Node::Seq(items), Node::Seq(more)) => {
-                Spanned::new(Node::Seq(merge_entries(items, more)), earlier.pos)
-            }
-            ("libraries" | "python", Node::Seq(mut items), Node::Seq(more)) => {
-                items.extend(more);
-                Spanned::new(Node::Seq(items), earlier.pos)
-            }
-            (_, _, later) => Spanned::new(later, value.pos),
-        };
-        slot.0 = key;
-    }
-    base
-}
-
-fn entry_name(item: &Spanned<Node>) -> Option<&str> {
-    item.value.get("name").and_then(|n| n.value.as_text())
-}
-
-/// The entries of a section: `more`'s appended to `items`, except that one
-/// named as an entry of `items` overrides it in place (each earlier entry
-/// at most once, so a name twice in one file stays a duplicate).
-fn merge_entries(mut items: Vec<Spanned<Node>>, more: Vec<Spanned<Node>>) -> Vec<Spanned<Node>> {
-    let earlier = items.len();
-    let mut overridden = vec![false; earlier];
-    for item in more {
-        let found = entry_name(&item)
-            .and_then(|name| (0..earlier).find(|&i| !overridden[i] && entry_name(&items[i]) == Some(name)));
-        match found {
-            Some(i) => {
-                overridden[i] = true;
-                let base = std::mem::replace(&mut items[i], Spanned::new(Node::Null, item.pos));
-                items[i] = merge_entry(base, item);
-            }
-            None => items.push(item),
-        }
-    }
-    items
-}
-
-/// One entry overridden by a later one of the same name, key by key.
-fn merge_entry(base: Spanned<Node>, over: Spanned<Node>) -> Spanned<Node> {
-    let (mut entries, more) = match (base.value, over.value) {
-        (Node::Map(entries), Node::Map(more)) => (entries, more),
-        (_, later) => return Spanned::new(later, over.pos),
-    };
-    let gives = |key: &str| more.iter().any(|(k, _)| k.value == key);
-    if gives("type") {
-        entries.retain(|(k, _)| k.value != "remote");
-    }
-    if gives("remote") {
-        entries.retain(|(k, _)| k.value != "type");
-    }
-    for (key, value) in more {
-        if key.value == "name" {
-            continue;
-        }
-        let Some(slot) = entries.iter_mut().find(|(k, _)| k.value == key.value) else {
-            entries.push((key, value));
-            continue;
-        };
-        let earlier = std::mem::replace(&mut slot.1, Spanned::new(Node::Null, value.pos));
-        slot.1 = match (key.value.as_str(), earlier.value, value.value) {
-            ("params" | "remap", Node::Map(mut names), Node::Map(later)) => {
-                for (k, v) in later {
-                    match names.iter_mut().find(|(n, _)| n.value == k.value) {
-                        Some(slot) => *slot = (k, v),
-                        None => names.push((k, v)),
-                    }
-                }
-                Spanned::new(Node::Map(names), earlier.pos)
-            }
-            (_, _, later) => Spanned::new(later, value.pos),
-        };
-        slot.0 = key;
-    }
-    Spanned::new(Node::Map(entries), base.pos)
-}
-
-/// Replaces `${NAME}` with the environment's value of NAME, and
-/// `${NAME:-default}` with the default when NAME is unset or empty; `$${`
-/// stays a literal `${`. Comment lines (`#` first) are left alone. An unset
-/// NAME without a default is an error at its line and column (1-based).
-pub fn substitute_env(source: &str, lookup: impl Fn(&str) -> Option<String>) -> Result<String, (usize, usize, String)> {
-    if !source.contains("${") {
-        return Ok(source.to_string());
-    }
-    let mut out = String::with_capacity(source.len());
-    for (n, line) in source.split_inclusive('\n').enumerate() {
-        if line.trim_start().starts_with('#') {
-            out.push_str(line);
-            continue;
-        }
-        let mut rest = line;
-        while let Some(at) = rest.find("${") {
-            if rest[..at].ends_with('$') {
-                out.push_str(&rest[..at - 1]);
-                out.push_str("${");
-                rest = &rest[at + 2..];
-                continue;
-            }
-            out.push_str(&rest[..at]);
-            let col = line[..line.len() - rest.len() + at].chars().count() + 1;
-            let Some(end) = rest[at..].find('}') else {
-                return Err((n + 1, col, "`${` without its closing `}` (write `$${` for a literal `${`)".into()));
-            };
-            let inner = &rest[at + 2..at + end];
-            let (name, default) = match inner.split_once(":-") {
-                Some((name, default)) => (name, Some(default)),
-                None => (inner, None),
-            };
-            let valid = !name.is_empty()
-                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                && !name.starts_with(|c: char| c.is_ascii_digit());
-            if !valid {
-                return Err((n + 1, col, format!("`${{{inner}}}`: `{name}` is not an environment variable's name")));
-            }
-            match (lookup(name).filter(|v| !v.is_empty()), default) {
-                (Some(value), _) => out.push_str(&value),
-                (None, Some(default)) => out.push_str(default),
-                (None, None) => {
-                    return Err((
-                        n + 1,
-                        col,
-                        format!("`${{{name}}}`: the environment variable `{name}` is not set (give a default: `${{{name}:-value}}`)"),
-                    ))
-                }
-            }
-            rest = &rest[at + end + 1..];
-        }
-        out.push_str(rest);
-    }
-    Ok(out)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -400,39 +263,5 @@ mod tests {
         assert_eq!(tidy(Path::new("./a/./b.yaml")), "a/b.yaml");
         assert_eq!(tidy(Path::new("../up.yaml")), "../up.yaml");
         assert_eq!(tidy(Path::new("/r/x/../y.yaml")), "/r/y.yaml");
-    }
-
-    #[test]
-    fn substitution_counts_columns_in_characters() {
-        let env = |name: &str| (name == "A").then(|| "1".to_string());
-        assert_eq!(substitute_env("x: ${A}\n", env), Ok("x: 1\n".to_string()));
-        let e = substitute_env("é: ${B}\n", env).expect_err("B is unset");
-        assert_eq!((e.0, e.1), (1, 4));
-        assert_eq!(substitute_env("# ${B}\nx: $${B}\n", env), Ok("# ${B}\nx: ${B}\n".to_string()));
-    }
-
-    fn map(source: &str) -> Entries {
-        match yaml::parse(source).expect("YAML").value {
-            Node::Map(entries) => entries,
-            other => panic!("not a mapping: {other:?}"),
-        }
-    }
-
-    #[test]
-    fn later_sections_replace_and_entries_merge_by_name() {
-        let base =
-            map("cycle: {rate_hz: 10, clock: simulated}\nskills:\n  - {name: a, type: t.a, params: {x: 1, y: 2}}\n");
-        let over = map("cycle: {rate_hz: 50}\nskills:\n  - {name: a, params: {y: 3}}\n  - {name: b, type: t.b}\n");
-        let merged = merge(base, over);
-        let root = Node::Map(merged);
-        let cycle = root.get("cycle").expect("cycle");
-        assert!(cycle.value.get("clock").is_none(), "replaced whole, not merged");
-        let skills = root.get("skills").and_then(|s| s.value.as_seq()).expect("skills");
-        assert_eq!(skills.len(), 2);
-        let a = &skills[0].value;
-        assert_eq!(a.get("type").and_then(|t| t.value.as_text()), Some("t.a"));
-        let params = a.get("params").expect("params");
-        assert_eq!(params.value.get("x").and_then(|v| v.value.as_i64()), Some(1));
-        assert_eq!(params.value.get("y").and_then(|v| v.value.as_i64()), Some(3));
     }
 }
