@@ -1,5 +1,5 @@
 //! A foreign skill's manifest: the format of
-//! `situate_manager::manifest` (doc, priority, inputs, outputs, params) plus
+//! `situate_robotfile::manifest` (doc, priority, inputs, outputs, params) plus
 //! `name` (required: the type name robot files use) and `kind` (`sync`, the
 //! default, `async` or `device`).
 //!
@@ -15,7 +15,7 @@
 use std::fmt;
 
 use situate_core::{SkillDecl, SkillKind};
-use situate_manager::yaml::{self, Node, Pos, Spanned};
+use situate_robotfile::yaml::{self, Node, Pos, Spanned};
 
 /// One problem in a manifest, at a 1-based line and column of its text.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -86,7 +86,7 @@ pub fn parse_manifest(text: &str) -> Result<SkillDecl, ManifestError> {
         return Err(problem(tree.pos, "the manifest has no `name` (the skill type's name, such as c.runaway)"));
     };
     let node = Spanned::new(Node::Map(rest), tree.pos);
-    situate_manager::manifest::decl_from_node(&node, &name, kind).map_err(|errors| ManifestError {
+    situate_robotfile::manifest::decl_from_node(&node, &name, kind).map_err(|errors| ManifestError {
         problems: errors
             .into_iter()
             .map(|(pos, message)| ManifestProblem { line: pos.line, col: pos.col, message })

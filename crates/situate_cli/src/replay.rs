@@ -9,9 +9,10 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use serde_json::json;
-use situate::manager::{ClockKind, ExecutorKind, Manager};
+use situate::manager::Manager;
 use situate_record::read::Recording;
 use situate_record::replay;
+use situate_robotfile::config::{ClockKind, ExecutorKind};
 
 use crate::args::Compose;
 use crate::output::{problem, Exit, Out};

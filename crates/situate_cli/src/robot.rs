@@ -9,11 +9,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
 use serde_json::{json, Value as Json};
-use situate::manager::yaml::Spanned;
-use situate::manager::{
-    ClockKind, Control, Event, ExecutorKind, Manager, ManagerStats, RobotFile, RobotSpec, SkillInfo,
-};
+use situate::manager::{Control, Event, Manager, ManagerStats, SkillInfo};
 use situate_link::{Link, LinkConfig};
+use situate_robotfile::config::{ClockKind, ExecutorKind, RobotFile};
+use situate_robotfile::spec::RobotSpec;
+use situate_robotfile::yaml::Spanned;
 
 use crate::args::{Compose, RunArgs};
 use crate::client::{client_verb, Remote};
@@ -39,7 +39,7 @@ pub(crate) struct Loaded {
 /// is a [`Problem`] of kind [`Exit::BadFile`] (or [`Exit::Usage`] for a bad `--set`).
 pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
     let env = |name: &str| std::env::var(name).ok();
-    let options = situate::manager::config::LoadOptions { env: Some(&env) };
+    let options = situate_robotfile::config::LoadOptions { env: Some(&env) };
     let mut robot_file = RobotFile::load_with(path, options).map_err(|errors| bad_file(path, &errors))?;
     apply_sets(&mut robot_file, &compose.set)?;
     let link = match &robot_file.link {
@@ -98,7 +98,7 @@ fn apply_sets(robot_file: &mut RobotFile, sets: &[String]) -> anyhow::Result<()>
         let Some((skill, param)) = target.trim().split_once('.') else {
             return Err(usage(format!("`{target}` is not SKILL.PARAM")));
         };
-        let node = situate::manager::yaml::parse(text).map_err(|e| usage(format!("the value: {}", e.message)))?;
+        let node = situate_robotfile::yaml::parse(text).map_err(|e| usage(format!("the value: {}", e.message)))?;
         let value = node
             .value
             .to_value()
@@ -118,7 +118,7 @@ fn apply_sets(robot_file: &mut RobotFile, sets: &[String]) -> anyhow::Result<()>
                 p.value = Spanned::new(value, p.value.pos);
                 p.written = written;
             }
-            None => entry.params.push(situate::manager::config::Param {
+            None => entry.params.push(situate_robotfile::config::Param {
                 name: Spanned::new(param.to_string(), entry.pos),
                 value: Spanned::new(value, entry.pos),
                 written,
@@ -160,7 +160,7 @@ pub(crate) fn static_graph(
 }
 
 /// The manager's diagnostics (errors and warnings), then the count of errors.
-fn build_failure(file: &Path, e: &situate::manager::BuildError) -> anyhow::Error {
+fn build_failure(file: &Path, e: &situate_robotfile::spec::BuildError) -> anyhow::Error {
     let n = e.diagnostics.iter().filter(|d| d.is_error()).count();
     let mut p = Problem::bad_file(file, e.diagnostics.iter().map(ToString::to_string).collect());
     p.message = format!("{}: {n} error{}", file.display(), if n == 1 { "" } else { "s" });

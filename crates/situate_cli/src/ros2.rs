@@ -2,13 +2,15 @@
 //! devices of the robot before it is built; the bridge (topics out, services, ROS time) starts
 //! once the link serves (`robot::start_robot`).
 
-use situate::manager::{Registry, RobotSpec};
+use situate::manager::Registry;
+use situate_robotfile::config::ClockKind;
+use situate_robotfile::spec::{RobotSpec, SkillSpec};
 use situate_ros2::{Inputs, Ros2Config, Ros2Node};
 
 use crate::output::{problem, Exit};
 
 /// Adds `devices` (a topic in's skill and type each) to the robot.
-fn add(spec: &mut RobotSpec, registry: &mut Registry, devices: Vec<(situate::manager::SkillSpec, situate::SkillType)>) {
+fn add(spec: &mut RobotSpec, registry: &mut Registry, devices: Vec<(SkillSpec, situate::SkillType)>) {
     for (skill, ty) in devices {
         registry.add(ty);
         spec.skills.push(skill);
@@ -36,7 +38,7 @@ pub(crate) fn declare(
 ) -> anyhow::Result<Option<(Ros2Node, Inputs)>> {
     let Some(config) = ros2 else { return Ok(None) };
     if config.use_sim_time {
-        spec.clock = situate::manager::ClockKind::Simulated;
+        spec.clock = ClockKind::Simulated;
     }
     let Some(session) = session else {
         add_devices(spec, registry, ros2);

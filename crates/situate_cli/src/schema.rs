@@ -5,10 +5,10 @@
 //! the reader enforces — while `situate check` and `situate map check`
 //! remain the judges (types of signals, skill types, the wiring).
 //!
-//! Written by hand, next to the readers: the robot file's keys are the
-//! manager's (`TOP_KEYS`, `CYCLE_KEYS`, `ENTRY_KEYS` in
-//! situate_manager/src/config.rs), and a test checks every key of the
-//! example files is in the schema.
+//! Written by hand, next to the readers: the robot file's keys are
+//! `situate_robotfile`'s (`TOP_KEYS` in config/robot_file.rs, `CYCLE_KEYS`
+//! in config/cycle.rs, `ENTRY_KEYS` in config/entries.rs), and a test checks
+//! every key of the example files is in the schema.
 
 use std::path::Path;
 

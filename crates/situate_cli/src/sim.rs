@@ -5,7 +5,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use situate::manager::RobotFile;
+use situate_robotfile::config::{ConfigError, RobotFile};
+use situate_robotfile::yaml::{Node, Spanned};
 
 /// The simulated building a robot file runs in (its `simulator:` section).
 pub struct Simulation {
@@ -177,10 +178,7 @@ pub(crate) fn simulation(robot_file: &RobotFile, over: &SimOverrides) -> Result<
 }
 
 /// `dead_sonars: [i, …]`: sonar indexes 0 to 23.
-fn dead_sonars(
-    robot_file: &RobotFile,
-    value: &situate::manager::yaml::Spanned<situate::manager::yaml::Node>,
-) -> Result<Vec<usize>, situate::manager::config::ConfigError> {
+fn dead_sonars(robot_file: &RobotFile, value: &Spanned<Node>) -> Result<Vec<usize>, ConfigError> {
     let Some(items) = value.value.as_seq() else {
         return Err(robot_file.error(value.pos, "`dead_sonars` expects a list of sonar indexes, e.g. [3, 17]"));
     };

@@ -7,8 +7,9 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-use situate::manager::{Registry, RobotFile};
+use situate::manager::Registry;
 use situate_core::SkillType;
+use situate_robotfile::config::RobotFile;
 
 use crate::output::{problem, Exit};
 use crate::sim::{simulation, SimOverrides, Simulation};

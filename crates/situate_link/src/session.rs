@@ -7,8 +7,7 @@
 //! are Zenoh *clients* that connect to that endpoint and listen on nothing.
 
 use serde_json::{json, Value as Json};
-use situate_manager::config::{Node, Spanned};
-use situate_manager::yaml::Pos;
+use situate_robotfile::yaml::{Node, Pos, Spanned};
 
 use crate::LinkError;
 
@@ -182,13 +181,13 @@ mod tests {
     #[test]
     fn robot_file_link_sections_are_read_with_positions_for_errors() {
         let src = "link:\n  listen: [tcp/127.0.0.1:9000]\n  connect: tcp/10.0.0.2:7447\n  telemetry_hz: 5\n";
-        let tree = situate_manager::yaml::parse(src).unwrap();
+        let tree = situate_robotfile::yaml::parse(src).unwrap();
         let link = tree.value.get("link").unwrap();
         let cfg = LinkConfig::from_node(link).unwrap();
         assert_eq!(cfg.listen, ["tcp/127.0.0.1:9000"]);
         assert_eq!(cfg.connect, ["tcp/10.0.0.2:7447"]);
         assert_eq!(cfg.telemetry_hz, 5.0);
-        let bad = situate_manager::yaml::parse("link:\n  listn: []\n  listen: [7447]\n").unwrap();
+        let bad = situate_robotfile::yaml::parse("link:\n  listn: []\n  listen: [7447]\n").unwrap();
         let errs = LinkConfig::from_node(bad.value.get("link").unwrap()).unwrap_err();
         assert_eq!(errs[0].message, "unknown key `listn` in `link` — did you mean `listen`?");
         assert_eq!((errs[0].pos.line, errs[0].pos.col), (2, 3));

@@ -25,6 +25,8 @@ use situate_core::{Io, SignalType, Skill, SkillDecl, SkillError, SkillKind, Skil
 use situate_link::json::{param_from_json, value_from_json, value_to_json};
 use situate_manager::graph::Graph;
 use situate_manager::{Frame, Manager, Request};
+use situate_robotfile::config::MAX_DEADLINE_MS;
+use situate_robotfile::spec::RobotSpec;
 
 use crate::hash::{cycle_hash, same};
 use crate::read::Recording;
@@ -60,7 +62,7 @@ pub struct Cast {
 /// `liveness_ms`) becomes the longest allowed, a day: a replay runs bodies
 /// to completion, however slow the machine.
 pub fn cast(
-    spec: &mut situate_manager::RobotSpec,
+    spec: &mut RobotSpec,
     registry: &mut situate_manager::Registry,
     remote: &[(String, SkillDecl)],
     live: Option<&[String]>,
@@ -82,7 +84,7 @@ pub fn cast(
     let mut cast = Cast::default();
     // Deadlines are the wall clock's: the recording's cycles were not
     // faulted by this machine's speed, so the replay's must not be either.
-    let no_deadline = Some(situate_manager::config::MAX_DEADLINE_MS);
+    let no_deadline = Some(MAX_DEADLINE_MS);
     spec.budget_ms = no_deadline;
     spec.liveness_ms = no_deadline;
     for s in &mut spec.skills {

@@ -22,7 +22,9 @@ use serde_json::{json, Value as Json};
 use situate_core::{ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillKind, Value};
 use situate_link::json::{value_from_json, value_to_json};
 use situate_manager::control::SkillInfo;
-use situate_manager::{Registry, RobotSpec, SkillSpec};
+use situate_manager::Registry;
+use situate_robotfile::config::{ClockKind, ExecutorKind, MAX_DEADLINE_MS};
+use situate_robotfile::spec::{RobotSpec, SkillSpec};
 
 use crate::read::Recording;
 use crate::replay::{player_type, Cast};
@@ -95,12 +97,12 @@ pub fn view(rec: &Recording) -> Result<View, String> {
     }
     let skills = wiring.get("skills").and_then(Json::as_array).ok_or_else(|| bad("no `skills` list".into()))?;
     let mut spec = RobotSpec::new(rec.metadata.get("robot").map_or("recording", String::as_str));
-    spec.clock = situate_manager::ClockKind::Simulated;
-    spec.executor = situate_manager::ExecutorKind::Serial;
+    spec.clock = ClockKind::Simulated;
+    spec.executor = ExecutorKind::Serial;
     if let Some(p) = rec.period_s() {
         spec.period_s = p;
     }
-    let no_deadline = Some(situate_manager::config::MAX_DEADLINE_MS);
+    let no_deadline = Some(MAX_DEADLINE_MS);
     spec.budget_ms = no_deadline;
     spec.liveness_ms = no_deadline;
     let mut registry = Registry::new();

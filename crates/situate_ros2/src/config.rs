@@ -21,7 +21,7 @@
 
 use serde::Deserialize;
 use serde_json::{json, Value as Json};
-use situate_manager::yaml::{Node, Pos, Spanned};
+use situate_robotfile::yaml::{Node, Pos, Spanned};
 
 use crate::msgs::MsgType;
 use crate::rmw::valid_ros_name;
@@ -130,7 +130,7 @@ impl Ros2Config {
     /// The highest domain id ROS 2 allows.
     pub const MAX_DOMAIN_ID: u32 = 232;
 
-    /// Reads and checks the robot file's `ros2:` mapping (from `situate_manager`'s YAML reader).
+    /// Reads and checks the robot file's `ros2:` mapping (from `situate_robotfile`'s YAML reader).
     pub fn from_node(node: &Spanned<Node>) -> Result<Ros2Config, Ros2ConfigError> {
         if node.value.as_map().is_none() {
             return Err(Ros2ConfigError {
@@ -303,7 +303,7 @@ ros2:
 ";
 
     fn section(text: &str) -> Spanned<Node> {
-        let root = situate_manager::yaml::parse(text).expect("YAML");
+        let root = situate_robotfile::yaml::parse(text).expect("YAML");
         root.value.get("ros2").expect("a ros2 section").clone()
     }
 

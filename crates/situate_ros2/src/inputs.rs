@@ -26,8 +26,8 @@ use situate_core::{
     ElemType, Io, PortSpec, RecordType, RecordValue, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType,
     Value,
 };
-use situate_manager::config::Section;
-use situate_manager::SkillSpec;
+use situate_robotfile::config::Section;
+use situate_robotfile::spec::SkillSpec;
 use zenoh::Wait;
 
 use crate::config::{Direction, Ros2Config, TopicConfig};

@@ -12,7 +12,7 @@
 //! link's endpoint (or the Zenoh router the link connects to) sees the topics.
 //!
 //! ```no_run
-//! # fn demo(handle: situate_manager::Handle, session: zenoh::Session, section: &situate_manager::yaml::Spanned<situate_manager::yaml::Node>) -> Result<(), Box<dyn std::error::Error>> {
+//! # fn demo(handle: situate_manager::Handle, session: zenoh::Session, section: &situate_robotfile::yaml::Spanned<situate_robotfile::yaml::Node>) -> Result<(), Box<dyn std::error::Error>> {
 //! let config = situate_ros2::Ros2Config::from_node(section)?;
 //! let bridge = situate_ros2::Bridge::start("toybot", handle, session, &config)?;
 //! // ... the robot runs ...

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde_json::{json, Value as Json};
-use situate::manager::yaml::{self, Node, Pos, Spanned};
+use situate_robotfile::yaml::{self, Node, Pos, Spanned};
 use thiserror::Error;
 
 use crate::geom::{in_polygon, Seg, P2};
