@@ -555,3 +555,58 @@ fn a_batch_is_its_requests_in_order_each_answered_as_alone() {
     // Nothing refused whole changed anything.
     assert_eq!(c.request("linkbot", "get_param", &json!({"skill": "runaway", "param": "speed"})).unwrap(), json!(0.4));
 }
+
+#[test]
+fn query_many_reads_every_signal_in_one_moment_or_refuses_the_whole_list() {
+    // On the simulated clock, run as fast as it goes, the devices run in the cycle and write
+    // `sonar.range` and `odom` in every one: one moment's readings carry the same cycle, however
+    // many cycles run between two requests.
+    let r = start(ClockKind::Simulated);
+    let c = client(&r);
+    let ask = |signals: &[&str]| c.request("linkbot", "query_many", &json!({ "signals": signals }));
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let mut checked = 0;
+    while checked < 50 && Instant::now() < deadline {
+        let readings = ask(&["sonar.range", "odom", "sonar.range"]).unwrap();
+        let readings = readings.as_array().expect("a list of readings");
+        assert_eq!(readings.len(), 3, "{readings:?}");
+        if readings.iter().any(|r| r["value"].is_null()) {
+            std::thread::sleep(Duration::from_millis(5));
+            continue; // before the first cycle
+        }
+        // In the request's order, a name asked twice read twice (the same reading).
+        assert_eq!(
+            (readings[0]["signal"].as_str(), readings[1]["signal"].as_str()),
+            (Some("sonar.range"), Some("odom"))
+        );
+        assert_eq!(readings[0], readings[2]);
+        assert_eq!(readings[0]["cycle"], readings[1]["cycle"], "one moment: {readings:?}");
+        checked += 1;
+    }
+    assert_eq!(checked, 50, "the robot ran no cycle within 20 s");
+    // Stopped, each reading is the one `query` gives for it alone.
+    c.request("linkbot", "stop", &json!({})).unwrap();
+    c.request("linkbot", "step", &json!({"cycles": 2})).unwrap();
+    let names = ["odom", "odom.x", "sonar.range", "drive"];
+    let readings = ask(&names).unwrap();
+    for (name, reading) in names.iter().zip(readings.as_array().unwrap()) {
+        assert_eq!(reading, &c.request("linkbot", "query", &json!({ "signal": name })).unwrap(), "{name}");
+    }
+    assert_eq!(readings.as_array().unwrap().len(), names.len());
+    // An unknown signal anywhere in the list refuses the whole request, naming it; nothing partial.
+    let (kind, msg) = remote_err(ask(&["odom", "sonr.range", "odom.z"]).unwrap_err());
+    assert_eq!(
+        (kind.as_str(), msg.as_str()),
+        ("unknown_signal", "unknown signal `sonr.range` — did you mean `sonar.range`?")
+    );
+    // Its bounds, over the wire as in the decoder.
+    let many = vec!["odom"; situate_link::json::MAX_QUERY_SIGNALS + 1];
+    let (kind, msg) = remote_err(ask(&many).unwrap_err());
+    assert_eq!(
+        (kind.as_str(), msg.as_str()),
+        ("bad_request", "`query_many`: argument `signals` has 257 signal names, it takes 1 to 256")
+    );
+    let (kind, msg) = refused_raw(&c, "query_many", r#"{"signals": "odom"}"#);
+    assert_eq!(kind, "bad_request", "{msg}");
+    assert!(msg.contains(r#"(a list of one is written ["odom"])"#), "{msg}");
+}

@@ -10,7 +10,7 @@ pub use replies::{
 };
 pub use requests::{
     decode_args, decode_batch, decode_request, Decoded, BATCH, MAX_BATCH, MAX_BATCH_BYTES, MAX_CONDITION_CHARS,
-    MAX_LIST_ITEMS, MAX_NAME_CHARS, MAX_PAYLOAD_BYTES, MAX_TELEMETRY_HZ, MIN_TELEMETRY_HZ,
+    MAX_LIST_ITEMS, MAX_NAME_CHARS, MAX_PAYLOAD_BYTES, MAX_QUERY_SIGNALS, MAX_TELEMETRY_HZ, MIN_TELEMETRY_HZ,
 };
 pub use values::{opt_value_to_json, param_from_json, param_type_name, value_from_json, value_to_json};
 
@@ -27,6 +27,7 @@ pub const VERBS: &[&str] = &[
     "set_priority",
     "set_verbose",
     "query",
+    "query_many",
     "skill",
     "skills",
     "winners",

@@ -23,6 +23,9 @@ pub const MAX_NAME_CHARS: usize = 256;
 pub const MAX_CONDITION_CHARS: usize = 4096;
 /// The most items of a list argument (`skills`, `report`, `signals`).
 pub const MAX_LIST_ITEMS: usize = 1024;
+/// The most signals one `query_many` reads (its reply holds a reading of each, whole records
+/// among them, so it is held well below [`MAX_LIST_ITEMS`]).
+pub const MAX_QUERY_SIGNALS: usize = 256;
 
 /// The slowest telemetry a client may ask for: a sample every 100 s.
 pub const MIN_TELEMETRY_HZ: f64 = 0.01;
@@ -168,19 +171,30 @@ impl Args<'_> {
     /// each at most [`MAX_CONDITION_CHARS`] long; a refusal names the item
     /// (`any[2]`).
     fn conditions(&mut self, name: &str) -> Result<Vec<String>, WireError> {
-        let what = format!("a list of 1 to {MAX_ANY_CONDITIONS} strings (conditions)");
-        let items = self.list(name, &what, |n| {
-            (n == 0 || n > MAX_ANY_CONDITIONS)
-                .then(|| format!("has {n} conditions, it takes 1 to {MAX_ANY_CONDITIONS}"))
-        })?;
+        self.texts(name, ("condition", "conditions"), MAX_ANY_CONDITIONS, MAX_CONDITION_CHARS)
+    }
+
+    /// `query_many`'s `signals`: 1 to [`MAX_QUERY_SIGNALS`] signal names, each
+    /// at most [`MAX_NAME_CHARS`] long; a refusal names the item (`signals[2]`).
+    fn signal_names(&mut self, name: &str) -> Result<Vec<String>, WireError> {
+        self.texts(name, ("signal name", "signal names"), MAX_QUERY_SIGNALS, MAX_NAME_CHARS)
+    }
+
+    /// 1 to `most` strings, each at most `cap` characters long, called `noun`
+    /// (singular, plural) in messages; a refusal names the item (`any[2]`).
+    fn texts(&mut self, name: &str, noun: (&str, &str), most: usize, cap: usize) -> Result<Vec<String>, WireError> {
+        let (one, many) = noun;
+        let what = format!("a list of 1 to {most} strings ({many})");
+        let items =
+            self.list(name, &what, |n| (n == 0 || n > most).then(|| format!("has {n} {many}, it takes 1 to {most}")))?;
         items
             .into_iter()
             .enumerate()
             .map(|(i, item)| {
                 let at = format!("{name}[{i}]");
                 match item {
-                    Json::String(s) => self.capped(&at, s, MAX_CONDITION_CHARS),
-                    other => Err(self.wrong(&at, "a string (a condition)", &Arg::Json(other))),
+                    Json::String(s) => self.capped(&at, s, cap),
+                    other => Err(self.wrong(&at, &format!("a string (a {one})"), &Arg::Json(other))),
                 }
             })
             .collect()
@@ -448,6 +462,8 @@ pub fn decode_request(verb: &str, payload: &[u8]) -> Result<Decoded, WireError> 
             Decoded::Manager(Request::SetVerbose { skill, verbose })
         }
         "query" => Decoded::Manager(Request::QuerySignal { signal: a.string("signal")? }),
+        // One moment's readings: the manager answers the whole list between two cycles.
+        "query_many" => Decoded::Manager(Request::QuerySignals { signals: a.signal_names("signals")? }),
         "skill" => Decoded::Manager(Request::QuerySkill { skill: a.string("skill")? }),
         "skills" => Decoded::Manager(Request::QuerySkills),
         "winners" => Decoded::Manager(Request::QueryWinners),
@@ -727,6 +743,75 @@ mod tests {
         assert!(decode_request("monitor_add", cond.as_bytes()).is_ok());
         let edge = format!(r#"{{"signal": "{}"}}"#, "x".repeat(MAX_NAME_CHARS));
         assert!(decode_request("query", edge.as_bytes()).is_ok());
+    }
+
+    fn query_many(payload: &str) -> Result<Vec<String>, WireError> {
+        match decode_request("query_many", payload.as_bytes())? {
+            Decoded::Manager(Request::QuerySignals { signals }) => Ok(signals),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn query_many_takes_1_to_256_signal_names_in_order_repeats_too() {
+        assert_eq!(
+            query_many(r#"{"signals": ["odom", "sonar.range[3]", "odom"], "protocol": 1}"#).unwrap(),
+            ["odom", "sonar.range[3]", "odom"]
+        );
+        let most = json!({"signals": vec!["odom"; MAX_QUERY_SIGNALS]}).to_string();
+        assert_eq!(query_many(&most).unwrap().len(), 256);
+        let edge = "x".repeat(MAX_NAME_CHARS);
+        assert_eq!(query_many(&json!({"signals": ["a", edge]}).to_string()).unwrap()[1], edge);
+        // Each refusal is a `bad_request` naming the argument, or the item, and the limit.
+        let long = "x".repeat(MAX_NAME_CHARS + 1);
+        for (payload, message) in [
+            (
+                json!({"signals": vec!["odom"; MAX_QUERY_SIGNALS + 1]}).to_string(),
+                "`query_many`: argument `signals` has 257 signal names, it takes 1 to 256",
+            ),
+            (r#"{"signals": []}"#.into(), "`query_many`: argument `signals` has 0 signal names, it takes 1 to 256"),
+            (
+                json!({"signals": ["odom", long]}).to_string(),
+                "`query_many`: argument `signals[1]` is 257 characters long, at most 256 are taken",
+            ),
+            (
+                r#"{"signals": ["odom", 1]}"#.into(),
+                "`query_many`: argument `signals[1]`: expected a string (a signal name), got 1",
+            ),
+            (
+                r#"{"signals": [["odom"]]}"#.into(),
+                "`query_many`: argument `signals[0]`: expected a string (a signal name), got an array",
+            ),
+            (
+                r#"{"signals": "odom"}"#.into(),
+                r#"`query_many`: argument `signals`: expected a list of 1 to 256 strings (signal names), got the string "odom" (a list of one is written ["odom"])"#,
+            ),
+            (
+                r#"{"signals": {"odom": 1}}"#.into(),
+                "`query_many`: argument `signals`: expected a list of 1 to 256 strings (signal names), got an object",
+            ),
+            (
+                r#"{"signals": null}"#.into(),
+                "`query_many`: argument `signals`: expected a list of 1 to 256 strings (signal names), got null",
+            ),
+            (
+                r#"{"signals": 1e400}"#.into(),
+                "`query_many`: argument `signals`: expected a list of 1 to 256 strings (signal names), got 1e400 (beyond the range of a 64-bit float)",
+            ),
+            (
+                r#"{"signal": "odom"}"#.into(),
+                "`query_many`: missing argument `signals` (a list of 1 to 256 strings (signal names))",
+            ),
+            (r#"{"signals": ["odom"], "signal": "odom"}"#.into(), "`query_many`: unknown argument `signal`"),
+            (r#"{"signals": ["odom"], "cycle": 3}"#.into(), "`query_many`: unknown argument `cycle`"),
+        ] {
+            let e = query_many(&payload).unwrap_err();
+            assert_eq!((e.kind, e.message.as_str()), ("bad_request", message), "{payload}");
+        }
+        // However the names are, the whole request stays within the payload cap.
+        let e = query_many(&json!({"signals": vec!["x".repeat(MAX_NAME_CHARS); MAX_QUERY_SIGNALS]}).to_string())
+            .unwrap_err();
+        assert!(e.message.contains("at most 65536 are taken"), "{}", e.message);
     }
 
     fn monitor_condition(payload: &str) -> Result<MonitorCondition, WireError> {
