@@ -64,6 +64,9 @@ MONITOR_MODES = ("once", "edge", "level")
 #: Most requests one ``batch`` query carries (the manager's cap, docs/protocol.md).
 MAX_BATCH = 64
 
+#: Most signals one ``query_many`` reads (the manager's cap, docs/protocol.md).
+MAX_QUERY_SIGNALS = 256
+
 #: A request waiting to leave: its verb, its encoded arguments, its reply's future.
 _Outgoing = tuple[str, dict[str, Any], "asyncio.Future[Any]"]
 
@@ -405,6 +408,20 @@ class Robot:
         ``signal`` is a leaf (``sonar.range``) or a whole record (``odom``).
         """
         return Reading.from_json(await self.request("query", signal=signal))
+
+    async def query_many(self, *signals: str) -> list[Reading]:
+        """Several signals' values, all at the end of the same cycle, in one request.
+
+        One :class:`Reading` per name, in the order given (a name given twice is read
+        twice), each as :meth:`query` would give it, all taken between the same two cycles.
+        1 to `MAX_QUERY_SIGNALS` (256) names; an unknown one refuses the whole request
+        (:class:`~situate.UnknownSignal`, naming it), too many or none is
+        :class:`~situate.BadRequest`.
+        """
+        result = await self.request("query_many", signals=list(signals))
+        if not (isinstance(result, list) and len(result) == len(signals)):
+            raise BadReply(f"`query_many`: not a list of {len(signals)} readings: {result!r}")
+        return [Reading.from_json(r) for r in result]
 
     async def skill(self, name: str) -> SkillInfo:
         """Everything about one skill: state, parameters, ports, timing, recent prints."""

@@ -354,6 +354,36 @@ def test_signals_are_queried_with_their_type_and_writer(toybot: Manager) -> None
     run(main())
 
 
+def test_several_signals_are_read_at_once_each_as_query_reads_it(toybot: Manager) -> None:
+    async def main() -> None:
+        async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
+            await robot.stop()
+            deadline = time.monotonic() + 60
+            while any(r.value is None for r in await robot.query_many("sonar.range", "odom")):
+                assert time.monotonic() < deadline, "no sonar and odometry readings within a minute"
+                await robot.step(1)
+            names = ["odom", "sonar.range", "odom.x", "odom"]
+            readings = await robot.query_many(*names)
+            # In the order asked, a name asked twice read twice; each what `query` gives alone
+            # (the cycle is stopped: nothing changes in between).
+            assert [r.signal for r in readings] == names
+            assert readings == [await robot.query(n) for n in names]
+            assert readings[0] == readings[3]
+            assert readings[1].type == "f32[24]"
+            assert len(readings[1].value) == 24
+            # An unknown name refuses the whole request, naming it; so do none and too many.
+            with pytest.raises(situate.UnknownSignal, match=r"`sonar\.rnge` — did you mean"):
+                await robot.query_many("odom", "sonar.rnge")
+            with pytest.raises(situate.BadRequest, match="has 0 signal names, it takes 1 to 256"):
+                await robot.query_many()
+            many = ["odom"] * (situate.client.MAX_QUERY_SIGNALS + 1)
+            with pytest.raises(situate.BadRequest, match="has 257 signal names, it takes 1 to 256"):
+                await robot.query_many(*many)
+            assert len(await robot.query_many(*many[1:])) == 256
+
+    run(main())
+
+
 def test_skills_describe_themselves(toybot: Manager) -> None:
     async def main() -> None:
         async with situate.connect("toybot", endpoint=toybot.endpoint) as robot:
