@@ -92,8 +92,10 @@ class Link:
         self.pending: list[asyncio.Future[Any]] = []
         #: Queries sent since the cycle last ran, by signal: their answers stand until it runs.
         self.readings: dict[str, asyncio.Future[Any]] = {}
-        #: Round trips to the robot so far (each `flush`; DELIVER_DEBUG prints them at the end).
+        #: Round trips to the robot so far (each `flush`; DELIVER_DEBUG prints them at the end),
+        #: and the requests they carried.
         self.round_trips = 0
+        self.requests = 0
         #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
         self.carried: dict[str, dict[str, Any]] = {}
         #: Skills that faulted: (cycle, skill, cause), oldest first.
@@ -118,6 +120,7 @@ class Link:
             else:
                 self.t_stale = True
         self.pending.append(self.r.send(verb, **args))
+        self.requests += 1
 
     def prefetch(self, *signals: str) -> None:
         """Sends a query for each of ``signals`` not asked for since the cycle last ran.
@@ -129,6 +132,7 @@ class Link:
             if signal not in self.readings and signal not in self.carried:
                 self.readings[signal] = self.r.send("query", signal=signal)
                 self.pending.append(self.readings[signal])
+                self.requests += 1
 
     async def flush(self) -> list[Any]:
         """Awaits the replies to every pending request; raises the first refusal.
@@ -152,6 +156,7 @@ class Link:
         if self.t_stale:
             stats = self.r.send("stats")
             self.pending.append(stats)
+            self.requests += 1
             await self.flush()
             result = await stats
             self.t = float(result["time_s"])

@@ -162,6 +162,8 @@ class Reactive(CarRider, RouteFollower, Link):
         self.rule_since = 0.0
         #: Rule changes (the drive's winner changing), for the experiment.
         self.switches = 0
+        #: Cycles run and sensed (`sense`; DELIVER_DEBUG prints them with the round trips).
+        self.cycles = 0
         self.rules: list[tuple[str, Callable[[Senses], bool], Callable[[Senses], Action]]] = [
             ("done", self.all_made, lambda s: Action(())),
             ("say", self.at_stop, self.say_message),
@@ -192,6 +194,7 @@ class Reactive(CarRider, RouteFollower, Link):
         for fault in self.take_faults():
             await self.on_fault(fault)
         self.send("step", cycles=1)
+        self.cycles += 1
         self.prefetch(*PERCEPTS)
         await self.flush()
         for attempt in range(3):
@@ -774,6 +777,12 @@ class Reactive(CarRider, RouteFollower, Link):
         await self.use()
         await self.flush()
         await self.say(f"mission complete ({self.switches} rule switches)")
+        if self.debug:
+            n, trips, requests = max(self.cycles, 1), self.round_trips, self.requests
+            print(
+                f"round trips to the robot: {trips} ({trips / n:.2f} a cycle),"
+                f" requests: {requests} ({requests / n:.2f} a cycle), cycles: {self.cycles}"
+            )
 
 
 def beside_barcode(
