@@ -9,7 +9,8 @@ sequenced robot's behaviours, and `reactive.rules.Reactive`, the rule list), in 
   (`Link.send`, `flush`), and every wait has a time-out on the robot's clock (`wait`);
 - skills that fault switched on again (`on_fault`), up to a limit;
 - switching skills (`use`: the active set), parameters (`set`, `restore`), reading values
-  (`value`, `odom`, `sonar`); progress lines (`say`, `phase`).
+  (`value`, `odom`, `sonar`; several at one moment in one request: `snapshot`); progress lines
+  (`say`, `phase`).
 
 What both read the robot with, its odometry pose and its sonar ring, is `geometry`'s.
 """
@@ -38,6 +39,27 @@ EVENT_KINDS = ("monitor_fired", "skill_faulted")
 #: Records read after most waits: each wait's monitor asks for them (``report``),
 #: so their values as of the cycle it fired in come with its event instead of a query each.
 CARRIED = ("odom", "target")
+
+
+class Snapshot:
+    """Signals read in one ``query_many`` request: all at the end of the same cycle.
+
+    `Link.snapshot` sends it; its reply comes with the next `Link.flush`, then `values` reads it.
+    """
+
+    def __init__(self, signals: Sequence[str], reply: asyncio.Future[Any]) -> None:
+        self.signals = tuple(signals)
+        self.reply = reply
+
+    async def values(self) -> dict[str, Any]:
+        """Each signal's value (None if never written), as `Link.value` would read it."""
+        readings = await self.reply
+        if not (isinstance(readings, list) and len(readings) == len(self.signals)):
+            raise situate.BadReply(f"`query_many`: not {len(self.signals)} readings: {readings!r}")
+        return {
+            s: situate.Reading.from_json(r).value
+            for s, r in zip(self.signals, readings, strict=True)
+        }
 
 
 class PhaseFailed(Exception):
@@ -133,6 +155,17 @@ class Link:
                 self.readings[signal] = self.r.send("query", signal=signal)
                 self.pending.append(self.readings[signal])
                 self.requests += 1
+
+    def snapshot(self, *signals: str) -> Snapshot:
+        """Sends one ``query_many`` for ``signals``: all read at the end of the same cycle.
+
+        One request however many signals (`prefetch` sends a ``query`` each); its reply comes
+        with the next `flush`. A signal unknown to the robot refuses them all.
+        """
+        reply = self.r.send("query_many", signals=list(signals))
+        self.pending.append(reply)
+        self.requests += 1
+        return Snapshot(signals, reply)
 
     async def flush(self) -> list[Any]:
         """Awaits the replies to every pending request; raises the first refusal.

@@ -187,19 +187,20 @@ class Reactive(CarRider, RouteFollower, Link):
     # ----- the senses --------------------------------------------------------------------
 
     async def sense(self) -> Senses:
-        """Runs one cycle and reads every percept, in one round trip.
+        """Runs one cycle and reads every percept, in one round trip and one request.
 
-        A skill that faulted since the last look is switched on again (`Link.on_fault`).
+        The percepts are one snapshot (`Link.snapshot`): all of the cycle just run. A skill
+        that faulted since the last look is switched on again (`Link.on_fault`).
         """
         for fault in self.take_faults():
             await self.on_fault(fault)
         self.send("step", cycles=1)
         self.cycles += 1
-        self.prefetch(*PERCEPTS)
+        snapshot = self.snapshot(*PERCEPTS)
         await self.flush()
         for attempt in range(3):
             try:
-                v = {k: situate.Reading.from_json(await self.readings[k]).value for k in PERCEPTS}
+                v = await snapshot.values()
             except situate.Interrupted:  # asked while the cycle restarted: ask again
                 if attempt == 2:
                     raise
@@ -207,8 +208,7 @@ class Reactive(CarRider, RouteFollower, Link):
             if not self.t_stale:
                 break
             # The step was cut short by a stuck body (`flush`): read afresh, and the time.
-            self.readings.clear()
-            self.prefetch(*PERCEPTS)
+            snapshot = self.snapshot(*PERCEPTS)
             await self.now()
         o = v["odom"] or {"x": 0.0, "y": 0.0, "theta": 0.0}
         b = v["barcodes"] or {"ids": [], "bearing": [], "distance": []}
