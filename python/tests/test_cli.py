@@ -122,6 +122,18 @@ def test_query(toybot: Manager) -> None:
     bad = situate("query", "sonar.rnge", *toybot.connect_args)
     assert bad.returncode == 5
     assert "did you mean `sonar.range`" in bad.stderr
+    # Several: one `query_many`, a line each (a list with --json), all of the same cycle.
+    several = situate("query", "odom.x", "sonar.range", *toybot.connect_args)
+    assert several.returncode == 0, several.stderr
+    lines = several.stdout.splitlines()
+    assert [line.split(" = ")[0] for line in lines] == ["odom.x", "sonar.range"]
+    listed = json.loads(situate("query", "odom", "odom.x", "--json", *toybot.connect_args).stdout)
+    assert [r["signal"] for r in listed] == ["odom", "odom.x"]
+    whole, leaf = listed[0]["value"], listed[1]["value"]
+    assert leaf == (whole["x"] if whole is not None else None)  # one moment's
+    bad = situate("query", "odom", "sonar.rnge", *toybot.connect_args)
+    assert bad.returncode == 5
+    assert "unknown signal `sonar.rnge` — did you mean `sonar.range`?" in bad.stderr
 
 
 def test_monitor_prints_its_event(toybot: Manager) -> None:

@@ -107,10 +107,11 @@ pub(crate) enum ClientCommand {
     },
     /// The monitors registered on a running robot.
     Monitors(#[command(flatten)] Remote),
-    /// The current value of a signal (`sonar.range`, or a whole record such as `odom`).
+    /// The current value of a signal (`sonar.range`, or a whole record such as `odom`); of
+    /// several, all at the end of the same cycle (`query odom sonar.range`, one `query_many`).
     Query {
-        #[arg(add = ArgValueCandidates::new(complete::signals))]
-        signal: String,
+        #[arg(required = true, add = ArgValueCandidates::new(complete::signals))]
+        signals: Vec<String>,
         #[command(flatten)]
         remote: Remote,
     },
@@ -319,9 +320,8 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
                 Ok(())
             })
         }
-        ClientCommand::Query { signal, remote } => client_verb(&remote, |c, robot| {
-            let r = c.request(robot, "query", &json!({"signal": signal}))?;
-            out.result(&r, || {
+        ClientCommand::Query { signals, remote } => client_verb(&remote, |c, robot| {
+            let line = |r: &Json| {
                 format!(
                     "{} = {} ({}, cycle {}, by {})",
                     r["signal"].as_str().unwrap_or(""),
@@ -330,7 +330,16 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
                     r["cycle"],
                     r["writer"]
                 )
-            });
+            };
+            // One signal: `query` (its reading, as ever); several: one `query_many` (a list).
+            if let [signal] = signals.as_slice() {
+                let r = c.request(robot, "query", &json!({ "signal": signal }))?;
+                out.result(&r, || line(&r));
+            } else {
+                let r = c.request(robot, "query_many", &json!({ "signals": signals }))?;
+                let readings = r.as_array().map(Vec::as_slice).unwrap_or_default();
+                out.result(&r, || readings.iter().map(line).collect::<Vec<_>>().join("\n"));
+            }
             Ok(())
         }),
         ClientCommand::Monitor { condition, any, mode, count, pause, remote } => client_verb(&remote, |c, robot| {
