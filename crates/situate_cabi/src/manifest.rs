@@ -15,6 +15,7 @@
 use std::fmt;
 
 use situate_core::{SkillDecl, SkillKind};
+use situate_robotfile::diagnostic::Diagnostic;
 use situate_robotfile::yaml::{self, Node, Pos, Spanned};
 
 /// One problem in a manifest, at a 1-based line and column of its text.
@@ -43,13 +44,21 @@ impl fmt::Display for ManifestError {
     }
 }
 
+/// A manifest's problem as the front end reports it (a diagnostic at its
+/// place).
+impl From<Diagnostic> for ManifestProblem {
+    fn from(d: Diagnostic) -> ManifestProblem {
+        ManifestProblem { line: d.line(), col: d.col(), message: d.message }
+    }
+}
+
 fn problem(pos: Pos, message: impl Into<String>) -> ManifestError {
     ManifestError { problems: vec![ManifestProblem { line: pos.line, col: pos.col, message: message.into() }] }
 }
 
 /// Reads a manifest's text into a declaration.
 pub fn parse_manifest(text: &str) -> Result<SkillDecl, ManifestError> {
-    let tree = yaml::parse(text).map_err(|e| problem(e.pos, e.message))?;
+    let tree = yaml::parse(text).map_err(|e| ManifestError { problems: vec![Diagnostic::from(e).into()] })?;
     let Some(entries) = tree.value.as_map() else {
         return Err(problem(tree.pos, format!("a skill manifest is a mapping, got {}", tree.value.describe())));
     };
@@ -86,12 +95,8 @@ pub fn parse_manifest(text: &str) -> Result<SkillDecl, ManifestError> {
         return Err(problem(tree.pos, "the manifest has no `name` (the skill type's name, such as c.runaway)"));
     };
     let node = Spanned::new(Node::Map(rest), tree.pos);
-    situate_robotfile::manifest::decl_from_node(&node, &name, kind).map_err(|errors| ManifestError {
-        problems: errors
-            .into_iter()
-            .map(|(pos, message)| ManifestProblem { line: pos.line, col: pos.col, message })
-            .collect(),
-    })
+    situate_robotfile::manifest::decl_from_node(&node, &name, kind)
+        .map_err(|errors| ManifestError { problems: errors.into_iter().map(ManifestProblem::from).collect() })
 }
 
 fn is_type_name(s: &str) -> bool {

@@ -7,11 +7,13 @@
 //! - [`include`]: `include:` and `${ENV}` substitution;
 //! - [`manifest`]: a skill's declaration written as data;
 //! - [`spec`]: a robot as plain data, from a file or from code;
+//! - [`diagnostic`]: a message at a position, the one type of every problem
+//!   found (a robot file's [`error::ConfigError`] is one);
 //! - [`limits`], [`names`] and [`error`]: what a file may hold, what a name
 //!   may be, and the error of a robot file.
 //!
 //! The modules form layers, each using only those above it: `yaml`,
-//! `limits` and `names`; `error`; `include` and `manifest`; `config`;
+//! `limits` and `names`; `diagnostic` and `error`; `include` and `manifest`; `config`;
 //! `spec`.
 //!
 //! Whether skill types, parameters and signals exist and fit together is
@@ -19,6 +21,7 @@
 //! modules under the paths they had there.
 
 pub mod config;
+pub mod diagnostic;
 pub mod error;
 pub mod include;
 pub mod limits;

@@ -15,6 +15,7 @@
 
 use situate_core::{suggestion, ParamSpec, ParamType, PortSpec, SignalType, SkillDecl, SkillKind, Value};
 
+use crate::diagnostic::Diagnostic;
 use crate::limits::MAX_NAME_CHARS;
 pub use crate::limits::{MAX_PORTS, MAX_TYPE_CHARS};
 use crate::names::{is_identifier, is_signal_name};
@@ -25,9 +26,15 @@ const PARAM_KEYS: &[&str] = &["type", "default", "min", "max", "unit", "doc"];
 /// A port's keys in its long form (outputs: the first three).
 const PORT_KEYS: &[&str] = &["type", "signal", "doc", "optional"];
 
-/// Reads a manifest into a declaration of `type_name` and `kind`. Errors
-/// carry the position of the offending key or value.
-pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) -> Result<SkillDecl, Vec<(Pos, String)>> {
+/// Reads a manifest into a declaration of `type_name` and `kind`. Its
+/// problems are diagnostics at the offending key or value, without a file
+/// (the caller knows it: [`Diagnostic::in_file`]).
+pub fn decl_from_node(node: &Spanned<Node>, type_name: &str, kind: SkillKind) -> Result<SkillDecl, Vec<Diagnostic>> {
+    decl_from_map(node, type_name, kind)
+        .map_err(|problems| problems.into_iter().map(|(pos, message)| Diagnostic::at(pos, message)).collect())
+}
+
+fn decl_from_map(node: &Spanned<Node>, type_name: &str, kind: SkillKind) -> Result<SkillDecl, Vec<(Pos, String)>> {
     let mut errors = Vec::new();
     let mut decl = SkillDecl::new(type_name, kind);
     let Some(entries) = node.value.as_map() else {
@@ -306,9 +313,11 @@ fn param_spec(name: &str, node: &Spanned<Node>) -> Result<ParamSpec, (Pos, Strin
 mod tests {
     use super::*;
 
+    /// The declaration, or each problem's place and message.
     fn manifest(src: &str) -> Result<SkillDecl, Vec<(Pos, String)>> {
         let tree = crate::yaml::parse(src).unwrap();
         decl_from_node(&tree, "remote.t", SkillKind::Async)
+            .map_err(|problems| problems.into_iter().map(|d| (d.pos.expect("a place"), d.message)).collect())
     }
 
     #[test]

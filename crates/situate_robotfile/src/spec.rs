@@ -10,43 +10,8 @@ use std::fmt;
 use situate_core::Value;
 
 use crate::config::{ClockKind, ExecutorKind, RobotFile, Section};
+pub use crate::diagnostic::{Diagnostic, Severity};
 use crate::yaml::Pos;
-
-/// A problem found while checking or building a robot.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Diagnostic {
-    pub severity: Severity,
-    pub file: Option<String>,
-    pub pos: Option<Pos>,
-    pub message: String,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Severity {
-    Error,
-    Warning,
-}
-
-impl Diagnostic {
-    pub fn is_error(&self) -> bool {
-        self.severity == Severity::Error
-    }
-}
-
-impl fmt::Display for Diagnostic {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let level = match self.severity {
-            Severity::Error => "error",
-            Severity::Warning => "warning",
-        };
-        match (&self.file, self.pos) {
-            (Some(file), Some(p)) => write!(f, "{file}:{}:{}: {level}: {}", p.line, p.col, self.message),
-            (Some(file), None) => write!(f, "{file}: {level}: {}", self.message),
-            (None, Some(p)) => write!(f, "{}:{}: {level}: {}", p.line, p.col, self.message),
-            (None, None) => write!(f, "{level}: {}", self.message),
-        }
-    }
-}
 
 /// All diagnostics of a failed build, errors first.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

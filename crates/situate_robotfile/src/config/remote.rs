@@ -23,9 +23,10 @@ impl RobotFile {
             }
             match crate::manifest::decl_from_node(manifest, &e.type_name.value, situate_core::SkillKind::Async) {
                 Ok(decl) => out.push((skill.clone(), decl)),
-                Err(errs) => {
-                    errors.extend(errs.into_iter().map(|(pos, msg)| self.error(pos, format!("skill `{skill}`: {msg}"))))
-                }
+                Err(errs) => errors.extend(
+                    errs.into_iter()
+                        .map(|d| self.error(d.pos.unwrap_or(manifest.pos), format!("skill `{skill}`: {}", d.message))),
+                ),
             }
         }
         if errors.is_empty() {
@@ -75,7 +76,7 @@ impl RobotFile {
             }
         };
         crate::manifest::decl_from_node(&node, type_name, situate_core::SkillKind::Async)
-            .map_err(|errs| errs.into_iter().map(|(pos, msg)| in_manifest(pos, msg)).collect())
+            .map_err(|errs| errs.into_iter().map(|d| in_manifest(d.pos.unwrap_or(tree.pos), d.message)).collect())
     }
 }
 

@@ -12,6 +12,9 @@ use super::lex::{check_control_characters, check_layout};
 use super::{Node, Pos, Spanned, MAX_DEPTH};
 
 /// A YAML error: the file is not YAML, or uses YAML a robot file may not.
+/// It reads `LINE:COL: message` (the reader does not know the file); as a
+/// [`Diagnostic`](crate::diagnostic::Diagnostic) (`Diagnostic::from`, then
+/// `in_file`) it is a robot file's error like any other.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParseError {
     pub pos: Pos,
