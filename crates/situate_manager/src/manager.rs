@@ -205,7 +205,16 @@ pub struct Manager {
     pool: Option<Arc<rayon::ThreadPool>>,
     slots: Vec<Slot>,
     insts: Vec<Inst>,
-    execs: Vec<Exec>,
+    /// Each boxed: a spawned manager takes a body out while it runs (see
+    /// `spawned`), and a box moves as a pointer (moved by value, an `Exec`
+    /// cost some 130 instructions per body run: copied out and back, an
+    /// empty one made and dropped).
+    #[allow(clippy::vec_box)]
+    execs: Vec<Box<Exec>>,
+    /// Empty bodies, put in the place of those taken out (`take_exec`):
+    /// room for all of them from the start, so taking allocates nothing.
+    #[allow(clippy::vec_box)]
+    spare_execs: Vec<Box<Exec>>,
     /// The compiled schedule of the active skills.
     schedule: Plan,
     schedule_dirty: bool,
@@ -317,7 +326,7 @@ impl Manager {
             }
             let worker =
                 (def.kind.is_threaded() && !lockstep).then(|| Worker::new(def.inputs.len(), def.outputs.len()));
-            execs.push(exec);
+            execs.push(Box::new(exec));
             insts.push(Inst {
                 active: false,
                 faulted: None,
@@ -361,6 +370,11 @@ impl Manager {
             period_s: spec.period_s,
             pool,
             insts,
+            spare_execs: {
+                let mut spares = Vec::with_capacity(execs.len());
+                spares.push(Box::default());
+                spares
+            },
             execs,
             schedule: Plan::default(),
             schedule_dirty: true,
@@ -516,7 +530,7 @@ impl Manager {
             skill.set_param(p, v);
         }
         let typed_outputs = outputs_typed(skill.as_ref(), def);
-        self.execs[i] = Exec::new(skill, def.inputs.len(), def.outputs.len());
+        *self.execs[i] = Exec::new(skill, def.inputs.len(), def.outputs.len());
         let inst = &mut self.insts[i];
         inst.typed_outputs = typed_outputs;
         if inst.worker.is_some() {

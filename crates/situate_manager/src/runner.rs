@@ -153,8 +153,16 @@ impl Exec {
     #[inline(always)]
     pub fn drop_copies(&mut self) {
         for input in &mut self.inputs {
-            if input.is_some() && !matches!(input, Some(Value::Record(_))) {
-                *input = None;
+            // Each kind's drop by name: a reference count let go of here,
+            // not through the value's drop glue, called out of line.
+            match input.take() {
+                None | Some(Value::Bool(_) | Value::I64(_) | Value::F64(_)) => {}
+                Some(Value::Str(a)) => drop(a),
+                Some(Value::Bytes(a)) => drop(a),
+                Some(Value::F32s(a)) => drop(a),
+                Some(Value::F64s(a)) => drop(a),
+                Some(Value::I64s(a)) => drop(a),
+                record @ Some(Value::Record(_)) => *input = record,
             }
         }
     }

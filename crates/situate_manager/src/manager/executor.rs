@@ -36,7 +36,8 @@ impl Bodies for InPlace<'_> {
         let m = &mut *self.0;
         let (cycle, time_s) = (m.cycle, m.time_s);
         let Some(pool) = &m.pool else { return Some(()) };
-        let jobs: Vec<Mutex<&mut Exec>> = pick_mut(&mut m.execs, batch).into_iter().map(Mutex::new).collect();
+        let jobs: Vec<Mutex<&mut Exec>> =
+            pick_mut(&mut m.execs, batch).into_iter().map(|e| Mutex::new(&mut **e)).collect();
         run_parallel(pool, &jobs, |job| {
             let mut exec = job.lock().unwrap_or_else(|p| p.into_inner());
             exec.run(cycle, time_s, Stamp::now(true), None);

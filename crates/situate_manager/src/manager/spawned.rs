@@ -78,6 +78,7 @@ impl Core {
         self.deferred.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    #[inline(always)]
     fn lock(&self) -> Guard<'_> {
         self.manager.lock().unwrap_or_else(|p| p.into_inner())
     }
@@ -146,6 +147,26 @@ impl Drop for PanicGuard<'_> {
             }
             self.0.stop.store(true, Ordering::Release);
             drop(self.0.done.lock().unwrap_or_else(|p| p.into_inner()).take());
+        }
+    }
+}
+
+impl Manager {
+    /// Takes body `i` out to run it with the lock let go, an empty one in
+    /// its place (from the spares: nothing allocated unless a body left
+    /// behind took its spare with it).
+    #[inline(always)]
+    fn take_exec(&mut self, i: usize) -> Box<Exec> {
+        let empty = self.spare_execs.pop().unwrap_or_default();
+        std::mem::replace(&mut self.execs[i], empty)
+    }
+
+    /// Puts body `i` back after it ran, its empty stand-in a spare again.
+    #[inline(always)]
+    fn put_exec(&mut self, i: usize, exec: Box<Exec>) {
+        let empty = std::mem::replace(&mut self.execs[i], exec);
+        if self.spare_execs.len() < self.spare_execs.capacity() {
+            self.spare_execs.push(empty);
         }
     }
 }
@@ -526,13 +547,13 @@ impl Bodies for OnThreads<'_> {
     fn run(&mut self, i: usize, _in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
         let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
-        let mut exec = std::mem::take(&mut m.execs[i]);
+        let mut exec = m.take_exec(i);
         self.g = None;
         let end = exec.run(cycle, time_s, start, Some(&self.core.clocks[i]));
         // Its copies of the inputs let go of at once, outside the lock.
         exec.drop_copies();
         self.g = Some(self.core.lock());
-        self.manager()?.execs[i] = exec;
+        self.manager()?.put_exec(i, exec);
         Some(end)
     }
 
@@ -544,15 +565,15 @@ impl Bodies for OnThreads<'_> {
         let generation = self.generation;
         let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
-        let jobs: Vec<(usize, Mutex<Exec>)> =
-            batch.iter().map(|&i| (i, Mutex::new(std::mem::take(&mut m.execs[i])))).collect();
+        let jobs: Vec<(usize, Mutex<Option<Box<Exec>>>)> =
+            batch.iter().map(|&i| (i, Mutex::new(Some(m.take_exec(i))))).collect();
         self.g = None;
         run_parallel(pool, &jobs, |(i, job)| {
-            let mut exec = std::mem::take(&mut *job.lock().unwrap_or_else(|p| p.into_inner()));
+            let Some(mut exec) = job.lock().unwrap_or_else(|p| p.into_inner()).take() else { return };
             exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[*i]));
             let mut g = core.lock();
             if let Some(m) = current(&mut g, generation) {
-                m.execs[*i] = exec;
+                m.put_exec(*i, exec);
             }
         });
         self.g = Some(core.lock());
