@@ -135,6 +135,18 @@ class LocalRobot:
         """A signal's value at the end of the last cycle."""
         return Reading.from_json(self.request("query", signal=signal))
 
+    def query_many(self, *signals: str) -> list[Reading]:
+        """Several signals' values at the end of the last cycle, one per name, in order.
+
+        As :meth:`situate.Robot.query_many`: 1 to 256 names; an unknown one refuses them all.
+        """
+        result = self.request("query_many", signals=list(signals))
+        if not (isinstance(result, list) and len(result) == len(signals)):
+            raise BadReply(
+                f"`query_many`: not a list of {len(signals)} readings: {result!r}", kind="bad_reply"
+            )
+        return [Reading.from_json(r) for r in result]
+
     def skill(self, name: str) -> SkillInfo:
         """Everything about one skill: state, parameters, ports, timing, recent prints."""
         return SkillInfo.from_json(self.request("skill", skill=name))

@@ -43,6 +43,17 @@ def test_a_standard_skill_drives_the_simulated_base_in_process() -> None:
     assert moved > 0.2, (before, after)
 
 
+def test_several_signals_are_read_in_process_as_over_the_link() -> None:
+    robot = situate.LocalRobot(DEMO_ROBOT, clock="simulated")
+    robot.step(5)
+    names = ["odom", "sonar.range", "odom.x", "odom"]
+    readings = robot.query_many(*names)
+    assert readings == [robot.query(n) for n in names]
+    assert readings[0].value is not None
+    with pytest.raises(situate.UnknownSignal, match=r"`sonar\.rnge` — did you mean"):
+        robot.query_many("odom", "sonar.rnge")
+
+
 def test_c_and_cpp_libraries_run_in_process_beside_rust_and_python() -> None:
     for lang in ("c", "cpp"):
         build_library(lang)
