@@ -44,16 +44,24 @@ impl Context {
         self.prints.push(line.into());
     }
 
+    /// The cycle and time of the run about to start (the manager's; not for
+    /// skill authors).
+    #[doc(hidden)]
     pub fn set(&mut self, cycle: u64, time_s: f64) {
         self.cycle = cycle;
         self.time_s = time_s;
     }
 
-    /// Takes the prints made since the last call.
+    /// Takes the prints made since the last call (the manager's; not for
+    /// skill authors).
+    #[doc(hidden)]
     pub fn take_prints(&mut self) -> Vec<String> {
         std::mem::take(&mut self.prints)
     }
 
+    /// Whether a print was made since the prints were last taken (the
+    /// manager's; not for skill authors).
+    #[doc(hidden)]
     pub fn has_prints(&self) -> bool {
         !self.prints.is_empty()
     }
@@ -128,6 +136,10 @@ pub trait Skill: Send + 'static {
     /// its previous one replaced in its slot, and a fixed-size array is
     /// written into that buffer. `#[derive(Skill)]` says yes; by default
     /// outputs are `None` on entry.
+    ///
+    /// A performance hook between the derive and the manager, hidden from
+    /// the author's API (a skill written by hand keeps the default).
+    #[doc(hidden)]
     fn fills_outputs(&self) -> bool {
         false
     }
@@ -142,6 +154,10 @@ pub trait Skill: Send + 'static {
     /// skill. `#[derive(Skill)]` says yes for an output field of a built-in
     /// signal type ([`SignalValue::ALWAYS_CONFORMS`](crate::SignalValue::ALWAYS_CONFORMS))
     /// whose type feeds `ty` ([`SignalType::feeds`]).
+    ///
+    /// A performance hook between the derive and the manager, hidden from
+    /// the author's API, as [`Skill::fills_outputs`] is.
+    #[doc(hidden)]
     fn output_typed(&self, port: usize, ty: &SignalType) -> bool {
         let _ = (port, ty);
         false
