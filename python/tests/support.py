@@ -49,14 +49,7 @@ def run(coro: Awaitable[T]) -> T:
 
 
 def situate_program() -> str:
-    """The `situate` program: $SITUATE_BIN, else the console script next to this interpreter.
-
-    $SITUATE_BIN (a program cargo built, as test_demo.py takes it) tests a change to the program
-    without installing the package again.
-    """
-    given = os.environ.get("SITUATE_BIN")
-    if given:
-        return given
+    """The `situate` console script installed next to this interpreter."""
     here = Path(sys.executable).parent / "situate"
     if here.exists():
         return str(here)
