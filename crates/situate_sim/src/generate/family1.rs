@@ -7,6 +7,8 @@
 //! the office barcode on purpose. The default, `--family 2`
 //! ([`super::build`]), draws from the whole space `docs/maps.md` allows.
 
+use super::corridor::{clutter, door_margins, features, hdoor, junction_kinds, junction_list, vdoor, Feature, Run};
+use super::route::{flip_word, junction_step, office_steps, turn};
 use super::*;
 
 /// What a family-1 building drew (no random number is drawn here).
