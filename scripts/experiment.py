@@ -51,6 +51,7 @@ KS = (1, 2, 4, 8)
 DESIGN_SOURCES: dict[str, tuple[str, ...]] = {
     "sequenced": (
         "demo/courier/sequenced/delivery.py",
+        "demo/courier/sequenced/lobby.py",
         "demo/courier/sequenced/behaviours.py",
         "demo/courier/sequenced/routes.py",
     ),

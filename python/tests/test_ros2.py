@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -24,7 +25,7 @@ import pytest
 import zenoh
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-from support import REPO, STARTUP_S, free_port, zenoh_client
+from support import PORT_TRIES, REPO, STARTUP_S, free_port, zenoh_client
 from zenoh.ext import Int64, z_deserialize, z_serialize
 
 TYPES = {
@@ -74,26 +75,45 @@ def build_example() -> Path:
 
 @pytest.fixture(scope="module")
 def toybot() -> Iterator[str]:
-    """The toy robot with its bridge, on a free port; yields its endpoint."""
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    """The toy robot with its bridge, on a free port; yields its endpoint.
+
+    A port `free_port` chose can be taken before the robot listens on it (another test picked
+    it too): the robot then exits saying "Address already in use", and another port is tried,
+    as `start_manager` does (`PORT_TRIES`).
+    """
     env = dict(os.environ)
     env.setdefault("RUST_LOG", "warn,zenoh=error")
-    proc = subprocess.Popen(
-        [str(build_example()), "--listen", endpoint],
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    assert proc.stdout is not None
-    ready: list[str] = []
-    reader = threading.Thread(
-        target=lambda: ready.append(proc.stdout.readline() if proc.stdout else "")
-    )
-    reader.start()
-    reader.join(STARTUP_S)
-    assert ready, "the robot did not start"
-    assert ready[0].startswith("ready "), f"the robot did not start: {ready}"
+    for _ in range(PORT_TRIES):
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        # Its log in a file, never a pipe nobody reads while it runs.
+        with tempfile.TemporaryFile(mode="w+") as log:
+            proc = subprocess.Popen(
+                [str(build_example()), "--listen", endpoint],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=log,
+                text=True,
+                env=env,
+            )
+            assert proc.stdout is not None
+            ready: list[str] = []
+            reader = threading.Thread(
+                target=lambda p=proc, r=ready: r.append(p.stdout.readline() if p.stdout else "")
+            )
+            reader.start()
+            reader.join(STARTUP_S)
+            if ready and ready[0].startswith("ready "):
+                break
+            if proc.poll() is None:
+                proc.kill()
+            proc.wait(STARTUP_S)
+            log.seek(0)
+            err = log.read()
+            if "Address already in use" in err:
+                continue
+            pytest.fail(f"the robot did not start: {ready}\n{err}")
+    else:
+        pytest.fail(f"the robot found no free port in {PORT_TRIES} tries")
     yield endpoint
     assert proc.stdin is not None
     proc.stdin.close()
