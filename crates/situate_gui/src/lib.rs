@@ -64,9 +64,6 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use axum::extract::ws::Utf8Bytes;
-use axum::extract::State;
-use axum::http::{header, StatusCode, Uri};
-use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
 use crossbeam_channel::Sender;
@@ -74,82 +71,36 @@ use serde_json::{json, Value as Json};
 use situate_manager::{ControlError, Handle, Reply, Request};
 use tokio::sync::{broadcast, watch};
 
+mod activity;
+mod config;
 pub mod formula;
 pub mod foxglove;
 pub mod history;
 mod hosts;
+mod http;
 pub mod metrics;
 mod sample;
 mod serve;
 mod session;
+#[cfg(test)]
+pub(crate) mod tests;
 
+use activity::Activity;
+pub use config::{
+    GuiConfig, GuiError, ReplayInfo, DEFAULT_HEADER_TIMEOUT, DEFAULT_MAX_CONNECTIONS, DEFAULT_WS_IDLE_TIMEOUT,
+};
 pub use history::{History, HistoryError, HistoryTap, Layout};
-
-mod assets {
-    include!(concat!(env!("OUT_DIR"), "/assets.rs"));
-}
+pub use http::{has_web_app, PLACEHOLDER};
+use http::{metrics_page, static_file, world};
 
 /// How long a browser's request may wait for the manager.
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 /// The largest message a browser may send.
 const MAX_MESSAGE: usize = 64 * 1024;
-/// The default cap on connections served at once ([`GuiConfig::max_connections`]).
-pub const DEFAULT_MAX_CONNECTIONS: usize = 256;
-/// The default time a connection has to send a whole request head ([`GuiConfig::header_timeout`]).
-pub const DEFAULT_HEADER_TIMEOUT: Duration = Duration::from_secs(10);
-/// The default time a WebSocket may stay silent, pings unanswered ([`GuiConfig::ws_idle_timeout`]).
-pub const DEFAULT_WS_IDLE_TIMEOUT: Duration = Duration::from_secs(60);
+
 /// The signals the world view draws, when they exist (`floor`: the robot's floor when its
 /// `truth.pose` has none, as a ROS 2 ground-truth Odometry mapped onto it).
 const WORLD_SIGNALS: [&str; 5] = ["truth.pose", "floor", "sonar.range", "truth.cars", "truth.people"];
-
-/// Where and how the GUI serves.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GuiConfig {
-    /// The address to listen on (port 0: pick a free one). Bind only where told: the `situate`
-    /// program's default is 127.0.0.1.
-    pub listen: SocketAddr,
-    /// The simulator's map (floors, walls, doors, barcodes, cars) for the world view, if any.
-    pub world: Option<Json>,
-    /// Telemetry samples per second while a browser is connected (default 10).
-    pub sample_hz: f64,
-    /// The cycles the timeline keeps (default [`history::DEFAULT_FRAMES`]), when the server is
-    /// given a [`HistoryTap`].
-    pub history_frames: usize,
-    /// The memory the timeline may take (default [`history::DEFAULT_BYTES`]): when the values
-    /// are large, it keeps fewer cycles.
-    pub history_bytes: usize,
-    /// Host names the server answers to besides `localhost`, loopback addresses and the bound
-    /// address (e.g. `robot.lan`, without a port): a request naming any other host in `Host` is
-    /// refused with `403`, so a web page cannot reach the robot by rebinding its own name.
-    pub allowed_hosts: Vec<String>,
-    /// The connections served at once, WebSockets included (default
-    /// [`DEFAULT_MAX_CONNECTIONS`]); past it a new connection is answered `503` and closed.
-    pub max_connections: usize,
-    /// How long a connection may take to send a whole request head, and may stay idle between
-    /// requests, before it is closed (default [`DEFAULT_HEADER_TIMEOUT`]).
-    pub header_timeout: Duration,
-    /// How long a WebSocket may send nothing and answer no ping before it is closed (default
-    /// [`DEFAULT_WS_IDLE_TIMEOUT`]; pinged every third of it). Also the longest a send to it may
-    /// wait for the client to read.
-    pub ws_idle_timeout: Duration,
-    /// Set when the robot served is a replay of a recording (`situate replay --gui`): the pages
-    /// say so, the requests that would change the robot are refused (it ran the recording to its
-    /// end; there is nothing live to change), and the timeline's marks are the recording's events.
-    pub replay: Option<ReplayInfo>,
-}
-
-/// What a replay's GUI says of the recording it replays ([`GuiConfig::replay`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReplayInfo {
-    /// The recording, as the user named it.
-    pub file: String,
-    /// One line on how the replay compared (`identical: every cycle matches the recording`).
-    pub summary: String,
-    /// The recording's events, in order, each the link's JSON of it (`docs/protocol.md`,
-    /// "Events"): the timeline's marks and the page's event log.
-    pub events: Vec<Json>,
-}
 
 /// The verbs a replay's GUI refuses: each would change the robot, and a replay's robot has run
 /// its recording to the end.
@@ -157,41 +108,6 @@ const CHANGING_VERBS: [&str; 9] =
     ["activate", "deactivate", "set_param", "set_priority", "set_verbose", "monitor_add", "run", "stop", "step"];
 /// The most recorded events one `replay_events` reply carries (the newest).
 const REPLAY_EVENTS: usize = 2000;
-
-impl Default for GuiConfig {
-    fn default() -> Self {
-        GuiConfig {
-            listen: SocketAddr::from(([127, 0, 0, 1], 0)),
-            world: None,
-            sample_hz: 10.0,
-            history_frames: history::DEFAULT_FRAMES,
-            history_bytes: history::DEFAULT_BYTES,
-            allowed_hosts: Vec::new(),
-            max_connections: DEFAULT_MAX_CONNECTIONS,
-            header_timeout: DEFAULT_HEADER_TIMEOUT,
-            ws_idle_timeout: DEFAULT_WS_IDLE_TIMEOUT,
-            replay: None,
-        }
-    }
-}
-
-/// Why the GUI could not start.
-#[derive(Debug, thiserror::Error)]
-pub enum GuiError {
-    /// The listening socket could not be opened.
-    #[error("the GUI cannot listen on {addr}: {source} (is the port in use? choose another, or 0 for a free one)")]
-    Bind {
-        addr: SocketAddr,
-        #[source]
-        source: std::io::Error,
-    },
-    /// A configuration value is out of range.
-    #[error("GUI configuration: {0}")]
-    Config(String),
-    /// The server's threads or runtime could not start.
-    #[error("could not start the GUI server: {0}")]
-    Start(#[source] std::io::Error),
-}
 
 /// A running GUI server. Dropping it stops it, like [`GuiServer::stop`].
 pub struct GuiServer {
@@ -280,59 +196,6 @@ impl RunInfo {
         h.write_u128(started.as_nanos());
         h.write_u32(std::process::id());
         RunInfo { id: format!("{:012x}", h.finish() & 0xffff_ffff_ffff), started_unix_s: started.as_secs_f64() }
-    }
-}
-
-/// When each skill's activation last changed, as far as this server has seen.
-#[derive(Default)]
-struct Activity {
-    /// The manager's cycle when the server started watching its events.
-    observed_from: u64,
-    /// Per skill, the cycle of its last activation change (activation_applied, skill_faulted).
-    changed: HashMap<String, u64>,
-    /// Per skill, the `skill_faulted` events seen (for `/metrics`).
-    faults: HashMap<String, u64>,
-}
-
-impl Activity {
-    /// An activation change seen by the history's tap (which may see it after, or, from before
-    /// the server started, instead of the events thread): the latest cycle wins, and faults are
-    /// counted by the events thread only.
-    fn note_change(&mut self, event: &situate_manager::Event) {
-        use situate_manager::Event;
-        let mut at = |skill: &String, cycle: u64| {
-            let c = self.changed.entry(skill.clone()).or_insert(cycle);
-            *c = (*c).max(cycle);
-        };
-        match event {
-            Event::ActivationApplied { activated, deactivated, cycle } => {
-                for s in activated.iter().chain(deactivated) {
-                    at(s, *cycle);
-                }
-            }
-            Event::SkillFaulted { skill, cycle, .. } => at(skill, *cycle),
-            _ => {}
-        }
-    }
-
-    fn note(&mut self, event: &situate_manager::Event) {
-        use situate_manager::Event;
-        match event {
-            Event::ActivationApplied { activated, deactivated, cycle } => {
-                for s in activated.iter().chain(deactivated) {
-                    self.changed.insert(s.clone(), *cycle);
-                }
-            }
-            Event::SkillFaulted { skill, cycle, .. } => {
-                self.changed.insert(skill.clone(), *cycle);
-                *self.faults.entry(skill.clone()).or_default() += 1;
-            }
-            _ => {}
-        }
-    }
-
-    fn to_json(&self) -> Json {
-        json!({"observed_from": self.observed_from, "changed": self.changed})
     }
 }
 
@@ -522,339 +385,4 @@ pub fn raise_open_files_limit() -> std::io::Result<u64> {
     // rlim_t is narrower than u64 on some 32-bit targets.
     #[allow(clippy::useless_conversion)]
     Ok(u64::from(limit.rlim_cur))
-}
-
-// ----- HTTP -----------------------------------------------------------------------------------
-
-/// `GET /metrics`: asks the manager off the server's thread (a scrape may wait for a cycle).
-async fn metrics_page(State(shared): State<Arc<Shared>>) -> Response {
-    match tokio::task::spawn_blocking(move || scrape(&shared)).await {
-        Ok(Ok(text)) => ([(header::CONTENT_TYPE, metrics::CONTENT_TYPE)], text).into_response(),
-        Ok(Err(e)) => {
-            (StatusCode::SERVICE_UNAVAILABLE, format!("the skill manager did not answer: {e}\n")).into_response()
-        }
-        Err(_) => (StatusCode::INTERNAL_SERVER_ERROR, "the scrape failed\n").into_response(),
-    }
-}
-
-fn scrape(shared: &Shared) -> Result<String, ControlError> {
-    let stats = match ask(&shared.handle, Request::QueryStats)? {
-        Reply::Stats(s) => s,
-        other => return Err(ControlError::Invalid(format!("unexpected reply {other:?}"))),
-    };
-    let skills = match ask(&shared.handle, Request::QuerySkills)? {
-        Reply::Skills(s) => s,
-        other => return Err(ControlError::Invalid(format!("unexpected reply {other:?}"))),
-    };
-    let faults = shared.activity.lock().unwrap_or_else(|p| p.into_inner()).faults.clone();
-    Ok(metrics::render(&stats, &skills, &faults))
-}
-
-async fn world(State(shared): State<Arc<Shared>>) -> Response {
-    axum::Json(shared.world.clone().unwrap_or(Json::Null)).into_response()
-}
-
-fn content_type(path: &str) -> &'static str {
-    match path.rsplit('.').next().unwrap_or("") {
-        "html" => "text/html; charset=utf-8",
-        "js" | "mjs" => "text/javascript; charset=utf-8",
-        "css" => "text/css; charset=utf-8",
-        "json" | "map" => "application/json",
-        "svg" => "image/svg+xml",
-        "png" => "image/png",
-        "ico" => "image/x-icon",
-        "woff2" => "font/woff2",
-        _ => "application/octet-stream",
-    }
-}
-
-/// The page served when the web app was not built into this program.
-pub const PLACEHOLDER: &str = "<!doctype html><html><head><meta charset=\"utf-8\"><title>situate GUI</title></head>\
-<body><h1>situate GUI: the web app is not built</h1><p>This program was compiled without <code>web/dist</code>. \
-Run <code>make gui</code> (or <code>scripts/gui.sh build</code>), then rebuild the program.</p></body></html>";
-
-/// Whether the web app was embedded at compile time.
-pub fn has_web_app() -> bool {
-    !assets::ASSETS.is_empty()
-}
-
-async fn static_file(uri: Uri) -> Response {
-    let path = uri.path().trim_start_matches('/');
-    let path = if path.is_empty() { "index.html" } else { path };
-    if let Some((_, bytes)) = assets::ASSETS.iter().find(|(p, _)| *p == path) {
-        let cache = if path.starts_with("assets/") { "public, max-age=31536000, immutable" } else { "no-cache" };
-        return ([(header::CONTENT_TYPE, content_type(path)), (header::CACHE_CONTROL, cache)], *bytes).into_response();
-    }
-    if path == "favicon.ico" {
-        return StatusCode::NO_CONTENT.into_response();
-    }
-    if path == "index.html" {
-        return ([(header::CONTENT_TYPE, "text/html; charset=utf-8")], PLACEHOLDER).into_response();
-    }
-    (StatusCode::NOT_FOUND, format!("no such file: /{path}")).into_response()
-}
-
-#[cfg(test)]
-pub(crate) mod tests {
-    use std::io::{Read, Write};
-    use std::net::TcpStream;
-
-    use situate::manager::{Control, Manager, RobotSpec, SkillSpec};
-
-    use super::*;
-    use crate::session::hello_message;
-
-    pub(crate) fn robot() -> (Handle, situate_manager::Joiner) {
-        let spec = RobotSpec::new("guitest")
-            .skill(SkillSpec::new("sonar", "toy.sonar"))
-            .skill(SkillSpec::new("wheels", "toy.wheels"))
-            .skill(SkillSpec::new("runaway", "toy.runaway"))
-            .skill(SkillSpec::new("wander", "toy.wander").active(false));
-        let manager = Manager::build(&spec, &situate_toys::registry()).expect("the toy robot builds");
-        manager.spawn(true)
-    }
-
-    pub(crate) fn shared(handle: Handle) -> Shared {
-        let (wake, _) = crossbeam_channel::unbounded();
-        Shared {
-            handle,
-            run: RunInfo::new(),
-            activity: Mutex::new(Activity::default()),
-            outcome: Mutex::new(None),
-            world: None,
-            sample_hz: 10.0,
-            ws_idle: DEFAULT_WS_IDLE_TIMEOUT,
-            clients: AtomicUsize::new(0),
-            next_client: AtomicU64::new(1),
-            watched: Mutex::new(HashMap::new()),
-            history: None,
-            replay: None,
-            foxglove: foxglove::Hub::default(),
-            telemetry: broadcast::channel(4).0,
-            events: broadcast::channel(4).0,
-            wake,
-            shutdown: watch::channel(false).1,
-        }
-    }
-
-    pub(crate) fn http(addr: SocketAddr, request: &str) -> String {
-        let mut s = TcpStream::connect(addr).expect("connect");
-        s.set_read_timeout(Some(Duration::from_secs(10))).expect("timeout");
-        s.write_all(request.as_bytes()).expect("write");
-        let mut buf = Vec::new();
-        let mut chunk = [0u8; 4096];
-        // Read the head (and whatever body came with it); upgrades never close the stream.
-        while let Ok(n) = s.read(&mut chunk) {
-            if n == 0 {
-                break;
-            }
-            buf.extend_from_slice(&chunk[..n]);
-            let text = String::from_utf8_lossy(&buf);
-            // An upgrade request keeps the connection open: its head is the whole answer.
-            if request.contains("Upgrade: websocket") && text.contains("\r\n\r\n") {
-                break;
-            }
-        }
-        String::from_utf8_lossy(&buf).into_owned()
-    }
-
-    #[test]
-    fn serves_the_app_the_world_and_refuses_cross_origin_sockets() {
-        let (mut handle, join) = robot();
-        let world = json!({"floors": [], "cars": [], "robot_radius": 0.25});
-        let gui =
-            serve(handle.clone(), GuiConfig { world: Some(world.clone()), ..GuiConfig::default() }).expect("serve");
-        let addr = gui.local_addr();
-        assert!(addr.ip().is_loopback());
-        assert_ne!(addr.port(), 0);
-        let get = |path: &str, host: &str| {
-            http(addr, &format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n"))
-        };
-        let page = get("/", &addr.to_string());
-        assert!(page.starts_with("HTTP/1.1 200"), "{page}");
-        assert!(page.contains("<html") || page.contains("<!doctype html>"), "{page}");
-        if !has_web_app() {
-            assert!(page.contains("make gui"), "the placeholder says what to run: {page}");
-        }
-        let w = get("/api/world", &addr.to_string());
-        assert!(w.contains("\"robot_radius\":0.25"), "{w}");
-        let missing = get("/nope.js", &addr.to_string());
-        assert!(missing.starts_with("HTTP/1.1 404"), "{missing}");
-        let upgrade = |host: &str, origin: &str| {
-            format!(
-                "GET /ws HTTP/1.1\r\nHost: {host}\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n\
-                 Sec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n{origin}\r\n"
-            )
-        };
-        let evil = http(addr, &upgrade(&addr.to_string(), "Origin: http://evil.example\r\n"));
-        assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
-        let ok = http(addr, &upgrade(&addr.to_string(), &format!("Origin: http://{addr}\r\n")));
-        assert!(ok.starts_with("HTTP/1.1 101"), "{ok}");
-        // DNS rebinding: a page at evil.example, its name pointed at this machine, is its own
-        // origin; only the Host tells it apart, on every route.
-        let port = addr.port();
-        let rebound = format!("evil.example:{port}");
-        let evil = http(addr, &upgrade(&rebound, &format!("Origin: http://{rebound}\r\n")));
-        assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
-        let page = get("/", &rebound);
-        assert!(page.contains("--gui-allow-host evil.example"), "the refusal says how to allow a name: {page}");
-        for path in ["/", "/index.html", "/api/world", "/metrics", "/nope.js", "/foxglove"] {
-            let page = get(path, &rebound);
-            assert!(page.starts_with("HTTP/1.1 403"), "{path}: {page}");
-        }
-        let no_host = http(addr, "GET /api/world HTTP/1.0\r\n\r\n");
-        assert!(no_host.starts_with("HTTP/1.0 400") || no_host.starts_with("HTTP/1.1 400"), "{no_host}");
-        assert!(no_host.contains("no Host header"), "{no_host}");
-        let absolute = http(
-            addr,
-            &format!("GET http://{rebound}/api/world HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"),
-        );
-        assert!(absolute.starts_with("HTTP/1.1 403"), "the request-target's host counts too: {absolute}");
-        // What a browser sends for this server: its address (browser tests open
-        // http://127.0.0.1:<port>/), localhost, or a tunnel's port.
-        for host in [format!("localhost:{port}"), format!("[::1]:{port}"), "localhost:9000".into()] {
-            let page = get("/api/world", &host);
-            assert!(page.starts_with("HTTP/1.1 200"), "{host}: {page}");
-        }
-        gui.stop();
-        // A name the user allows.
-        let gui = serve(handle.clone(), GuiConfig { allowed_hosts: vec!["Robot.LAN".into()], ..GuiConfig::default() })
-            .expect("serve");
-        let (addr, port) = (gui.local_addr(), gui.local_addr().port());
-        let named = format!("robot.lan:{port}");
-        let ok = http(addr, &upgrade(&named, &format!("Origin: http://{named}\r\n")));
-        assert!(ok.starts_with("HTTP/1.1 101"), "{ok}");
-        let evil = http(addr, &upgrade(&rebound, &format!("Origin: http://{rebound}\r\n")));
-        assert!(evil.starts_with("HTTP/1.1 403"), "{evil}");
-        gui.stop();
-        match serve(handle.clone(), GuiConfig { allowed_hosts: vec!["robot.lan:80".into()], ..GuiConfig::default() }) {
-            Err(GuiError::Config(m)) => assert!(m.contains("without a port"), "{m}"),
-            Err(other) => panic!("expected a config error, got {other}"),
-            Ok(_) => panic!("expected a config error"),
-        }
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
-    fn every_server_is_a_new_run_named_in_the_hello_with_its_outcome() {
-        let (mut handle, join) = robot();
-        let first = serve(handle.clone(), GuiConfig::default()).expect("serve");
-        let second = serve(handle.clone(), GuiConfig::default()).expect("serve");
-        let hello = hello_message(&first.shared, 1);
-        assert_eq!(hello["type"], "hello");
-        assert_eq!(hello["run"]["id"], first.run_id(), "{hello}");
-        let started = hello["run"]["started_unix_s"].as_f64().unwrap_or(0.0);
-        assert!(started > 1.6e9, "a wall-clock start time: {hello}");
-        assert_ne!(first.run_id(), second.run_id(), "a restarted server is a new run");
-        assert_eq!(hello["outcome"], Json::Null, "no outcome yet");
-        let mut listener = first.shared.events.subscribe();
-        first.set_outcome(Outcome { ok: false, summary: "not delivered: gave up at t = 1800 s".into() });
-        let hello = hello_message(&first.shared, 2);
-        assert_eq!(hello["outcome"]["ok"], false, "{hello}");
-        assert_eq!(hello["outcome"]["summary"], "not delivered: gave up at t = 1800 s");
-        let sent: Json = serde_json::from_str(listener.try_recv().expect("the outcome is sent to open pages").as_str())
-            .expect("JSON");
-        assert_eq!(sent["type"], "outcome");
-        assert_eq!(sent["summary"], "not delivered: gave up at t = 1800 s");
-        first.stop();
-        second.stop();
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
-    fn metrics_count_cycles_skill_time_and_faults_in_prometheus_text_format() {
-        let (mut handle, join) = robot();
-        let gui = serve(handle.clone(), GuiConfig::default()).expect("serve");
-        let scrape = |addr| {
-            let page = http(addr, &format!("GET /metrics HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"));
-            assert!(page.starts_with("HTTP/1.1 200"), "{page}");
-            assert!(page.to_ascii_lowercase().contains("content-type: text/plain; version=0.0.4"), "{page}");
-            let body = page.split_once("\r\n\r\n").map(|(_, b)| b.to_string()).unwrap_or_default();
-            metrics::tests::parse(&body)
-        };
-        let before = scrape(gui.local_addr());
-        let cycles_before = before["situate_cycles_total{robot=\"guitest\"}"];
-        handle.step(5).expect("step");
-        let after = scrape(gui.local_addr());
-        assert!(after["situate_cycles_total{robot=\"guitest\"}"] >= cycles_before + 5.0, "{after:?}");
-        for skill in ["sonar", "wheels", "runaway", "wander"] {
-            let active = after[&format!("situate_skill_active{{robot=\"guitest\",skill=\"{skill}\"}}")];
-            assert_eq!(active, if skill == "wander" { 0.0 } else { 1.0 }, "{skill}");
-        }
-        assert!(after["situate_skill_runs_total{robot=\"guitest\",skill=\"runaway\"}"] >= 1.0, "{after:?}");
-        assert!(after.contains_key("situate_cycle_overruns_total{robot=\"guitest\"}"));
-        assert_eq!(after["situate_skill_faults_total{robot=\"guitest\",skill=\"runaway\"}"], 0.0);
-        // A fault as the events thread records it.
-        gui.shared.activity.lock().expect("lock").note(&situate_manager::Event::SkillFaulted {
-            skill: "runaway".into(),
-            cause: "panicked: test".into(),
-            cycle: 9,
-        });
-        let faulted = scrape(gui.local_addr());
-        assert_eq!(faulted["situate_skill_faults_total{robot=\"guitest\",skill=\"runaway\"}"], 1.0);
-        assert_eq!(faulted["situate_skill_faults_total{robot=\"guitest\",skill=\"wander\"}"], 0.0);
-        gui.stop();
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
-
-    #[test]
-    fn the_open_files_limit_is_raised_to_the_hard_limit() {
-        let get = || {
-            let mut l = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
-            // SAFETY: getrlimit writes the struct it is given.
-            assert_eq!(unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut l) }, 0);
-            l
-        };
-        let before = get();
-        if before.rlim_cur == before.rlim_max && before.rlim_max > 64 {
-            // Lowered a little first (other tests run beside this one), so there is a raise to see.
-            let lowered = libc::rlimit { rlim_cur: before.rlim_max - 1, rlim_max: before.rlim_max };
-            // SAFETY: setrlimit reads the struct it is given.
-            assert_eq!(unsafe { libc::setrlimit(libc::RLIMIT_NOFILE, &lowered) }, 0);
-        }
-        let now = raise_open_files_limit().expect("raised");
-        let after = get();
-        assert_eq!(after.rlim_cur, after.rlim_max, "the soft limit is the hard one");
-        #[allow(clippy::useless_conversion)]
-        let soft = u64::from(after.rlim_cur);
-        assert_eq!(soft, now);
-    }
-
-    #[test]
-    fn a_busy_port_and_a_bad_rate_are_clear_errors() {
-        let (mut handle, join) = robot();
-        let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("bind");
-        let addr = taken.local_addr().expect("addr");
-        match serve(handle.clone(), GuiConfig { listen: addr, ..GuiConfig::default() }) {
-            Err(e @ GuiError::Bind { .. }) => assert!(e.to_string().contains(&addr.to_string()), "{e}"),
-            Err(other) => panic!("expected a bind error, got {other}"),
-            Ok(_) => panic!("expected a bind error"),
-        }
-        match serve(handle.clone(), GuiConfig { sample_hz: 0.0, ..GuiConfig::default() }) {
-            Err(GuiError::Config(m)) => assert!(m.contains("sample_hz"), "{m}"),
-            Err(other) => panic!("expected a config error, got {other}"),
-            Ok(_) => panic!("expected a config error"),
-        }
-        match serve(handle.clone(), GuiConfig { history_frames: 0, ..GuiConfig::default() }) {
-            Err(GuiError::Config(m)) => assert!(m.contains("history_frames"), "{m}"),
-            Err(other) => panic!("expected a config error, got {other}"),
-            Ok(_) => panic!("expected a config error"),
-        }
-        for (config, name) in [
-            (GuiConfig { max_connections: 0, ..GuiConfig::default() }, "max_connections"),
-            (GuiConfig { header_timeout: Duration::ZERO, ..GuiConfig::default() }, "header_timeout"),
-            (GuiConfig { ws_idle_timeout: Duration::from_millis(1), ..GuiConfig::default() }, "ws_idle_timeout"),
-        ] {
-            match serve(handle.clone(), config) {
-                Err(GuiError::Config(m)) => assert!(m.contains(name), "{m}"),
-                Err(other) => panic!("expected a config error, got {other}"),
-                Ok(_) => panic!("expected a config error"),
-            }
-        }
-        let _ = handle.request(Request::Shutdown);
-        let _ = join.join();
-    }
 }
