@@ -305,7 +305,6 @@ pub(crate) fn run(command: ClientCommand, ext: &Extensions, out: Out) -> anyhow:
     }
 }
 
-/// `sonar.range  f32[24]  written by sonar  read by runaway, wander`.
 /// Seconds as a person reads them: to the millisecond, without the float's noise or trailing
 /// zeros (`21.9`, not `21.900000000000002`; `3`, not `3.000`).
 fn seconds(s: f64) -> String {

@@ -68,6 +68,7 @@ fn names(list: &Json) -> String {
     }
 }
 
+/// One line a signal: `sonar.range  f32[24]  written by sonar  read by runaway, wander`.
 pub(super) fn signals_text(signals: &Json) -> String {
     let rows: Vec<&Json> = signals.as_array().into_iter().flatten().collect();
     let width = rows.iter().filter_map(|s| s["signal"].as_str()).map(str::len).max().unwrap_or(0);
