@@ -211,8 +211,11 @@ pub struct Manager {
     /// empty one made and dropped).
     #[allow(clippy::vec_box)]
     execs: Vec<Box<Exec>>,
-    /// Empty bodies, put in the place of those taken out (`take_exec`):
-    /// room for all of them from the start, so taking allocates nothing.
+    /// Empty bodies, put in the place of those taken out (`take_exec`) and
+    /// kept again when they are put back. One is made at build, which is
+    /// all a serial cycle needs; a parallel batch makes the others it needs
+    /// the first time (the vector has room for one a body from the start),
+    /// so a steady cycle allocates nothing.
     #[allow(clippy::vec_box)]
     spare_execs: Vec<Box<Exec>>,
     /// The compiled schedule of the active skills.

@@ -153,8 +153,9 @@ impl Drop for PanicGuard<'_> {
 
 impl Manager {
     /// Takes body `i` out to run it with the lock let go, an empty one in
-    /// its place (from the spares: nothing allocated unless a body left
-    /// behind took its spare with it).
+    /// its place (from the spares: one is made only when none is left, the
+    /// first time a parallel batch takes several bodies out, or after a body
+    /// left behind kept its stand-in's place).
     #[inline(always)]
     fn take_exec(&mut self, i: usize) -> Box<Exec> {
         let empty = self.spare_execs.pop().unwrap_or_default();
