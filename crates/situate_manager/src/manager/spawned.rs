@@ -31,7 +31,7 @@ use crate::config::ClockKind;
 use crate::control::{ControlError, Handle, Reply, Request};
 use crate::handle::Envelope;
 use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
-use crate::starved::Starvation;
+use crate::starved::{self, Starvation, Suspect};
 
 type Guard<'a> = MutexGuard<'a, Option<Manager>>;
 
@@ -591,35 +591,40 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
     // Room for every body up front: a body seen past its deadline for a
     // moment (its thread preempted on a loaded machine) must not make the
     // watchdog allocate while the robot runs.
-    let mut stale: Vec<(usize, u64)> = Vec::with_capacity(core.clocks.len());
+    let mut stale: Vec<(usize, u64, Duration)> = Vec::with_capacity(core.clocks.len());
+    // On the simulated clock, what an earlier reading saw of each body (`crate::starved::judge`).
+    let mut suspects: Vec<Option<Suspect>> = vec![None; core.clocks.len()];
     loop {
         thread::park_timeout(tick);
         if core.stop.load(Ordering::Acquire) {
             return;
         }
         stale.clear();
-        if let Some(s) = &core.starved {
-            s.sample();
-        }
-        // How long the body with `mark` has run (on the simulated clock, less the time its
-        // thread waited for a CPU: `crate::starved`).
-        let ran = |clock: &BodyClock, mark: u64| {
-            let wall = clock.running_for(mark);
-            match &core.starved {
-                Some(s) => wall.saturating_sub(Duration::from_nanos(s.since(mark - 1))),
-                None => wall,
-            }
-        };
+        let reading = core.starved.as_ref().and_then(|s| s.sample());
         // Marks are on the coarse clock: a body is stuck only when it
         // certainly ran past its deadline.
         let slack = Duration::from_nanos(coarse_tick_ns());
-        // A thread waiting for a CPU right now has a wait the kernel has not counted yet
-        // (`crate::starved`): its bodies are judged once it has run again.
-        let waiting = core.starved.as_ref().is_some_and(|s| s.waiting_now());
         for (i, clock) in core.clocks.iter().enumerate() {
             let mark = clock.mark();
-            if mark != 0 && !waiting && ran(clock, mark) > deadlines[i] + slack {
-                stale.push((i, mark));
+            if mark == 0 {
+                suspects[i] = None;
+                continue;
+            }
+            let wall = clock.running_for(mark);
+            let limit = deadlines[i] + slack;
+            let over = match (&core.starved, reading) {
+                // On the simulated clock the time its thread waited for a CPU does not count
+                // (`crate::starved`).
+                (Some(s), Some(reading)) => {
+                    let waited = s.waited(&reading, mark - 1);
+                    let ns = |d: Duration| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
+                    starved::judge(&mut suspects[i], mark, ns(wall), waited, reading, ns(limit))
+                        .map(Duration::from_nanos)
+                }
+                _ => (wall > limit).then_some(wall),
+            };
+            if let Some(ran) = over {
+                stale.push((i, mark, ran));
             }
         }
         if stale.is_empty() {
@@ -628,11 +633,11 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
         let mut g = core.lock();
         let Some(m) = g.as_mut() else { return };
         let mut left = false;
-        for &(i, mark) in &stale {
+        for &(i, mark, ran) in &stale {
             // Still in that same run: its thread is stuck in the body.
             let clock = &core.clocks[i];
             if clock.mark() == mark {
-                let ran = ran(clock, mark);
+                suspects[i] = None;
                 clock.forget(mark);
                 m.abandon(i, ran);
                 left = true;
