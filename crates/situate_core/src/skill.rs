@@ -129,6 +129,22 @@ pub trait Skill: Send + 'static {
     /// checked `value` against the parameter's type and range.
     fn set_param(&mut self, index: usize, value: &Value);
 
+    /// The skill was switched on (at start, if it starts active, or by the
+    /// sequencer): called once, before its first run after that, on the
+    /// thread that runs its body. See [`Body::activate`].
+    fn activate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let _ = cx;
+        Ok(())
+    }
+
+    /// The skill was switched off (by the sequencer, or by a fault): called
+    /// once, after its last run, on the thread that runs its body. See
+    /// [`Body::deactivate`].
+    fn deactivate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let _ = cx;
+        Ok(())
+    }
+
     /// Whether [`Skill::step`] sets every output (to `Some` or `None`)
     /// whenever it returns `Ok`, taking what an output held on entry as a
     /// spare buffer ([`SignalValue::into_output`](crate::SignalValue::into_output)).
@@ -166,7 +182,33 @@ pub trait Skill: Send + 'static {
 
 /// The computational body of a Rust skill.
 pub trait Body {
+    /// One run: read the input fields, write the output fields.
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError>;
+
+    /// The skill was switched on: called once before its first run after
+    /// that, on the thread that runs its body, at the start of the cycle the
+    /// activation takes effect in (a threaded body: on its thread, before its
+    /// next run). The place to reset what a run of the skill remembers (a
+    /// turn measured from the heading at activation). Skills that start
+    /// active are activated before their first run. A skill switched off
+    /// and on again between two cycles is deactivated, then activated. An
+    /// error faults the skill. By default nothing.
+    fn activate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let _ = cx;
+        Ok(())
+    }
+
+    /// The skill was switched off (by the sequencer, or because it
+    /// faulted): called once, after its last run, at the start of the next
+    /// cycle (a threaded body: on its thread, when it next waits). Not
+    /// called for a body left behind (it never returned), nor at shutdown
+    /// (the body is dropped: `Drop`). The skill is off whatever this
+    /// returns: an error is said in a warning and in the skill's prints. By
+    /// default nothing.
+    fn deactivate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        let _ = cx;
+        Ok(())
+    }
 }
 
 /// A skill type that can declare itself and make instances.

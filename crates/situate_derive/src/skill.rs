@@ -597,6 +597,20 @@ fn generate(
                 #set_param
             }
 
+            fn activate(
+                &mut self,
+                cx: &mut #core::Context,
+            ) -> ::core::result::Result<(), #core::SkillError> {
+                <Self as #core::Body>::activate(self, cx)
+            }
+
+            fn deactivate(
+                &mut self,
+                cx: &mut #core::Context,
+            ) -> ::core::result::Result<(), #core::SkillError> {
+                <Self as #core::Body>::deactivate(self, cx)
+            }
+
             fn fills_outputs(&self) -> bool {
                 true
             }

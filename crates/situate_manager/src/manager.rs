@@ -173,6 +173,8 @@ struct Inst {
     /// ([`Skill::output_typed`], asked when the body is made): the plan
     /// does not check them.
     typed_outputs: bool,
+    /// Switched on or off since the last cycle began: listed in `Manager::switched`.
+    switched: bool,
 }
 
 /// What a monitor condition can name: a leaf signal or a parameter.
@@ -265,6 +267,9 @@ pub struct Manager {
     /// Activation changes applied at this boundary, reported with the next cycle.
     activated: Vec<String>,
     deactivated: Vec<String>,
+    /// The instances switched on or off since the last cycle began, whose bodies are told so
+    /// at the next (`Manager::switch_bodies`); room for all, so switching allocates nothing.
+    switched: Vec<usize>,
     /// When running on its own thread, stop after this cycle.
     stop_at: Option<u64>,
     /// Pacing of the simulated clock when spawned (see [`Manager::set_speed`]).
@@ -346,6 +351,7 @@ impl Manager {
                 params_from: 0,
                 active_from: 0,
                 typed_outputs,
+                switched: false,
             });
         }
         let started = Instant::now();
@@ -408,6 +414,7 @@ impl Manager {
             bus: EventBus::default(),
             activated: Vec::new(),
             deactivated: Vec::new(),
+            switched: Vec::with_capacity(graph.instances.len()),
             stop_at: None,
             speed: None,
             paused: false,
@@ -498,6 +505,9 @@ impl Manager {
         let next_cycle = self.cycle + 1;
         let inst = &mut self.insts[i];
         inst.active = active;
+        if !std::mem::replace(&mut inst.switched, true) {
+            self.switched.push(i);
+        }
         if active {
             inst.faulted = None;
             inst.active_from = next_cycle;

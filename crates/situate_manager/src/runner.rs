@@ -44,6 +44,9 @@ pub(crate) struct Exec {
     /// holding the value its last output replaced is handed to the body as
     /// a spare instead of being recycled on entry.
     pub fills: bool,
+    /// The body has been activated and not deactivated since
+    /// ([`Skill::activate`]): a fresh body has not.
+    pub on: bool,
 }
 
 impl Default for Exec {
@@ -59,6 +62,7 @@ impl Default for Exec {
             untimed_runs: 0,
             untimed_ns: 0,
             fills: false,
+            on: false,
         }
     }
 }
@@ -76,6 +80,7 @@ impl Exec {
             timed: false,
             untimed_runs: 0,
             untimed_ns: 0,
+            on: false,
         }
     }
 
@@ -347,6 +352,25 @@ pub(crate) fn run_body(
 
 use crate::supervise::panic_message;
 
+/// A body's `deactivate` failed: the skill is off anyway, so this is no fault; it is said in a
+/// warning and in one of the skill's prints.
+pub(crate) fn deactivate_failed(cx: &mut Context, error: &str) {
+    tracing::warn!(%error, "a skill's deactivate hook failed");
+    cx.print(error.to_string());
+}
+
+/// Tells a body it was switched on (`on`) or off ([`Skill::activate`],
+/// [`Skill::deactivate`]), turning a panic into an error. The error names the
+/// hook.
+pub(crate) fn run_hook(skill: &mut dyn Skill, on: bool, cx: &mut Context) -> Result<(), String> {
+    let hook = if on { "activate" } else { "deactivate" };
+    match catch_unwind(AssertUnwindSafe(|| if on { skill.activate(cx) } else { skill.deactivate(cx) })) {
+        Ok(Ok(())) => Ok(()),
+        Ok(Err(e)) => Err(format!("`{hook}` failed: {}", e.message)),
+        Err(panic) => Err(format!("`{hook}` panicked: {}", panic_message(&*panic))),
+    }
+}
+
 /// Timing of a threaded body, kept by its worker (every run is timed).
 pub(crate) type WorkerStats = crate::control::SkillTiming;
 
@@ -354,6 +378,9 @@ pub(crate) type WorkerStats = crate::control::SkillTiming;
 #[derive(Default)]
 pub(crate) struct Mailbox {
     pub active: bool,
+    /// How many times the skill was switched on or off: the worker tells its
+    /// body ([`run_hook`]) when this moved since it last looked.
+    pub switches: u64,
     pub stop: bool,
     /// Latest inputs (async) or pending commands (dskill; taken by the worker).
     pub inputs: Vec<Option<Value>>,
@@ -448,6 +475,9 @@ impl Worker {
     ) {
         {
             let mut mb = self.shared.lock();
+            if mb.active != active {
+                mb.switches += 1;
+            }
             mb.active = active;
             if !active {
                 // A handoff not yet taken belongs to the cycles the skill was
@@ -505,12 +535,17 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
         (mb.inputs.len(), mb.outputs.len())
     };
     let mut outputs: Vec<Option<Value>> = vec![None; n_out];
+    // Whether the body has been activated (and not deactivated since), and the switches seen.
+    let (mut on, mut seen) = (false, 0);
     loop {
         let (inputs, params) = {
             let mut mb = shared.lock();
             loop {
                 if mb.stop {
                     return;
+                }
+                if mb.switches != seen {
+                    break;
                 }
                 if mb.active {
                     if kind == SkillKind::Device {
@@ -529,6 +564,32 @@ fn worker_loop(mut skill: Box<dyn Skill>, shared: Arc<Shared>, kind: SkillKind, 
                     }
                 }
                 mb = shared.wake.wait(mb).unwrap_or_else(|p| p.into_inner());
+            }
+            if mb.switches != seen {
+                // Switched since the body last heard: off (if it was on), then on (if it is).
+                // Any switch while on went off at some point; the hooks run outside the lock.
+                let active = mb.active;
+                seen = mb.switches;
+                cx.set(mb.cycle, mb.time_s);
+                drop(mb);
+                if std::mem::take(&mut on) {
+                    if let Err(e) = run_hook(skill.as_mut(), false, &mut cx) {
+                        deactivate_failed(&mut cx, &e);
+                    }
+                }
+                let result = if active { run_hook(skill.as_mut(), true, &mut cx) } else { Ok(()) };
+                on = active && result.is_ok();
+                let mut mb = shared.lock();
+                mb.prints.extend(cx.take_prints());
+                if let Err(e) = result {
+                    // Unless it was switched again meanwhile (that says what it is now).
+                    if mb.switches == seen {
+                        mb.fault = Some(e);
+                        mb.active = false;
+                        mb.inputs_new = false;
+                    }
+                }
+                continue;
             }
             mb.inputs_new = false;
             let started = Instant::now();

@@ -84,6 +84,9 @@ impl Manager {
             };
             self.bus.send(event);
         }
+        if !self.switched.is_empty() {
+            self.switch_bodies();
+        }
         if self.schedule_dirty {
             self.compile_schedule();
         }
@@ -92,6 +95,39 @@ impl Manager {
             self.take_readings(d);
         }
         self.schedule.devices = devices;
+    }
+
+    /// Step 1b: tells the bodies in place that were switched on or off since
+    /// the last cycle (`Skill::deactivate`, then `Skill::activate`), on this
+    /// thread, before anything runs. A threaded body is told by its worker
+    /// (`runner::Mailbox::switches`); a body left behind is not told.
+    #[cold]
+    fn switch_bodies(&mut self) {
+        // A failed activation faults the skill, which switches it off again and lists it anew.
+        let mut k = 0;
+        while let Some(&i) = self.switched.get(k) {
+            k += 1;
+            self.insts[i].switched = false;
+            let active = self.insts[i].active;
+            let exec = &mut *self.execs[i];
+            let Some(skill) = exec.skill.as_mut() else { continue };
+            exec.cx.set(self.cycle, self.time_s);
+            if std::mem::take(&mut exec.on) {
+                if let Err(e) = crate::runner::run_hook(skill.as_mut(), false, &mut exec.cx) {
+                    crate::runner::deactivate_failed(&mut exec.cx, &e);
+                }
+            }
+            let result = if active { crate::runner::run_hook(skill.as_mut(), true, &mut exec.cx) } else { Ok(()) };
+            exec.on = active && result.is_ok();
+            let prints = exec.cx.take_prints();
+            if !prints.is_empty() {
+                self.record_prints(i, prints);
+            }
+            if let Err(cause) = result {
+                self.fault(i, cause);
+            }
+        }
+        self.switched.clear();
     }
 
     /// Gathers copies of the inputs of level `level`'s steps; those ready
