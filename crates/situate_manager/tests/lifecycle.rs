@@ -117,7 +117,9 @@ fn switched_off_and_on_between_two_cycles_it_is_deactivated_then_activated() {
 
 #[test]
 fn an_activation_that_fails_or_panics_faults_the_skill_which_never_runs() {
-    for (failing, says) in [(Hook::Fail, "`activate` failed: no activation today"), (Hook::Panic, "`activate` panicked")] {
+    for (failing, says) in
+        [(Hook::Fail, "`activate` failed: no activation today"), (Hook::Panic, "`activate` panicked")]
+    {
         let log = log();
         let mut m = robot(&log, failing, Hook::Quiet);
         let events = m.events();

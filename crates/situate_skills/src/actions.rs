@@ -3,7 +3,7 @@
 use situate::prelude::*;
 use situate_robot::{Arm, Target};
 
-use crate::util::{wrap, Activation};
+use crate::util::wrap;
 
 /// Pushes a button: writes `arm.press` = `button` when the tracked barcode
 /// (`target`, tracking the button's barcode) is within `reach` and within
@@ -34,19 +34,20 @@ pub struct PushButton {
     /// Time between tries while no hit is seen, s.
     #[param(default = 2.0, min = 0.0, max = 600.0, unit = "s")]
     retry_s: f64,
-    activation: Activation,
     last_try: Option<f64>,
     presses_before: Option<i64>,
     done: bool,
 }
 
 impl Body for PushButton {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.last_try = None;
+        self.presses_before = None;
+        self.done = false;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        if self.activation.fresh(cx.cycle()) {
-            self.last_try = None;
-            self.presses_before = None;
-            self.done = false;
-        }
         if let (Some(arm), Some(before)) = (self.arm, self.presses_before) {
             if arm.presses > before && !self.done {
                 self.done = true;
@@ -84,15 +85,16 @@ pub struct Say {
     /// What to say.
     #[param(default = "hello")]
     message: String,
-    activation: Activation,
     said: Option<String>,
 }
 
 impl Body for Say {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.said = None;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        if self.activation.fresh(cx.cycle()) {
-            self.said = None;
-        }
         if self.said.as_deref() != Some(self.message.as_str()) {
             self.say = Some(self.message.clone());
             self.said = Some(self.message.clone());

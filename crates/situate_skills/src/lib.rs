@@ -38,10 +38,11 @@
 //!
 //! Skills whose behaviour depends on "since activation" (`std.turn`,
 //! `std.say`, `std.push_button`, `std.pass_door`, `std.enter_car`,
-//! `std.leave_car`, the corridor width `std.follow_hallway` remembers, and
-//! the detectors' and trackers' state) notice a re-activation as a gap of
-//! more than one cycle between two runs ([`util::Activation`]) and start
-//! afresh.
+//! `std.leave_car`, `std.home_position`, the corridor width
+//! `std.follow_hallway` remembers, and the detectors' and trackers' state)
+//! start afresh in their `Body::activate`, which the manager calls when the
+//! skill is switched on. (They once guessed a switch on from a gap between
+//! two runs, and so also started afresh when an input skipped a cycle.)
 
 mod actions;
 mod health;

@@ -4,7 +4,7 @@
 use situate::prelude::*;
 use situate_robot::{sonar_bearing, Barcodes, Door, Junction, Odom, Opened, Target, SONARS};
 
-use crate::util::{centre_range, side_wall, Activation, Hysteresis, LEFT, RIGHT, ROBOT_RADIUS};
+use crate::util::{centre_range, side_wall, Hysteresis, LEFT, RIGHT, ROBOT_RADIUS};
 
 /// The upper quartile of the last [`Window::N`] values: a wall's distance
 /// that a bin or a box standing against it (always nearer than the wall,
@@ -230,18 +230,19 @@ pub struct DetectDoor {
     /// Cycles without the opening before the report ends.
     #[param(default = 3, min = 1, max = 100)]
     release: i64,
-    activation: Activation,
     corridor: Corridor,
     flags: [Hysteresis; 2],
 }
 
 impl Body for DetectDoor {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.corridor = Corridor::default();
+        self.flags = Default::default();
+        self.door = Door::default();
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        if self.activation.fresh(cx.cycle()) {
-            self.corridor = Corridor::default();
-            self.flags = Default::default();
-            self.door = Door::default();
-        }
         let mut out = Door { bearing: self.door.bearing, ..Door::default() };
         let openings = self.corridor.scan(&self.sonar, self.max_wall, self.depth);
         for (k, side) in [LEFT, RIGHT].into_iter().enumerate() {
@@ -310,7 +311,8 @@ pub struct DetectIntersection {
     /// door travels about 1.35 m, a 1.8 m side corridor about 1.58 m).
     #[param(default = 0.25, min = 0.0, max = 5.0, unit = "m")]
     travel_slack: f64,
-    activation: Activation,
+    /// Switched on since the last run: start afresh, the way ahead as seen then.
+    fresh: bool,
     corridor: Corridor,
     flags: [Hysteresis; 3],
     /// Path length travelled since activation (odometry), m.
@@ -349,10 +351,15 @@ const MAX_TURNED: f64 = 0.3;
 const AXIS_TRACK: f64 = 0.15;
 
 impl Body for DetectIntersection {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.fresh = true;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         // Sonar 0 alone: the ones at ±15° see the side walls of a narrow corridor.
         let ahead_now = centre_range(&self.sonar, 0) - ROBOT_RADIUS >= self.ahead_distance;
-        if self.activation.fresh(cx.cycle()) {
+        if std::mem::take(&mut self.fresh) {
             self.corridor = Corridor::default();
             self.flags = Default::default();
             // The way ahead starts as seen, not as "closed".
@@ -481,14 +488,19 @@ pub struct TrackBarcode {
     /// Cycles a lost barcode is still reported as seen.
     #[param(default = 5, min = 0, max = 1000)]
     hold: i64,
-    activation: Activation,
+    /// The barcode tracked since the last switch on or change of `id` (`None`: start afresh).
     tracking: Option<i64>,
     missed: i64,
 }
 
 impl Body for TrackBarcode {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.tracking = None;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        if self.activation.fresh(cx.cycle()) || self.tracking != Some(self.id) {
+        if self.tracking != Some(self.id) {
             self.tracking = Some(self.id);
             self.target = Target { seen: false, id: self.id, bearing: 0.0, distance: 0.0 };
             self.missed = i64::MAX / 2;
@@ -538,16 +550,17 @@ pub struct IdentifyCar {
     /// Cycles a car is still reported after its barcode drops out.
     #[param(default = 3, min = 0, max = 1000)]
     hold: i64,
-    activation: Activation,
     missed: i64,
 }
 
 impl Body for IdentifyCar {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.car = 0;
+        self.missed = 0;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        if self.activation.fresh(cx.cycle()) {
-            self.car = 0;
-            self.missed = 0;
-        }
         let b = &self.barcodes;
         let n = b.ids.len().min(b.distance.len());
         let last = self.first_id.saturating_add(self.cars - 1);
@@ -619,7 +632,6 @@ pub struct WatchOpenings {
     /// Turning faster than this starts the watch afresh, rad/s.
     #[param(default = 0.3, min = 0.0, max = 10.0, unit = "rad/s")]
     max_turn: f64,
-    activation: Activation,
     /// The last scans (oldest first once full) and the way made along the heading at each.
     scans: Vec<([f32; SONARS], f64)>,
     /// The way made along the heading (odometry), signed: backing off counts negative, m.
@@ -629,9 +641,15 @@ pub struct WatchOpenings {
 }
 
 impl Body for WatchOpenings {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.scans.clear();
+        self.held = [0; SONARS];
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         let turning = self.odom.is_some_and(|o| o.w.abs() > self.max_turn);
-        if self.activation.fresh(cx.cycle()) || turning {
+        if turning {
             self.scans.clear();
             self.held = [0; SONARS];
         }

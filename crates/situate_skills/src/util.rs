@@ -92,27 +92,6 @@ pub fn nearest_in(range: &[f32; SONARS], bearing: f64, half_width: f64) -> Optio
         .min_by(|a, b| a.1.total_cmp(&b.1))
 }
 
-/// Detects re-activation: the manager does not tell a body that it was
-/// deactivated, but an active skill whose inputs are produced every cycle
-/// runs every cycle, so a gap of more than one cycle between two runs (or a
-/// cycle number going back) means the skill was off in between.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Activation {
-    last: Option<u64>,
-}
-
-impl Activation {
-    /// Records a run in `cycle`; true for the first run after an activation.
-    pub fn fresh(&mut self, cycle: u64) -> bool {
-        let fresh = match self.last {
-            None => true,
-            Some(last) => cycle > last + 1 || cycle <= last,
-        };
-        self.last = Some(cycle);
-        fresh
-    }
-}
-
 /// Counts consecutive agreeing observations before flipping a flag: the
 /// flag turns on after `on` cycles of `true` and off after `off` cycles of
 /// `false`.
@@ -154,17 +133,6 @@ mod tests {
         assert!((wrap(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-12);
         assert!((wrap(PI) - PI).abs() < 1e-12);
         assert!((wrap(0.3) - 0.3).abs() < 1e-12);
-    }
-
-    #[test]
-    fn activation_is_fresh_after_a_gap() {
-        let mut a = Activation::default();
-        assert!(a.fresh(5));
-        assert!(!a.fresh(6));
-        assert!(!a.fresh(7));
-        assert!(a.fresh(9));
-        assert!(!a.fresh(10));
-        assert!(a.fresh(3), "a cycle number going back is a new run");
     }
 
     #[test]

@@ -5,7 +5,7 @@ use situate_robot::{Drive, Odom, SONARS};
 
 use super::clamp_abs;
 use crate::perception::Window;
-use crate::util::{nearest_in, side_wall, wrap, Activation, SideWall, LEFT, RIGHT, ROBOT_RADIUS};
+use crate::util::{nearest_in, side_wall, wrap, SideWall, LEFT, RIGHT, ROBOT_RADIUS};
 
 /// A side wall more oblique than this to the heading is no corridor wall, rad.
 const MAX_WALL_ANGLE: f64 = 0.5;
@@ -55,7 +55,6 @@ pub struct FollowHallway {
     /// A side echo this much nearer than the corridor's width says is clutter, m.
     #[param(default = 0.2, min = 0.05, max = 2.0, unit = "m")]
     clutter_m: f64,
-    activation: Activation,
     half: Option<f64>,
     /// Recent corridor widths (both walls seen).
     widths: Window,
@@ -78,15 +77,17 @@ impl FollowHallway {
 }
 
 impl Body for FollowHallway {
-    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        if self.activation.fresh(cx.cycle()) {
-            self.half = None;
-            self.widths = Window::default();
-            self.sides = [Window::default(); 2];
-            self.axis = None;
-            self.lone = None;
-            self.line = None;
-        }
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.half = None;
+        self.widths = Window::default();
+        self.sides = [Window::default(); 2];
+        self.axis = None;
+        self.lone = None;
+        self.line = None;
+        Ok(())
+    }
+
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
         // Only walls roughly along the corridor are the corridor's: at a junction the side
         // sonars see the side corridor's walls, across it, and steering by them would turn
         // the robot into it. Along the corridor's direction once it is known (odometry),

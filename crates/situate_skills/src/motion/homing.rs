@@ -7,7 +7,7 @@ use situate::prelude::*;
 use situate_robot::{Drive, Odom, Target};
 
 use super::clamp_abs;
-use crate::util::{wrap, Activation};
+use crate::util::wrap;
 
 /// Drives towards a bearing and distance: turns in place while the bearing
 /// exceeds `turn_angle` (until it is under half of it), else drives with a
@@ -116,16 +116,20 @@ pub struct HomePosition {
     reverse_within: f64,
     approach: Approach,
     arrived: bool,
-    activation: Activation,
-    /// The goal `arrived` is about.
+    /// The goal `arrived` is about (`None` after a switch on: not there yet).
     goal: Option<(f64, f64)>,
 }
 
 impl Body for HomePosition {
-    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.goal = None;
+        Ok(())
+    }
+
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
         // A new activation or a new goal: not there yet (a goal just beside the last one,
         // within twice `stop_distance`, would otherwise count as reached).
-        if self.activation.fresh(cx.cycle()) || self.goal != Some((self.x, self.y)) {
+        if self.goal != Some((self.x, self.y)) {
             self.arrived = false;
             self.approach = Approach::default();
             self.goal = Some((self.x, self.y));

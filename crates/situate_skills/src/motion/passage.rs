@@ -5,7 +5,7 @@ use situate::prelude::*;
 use situate_robot::{sonar_bearing, Drive, Odom, SONARS};
 
 use super::clamp_abs;
-use crate::util::{echo_point, nearest_in, wrap, Activation, ROBOT_RADIUS};
+use crate::util::{echo_point, nearest_in, wrap, ROBOT_RADIUS};
 
 /// Echoes farther than this from the centre are no jamb, m.
 const JAMB_RANGE: f64 = 1.5;
@@ -24,7 +24,8 @@ struct PassageLimits {
 /// shared by `std.pass_door`, `std.enter_car` and `std.leave_car`.
 #[derive(Clone, Copy, Debug, Default)]
 struct Passage {
-    activation: Activation,
+    /// Begun: `start` and `heading` hold (a skill's switch on makes a fresh `Passage`).
+    begun: bool,
     start: (f64, f64),
     heading: f64,
     done: bool,
@@ -32,14 +33,14 @@ struct Passage {
 
 impl Passage {
     /// The command this cycle; `self.done` tells whether the passage is over.
-    fn step(&mut self, cycle: u64, sonar: &[f32; SONARS], odom: &Odom, limits: PassageLimits) -> Drive {
+    fn step(&mut self, sonar: &[f32; SONARS], odom: &Odom, limits: PassageLimits) -> Drive {
         let PassageLimits { speed, distance, stop_distance, max_turn } = limits;
         if !(odom.x.is_finite() && odom.y.is_finite() && odom.theta.is_finite()) {
             tracing::warn!(?odom, "passage: odometry is not finite: stopping this cycle");
             return Drive::default();
         }
-        if self.activation.fresh(cycle) {
-            *self = Passage { activation: self.activation, start: (odom.x, odom.y), heading: odom.theta, done: false };
+        if !self.begun {
+            *self = Passage { begun: true, start: (odom.x, odom.y), heading: odom.theta, done: false };
         }
         let travelled = (odom.x - self.start.0).hypot(odom.y - self.start.1);
         let ahead = nearest_in(sonar, 0.0, 16f64.to_radians()).map_or(f64::INFINITY, |(_, r)| r - ROBOT_RADIUS);
@@ -116,7 +117,12 @@ pub struct PassDoor {
 }
 
 impl Body for PassDoor {
-    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.passage = Passage::default();
+        Ok(())
+    }
+
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
         let limits = PassageLimits {
             speed: self.speed,
             distance: self.distance,
@@ -124,7 +130,7 @@ impl Body for PassDoor {
             max_turn: self.max_turn,
         };
         let p = &mut self.passage;
-        self.drive = p.step(cx.cycle(), &self.sonar, &self.odom, limits);
+        self.drive = p.step(&self.sonar, &self.odom, limits);
         self.passed = p.done;
         Ok(())
     }
@@ -165,7 +171,12 @@ pub struct EnterCar {
 }
 
 impl Body for EnterCar {
-    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.passage = Passage::default();
+        Ok(())
+    }
+
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
         let limits = PassageLimits {
             speed: self.speed,
             distance: self.distance,
@@ -173,7 +184,7 @@ impl Body for EnterCar {
             max_turn: self.max_turn,
         };
         let p = &mut self.passage;
-        self.drive = p.step(cx.cycle(), &self.sonar, &self.odom, limits);
+        self.drive = p.step(&self.sonar, &self.odom, limits);
         self.entered = p.done;
         Ok(())
     }
@@ -214,7 +225,12 @@ pub struct LeaveCar {
 }
 
 impl Body for LeaveCar {
-    fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.passage = Passage::default();
+        Ok(())
+    }
+
+    fn step(&mut self, _: &mut Context) -> Result<(), SkillError> {
         let limits = PassageLimits {
             speed: self.speed,
             distance: self.distance,
@@ -222,7 +238,7 @@ impl Body for LeaveCar {
             max_turn: self.max_turn,
         };
         let p = &mut self.passage;
-        self.drive = p.step(cx.cycle(), &self.sonar, &self.odom, limits);
+        self.drive = p.step(&self.sonar, &self.odom, limits);
         self.exited = p.done;
         Ok(())
     }

@@ -6,7 +6,7 @@ use situate::prelude::*;
 use situate_robot::{Drive, Odom};
 
 use super::clamp_abs;
-use crate::util::{wrap, Activation};
+use crate::util::wrap;
 
 /// Turns in place by `angle` relative to the heading at activation
 /// (measured with odometry, so any angle, even beyond a half turn), then
@@ -29,26 +29,30 @@ pub struct Turn {
     /// The turn is done when this close to `angle`, rad.
     #[param(default = 0.03, min = 0.001, max = 0.5, unit = "rad")]
     tolerance: f64,
-    activation: Activation,
     turned: f64,
-    last_theta: f64,
+    /// The heading at the last run since the switch on (`None`: none yet).
+    last_theta: Option<f64>,
     done: bool,
 }
 
 impl Body for Turn {
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.turned = 0.0;
+        self.last_theta = None;
+        self.done = false;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         let theta = self.odom.theta;
         if !theta.is_finite() {
             tracing::warn!(skill = "std.turn", theta, "odometry heading is not finite: silent this cycle");
             return Ok(());
         }
-        if self.activation.fresh(cx.cycle()) {
-            self.turned = 0.0;
-            self.done = false;
-        } else {
-            self.turned += wrap(theta - self.last_theta);
+        if let Some(last) = self.last_theta {
+            self.turned += wrap(theta - last);
         }
-        self.last_theta = theta;
+        self.last_theta = Some(theta);
         let remaining = self.angle - self.turned;
         if !self.done && remaining.abs() <= self.tolerance {
             self.done = true;

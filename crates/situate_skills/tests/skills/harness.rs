@@ -1,5 +1,7 @@
 //! Runs one skill through its real glue (`Skill::step` with an `Io`), with
-//! ports and parameters named as in its declaration.
+//! ports and parameters named as in its declaration, and switched on and off
+//! as the manager does (`Skill::activate` before the first run after a switch
+//! on, `Skill::deactivate` when switched off).
 
 use situate::{Context, Declare, Io, SignalValue, Skill, SkillDecl, Value};
 
@@ -7,6 +9,8 @@ pub struct Harness {
     skill: Box<dyn Skill>,
     decl: SkillDecl,
     cycle: u64,
+    /// Activated, not deactivated since.
+    on: bool,
     /// Simulated seconds per cycle.
     pub dt: f64,
     pub prints: Vec<String>,
@@ -27,7 +31,7 @@ impl Outputs {
 
 impl Harness {
     pub fn new<T: Declare>() -> Self {
-        Harness { skill: T::create(), decl: T::declaration(), cycle: 1, dt: 0.05, prints: Vec::new() }
+        Harness { skill: T::create(), decl: T::declaration(), cycle: 1, on: false, dt: 0.05, prints: Vec::new() }
     }
 
     pub fn decl(&self) -> &SkillDecl {
@@ -47,8 +51,19 @@ impl Harness {
         self.skill.set_param(k, &v);
     }
 
-    /// The skill is off for `cycles` cycles (deactivated).
+    /// The skill is switched off for `cycles` cycles (deactivated; activated
+    /// again before its next run).
     pub fn skip(&mut self, cycles: u64) {
+        let mut cx = Context::new(self.cycle, self.cycle as f64 * self.dt);
+        self.skill.deactivate(&mut cx).expect("the body is deactivated");
+        self.prints.extend(cx.take_prints());
+        self.on = false;
+        self.cycle += cycles;
+    }
+
+    /// The skill stays on but does not run for `cycles` cycles (an input it
+    /// needs was not written in them).
+    pub fn gap(&mut self, cycles: u64) {
         self.cycle += cycles;
     }
 
@@ -65,6 +80,9 @@ impl Harness {
             .collect();
         let mut outs = vec![None; self.decl.outputs.len()];
         let mut cx = Context::new(self.cycle, self.cycle as f64 * self.dt);
+        if !std::mem::replace(&mut self.on, true) {
+            self.skill.activate(&mut cx).expect("the body is activated");
+        }
         self.skill.step(&mut Io { inputs: &ins, outputs: &mut outs, cx: &mut cx }).expect("the body runs");
         self.prints.extend(cx.take_prints());
         self.cycle += 1;

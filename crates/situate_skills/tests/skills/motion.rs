@@ -247,6 +247,26 @@ fn turn_turns_by_the_angle_then_is_silent_and_again_after_reactivation() {
     assert!((turned + PI).abs() < 5f64.to_radians(), "turned {:.1}°", turned.to_degrees());
 }
 
+#[test]
+fn a_turn_goes_on_across_cycles_it_did_not_run_in() {
+    // Its odometry missed a few cycles (the skill stays on, it just does not run): the turn goes
+    // on from where it was. It once took a gap between two runs for a switch on and began a
+    // whole new turn from there, turning 90° more than asked.
+    let mut h = Harness::new::<Turn>();
+    let mut pose = Pose::new(0.0, 0.0, 0.0);
+    let mut base = Base::new(pose);
+    for _ in 0..10 {
+        let d = drive_of(&mut h, &[("odom", odom(base.pose))]);
+        base.step(d, DT);
+    }
+    h.gap(3);
+    let so_far = base.pose.theta;
+    assert!(so_far > 0.05, "it had begun: {so_far}");
+    pose = base.pose;
+    let turned = turn_until_silent(&mut h, &mut pose) + so_far;
+    assert!((turned - FRAC_PI_2).abs() < 5f64.to_radians(), "turned {:.1}° in all", turned.to_degrees());
+}
+
 /// A wall along x = 2 (0.1 m thick) with a 1 m door centred on y = 0.
 fn door_wall() -> Scene {
     Scene::new()
