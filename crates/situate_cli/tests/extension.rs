@@ -243,7 +243,7 @@ fn the_example_program_lists_checks_and_runs_its_own_types() {
 }
 
 #[test]
-fn the_example_program_serves_its_robot_and_its_brake_wins_the_drive() {
+fn the_example_program_serves_its_robot_its_brake_wins_the_drive_and_says_when_switched_off() {
     let robot = Robot::start_with(program(), &example().join("robot.yaml"), "extbot");
     // The workspace's `situate` is the client: the verbs speak the protocol, whatever the skills.
     // The toy sonar's drifting box is always nearer than brake's stop_distance, so brake wins the
@@ -258,9 +258,23 @@ fn the_example_program_serves_its_robot_and_its_brake_wins_the_drive() {
         if let Some(drive) = drive.filter(|d| d["winner"] == "brake") {
             let writers = drive["writers"].to_string();
             assert!(writers.contains("brake") && writers.contains("wander"), "{winners}");
-            return;
+            break;
         }
         assert!(std::time::Instant::now() < deadline, "brake did not win drive.v within {WAIT:?}: {winners}");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // Switched off, brake's `deactivate` says how long it braked (a count `activate` reset).
+    let out = robot.verb(&["deactivate", "brake"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let deadline = std::time::Instant::now() + WAIT;
+    loop {
+        let out = robot.verb(&["skills", "--json"]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        if text.contains("switched off after braking") {
+            return;
+        }
+        assert!(std::time::Instant::now() < deadline, "brake never said it was switched off: {text}");
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
 }

@@ -59,15 +59,30 @@ pub struct Brake {
     /// Turn rate while stopped.
     #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
     turn: f64,
+    /// Cycles braked since the skill was last switched on.
+    braked: u64,
 }
 
 impl Body for Brake {
+    /// Switched on: counts afresh (the body, and this field, live across activations).
+    fn activate(&mut self, _: &mut Context) -> Result<(), SkillError> {
+        self.braked = 0;
+        Ok(())
+    }
+
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         if self.range < self.stop_distance {
             let away = if self.bearing >= 0.0 { -self.turn } else { self.turn };
             self.drive = Some(Drive { v: 0.0, w: away });
+            self.braked += 1;
             sprint!(cx, "obstacle at {:.2} m: braking", self.range);
         }
+        Ok(())
+    }
+
+    /// Switched off: says how long it braked while on.
+    fn deactivate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        sprint!(cx, "switched off after braking {} cycles", self.braked);
         Ok(())
     }
 }
