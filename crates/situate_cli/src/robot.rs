@@ -69,7 +69,7 @@ pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
                 }
             },
             Err(errors) => {
-                let lines: Vec<_> = errors.iter().map(|e| robot_file.error(e.pos, e.message.clone())).collect();
+                let lines: Vec<_> = errors.into_iter().map(|e| robot_file.locate(e, node.pos)).collect();
                 return Err(bad_file(path, &lines));
             }
         },
@@ -78,10 +78,7 @@ pub(crate) fn load(path: &Path, compose: &Compose) -> anyhow::Result<Loaded> {
         None => None,
         Some(node) => match situate_ros2::Ros2Config::from_node(node) {
             Ok(c) => Some(c),
-            Err(e) => {
-                let at = e.pos.unwrap_or(node.pos);
-                return Err(bad_file(path, &[robot_file.error(at, format!("`ros2`: {}", e.message))]));
-            }
+            Err(e) => return Err(bad_file(path, &[robot_file.locate(e, node.pos)])),
         },
     };
     let remote = robot_file.remote_decls().map_err(|errors| bad_file(path, &errors))?;

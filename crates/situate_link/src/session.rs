@@ -7,7 +7,8 @@
 //! are Zenoh *clients* that connect to that endpoint and listen on nothing.
 
 use serde_json::{json, Value as Json};
-use situate_robotfile::yaml::{Node, Pos, Spanned};
+use situate_robotfile::diagnostic::Diagnostic;
+use situate_robotfile::yaml::{Node, Spanned};
 
 use crate::LinkError;
 
@@ -34,13 +35,6 @@ impl Default for LinkConfig {
     }
 }
 
-/// A problem in the `link:` section, with its position.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LinkConfigError {
-    pub pos: Pos,
-    pub message: String,
-}
-
 fn node_to_json(node: &Node) -> Json {
     match node {
         Node::Null => Json::Null,
@@ -59,14 +53,14 @@ fn node_to_json(node: &Node) -> Json {
 
 impl LinkConfig {
     /// Reads the robot file's `link:` mapping.
-    pub fn from_node(node: &Spanned<Node>) -> Result<LinkConfig, Vec<LinkConfigError>> {
+    pub fn from_node(node: &Spanned<Node>) -> Result<LinkConfig, Vec<Diagnostic>> {
         let mut cfg = LinkConfig::default();
         let mut errors = Vec::new();
         let Some(entries) = node.value.as_map() else {
-            return Err(vec![LinkConfigError { pos: node.pos, message: "`link` must be a mapping".into() }]);
+            return Err(vec![Diagnostic::at(node.pos, "`link` must be a mapping")]);
         };
         for (key, value) in entries {
-            let endpoints = |errors: &mut Vec<LinkConfigError>| -> Vec<String> {
+            let endpoints = |errors: &mut Vec<Diagnostic>| -> Vec<String> {
                 let items: Vec<&Spanned<Node>> = match &value.value {
                     Node::Seq(items) => items.iter().collect(),
                     Node::Scalar { .. } => vec![value],
@@ -76,14 +70,14 @@ impl LinkConfig {
                 for item in items {
                     match item.value.as_text() {
                         Some(t) if t.contains('/') => out.push(t.to_string()),
-                        _ => errors.push(LinkConfigError {
-                            pos: item.pos,
-                            message: format!(
+                        _ => errors.push(Diagnostic::at(
+                            item.pos,
+                            format!(
                                 "`link.{}` expects endpoints like \"tcp/127.0.0.1:7447\", got {}",
                                 key.value,
                                 item.value.describe()
                             ),
-                        }),
+                        )),
                     }
                 }
                 out
@@ -95,31 +89,28 @@ impl LinkConfig {
                     Some(r) if (crate::json::MIN_TELEMETRY_HZ..=crate::json::MAX_TELEMETRY_HZ).contains(&r) => {
                         cfg.telemetry_hz = r
                     }
-                    _ => errors.push(LinkConfigError {
-                        pos: value.pos,
-                        message: format!(
+                    _ => errors.push(Diagnostic::at(
+                        value.pos,
+                        format!(
                             "`link.telemetry_hz` expects a number from 0.01 to 100, got {}",
                             value.value.describe()
                         ),
-                    }),
+                    )),
                 },
                 "zenoh" => match &value.value {
                     Node::Map(_) => cfg.zenoh = Some(node_to_json(&value.value)),
-                    other => errors.push(LinkConfigError {
-                        pos: value.pos,
-                        message: format!(
-                            "`link.zenoh` expects a mapping of Zenoh configuration, got {}",
-                            other.describe()
-                        ),
-                    }),
+                    other => errors.push(Diagnostic::at(
+                        value.pos,
+                        format!("`link.zenoh` expects a mapping of Zenoh configuration, got {}", other.describe()),
+                    )),
                 },
-                other => errors.push(LinkConfigError {
-                    pos: key.pos,
-                    message: format!(
+                other => errors.push(Diagnostic::at(
+                    key.pos,
+                    format!(
                         "unknown key `{other}` in `link`{}",
                         situate_core::suggestion(other, ["listen", "connect", "telemetry_hz", "zenoh"])
                     ),
-                }),
+                )),
             }
         }
         if errors.is_empty() {
@@ -190,7 +181,7 @@ mod tests {
         let bad = situate_robotfile::yaml::parse("link:\n  listn: []\n  listen: [7447]\n").unwrap();
         let errs = LinkConfig::from_node(bad.value.get("link").unwrap()).unwrap_err();
         assert_eq!(errs[0].message, "unknown key `listn` in `link` — did you mean `listen`?");
-        assert_eq!((errs[0].pos.line, errs[0].pos.col), (2, 3));
+        assert_eq!((errs[0].line(), errs[0].col()), (2, 3));
         assert!(errs[1].message.starts_with("`link.listen` expects endpoints"), "{}", errs[1].message);
     }
 

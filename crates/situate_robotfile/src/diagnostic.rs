@@ -56,6 +56,11 @@ impl Diagnostic {
         Diagnostic { severity: Severity::Error, file: None, pos: Some(pos), message: message.into() }
     }
 
+    /// An error with no place (a configuration built in code, not read from a file).
+    pub fn without_place(message: impl Into<String>) -> Diagnostic {
+        Diagnostic { severity: Severity::Error, file: None, pos: None, message: message.into() }
+    }
+
     /// The same diagnostic, in `file`.
     pub fn in_file(self, file: &str) -> Diagnostic {
         Diagnostic { file: Some(file.to_string()), ..self }

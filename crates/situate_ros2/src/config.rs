@@ -21,7 +21,8 @@
 
 use serde::Deserialize;
 use serde_json::{json, Value as Json};
-use situate_robotfile::yaml::{Node, Pos, Spanned};
+use situate_robotfile::diagnostic::Diagnostic;
+use situate_robotfile::yaml::{Node, Spanned};
 
 use crate::msgs::MsgType;
 use crate::rmw::valid_ros_name;
@@ -118,29 +119,21 @@ pub struct TopicConfig {
     pub range_max: Option<f32>,
 }
 
-/// A mistake in the `ros2:` section, at its place in the robot file when known.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{}`ros2`: {message}", pos.map(|p| format!("{}:{}: ", p.line, p.col)).unwrap_or_default())]
-pub struct Ros2ConfigError {
-    pub pos: Option<Pos>,
-    pub message: String,
-}
-
 impl Ros2Config {
     /// The highest domain id ROS 2 allows.
     pub const MAX_DOMAIN_ID: u32 = 232;
 
     /// Reads and checks the robot file's `ros2:` mapping (from `situate_robotfile`'s YAML reader).
-    pub fn from_node(node: &Spanned<Node>) -> Result<Ros2Config, Ros2ConfigError> {
+    /// A mistake is a [`Diagnostic`] at its place in the section (the file is the caller's:
+    /// `RobotFile::locate`), its message beginning with `` `ros2`: ``.
+    pub fn from_node(node: &Spanned<Node>) -> Result<Ros2Config, Diagnostic> {
+        let mistake = |message: String| Diagnostic::at(node.pos, format!("`ros2`: {message}"));
         if node.value.as_map().is_none() {
-            return Err(Ros2ConfigError {
-                pos: Some(node.pos),
-                message: format!("expected a mapping, got {}", node.value.describe()),
-            });
+            return Err(mistake(format!("expected a mapping, got {}", node.value.describe())));
         }
-        let config: Ros2Config = serde_json::from_value(node_to_json(&node.value))
-            .map_err(|e| Ros2ConfigError { pos: Some(node.pos), message: e.to_string() })?;
-        config.check().map_err(|message| Ros2ConfigError { pos: Some(node.pos), message })?;
+        let config: Ros2Config =
+            serde_json::from_value(node_to_json(&node.value)).map_err(|e| mistake(e.to_string()))?;
+        config.check().map_err(mistake)?;
         Ok(config)
     }
 
@@ -324,7 +317,7 @@ ros2:
     #[test]
     fn mistakes_are_named_with_their_place() {
         let e = Ros2Config::from_node(&section("x: 1\nros2:\n  topcs: []\n")).expect_err("unknown key");
-        assert!(e.to_string().starts_with("3:3: `ros2`: unknown field `topcs`"), "{e}");
+        assert!(e.to_string().starts_with("3:3: error: `ros2`: unknown field `topcs`"), "{e}");
         let e = Ros2Config::from_node(&section(
             "ros2:\n  topics:\n    - {signal: odom, topic: odom, type: nav_msgs/msg/Odom}\n",
         ))

@@ -42,9 +42,10 @@ use std::time::{Duration, Instant};
 
 use situate_core::{ElemType, SignalType, Value};
 use situate_manager::{ControlError, Handle, Reply, Request};
+use situate_robotfile::diagnostic::Diagnostic;
 use zenoh::Wait;
 
-pub use config::{Direction, Ros2Config, Ros2ConfigError, TopicConfig};
+pub use config::{Direction, Ros2Config, TopicConfig};
 pub use inputs::{InputStats, Inputs};
 pub use msgs::MsgType;
 
@@ -56,7 +57,7 @@ const REQUEST_TIMEOUT: Duration = Duration::from_secs(5);
 pub enum Ros2Error {
     /// The configuration is invalid.
     #[error(transparent)]
-    Config(#[from] Ros2ConfigError),
+    Config(#[from] Diagnostic),
     /// A topic's signal does not exist.
     #[error("`ros2`: topic `{topic}`: {source}")]
     Signal {
@@ -122,7 +123,7 @@ impl Ros2Node {
     /// Checks the configuration and declares the node on `session`; `robot` names the node
     /// when the configuration does not.
     pub fn declare(robot: &str, session: zenoh::Session, config: &Ros2Config) -> Result<Ros2Node, Ros2Error> {
-        config.check().map_err(|message| Ros2ConfigError { pos: None, message })?;
+        config.check().map_err(|message| Ros2Error::Config(Diagnostic::without_place(format!("`ros2`: {message}"))))?;
         let name = rmw::NodeName {
             domain_id: config.domain_id,
             namespace: config.namespace.clone(),

@@ -119,6 +119,14 @@ impl RobotFile {
         ConfigError::new(self.file_of(pos), pos, message)
     }
 
+    /// A diagnostic about one of this file's sections (a section's own reader, which knows
+    /// positions but not files: `link:`, `ros2:`), placed in the file that holds its position;
+    /// one without a position is placed at `section`, the section's own.
+    pub fn locate(&self, diagnostic: ConfigError, section: Pos) -> ConfigError {
+        let pos = diagnostic.pos.unwrap_or(section);
+        ConfigError { pos: (pos.line > 0).then_some(pos), ..diagnostic }.in_file(self.file_of(pos))
+    }
+
     /// The entries of one section, in file order.
     pub fn section(&self, section: Section) -> impl Iterator<Item = &SkillEntry> {
         self.skills.iter().filter(move |s| s.section == section)
