@@ -41,6 +41,13 @@ memory (no copy). Whatever the body prints goes to the skill's own prints
 (shown by ``situate skills``/``skill`` queries, and as print events when the
 skill is verbose). An exception faults the skill with its traceback; a wrongly
 typed output faults it naming the port, the expected and the given type.
+
+A class skill may also define ``activate(self)`` and ``deactivate(self)``: the
+manager calls ``activate`` once when the skill is switched on, before its first
+run after that, and ``deactivate`` once when it is switched off, after its last
+run (see ``docs/python.md``, "Switched on and off"). An exception in
+``activate`` faults the skill; one in ``deactivate`` is a warning and one of the
+skill's prints, and the skill is off anyway.
 """
 
 from __future__ import annotations
@@ -164,6 +171,56 @@ def _param_type(name: str, spec: Param, annotation: Any) -> str:
     )
 
 
+#: A class skill's optional methods the manager calls when it is switched on and off.
+_HOOKS = ("activate", "deactivate")
+
+
+def _check_hook(cls: object, name: str) -> None:
+    """Refuses a class's ``activate``/``deactivate`` that cannot be called as ``obj.name()``.
+
+    The manager calls the hook of each instance with no arguments (besides
+    ``self``) and does not await it. A class without the method has no hook.
+    """
+    hook = getattr(cls, name, None)
+    if hook is None:
+        return
+    if not callable(hook):
+        raise SkillDeclarationError(
+            f"`{name}` must be a method taking only self, not a {type(hook).__name__}"
+        )
+    if inspect.iscoroutinefunction(hook):
+        raise SkillDeclarationError(
+            f"`{name}` is an async def: the manager calls it without awaiting it; "
+            "make it a plain method"
+        )
+    try:
+        arguments = list(inspect.signature(hook).parameters.values())
+    except (TypeError, ValueError):  # no signature to read (a builtin): the call will tell
+        return
+    if inspect.isfunction(inspect.getattr_static(cls, name)):
+        # A plain method: its first argument receives the instance.
+        if arguments and arguments[0].kind in (
+            inspect.Parameter.POSITIONAL_ONLY,
+            inspect.Parameter.POSITIONAL_OR_KEYWORD,
+        ):
+            arguments = arguments[1:]
+        elif not any(a.kind is inspect.Parameter.VAR_POSITIONAL for a in arguments):
+            raise SkillDeclarationError(
+                f"`{name}` takes no `self`: write `def {name}(self) -> None:`"
+            )
+    required = [
+        a.name
+        for a in arguments
+        if a.default is inspect.Parameter.empty
+        and a.kind not in (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
+    ]
+    if required:
+        needs = ", ".join(f"`{n}`" for n in required)
+        raise SkillDeclarationError(
+            f"`{name}` is called with no arguments besides self, but it needs {needs}"
+        )
+
+
 def _hints(body: Callable[..., Any], arguments: list[inspect.Parameter]) -> dict[str, Any]:
     """The arguments' annotations, evaluated (string annotations included).
 
@@ -247,6 +304,8 @@ class Skill:
                     raise SkillDeclarationError(
                         f"the class is made with no arguments, but __init__ needs {needs}"
                     )
+            for hook in _HOOKS:
+                _check_hook(self.target, hook)
             sig = inspect.signature(step)
             return step, list(sig.parameters.values())[1:]  # without self
         if not callable(self.target):
@@ -363,13 +422,22 @@ class Skill:
             default = float(default)
         return (name, ty, default, spec.min, spec.max, spec.unit, spec.doc)
 
-    def _make_body(self) -> Callable[..., Any]:
-        """A body callable for one new instance (a class: a new object's ``step``)."""
+    def _make_body(
+        self,
+    ) -> tuple[Callable[..., Any], Callable[[], Any] | None, Callable[[], Any] | None]:
+        """One new instance's body and hooks: ``(step, activate, deactivate)``.
+
+        A class: a new object's ``step``, ``activate`` and ``deactivate`` (``None``
+        for a hook the class does not define). A function: the function, without
+        hooks.
+        """
         if self._is_class:
             instance = self.target()
             step: Callable[..., Any] = instance.step
-            return step
-        return self.target
+            activate: Callable[[], Any] | None = getattr(instance, "activate", None)
+            deactivate: Callable[[], Any] | None = getattr(instance, "deactivate", None)
+            return step, activate, deactivate
+        return self.target, None, None
 
     def describe(self) -> str:
         """The declaration in words (ports, parameters with their ranges)."""

@@ -10,6 +10,11 @@
 //! returns a [`SkillError`] carrying the traceback, so the manager faults
 //! the skill and the cycle goes on. What the body prints to `sys.stdout` is
 //! captured per call and becomes the skill's own prints.
+//!
+//! A class skill's optional `activate(self)` and `deactivate(self)` are its
+//! [`Skill::activate`] and [`Skill::deactivate`]: called the same way (the
+//! same thread state, the same capture of prints), an exception becomes the
+//! [`SkillError`] a failed `step` would return.
 
 use std::cell::{Cell, RefCell};
 use std::sync::Arc;
@@ -19,7 +24,7 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyString, PyTuple};
 use situate_core::{
-    Io, ParamSpec, ParamType, PortSpec, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType, Value,
+    Context, Io, ParamSpec, ParamType, PortSpec, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType, Value,
 };
 
 use crate::convert;
@@ -315,6 +320,10 @@ pub fn traceback_text(py: Python<'_>, err: &PyErr) -> String {
 pub struct PySkill {
     decl: Arc<SkillDecl>,
     body: Py<PyAny>,
+    /// The instance's `activate` and `deactivate` (a class skill's, when it
+    /// defines them; a function skill has none).
+    on_activate: Option<Py<PyAny>>,
+    on_deactivate: Option<Py<PyAny>>,
     args: Vec<(bool, usize, Py<PyString>)>,
     positional: bool,
     params: Vec<Py<PyAny>>,
@@ -322,12 +331,15 @@ pub struct PySkill {
 }
 
 impl PySkill {
-    fn new(py: Python<'_>, d: &Declaration, body: Py<PyAny>) -> PyResult<PySkill> {
+    fn new(py: Python<'_>, d: &Declaration, made: Made) -> PyResult<PySkill> {
+        let (body, on_activate, on_deactivate) = made;
         let params =
             d.decl.params.iter().map(|p| convert::to_py(py, &p.default).map(Bound::unbind)).collect::<PyResult<_>>()?;
         Ok(PySkill {
             decl: Arc::clone(&d.decl),
             body,
+            on_activate,
+            on_deactivate,
             args: d.args.iter().map(|(p, i, n)| (*p, *i, PyString::intern(py, n).unbind())).collect(),
             positional: d.positional,
             params,
@@ -379,6 +391,24 @@ impl PySkill {
         SkillError::new(format!("python skill `{}`: {message}", self.decl.type_name))
     }
 
+    /// Calls a hook (`activate` or `deactivate`) with no arguments, as
+    /// [`Skill::step`] calls the body: what it prints becomes the skill's
+    /// prints, an exception the error (the manager names the hook). No hook:
+    /// nothing, without attaching to the interpreter.
+    fn call_hook(&self, hook: Option<&Py<PyAny>>, cx: &mut Context) -> Result<(), SkillError> {
+        let Some(hook) = hook else { return Ok(()) };
+        keep_thread_state();
+        Python::attach(|py| {
+            let capture = Capture::begin(py);
+            let result = hook.bind(py).call0();
+            print_lines(cx, &capture.end());
+            match result {
+                Ok(_) => Ok(()),
+                Err(e) => Err(self.fail(format!("raised {}", traceback_text(py, &e)))),
+            }
+        })
+    }
+
     /// Converts the body's result into the outputs, checking every type.
     fn take_outputs(&self, result: &Bound<'_, PyAny>, outputs: &mut [Option<Value>]) -> Result<(), SkillError> {
         if result.is_none() {
@@ -423,24 +453,37 @@ impl PySkill {
     }
 }
 
+/// What a call printed, one print per line (a last newline ends the last line).
+fn print_lines(cx: &mut Context, printed: &str) {
+    if printed.is_empty() {
+        return;
+    }
+    let text = printed.strip_suffix('\n').unwrap_or(printed);
+    for line in text.split('\n') {
+        cx.print(line);
+    }
+}
+
 impl Skill for PySkill {
     fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
         keep_thread_state();
         Python::attach(|py| {
             let capture = Capture::begin(py);
             let result = self.call(py, io.inputs);
-            let printed = capture.end();
-            if !printed.is_empty() {
-                let text = printed.strip_suffix('\n').unwrap_or(&printed);
-                for line in text.split('\n') {
-                    io.cx.print(line);
-                }
-            }
+            print_lines(io.cx, &capture.end());
             match result {
                 Ok(r) => self.take_outputs(&r, io.outputs),
                 Err(e) => Err(self.fail(format!("raised {}", traceback_text(py, &e)))),
             }
         })
+    }
+
+    fn activate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.call_hook(self.on_activate.as_ref(), cx)
+    }
+
+    fn deactivate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.call_hook(self.on_deactivate.as_ref(), cx)
     }
 
     fn set_param(&mut self, index: usize, value: &Value) {
@@ -452,8 +495,12 @@ impl Skill for PySkill {
     }
 }
 
+/// What `_make_body()` returns for one new instance: the body callable and
+/// the instance's `activate` and `deactivate` hooks (`None` when absent).
+type Made = (Py<PyAny>, Option<Py<PyAny>>, Option<Py<PyAny>>);
+
 /// The skill type of a `@situate.skill` object: its `_declaration` and its
-/// `_make_body()` (a fresh body callable per instance).
+/// `_make_body()` (a fresh body callable and its hooks per instance).
 pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType> {
     let declaration = obj.getattr("_declaration")?;
     let declaration = declaration.cast::<Declaration>()?;
@@ -471,11 +518,12 @@ pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType>
     Ok(SkillType::new(decl, move || {
         Python::attach(|py| {
             let d = declaration.bind(py).get();
-            let body = factory
+            let made = factory
                 .bind(py)
                 .call0()
+                .and_then(|made| made.extract::<Made>())
                 .map_err(|e| format!("creating python skill `{}`: {}", d.decl.type_name, traceback_text(py, &e)))?;
-            let skill = PySkill::new(py, d, body.unbind()).map_err(|e| e.to_string())?;
+            let skill = PySkill::new(py, d, made).map_err(|e| e.to_string())?;
             Ok(Box::new(skill) as Box<dyn Skill>)
         })
     }))
