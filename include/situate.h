@@ -19,6 +19,12 @@
 /*
  The version of this ABI. A library built for another version is refused
  at load time with a clear error.
+
+ Optional fields appended at the end of `situate_skill_type` do not change
+ it: a library says how large its entries are (`skill_type_size`), the host
+ reads a field only when that size covers it (else the field is NULL), and
+ a host older than the library refuses its longer entries by their size.
+ The lifecycle hooks (`activate`, `deactivate`) were appended so, in v2.
  */
 #define SITUATE_ABI_VERSION 2
 
@@ -239,7 +245,32 @@ typedef struct situate_field {
 } situate_field;
 
 /*
+ The skill was switched on (at start if it starts active, or by the
+ sequencer): called once before its first `step` after that, on the thread
+ that runs its body, with the current parameters. An error status
+ (`situate_fail(cx, ...)`) faults the skill with the message. Its prints
+ (`situate_print(cx, ...)`) are the skill's.
+ */
+typedef situate_status (*situate_activate_fn)(void *state,
+                                              const void *params,
+                                              struct situate_context *cx);
+
+/*
+ The skill was switched off (by the sequencer, or by a fault): called once
+ after its last `step`, on the thread that runs its body. The skill is off
+ whatever it returns: an error status is a warning and one of the skill's
+ prints, not a fault. Not called at shutdown (only `fini`).
+ */
+typedef situate_status (*situate_deactivate_fn)(void *state,
+                                                const void *params,
+                                                struct situate_context *cx);
+
+/*
  One skill type of a library.
+
+ Fields are only ever appended, each optional: a library built before a
+ field existed has shorter entries (`skill_type_size`) and the host takes
+ the field as NULL.
  */
 typedef struct situate_skill_type {
   /*
@@ -284,6 +315,15 @@ typedef struct situate_skill_type {
   uint32_t inputs_field_count;
   uint32_t outputs_field_count;
   uint32_t params_field_count;
+  /*
+   Optional (appended in ABI v2: read only when `skill_type_size`
+   covers it).
+   */
+  situate_activate_fn activate;
+  /*
+   Optional (appended in ABI v2, as `activate`).
+   */
+  situate_deactivate_fn deactivate;
 } situate_skill_type;
 
 /*
@@ -295,7 +335,8 @@ typedef struct situate_library {
    */
   uint32_t abi_version;
   /*
-   `sizeof(situate_skill_type)` as the library was built.
+   `sizeof(situate_skill_type)` as the library was built: the stride of
+   `skills`, and which of the appended fields it has.
    */
   uint32_t skill_type_size;
   /*
@@ -397,12 +438,18 @@ static inline void situate_print(situate_context *cx, const char *format, ...) {
     cx->host->print(cx->host_data, line, (size_t)n);
 }
 
-/* A skill type of a C library: `prefix_step` only (the state starts zeroed).
+/* A skill type of a C library with the hooks you choose: each of `init`, `fini`, `set_param`,
+ * `activate` and `deactivate` is NULL or the generated glue to your function (`prefix##__init`,
+ * `prefix##__fini`, `prefix##__set_param`, `prefix##__activate`, `prefix##__deactivate`):
+ * SITUATE_SKILL_WITH(c_x, NULL, NULL, NULL, c_x__activate, c_x__deactivate).
  * `prefix_state` must be a complete type where this is used. */
-#define SITUATE_SKILL(prefix)                                                                       \
+#define SITUATE_SKILL_WITH(prefix, init, fini, set_param, activate, deactivate)                     \
     { prefix##_manifest, sizeof(prefix##_inputs), sizeof(prefix##_outputs), sizeof(prefix##_params), \
-      sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), NULL, NULL, prefix##__step, NULL,     \
-      SITUATE__FIELDS(prefix) }
+      sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), init, fini, prefix##__step, set_param, \
+      SITUATE__FIELDS(prefix), activate, deactivate }
+
+/* A skill type of a C library: `prefix_step` only (the state starts zeroed). */
+#define SITUATE_SKILL(prefix) SITUATE_SKILL_WITH(prefix, NULL, NULL, NULL, NULL, NULL)
 
 /* The field tables the generated header writes for `prefix`, with their lengths. */
 #define SITUATE__FIELDS(prefix)                                                                     \
@@ -413,9 +460,13 @@ static inline void situate_print(situate_context *cx, const char *format, ...) {
 
 /* The same with `prefix_init`, `prefix_fini` and `prefix_set_param` as well. */
 #define SITUATE_SKILL_HOOKS(prefix)                                                                 \
-    { prefix##_manifest, sizeof(prefix##_inputs), sizeof(prefix##_outputs), sizeof(prefix##_params), \
-      sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), prefix##__init, prefix##__fini,        \
-      prefix##__step, prefix##__set_param, SITUATE__FIELDS(prefix) }
+    SITUATE_SKILL_WITH(prefix, prefix##__init, prefix##__fini, prefix##__set_param, NULL, NULL)
+
+/* The same with every hook: `prefix_init`, `prefix_fini`, `prefix_set_param`, `prefix_activate`
+ * and `prefix_deactivate`. */
+#define SITUATE_SKILL_ALL_HOOKS(prefix)                                                             \
+    SITUATE_SKILL_WITH(prefix, prefix##__init, prefix##__fini, prefix##__set_param,                 \
+                       prefix##__activate, prefix##__deactivate)
 
 /* Exports the library's skill types: SITUATE_LIBRARY(SITUATE_SKILL(a), SITUATE_SKILL(b)). Once per library. */
 #define SITUATE_LIBRARY(...)                                                                          \

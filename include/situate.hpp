@@ -10,11 +10,21 @@
 //       explicit Runaway(const Params& params);   // optional: else default-constructed
 //       void step(const Inputs& in, Outputs& out, const Params& params, situate::Context& cx);
 //       void on_param(uint32_t index, const Params& params);   // optional
+//       void on_activate(const Params& params, situate::Context& cx);   // optional, or on_activate(cx)
+//       void on_deactivate(const Params& params, situate::Context& cx); // optional, or on_deactivate(cx)
 //     };
 //     SITUATE_CPP_LIBRARY(Runaway)   // once per library; several classes may be listed
 //
-// An exception thrown by the constructor, `step` or `on_param` becomes an
-// error status carrying its `what()`: the skill is faulted, the cycle goes on.
+// `on_activate` is called once when the skill is switched on (at start if it
+// starts active, or by the sequencer), before its first `step` after that;
+// `on_deactivate` once when it is switched off (by the sequencer or by a
+// fault), after its last `step`; both on the thread that runs `step`. Not at
+// shutdown: then only the destructor runs.
+//
+// An exception thrown by the constructor, `step`, `on_param` or
+// `on_activate` becomes an error status carrying its `what()`: the skill is
+// faulted, the cycle goes on. One thrown by `on_deactivate` is a warning and
+// one of the skill's prints (the skill is off anyway).
 // Nothing here is a second FFI: the library exports the C ABI.
 #pragma once
 
@@ -92,6 +102,39 @@ struct has_on_param<S, std::void_t<decltype(std::declval<S&>().on_param(std::uin
                                                                          std::declval<const typename S::Params&>()))>>
     : std::true_type {};
 
+// on_activate / on_deactivate: with the parameters and the context, or the context only.
+template <class S, class = void>
+struct has_on_activate_params : std::false_type {};
+template <class S>
+struct has_on_activate_params<S, std::void_t<decltype(std::declval<S&>().on_activate(
+                                     std::declval<const typename S::Params&>(), std::declval<Context&>()))>>
+    : std::true_type {};
+template <class S, class = void>
+struct has_on_activate_cx : std::false_type {};
+template <class S>
+struct has_on_activate_cx<S, std::void_t<decltype(std::declval<S&>().on_activate(std::declval<Context&>()))>>
+    : std::true_type {};
+template <class S, class = void>
+struct has_on_deactivate_params : std::false_type {};
+template <class S>
+struct has_on_deactivate_params<S, std::void_t<decltype(std::declval<S&>().on_deactivate(
+                                       std::declval<const typename S::Params&>(), std::declval<Context&>()))>>
+    : std::true_type {};
+template <class S, class = void>
+struct has_on_deactivate_cx : std::false_type {};
+template <class S>
+struct has_on_deactivate_cx<S, std::void_t<decltype(std::declval<S&>().on_deactivate(std::declval<Context&>()))>>
+    : std::true_type {};
+// A member of that name at all (not overloaded): one of neither form is a mistake, not "no hook".
+template <class S, class = void>
+struct names_on_activate : std::false_type {};
+template <class S>
+struct names_on_activate<S, std::void_t<decltype(&S::on_activate)>> : std::true_type {};
+template <class S, class = void>
+struct names_on_deactivate : std::false_type {};
+template <class S>
+struct names_on_deactivate<S, std::void_t<decltype(&S::on_deactivate)>> : std::true_type {};
+
 template <class S>
 situate_status init(void* state, const void* params, situate_error* error) noexcept {
   using P = typename S::Params;
@@ -127,15 +170,57 @@ situate_status set_param(void* state, std::uint32_t index, const void* params, s
   });
 }
 
+template <class S>
+situate_status activate(void* state, const void* params, situate_context* cx) noexcept {
+  return guarded(cx->error, [&] {
+    Context context(cx);
+    S& skill = *static_cast<S*>(state);
+    if constexpr (has_on_activate_params<S>::value) {
+      skill.on_activate(*static_cast<const typename S::Params*>(params), context);
+    } else {
+      skill.on_activate(context);
+    }
+  });
+}
+
+template <class S>
+situate_status deactivate(void* state, const void* params, situate_context* cx) noexcept {
+  return guarded(cx->error, [&] {
+    Context context(cx);
+    S& skill = *static_cast<S*>(state);
+    if constexpr (has_on_deactivate_params<S>::value) {
+      skill.on_deactivate(*static_cast<const typename S::Params*>(params), context);
+    } else {
+      skill.on_deactivate(context);
+    }
+  });
+}
+
 }  // namespace detail
 
 /// The C ABI's skill type entry of class `S`.
 template <class S>
 situate_skill_type skill_type() noexcept {
   static_assert(std::is_standard_layout_v<typename S::Inputs>, "Inputs must be the generated struct");
+  constexpr bool activates = detail::has_on_activate_params<S>::value || detail::has_on_activate_cx<S>::value;
+  constexpr bool deactivates = detail::has_on_deactivate_params<S>::value || detail::has_on_deactivate_cx<S>::value;
+  static_assert(activates || !detail::names_on_activate<S>::value,
+                "on_activate must be callable as on_activate(const Params&, situate::Context&) or "
+                "on_activate(situate::Context&)");
+  static_assert(deactivates || !detail::names_on_deactivate<S>::value,
+                "on_deactivate must be callable as on_deactivate(const Params&, situate::Context&) or "
+                "on_deactivate(situate::Context&)");
   situate_set_param_fn on_param = nullptr;
   if constexpr (detail::has_on_param<S>::value) {
     on_param = &detail::set_param<S>;
+  }
+  situate_activate_fn on_activate = nullptr;
+  if constexpr (activates) {
+    on_activate = &detail::activate<S>;
+  }
+  situate_deactivate_fn on_deactivate = nullptr;
+  if constexpr (deactivates) {
+    on_deactivate = &detail::deactivate<S>;
   }
   return situate_skill_type{S::manifest(),
                             sizeof(typename S::Inputs),
@@ -152,7 +237,9 @@ situate_skill_type skill_type() noexcept {
                             S::params_fields(),
                             S::inputs_field_count(),
                             S::outputs_field_count(),
-                            S::params_field_count()};
+                            S::params_field_count(),
+                            on_activate,
+                            on_deactivate};
 }
 
 /// The library table of skill classes `S...`.

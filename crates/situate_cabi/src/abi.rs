@@ -13,6 +13,12 @@ use std::ffi::{c_char, c_void};
 
 /// The version of this ABI. A library built for another version is refused
 /// at load time with a clear error.
+///
+/// Optional fields appended at the end of `situate_skill_type` do not change
+/// it: a library says how large its entries are (`skill_type_size`), the host
+/// reads a field only when that size covers it (else the field is NULL), and
+/// a host older than the library refuses its longer entries by their size.
+/// The lifecycle hooks (`activate`, `deactivate`) were appended so, in v2.
 pub const SITUATE_ABI_VERSION: u32 = 2;
 
 /// A call succeeded.
@@ -121,6 +127,21 @@ pub type situate_set_param_fn = Option<
     ) -> situate_status,
 >;
 
+/// The skill was switched on (at start if it starts active, or by the
+/// sequencer): called once before its first `step` after that, on the thread
+/// that runs its body, with the current parameters. An error status
+/// (`situate_fail(cx, ...)`) faults the skill with the message. Its prints
+/// (`situate_print(cx, ...)`) are the skill's.
+pub type situate_activate_fn =
+    Option<unsafe extern "C" fn(state: *mut c_void, params: *const c_void, cx: *mut situate_context) -> situate_status>;
+
+/// The skill was switched off (by the sequencer, or by a fault): called once
+/// after its last `step`, on the thread that runs its body. The skill is off
+/// whatever it returns: an error status is a warning and one of the skill's
+/// prints, not a fault. Not called at shutdown (only `fini`).
+pub type situate_deactivate_fn =
+    Option<unsafe extern "C" fn(state: *mut c_void, params: *const c_void, cx: *mut situate_context) -> situate_status>;
+
 /// A field's type in a [`situate_field`]: what the compiler saw, by
 /// `SITUATE_FIELD_CODE` (C11 `_Generic`, C++ templates) in the generated
 /// headers. `bool`.
@@ -164,6 +185,10 @@ pub struct situate_field {
 }
 
 /// One skill type of a library.
+///
+/// Fields are only ever appended, each optional: a library built before a
+/// field existed has shorter entries (`skill_type_size`) and the host takes
+/// the field as NULL.
 #[repr(C)]
 pub struct situate_skill_type {
     /// The declaration: a NUL-terminated YAML manifest with a `name`.
@@ -192,6 +217,11 @@ pub struct situate_skill_type {
     pub inputs_field_count: u32,
     pub outputs_field_count: u32,
     pub params_field_count: u32,
+    /// Optional (appended in ABI v2: read only when `skill_type_size`
+    /// covers it).
+    pub activate: situate_activate_fn,
+    /// Optional (appended in ABI v2, as `activate`).
+    pub deactivate: situate_deactivate_fn,
 }
 
 /// What a library's entry function returns.
@@ -199,7 +229,8 @@ pub struct situate_skill_type {
 pub struct situate_library {
     /// `SITUATE_ABI_VERSION` as the library was built. Always the first field.
     pub abi_version: u32,
-    /// `sizeof(situate_skill_type)` as the library was built.
+    /// `sizeof(situate_skill_type)` as the library was built: the stride of
+    /// `skills`, and which of the appended fields it has.
     pub skill_type_size: u32,
     /// The number of skill types in `skills`.
     pub skill_count: u32,

@@ -237,7 +237,15 @@ fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> Stri
          situate_status {p}_init({p}_state* state, const {p}_params* params, situate_error* error);\n\
          void {p}_fini({p}_state* state);\n\
          situate_status {p}_set_param({p}_state* state, uint32_t index, const {p}_params* params,\n    \
-         situate_error* error);\n"
+         situate_error* error);\n\n\
+         /* With SITUATE_SKILL_ALL_HOOKS({p}) you write all five; with SITUATE_SKILL_WITH({p}, init, fini,\n   \
+         set_param, activate, deactivate) the ones you name (`{p}__activate`, ...; NULL for the others).\n   \
+         activate: the skill was switched on; called once before its first step after that (an error\n   \
+         status, `situate_fail(cx, ...)`, faults the skill). deactivate: it was switched off (by the\n   \
+         sequencer or a fault); called once after its last step (an error status is only a warning).\n   \
+         Both on the thread that runs the step; not at shutdown (then only fini). */\n\
+         situate_status {p}_activate({p}_state* state, const {p}_params* params, situate_context* cx);\n\
+         situate_status {p}_deactivate({p}_state* state, const {p}_params* params, situate_context* cx);\n"
     );
     let _ = writeln!(
         o,
@@ -248,7 +256,11 @@ fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> Stri
          return {p}_init(({p}_state*)s, (const {p}_params*)p, e);\n}}\n\
          static inline void {p}__fini(void* s) {{\n    {p}_fini(({p}_state*)s);\n}}\n\
          static inline situate_status {p}__set_param(void* s, uint32_t i, const void* p, situate_error* e) {{\n    \
-         return {p}_set_param(({p}_state*)s, i, (const {p}_params*)p, e);\n}}\n"
+         return {p}_set_param(({p}_state*)s, i, (const {p}_params*)p, e);\n}}\n\
+         static inline situate_status {p}__activate(void* s, const void* p, situate_context* cx) {{\n    \
+         return {p}_activate(({p}_state*)s, (const {p}_params*)p, cx);\n}}\n\
+         static inline situate_status {p}__deactivate(void* s, const void* p, situate_context* cx) {{\n    \
+         return {p}_deactivate(({p}_state*)s, (const {p}_params*)p, cx);\n}}\n"
     );
     let _ = writeln!(o, "#ifdef __cplusplus\n}}\n#endif\n\n#endif /* {guard} */");
     o
@@ -324,10 +336,15 @@ fn cpp_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> St
          ///   explicit MySkill(const Params& params);  // optional (else default-constructed)\n\
          ///   void step(const Inputs& in, Outputs& out, const Params& params, situate::Context& cx);\n\
          ///   void on_param(uint32_t index, const Params& params);  // optional\n\
+         ///   void on_activate(const Params& params, situate::Context& cx);  // optional; or on_activate(cx)\n\
+         ///   void on_deactivate(const Params& params, situate::Context& cx);  // optional; or on_deactivate(cx)\n\
          /// }};\n\
          /// SITUATE_CPP_LIBRARY(MySkill)\n\
          /// ```\n\
-         /// Throwing from any of them faults the skill with the exception's `what()`.\n\
+         /// `on_activate`: the skill was switched on, before its first `step` after that; `on_deactivate`:\n\
+         /// it was switched off, after its last `step` (both on the thread that runs `step`; not at shutdown).\n\
+         /// Throwing from any of them faults the skill with the exception's `what()` (from `on_deactivate`:\n\
+         /// a warning only, the skill is off anyway).\n\
          struct Skill {{\n    \
          using Inputs = {p}::Inputs;\n    \
          using Outputs = {p}::Outputs;\n    \
@@ -364,6 +381,23 @@ mod tests {
             "    double gain;",
             "#define C_T_PARAM_GAIN 0u",
             "situate_status c_t_step(c_t_state* state",
+            "situate_status c_t_activate(c_t_state* state, const c_t_params* params, situate_context* cx);",
+            "situate_status c_t_deactivate(c_t_state* state, const c_t_params* params, situate_context* cx);",
+            "static inline situate_status c_t__activate(void* s, const void* p, situate_context* cx) {",
+            "static inline situate_status c_t__deactivate(void* s, const void* p, situate_context* cx) {",
+        ] {
+            assert!(h.contains(needle), "missing {needle:?} in\n{h}");
+        }
+    }
+
+    #[test]
+    fn cpp_header_documents_the_optional_members() {
+        let files = generate_text(Lang::Cpp, MANIFEST, "t.yaml").unwrap();
+        let h = &files[0].contents;
+        for needle in [
+            "void on_param(uint32_t index, const Params& params);  // optional",
+            "void on_activate(const Params& params, situate::Context& cx);  // optional; or on_activate(cx)",
+            "void on_deactivate(const Params& params, situate::Context& cx);  // optional; or on_deactivate(cx)",
         ] {
             assert!(h.contains(needle), "missing {needle:?} in\n{h}");
         }

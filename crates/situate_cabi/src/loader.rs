@@ -20,9 +20,9 @@ use std::sync::Arc;
 use situate_core::{Context, ElemType, Io, ParamType, Skill, SkillDecl, SkillError, SkillType, Value};
 
 use crate::abi::{
-    situate_context, situate_entry_fn, situate_error, situate_field, situate_fini_fn, situate_host, situate_init_fn,
-    situate_library, situate_set_param_fn, situate_skill_type, SITUATE_ABI_VERSION, SITUATE_ENTRY_SYMBOL,
-    SITUATE_ERROR_CAPACITY, SITUATE_OK,
+    situate_activate_fn, situate_context, situate_deactivate_fn, situate_entry_fn, situate_error, situate_field,
+    situate_fini_fn, situate_host, situate_init_fn, situate_library, situate_set_param_fn, situate_skill_type,
+    SITUATE_ABI_VERSION, SITUATE_ENTRY_SYMBOL, SITUATE_ERROR_CAPACITY, SITUATE_OK,
 };
 use crate::layout::{code_c, flag_name, Field, FieldKind, SkillLayout, StructLayout};
 use crate::manifest::{parse_manifest, ManifestError};
@@ -52,6 +52,45 @@ struct Vtable {
     fini: situate_fini_fn,
     step: unsafe extern "C" fn(*mut c_void, *const c_void, *mut c_void, *const c_void, *mut situate_context) -> i32,
     set_param: situate_set_param_fn,
+    activate: situate_activate_fn,
+    deactivate: situate_deactivate_fn,
+}
+
+/// The size of a skill type entry before the lifecycle hooks were appended
+/// (the first ABI v2 libraries): the shortest entry a library may declare.
+/// The old struct ended where `activate` starts: its last field was followed
+/// by padding up to the alignment of a pointer, which is `activate`'s.
+const SKILL_TYPE_BASE_SIZE: usize = std::mem::offset_of!(situate_skill_type, activate);
+
+/// Where each field appended after [`SKILL_TYPE_BASE_SIZE`] ends, in order:
+/// an entry of `skill_type_size` bytes has those that end within it.
+const SKILL_TYPE_APPENDED_ENDS: [usize; 2] = [
+    std::mem::offset_of!(situate_skill_type, activate) + std::mem::size_of::<situate_activate_fn>(),
+    std::mem::offset_of!(situate_skill_type, deactivate) + std::mem::size_of::<situate_deactivate_fn>(),
+];
+
+/// How many bytes of an entry of `entry_size` bytes the host reads: up to the
+/// end of the last appended field wholly inside it.
+fn covered_len(entry_size: usize) -> usize {
+    SKILL_TYPE_APPENDED_ENDS.iter().copied().filter(|&end| end <= entry_size).max().unwrap_or(SKILL_TYPE_BASE_SIZE)
+}
+
+/// Entry `index` of a table of `entry_size`-byte entries, as this host's
+/// struct: the fields the entry covers copied, the others NULL.
+///
+/// # Safety
+/// `skills` must hold `index + 1` entries of `entry_size` bytes, and
+/// `entry_size` must be at least [`SKILL_TYPE_BASE_SIZE`].
+unsafe fn read_entry(skills: *const situate_skill_type, entry_size: usize, index: usize) -> situate_skill_type {
+    let mut entry = std::mem::MaybeUninit::<situate_skill_type>::zeroed();
+    // SAFETY: per the contract, the bytes read lie in the library's entry; the
+    // struct is valid zeroed (null pointers, `None` functions, zero sizes) and
+    // the copied bytes are fields of the same types at the same offsets.
+    unsafe {
+        let src = skills.cast::<u8>().add(index * entry_size);
+        std::ptr::copy_nonoverlapping(src, entry.as_mut_ptr().cast::<u8>(), covered_len(entry_size));
+        entry.assume_init()
+    }
 }
 
 /// One loaded skill type: what every instance shares.
@@ -97,11 +136,21 @@ pub fn load_library(path: &Path) -> Result<Vec<SkillType>, LoadError> {
     }
     // SAFETY: same version, so the same layout.
     let table: &situate_library = unsafe { &*table };
-    if table.skill_type_size as usize != std::mem::size_of::<situate_skill_type>() {
+    // Entries may be shorter than this host's: built before optional fields were appended (see
+    // SITUATE_ABI_VERSION). Longer ones come from newer headers, with hooks this host would
+    // never call.
+    let entry_size = table.skill_type_size as usize;
+    let ours = std::mem::size_of::<situate_skill_type>();
+    if entry_size > ours {
         return Err(malformed(format!(
-            "its skill type table entries are {} bytes, this situate's are {}",
-            table.skill_type_size,
-            std::mem::size_of::<situate_skill_type>()
+            "its skill type table entries are {entry_size} bytes, this situate's are {ours}: it was built against \
+             newer situate headers; rebuild it against this situate's headers"
+        )));
+    }
+    if entry_size < SKILL_TYPE_BASE_SIZE {
+        return Err(malformed(format!(
+            "its skill type table entries are {entry_size} bytes, fewer than the {SKILL_TYPE_BASE_SIZE} every \
+             ABI v{SITUATE_ABI_VERSION} entry has"
         )));
     }
     if table.skill_count > 0 && table.skills.is_null() {
@@ -109,9 +158,9 @@ pub fn load_library(path: &Path) -> Result<Vec<SkillType>, LoadError> {
     }
     let mut types: Vec<SkillType> = Vec::new();
     for index in 0..table.skill_count as usize {
-        // SAFETY: `skills` holds `skill_count` entries of this layout.
-        let raw = unsafe { &*table.skills.add(index) };
-        let ty = load_type(path, index, raw, &lib)?;
+        // SAFETY: `skills` holds `skill_count` entries of `entry_size` bytes, checked above.
+        let raw = unsafe { read_entry(table.skills, entry_size, index) };
+        let ty = load_type(path, index, &raw, &lib)?;
         if types.iter().any(|t| t.decl.type_name == ty.decl.type_name) {
             return Err(malformed(format!("skill type `{}` is declared twice", ty.decl.type_name)));
         }
@@ -194,7 +243,14 @@ fn load_type(
         inputs,
         outputs,
         block,
-        vt: Vtable { init: raw.init, fini: raw.fini, step, set_param: raw.set_param },
+        vt: Vtable {
+            init: raw.init,
+            fini: raw.fini,
+            step,
+            set_param: raw.set_param,
+            activate: raw.activate,
+            deactivate: raw.deactivate,
+        },
         _lib: Arc::clone(lib),
     })
 }
@@ -382,6 +438,27 @@ impl CSkill {
         self.at(self.ty.block.error).cast()
     }
 
+    /// Calls a lifecycle hook (`activate` or `deactivate`), if the library
+    /// has it, with the context `cx`.
+    fn hook(&mut self, hook: situate_activate_fn, cx: &mut Context) -> Result<(), SkillError> {
+        let Some(hook) = hook else { return Ok(()) };
+        let mut ccx = situate_context {
+            cycle: cx.cycle(),
+            time_s: cx.time_s(),
+            error: self.error(),
+            host: &HOST,
+            host_data: (cx as *mut Context).cast(),
+        };
+        // SAFETY: state, params and the context are valid for the call.
+        let status = unsafe {
+            hook(self.at(self.ty.block.state).cast(), self.at(self.ty.block.params).cast_const().cast(), &mut ccx)
+        };
+        if status != SITUATE_OK {
+            return Err(SkillError::new(self.take_error(status)));
+        }
+        Ok(())
+    }
+
     fn take_error(&mut self, status: i32) -> String {
         // SAFETY: the error lies in the block, NUL-terminated by the host's
         // zeroing and kept so below (the last byte is never read).
@@ -524,6 +601,14 @@ impl Skill for CSkill {
                 self.pending = Some(format!("refused parameter `{name}`: {msg}"));
             }
         }
+    }
+
+    fn activate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.hook(self.ty.vt.activate, cx)
+    }
+
+    fn deactivate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        self.hook(self.ty.vt.deactivate, cx)
     }
 }
 
@@ -693,5 +778,23 @@ mod tests {
         // SAFETY: as above.
         let e = unsafe { write_value(&f.kind, buf.as_mut_ptr().cast::<u8>().add(f.offset), &wrong) };
         assert!(e.is_err());
+    }
+
+    #[test]
+    fn an_entry_is_read_up_to_its_last_whole_field() {
+        let ours = std::mem::size_of::<situate_skill_type>();
+        let ptr = std::mem::size_of::<situate_activate_fn>();
+        assert_eq!(ours, SKILL_TYPE_BASE_SIZE + 2 * ptr, "two hooks appended, no padding after them");
+        assert_eq!(covered_len(SKILL_TYPE_BASE_SIZE), SKILL_TYPE_BASE_SIZE);
+        assert_eq!(covered_len(SKILL_TYPE_BASE_SIZE + ptr / 2), SKILL_TYPE_BASE_SIZE, "never half a pointer");
+        assert_eq!(covered_len(SKILL_TYPE_BASE_SIZE + ptr), SKILL_TYPE_BASE_SIZE + ptr);
+        assert_eq!(covered_len(ours), ours);
+        // An old entry followed by bytes a longer read would take for hooks: they stay NULL.
+        let mut bytes = vec![0xA5u8; 2 * ours];
+        bytes[..SKILL_TYPE_BASE_SIZE].fill(0);
+        let base = bytes.as_ptr().cast::<situate_skill_type>();
+        // SAFETY: the buffer holds more than one old entry.
+        let entry = unsafe { read_entry(base, SKILL_TYPE_BASE_SIZE, 0) };
+        assert!(entry.activate.is_none() && entry.deactivate.is_none() && entry.step.is_none());
     }
 }
