@@ -300,9 +300,8 @@ class Link:
         if off:
             self.send("deactivate", skills=off)
             self.active -= set(off)
-        if again:
-            # A skill notices a re-activation as a gap of more than one cycle.
-            self.send("step", cycles=1)
+        # Off and on again before the next cycle, a skill is told both (its `deactivate`, then
+        # its `activate`, where it starts afresh): no cycle is needed between them.
         on = sorted(want - self.active)
         if on:
             self.send("activate", skills=on, with_providers=False)

@@ -58,6 +58,7 @@ impl Skill for Hooked {
 
     fn deactivate(&mut self, cx: &mut Context) -> Result<(), SkillError> {
         self.note("deactivate", cx.cycle());
+        cx.print("switched off");
         hook(self.on_deactivate, "deactivation")
     }
 }
@@ -238,6 +239,12 @@ fn a_threaded_body_is_told_on_its_own_thread_between_runs() {
         until_logged(&log, "a run", |e| e.iter().any(|e| e.starts_with("step@")));
         handle.deactivate(&["h"]).unwrap();
         until_logged(&log, "a deactivation", |e| e.iter().any(|e| e.starts_with("deactivate@")));
+        // What `deactivate` said on the skill's thread is seen while the skill is off.
+        let deadline = Instant::now() + BOUND;
+        while !handle.skill("h").unwrap().prints.iter().any(|(_, p)| p == "switched off") {
+            assert!(Instant::now() < deadline, "{kind:?}: the deactivation's print never seen");
+            std::thread::sleep(Duration::from_millis(2));
+        }
         handle.activate(&["h"]).unwrap();
         until_logged(&log, "a second activation", |e| e.iter().filter(|e| e.starts_with("activate@")).count() == 2);
         until_logged(&log, "a run after it", |e| e.last().is_some_and(|e| e.starts_with("step@")));

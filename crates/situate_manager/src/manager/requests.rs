@@ -156,6 +156,20 @@ impl Manager {
         Ok(SignalReading { signal: path.into(), ty, value, cycle, writer })
     }
 
+    /// The prints a switched-off threaded skill made since its last exchange (its `deactivate`
+    /// runs on its own thread after the cycle stopped looking at it): taken when it is asked
+    /// about, so what `deactivate` said is seen while the skill is off.
+    fn take_idle_prints(&mut self, i: usize) {
+        if self.insts[i].active {
+            return;
+        }
+        let Some(worker) = self.insts[i].worker.as_ref() else { return };
+        let prints = std::mem::take(&mut worker.shared.lock().prints);
+        if !prints.is_empty() {
+            self.record_prints(i, prints);
+        }
+    }
+
     pub(super) fn skill_info(&self, i: usize) -> SkillInfo {
         let def = &self.graph.instances[i];
         let inst = &self.insts[i];
@@ -423,9 +437,15 @@ impl Manager {
             }
             Request::QuerySkill { skill } => {
                 let i = self.find(&skill)?;
+                self.take_idle_prints(i);
                 Ok(Reply::Skill(Box::new(self.skill_info(i))))
             }
-            Request::QuerySkills => Ok(Reply::Skills((0..self.insts.len()).map(|i| self.skill_info(i)).collect())),
+            Request::QuerySkills => {
+                for i in 0..self.insts.len() {
+                    self.take_idle_prints(i);
+                }
+                Ok(Reply::Skills((0..self.insts.len()).map(|i| self.skill_info(i)).collect()))
+            }
             Request::QueryWinners => Ok(Reply::Winners(self.resource_winners())),
             Request::QueryGraph => Ok(Reply::Graph(self.graph_info())),
             Request::QueryStats => Ok(Reply::Stats(self.current_stats())),
