@@ -388,6 +388,9 @@ export class WorldView {
       zoom: this.zoom.toFixed(3),
       centerX: cx.toFixed(3),
       centerY: cy.toFixed(3),
+      // The robot as drawn (its pose in the sample this draw used), for tests; empty off its floor.
+      robotX: robot && robot.floor === floor ? robot.x.toFixed(3) : "",
+      robotY: robot && robot.floor === floor ? robot.y.toFixed(3) : "",
     });
     if (robot && robot.floor === floor) {
       const radius = this.map ? num(this.map["robot_radius"], 0.25) : 0.25;
