@@ -4,6 +4,7 @@
 
 mod common;
 
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use common::*;
@@ -158,20 +159,26 @@ fn a_body_left_behind_is_not_told_and_its_fresh_replacement_is_activated() {
     // A sync body that blocks in cycle 2 past its budget is left behind; activating the skill
     // again makes a fresh body, which is activated before it runs (the old one is never told).
     let log = log();
-    let l = log.clone();
+    let gate: Gate = Arc::default();
+    let (l, g) = (log.clone(), Arc::clone(&gate));
     let d = decl("stuck", SkillKind::Sync, &[], &[("y", "f64")]);
     let mut reg = Registry::new();
     reg.add(SkillType::new(d, move || {
-        Ok(Box::new(Stuck { inner: Hooked { log: l.clone(), on_activate: Hook::Quiet, on_deactivate: Hook::Quiet } })
-            as _)
+        let inner = Hooked { log: l.clone(), on_activate: Hook::Quiet, on_deactivate: Hook::Quiet };
+        Ok(Box::new(Stuck { inner, gate: Arc::clone(&g) }) as _)
     }));
     let spec = simulated("behind").skill(skill("h", "stuck").budget_ms(50.0));
     let m = build(&spec, &reg);
     let events = m.events();
     let (mut handle, join) = m.spawn(true);
-    fault_of(&events, "h");
+    // The body is still blocked (the gate is shut): only the watchdog can have faulted it.
+    let cause = fault_of(&events, "h");
+    assert!(cause.contains("left behind"), "{cause}");
     handle.request(Request::Stop).unwrap();
-    // A fresh body is made once the old one has returned (about 400 ms).
+    let (open, opened) = &*gate;
+    *open.lock().unwrap() = true;
+    opened.notify_all();
+    // A fresh body is made once the old one has returned.
     let deadline = Instant::now() + BOUND;
     while let Err(e) = handle.activate(&["h"]) {
         assert!(Instant::now() < deadline, "never activated again: {e}");
@@ -186,15 +193,22 @@ fn a_body_left_behind_is_not_told_and_its_fresh_replacement_is_activated() {
     join.join_timeout(BOUND).ok().expect("the manager ended").unwrap();
 }
 
-/// [`Hooked`], whose second run (the first body's only) blocks past its budget.
+/// Shut until the test opens it.
+type Gate = Arc<(Mutex<bool>, Condvar)>;
+
+/// [`Hooked`], whose second run (the first body's only) blocks until the gate opens (at most
+/// [`BOUND`]): past its budget, however late the watchdog gets a CPU on a busy machine.
 struct Stuck {
     inner: Hooked,
+    gate: Gate,
 }
 
 impl Skill for Stuck {
     fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
         if io.cx.cycle() == 2 && what(&self.inner.log).iter().filter(|e| e.starts_with("activate")).count() == 1 {
-            std::thread::sleep(Duration::from_millis(400));
+            let (open, opened) = &*self.gate;
+            let shut = open.lock().unwrap();
+            drop(opened.wait_timeout_while(shut, BOUND, |open| !*open).unwrap());
         }
         self.inner.step(io)
     }
