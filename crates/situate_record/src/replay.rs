@@ -405,7 +405,14 @@ pub fn requests(rec: &Recording, live: &[String]) -> BTreeMap<u64, Vec<Request>>
             "activation_applied" => {
                 let (on, off) = (names(j, "activated"), names(j, "deactivated"));
                 if !on.is_empty() {
-                    out.entry(cycle).or_default().push(Request::Activate { skills: on, with_providers: false });
+                    // A skill switched off and on again before a cycle is listed as activated
+                    // only, and its body was told both (`Skill::deactivate`, then `activate`:
+                    // it started afresh). The replay's robot is in the recorded state, so a
+                    // skill listed as activated that is on there was switched off and on:
+                    // deactivating first does that again (and is nothing for one that is off).
+                    let requests = out.entry(cycle).or_default();
+                    requests.push(Request::Deactivate { skills: on.clone() });
+                    requests.push(Request::Activate { skills: on, with_providers: false });
                 }
                 if !off.is_empty() {
                     out.entry(cycle).or_default().push(Request::Deactivate { skills: off });

@@ -43,6 +43,12 @@ struct Filter {
 }
 
 impl Body for Filter {
+    /// Switched on, it forgets what it smoothed.
+    fn activate(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
+        self.smooth = 0.0;
+        Ok(())
+    }
+
     fn step(&mut self, _cx: &mut Context) -> Result<(), SkillError> {
         self.smooth += self.alpha * (self.range - self.smooth);
         Ok(())
@@ -95,7 +101,8 @@ fn temp(name: &str) -> PathBuf {
 }
 
 /// Records the run: 30 cycles, `high` on, its gain changed, `low`'s priority raised over
-/// `high`'s, `high` off, 80 cycles in all.
+/// `high`'s, `filter` restarted (off and on before one cycle: the recording lists it as
+/// activated only), `high` off, 80 cycles in all.
 fn record(name: &str) -> Recording {
     let path = temp(name);
     let mut m = Manager::build(&spec(0.5), &registry()).unwrap_or_else(|e| panic!("{e}"));
@@ -107,7 +114,10 @@ fn record(name: &str) -> Recording {
     m.run_cycles(5);
     // `low` overtakes `high`: the winner of `cmd` changes hands by priority.
     m.request(Request::SetPriority { skill: "low".into(), priority: 10 }).unwrap();
-    m.run_cycles(15);
+    m.run_cycles(8);
+    m.request(Request::Deactivate { skills: vec!["filter".into()] }).unwrap();
+    m.request(Request::Activate { skills: vec!["filter".into()], with_providers: false }).unwrap();
+    m.run_cycles(7);
     m.request(Request::Deactivate { skills: vec!["high".into()] }).unwrap();
     m.run_cycles(20);
     drop(m);
