@@ -119,7 +119,12 @@ def test_activate_comes_before_the_runs_and_deactivate_after_them_each_switch(
     path = files("robot.yaml", robot_yaml(f"- {{name: h, type: {type_name}}}"))
     robot = situate.LocalRobot(path, clock=clock)
     log: list[str] = module_of(skills).LOG
-    assert log == [], "nothing is called before the first cycle"
+    if clock == "wall":
+        # A threaded body's thread starts as the robot is built, and is told it is on there,
+        # before its first run: that may come before the first cycle, and nothing else may.
+        assert log in ([], ["activate"]), log
+    else:
+        assert log == [], "nothing is called before the first cycle"
     step_until(robot, "ran after the start", lambda: log.count("step") >= 3)
     assert phases(log) == ["activate", "step"]
     assert robot.deactivate("h") == ["h"]
