@@ -191,9 +191,14 @@ describe("the timeline", () => {
     assert.ok(second > first, `the phases in order: ${first} < ${second}`);
     // Not marks: the lane holds them.
     assert.equal(await page.locator('[data-testid="tl-mark"][data-kind="phase"]').count(), 0);
-    // The first phase's span ends where the second begins.
-    const a = await segs.nth(0).boundingBox();
-    const b = await segs.nth(1).boundingBox();
+    // The first phase's span ends where the second begins: both measured in one go (the live
+    // lane is laid out again as samples come; two separate measures once straddled a redraw).
+    const [a, b] = await page.evaluate(() =>
+      [...document.querySelectorAll('[data-testid="tl-phase-seg"]')].slice(0, 2).map((e) => {
+        const r = e.getBoundingClientRect();
+        return { x: r.x, width: r.width };
+      }),
+    );
     assert.ok(a && b && Math.abs(a.x + a.width - b.x) < 3, `adjacent spans: ${JSON.stringify([a, b])}`);
     await segs.nth(0).click();
     await until(async () => (await mode()) === "paused" && (await shown()) === first, `paused at the first phase's cycle ${first}`);
