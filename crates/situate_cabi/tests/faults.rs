@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use situate_core::{PortSpec, SkillDecl, SkillKind, Value};
-use situate_manager::{Event, Registry, Reply, Request, SkillSpec};
+use situate_manager::{Registry, Reply, Request, SkillSpec};
 
 const C_MANIFEST: &str = "name: c.faulty\ninputs: {x: f64}\noutputs: {y: f64}\nparams:\n  limit: 5.0\n";
 const C_SOURCE: &str = r#"
@@ -83,16 +83,6 @@ fn registry(test: &str) -> Registry {
         Ok(())
     }));
     r
-}
-
-fn faults(events: &crossbeam_channel::Receiver<Event>) -> Vec<(String, String, u64)> {
-    events
-        .try_iter()
-        .filter_map(|e| match e {
-            Event::SkillFaulted { skill, cause, cycle } => Some((skill, cause, cycle)),
-            _ => None,
-        })
-        .collect()
 }
 
 fn query_skill(m: &mut situate_manager::Manager, name: &str) -> situate_manager::SkillInfo {

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use common::*;
 use situate_cabi::{load_library, LoadError};
 use situate_core::Value;
-use situate_manager::{ClockKind, Control, Event, Registry, RobotSpec, SkillSpec};
+use situate_manager::{ClockKind, Control, Registry, RobotSpec, SkillSpec};
 
 /// How long a threaded body is waited for (the machine may be loaded).
 const BOUND: Duration = Duration::from_secs(60);
@@ -174,16 +174,6 @@ fn registry(test: &str) -> Registry {
 
 fn prints(m: &mut impl Control, skill: &str) -> Vec<String> {
     m.skill(skill).expect("the skill").prints.into_iter().map(|(_, line)| line).collect()
-}
-
-fn faults(events: &crossbeam_channel::Receiver<Event>) -> Vec<(String, String, u64)> {
-    events
-        .try_iter()
-        .filter_map(|e| match e {
-            Event::SkillFaulted { skill, cause, cycle } => Some((skill, cause, cycle)),
-            _ => None,
-        })
-        .collect()
 }
 
 fn y(m: &mut impl Control) -> (Option<Value>, u64) {

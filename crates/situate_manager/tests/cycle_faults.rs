@@ -13,21 +13,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use common::*;
-use crossbeam_channel::Receiver;
 use situate_core::{FnSkill, Io, SkillKind, SkillType, Value};
 use situate_manager::{ClockKind, Control, ControlError, Event, Registry, Request, RobotSpec};
-
-/// The cause of the first `SkillFaulted` event for `skill`.
-fn fault_of(events: &Receiver<Event>, skill: &str) -> String {
-    let deadline = Instant::now() + BOUND;
-    loop {
-        match events.recv_deadline(deadline) {
-            Ok(Event::SkillFaulted { skill: s, cause, .. }) if s == skill => return cause,
-            Ok(_) => {}
-            Err(e) => panic!("no fault of `{skill}` reported: {e}"),
-        }
-    }
-}
 
 /// Waits until `f` holds.
 fn until(what: &str, mut f: impl FnMut() -> bool) {

@@ -221,18 +221,6 @@ impl Skill for Stuck {
     }
 }
 
-/// The cause of the next fault of `skill`, waited for with a generous bound.
-fn fault_of(events: &crossbeam_channel::Receiver<Event>, skill: &str) -> String {
-    let deadline = Instant::now() + BOUND;
-    loop {
-        match events.recv_deadline(deadline) {
-            Ok(Event::SkillFaulted { skill: s, cause, .. }) if s == skill => return cause,
-            Ok(_) => {}
-            Err(e) => panic!("no fault of `{skill}` reported: {e}"),
-        }
-    }
-}
-
 /// Waits, with a generous bound, until `ok` holds of the log.
 fn until_logged(log: &Log, what_for: &str, ok: impl Fn(&[String]) -> bool) {
     let deadline = Instant::now() + BOUND;

@@ -135,3 +135,14 @@ pub fn build(spec: &RobotSpec, registry: &Registry) -> Manager {
         Err(e) => panic!("build failed:\n{e}"),
     }
 }
+
+/// The faults reported so far: (skill, cause, cycle).
+pub fn faults(events: &crossbeam_channel::Receiver<situate_manager::Event>) -> Vec<(String, String, u64)> {
+    events
+        .try_iter()
+        .filter_map(|e| match e {
+            situate_manager::Event::SkillFaulted { skill, cause, cycle } => Some((skill, cause, cycle)),
+            _ => None,
+        })
+        .collect()
+}

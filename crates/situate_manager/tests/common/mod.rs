@@ -132,3 +132,15 @@ pub fn within_bound<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -
     });
     rx.recv_timeout(BOUND).expect("the cycle blocked")
 }
+
+/// The cause of the next fault of `skill` reported on `events`, waited for within [`BOUND`].
+pub fn fault_of(events: &crossbeam_channel::Receiver<situate_manager::Event>, skill: &str) -> String {
+    let deadline = std::time::Instant::now() + BOUND;
+    loop {
+        match events.recv_deadline(deadline) {
+            Ok(situate_manager::Event::SkillFaulted { skill: s, cause, .. }) if s == skill => return cause,
+            Ok(_) => {}
+            Err(e) => panic!("no fault of `{skill}` reported: {e}"),
+        }
+    }
+}
