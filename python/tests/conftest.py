@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from support import TOYBOT, Manager, start_manager
+from support import TOYBOT, Manager, Write, start_manager
 
 # The modules whose tests take seconds (whole deliveries, recordings: 15-40 s each in test_demo.py),
 # in the order to start them; the other tests take well under one. pytest-xdist hands tests out as
@@ -67,3 +67,15 @@ def manager_for(robot_file: Callable[[str], Path]) -> Iterator[Callable[[str, st
     yield start
     for m in started:
         m.stop()
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> Write:
+    """Writes a file (dedented) into the test's directory and returns its path."""
+
+    def write(name: str, text: str) -> Path:
+        path = tmp_path / name
+        path.write_text(textwrap.dedent(text))
+        return path
+
+    return write

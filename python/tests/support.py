@@ -19,7 +19,7 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Awaitable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
@@ -29,6 +29,9 @@ import zenoh
 
 from situate import _link
 from situate.errors import SituateError
+
+#: The `files` fixture (conftest.py): writes a dedented file into the test's directory.
+Write = Callable[[str, str], Path]
 
 REPO = Path(__file__).resolve().parents[2]
 TOYBOT = REPO / "examples" / "toybot.yaml"

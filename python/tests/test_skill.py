@@ -17,26 +17,13 @@ from typing import Annotated, Any
 
 import numpy as np
 import pytest
+from support import Write
 
 import situate
 from situate import _native
 
 REPO = Path(__file__).resolve().parents[2]
 RUNAWAY = REPO / "examples" / "python" / "runaway"
-
-Write = Callable[[str, str], Path]
-
-
-@pytest.fixture
-def files(tmp_path: Path) -> Write:
-    """Writes a file (dedented) into the test's directory and returns its path."""
-
-    def write(name: str, text: str) -> Path:
-        path = tmp_path / name
-        path.write_text(textwrap.dedent(text))
-        return path
-
-    return write
 
 
 def robot_yaml(skills: str, *, python: str = "skills.py", devices: str = "") -> str:

@@ -19,25 +19,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from support import Write
 
 import situate
 
-Write = Callable[[str, str], Path]
-
 #: A generous bound on anything waited for (a loaded machine included).
 BOUND_S = 60.0
-
-
-@pytest.fixture
-def files(tmp_path: Path) -> Write:
-    """Writes a file (dedented) into the test's directory and returns its path."""
-
-    def write(name: str, text: str) -> Path:
-        path = tmp_path / name
-        path.write_text(textwrap.dedent(text))
-        return path
-
-    return write
 
 
 def robot_yaml(skills: str) -> str:

@@ -9,27 +9,14 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import textwrap
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from support import EVENT_S, run, situate, start_manager
+from support import EVENT_S, Write, run, situate, start_manager
 
 import situate as sit
 
-Write = Callable[[str, str], Path]
 REPO = Path(__file__).resolve().parents[2]
-
-
-@pytest.fixture
-def files(tmp_path: Path) -> Write:
-    def write(name: str, text: str) -> Path:
-        path = tmp_path / name
-        path.write_text(textwrap.dedent(text))
-        return path
-
-    return write
 
 
 def robot(python: str) -> str:
