@@ -302,14 +302,21 @@ mod tests {
 
         let (s2, stop) = (Arc::clone(&s), Arc::new(AtomicBool::new(false)));
         let stop2 = Arc::clone(&stop);
+        let blocked_tid = s.tid.load(Ordering::Acquire);
         let spinner = std::thread::spawn(move || {
             s2.adopt_current_thread();
             while !stop2.load(Ordering::Relaxed) {
                 std::hint::spin_loop();
             }
         });
-        // Once adopted, every reading of a thread that never sleeps is runnable; and it computes.
-        until_read(&s, "the spinning thread adopted, on a CPU", |r| r.cpu > 0);
+        // Once adopted (not the ended thread's readings), every reading of a thread that never
+        // sleeps is runnable; and it computes.
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+        while s.tid.load(Ordering::Acquire) == blocked_tid {
+            assert!(std::time::Instant::now() < deadline, "the spinning thread never adopted");
+            std::thread::yield_now();
+        }
+        until_read(&s, "the spinning thread on a CPU", |r| r.cpu > 0);
         let first = s.sample().unwrap();
         for _ in 0..20 {
             assert!(s.sample().unwrap().runnable, "a spinning thread is runnable");
