@@ -12,6 +12,15 @@ const SEQUENCER_PAUSE_MS = 1500;
 /** How often the monitor list is asked for again. */
 const MONITOR_REFRESH_MS = 2000;
 
+/** One listed monitor: its row, its cells (id, owner, condition, mode, pause, fired, holds) and
+ *  its owner as the last list named it. */
+interface MonitorRow {
+  tr: HTMLElement;
+  cells: HTMLElement[];
+  cancel: HTMLButtonElement;
+  owner: string;
+}
+
 export class Monitors {
   readonly el: HTMLElement;
   private readonly list: HTMLElement;
@@ -29,6 +38,9 @@ export class Monitors {
   private stopped = false;
   /** This tab's session (from the hello): the monitors it adds are its own. */
   private session = "";
+  /** The listed monitors' rows, by id. */
+  private readonly rows = new Map<number, MonitorRow>();
+  private readonly header = h("tr", {}, h("th", {}, "id"), h("th", {}, "owner"), h("th", {}, "condition"), h("th", {}, "mode"), h("th", {}, ""), h("th", {}, ""), h("th", {}, ""), h("th", {}, ""));
 
   constructor(
     private readonly conn: Connection,
@@ -89,6 +101,7 @@ export class Monitors {
     this.fired = [];
     this.stopped = false;
     this.showPaused(null);
+    this.rows.clear();
     this.list.replaceChildren();
   }
 
@@ -99,40 +112,56 @@ export class Monitors {
     } catch {
       return;
     }
-    const rows = (Array.isArray(list) ? list : []).filter(isObject).map((m) => {
+    const monitors = (Array.isArray(list) ? list : []).filter(isObject);
+    const listed = new Set<number>();
+    const order: HTMLElement[] = [this.header];
+    for (const m of monitors) {
       const id = num(m["monitor"]);
       const owner = this.owner(m);
       if (m["pause"] === true && !this.pausing.has(id)) {
         this.pausing.set(id, { condition: str(m["condition"]), owner });
         this.check();
       }
+      const row = this.rows.get(id) ?? this.row(id);
+      row.owner = owner;
+      const cells = [String(id), owner, str(m["condition"]), str(m["mode"]), m["pause"] === true ? "pauses" : "", `fired ${num(m["fired"])}`, m["holds"] === true ? "holds" : ""];
+      cells.forEach((text, i) => setText(row.cells[i]!, text));
+      row.cancel.title = owner === "this tab" ? "cancel this tab's monitor" : `cancel ${owner}'s monitor (asks first)`;
+      listed.add(id);
+      order.push(row.tr);
+    }
+    for (const [id, row] of this.rows) {
+      if (!listed.has(id)) {
+        row.tr.remove();
+        this.rows.delete(id);
+      }
+    }
+    // Rows are kept and updated in place, never rebuilt: a list rebuilt between a click's press
+    // and its release (every 2 s, and on every firing) loses the click.
+    const current = Array.from(this.list.children);
+    if (order.length !== current.length || order.some((el, i) => el !== current[i])) this.list.replaceChildren(...order);
+  }
+
+  /** A monitor's row; its Cancel reads the owner when clicked, as the last list named it. */
+  private row(id: number): MonitorRow {
+    const cells = Array.from({ length: 7 }, (_, i) => h("td", i === 1 ? { "data-testid": `monitor-owner-${id}` } : i === 2 ? { class: "mono" } : {}));
+    const cancel = linkControl(h("button", {}, "Cancel"));
+    const row: MonitorRow = { tr: h("tr", { "data-monitor": id }, ...cells, h("td", {}, cancel)), cells, cancel, owner: "" };
+    cancel.addEventListener("click", async () => {
+      // Another session's monitor: its sequencer may be waiting on it. Ask, then tell the
+      // manager the user confirmed (`force`); the owner gets a `monitor_cancelled` event.
+      const owner = row.owner;
       const mine = owner === "this tab";
-      const cancel = linkControl(h("button", { title: mine ? "cancel this tab's monitor" : `cancel ${owner}'s monitor (asks first)` }, "Cancel"));
-      cancel.addEventListener("click", async () => {
-        // Another session's monitor: its sequencer may be waiting on it. Ask, then tell the
-        // manager the user confirmed (`force`); the owner gets a `monitor_cancelled` event.
-        if (!mine && !window.confirm(`Monitor ${id} belongs to ${owner}, which may be waiting for it to fire. Cancel it anyway? (${owner} is told.)`)) return;
-        try {
-          await this.conn.request("monitor_cancel", mine ? { monitor: id } : { monitor: id, force: true });
-          await this.refresh();
-        } catch (e) {
-          setText(this.error, errorText(e));
-        }
-      });
-      return h(
-        "tr",
-        { "data-monitor": id },
-        h("td", {}, String(id)),
-        h("td", { "data-testid": `monitor-owner-${id}` }, owner),
-        h("td", { class: "mono" }, str(m["condition"])),
-        h("td", {}, str(m["mode"])),
-        h("td", {}, m["pause"] === true ? "pauses" : ""),
-        h("td", {}, `fired ${num(m["fired"])}`),
-        h("td", {}, m["holds"] === true ? "holds" : ""),
-        h("td", {}, cancel),
-      );
+      if (!mine && !window.confirm(`Monitor ${id} belongs to ${owner}, which may be waiting for it to fire. Cancel it anyway? (${owner} is told.)`)) return;
+      try {
+        await this.conn.request("monitor_cancel", mine ? { monitor: id } : { monitor: id, force: true });
+        await this.refresh();
+      } catch (e) {
+        setText(this.error, errorText(e));
+      }
     });
-    this.list.replaceChildren(h("tr", {}, h("th", {}, "id"), h("th", {}, "owner"), h("th", {}, "condition"), h("th", {}, "mode"), h("th", {}, ""), h("th", {}, ""), h("th", {}, ""), h("th", {}, "")), ...rows);
+    this.rows.set(id, row);
+    return row;
   }
 
   event(e: JsonObject): void {

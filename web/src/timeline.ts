@@ -336,18 +336,29 @@ export class Timeline {
       .map((p, i) => ({ p, end: this.phases[i + 1]?.cycle ?? span.last + 1 }))
       .filter(({ p, end }) => end > span.first && p.cycle <= span.last);
     this.lane.hidden = segments.length === 0;
-    const key = JSON.stringify([span.first, span.last, segments.map(({ p, end }) => [p.cycle, end, p.text])]);
-    if (key === this.laneKey) return;
+    const place = (b: HTMLElement, cycle: number, end: number) => {
+      const left = pct(cycle);
+      b.style.left = `${left}%`;
+      b.style.width = `${Math.max(0.3, pct(end) - left)}%`;
+    };
+    // The span grows every refresh on a live run: the segments are moved in place then, and built
+    // again only when the phases shown change (a button rebuilt between a click's press and its
+    // release loses the click).
+    const key = JSON.stringify(segments.map(({ p }) => [p.cycle, p.text]));
+    if (key === this.laneKey) {
+      segments.forEach(({ p, end }, i) => {
+        const el = this.lane.children.item(i);
+        if (el instanceof HTMLElement) place(el, p.cycle, end);
+      });
+      return;
+    }
     this.laneKey = key;
     this.lane.replaceChildren(
       ...segments.map(({ p, end }) => {
-        const left = pct(p.cycle);
-        const right = pct(end);
         const title = `cycle ${p.cycle}: ${p.text}`;
         const b = h("button", { class: "tl-seg", "data-testid": "tl-phase-seg", "data-cycle": p.cycle, "data-text": p.text, title, "aria-label": title }, p.text);
-        b.style.left = `${left}%`;
-        b.style.width = `${Math.max(0.3, right - left)}%`;
-        b.addEventListener("click", () => void this.jump(Math.max(span.first, p.cycle)));
+        place(b, p.cycle, end);
+        b.addEventListener("click", () => void this.jump(Math.max(this.span?.first ?? p.cycle, p.cycle)));
         return b;
       }),
     );

@@ -205,9 +205,13 @@ describe("situate GUI", () => {
     await page.getByTestId("monitor-add").click();
     await until(async () => ((await page.getByTestId("monitors").textContent()) ?? "").includes("odom.x < 1000"), "the monitor listed");
     await until(async () => (await page.locator('[data-testid="event-log"] [data-kind="monitor_fired"]').count()) > 0, "its event in the log");
-    await page.getByTestId("monitors").getByRole("button", { name: "Cancel" }).first().click();
-    // Once, under the flake hunt's load, the monitor was still listed 60 s after the click (not
-    // diagnosed): a failure says what the page listed and what error it showed.
+    // Its own row, said to be this tab's (no question asked before cancelling it).
+    const row = page.locator("[data-monitor]", { hasText: "odom.x < 1000" });
+    assert.equal(await row.locator("[data-testid^=monitor-owner-]").textContent(), "this tab");
+    await row.getByRole("button", { name: "Cancel" }).click();
+    // Once, under the flake hunt's load, the monitor was still listed 60 s after the click: the
+    // list was rebuilt every 2 s, and a rebuild between the click's press and release lost it
+    // (rows are now updated in place). A failure says what the page listed and what error it showed.
     await until(async () => !((await page.getByTestId("monitors").textContent()) ?? "").includes("odom.x < 1000"), "the monitor cancelled").catch(async (e) => {
       const listed = await page.getByTestId("monitors").textContent();
       const error = await page.getByTestId("monitor-error").textContent();
@@ -216,6 +220,22 @@ describe("situate GUI", () => {
     await page.getByTestId("monitor-condition").fill("odom.x <");
     await page.getByTestId("monitor-add").click();
     await until(async () => ((await page.getByTestId("monitor-error").textContent()) ?? "").includes("column"), "the condition's error");
+  });
+
+  test("a monitor's row is updated in place, never rebuilt: a click during a refresh is not lost", async () => {
+    // A level monitor fires every cycle, and every firing refreshes the list.
+    await page.getByTestId("monitor-condition").fill("cycle >= 0");
+    await page.getByTestId("monitor-mode").selectOption("level");
+    await page.getByTestId("monitor-add").click();
+    const row = page.locator("[data-monitor]", { hasText: "cycle >= 0" });
+    await until(async () => (await row.count()) === 1, "the monitor listed");
+    const button = await row.getByRole("button", { name: "Cancel" }).elementHandle();
+    const fired = async () => Number(/fired (\d+)/.exec((await row.textContent()) ?? "")?.[1] ?? -1);
+    const before = await fired();
+    await until(async () => (await fired()) > before + 5, "the list refreshed with new counts");
+    assert.ok(await button.evaluate((b) => b.isConnected), "the Cancel button shown before the refresh is still the one in the page");
+    await button.click();
+    await until(async () => (await row.count()) === 0, "the monitor cancelled");
   });
 
   test("the event log filters by kind, by skill and by text, hiding lines, dropping none", async () => {
