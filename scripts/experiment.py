@@ -52,6 +52,7 @@ DESIGN_SOURCES: dict[str, tuple[str, ...]] = {
     "sequenced": (
         "demo/courier/sequenced/delivery.py",
         "demo/courier/sequenced/lobby.py",
+        "demo/courier/sequenced/explore.py",
         "demo/courier/sequenced/behaviours.py",
         "demo/courier/sequenced/routes.py",
     ),

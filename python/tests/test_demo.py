@@ -194,6 +194,36 @@ def _generated(seed: int, where: Path) -> Path:
     return building
 
 
+#: Buildings without route hints (`map generate --no-route`, generator seed) the explorer was
+#: written on, each naming what it once got wrong.
+NO_ROUTE = [
+    5,  # none: the first building tried
+    7,  # the exploration began along the far wall's normal, not facing it: no way made
+    14,  # a wall with a door in it (the front sonar reads through) never "stayed": a loop
+    9,  # the office barcode read aslant on turning back from a dead end: homing lost it
+]
+
+
+@needs_bin
+@pytest.mark.parametrize("seed", NO_ROUTE)
+def test_without_a_route_the_robot_explores_and_delivers(seed: int, tmp_path: Path) -> None:
+    assert BIN is not None
+    building = tmp_path / f"n{seed}.yaml"
+    made = subprocess.run(
+        [str(BIN), "map", "generate", "--no-route", "--seed", str(seed), "-o", str(building)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert made.returncode == 0, made.stderr
+    # No hints at all (before the explorer, such a run never got past the lab's corridor:
+    # "the call button is nowhere in sight").
+    assert "route:" not in building.read_text(), "the building has route hints"
+    out = demo(seed, map_file=str(building))
+    assert out["delivered"], why(out)
+    assert out["sequencer_exit"] == 0, out
+
+
 @needs_bin
 def test_a_task_of_several_stops_is_made_in_order_on_other_floors(tmp_path: Path) -> None:
     # Building 20003: floors 0 to 3. A message in the lobby of floor 1, then the office (3):
@@ -437,6 +467,33 @@ def test_heading_off_holds_exactly_outside_the_allowed_range_also_where_it_wraps
             t = math.radians(probe_deg)
             off = abs(wrap(t - along)) > math.radians(60)
             assert eval(as_python, {}, {"t": t}) == off, (along_deg, probe_deg, cond)
+
+
+def test_a_side_is_open_when_a_sonar_near_square_to_it_reads_past_a_corridors_wall() -> None:
+    _demo_on_path()
+    from courier.geometry import SONARS, bearing_of
+    from courier.sequenced.explore import SIDE_OPEN_M, side_open
+
+    # A corridor 2 m wide, a wall 1 m ahead: a dead end, open on neither side.
+    ranges = []
+    for i in range(SONARS):
+        b = bearing_of(i)
+        ahead, across = math.cos(b), abs(math.sin(b))
+        ranges.append(
+            min(1.0 / ahead if ahead > 0.01 else 4.0, 1.0 / across if across > 0.01 else 4.0)
+        )
+    assert not side_open(ranges, 1.0)
+    assert not side_open(ranges, -1.0)
+    # The left wall gone (a corridor crossing to the left, an L): open on the left only.
+    left = [i for i in range(SONARS) if abs(bearing_of(i) - math.pi / 2) <= math.radians(20)]
+    for i in left:
+        ranges[i] = 4.0
+    assert side_open(ranges, 1.0)
+    assert not side_open(ranges, -1.0)
+    # A door's jamb-to-jamb view narrower than that reads no farther than the limit: closed.
+    for i in left:
+        ranges[i] = SIDE_OPEN_M
+    assert not side_open(ranges, 1.0)
 
 
 def test_side_walls_are_the_nearest_square_to_each_side_and_corners_count_only_when_asked() -> None:

@@ -8,7 +8,8 @@ car it is, enters, pushes the goal floor, waits for it, leaves, follows the corr
 office's barcode and says its message inside the office.
 
 The means are beside this module: the lobby's phases (calling and boarding a car) in
-`lobby`, the behaviours shared by phases in `behaviours`, the route interpreter in `routes`,
+`lobby`, the way found without route hints in `explore`, the behaviours shared by phases in
+`behaviours`, the route interpreter in `routes`,
 over the link (skill switching and waits) of `courier.link`; the perceiving is done by skills
 (`std.locate_door`, `std.fit_wall`, the detectors and trackers). Every wait has a time-out on
 the robot's clock, and failed phases are retried a bounded number of times.
@@ -28,7 +29,7 @@ from collections.abc import Sequence
 from courier.geometry import bearing_of, wrap
 from courier.link import PhaseFailed
 from courier.mission import NORMAL, SKILLS, Stop
-from courier.sequenced.lobby import Lobby
+from courier.sequenced.explore import Explorer
 
 #: The phases, in mission order (``--from``/``--to`` pick a stretch of them).
 PHASES = ("lab", "corridor", "lobby", "ride", "office")
@@ -42,7 +43,7 @@ FAR_WALL_M = 2.5
 LEAVE_CLEAR_M = 1.0
 
 
-class Delivery(Lobby):
+class Delivery(Explorer):
     """The delivery mission: one method per phase of the narrative."""
 
     async def leave_lab(self) -> None:
@@ -124,6 +125,10 @@ class Delivery(Lobby):
 
     async def to_lobby(self) -> None:
         """Phase 4: the route hints from the lab door to the elevator lobby."""
+        if "lab_to_lobby" not in self.m.route:
+            await self.phase(4, "exploring the hallways for the elevator lobby (no route)")
+            await self.explore_to_lobby()
+            return
         await self.phase(4, "following the hallways to the elevator lobby")
         await self.run_route(
             "lab_to_lobby",
@@ -227,6 +232,8 @@ class Delivery(Lobby):
             await self.to_button(button)
             await self.say(f"    following the route to the office's barcode {m.office_barcode}")
             await self.run_route("button_to_office", m.route["button_to_office"], on_home=homing)
+        elif "car_to_office" not in m.route:
+            await self.explore_to_office()
         else:
             await self.phase(
                 11, f"following the corridor to the office's barcode {m.office_barcode}"
@@ -234,18 +241,6 @@ class Delivery(Lobby):
             await self.run_route("car_to_office", m.route.get("car_to_office", []), on_home=homing)
         await self.phase(13, "delivering the message")
         await self.deliver()
-
-    async def to_button(self, button: int) -> None:
-        """Phase 11: about 1 m in front of this floor's call button, facing it."""
-        await self.phase(11, f"finding this floor's call button (barcode {button})")
-        # Someone passing between may hide the barcode while lining up: look again.
-        for _attempt in range(3):
-            if not await self.look_round(button) and not await self.search(button, 120):
-                raise PhaseFailed(f"the call button of floor {self.here} is nowhere in sight")
-            if await self.line_up(button, 1.0):
-                return
-            await self.say(f"    could not line up with barcode {button}: again")
-        raise PhaseFailed(f"could not line up with barcode {button}")
 
     async def deliver(self) -> None:
         """Says the message where the robot is."""

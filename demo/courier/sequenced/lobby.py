@@ -171,6 +171,18 @@ class Lobby(RouteSequencer):
             await self.say("    no car to board: calling again")
         raise PhaseFailed("could not board a car")
 
+    async def to_button(self, button: int) -> None:
+        """Phase 11: about 1 m in front of this floor's call button, facing it."""
+        await self.phase(11, f"finding this floor's call button (barcode {button})")
+        # Someone passing between may hide the barcode while lining up: look again.
+        for _attempt in range(3):
+            if not await self.look_round(button) and not await self.search(button, 120):
+                raise PhaseFailed(f"the call button of floor {self.here} is nowhere in sight")
+            if await self.line_up(button, 1.0):
+                return
+            await self.say(f"    could not line up with barcode {button}: again")
+        raise PhaseFailed(f"could not line up with barcode {button}")
+
     async def restore_lobby_patrol(self) -> None:
         """The parameters of the lobby patrol (a crowded lobby: nearer to things)."""
         await self.set("runaway", "safe_distance", 0.15)

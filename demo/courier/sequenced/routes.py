@@ -258,10 +258,7 @@ class RouteSequencer(Sequencer):
             lateral = f"(odom.y - {start.y!r}) * {c!r} - (odom.x - {start.x!r}) * {s!r}"
             return f"{heading_off(along, SIDE_EXIT_RAD)} && abs({lateral}) > {SIDE_EXIT_M!r}"
 
-        ahead = (
-            f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
-            f" && wall.distance < {WALL_AHEAD_M} && {await self.front_on_wall()}"
-        )
+        ahead = await self.wall_ahead_condition()
 
         async def watch_ahead() -> None:
             await self.set("fit_wall", "bearing_deg", 0.0)
@@ -332,6 +329,18 @@ class RouteSequencer(Sequencer):
         finally:
             await self.restore("fit_wall", "bearing_deg")
             await self.restore("fit_wall", "half_angle_deg")
+
+    async def wall_ahead_condition(self) -> str:
+        """The condition: a wall across the way ahead, near (`std.fit_wall` looking ahead).
+
+        A line fitted to at least 5 of the 7 sonars within 45° of ahead, square to the way,
+        with the front sonar (or the live one nearest it) on it: not a jamb in the front
+        sonar's cone, nor clutter or someone in the corridor.
+        """
+        return (
+            f"wall.seen && wall.inliers >= 5 && abs(wall.normal) < {math.radians(25):.3f}"
+            f" && wall.distance < {WALL_AHEAD_M} && {await self.front_on_wall()}"
+        )
 
     async def wall_from_the_way(self, start: Pose, along: float) -> bool:
         """Gone round a corner off the way that began at ``start``: whether the way ends here.
