@@ -36,6 +36,10 @@ SIDE_OPEN_M = 2.4
 START_WALL_M = 1.6
 #: Into a side corridor: at least this far along it before a wall ahead ends it, m.
 NEW_LEG_M = 1.0
+#: Into a side corridor: a side corridor on the left counts only this far along it, m.
+OUT_OF_CROSSING_M = 2.0
+#: A mouth stood in this near one taken before, facing the same way, is that one, m.
+SAME_MOUTH_M = 1.5
 #: The call button in view, the robot goes on into the lobby at most this far, m.
 INTO_LOBBY_M = 3.0
 #: Sight of the call button ends the start floor's exploration; the office's the goal floor's.
@@ -66,7 +70,7 @@ class Explorer(Lobby):
 
     def __init__(self, robot: situate.Robot, mission: Mission, **kw: Any) -> None:
         super().__init__(robot, mission, **kw)
-        #: Every barcode read while exploring: its id, floor and where (odometry frame).
+        #: Every barcode read while exploring, by floor and id: where it is (odometry frame).
         self.places: dict[tuple[int, int], tuple[float, float]] = {}
         #: The start floor's lobby entry, from its call button's barcode: how far out from the
         #: button's wall and how far to the left of it (facing the wall), and the way in,
@@ -108,6 +112,8 @@ class Explorer(Lobby):
         stalls = 0
         #: Walls ahead that did not stay put, on this leg.
         doubts = 0
+        #: The side corridors turned into: where the robot stood in the mouth, and the way in.
+        taken: list[tuple[float, float, float]] = []
         # Facing the way, and a wall already (out of a door, the corridor's far wall): the
         # way ends here.
         await self.turn((await self.odom()).turn_to(heading))
@@ -142,12 +148,15 @@ class Explorer(Lobby):
             )
             afresh = False
             # A wall ahead counts only a little way into a new leg (the crossing corridor's
-            # far wall is ahead of a robot just turned into a side corridor's mouth).
+            # far wall is ahead of a robot just turned into a side corridor's mouth), a side
+            # corridor only once the robot is out of the crossing (its other arm is beside
+            # the robot entering the mouth; junctions are 1.5 m apart at least).
             into = farther_than(leg_start, NEW_LEG_M)
+            out_of_crossing = farther_than(leg_start, OUT_OF_CROSSING_M)
             before = await self.odom()
             got = await self.wait(
                 seen,
-                "junction.left",
+                f"junction.left && {out_of_crossing}",
                 f"{ahead} && {into}",
                 within=min(FOLLOW_SLICE_S, max(deadline - self.t, 0.1)),
             )
@@ -167,6 +176,20 @@ class Explorer(Lobby):
                     continue
                 self.corridor_heading = heading
                 await self.into_mouth(heading, math.pi / 2)
+                here = await self.odom()
+                if any(
+                    math.hypot(here.x - x, here.y - y) < SAME_MOUTH_M
+                    and abs(wrap(heading - h)) < math.pi / 4
+                    for x, y, h in taken
+                ):
+                    # Taken before: in a tree of corridors only a door beside a junction
+                    # (read with it as one wide opening) leads back into one. On the way.
+                    await self.say("    that side corridor was explored already: on")
+                    heading = wrap(heading - math.pi / 2)
+                    await self.turn((await self.odom()).turn_to(heading))
+                    self.corridor_heading = heading
+                else:
+                    taken.append((here.x, here.y, heading))
                 leg_start, afresh = await self.odom(), True
                 continue
             if got == 2:
