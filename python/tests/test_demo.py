@@ -201,6 +201,8 @@ NO_ROUTE = [
     7,  # the exploration began along the far wall's normal, not facing it: no way made
     14,  # a wall with a door in it (the front sonar reads through) never "stayed": a loop
     9,  # the office barcode read aslant on turning back from a dead end: homing lost it
+    50,  # read straight ahead, then lined up with from right in front: a box beside it
+    # skewed the wall fitted, and the door was looked for in that line
     90,  # a door beside a junction, read with it as one opening, led back into a side corridor
     # explored already: round and round until the time was up
 ]

@@ -45,6 +45,8 @@ INTO_LOBBY_M = 3.0
 #: Sight of the call button ends the start floor's exploration; the office's the goal floor's.
 #: Exploring gives up after this much time on the robot's clock, s.
 EXPLORE_BUDGET_S = 900.0
+#: A barcode read within this of ahead is homed on from where it was read, rad.
+AHEAD_RAD = math.radians(30)
 #: A barcode read less than this to the side of the way is on the wall ahead, m.
 FACE_AHEAD_M = 0.5
 #: Facing a barcode read in passing from this far off its wall, m.
@@ -306,7 +308,11 @@ class Explorer(Lobby):
         if not await self.explore(m.office_barcode):
             raise PhaseFailed(f"explored for {EXPLORE_BUDGET_S:.0f} s: no office barcode found")
 
-        await self.face_noted(m.office_barcode)
+        # Read about straight ahead, it is homed on from here, as after a route's `until:
+        # barcode`; else (read aslant, turning at a dead end) from across the corridor.
+        target = await self.value("target")
+        if not target["seen"] or abs(float(target["bearing"])) > AHEAD_RAD:
+            await self.face_noted(m.office_barcode)
 
         async def homing(barcode: int) -> None:
             await self.phase(12, f"homing on barcode {barcode}, passing the door")
