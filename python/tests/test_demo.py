@@ -179,13 +179,34 @@ def test_generated_buildings_that_failed_now_deliver(
     assert out["sequencer_exit"] == 0, out
 
 
-def _generated(seed: int, where: Path) -> Path:
+#: The same for buildings of the generator's family 2 (the whole documented space), found with
+#: issue 37's dev seeds (50000…; the benchmark's 30000… stay held out).
+FAMILY_2_REGRESSIONS = [
+    (50050, []),  # a box by the wall near a corridor's end kept the robot 1.3 m off it: never
+    # taken for the end, the office barcode (its face away, a box beside it) never read
+    (50044, [*HARD, "4"]),  # someone standing in the corridor taken for its end: turned back
+]
+
+
+@needs_bin
+@pytest.mark.parametrize(("seed", "extra"), FAMILY_2_REGRESSIONS)
+def test_whole_space_buildings_that_failed_now_deliver(
+    seed: int, extra: list[str], tmp_path: Path
+) -> None:
+    out = demo(seed, map_file=str(_generated(seed, tmp_path, family=2)), extra=extra)
+    assert out["delivered"], why(out)
+    assert out["sequencer_exit"] == 0, out
+
+
+def _generated(seed: int, where: Path, family: int = 1) -> Path:
     assert BIN is not None
     building = where / f"g{seed}.yaml"
-    # Family 1: the generator these regressions were found with (`map generate --family 1`
-    # keeps each seed's building as it was before the generator drew the whole documented space).
+    # Family 1 by default: the generator the first regressions were found with (`map generate
+    # --family 1` keeps each seed's building as it was before the generator drew the whole
+    # documented space).
+    family_args = ["--family", str(family)]
     made = subprocess.run(
-        [str(BIN), "map", "generate", "--family", "1", "--seed", str(seed), "-o", str(building)],
+        [str(BIN), "map", "generate", *family_args, "--seed", str(seed), "-o", str(building)],
         capture_output=True,
         text=True,
         timeout=120,

@@ -21,8 +21,15 @@ from courier.sequenced.behaviours import DOOR_STANDOFF, Sequencer
 
 #: Following for a distance: the time in which some way must be made, s.
 FOLLOW_SLICE_S = 20.0
-#: A wall ahead this near (sonar, from the centre) where no way is made is the corridor's end, m.
-DEAD_END_M = 1.2
+#: A wall ahead this near (sonar, from the centre) where no way is made is the corridor's end, if
+#: it stays there (`way_stays_shut`): a box by a side wall near the end keeps the robot some 1.3 m
+#: off it, m.
+DEAD_END_M = 1.6
+#: Following until a barcode: the time budget, s (a corridor 25 m long, followed to its end and
+#: back towards the barcode's face, round people: docs/maps.md, "Clutter").
+BARCODE_BUDGET_S = 360.0
+#: Someone standing in the way has walked on after this long (docs/maps.md, people), s.
+PEOPLE_PAUSE_S = 6.0
 #: Following to a wall: turned off the way by more than this (rad) and this far to its side
 #: (m), the robot has gone round a corner into a side corridor.
 SIDE_EXIT_RAD = math.radians(60)
@@ -125,7 +132,9 @@ class RouteSequencer(Sequencer):
         if until == "barcode":
             code = int(step["barcode"])
             await self.set("track_barcode", "id", code)
-            return await self.follow_until(f"target.seen && target.id == {code}", 180, barcode=code)
+            return await self.follow_until(
+                f"target.seen && target.id == {code}", BARCODE_BUDGET_S, barcode=code
+            )
         if until == "wall":
             return await self.follow_to_wall()
         detector, signal = (
@@ -398,7 +407,7 @@ class RouteSequencer(Sequencer):
                 if await self.look_round(barcode):
                     return True
                 await self.turn((await self.odom()).turn_to(heading))
-                if (await self.sonar())[0] < DEAD_END_M:
+                if (await self.sonar())[0] < DEAD_END_M and await self.way_stays_shut():
                     await self.say(
                         f"    the corridor ends, barcode {barcode} unseen: back along it"
                     )
@@ -422,6 +431,17 @@ class RouteSequencer(Sequencer):
             await self.use("runaway", "avoid", "follow_hallway", "track_barcode")
             best = made
         return False
+
+    async def way_stays_shut(self) -> bool:
+        """Whether the way ahead, shut within `DEAD_END_M`, stays shut while the robot stands.
+
+        Someone standing in the corridor (docs/maps.md: people pause at most 2.5 s, and wait
+        at most 3 s for the robot) walks on within `PEOPLE_PAUSE_S`; the corridor's end does
+        not.
+        """
+        await self.use("runaway", "track_barcode")
+        opened = f"sonar.range[0] > {DEAD_END_M + 0.3!r}"
+        return await self.wait(opened, within=PEOPLE_PAUSE_S) != 0
 
     async def probe_junction(
         self,
