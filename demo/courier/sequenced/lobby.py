@@ -17,6 +17,7 @@ import situate
 from courier.geometry import SONARS, Pose, bearing_of, wrap
 from courier.link import PhaseFailed
 from courier.mission import NORMAL, OPENED_ON_WALL_M, Mission, seen_wall_ends_at
+from courier.sequenced.behaviours import MAX_DOOR_WIDTH
 from courier.sequenced.routes import RouteSequencer, way_made_expr
 
 #: The robot pushes the call button from this far from it (its centre from the barcode), m.
@@ -46,6 +47,9 @@ OPEN_INSIDE_M = 0.4
 #: Beyond the depth a route left the robot inside a lobby entered facing the button, nothing
 #: is a car's door (the entry's wall is 1 m on in generated buildings), m.
 ENTRY_BEYOND_M = 0.5
+#: An opening at least this wide and within this far ahead is the car's door to aim at, m.
+CAR_DOOR_MIN_M = 0.8
+AIM_WITHIN_M = 5.0
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -426,6 +430,7 @@ class Lobby(RouteSequencer):
             await self.phase(6, "a car's door opened: facing it, reading which car it is")
             if not await self.turn(bearing, keep=["runaway", "identify_car"]):
                 continue
+            await self.aim_at_opening()
             await self.set("runaway", "safe_distance", 0.1)
             await self.set("enter_car", "distance", 4.0)
             await self.set("enter_car", "speed", 0.5)
@@ -487,6 +492,27 @@ class Lobby(RouteSequencer):
         await self.restore("follow_hallway", "speed")
         await self.restore("watch_openings", "confirm")
         return False
+
+    async def aim_at_opening(self) -> None:
+        """Facing a car's open door: turned to the opening's middle, as the sonars place it.
+
+        The bearing turned to is a detector's (a door beside the robot, a way seen open, the
+        car's panel), some ten degrees off the opening's middle when seen aslant from across
+        the lobby; heading a few metres that way, the robot reaches the door at a jamb and
+        stops there while the door closes. An opening as wide as a car's door, near ahead,
+        is aimed at; anything else (another opening, none) leaves the heading as it is.
+        """
+        fix = await self.clue("locate_door", "opening", keep=["runaway", "identify_car"])
+        if fix is None:
+            return
+        x, y, width = float(fix["x"]), float(fix["y"]), float(fix["width"])
+        off = math.atan2(y, x)
+        if self.debug:
+            await self.say(f"      the opening ahead: {fix}")
+        if not (CAR_DOOR_MIN_M <= width <= MAX_DOOR_WIDTH and 0.3 < x < AIM_WITHIN_M):
+            return
+        if math.radians(3) < abs(off) < math.radians(30):
+            await self.turn(off, keep=["runaway", "identify_car"])
 
     async def centre_on_opening(self) -> bool:
         """Facing an opening in a wall just ahead: sideways to its middle. False if none.
