@@ -50,6 +50,11 @@ ENTRY_BEYOND_M = 0.5
 #: An opening at least this wide and within this far ahead is the car's door to aim at, m.
 CAR_DOOR_MIN_M = 0.8
 AIM_WITHIN_M = 5.0
+#: A car's depth, from its door to the panel on its back wall (docs/maps.md: about 2 m), m.
+CAR_DEPTH_M = 2.0
+#: Waiting for the only car in front of its door: this far from it, m, and this long, s.
+WAIT_BEFORE_DOOR_M = 1.3
+CAR_WAIT_S = 60.0
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -118,6 +123,9 @@ class Lobby(RouteSequencer):
         #: and where the route left it inside.
         self.entry_heading: float | None = None
         self.entered_at: Pose | None = None
+        #: The car doors seen open, by floor and car: the opening's middle and the heading that
+        #: faces it (odometry frame).
+        self.car_doors: dict[tuple[int, int], tuple[float, float, float]] = {}
 
     @property
     def button_here(self) -> int:
@@ -198,6 +206,9 @@ class Lobby(RouteSequencer):
     async def wait_for_car(self) -> bool:
         """Patrols the lobby along the cars until a car's door opens, identifies it, enters."""
         m = self.m
+        door = self.car_doors.get((self.here, 1)) if m.cars == 1 else None
+        if door is not None:
+            return await self.wait_at_door(door)
         await self.phase(6, "waiting for a car: patrolling the lobby, watching for an open door")
         self.car = 0
         await self.restore_lobby_patrol()
@@ -471,6 +482,8 @@ class Lobby(RouteSequencer):
                             self.car = int(await self.value("car"))
                         break
             code = m.car_barcode_first + self.car - 1
+            if self.car > 0 and (self.here, self.car) not in self.car_doors:
+                await self.note_car_door(code)
             if self.car > 0 and not await self.enclosed():
                 # Stopped short: aslant in the doorway, a jamb ahead. While the car's panel
                 # is in view, its door is open: facing the panel, in again.
@@ -491,6 +504,88 @@ class Lobby(RouteSequencer):
         await self.restore("runaway", "safe_distance")
         await self.restore("follow_hallway", "speed")
         await self.restore("watch_openings", "confirm")
+        return False
+
+    async def note_car_door(self, code: int) -> None:
+        """Notes where the door of the car whose panel (barcode ``code``) is in view lies.
+
+        The panel is on the car's back wall, seen through the door; the lobby's walls are
+        square to the call button's (docs/maps.md, "Lobby"), so the door faces the one of
+        their four ways nearest the way the robot looks at the panel, `CAR_DEPTH_M` out
+        from it.
+        """
+        b = self.button_pose
+        self.prefetch("barcodes", "odom")
+        seen: Any = await self.value("barcodes")
+        o = await self.odom()
+        if b is None or not isinstance(seen, dict):
+            return
+        for k, bearing, distance in zip(
+            seen.get("ids") or [],
+            seen.get("bearing") or [],
+            seen.get("distance") or [],
+            strict=False,
+        ):
+            if int(k) != code:
+                continue
+            px, py = o.seen_at(float(bearing), float(distance))
+            towards = o.heading_of(float(bearing))
+            facing = min(
+                (wrap(b.theta + q * math.pi / 2) for q in range(4)),
+                key=lambda h: abs(wrap(h - towards)),
+            )
+            dx, dy = Pose(px, py, facing).ahead(-CAR_DEPTH_M)
+            self.car_doors[(self.here, code - self.m.car_barcode_first + 1)] = (dx, dy, facing)
+            if self.debug:
+                await self.say(f"      car door noted at ({dx:.2f}, {dy:.2f}) facing {facing:.2f}")
+            return
+
+    async def wait_at_door(self, door: tuple[float, float, float]) -> bool:
+        """The building's only car, its door seen before: waits in front of it, then enters.
+
+        Every call brings that car, to the same door. Patrolling the lobby, the robot may be
+        across it when the door opens (a car on the wall across from the button), further off
+        than it can go in the 8 s the door may stay open (docs/maps.md, "Elevator"); waiting
+        in front of the door, it is in as the door opens.
+        """
+        m = self.m
+        await self.phase(6, "waiting for the car in front of its door (seen before)")
+        self.car = 0
+        px, py, facing = door
+        gx, gy = Pose(px, py, facing).ahead(-WAIT_BEFORE_DOOR_M)
+        await self.set("runaway", "safe_distance", 0.15)
+        try:
+            await self.goto(gx, gy, within=40, speed=0.6)
+            await self.turn((await self.odom()).turn_to(facing), keep=["runaway"])
+        finally:
+            await self.restore("runaway", "safe_distance")
+        await self.set("identify_car", "first_id", m.car_barcode_first)
+        await self.set("identify_car", "cars", m.cars)
+        await self.use("runaway", "identify_car", restart=["identify_car"])
+        if await self.wait("car > 0", within=CAR_WAIT_S):
+            return False
+        self.car = int(await self.value("car"))
+        code = m.car_barcode_first + self.car - 1
+        await self.phase(7, f"car {self.car} arrived: entering it")
+        await self.aim_at_opening()
+        await self.set("runaway", "safe_distance", 0.1)
+        await self.set("enter_car", "distance", 4.0)
+        await self.set("enter_car", "speed", 0.5)
+        try:
+            for _again in range(2):
+                await self.use("runaway", "enter_car", "identify_car", restart=["enter_car"])
+                await self.wait("car_entered", within=20)
+                if await self.enclosed():
+                    break
+                # Stopped short, a jamb ahead: while the panel is in view, the door is open.
+                if not await self.face_barcode(code):
+                    break
+        finally:
+            await self.restore("runaway", "safe_distance")
+        if await self.enclosed() and await self.look_round(code):
+            await self.say(f"    inside car {self.car}")
+            return True
+        await self.say("    the car left before the robot got in")
         return False
 
     async def aim_at_opening(self) -> None:
