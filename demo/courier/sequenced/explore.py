@@ -7,7 +7,9 @@ side corridor on its left, and where a wall ends the way it turns left if it can
 else back. In corridors that form a tree (every building of docs/maps.md) that walks each
 corridor once each way and comes back to where it began: no barcode in reach is missed. As it
 goes it notes every barcode it reads and where (`places`, the topological map: which barcode
-lies where along which corridor), and the junctions it turned at.
+lies where along which corridor), and the side corridors it turned into: one taken before is
+passed (in a tree only a misread opening, a door beside a junction read with it as one, leads
+back into one).
 
 On the start floor it explores from the lab door until the call button is in view, then goes
 into the lobby. On the goal floor it starts from the lobby's entry, which it finds from the
@@ -42,8 +44,8 @@ OUT_OF_CROSSING_M = 2.0
 SAME_MOUTH_M = 1.5
 #: The call button in view, the robot goes on into the lobby at most this far, m.
 INTO_LOBBY_M = 3.0
-#: Sight of the call button ends the start floor's exploration; the office's the goal floor's.
-#: Exploring gives up after this much time on the robot's clock, s.
+#: Exploring gives up after this much time on the robot's clock (unless the barcode it looks for
+#: came into view: the call button on the start floor, the office's on the goal floor), s.
 EXPLORE_BUDGET_S = 900.0
 #: A barcode read within this of ahead is homed on from where it was read, rad.
 AHEAD_RAD = math.radians(30)
