@@ -153,7 +153,20 @@ def _result(key: str, reply: zenoh.Reply, timeout: float, endpoints: Sequence[st
     raise BadReply(f"`{key}`: a reply with neither `ok` nor `error`: {body!r}")
 
 
-def _no_answer(key: str, timeout: float, endpoints: Sequence[str]) -> NotRunning:
+def _no_answer(
+    key: str, timeout: float, endpoints: Sequence[str], started: float | None = None
+) -> NotRunning:
+    """No reply to ``key``; ``started`` (`time.monotonic`) is when the request was sent."""
+    waited = None if started is None else time.monotonic() - started
+    if waited is not None and waited < timeout / 2:
+        # Zenoh ends a query at once when nothing on the link takes that key: no manager of
+        # that name is connected now (or the connection to it was just lost).
+        return NotRunning(
+            f"no skill manager answered `{key}`: the request ended after {waited:.1f} s "
+            f"unanswered (this client waits up to {timeout:g} s for one that took it), so "
+            f"nothing on the link at {', '.join(endpoints)} took it: no robot of that name "
+            "is connected now, or the connection to it was lost"
+        )
     return NotRunning(
         f"no skill manager answered `{key}` within {timeout:g} s "
         f"(is `situate run` running and reachable at {', '.join(endpoints)}, "
@@ -175,9 +188,10 @@ def request(
     Blocks for at most ``timeout`` seconds; no answer at all is :class:`NotRunning`.
     """
     key = f"situate/{robot}/req/{verb}"
+    started = time.monotonic()
     reply = _first_reply(session, key, json.dumps(args), timeout)
     if reply is None:
-        raise _no_answer(key, timeout, endpoints)
+        raise _no_answer(key, timeout, endpoints, started)
     return _result(key, reply, timeout, endpoints)
 
 
@@ -236,11 +250,12 @@ def send(
 
     def on_end() -> None:
         # The query is over (all replies in, or the time-out): no reply means no manager.
-        finish(None, _no_answer(key, timeout, endpoints))
+        finish(None, _no_answer(key, timeout, endpoints, started))
 
     # Called on Zenoh's own thread (not one more thread per request): the
     # callbacks only decode the reply and hand it over.
     handler = zenoh.handlers.Callback(on_reply, on_end, indirect=False)
+    started = time.monotonic()
     try:
         session.get(key, handler, payload=json.dumps(args), timeout=timeout)
     except zenoh.ZError as e:

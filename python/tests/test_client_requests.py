@@ -11,6 +11,7 @@ import json
 import math
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -112,6 +113,48 @@ def test_a_robot_that_takes_requests_and_never_answers_is_a_sentence() -> None:
         queryable.undeclare()  # type: ignore[no-untyped-call]
     finally:
         held.clear()
+        session.close()  # type: ignore[no-untyped-call]
+
+
+def _nothing_takes_it(endpoint: str, error: BaseException, started: float) -> None:
+    assert isinstance(error, situate.NotRunning), error
+    assert time.monotonic() - started < 20.0, "ended at once, not at the time-out"
+    message = str(error)
+    assert "within 30 s" not in message, message
+    assert "the request ended after" in message, message
+    assert "nothing on the link" in message, message
+    assert endpoint in message, message
+
+
+def test_a_request_nothing_on_the_link_takes_says_it_ended_at_once() -> None:
+    # Zenoh ends a query at once when nothing on the link takes its key (no robot of that
+    # name now, or the connection to it just lost): the message once said "within 30 s" of a
+    # request that had waited no time at all, in a delivery that failed under load.
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    session = zenoh.open(_link.zenoh_config(listen=[endpoint], mode="peer"))
+    client = _link.open_session([endpoint])
+    try:
+        started = time.monotonic()
+        with pytest.raises(situate.NotRunning) as e:
+            _link.request(client, "nobody", "get_param", {}, timeout=30.0, endpoints=[endpoint])
+        _nothing_takes_it(endpoint, e.value, started)
+        # The same for a request sent without waiting (`send`: what `robot.send` uses).
+        got: list[BaseException | None] = []
+        done = threading.Event()
+
+        def outcome(_result: object, error: BaseException | None) -> None:
+            got.append(error)
+            done.set()
+
+        started = time.monotonic()
+        _link.send(
+            client, "nobody", "get_param", {}, timeout=30.0, endpoints=[endpoint], done=outcome
+        )
+        assert done.wait(60), "no outcome"
+        assert got[0] is not None
+        _nothing_takes_it(endpoint, got[0], started)
+    finally:
+        _link.close_session(client)
         session.close()  # type: ignore[no-untyped-call]
 
 
