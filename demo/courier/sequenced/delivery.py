@@ -26,9 +26,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from courier.geometry import bearing_of, wrap
+from courier.geometry import Pose, bearing_of, wrap
 from courier.link import PhaseFailed
 from courier.mission import NORMAL, SKILLS, Stop
+from courier.sequenced.behaviours import BEYOND_WALL_M
 from courier.sequenced.explore import Explorer
 
 #: The phases, in mission order (``--from``/``--to`` pick a stretch of them).
@@ -39,6 +40,8 @@ LAB_BUDGET_S = 900.0
 #: Out of the lab, a wall ahead nearer than this is the corridor's far wall (corridors are at
 #: most 3 m wide; the robot stops about 1.1 m past the door's line), m.
 FAR_WALL_M = 2.5
+#: Stopped in the lab's doorway, the robot goes on this far through it, m.
+ON_THROUGH_M = 0.8
 #: Stopped in a car's doorway on the way out, the robot waits for this much room ahead, m.
 LEAVE_CLEAR_M = 1.0
 
@@ -89,12 +92,35 @@ class Delivery(Explorer):
                 # checked against it (beyond its line).
                 self.wall_fix = await self.barcode_wall(m.lab_door_barcode)
             await self.phase(3, "looking for the door opening and passing the lab door")
-            if await self.pass_door(m.lab_door_barcode, None) and await self.beyond_wall():
+            if await self.pass_door(m.lab_door_barcode, None) and (
+                await self.beyond_wall() or await self.on_through_the_door()
+            ):
                 await self.square_the_way_out()
                 return
             await self.say("    could not pass the door: looking again")
             await self.escape(5)
         raise PhaseFailed("could not leave the lab")
+
+    async def on_through_the_door(self) -> bool:
+        """Stopped in the doorway (past the wall's line, not yet `BEYOND_WALL_M` beyond): on.
+
+        Someone beyond the door, or a jamb caught aslant, stops `std.pass_door` short. The way
+        on is straight out along the wall's normal; going back to look for the barcode from
+        there would leave the robot outside, where the lab door's barcode (facing into the
+        lab) is never read again.
+        """
+        if self.wall_fix is None:
+            return False
+        wall = Pose(*self.wall_fix)
+        o = await self.odom()
+        if not 0.0 < wall.along(o.x, o.y) < BEYOND_WALL_M:
+            return False
+        await self.say("    in the doorway: on through it")
+        await self.turn(o.turn_to(wall.theta), keep=["runaway"])
+        await self.set("pass_door", "distance", ON_THROUGH_M)
+        await self.use("runaway", "pass_door", restart=["pass_door"])
+        await self.wait("door_passed", within=20)
+        return await self.beyond_wall()
 
     async def square_the_way_out(self) -> None:
         """Takes the way out of the lab square to the corridor's far wall, just ahead.
