@@ -122,9 +122,13 @@ fn hz_reports_the_rate_of_a_signal_written_every_cycle() {
     assert!(rate > 0.0 && rate <= 20.0 + 1e-9, "{last}");
     if last["at_least"] == false {
         // The toybot's winner writes the drive every cycle: the shortest interval seen is one
-        // cycle (a busy machine may make a poll miss a write, and a longer one show up too).
+        // cycle. A busy machine makes polls miss writes (the flake hunt saw every 2.2 cycles
+        // on average, 19 at most): the rate is then lower by as much, and said to be lower
+        // only through `max_cycles`. With no write missed, it is the cycle rate exactly.
         assert_eq!(last["min_cycles"], 1, "{last}");
-        assert!(rate > 10.0, "{last}");
+        if last["max_cycles"] == 1 {
+            assert!((rate - 20.0).abs() < 1e-9, "{last}");
+        }
     }
     // The fields are the ones docs/cli.md lists (it once left `written` out).
     let mut fields: Vec<String> = last.as_object().expect("an object").keys().cloned().collect();
