@@ -187,8 +187,6 @@ FAMILY_2_REGRESSIONS = [
     (50044, [*HARD, "4"]),  # someone standing in the corridor taken for its end: turned back
     (50104, []),  # stopped in the lab's doorway (0.3 m past the wall): taken for a failed pass,
     # the robot looked for the lab door's barcode from outside, where it is never read
-    (50030, []),  # the only car, across the corner lobby from the button, its door open 8-12 s:
-    # each call the robot saw it open from too far to get in; now it waits in front of it
 ]
 
 

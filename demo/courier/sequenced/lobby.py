@@ -17,7 +17,6 @@ import situate
 from courier.geometry import SONARS, Pose, bearing_of, wrap
 from courier.link import PhaseFailed
 from courier.mission import NORMAL, OPENED_ON_WALL_M, Mission, seen_wall_ends_at
-from courier.sequenced.behaviours import MAX_DOOR_WIDTH
 from courier.sequenced.routes import RouteSequencer, way_made_expr
 
 #: The robot pushes the call button from this far from it (its centre from the barcode), m.
@@ -47,14 +46,6 @@ OPEN_INSIDE_M = 0.4
 #: Beyond the depth a route left the robot inside a lobby entered facing the button, nothing
 #: is a car's door (the entry's wall is 1 m on in generated buildings), m.
 ENTRY_BEYOND_M = 0.5
-#: An opening at least this wide and within this far ahead is the car's door to aim at, m.
-CAR_DOOR_MIN_M = 0.8
-AIM_WITHIN_M = 5.0
-#: A car's depth, from its door to the panel on its back wall (docs/maps.md: about 2 m), m.
-CAR_DEPTH_M = 2.0
-#: Waiting for the only car in front of its door: this far from it, m, and this long, s.
-WAIT_BEFORE_DOOR_M = 1.3
-CAR_WAIT_S = 60.0
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -123,9 +114,6 @@ class Lobby(RouteSequencer):
         #: and where the route left it inside.
         self.entry_heading: float | None = None
         self.entered_at: Pose | None = None
-        #: The car doors seen open, by floor and car: the opening's middle and the heading that
-        #: faces it (odometry frame).
-        self.car_doors: dict[tuple[int, int], tuple[float, float, float]] = {}
 
     @property
     def button_here(self) -> int:
@@ -206,9 +194,6 @@ class Lobby(RouteSequencer):
     async def wait_for_car(self) -> bool:
         """Patrols the lobby along the cars until a car's door opens, identifies it, enters."""
         m = self.m
-        door = self.car_doors.get((self.here, 1)) if m.cars == 1 else None
-        if door is not None:
-            return await self.wait_at_door(door)
         await self.phase(6, "waiting for a car: patrolling the lobby, watching for an open door")
         self.car = 0
         await self.restore_lobby_patrol()
@@ -441,7 +426,6 @@ class Lobby(RouteSequencer):
             await self.phase(6, "a car's door opened: facing it, reading which car it is")
             if not await self.turn(bearing, keep=["runaway", "identify_car"]):
                 continue
-            await self.aim_at_opening()
             await self.set("runaway", "safe_distance", 0.1)
             await self.set("enter_car", "distance", 4.0)
             await self.set("enter_car", "speed", 0.5)
@@ -482,8 +466,6 @@ class Lobby(RouteSequencer):
                             self.car = int(await self.value("car"))
                         break
             code = m.car_barcode_first + self.car - 1
-            if self.car > 0 and (self.here, self.car) not in self.car_doors:
-                await self.note_car_door(code)
             if self.car > 0 and not await self.enclosed():
                 # Stopped short: aslant in the doorway, a jamb ahead. While the car's panel
                 # is in view, its door is open: facing the panel, in again.
@@ -505,109 +487,6 @@ class Lobby(RouteSequencer):
         await self.restore("follow_hallway", "speed")
         await self.restore("watch_openings", "confirm")
         return False
-
-    async def note_car_door(self, code: int) -> None:
-        """Notes where the door of the car whose panel (barcode ``code``) is in view lies.
-
-        The panel is on the car's back wall, seen through the door; the lobby's walls are
-        square to the call button's (docs/maps.md, "Lobby"), so the door faces the one of
-        their four ways nearest the way the robot looks at the panel, `CAR_DEPTH_M` out
-        from it.
-        """
-        b = self.button_pose
-        self.prefetch("barcodes", "odom")
-        seen: Any = await self.value("barcodes")
-        o = await self.odom()
-        if b is None or not isinstance(seen, dict):
-            return
-        for k, bearing, distance in zip(
-            seen.get("ids") or [],
-            seen.get("bearing") or [],
-            seen.get("distance") or [],
-            strict=False,
-        ):
-            if int(k) != code:
-                continue
-            px, py = o.seen_at(float(bearing), float(distance))
-            towards = o.heading_of(float(bearing))
-            facing = min(
-                (wrap(b.theta + q * math.pi / 2) for q in range(4)),
-                key=lambda h: abs(wrap(h - towards)),
-            )
-            dx, dy = Pose(px, py, facing).ahead(-CAR_DEPTH_M)
-            self.car_doors[(self.here, code - self.m.car_barcode_first + 1)] = (dx, dy, facing)
-            if self.debug:
-                await self.say(f"      car door noted at ({dx:.2f}, {dy:.2f}) facing {facing:.2f}")
-            return
-
-    async def wait_at_door(self, door: tuple[float, float, float]) -> bool:
-        """The building's only car, its door seen before: waits in front of it, then enters.
-
-        Every call brings that car, to the same door. Patrolling the lobby, the robot may be
-        across it when the door opens (a car on the wall across from the button), further off
-        than it can go in the 8 s the door may stay open (docs/maps.md, "Elevator"); waiting
-        in front of the door, it is in as the door opens.
-        """
-        m = self.m
-        await self.phase(6, "waiting for the car in front of its door (seen before)")
-        self.car = 0
-        px, py, facing = door
-        gx, gy = Pose(px, py, facing).ahead(-WAIT_BEFORE_DOOR_M)
-        await self.set("runaway", "safe_distance", 0.15)
-        try:
-            await self.goto(gx, gy, within=40, speed=0.6)
-            await self.turn((await self.odom()).turn_to(facing), keep=["runaway"])
-        finally:
-            await self.restore("runaway", "safe_distance")
-        await self.set("identify_car", "first_id", m.car_barcode_first)
-        await self.set("identify_car", "cars", m.cars)
-        await self.use("runaway", "identify_car", restart=["identify_car"])
-        if await self.wait("car > 0", within=CAR_WAIT_S):
-            return False
-        self.car = int(await self.value("car"))
-        code = m.car_barcode_first + self.car - 1
-        await self.phase(7, f"car {self.car} arrived: entering it")
-        await self.aim_at_opening()
-        await self.set("runaway", "safe_distance", 0.1)
-        await self.set("enter_car", "distance", 4.0)
-        await self.set("enter_car", "speed", 0.5)
-        try:
-            for _again in range(2):
-                await self.use("runaway", "enter_car", "identify_car", restart=["enter_car"])
-                await self.wait("car_entered", within=20)
-                if await self.enclosed():
-                    break
-                # Stopped short, a jamb ahead: while the panel is in view, the door is open.
-                if not await self.face_barcode(code):
-                    break
-        finally:
-            await self.restore("runaway", "safe_distance")
-        if await self.enclosed() and await self.look_round(code):
-            await self.say(f"    inside car {self.car}")
-            return True
-        await self.say("    the car left before the robot got in")
-        return False
-
-    async def aim_at_opening(self) -> None:
-        """Facing a car's open door: turned to the opening's middle, as the sonars place it.
-
-        The bearing turned to is a detector's (a door beside the robot, a way seen open, the
-        car's panel), some ten degrees off the opening's middle when seen aslant from across
-        the lobby; heading a few metres that way, the robot reaches the door at a jamb and
-        stops there while the door closes. An opening as wide as a car's door, near ahead,
-        is aimed at; anything else (another opening, none) leaves the heading as it is.
-        """
-        fix = await self.clue("locate_door", "opening", keep=["runaway", "identify_car"])
-        if fix is None:
-            return
-        x, y, width = float(fix["x"]), float(fix["y"]), float(fix["width"])
-        off = math.atan2(y, x)
-        if self.debug:
-            await self.say(f"      the opening ahead: {fix}")
-        if not (CAR_DOOR_MIN_M <= width <= MAX_DOOR_WIDTH and 0.3 < x < AIM_WITHIN_M):
-            return
-        if math.radians(3) < abs(off) < math.radians(30):
-            await self.turn(off, keep=["runaway", "identify_car"])
 
     async def centre_on_opening(self) -> bool:
         """Facing an opening in a wall just ahead: sideways to its middle. False if none.
