@@ -546,7 +546,7 @@ def main() -> int:
                     else []
                 )
                 features = read_features(path)
-                cases.append(Case(name, seed, path, seed, extra, features, gen_extra=gen))
+                cases.append(Case(name, seed, path, seed, extra, features=features, gen_extra=gen))
             if cases:
                 sets[name] = cases
         everything = [c for cases in sets.values() for c in cases]
