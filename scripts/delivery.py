@@ -211,7 +211,17 @@ def coverage_section(sets: dict[str, list[Case]]) -> list[str]:
     A value delivered below its set's target is in bold; ``-``: no building of the set has it.
     """
     names = [n for n, cases in sets.items() if any(c.features for c in cases)]
+    # A generated set whose buildings' features were not read: said, never left out silently.
+    unread = [n for n, cases in sets.items() if any(c.map_seed is not None for c in cases)]
+    unread = [n for n in unread if n not in names]
     if not names:
+        if unread:
+            return [
+                "## Coverage by feature of the building",
+                "",
+                f"Not counted: the features of {', '.join(unread)} were not read.",
+                "",
+            ]
         return []
     out = [
         "## Coverage by feature of the building",
