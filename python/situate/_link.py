@@ -160,12 +160,14 @@ def _no_answer(
     waited = None if started is None else time.monotonic() - started
     if waited is not None and waited < timeout / 2:
         # Zenoh ends a query at once when nothing on the link takes that key: no manager of
-        # that name is connected now (or the connection to it was just lost).
+        # that name is connected now, the connection to it was just lost, or the robot's
+        # access rules drop this client's request.
         return NotRunning(
             f"no skill manager answered `{key}`: the request ended after {waited:.1f} s "
             f"unanswered (this client waits up to {timeout:g} s for one that took it), so "
             f"nothing on the link at {', '.join(endpoints)} took it: no robot of that name "
-            "is connected now, or the connection to it was lost"
+            "is connected now, the connection to it was lost, or it refused this client's "
+            "credentials or access rules"
         )
     return NotRunning(
         f"no skill manager answered `{key}` within {timeout:g} s "
