@@ -116,20 +116,23 @@ pub(crate) fn map_command(command: MapCommand, out: Out) -> anyhow::Result<u8> {
 
 fn map_check(file: &Path, json: bool) -> anyhow::Result<u8> {
     let shown = file.display().to_string();
-    let findings: Vec<Json> = match situate_sim::load_map(file) {
-        Err(e) => {
-            let (element, message) = match &e {
-                situate_sim::MapError::Invalid { element, message, .. } => (element.clone(), message.clone()),
-                situate_sim::MapError::Yaml { message, .. } => ("map".to_string(), message.clone()),
-                other => ("map".to_string(), other.to_string()),
-            };
-            vec![json!({"line": e.line(), "element": element, "message": message, "text": e.to_string()})]
-        }
-        Ok(map) => situate_sim::check::lint(&map)
-            .iter()
-            .map(|f| json!({"line": f.line, "element": f.element, "message": f.message, "text": f.render(&shown)}))
-            .collect(),
+    // A map that cannot be read is one finding, about the map as a whole unless its reader
+    // named the element; a map that reads is checked against every documented rule.
+    let findings: Vec<situate_sim::Diagnostic> = match situate_sim::load_map(file) {
+        Err(e) => vec![e],
+        Ok(map) => situate_sim::check::lint(&map).into_iter().map(|f| f.in_file(&shown)).collect(),
     };
+    let findings: Vec<Json> = findings
+        .iter()
+        .map(|f| {
+            json!({
+                "line": f.line(),
+                "element": f.element.as_deref().unwrap_or("map"),
+                "message": f.message,
+                "text": f.to_string(),
+            })
+        })
+        .collect();
     if json {
         stdoutln!("{}", json!({"file": shown, "ok": findings.is_empty(), "findings": findings}));
     } else if findings.is_empty() {

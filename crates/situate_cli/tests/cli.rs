@@ -296,7 +296,8 @@ fn a_broken_map_is_reported_in_the_map_and_at_the_robot_files_map_line() {
         let err = stderr(&out);
         let map = shown(&dir.path().join("broken.yaml"));
         assert!(
-            err.lines().any(|l| l.starts_with(&format!("{map}:1:9: missing `]` to close the `[` at line 1, column 9"))),
+            err.lines()
+                .any(|l| l.starts_with(&format!("{map}:1:9: error: missing `]` to close the `[` at line 1, column 9"))),
             "{verb}: the map's own place: {err}"
         );
         assert!(
@@ -548,9 +549,9 @@ fn a_failing_map_check_exits_non_zero_with_every_finding_and_its_line() {
     assert_eq!(out.status.code(), Some(1));
     let err = stderr(&out);
     let line = |needle: &str| broken.lines().position(|l| l.contains(needle)).map(|i| i + 1).unwrap_or(0);
-    let car = format!("{}:{}: elevator, car 2: door 0.60 m wide", shown(&path), line("door_width: 0.6"));
+    let car = format!("{}:{}: error: elevator, car 2: door 0.60 m wide", shown(&path), line("door_width: 0.6"));
     let code = format!(
-        "{}:{}: floor 0, door 1 (lab), barcode: barcode 10 faces the wall it is on (0.02 m ahead of it): it cannot be \
+        "{}:{}: error: floor 0, door 1 (lab), barcode: barcode 10 faces the wall it is on (0.02 m ahead of it): it cannot be \
          read; turn it round (facing_deg: 90)",
         shown(&path),
         line("name: lab")
@@ -563,12 +564,27 @@ fn a_failing_map_check_exits_non_zero_with_every_finding_and_its_line() {
     let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
     assert_eq!(j["ok"], false);
     assert_eq!(j["findings"].as_array().map(Vec::len), Some(2));
+    assert_eq!(j["findings"][0]["element"], "elevator, car 2");
+    assert_eq!(j["findings"][0]["line"], line("door_width: 0.6"));
+    assert_eq!(j["findings"][0]["message"], "door 0.60 m wide: the robot (0.50 m) needs 0.80 m to board");
     // A loader error: the file, line and element.
     let (_dir2, path2) = robot_file("missing.yaml", small.replacen("{home: 40}", "{home: 99}", 1));
     let out = situate(["map", "check", &shown(&path2)]);
     assert_eq!(out.status.code(), Some(1));
-    let want = format!("{}:{}: mission, route car_to_office, step 1: no barcode 99", shown(&path2), line("{home: 40}"));
+    let want =
+        format!("{}:{}: error: mission, route car_to_office, step 1: no barcode 99", shown(&path2), line("{home: 40}"));
     assert!(stderr(&out).contains(&want), "{}", stderr(&out));
+    let out = situate(["map", "check", "--json", &shown(&path2)]);
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
+    assert_eq!(j["findings"][0]["element"], "mission, route car_to_office, step 1");
+    // A file that is not YAML: about the map, with its line and column.
+    let (_dir3, path3) = robot_file("unclosed.yaml", small.replacen("[4.25, 0.02]", "[4.25, 0.02", 1));
+    let out = situate(["map", "check", "--json", &shown(&path3)]);
+    assert_eq!(out.status.code(), Some(1));
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).expect("JSON");
+    assert_eq!(j["findings"][0]["element"], "map");
+    let text = j["findings"][0]["text"].as_str().unwrap_or_default();
+    assert!(text.starts_with(&format!("{}:", shown(&path3))) && text.contains(": error: missing `]`"), "{text}");
 }
 
 #[test]

@@ -264,6 +264,6 @@ impl RobotSpec {
             Some(p) if p.src > 0 => self.sources.get(p.src).cloned().or_else(|| self.file.clone()),
             _ => self.file.clone(),
         };
-        Diagnostic { severity, file, pos, message }
+        Diagnostic { severity, file, pos, element: None, message }
     }
 }

@@ -48,8 +48,9 @@ use reach::floor_reach;
 use routes::{route, turns_before_pass};
 use start::{start_checks, start_in_lab};
 
-pub use finding::Finding;
+use finding::finding;
 pub use reach::readable_from;
+pub use situate_robotfile::diagnostic::Diagnostic;
 
 /// Grid cell of the reachability flood fill, m.
 pub const CELL: f64 = 0.05;
@@ -106,7 +107,7 @@ const GAP_MIN: f64 = 0.6;
 const OVERLAP_MIN: f64 = 1.0;
 
 /// Every feasibility problem of the map's mission, in a stable order.
-pub fn lint(map: &Map) -> Vec<Finding> {
+pub fn lint(map: &Map) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     let r = map.robot_radius;
     elevator_timing(map, &mut out);
@@ -114,7 +115,7 @@ pub fn lint(map: &Map) -> Vec<Finding> {
     for (k, c) in map.elevator.cars.iter().enumerate() {
         let el = format!("elevator, car {}", k + 1);
         if c.door_width < 2.0 * r + DOOR_SPARE - 1e-9 {
-            out.push(Finding::new(
+            out.push(finding(
                 c.line,
                 &el,
                 format!(
@@ -127,7 +128,7 @@ pub fn lint(map: &Map) -> Vec<Finding> {
         }
         let inner = (c.x1 - c.x0).min(c.y1 - c.y0);
         if inner < 2.0 * (r + MARGIN) {
-            out.push(Finding::new(
+            out.push(finding(
                 c.line,
                 &el,
                 format!("interior {inner:.2} m across: the robot needs {:.2} m", 2.0 * (r + MARGIN)),
@@ -135,7 +136,7 @@ pub fn lint(map: &Map) -> Vec<Finding> {
         }
         let (w, h) = (c.x1 - c.x0, c.y1 - c.y0);
         if [w, h].iter().any(|s| !(SHAFT_MIN - SLACK..=SHAFT_MAX + SLACK).contains(s)) {
-            out.push(Finding::new(
+            out.push(finding(
                 c.line,
                 &el,
                 format!("shaft {w:.2} × {h:.2} m: shafts are {SHAFT_MIN} to {SHAFT_MAX} m on each side"),

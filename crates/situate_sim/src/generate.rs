@@ -63,8 +63,8 @@ pub fn generate(seed: u64, opts: &Options) -> Result<Generated, GenError> {
         let yaml = b.building.emit(seed, opts.route, &b.features);
         match Map::parse(&format!("seed-{seed}.yaml"), &yaml) {
             Err(e) => last = e.to_string(),
-            Ok(map) => match lint(&map).first() {
-                Some(f) => last = f.render(&format!("seed-{seed}.yaml")),
+            Ok(map) => match lint(&map).into_iter().next() {
+                Some(f) => last = f.in_file(&format!("seed-{seed}.yaml")).to_string(),
                 None => {
                     return Ok(Generated {
                         yaml,

@@ -21,6 +21,7 @@ pub mod task;
 pub mod traffic;
 pub mod world;
 
-pub use map::{load_map, Map, MapError};
+pub use map::{load_map, Map};
+pub use situate_robotfile::diagnostic::Diagnostic;
 pub use skills::{declarations, register, registry, SharedWorld};
 pub use world::{BaseLimits, SonarSettings, World, WorldConfig};

@@ -1,12 +1,11 @@
 //! Building maps: the YAML format (see `docs/maps.md`), its checks, and the
 //! world view the GUI draws.
 //!
-//! Every error names the file, the line and the element, e.g.
-//! `maps/x.yaml:12: floor 4, wall 3: segment has zero length`.
+//! Every error is a [`Diagnostic`](situate_robotfile::diagnostic::Diagnostic) naming the file, the line and the
+//! element, e.g. `maps/x.yaml:12: error: floor 4, wall 3: segment has zero
+//! length`.
 
 use std::collections::BTreeMap;
-
-use thiserror::Error;
 
 use crate::geom::{Seg, P2};
 
@@ -16,34 +15,6 @@ mod read;
 mod validate;
 
 pub use read::{load_map, MAX_MAP_FILE_BYTES};
-
-/// A map that could not be read or makes no sense.
-#[derive(Debug, Error)]
-pub enum MapError {
-    /// The file could not be read.
-    #[error("{file}: {source}")]
-    Io {
-        file: String,
-        #[source]
-        source: std::io::Error,
-    },
-    /// The file is not YAML a map may use.
-    #[error("{file}:{line}:{col}: {message}")]
-    Yaml { file: String, line: usize, col: usize, message: String },
-    /// An element of the map is wrong.
-    #[error("{file}:{line}: {element}: {message}")]
-    Invalid { file: String, line: usize, element: String, message: String },
-}
-
-impl MapError {
-    /// The line the error points at (0 when there is none).
-    pub fn line(&self) -> usize {
-        match self {
-            MapError::Io { .. } => 0,
-            MapError::Yaml { line, .. } | MapError::Invalid { line, .. } => *line,
-        }
-    }
-}
 
 /// A side of an elevator car's rectangle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

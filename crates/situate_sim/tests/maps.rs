@@ -1,7 +1,7 @@
 //! Map files: the shipped maps load; broken ones are refused with the file,
 //! line and element named.
 
-use situate_sim::{load_map, Map, MapError};
+use situate_sim::{load_map, Map};
 
 fn path(name: &str) -> String {
     format!("{}/../../maps/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -90,7 +90,7 @@ fn world_json_has_the_gui_shape() {
 fn a_zero_length_wall_names_file_line_floor_and_wall() {
     let (e, line) = broken("[2.8, 4, 3.2, 4]", "[2.8, 4, 2.8, 4]");
     let want = line_of(&small_text(), "[2.8, 4, 3.2, 4]");
-    assert_eq!(e, format!("maps/x.yaml:{want}: floor 0, wall 2: segment has zero length"));
+    assert_eq!(e, format!("maps/x.yaml:{want}: error: floor 0, wall 2: segment has zero length"));
     assert_eq!(line, want);
 }
 
@@ -132,7 +132,7 @@ fn duplicate_levels_overlapping_cars_and_duplicate_barcodes_are_refused() {
     assert_eq!(
         e,
         format!(
-            "maps/x.yaml:{second}: floor 1, lobby: barcode 30 is used twice: by floor 0, lobby on line {first} and by \
+            "maps/x.yaml:{second}: error: floor 1, lobby: barcode 30 is used twice: by floor 0, lobby on line {first} and by \
              floor 1, lobby on line {second}"
         )
     );
@@ -151,7 +151,7 @@ fn a_barcode_used_twice_on_one_floor_names_both_places() {
     assert_eq!(
         e,
         format!(
-            "maps/x.yaml:{}: floor 0, barcode 2: barcode 13 is used twice: by floor 0, barcode 1 on line {} and by \
+            "maps/x.yaml:{}: error: floor 0, barcode 2: barcode 13 is used twice: by floor 0, barcode 1 on line {} and by \
              floor 0, barcode 2 on line {}",
             at + 3,
             at + 2,
@@ -176,7 +176,7 @@ fn a_bracket_left_open_is_named_at_its_line_and_column() {
     assert_eq!(line, at);
     assert!(
         e.starts_with(&format!(
-            "maps/x.yaml:{at}:9: missing `]` to close the `[` at line {at}, column 9 (the YAML parser stopped at line {}",
+            "maps/x.yaml:{at}:9: error: missing `]` to close the `[` at line {at}, column 9 (the YAML parser stopped at line {}",
             at + 2
         )),
         "{e}"
@@ -200,8 +200,11 @@ fn bad_values_name_the_element() {
 #[test]
 fn a_missing_file_is_named() {
     match load_map("maps/no-such-map.yaml") {
-        Err(e @ MapError::Io { .. }) => assert!(e.to_string().starts_with("maps/no-such-map.yaml: "), "{e}"),
-        other => panic!("expected an I/O error, got {other:?}"),
+        Err(e) => {
+            assert!(e.to_string().starts_with("maps/no-such-map.yaml: error: cannot read map file: "), "{e}");
+            assert_eq!((e.line(), e.element.as_deref()), (0, None), "the file as a whole: {e:?}");
+        }
+        Ok(_) => panic!("a missing map file loaded"),
     }
 }
 

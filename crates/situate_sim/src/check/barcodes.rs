@@ -5,8 +5,8 @@
 //! (a floor's barcode by id, the door nearest a point, a door's name).
 
 use super::{
-    Finding, BARCODE_JAMB_MAX, BARCODE_LINE_MAX, CORRIDOR_MIN, DOOR_MAX, DOOR_MIN, DOOR_SPARE, SLACK, STICK_MAX,
-    STICK_SLACK,
+    finding, Diagnostic, BARCODE_JAMB_MAX, BARCODE_LINE_MAX, CORRIDOR_MIN, DOOR_MAX, DOOR_MIN, DOOR_SPARE, SLACK,
+    STICK_MAX, STICK_SLACK,
 };
 use crate::geom::{cast, in_polygon, Seg, P2};
 use crate::map::{Barcode, Floor, Map};
@@ -39,14 +39,10 @@ pub(super) fn nearest_door(f: &Floor, at: P2) -> Option<(usize, f64, f64)> {
 /// [`BARCODE_LINE_MAX`]), 0.1 to [`BARCODE_JAMB_MAX`] m from its nearer jamb
 /// (`docs/maps.md`, "Lab door" and "Goal floor"). The robot, lined up with
 /// the barcode, looks for its door there.
-pub(super) fn door_beside(map: &Map, f: &Floor, id: i64, out: &mut Vec<Finding>) {
+pub(super) fn door_beside(map: &Map, f: &Floor, id: i64, out: &mut Vec<Diagnostic>) {
     let Some((el, b)) = floor_barcode(f, id) else { return };
     let Some((i, off, jamb)) = nearest_door(f, b.at) else {
-        out.push(Finding::new(
-            b.line,
-            el,
-            format!("barcode {id} marks a door, but there is no door on floor {}", f.level),
-        ));
+        out.push(finding(b.line, el, format!("barcode {id} marks a door, but there is no door on floor {}", f.level)));
         return;
     };
     let mut wrong = Vec::new();
@@ -60,7 +56,7 @@ pub(super) fn door_beside(map: &Map, f: &Floor, id: i64, out: &mut Vec<Finding>)
     }
     if !wrong.is_empty() {
         let d = &f.doors[i];
-        out.push(Finding::new(
+        out.push(finding(
             b.line,
             el,
             format!(
@@ -76,11 +72,11 @@ pub(super) fn door_beside(map: &Map, f: &Floor, id: i64, out: &mut Vec<Finding>)
 }
 
 /// The office's barcode faces the corridor: out of the office.
-pub(super) fn office_barcode_faces_out(f: &Floor, id: i64, out: &mut Vec<Finding>) {
+pub(super) fn office_barcode_faces_out(f: &Floor, id: i64, out: &mut Vec<Diagnostic>) {
     let (Some(o), Some((el, b))) = (&f.office, floor_barcode(f, id)) else { return };
     let Some(facing) = b.facing else { return };
     if in_polygon(b.at.plus(P2::dir(facing).scale(0.3)), &o.polygon) {
-        out.push(Finding::new(
+        out.push(finding(
             b.line,
             el,
             format!("barcode {id} faces into the office: the office's barcode faces the corridor, out of the office"),
@@ -123,7 +119,7 @@ fn turned_round(facing: f64) -> f64 {
 /// face (`docs/maps.md`, "Elements"); the call button is on a wall, facing
 /// into the lobby. Returns whether this floor's call button faces the wall it
 /// is on (what is checked from in front of it is then skipped).
-pub(super) fn stand_offs(map: &Map, f: &Floor, out: &mut Vec<Finding>) -> bool {
+pub(super) fn stand_offs(map: &Map, f: &Floor, out: &mut Vec<Diagnostic>) -> bool {
     let segs = map.static_segments(f);
     let rule = format!("barcodes are stuck 0.01 to {STICK_MAX:.2} m off their wall, on the side they face");
     let mut barcodes: Vec<(String, Barcode)> = Vec::new();
@@ -150,7 +146,7 @@ pub(super) fn stand_offs(map: &Map, f: &Floor, out: &mut Vec<Finding>) -> bool {
             Stuck::Far(d) => format!("barcode {id} is {d:.2} m in front of the wall behind it: {rule}"),
             Stuck::NoWall => format!("barcode {id} has no wall behind it within 1 m: {rule}"),
         };
-        out.push(Finding::new(b.line, el, message));
+        out.push(finding(b.line, el, message));
     }
     let Some(l) = &f.lobby else { return false };
     let b = Barcode { id: l.barcode, at: l.button, facing: Some(l.facing), line: l.line };
@@ -182,18 +178,18 @@ pub(super) fn stand_offs(map: &Map, f: &Floor, out: &mut Vec<Finding>) -> bool {
             false,
         ),
     };
-    out.push(Finding::new(l.line, el, message));
+    out.push(finding(l.line, el, message));
     faces
 }
 
 /// Every floor door wide enough for the robot.
-pub(super) fn doors(map: &Map, out: &mut Vec<Finding>) {
+pub(super) fn doors(map: &Map, out: &mut Vec<Diagnostic>) {
     let need = 2.0 * map.robot_radius + DOOR_SPARE;
     for f in &map.floors {
         for (i, d) in f.doors.iter().enumerate() {
             let w = d.seg.len();
             if w < need - 1e-9 {
-                out.push(Finding::new(
+                out.push(finding(
                     d.line,
                     door_el(f, i, &d.name),
                     format!("{w:.2} m wide: the robot needs {need:.2} m (its diameter + {DOOR_SPARE} m)"),
@@ -207,7 +203,7 @@ pub(super) fn doors(map: &Map, out: &mut Vec<Finding>) {
                 } else {
                     String::new()
                 };
-                out.push(Finding::new(
+                out.push(finding(
                     d.line,
                     door_el(f, i, &d.name),
                     format!("{w:.2} m wide: doors are {DOOR_MIN:.1} to {DOOR_MAX:.1} m wide{why}"),

@@ -6,8 +6,8 @@ use std::collections::{HashMap, HashSet};
 
 use super::reach::Grid;
 use super::{
-    Finding, CLUTTER_FREE, CORRIDOR_MAX, CORRIDOR_MIN, DOOR_MAX, DOOR_MIN, GAP_MAX, GAP_MIN, MARGIN, OPENINGS_APART,
-    OVERLAP_MIN, SLACK,
+    finding, Diagnostic, CLUTTER_FREE, CORRIDOR_MAX, CORRIDOR_MIN, DOOR_MAX, DOOR_MIN, GAP_MAX, GAP_MIN, MARGIN,
+    OPENINGS_APART, OVERLAP_MIN, SLACK,
 };
 use crate::geom::{cast, Seg, P2};
 use crate::map::{Car, Floor, Map};
@@ -127,7 +127,7 @@ fn wall_name(f: &Floor, j: usize) -> String {
 /// from [`DOOR_MAX`] to [`CORRIDOR_MIN`] m wide; and two openings have at
 /// least [`OPENINGS_APART`] of wall between them. Returns the ends of the
 /// openings found too narrow for a side corridor.
-pub(super) fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Finding>) -> Vec<(P2, P2)> {
+pub(super) fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Diagnostic>) -> Vec<(P2, P2)> {
     let mut flagged = Vec::new();
     let shafts = shaft_sides(map);
     let shaft_segs: Vec<Seg> = shafts.iter().map(|(_, s)| *s).collect();
@@ -222,7 +222,7 @@ pub(super) fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &
             };
             let m = at((a + b) / 2.0);
             flagged.push((at(a), at(b)));
-            out.push(Finding::new(
+            out.push(finding(
                 line,
                 format!("floor {}, {}", f.level, end_name(f, el_end)),
                 format!(
@@ -252,7 +252,7 @@ pub(super) fn openings(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &
                 End::Shaft(_) => continue,
             };
             let (p, q) = (at((gaps[k - 1].0 + gaps[k - 1].1) / 2.0), at((gaps[k].0 + gaps[k].1) / 2.0));
-            out.push(Finding::new(
+            out.push(finding(
                 wall_line(j),
                 format!("floor {}, {}", f.level, end_name(f, End::Wall(j))),
                 format!(
@@ -285,7 +285,14 @@ fn poly_dist(p: &[P2], q: &[P2]) -> f64 {
 /// [`CORRIDOR_MIN`] wide, and obstacles in it leave [`CLUTTER_FREE`] free
 /// across it. A side corridor whose mouth was found too narrow
 /// (`flagged`) is not reported again.
-pub(super) fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged: &[(P2, P2)], out: &mut Vec<Finding>) {
+pub(super) fn widths(
+    map: &Map,
+    f: &Floor,
+    grid: &Grid,
+    reach: &[bool],
+    flagged: &[(P2, P2)],
+    out: &mut Vec<Diagnostic>,
+) {
     let mut walls: Vec<Seg> = f.walls.clone();
     walls.extend(map.elevator.cars.iter().flat_map(Car::walls));
     let reach_across = CORRIDOR_MAX + SLACK;
@@ -367,7 +374,7 @@ pub(super) fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged:
                 let cm = |v: f64| (v * 100.0).round() as i64;
                 let key = (cm(angle), cm(ci.min(cj)), cm(ci.max(cj)));
                 if !mouth && narrow.insert(key) {
-                    out.push(Finding::new(
+                    out.push(finding(
                         wall_line(i),
                         format!("floor {}, {}", f.level, wall_name(i)),
                         format!(
@@ -405,7 +412,7 @@ pub(super) fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged:
                 let edges: Vec<Seg> = o.iter().zip(o.iter().cycle().skip(1)).map(|(a, b)| Seg::new(*a, *b)).collect();
                 let free = edges.iter().map(|e| e.dist_to_seg(&far.0)).fold(f64::INFINITY, f64::min);
                 if free < CLUTTER_FREE - SLACK && cluttered.insert(k) {
-                    out.push(Finding::new(
+                    out.push(finding(
                         obstacle_line(k),
                         obstacle_name(k),
                         format!(
@@ -423,7 +430,7 @@ pub(super) fn widths(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], flagged:
                     let between = poly_dist(o, &f.obstacles[q]);
                     if between < CLUTTER_FREE - SLACK {
                         pairs.insert((k, q));
-                        out.push(Finding::new(
+                        out.push(finding(
                             obstacle_line(q),
                             obstacle_name(q),
                             format!(

@@ -6,15 +6,15 @@
 
 use super::barcodes::{floor_barcode, stuck, Stuck};
 use super::reach::{blocking_segments, readable_from, readable_somewhere, Grid};
-use super::{Finding, CAR_APRON, CELL, MARGIN, OPEN_S_MIN, PRESS_STANDOFF, SLACK};
+use super::{finding, Diagnostic, CAR_APRON, CELL, MARGIN, OPEN_S_MIN, PRESS_STANDOFF, SLACK};
 use crate::geom::{in_polygon, P2};
 use crate::map::{Barcode, Car, Floor, Map, Side};
 
 /// The doors stay open long enough to board (`docs/maps.md`, "Elevator").
-pub(super) fn elevator_timing(map: &Map, out: &mut Vec<Finding>) {
+pub(super) fn elevator_timing(map: &Map, out: &mut Vec<Diagnostic>) {
     let (lo, hi) = map.elevator.open_s;
     if lo < OPEN_S_MIN - 1e-9 {
-        out.push(Finding::new(
+        out.push(finding(
             map.elevator.lines.get("open_s").copied().unwrap_or(1),
             "elevator",
             format!(
@@ -29,7 +29,7 @@ pub(super) fn elevator_timing(map: &Map, out: &mut Vec<Finding>) {
 /// "Lobby"): the robot takes a way that opens there for a car's door. Along
 /// the button's wall, walls one after another with gaps between them: a gap
 /// not filled by a car's shaft is an opening.
-pub(super) fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Finding>) {
+pub(super) fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Diagnostic>) {
     let Some(l) = &f.lobby else { return };
     let normal = P2::dir(l.facing);
     let along_dir = P2::new(-normal.y, normal.x);
@@ -77,7 +77,7 @@ pub(super) fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Finding>) {
     };
     for (a, b) in gaps {
         let at = l.button.plus(along_dir.scale((a + b) / 2.0));
-        out.push(Finding::new(
+        out.push(finding(
             l.line,
             format!("floor {}, lobby", f.level),
             format!(
@@ -91,18 +91,18 @@ pub(super) fn button_wall(map: &Map, f: &Floor, out: &mut Vec<Finding>) {
     }
 }
 
-pub(super) fn goal_checks(map: &Map, f: &Floor, out: &mut Vec<Finding>, goal_line: usize) {
+pub(super) fn goal_checks(map: &Map, f: &Floor, out: &mut Vec<Diagnostic>, goal_line: usize) {
     let m = &map.mission;
     let segs = blocking_segments(map, f);
     let grid = Grid::new(&segs, map.robot_radius + MARGIN);
     let Some(l) = &f.lobby else {
-        out.push(Finding::new(goal_line, format!("floor {}", f.level), "the goal floor has no lobby"));
+        out.push(finding(goal_line, format!("floor {}", f.level), "the goal floor has no lobby"));
         return;
     };
     let lobby_el = format!("floor {}, lobby", f.level);
     let press = l.button.plus(P2::dir(l.facing).scale(PRESS_STANDOFF));
     let Some(from) = grid.free_near(press, CELL * 2.0) else {
-        out.push(Finding::new(l.line, lobby_el, "the robot cannot stand in front of the goal floor's call button"));
+        out.push(finding(l.line, lobby_el, "the robot cannot stand in front of the goal floor's call button"));
         return;
     };
     let reach = grid.flood(from);
@@ -111,7 +111,7 @@ pub(super) fn goal_checks(map: &Map, f: &Floor, out: &mut Vec<Finding>, goal_lin
     for (k, c) in map.elevator.cars.iter().enumerate() {
         let apron = door_centre(c).plus(outward(c).scale(CAR_APRON));
         if !readable_from(&button, apron, &segs) {
-            out.push(Finding::new(
+            out.push(finding(
                 l.line,
                 &lobby_el,
                 format!(
@@ -123,11 +123,11 @@ pub(super) fn goal_checks(map: &Map, f: &Floor, out: &mut Vec<Finding>, goal_lin
         }
     }
     match &f.office {
-        None => out.push(Finding::new(goal_line, "mission", format!("the goal floor {} has no office", f.level))),
+        None => out.push(finding(goal_line, "mission", format!("the goal floor {} has no office", f.level))),
         Some(o) => {
             let inside = reach.iter().enumerate().any(|(i, &r)| r && in_polygon(grid.centre(i), &o.polygon));
             if !inside {
-                out.push(Finding::new(
+                out.push(finding(
                     o.line,
                     format!("floor {}, office", f.level),
                     "the office cannot be reached from the goal floor's lobby",
@@ -139,7 +139,7 @@ pub(super) fn goal_checks(map: &Map, f: &Floor, out: &mut Vec<Finding>, goal_lin
     if let Some((el, b)) = floor_barcode(f, id) {
         let faces_wall = matches!(stuck(&b, &map.static_segments(f)), Stuck::FacesWall(_));
         if !faces_wall && !readable_somewhere(&grid, &reach, &b, &segs) {
-            out.push(Finding::new(
+            out.push(finding(
                 b.line,
                 el,
                 format!("barcode {id} cannot be read from anywhere the robot reaches (range, facing, sight)"),
@@ -149,11 +149,11 @@ pub(super) fn goal_checks(map: &Map, f: &Floor, out: &mut Vec<Finding>, goal_lin
 }
 
 /// Each car's door opens on floor the robot reaches (its apron is reached).
-pub(super) fn cars_open_on(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Finding>) {
+pub(super) fn cars_open_on(map: &Map, f: &Floor, grid: &Grid, reach: &[bool], out: &mut Vec<Diagnostic>) {
     for (k, c) in map.elevator.cars.iter().enumerate() {
         let apron = door_centre(c).plus(outward(c).scale(map.robot_radius + 0.35));
         if !grid.reached_near(reach, apron, CELL * 2.0) {
-            out.push(Finding::new(
+            out.push(finding(
                 c.line,
                 format!("elevator, car {}", k + 1),
                 format!("on floor {}, the car's door does not open on floor the robot reaches", f.level),

@@ -3,7 +3,7 @@
 //! before a `pass: door` names the door's side.
 
 use super::barcodes::{door_el, floor_barcode, nearest_door};
-use super::{Finding, BARCODE_JAMB_MAX, BARCODE_LINE_MAX, SLACK};
+use super::{finding, Diagnostic, BARCODE_JAMB_MAX, BARCODE_LINE_MAX, SLACK};
 use crate::geom::P2;
 use crate::map::Map;
 
@@ -12,7 +12,7 @@ use crate::map::Map;
 /// (`left` or `right`) between the `home` and the `pass`, and, where the
 /// barcode marks a door, it is that door's side as the robot sees it,
 /// squared up in front of the barcode.
-pub(super) fn turns_before_pass(map: &Map, out: &mut Vec<Finding>) {
+pub(super) fn turns_before_pass(map: &Map, out: &mut Vec<Diagnostic>) {
     let m = &map.mission;
     for (leg, steps) in &m.route {
         let level = match leg.as_str() {
@@ -41,7 +41,7 @@ pub(super) fn turns_before_pass(map: &Map, out: &mut Vec<Finding>) {
             let at =
                 |i: usize| if steps[i].line > 0 { steps[i].line } else { m.lines.get("route").copied().unwrap_or(1) };
             let Some((ti, turn)) = turn else {
-                out.push(Finding::new(
+                out.push(finding(
                     at(p),
                     el(p),
                     format!(
@@ -62,7 +62,7 @@ pub(super) fn turns_before_pass(map: &Map, out: &mut Vec<Finding>) {
             let heading = P2::dir(facing + std::f64::consts::PI);
             let side = if heading.cross(d.seg.at(0.5).minus(b.at)) > 0.0 { "left" } else { "right" };
             if side != turn {
-                out.push(Finding::new(
+                out.push(finding(
                     at(ti),
                     el(ti),
                     format!(
@@ -78,7 +78,7 @@ pub(super) fn turns_before_pass(map: &Map, out: &mut Vec<Finding>) {
 
 /// Route steps: the barcodes they name exist, on the leg's floor, and the
 /// legs home on the barcodes their ends need.
-pub(super) fn route(map: &Map, out: &mut Vec<Finding>) {
+pub(super) fn route(map: &Map, out: &mut Vec<Diagnostic>) {
     let m = &map.mission;
     let all = map.all_barcodes();
     for (leg, steps) in &m.route {
@@ -92,8 +92,8 @@ pub(super) fn route(map: &Map, out: &mut Vec<Finding>) {
             let at = if st.line > 0 { st.line } else { m.lines.get("route").copied().unwrap_or(1) };
             for id in [st.barcode, st.home].into_iter().flatten() {
                 match all.iter().find(|(_, b)| b.id == id) {
-                    None => out.push(Finding::new(at, &el, format!("no barcode {id} in the map"))),
-                    Some((Some(level), _)) if floor.is_some_and(|l| l != *level) => out.push(Finding::new(
+                    None => out.push(finding(at, &el, format!("no barcode {id} in the map"))),
+                    Some((Some(level), _)) if floor.is_some_and(|l| l != *level) => out.push(finding(
                         at,
                         &el,
                         format!("barcode {id} is on floor {level}, not on this leg's floor {}", floor.unwrap_or(0)),
@@ -111,7 +111,7 @@ pub(super) fn route(map: &Map, out: &mut Vec<Finding>) {
             (want, steps.iter().enumerate().rev().find(|(_, s)| s.home.is_some()))
         {
             if st.home != Some(id) {
-                out.push(Finding::new(
+                out.push(finding(
                     st.line,
                     format!("mission, route {leg}, step {}", i + 1),
                     format!("the leg's last `home` is {}, not the {what} {id}", st.home.unwrap_or(0)),

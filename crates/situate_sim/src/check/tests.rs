@@ -17,7 +17,7 @@ fn line_of(text: &str, needle: &str) -> usize {
 }
 
 /// small.yaml with `from` replaced by `to`, loaded and linted.
-fn lint_changed(from: &str, to: &str) -> (String, Vec<Finding>) {
+fn lint_changed(from: &str, to: &str) -> (String, Vec<Diagnostic>) {
     let text = small();
     assert!(text.contains(from), "small.yaml has no `{from}`");
     let text = text.replacen(from, to, 1);
@@ -27,8 +27,13 @@ fn lint_changed(from: &str, to: &str) -> (String, Vec<Finding>) {
     }
 }
 
-fn has(findings: &[Finding], line: usize, needle: &str) -> bool {
-    findings.iter().any(|f| f.line == line && f.render("x").contains(needle))
+/// A finding as `situate map check` prints it for the file `file`.
+fn render(f: &Diagnostic, file: &str) -> String {
+    f.clone().in_file(file).to_string()
+}
+
+fn has(findings: &[Diagnostic], line: usize, needle: &str) -> bool {
+    findings.iter().any(|f| f.line() == line && render(f, "x").contains(needle))
 }
 
 #[test]
@@ -38,7 +43,7 @@ fn the_shipped_maps_have_no_findings() {
             Ok(m) => m,
             Err(e) => panic!("{e}"),
         };
-        let f: Vec<String> = lint(&m).iter().map(|f| f.render(name)).collect();
+        let f: Vec<String> = lint(&m).iter().map(|f| render(f, name)).collect();
         assert!(f.is_empty(), "{name}: {f:#?}");
     }
 }
@@ -52,7 +57,7 @@ fn a_door_barcode_far_from_its_door_is_found_on_its_line() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 marks door 1 (lab) (the nearest), but is 0.90 m \
+            "x:{at}: error: floor 0, door 1 (lab), barcode: barcode 10 marks door 1 (lab) (the nearest), but is 0.90 m \
              from the door's nearer jamb along its wall: 0.10 to 0.60 m"
         )]
     );
@@ -62,7 +67,7 @@ fn a_door_barcode_far_from_its_door_is_found_on_its_line() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 is 0.30 m in front of the wall behind it: barcodes \
+            "x:{at}: error: floor 0, door 1 (lab), barcode: barcode 10 is 0.30 m in front of the wall behind it: barcodes \
              are stuck 0.01 to 0.02 m off their wall, on the side they face"
         )]
     );
@@ -74,7 +79,7 @@ fn a_door_barcode_far_from_its_door_is_found_on_its_line() {
     assert_eq!(
         rendered(&lint_text(&text)),
         [format!(
-            "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 marks door 1 (lab) (the nearest), but is 0.30 m \
+            "x:{at}: error: floor 0, door 1 (lab), barcode: barcode 10 marks door 1 (lab) (the nearest), but is 0.30 m \
              off the door's line (its wall): at most 0.10 m"
         )]
     );
@@ -121,21 +126,21 @@ fn a_barcode_facing_a_wall_is_found_on_its_line() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 faces the wall it is on (0.02 m ahead of it): it \
+            "x:{at}: error: floor 0, door 1 (lab), barcode: barcode 10 faces the wall it is on (0.02 m ahead of it): it \
              cannot be read; turn it round (facing_deg: 90)"
         )]
     );
 }
 
-fn rendered(f: &[Finding]) -> Vec<String> {
-    f.iter().map(|f| f.render("x")).collect()
+fn rendered(f: &[Diagnostic]) -> Vec<String> {
+    f.iter().map(|f| render(f, "x")).collect()
 }
 
 fn default_text() -> String {
     std::fs::read_to_string(maps_dir("default.yaml")).unwrap_or_default()
 }
 
-fn lint_text(text: &str) -> Vec<Finding> {
+fn lint_text(text: &str) -> Vec<Diagnostic> {
     match Map::parse("x.yaml", text) {
         Ok(m) => lint(&m),
         Err(e) => panic!("the changed map does not load: {e}"),
@@ -154,7 +159,7 @@ fn a_call_button_facing_its_own_wall_is_the_one_finding() {
     assert_eq!(
         rendered(&lint_text(&text)),
         [format!(
-            "x:{at}: floor 4, lobby: the call button (barcode 35) faces the wall it is on (0.02 m ahead of it): it \
+            "x:{at}: error: floor 4, lobby: the call button (barcode 35) faces the wall it is on (0.02 m ahead of it): it \
              must face into the lobby (facing_deg: -90); what the robot does in front of it is not checked until \
              it does"
         )]
@@ -173,7 +178,7 @@ fn doors_open_too_short_a_time_are_found_on_the_open_s_line() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: elevator: open_s [2, 3]: the doors must stay open at least 8 s for the robot to board (the \
+            "x:{at}: error: elevator: open_s [2, 3]: the doors must stay open at least 8 s for the robot to board (the \
              shortest documented range is [8, 12])"
         )]
     );
@@ -189,7 +194,7 @@ fn a_start_outside_the_lab_is_found_on_the_start_line() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: mission, start: the start pose is not in the lab: it is outside floor 0, door 1 (lab) (the lab \
+            "x:{at}: error: mission, start: the start pose is not in the lab: it is outside floor 0, door 1 (lab) (the lab \
              is the side its barcode 10 is on); the robot starts in the lab"
         )]
     );
@@ -208,7 +213,7 @@ fn a_side_corridor_of_1_6_m_is_found_once_at_its_mouth() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: floor 0, wall 1, segment 3: an opening 1.60 m wide at (2.80, -2.00) between wall 1, segment 3 \
+            "x:{at}: error: floor 0, wall 1, segment 3: an opening 1.60 m wide at (2.80, -2.00) between wall 1, segment 3 \
              and wall 1, segment 7: a side opening is a door (1.0 to 1.4 m) or a side corridor (at least 1.8 m), \
              nothing in between (the junction detector cannot tell which)"
         )]
@@ -230,7 +235,7 @@ fn a_corridor_of_1_6_m_is_found() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: floor 0, wall 1, segment 3: a way 1.60 m wide between wall 1, segment 3 and wall 3 (around \
+            "x:{at}: error: floor 0, wall 1, segment 3: a way 1.60 m wide between wall 1, segment 3 and wall 3 (around \
              (2.20, -0.80)): corridors and side corridors are at least 1.8 m wide"
         )]
     );
@@ -247,7 +252,7 @@ fn a_door_wider_than_1_4_m_is_found_on_its_line() {
     assert_eq!(
         rendered(&lint_text(&text)),
         [format!(
-            "x:{at}: floor 0, door 1 (lab): 1.50 m wide: doors are 1.0 to 1.4 m wide (from 1.4 to 1.8 m the \
+            "x:{at}: error: floor 0, door 1 (lab): 1.50 m wide: doors are 1.0 to 1.4 m wide (from 1.4 to 1.8 m the \
              junction detector cannot tell a door from a side corridor)"
         )]
     );
@@ -259,7 +264,7 @@ fn a_shaft_out_of_size_is_found_on_its_car_line() {
     let at = line_of(&text, "[3.2, 4.0, 5.2, 6.8]");
     assert_eq!(
         rendered(&f),
-        [format!("x:{at}: elevator, car 2: shaft 2.00 × 2.80 m: shafts are 1.8 to 2.4 m on each side")]
+        [format!("x:{at}: error: elevator, car 2: shaft 2.00 × 2.80 m: shafts are 1.8 to 2.4 m on each side")]
     );
 }
 
@@ -270,7 +275,7 @@ fn a_barcode_off_its_wall_is_found_with_the_distance_and_the_limit() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: floor 0, door 1 (lab), barcode: barcode 10 is 0.10 m in front of the wall behind it: barcodes \
+            "x:{at}: error: floor 0, door 1 (lab), barcode: barcode 10 is 0.10 m in front of the wall behind it: barcodes \
              are stuck 0.01 to 0.02 m off their wall, on the side they face"
         )]
     );
@@ -286,7 +291,7 @@ fn openings_closer_than_0_8_m_are_found_on_the_wall_between() {
     assert_eq!(
         rendered(&lint_text(&text)),
         [format!(
-            "x:{at}: floor 0, wall 4: only 0.50 m of wall between the openings at (3.40, 0.00) and (5.00, 0.00): \
+            "x:{at}: error: floor 0, wall 4: only 0.50 m of wall between the openings at (3.40, 0.00) and (5.00, 0.00): \
              openings on one side of a corridor are at least 0.8 m apart (one hidden for less counts as one)"
         )]
     );
@@ -305,11 +310,11 @@ fn clutter_leaving_less_than_1_2_m_is_found_on_its_line() {
         rendered(&f),
         [
             format!(
-                "x:{crate_at}: floor 0, obstacle 2: it leaves 1.10 m free across the corridor (to wall 3): clutter \
+                "x:{crate_at}: error: floor 0, obstacle 2: it leaves 1.10 m free across the corridor (to wall 3): clutter \
                  in a corridor leaves at least 1.2 m free"
             ),
             format!(
-                "x:{bin_at}: floor 0, obstacle 4: it and obstacle 3 (on the facing wall) leave 1.10 m between them: \
+                "x:{bin_at}: error: floor 0, obstacle 4: it and obstacle 3 (on the facing wall) leave 1.10 m between them: \
                  clutter in a corridor leaves at least 1.2 m free"
             )
         ]
@@ -323,7 +328,7 @@ fn the_turn_before_a_pass_must_be_written_and_name_the_doors_side() {
     assert_eq!(
         rendered(&f),
         [format!(
-            "x:{at}: mission, route car_to_office, step 2: `pass: door` after `home: 40` (step 1) with no `turn: \
+            "x:{at}: error: mission, route car_to_office, step 2: `pass: door` after `home: 40` (step 1) with no `turn: \
              left` or `turn: right` between: the last turn names the side of the barcode the door is on"
         )]
     );
@@ -336,7 +341,7 @@ fn the_turn_before_a_pass_must_be_written_and_name_the_doors_side() {
     assert_eq!(
         rendered(&lint_text(&text)),
         [format!(
-            "x:{at}: mission, route car_to_office, step 4: `turn: left` before `pass: door`, but floor 4, door 1 \
+            "x:{at}: error: mission, route car_to_office, step 4: `turn: left` before `pass: door`, but floor 4, door 1 \
              (office) is on the right of barcode 40 (the robot squared up in front of it): the last turn names the \
              side the door is on"
         )]

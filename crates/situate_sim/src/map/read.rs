@@ -4,9 +4,10 @@
 
 use std::path::Path;
 
+use situate_robotfile::diagnostic::Diagnostic;
 use situate_robotfile::yaml::{self, Node, Pos, Spanned};
 
-use super::{Barcode, Car, Door, Elevator, Floor, Lobby, Map, MapError, Mission, Office, RouteStep, Side};
+use super::{Barcode, Car, Door, Elevator, Floor, Lobby, Map, Mission, Office, RouteStep, Side};
 use crate::geom::{Seg, P2};
 
 /// The largest map file read: 4 MiB (a larger one is refused before it is
@@ -14,28 +15,20 @@ use crate::geom::{Seg, P2};
 pub const MAX_MAP_FILE_BYTES: u64 = 4 << 20;
 
 /// Reads and checks a map file of at most [`MAX_MAP_FILE_BYTES`].
-pub fn load_map(path: impl AsRef<Path>) -> Result<Map, MapError> {
+pub fn load_map(path: impl AsRef<Path>) -> Result<Map, Diagnostic> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let text = yaml::read_source(path, "map file", MAX_MAP_FILE_BYTES).map_err(|e| match e {
-        yaml::ReadError::Io { source, .. } => MapError::Io { file: file.clone(), source },
-        yaml::ReadError::NotUtf8 { pos, .. } => {
-            MapError::Yaml { file: file.clone(), line: pos.line, col: pos.col, message: e.to_string() }
-        }
-        e => MapError::Io { file: file.clone(), source: std::io::Error::new(std::io::ErrorKind::InvalidData, e) },
+    let text = yaml::read_source(path, "map file", MAX_MAP_FILE_BYTES).map_err(|e| match e.pos() {
+        Some(pos) => Diagnostic::new(&file, pos, e.to_string()),
+        None => Diagnostic::whole_file(&file, e.to_string()),
     })?;
     Map::parse(&file, &text)
 }
 
 impl Map {
     /// Parses and checks map text; `file` names it in errors.
-    pub fn parse(file: &str, text: &str) -> Result<Map, MapError> {
-        let root = yaml::parse(text).map_err(|e| MapError::Yaml {
-            file: file.to_string(),
-            line: e.pos.line,
-            col: e.pos.col,
-            message: e.message,
-        })?;
+    pub fn parse(file: &str, text: &str) -> Result<Map, Diagnostic> {
+        let root = yaml::parse(text).map_err(|e| Diagnostic::from(e).in_file(file))?;
         let r = Reader { file };
         let map = r.map(&root)?;
         map.check(&r)?;
@@ -51,17 +44,13 @@ pub(super) struct Reader<'a> {
 type N = Spanned<Node>;
 
 impl Reader<'_> {
-    pub(super) fn err(&self, pos: Pos, element: &str, message: impl Into<String>) -> MapError {
-        MapError::Invalid {
-            file: self.file.to_string(),
-            line: pos.line,
-            element: element.to_string(),
-            message: message.into(),
-        }
+    pub(super) fn err(&self, pos: Pos, element: &str, message: impl Into<String>) -> Diagnostic {
+        // The element names the place; a column would point into its line, not at the problem.
+        Diagnostic::new(self.file, Pos::new(pos.line, 0), message).about(element)
     }
 
     /// A mapping's entries, refusing keys not in `allowed`.
-    fn fields<'n>(&self, n: &'n N, el: &str, allowed: &[&str]) -> Result<Fields<'n>, MapError> {
+    fn fields<'n>(&self, n: &'n N, el: &str, allowed: &[&str]) -> Result<Fields<'n>, Diagnostic> {
         let Some(entries) = n.value.as_map() else {
             return Err(self.err(n.pos, el, format!("expected a mapping, got {}", n.value.describe())));
         };
@@ -77,31 +66,31 @@ impl Reader<'_> {
         Ok(Fields { node: n, entries })
     }
 
-    fn req<'n>(&self, f: &Fields<'n>, key: &str, el: &str) -> Result<&'n N, MapError> {
+    fn req<'n>(&self, f: &Fields<'n>, key: &str, el: &str) -> Result<&'n N, Diagnostic> {
         f.get(key).ok_or_else(|| self.err(f.node.pos, el, format!("missing `{key}`")))
     }
 
-    fn num(&self, n: &N, el: &str, what: &str) -> Result<f64, MapError> {
+    fn num(&self, n: &N, el: &str, what: &str) -> Result<f64, Diagnostic> {
         match n.value.as_f64() {
             Some(x) if x.is_finite() => Ok(x),
             _ => Err(self.err(n.pos, el, format!("{what}: expected a number, got {}", n.value.describe()))),
         }
     }
 
-    fn int(&self, n: &N, el: &str, what: &str) -> Result<i64, MapError> {
+    fn int(&self, n: &N, el: &str, what: &str) -> Result<i64, Diagnostic> {
         n.value
             .as_i64()
             .ok_or_else(|| self.err(n.pos, el, format!("{what}: expected an integer, got {}", n.value.describe())))
     }
 
-    fn text(&self, n: &N, el: &str, what: &str) -> Result<String, MapError> {
+    fn text(&self, n: &N, el: &str, what: &str) -> Result<String, Diagnostic> {
         match &n.value {
             Node::Scalar { text, .. } => Ok(text.clone()),
             other => Err(self.err(n.pos, el, format!("{what}: expected text, got {}", other.describe()))),
         }
     }
 
-    fn seq<'n>(&self, n: &'n N, el: &str, what: &str) -> Result<&'n [N], MapError> {
+    fn seq<'n>(&self, n: &'n N, el: &str, what: &str) -> Result<&'n [N], Diagnostic> {
         match &n.value {
             Node::Seq(items) => Ok(items),
             Node::Null => Ok(&[]),
@@ -110,7 +99,7 @@ impl Reader<'_> {
     }
 
     /// A list of exactly `k` numbers.
-    fn nums(&self, n: &N, el: &str, what: &str, k: usize) -> Result<Vec<f64>, MapError> {
+    fn nums(&self, n: &N, el: &str, what: &str, k: usize) -> Result<Vec<f64>, Diagnostic> {
         let items = self.seq(n, el, what)?;
         if items.len() != k {
             return Err(self.err(n.pos, el, format!("{what}: expected {k} numbers, got {}", items.len())));
@@ -118,16 +107,16 @@ impl Reader<'_> {
         items.iter().map(|i| self.num(i, el, what)).collect()
     }
 
-    fn point(&self, n: &N, el: &str, what: &str) -> Result<P2, MapError> {
+    fn point(&self, n: &N, el: &str, what: &str) -> Result<P2, Diagnostic> {
         let v = self.nums(n, el, what, 2)?;
         Ok(P2::new(v[0], v[1]))
     }
 
-    fn points(&self, n: &N, el: &str, what: &str) -> Result<Vec<P2>, MapError> {
+    fn points(&self, n: &N, el: &str, what: &str) -> Result<Vec<P2>, Diagnostic> {
         self.seq(n, el, what)?.iter().map(|p| self.point(p, el, what)).collect()
     }
 
-    fn segment(&self, n: &N, el: &str) -> Result<Seg, MapError> {
+    fn segment(&self, n: &N, el: &str) -> Result<Seg, Diagnostic> {
         let v = self.nums(n, el, "segment [x1, y1, x2, y2]", 4)?;
         let s = Seg::new(P2::new(v[0], v[1]), P2::new(v[2], v[3]));
         if s.len() < 1e-6 {
@@ -136,11 +125,11 @@ impl Reader<'_> {
         Ok(s)
     }
 
-    fn angle(&self, f: &Fields<'_>, key: &str, el: &str) -> Result<Option<f64>, MapError> {
+    fn angle(&self, f: &Fields<'_>, key: &str, el: &str) -> Result<Option<f64>, Diagnostic> {
         f.get(key).map(|n| self.num(n, el, key).map(f64::to_radians)).transpose()
     }
 
-    fn barcode(&self, n: &N, el: &str) -> Result<Barcode, MapError> {
+    fn barcode(&self, n: &N, el: &str) -> Result<Barcode, Diagnostic> {
         let f = self.fields(n, el, &["id", "at", "facing_deg"])?;
         let id = self.int(self.req(&f, "id", el)?, el, "id")?;
         let at = self.point(self.req(&f, "at", el)?, el, "at")?;
@@ -148,7 +137,7 @@ impl Reader<'_> {
     }
 
     /// A `{rect: [x0, y0, x1, y1]}` or `{polygon: [[x, y], …]}` region.
-    fn region(&self, f: &Fields<'_>, el: &str) -> Result<Vec<P2>, MapError> {
+    fn region(&self, f: &Fields<'_>, el: &str) -> Result<Vec<P2>, Diagnostic> {
         match (f.get("rect"), f.get("polygon")) {
             (Some(r), None) => {
                 let v = self.nums(r, el, "rect [x0, y0, x1, y1]", 4)?;
@@ -169,7 +158,7 @@ impl Reader<'_> {
         }
     }
 
-    fn map(&self, root: &N) -> Result<Map, MapError> {
+    fn map(&self, root: &N) -> Result<Map, Diagnostic> {
         let f = self.fields(root, "map", &["name", "robot_radius", "elevator", "floors", "mission"])?;
         let name = f.get("name").map(|n| self.text(n, "map", "name")).transpose()?.unwrap_or_default();
         let robot_radius = match f.get("robot_radius") {
@@ -199,7 +188,7 @@ impl Reader<'_> {
         Ok(Map { file: self.file.to_string(), name, robot_radius, floors, elevator, mission })
     }
 
-    fn floor(&self, n: &N, index: usize, radius: f64) -> Result<Floor, MapError> {
+    fn floor(&self, n: &N, index: usize, radius: f64) -> Result<Floor, Diagnostic> {
         let keys = ["level", "name", "walls", "obstacles", "doors", "barcodes", "lobby", "office"];
         let f = self.fields(n, &format!("floor #{index}"), &keys)?;
         let level =
@@ -315,7 +304,7 @@ impl Reader<'_> {
         })
     }
 
-    fn range(&self, f: &Fields<'_>, key: &str, el: &str, default: (f64, f64)) -> Result<(f64, f64), MapError> {
+    fn range(&self, f: &Fields<'_>, key: &str, el: &str, default: (f64, f64)) -> Result<(f64, f64), Diagnostic> {
         let Some(n) = f.get(key) else { return Ok(default) };
         let v = self.nums(n, el, key, 2)?;
         if v[0] < 0.0 || v[1] < v[0] {
@@ -324,7 +313,7 @@ impl Reader<'_> {
         Ok((v[0], v[1]))
     }
 
-    fn positive(&self, f: &Fields<'_>, key: &str, el: &str, default: f64) -> Result<f64, MapError> {
+    fn positive(&self, f: &Fields<'_>, key: &str, el: &str, default: f64) -> Result<f64, Diagnostic> {
         let Some(n) = f.get(key) else { return Ok(default) };
         let x = self.num(n, el, key)?;
         if x <= 0.0 {
@@ -333,7 +322,7 @@ impl Reader<'_> {
         Ok(x)
     }
 
-    fn elevator(&self, n: &N, radius: f64) -> Result<Elevator, MapError> {
+    fn elevator(&self, n: &N, radius: f64) -> Result<Elevator, Diagnostic> {
         let el = "elevator";
         let f = self.fields(n, el, &["travel_s_per_floor", "door_move_s", "open_s", "arrive_s", "cars"])?;
         let travel_s_per_floor = self.positive(&f, "travel_s_per_floor", el, 2.0)?;
@@ -398,7 +387,7 @@ impl Reader<'_> {
         Ok(Elevator { travel_s_per_floor, door_move_s, open_s, arrive_s, cars, lines })
     }
 
-    fn mission(&self, n: &N) -> Result<Mission, MapError> {
+    fn mission(&self, n: &N) -> Result<Mission, Diagnostic> {
         let el = "mission";
         let keys = [
             "start",
@@ -418,7 +407,7 @@ impl Reader<'_> {
         let x = self.num(self.req(&s, "x", sel)?, sel, "x")?;
         let y = self.num(self.req(&s, "y", sel)?, sel, "y")?;
         let theta = self.angle(&s, "theta_deg", sel)?.unwrap_or(0.0);
-        let int = |key: &str| -> Result<i64, MapError> { self.int(self.req(&f, key, el)?, el, key) };
+        let int = |key: &str| -> Result<i64, Diagnostic> { self.int(self.req(&f, key, el)?, el, key) };
         let message = match f.get("message") {
             Some(m) => self.text(m, el, "message")?,
             None => "Hello! I have a message for you.".to_string(),
@@ -451,10 +440,10 @@ impl Reader<'_> {
         })
     }
 
-    fn step(&self, n: &N, el: &str) -> Result<RouteStep, MapError> {
+    fn step(&self, n: &N, el: &str) -> Result<RouteStep, Diagnostic> {
         let keys = ["follow", "until", "side", "turn", "barcode", "home", "pass", "count", "distance"];
         let f = self.fields(n, el, &keys)?;
-        let word = |key: &str, allowed: &[&str]| -> Result<Option<String>, MapError> {
+        let word = |key: &str, allowed: &[&str]| -> Result<Option<String>, Diagnostic> {
             let Some(v) = f.get(key) else { return Ok(None) };
             let t = self.text(v, el, key)?;
             if !allowed.contains(&t.as_str()) {

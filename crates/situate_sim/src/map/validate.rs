@@ -5,15 +5,16 @@
 
 use std::collections::BTreeMap;
 
+use situate_robotfile::diagnostic::Diagnostic;
 use situate_robotfile::yaml::Pos;
 
 use super::read::Reader;
-use super::{Floor, Map, MapError};
+use super::{Floor, Map};
 use crate::geom::P2;
 
 impl Map {
     /// Checks across elements (ids, references, geometry).
-    pub(super) fn check(&self, r: &Reader<'_>) -> Result<(), MapError> {
+    pub(super) fn check(&self, r: &Reader<'_>) -> Result<(), Diagnostic> {
         // Whole-map checks carry line 1: they concern several elements.
         let at = Pos::START;
         // Each id once: a second use is reported on its line, naming both elements and lines.
