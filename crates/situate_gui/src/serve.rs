@@ -138,7 +138,7 @@ pub(crate) async fn accept_loop(listener: TcpListener, app: Router, limits: Limi
     loop {
         let mut stop = shutdown.clone();
         let (stream, peer) = tokio::select! {
-            _ = async { stop.wait_for(|s| *s).await.map(|_| ()) } => break,
+            _ = stopping(&mut stop) => break,
             accepted = listener.accept() => match accepted {
                 Ok(a) => a,
                 Err(e) => {
@@ -179,7 +179,7 @@ pub(crate) async fn accept_loop(listener: TcpListener, app: Router, limits: Limi
                         tracing::debug!(%peer, error = %e, "a GUI connection ended");
                     }
                 }
-                _ = async { stop.wait_for(|s| *s).await.map(|_| ()) } => {
+                _ = stopping(&mut stop) => {
                     conn.as_mut().graceful_shutdown();
                     let _ = tokio::time::timeout(GRACE, conn).await;
                 }
@@ -188,6 +188,11 @@ pub(crate) async fn accept_loop(listener: TcpListener, app: Router, limits: Limi
     }
     drop(listener);
     let _ = tokio::time::timeout(GRACE, alive_tx.closed()).await;
+}
+
+/// Resolves once `stop` says the server is stopping (or its sender is gone).
+pub(crate) async fn stopping(stop: &mut tokio::sync::watch::Receiver<bool>) {
+    let _ = stop.wait_for(|s| *s).await;
 }
 
 /// What a WebSocket's keepalive says to do.
@@ -215,9 +220,11 @@ impl Keepalive {
         Keepalive { idle, heard: Instant::now(), ticker }
     }
 
-    /// Something came from the client.
-    pub(crate) fn heard(&mut self) {
-        self.heard = Instant::now();
+    /// Notes what `recv` gave: any frame from the client (a pong included) shows it is alive.
+    pub(crate) fn heard_from<T, E>(&mut self, incoming: &Option<Result<T, E>>) {
+        if let Some(Ok(_)) = incoming {
+            self.heard = Instant::now();
+        }
     }
 
     /// Waits for the next beat.
@@ -227,6 +234,19 @@ impl Keepalive {
             Beat::Dead
         } else {
             Beat::Ping
+        }
+    }
+
+    /// Does what `beat` says: pings the client, or closes the connection of a client silent for
+    /// the idle timeout (`who` names it in the log). `false`: the connection is done.
+    pub(crate) async fn answer(&self, beat: Beat, socket: &mut WebSocket, who: &str) -> bool {
+        match beat {
+            Beat::Ping => self.send(socket, Message::Ping(Default::default())).await,
+            Beat::Dead => {
+                tracing::debug!("{who} silent for the idle timeout: closing");
+                self.close(socket).await;
+                false
+            }
         }
     }
 

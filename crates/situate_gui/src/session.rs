@@ -16,7 +16,7 @@ use situate_manager::{Reply, Request};
 use tokio::sync::broadcast;
 
 use crate::formula::Derived;
-use crate::serve::{Beat, Keepalive};
+use crate::serve::{stopping, Keepalive};
 use crate::{ask, HistoryError, Shared, MAX_MESSAGE, WORLD_SIGNALS};
 
 /// The GUI's own verbs, besides the link's.
@@ -110,26 +110,17 @@ async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
     let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Utf8Bytes>();
     loop {
         tokio::select! {
-            _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
+            _ = stopping(&mut shutdown) => {
                 keepalive.close(&mut socket).await;
                 break;
             }
-            beat = keepalive.beat() => match beat {
-                Beat::Ping => {
-                    if !keepalive.send(&mut socket, Message::Ping(Default::default())).await {
-                        break;
-                    }
-                }
-                Beat::Dead => {
-                    tracing::debug!(client = id, "GUI tab silent for the idle timeout: closing");
-                    keepalive.close(&mut socket).await;
+            beat = keepalive.beat() => {
+                if !keepalive.answer(beat, &mut socket, &format!("GUI tab {id}")).await {
                     break;
                 }
-            },
+            }
             incoming = socket.recv() => {
-                if let Some(Ok(_)) = &incoming {
-                    keepalive.heard();
-                }
+                keepalive.heard_from(&incoming);
                 match incoming {
                     Some(Ok(Message::Text(text))) => {
                         let shared = Arc::clone(&shared);

@@ -13,7 +13,7 @@ use super::poller::parameter_values;
 use super::protocol::{advertise, status, ERROR};
 use super::schemas::history_schemas;
 use super::{MAX_CLIENTS, MAX_PARAM_REQUESTS, QUEUE};
-use crate::serve::{Beat, Keepalive};
+use crate::serve::{stopping, Keepalive};
 use crate::Shared;
 
 fn server_info(shared: &Shared) -> Json {
@@ -59,26 +59,17 @@ pub(super) async fn session(shared: Arc<Shared>, mut socket: WebSocket) {
     }
     loop {
         tokio::select! {
-            _ = async { shutdown.wait_for(|s| *s).await.map(|_| ()) } => {
+            _ = stopping(&mut shutdown) => {
                 keepalive.close(&mut socket).await;
                 break;
             }
-            beat = keepalive.beat() => match beat {
-                Beat::Ping => {
-                    if !keepalive.send(&mut socket, Message::Ping(Default::default())).await {
-                        break;
-                    }
-                }
-                Beat::Dead => {
-                    tracing::debug!("Foxglove client silent for the idle timeout: closing");
-                    keepalive.close(&mut socket).await;
+            beat = keepalive.beat() => {
+                if !keepalive.answer(beat, &mut socket, "Foxglove client").await {
                     break;
                 }
-            },
+            }
             incoming = socket.recv() => {
-                if let Some(Ok(_)) = &incoming {
-                    keepalive.heard();
-                }
+                keepalive.heard_from(&incoming);
                 match incoming {
                     Some(Ok(Message::Text(text))) => {
                         handle_text(&shared, &client, text.as_str(), channel_count, &known)
