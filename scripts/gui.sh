@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The debugging GUI: build the web app (web/dist, embedded by crates/situate_gui), and test it in a
+# The debugging GUI: build the web app (web/dist, embedded by crates/surfaces/situate_gui), and test it in a
 # real browser.
 #
 #   scripts/gui.sh build     npm install when needed, then type-check and build web/dist

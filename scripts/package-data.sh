@@ -6,7 +6,7 @@
 # not tracked (.gitignore) and is made again on every build.
 #
 #   scripts/package-data.sh [DEST]     DEST defaults to python/situate/_data
-#                                      (scripts/publish-crates.sh gives crates/situate_cli/data)
+#                                      (scripts/publish-crates.sh gives crates/binaries/situate_cli/data)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DEST=${1:-python/situate/_data}

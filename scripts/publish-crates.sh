@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The Rust crates for publishing. A published crate cannot reach files outside its own
 # directory, so two get copies first (not tracked, see .gitignore):
-#   crates/situate_gui/web-dist/   the built web app (web/dist), which its build.rs embeds
-#   crates/situate_cli/data/       demo/, maps/, examples/, cmake/, include/ (scripts/package-data.sh),
+#   crates/surfaces/situate_gui/web-dist/   the built web app (web/dist), which its build.rs embeds
+#   crates/binaries/situate_cli/data/       demo/, maps/, examples/, cmake/, include/ (scripts/package-data.sh),
 #                                  where `situate demo` and `situate cmake-dir` look last
 #
 #   scripts/publish-crates.sh            copy, check the packages' file lists, then
@@ -20,10 +20,10 @@ die() { printf 'publish-crates.sh: %s\n' "$*" >&2; exit 1; }
 # The copies are for the packages only: gone again when the script ends, however it ends. Left
 # in the checkout, the program built from it would find the demo in them, where a test expects
 # it to find none.
-trap 'rm -rf crates/situate_gui/web-dist crates/situate_cli/data' EXIT
-rm -rf crates/situate_gui/web-dist
-cp -rp web/dist crates/situate_gui/web-dist
-scripts/package-data.sh crates/situate_cli/data
+trap 'rm -rf crates/surfaces/situate_gui/web-dist crates/binaries/situate_cli/data' EXIT
+rm -rf crates/surfaces/situate_gui/web-dist
+cp -rp web/dist crates/surfaces/situate_gui/web-dist
+scripts/package-data.sh crates/binaries/situate_cli/data
 
 check() {
     local crate=$1

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The Python package (python/situate, crates/situate_py): sets up .venv at the repository root
+# The Python package (python/situate, crates/apis/situate_py): sets up .venv at the repository root
 # with the tools, builds the wheel and installs it there. Safe to run again: the tools are
 # installed only when their list changed, and cargo rebuilds only what changed.
 #

@@ -1,6 +1,6 @@
 import { defineConfig } from "vite";
 
-// The server (crates/situate_gui) embeds dist/ at compile time and serves it at /.
+// The server (crates/surfaces/situate_gui) embeds dist/ at compile time and serves it at /.
 export default defineConfig({
   base: "/",
   build: { outDir: "dist", emptyOutDir: true, sourcemap: false, target: "es2022" },

@@ -1,6 +1,6 @@
 """Imports a robot file's ``python:`` files and collects their ``@situate.skill`` types.
 
-Called by the native loader (``crates/situate_py/src/loader.rs``) for each file
+Called by the native loader (``crates/apis/situate_py/src/loader.rs``) for each file
 a robot file lists. Each file is imported by path under a module name of its
 own (so two files named ``skills.py`` never clash), with its directory on
 ``sys.path`` so it can import its neighbours. Every problem is a

@@ -43,14 +43,14 @@ def gid(token: str) -> bytes:
 
 
 def test_every_hash_situate_writes_is_the_one_ros_2_computes() -> None:
-    msgs = (REPO / "crates/situate_ros2/src/msgs.rs").read_text()
+    msgs = (REPO / "crates/surfaces/situate_ros2/src/msgs.rs").read_text()
     names = dict(re.findall(r'MsgType::(\w+) => "(\w+/msg/\w+)"', msgs))
     hashes = dict(re.findall(r'MsgType::(\w+) => "(RIHS01_[0-9a-f]{64})"', msgs))
     assert len(names) >= 14, names
     assert names.keys() == hashes.keys(), (names, hashes)
     for variant, ros_type in names.items():
         assert hashes[variant] == STORE.hash_rihs01(ros_type), ros_type
-    clock = (REPO / "crates/situate_ros2/src/clock.rs").read_text()
+    clock = (REPO / "crates/surfaces/situate_ros2/src/clock.rs").read_text()
     (clock_hash,) = re.findall(r'CLOCK_HASH: &str = "(RIHS01_[0-9a-f]{64})"', clock)
     assert clock_hash == STORE.hash_rihs01("rosgraph_msgs/msg/Clock")
     # The one hash rmw_zenoh's design document prints, from a real system.

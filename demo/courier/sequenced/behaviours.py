@@ -3,7 +3,7 @@
 A mission (such as `delivery`) is a short narrative of phases. `courier.link.Link` gives it the
 means to drive the robot: waits on the robot's clock, switching skills, parameters, reading
 values. `Sequencer` adds the behaviours built of the standard skills (`std.*`, see
-crates/situate_skills) that any mission of the mobile robot needs: turning, homing on a
+crates/components/situate_skills) that any mission of the mobile robot needs: turning, homing on a
 barcode, driving to a point of the odometry frame, lining up with a barcode on a wall,
 passing the door ahead, searching for a barcode, getting unstuck. The interpreter of route
 hints (docs/maps.md) is `routes`, over this.
