@@ -15,7 +15,7 @@ Perception is the skills' job: the wall ahead is `std.fit_wall`'s `wall`, the do
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import situate
@@ -46,6 +46,30 @@ BEYOND_WALL_M = 0.4
 SEARCH_LEG_S = 20.0
 #: Homing that gets no closer for this long steps aside, s.
 HOME_PROGRESS_S = 8.0
+
+
+def not_its_door(
+    fix: Mapping[str, Any] | None, beside: float | None, hint: str | None, barcode: int | None
+) -> str | None:
+    """Why the opening ``fix`` (`std.locate_door`'s, robot frame) is not the barcode's door.
+
+    None when it may be: no opening, or one within `DOOR_BESIDE_BARCODE_M` of the barcode
+    across the view at ``beside`` (robot frame, left positive; None: unknown) and, with the
+    route's ``hint``, on that side of it (the robot squared up in front of the barcode,
+    docs/maps.md). Otherwise where it is (``"1.2 m to the right of barcode 40"``).
+    """
+    if fix is None or not fix.get("seen", True):
+        return None
+    y, width = float(fix["y"]), float(fix["width"])
+    ref = 0.0 if beside is None else beside
+    side = "left" if y > ref else "right"
+    gap = abs(y - ref) - width / 2
+    of = f"of barcode {barcode}" if barcode is not None else "of the barcode"
+    if beside is not None and gap > DOOR_BESIDE_BARCODE_M:
+        return f"{gap:.1f} m to the {side} {of}"
+    if hint in ("left", "right") and side != hint:
+        return f"to the {side} {of} (the route's door is to the {hint})"
+    return None
 
 
 class Sequencer(Link):
@@ -477,18 +501,18 @@ class Sequencer(Link):
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
         """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
 
-        The opening is `std.locate_door`'s; ``hint`` (``left`` or ``right``, from the route)
-        is used only when it finds none.
+        The opening is `std.locate_door`'s: beside the barcode and, with ``hint`` (``left``
+        or ``right``, from the route: the side of the barcode the door is on), on that side.
+        Without such an opening the hint places the door.
         """
         fix = await self.opening()
         beside = await self.barcode_across(barcode)
-        if fix is not None and beside is not None:
-            gap = abs(float(fix["y"]) - beside) - float(fix["width"]) / 2
-            if gap > DOOR_BESIDE_BARCODE_M:
-                # Its door closed (or someone in it), the scan finds another way along the
-                # wall: a corridor's mouth, the next room's door.
-                await self.say(f"    an opening {gap:.1f} m from barcode {barcode}: not its door")
-                fix = None
+        why = not_its_door(fix, beside, hint, barcode)
+        if why is not None:
+            # Its door closed (or someone in it), the scan finds another way along the
+            # wall: a corridor's mouth, the next room's door.
+            await self.say(f"    an opening {why}: not its door")
+            fix = None
         if fix is None or float(fix["width"]) < 0.3:
             # A door closed for a while, or someone standing in it: wait for the opening.
             await self.say("    no opening in sight (a closed door, someone in it?): waiting")
@@ -499,8 +523,16 @@ class Sequencer(Link):
                     f" && abs(opening.y - {beside:.3f}) - opening.width / 2"
                     f" < {DOOR_BESIDE_BARCODE_M}"
                 )
+            if hint in ("left", "right"):
+                wanted += f" && opening.y {'>' if hint == 'left' else '<'} {beside or 0.0:.3f}"
             if await self.wait(wanted, within=DOOR_WAIT_S) == 0:
+                # Read again, as the door fix is taken (in the barcode's wall): the opening
+                # that made the condition hold may be gone, or another one found.
                 fix = await self.opening()
+                why = not_its_door(fix, beside, hint, barcode)
+                if why is not None:
+                    await self.say(f"    the opening seen again is {why}: not its door")
+                    fix = None
         pose = await self.odom()
         if fix is None or float(fix["width"]) < 0.3:
             if hint is None:
