@@ -589,3 +589,23 @@ def test_an_opening_on_the_other_side_of_the_barcode_than_the_route_says_is_not_
         "to the right of the barcode (the route's door is to the left)"
     )
     assert not_its_door(None, 0.1, "left", 40) is None
+
+
+def test_the_way_out_square_to_the_corridor_is_the_one_the_sonars_see_farthest_across() -> None:
+    _demo_on_path()
+    from courier.geometry import SONARS, bearing_of
+    from courier.sequenced.delivery import along_corridor
+
+    # Out of a door into a corridor 1.9 m wide running left-right: the robot 0.95 m from each
+    # wall, its sonars read each wall along their axes, and 4 m (no echo) along the corridor.
+    def reading(i: int) -> float:
+        b = bearing_of(i)
+        across = abs(math.cos(b))
+        return min(4.0, 0.95 / across) if across > 1e-9 else 4.0
+
+    ranges = [reading(i) for i in range(SONARS)]
+    square = along_corridor(ranges, 0.0)
+    assert square == 8.0
+    # A way out turned 35° (a line fitted through clutter on the far wall): its sides see walls.
+    for off in (math.radians(35), math.radians(-40)):
+        assert along_corridor(ranges, off) < square - 4.0, off
