@@ -87,6 +87,8 @@ class Sequencer(Link):
         self.corridor_heading: float | None = None
         #: The barcode last lined up with and its wall's normal (odometry frame): x, y, rad.
         self.wall_fix: tuple[float, float, float] | None = None
+        #: The barcode last placed (its id and where, odometry frame), with or without a wall.
+        self.barcode_place: tuple[int, float, float] | None = None
         #: The odometry heading the last door was passed at (out through it).
         self.passed_heading: float | None = None
         #: The heading the route planned for its last `follow` step (odometry frame).
@@ -310,6 +312,7 @@ class Sequencer(Link):
         o = await self.odom()
         bearing, distance = float(t["bearing"]), float(t["distance"])
         px, py = o.seen_at(bearing, distance)
+        self.barcode_place = (barcode, px, py)
         # Looking towards the barcode first; a door beside it may hide most of that wall from
         # the sonars, so then wider. The wall must be the barcode's: it lies on its line.
         normal: float | None = None  # in the odometry frame
@@ -488,12 +491,18 @@ class Sequencer(Link):
     async def barcode_across(self, barcode: int | None) -> float | None:
         """Where the barcode just lined up with is across the robot's view (robot frame, m).
 
-        Its lateral offset, left positive, from `line_up`'s fix; None without a barcode or a
-        fix, or when the fix is not in front of the robot (some earlier barcode's).
+        Its lateral offset, left positive, from `line_up`'s fix, or, without a wall through
+        it, from where it was last placed (`barcode_wall`); None without a barcode or a
+        place, or when the place is not in front of the robot (some earlier barcode's).
         """
-        if barcode is None or self.wall_fix is None:
+        if barcode is None:
             return None
-        px, py, _normal = self.wall_fix
+        if self.wall_fix is not None:
+            px, py, _normal = self.wall_fix
+        elif self.barcode_place is not None and self.barcode_place[0] == barcode:
+            _id, px, py = self.barcode_place
+        else:
+            return None
         o = await self.odom()
         ahead, across = o.along(px, py), o.across(px, py)
         return across if 0.2 < ahead < 3.0 and abs(across) < 2.0 else None

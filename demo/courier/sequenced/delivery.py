@@ -80,7 +80,7 @@ class Delivery(Explorer):
                 await self.say("    not found")
                 continue
             await self.phase(2, f"homing on the lab door's barcode {m.lab_door_barcode}")
-            self.wall_fix = None
+            self.wall_fix = self.barcode_place = None
             # Homing with avoidance; failing that, straight at the barcode and square in front
             # of it (fitting the wall): near the wall avoidance can slide the robot along it,
             # where a barcode beside the door is seen too obliquely to read.
