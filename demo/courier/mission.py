@@ -65,6 +65,9 @@ DOOR_WAIT_S = 75.0
 #: A door's nearer jamb is at most this far from its barcode (docs/maps.md: 0.1 to 0.6 m), with
 #: the slack of placing a jamb by sonar; an opening farther off is some other way, m.
 DOOR_BESIDE_BARCODE_M = 1.0
+#: Clutter stands this deep at most in front of its wall (docs/maps.md, "Clutter": 0.5 m, 5 cm
+#: from the wall), m.
+CLUTTER_DEPTH_M = 0.55
 #: No opening in sight after `DOOR_WAIT_S`, the door is taken to be where the route's hint
 #: (its last turn: left or right) says: its centre this far ahead and to that side, m.
 HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M = 1.0, 0.75

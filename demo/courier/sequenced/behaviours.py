@@ -22,6 +22,7 @@ import situate
 from courier.geometry import SONARS, Pose, bearing_of, live_sonar_ahead, sonar_toward, wrap
 from courier.link import Link
 from courier.mission import (
+    CLUTTER_DEPTH_M,
     DOOR_BESIDE_BARCODE_M,
     DOOR_WAIT_S,
     HINT_DOOR_AHEAD_M,
@@ -358,7 +359,8 @@ class Sequencer(Link):
         """The normal (odometry frame) of the corridor's wall ``barcode`` at (px, py) is on.
 
         The corridor runs along ``axis``: the point is on a side wall when a wall along the
-        corridor lies about as far to that side as the point does; on the end wall when a
+        corridor lies about as far to that side as the point does (or nearer by clutter's
+        depth: the face of a box beside the barcode); on the end wall when a
         wall lies across the corridor about as far ahead as the point, and no side wall
         holds it. ``fitted`` is a wall across the way fitted through the point (kept, with
         its angle, when it is the end wall). Walls fitted, not single echoes: someone
@@ -372,7 +374,10 @@ class Sequencer(Link):
         ahead = w.along(px, py, axis)
         by = await self.wall_towards(side)
         on_side = by is not None and abs(wrap(by[0] - side)) < math.radians(20)
-        on_side = on_side and by is not None and abs(by[1] - abs(lateral)) < 0.35
+        # As far as the point, or nearer by a box's depth at most: clutter standing along
+        # the barcode's wall (in front of it beside the barcode) is no wall of its own.
+        nearer = 0.0 if by is None else abs(lateral) - by[1]
+        on_side = on_side and -0.35 < nearer < CLUTTER_DEPTH_M + 0.1
         end = await self.wall_towards(axis)
         on_end = end is not None and abs(wrap(end[0] - axis)) < math.radians(20)
         on_end = on_end and end is not None and abs(end[1] - ahead) < 0.35
