@@ -45,6 +45,9 @@ FAR_WALL_M = 2.5
 #: a line fitted through clutter on the far wall (a bin and a box across from the door), or
 #: the door's own normal misjudged (both seen in the benchmark, 35 to 40° off), rad.
 SQUARE_OUT_MAX_RAD = math.radians(25)
+#: ... and never by this much: that is no wall facing the door (the robot came out aslant
+#: along a wall, or someone stands in front of it), rad.
+SQUARE_OUT_NEVER_RAD = math.radians(60)
 #: Stopped in the lab's doorway, the robot goes on this far through it, m.
 ON_THROUGH_M = 0.8
 #: Stopped in a car's doorway on the way out, the robot waits for this much room ahead, m.
@@ -160,7 +163,7 @@ class Delivery(Explorer):
         out = o.heading_of(float(wall["normal"]))
         off = wrap(out - self.passed_heading)
         take = abs(off) <= SQUARE_OUT_MAX_RAD
-        if not take:
+        if not take and abs(off) < SQUARE_OUT_NEVER_RAD:
             # Which way out is square to the corridor: the corridor runs across it, where the
             # sonars see far (along it), not into its walls.
             ranges = await self.sonar()
