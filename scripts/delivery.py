@@ -12,6 +12,8 @@ raw outcomes). The sets:
   ``python/tests/test_demo.py``, and the set moved to seeds nothing was looked at on.)
 - ``generated-hard``: the same buildings with people walking, doors closed now and then and
   one dead sonar (``situate demo --people 3 --door-closures --dead-sonar K``, K from the seed).
+- ``unseen-hard``: the hard set on other generator seeds (``UNSEEN_SEEDS``), whose failures
+  no one had read when it was first reported.
 - ``no-route``: the same generator's buildings without route hints (``situate map generate
   --no-route``): the robot is told only the barcodes and floors, and explores (docs/delivery.md).
 - ``physics-default`` and ``physics-generated``: the same two kinds of building on the physics
@@ -55,12 +57,19 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_SEEDS = 10000
 GENERATED_SEEDS = 30000
+#: The unseen set's generator seeds: the other sets' failures, listed in each report, are read
+#: to find the robot's faults (each fix is for a case the docs allow, never for one seed), and
+#: so those sets are no longer quite unseen after a fix. This range's runs were never read
+#: before it was first reported: whether fixes carry over shows here. Once its failures have
+#: been read to fix something, move it to a range never used.
+UNSEEN_SEEDS = 70000
 #: Targets per set: the share delivered (issue 37: the whole documented space, and no route;
 #: the default building: issue 12; the physics sets: issue 41).
 TARGETS = {
     "default": 0.99,
     "generated": 0.98,
     "generated-hard": 0.95,
+    "unseen-hard": 0.95,
     "no-route": 0.80,
     "physics-default": 0.95,
     "physics-generated": 0.90,
@@ -345,8 +354,12 @@ def report(
         "How often the demo robot delivers its message, on buildings it was not tuned on. "
         "Regenerate with `.venv/bin/python scripts/delivery.py` (after "
         "`cargo build --release -p situate_cli`); each run is `situate demo --headless` with "
-        "the arguments given below. Run seeds and generator seeds here are used by no test "
-        "and were not tuned on. Speed is each run's simulated time over its wall time (from "
+        "the arguments given below. Run seeds and generator seeds here are used by no test. "
+        "The failures listed below are read to find the robot's faults (each fix is for a case "
+        "the docs allow, never for a seed), so a set is not quite unseen once a fix followed "
+        f"its failures: `unseen-hard` (generator seeds from {UNSEEN_SEEDS}) is the hard set on "
+        "seeds whose failures no one had read when it was first reported, to show whether the "
+        "fixes carry over. Speed is each run's simulated time over its wall time (from "
         "starting the sequencer to its exit, Python's start included), runs made "
         + (
             "one at a time."
@@ -476,6 +489,12 @@ def main() -> int:
         help="generated buildings with people (default: --generated)",
     )
     p.add_argument(
+        "--unseen",
+        type=int,
+        default=200,
+        help="generated buildings with people etc., on seeds no failure was read of",
+    )
+    p.add_argument(
         "--no-route",
         type=int,
         default=100,
@@ -531,10 +550,11 @@ def main() -> int:
     skipped: dict[str, str] = {}
     with tempfile.TemporaryDirectory(prefix="situate-delivery-") as tmp:
         hard = a.generated if a.hard is None else a.hard
-        for name, count, hard_world, gen in (
-            ("generated", a.generated, False, []),
-            ("generated-hard", hard, True, []),
-            ("no-route", a.no_route, False, ["--no-route"]),
+        for name, count, hard_world, gen, base in (
+            ("generated", a.generated, False, [], GENERATED_SEEDS),
+            ("generated-hard", hard, True, [], GENERATED_SEEDS),
+            ("unseen-hard", a.unseen, True, [], UNSEEN_SEEDS),
+            ("no-route", a.no_route, False, ["--no-route"], GENERATED_SEEDS),
         ):
             if count == 0:
                 continue
@@ -543,7 +563,7 @@ def main() -> int:
                 continue
             cases: list[Case] = []
             for k in range(count):
-                seed = GENERATED_SEEDS + k
+                seed = base + k
                 path = Path(tmp) / f"generated-{seed}{''.join(gen)}.yaml"
                 err = None if path.exists() else generate(binary, seed, path, gen)
                 if err is not None:
