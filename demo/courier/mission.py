@@ -65,6 +65,10 @@ DOOR_WAIT_S = 75.0
 #: A door's nearer jamb is at most this far from its barcode (docs/maps.md: 0.1 to 0.6 m), with
 #: the slack of placing a jamb by sonar; an opening farther off is some other way, m.
 DOOR_BESIDE_BARCODE_M = 1.0
+#: An opening whose wall line runs this far in front of or behind the door's barcode is not in
+#: the barcode's wall (the barcode is 1 to 2 cm off it; placing a wall and a barcode by sonar
+#: and barcode reader is good to a few tenths), m.
+DOOR_OFF_WALL_M = 0.45
 #: Clutter stands this deep at most in front of its wall (docs/maps.md, "Clutter": 0.5 m, 5 cm
 #: from the wall), m.
 CLUTTER_DEPTH_M = 0.55

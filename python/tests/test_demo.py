@@ -566,29 +566,35 @@ def test_pose_methods_are_the_formulas_they_replaced_to_the_last_bit() -> None:
         assert abs(wrap(h - th)) == abs(wrap(th - h))
 
 
-def test_an_opening_on_the_other_side_of_the_barcode_than_the_route_says_is_not_its_door() -> None:
+def test_an_opening_on_the_other_side_of_the_barcode_or_off_its_wall_is_not_its_door() -> None:
     _demo_on_path()
     from courier.sequenced.behaviours import not_its_door
 
-    # Robot frame, left positive: the barcode 0.1 m to the left, the route's door to its left.
-    door = {"seen": True, "x": 0.9, "y": 0.85, "width": 1.0}
-    assert not_its_door(door, 0.1, "left", 40) is None
-    assert not_its_door(door, 0.1, None, 40) is None
+    # Robot frame, left positive: the barcode 0.9 m ahead, 0.1 m to the left, on the wall
+    # square ahead (normal 0); the route's door to its left.
+    at = (0.9, 0.1)
+    door = {"seen": True, "x": 0.9, "y": 0.85, "width": 1.0, "normal": 0.0}
+    assert not_its_door(door, at, "left", 40) is None
+    assert not_its_door(door, at, None, 40) is None
     # The next room's door, or a corridor's mouth, on the other side: not it, and said why.
-    other = {"seen": True, "x": 0.9, "y": -0.8, "width": 1.0}
-    assert not_its_door(other, 0.1, "left", 40) == (
+    other = {"seen": True, "x": 0.9, "y": -0.8, "width": 1.0, "normal": 0.0}
+    assert not_its_door(other, at, "left", 40) == (
         "to the right of barcode 40 (the route's door is to the left)"
     )
-    assert not_its_door(other, 0.1, "right", 40) is None
+    assert not_its_door(other, at, "right", 40) is None
     # Without a hint the side is open; too far from the barcode is never its door.
-    assert not_its_door(other, 0.1, None, 40) is None
-    far = {"seen": True, "x": 0.9, "y": -2.0, "width": 1.0}  # its near jamb 1.6 m off
-    assert not_its_door(far, 0.1, "right", 40) == "1.6 m to the right of barcode 40"
-    # Without the barcode's place across the view, the side is the robot's own.
+    assert not_its_door(other, at, None, 40) is None
+    far = {"seen": True, "x": 0.9, "y": -2.0, "width": 1.0, "normal": 0.0}  # near jamb 1.6 m off
+    assert not_its_door(far, at, "right", 40) == "1.6 m to the right of barcode 40"
+    # An opening in another wall, seen through the door (a corridor's end beyond it): not it.
+    beyond = {"seen": True, "x": 2.0, "y": 0.6, "width": 1.2, "normal": 0.0}
+    assert not_its_door(beyond, at, "left", 40) == "in a wall 1.1 m beyond the wall of barcode 40"
+    assert not_its_door({**beyond, "x": 1.2}, at, "left", 40) is None  # 0.3 m: its wall, misplaced
+    # Without the barcode's place, the side is the robot's own.
     assert not_its_door(other, None, "left", None) == (
         "to the right of the barcode (the route's door is to the left)"
     )
-    assert not_its_door(None, 0.1, "left", 40) is None
+    assert not_its_door(None, at, "left", 40) is None
 
 
 def test_the_way_out_square_to_the_corridor_is_the_one_the_sonars_see_farthest_across() -> None:

@@ -24,6 +24,7 @@ from courier.link import Link
 from courier.mission import (
     CLUTTER_DEPTH_M,
     DOOR_BESIDE_BARCODE_M,
+    DOOR_OFF_WALL_M,
     DOOR_WAIT_S,
     HINT_DOOR_AHEAD_M,
     HINT_DOOR_ASIDE_M,
@@ -50,24 +51,37 @@ HOME_PROGRESS_S = 8.0
 
 
 def not_its_door(
-    fix: Mapping[str, Any] | None, beside: float | None, hint: str | None, barcode: int | None
+    fix: Mapping[str, Any] | None,
+    at: tuple[float, float] | None,
+    hint: str | None,
+    barcode: int | None,
 ) -> str | None:
     """Why the opening ``fix`` (`std.locate_door`'s, robot frame) is not the barcode's door.
 
-    None when it may be: no opening, or one within `DOOR_BESIDE_BARCODE_M` of the barcode
-    across the view at ``beside`` (robot frame, left positive; None: unknown) and, with the
-    route's ``hint``, on that side of it (the robot squared up in front of the barcode,
-    docs/maps.md). Otherwise where it is (``"1.2 m to the right of barcode 40"``).
+    None when it may be: no opening, or one in the barcode's wall (within `DOOR_OFF_WALL_M`
+    of the barcode at ``at``, robot frame: ahead, left; None: unknown, taken straight ahead)
+    within `DOOR_BESIDE_BARCODE_M` of it along that wall and, with the route's ``hint``, on
+    that side of it (the robot squared up in front of the barcode, docs/maps.md). Otherwise
+    where it is (``"1.2 m to the right of barcode 40"``).
     """
     if fix is None or not fix.get("seen", True):
         return None
-    y, width = float(fix["y"]), float(fix["width"])
-    ref = 0.0 if beside is None else beside
+    x, y, width = float(fix["x"]), float(fix["y"]), float(fix["width"])
+    ref = 0.0 if at is None else at[1]
     side = "left" if y > ref else "right"
     gap = abs(y - ref) - width / 2
     of = f"of barcode {barcode}" if barcode is not None else "of the barcode"
-    if beside is not None and gap > DOOR_BESIDE_BARCODE_M:
+    if at is not None and gap > DOOR_BESIDE_BARCODE_M:
         return f"{gap:.1f} m to the {side} {of}"
+    if at is not None and "normal" in fix:
+        # A barcode is stuck on the door's wall (docs/maps.md): an opening whose wall runs
+        # well in front of or behind it is another way seen through the door (the far
+        # wall's end across a corridor, a room beyond).
+        n = float(fix["normal"])
+        off = (x - at[0]) * math.cos(n) + (y - at[1]) * math.sin(n)
+        if abs(off) > DOOR_OFF_WALL_M:
+            where = "beyond" if off > 0 else "in front of"
+            return f"in a wall {abs(off):.1f} m {where} the wall {of}"
     if hint in ("left", "right") and side != hint:
         return f"to the {side} {of} (the route's door is to the {hint})"
     return None
@@ -493,12 +507,12 @@ class Sequencer(Link):
                 await self.restore("locate_door", "wall_distance")
                 await self.restore("locate_door", "wall_normal_deg")
 
-    async def barcode_across(self, barcode: int | None) -> float | None:
-        """Where the barcode just lined up with is across the robot's view (robot frame, m).
+    async def barcode_ahead_at(self, barcode: int | None) -> tuple[float, float] | None:
+        """Where the barcode just lined up with is, robot frame: ahead and across (left), m.
 
-        Its lateral offset, left positive, from `line_up`'s fix, or, without a wall through
-        it, from where it was last placed (`barcode_wall`); None without a barcode or a
-        place, or when the place is not in front of the robot (some earlier barcode's).
+        From `line_up`'s fix, or, without a wall through it, from where it was last placed
+        (`barcode_wall`); None without a barcode or a place, or when the place is not in
+        front of the robot (some earlier barcode's).
         """
         if barcode is None:
             return None
@@ -510,7 +524,7 @@ class Sequencer(Link):
             return None
         o = await self.odom()
         ahead, across = o.along(px, py), o.across(px, py)
-        return across if 0.2 < ahead < 3.0 and abs(across) < 2.0 else None
+        return (ahead, across) if 0.2 < ahead < 3.0 and abs(across) < 2.0 else None
 
     async def pass_door(self, barcode: int | None, hint: str | None) -> bool:
         """Lines up with the door in the wall ahead (beside the barcode homed on) and passes it.
@@ -520,8 +534,9 @@ class Sequencer(Link):
         Without such an opening the hint places the door.
         """
         fix = await self.opening()
-        beside = await self.barcode_across(barcode)
-        why = not_its_door(fix, beside, hint, barcode)
+        at = await self.barcode_ahead_at(barcode)
+        beside = None if at is None else at[1]
+        why = not_its_door(fix, at, hint, barcode)
         if why is not None:
             # Its door closed (or someone in it), the scan finds another way along the
             # wall: a corridor's mouth, the next room's door.
@@ -543,7 +558,7 @@ class Sequencer(Link):
                 # Read again, as the door fix is taken (in the barcode's wall): the opening
                 # that made the condition hold may be gone, or another one found.
                 fix = await self.opening()
-                why = not_its_door(fix, beside, hint, barcode)
+                why = not_its_door(fix, at, hint, barcode)
                 if why is not None:
                     await self.say(f"    the opening seen again is {why}: not its door")
                     fix = None
