@@ -48,6 +48,9 @@ SQUARE_OUT_MAX_RAD = math.radians(25)
 #: ... and never by this much: that is no wall facing the door (the robot came out aslant
 #: along a wall, or someone stands in front of it), rad.
 SQUARE_OUT_NEVER_RAD = math.radians(60)
+#: A way out other than the passed one and the far wall's is taken when the sonars see this much
+#: farther along the corridor it makes (the two readings added), m.
+SQUARE_OUT_CLEARER_M = 1.0
 #: Stopped in the lab's doorway, the robot goes on this far through it, m.
 ON_THROUGH_M = 0.8
 #: Stopped in a car's doorway on the way out, the robot waits for this much room ahead, m.
@@ -162,19 +165,30 @@ class Delivery(Explorer):
         o = await self.odom()
         out = o.heading_of(float(wall["normal"]))
         off = wrap(out - self.passed_heading)
-        take = abs(off) <= SQUARE_OUT_MAX_RAD
-        if not take and abs(off) < SQUARE_OUT_NEVER_RAD:
-            # Which way out is square to the corridor: the corridor runs across it, where the
-            # sonars see far (along it), not into its walls.
+        way = out if abs(off) <= SQUARE_OUT_MAX_RAD else self.passed_heading
+        if SQUARE_OUT_MAX_RAD < abs(off) < SQUARE_OUT_NEVER_RAD:
+            # The wall and the way the door was passed disagree: one of them is wrong (a line
+            # through clutter on the far wall; a door's normal misjudged). The way out is
+            # square to the corridor, which runs across it, where the sonars see far (along
+            # it), not into its walls: the wall's way when it is the farthest seeing, else
+            # the farthest seeing of the ways around the passed one, if clearly so.
             ranges = await self.sonar()
-            take = along_corridor(ranges, o.turn_to(out)) > along_corridor(
-                ranges, o.turn_to(self.passed_heading)
-            )
+
+            def room(h: float) -> float:
+                return along_corridor(ranges, o.turn_to(h))
+
+            around = [self.passed_heading + math.radians(d) for d in range(-60, 61, 15)]
+            best = max([*around, out], key=room)
+            if abs(wrap(best - out)) <= math.radians(20):
+                way = out
+            elif room(best) > room(self.passed_heading) + SQUARE_OUT_CLEARER_M:
+                way = best
         if self.debug:
-            taken = "squared to" if take else "not squared to"
-            await self.say(f"      the way out {taken} the far wall: {math.degrees(off):+.0f}°")
-        if take:
-            self.passed_heading = out
+            turned = math.degrees(wrap(way - self.passed_heading))
+            await self.say(
+                f"      the way out: far wall {math.degrees(off):+.0f}° off, turned {turned:+.0f}°"
+            )
+        self.passed_heading = way
 
     async def to_lobby(self) -> None:
         """Phase 4: the route hints from the lab door to the elevator lobby."""
