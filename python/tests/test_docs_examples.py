@@ -56,8 +56,9 @@ BLOCKS = blocks()
 
 def own_program(path: Path) -> bool:
     """Whether the robot file belongs to a program of its own (a Cargo package at or above it,
-    under examples/: its skill types are that program's; crates/binaries/situate_cli/tests/extension.rs
-    builds the program and checks the file with it)."""
+    under examples/: its skill types are that program's;
+    crates/binaries/situate_cli/tests/extension.rs builds the program and checks the file with
+    it)."""
     return any((d / "Cargo.toml").exists() for d in path.parents if REPO / "examples" in d.parents)
 
 

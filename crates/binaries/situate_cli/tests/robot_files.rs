@@ -220,7 +220,7 @@ fn a_map_file_over_its_cap_is_refused_by_its_size() {
     let err = stderr(&out);
     assert!(
         err.starts_with(&format!(
-            "{}: the file is 67108864 bytes (64 MiB); a map file may be at most 4194304 bytes (4 MiB)",
+            "{}: error: the file is 67108864 bytes (64 MiB); a map file may be at most 4194304 bytes (4 MiB)",
             map.display()
         )),
         "{err}"
