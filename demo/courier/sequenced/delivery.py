@@ -150,7 +150,10 @@ class Delivery(Explorer):
         The route's first turn is from the way the robot came out (docs/maps.md, "Route
         steps"); passed aslant (the door's normal misjudged, someone in the way), that way is
         off by as much, and so is every turn after it. The corridor's far wall, fitted by
-        sonar, faces the lab's door (the corridor runs along the lab's wall).
+        sonar, faces the lab's door (the corridor runs along the lab's wall). Up to
+        `SQUARE_OUT_MAX_RAD` the wall decides; beyond it (and short of `SQUARE_OUT_NEVER_RAD`)
+        the wall or the passed way may be wrong, and the sonars' reach along the corridor
+        each would make decides (`along_corridor`).
         """
         if self.passed_heading is None:
             return
