@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import copy
 import json
 import math
 import os
@@ -36,9 +37,10 @@ FAULT_WINDOW_S = 60.0
 #: The events a link's stream carries (`Link.stream`).
 EVENT_KINDS = ("monitor_fired", "skill_faulted")
 
-#: Records read after most waits: each wait's monitor asks for them (``report``),
-#: so their values as of the cycle it fired in come with its event instead of a query each.
-CARRIED = ("odom", "target")
+#: Values read after most waits: each wait's monitor asks for them (``report``), so their
+#: values as of the cycle it fired in come with its event instead of a query each. A record
+#: (``odom``) comes as its leaves, a leaf (``sonar.range``: read after 4 waits in 5) whole.
+CARRIED = ("odom", "target", "sonar.range")
 
 
 class Snapshot:
@@ -118,8 +120,8 @@ class Link:
         #: and the requests they carried.
         self.round_trips = 0
         self.requests = 0
-        #: Records the last wait's event reported (`CARRIED`), until the cycle runs again.
-        self.carried: dict[str, dict[str, Any]] = {}
+        #: Values the last wait's event reported (`CARRIED`), until the cycle runs again.
+        self.carried: dict[str, Any] = {}
         #: Skills that faulted: (cycle, skill, cause), oldest first.
         self.faults: list[tuple[int, str, str]] = []
 
@@ -246,13 +248,17 @@ class Link:
         if fired is None:
             raise situate.NotRunning("the link closed while waiting")
         self.t = fired.time_s
-        for record in CARRIED:
-            prefix = f"{record}."
+        for name in CARRIED:
+            if name in fired.values:  # a leaf
+                if fired.values[name] is not None:  # else never written
+                    self.carried[name] = fired.values[name]
+                continue
+            prefix = f"{name}."
             values = {
                 k.removeprefix(prefix): v for k, v in fired.values.items() if k.startswith(prefix)
             }
             if values and all(v is not None for v in values.values()):  # else never written
-                self.carried[record] = values
+                self.carried[name] = values
         if not fired.held:
             raise RuntimeError(f"monitor {monitor} fired with none of {conds} holding")
         return min(fired.held)
@@ -321,7 +327,7 @@ class Link:
     async def value(self, signal: str) -> Any:
         """The value of ``signal`` at the end of the last cycle (None if never written)."""
         if signal in self.carried:
-            return dict(self.carried[signal])
+            return copy.copy(self.carried[signal])  # a reader may change its own copy
         self.prefetch(signal)
         reading = self.readings[signal]
         await self.flush()

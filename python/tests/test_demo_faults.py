@@ -47,10 +47,13 @@ class Flaky:
         return {"n": self.n}
 
 
-@situate.skill(name="still", outputs={"odom": "{x: f64, y: f64, theta: f64}", "target": "f64"})
+@situate.skill(
+    name="still",
+    outputs={"odom": "{x: f64, y: f64, theta: f64}", "target": "f64", "range": "f32[24]"},
+)
 def still() -> dict[str, object]:
-    \"\"\"The records every wait of the sequencer reports (`link.CARRIED`).\"\"\"
-    return {"odom": {"x": 0.0, "y": 0.0, "theta": 0.0}, "target": 0.0}
+    \"\"\"What every wait of the sequencer reports (`link.CARRIED`).\"\"\"
+    return {"odom": {"x": 0.0, "y": 0.0, "theta": 0.0}, "target": 0.0, "range": [4.0] * 24}
 """
 
 ROBOT = """
@@ -59,7 +62,7 @@ cycle: {{rate_hz: 50, clock: wall, executor: serial}}
 python: [{skills}]
 skills:
   - {{name: flaky, type: flaky, active: false, params: {{faults: {faults}}}, remap: {{n: flaky.n}}}}
-  - {{name: still, type: still}}
+  - {{name: still, type: still, remap: {{range: sonar.range}}}}
 """
 
 
@@ -107,6 +110,22 @@ def test_a_skill_that_keeps_faulting_fails_the_mission_naming_it(
 ) -> None:
     with pytest.raises(PhaseFailed, match=r"skill 'flaky' faulted 5 times within 60 s"):
         run(waited(faultbot(100)))
+
+
+def test_what_a_wait_reports_is_read_without_a_request_of_its_own(
+    faultbot: Callable[[int], Manager],
+) -> None:
+    """The pose, the target and the sonar ring come with the wait's event (`link.CARRIED`)."""
+    _index, seq = run(waited(faultbot(0)))
+    requests = seq.requests
+    sonar = run(seq.sonar())
+    odom = run(seq.odom())
+    assert sonar == [4.0] * 24
+    assert (odom.x, odom.y, odom.theta) == (0.0, 0.0, 0.0)
+    # No query was sent (the link is closed by now: one would fail): each came with the event.
+    assert seq.requests == requests
+    sonar[0] = 1.0  # a reader's own copy
+    assert run(seq.sonar()) == [4.0] * 24
 
 
 STUCK = """
