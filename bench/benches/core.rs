@@ -587,7 +587,7 @@ fn monitors(settings: &Settings, report: &mut Report) {
 fn parts(settings: &Settings, report: &mut Report) {
     let bench = "parts";
     let value = Value::F32s(Arc::from([1.0f32; skills::LEN]));
-    let mut skill = skills::Add::create();
+    let mut skill = skills::Add::create(&situate::Resources::new()).expect("an adder needs no resource");
     let inputs = [Some(value.clone())];
     let mut outputs = [None];
     let mut cx = situate::Context::new(0, 0.0);

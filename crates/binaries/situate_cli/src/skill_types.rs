@@ -113,6 +113,8 @@ pub(crate) fn registry_for(
                 registry.add(t.clone());
             }
         }
+        // The world they are made with.
+        registry.provide_all(devices.resources());
     }
     let mut errors = Vec::new();
     for lib in &robot_file.libraries {
@@ -220,6 +222,8 @@ fn with_rust_skills(mut registry: Registry, ext: &Extensions) -> Result<Registry
                 registry.add(t.clone());
             }
         }
+        // And the resources its types are made with.
+        registry.provide_all(added.resources());
     }
     Ok(registry)
 }

@@ -10,7 +10,6 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use situate::manager::Registry;
 use situate::prelude::*;
-use situate::SkillType;
 use situate_robot::{Arm, Barcodes, Drive, Odom, Speaker, TruthCars, TruthMission, TruthPeople, TruthPose, SONARS};
 
 use crate::world::{BaseLimits, SonarSettings, World};
@@ -18,18 +17,18 @@ use crate::world::{BaseLimits, SonarSettings, World};
 /// The world the sim dskills share.
 pub type SharedWorld = Arc<Mutex<World>>;
 
+/// The name of the resource every sim dskill is made with: the [`SharedWorld`].
+pub const WORLD: &str = "world";
+
 /// Locks the world (a poisoned lock is recovered: the world has no
-/// invariant a panicking reader could break) after checking it is there.
-fn lock<'a>(world: &'a Option<SharedWorld>, skill: &str) -> Result<MutexGuard<'a, World>, SkillError> {
-    let w = world
-        .as_ref()
-        .ok_or_else(|| SkillError::new(format!("{skill}: no world (make it with situate_sim::registry)")))?;
-    Ok(w.lock().unwrap_or_else(|p| p.into_inner()))
+/// invariant a panicking reader could break).
+fn lock(world: &SharedWorld) -> MutexGuard<'_, World> {
+    world.lock().unwrap_or_else(|p| p.into_inner())
 }
 
 /// The ring of 24 sonars: range along bearing i·15°, measured from the
 /// robot's centre; no echo reads `max_range`.
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.sonar", kind = "device")]
 pub struct SimSonar {
     /// Ranges, m: sonar 0 ahead, counter-clockwise.
@@ -53,12 +52,14 @@ pub struct SimSonar {
     /// Probability of a missed echo per reading.
     #[param(default = 0.01, min = 0.0, max = 1.0)]
     dropout: f64,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimSonar {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let mut w = lock(&self.world, "sim.sonar")?;
+        let mut w = lock(&self.world);
         w.advance_to(cx.time_s());
         let s = SonarSettings {
             min_range: self.min_range,
@@ -76,7 +77,7 @@ impl Body for SimSonar {
 /// The differential-drive base: obeys the latest `drive` within its limits
 /// (no command for `hold_s` = stop, decelerating) and reports odometry, with
 /// drift, in the frame of the pose it started at.
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.base", kind = "device")]
 pub struct SimBase {
     /// Velocity command.
@@ -102,7 +103,9 @@ pub struct SimBase {
     hold_s: f64,
     last: Drive,
     last_at: f64,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimBase {
@@ -118,7 +121,7 @@ impl Body for SimBase {
             self.last = Drive::default();
         }
         let limits = BaseLimits { max_v: self.max_v, max_w: self.max_w, acc_v: self.acc_v, acc_w: self.acc_w };
-        let mut w = lock(&self.world, "sim.base")?;
+        let mut w = lock(&self.world);
         w.advance_to(now);
         w.set_drive(self.last.v, self.last.w, limits);
         let (x, y, theta, v, wr) = w.odom();
@@ -129,7 +132,7 @@ impl Body for SimBase {
 
 /// The barcode reader: barcodes in range and field of view, facing the
 /// robot, not hidden by a wall or a closed door; nearest first.
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.barcode", kind = "device")]
 pub struct SimBarcode {
     /// What the reader sees now.
@@ -141,12 +144,14 @@ pub struct SimBarcode {
     /// Half the field of view (either side of ahead).
     #[param(default = 60.0, min = 0.0, max = 180.0, unit = "deg")]
     fov_deg: f64,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimBarcode {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let mut w = lock(&self.world, "sim.barcode")?;
+        let mut w = lock(&self.world);
         w.advance_to(cx.time_s());
         let seen = w.barcodes(self.range, self.fov_deg.to_radians());
         self.barcodes = Barcodes {
@@ -161,7 +166,7 @@ impl Body for SimBarcode {
 /// The button arm: `arm.press` pushes the button with that label (a car
 /// panel: the floor; a call button: any) if one is within `reach` of the
 /// robot's centre and `fov_deg` of ahead.
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.arm", kind = "device")]
 pub struct SimArm {
     /// Button to push.
@@ -176,12 +181,14 @@ pub struct SimArm {
     /// How far off ahead a button may be.
     #[param(default = 25.0, min = 0.0, max = 180.0, unit = "deg")]
     fov_deg: f64,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimArm {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let mut w = lock(&self.world, "sim.arm")?;
+        let mut w = lock(&self.world);
         w.advance_to(cx.time_s());
         if let Some(label) = self.press.take() {
             let hit = w.press(label, self.reach, self.fov_deg.to_radians());
@@ -194,7 +201,7 @@ impl Body for SimArm {
 }
 
 /// The speaker: says `speaker.say`.
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.speaker", kind = "device")]
 pub struct SimSpeaker {
     /// Text to say.
@@ -203,12 +210,14 @@ pub struct SimSpeaker {
     /// Utterances so far.
     #[output]
     speaker: Speaker,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimSpeaker {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let mut w = lock(&self.world, "sim.speaker")?;
+        let mut w = lock(&self.world);
         w.advance_to(cx.time_s());
         if let Some(text) = self.say.take() {
             sprint!(cx, "says: {text}");
@@ -220,18 +229,20 @@ impl Body for SimSpeaker {
 }
 
 /// The altimeter: the floor the robot is on (nearest floor while a car moves).
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.altimeter", kind = "device")]
 pub struct SimAltimeter {
     /// Floor level.
     #[output]
     floor: i64,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimAltimeter {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let mut w = lock(&self.world, "sim.altimeter")?;
+        let mut w = lock(&self.world);
         w.advance_to(cx.time_s());
         self.floor = w.robot().floor;
         Ok(())
@@ -239,7 +250,7 @@ impl Body for SimAltimeter {
 }
 
 /// Ground truth for displays, tests and experiments (skills must not read it).
-#[derive(Skill, Default)]
+#[derive(Skill)]
 #[skill(name = "sim.truth", kind = "device")]
 pub struct SimTruth {
     /// The robot's true pose and floor.
@@ -254,12 +265,14 @@ pub struct SimTruth {
     /// The people: positions and floors (empty without people).
     #[output(signal = "truth.people")]
     people: TruthPeople,
-    world: Option<SharedWorld>,
+    /// The world it senses and acts in (the resource `world`).
+    #[resource]
+    world: SharedWorld,
 }
 
 impl Body for SimTruth {
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
-        let mut w = lock(&self.world, "sim.truth")?;
+        let mut w = lock(&self.world);
         w.advance_to(cx.time_s());
         let r = w.robot();
         self.pose = TruthPose { x: r.x, y: r.y, theta: r.theta, floor: r.floor };
@@ -281,34 +294,18 @@ impl Body for SimTruth {
     }
 }
 
-/// A skill type whose instances share `world`; params start at their declared defaults.
-fn typed<T>(world: &SharedWorld, with: fn(&mut T, SharedWorld)) -> SkillType
-where
-    T: Declare + Default + SkillTrait,
-{
-    let decl = T::declaration();
-    let defaults: Vec<Value> = decl.params.iter().map(|p| p.default.clone()).collect();
-    let world = Arc::clone(world);
-    SkillType::new(decl, move || {
-        let mut skill = T::default();
-        for (i, v) in defaults.iter().enumerate() {
-            skill.set_param(i, v);
-        }
-        with(&mut skill, Arc::clone(&world));
-        Ok(Box::new(skill) as Box<dyn SkillTrait>)
-    })
-}
-
-/// Adds every sim dskill type to `registry`, all sharing `world`.
+/// Adds every sim dskill type to `registry`, and `world` as the resource they are all made
+/// with ([`WORLD`]).
 pub fn register(registry: &mut Registry, world: SharedWorld) {
     registry
-        .add(typed::<SimSonar>(&world, |s, w| s.world = Some(w)))
-        .add(typed::<SimBase>(&world, |s, w| s.world = Some(w)))
-        .add(typed::<SimBarcode>(&world, |s, w| s.world = Some(w)))
-        .add(typed::<SimArm>(&world, |s, w| s.world = Some(w)))
-        .add(typed::<SimSpeaker>(&world, |s, w| s.world = Some(w)))
-        .add(typed::<SimAltimeter>(&world, |s, w| s.world = Some(w)))
-        .add(typed::<SimTruth>(&world, |s, w| s.world = Some(w)));
+        .provide(WORLD, world)
+        .register::<SimSonar>()
+        .register::<SimBase>()
+        .register::<SimBarcode>()
+        .register::<SimArm>()
+        .register::<SimSpeaker>()
+        .register::<SimAltimeter>()
+        .register::<SimTruth>();
 }
 
 /// The sim dskill types' declarations (ports, parameters, documentation), without a world: what

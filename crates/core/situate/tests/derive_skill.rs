@@ -307,7 +307,7 @@ fn kinds_async_and_device_are_declared() {
 
 #[test]
 fn create_applies_the_declared_defaults_over_the_struct_default() {
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
     let (r, out, _) = run(&mut *probe, &[Some(Value::F64(1.5)), None], 3);
     assert_eq!(r, Ok(()));
     assert_eq!(out[0], Some(Value::F64(3.0)));
@@ -316,7 +316,7 @@ fn create_applies_the_declared_defaults_over_the_struct_default() {
 
 #[test]
 fn plain_outputs_are_written_every_run_and_option_outputs_once() {
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
 
     let (r, out, prints) = run(&mut *probe, &[Some(Value::F64(1.0)), Some(Value::Bool(true))], 3);
     assert_eq!(r, Ok(()));
@@ -336,7 +336,7 @@ fn plain_outputs_are_written_every_run_and_option_outputs_once() {
 
 #[test]
 fn the_runaway_turns_and_prints() {
-    let mut skill = Runaway::create();
+    let mut skill = Runaway::create(&situate::Resources::new()).unwrap();
     let (r, out, prints) = run(&mut *skill, &[Some(Value::F32s(vec![2.0, 0.2].into())), Some(Value::Bool(true))], 2);
     assert_eq!(r, Ok(()));
     assert_eq!(out, [Some(Drive { speed: 0.0, turn: 1.0 }.into_value()), Some(Value::F64(1.5))]);
@@ -349,7 +349,7 @@ fn the_runaway_turns_and_prints() {
 
 #[test]
 fn a_missing_or_mistyped_required_input_is_an_error_naming_it() {
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
     let (r, out, prints) = run(&mut *probe, &[None, None], 3);
     let e = r.unwrap_err();
     assert!(e.message.contains("input `level`"), "{e}");
@@ -367,14 +367,14 @@ fn a_missing_or_mistyped_required_input_is_an_error_naming_it() {
 
 #[test]
 fn a_mistyped_optional_input_is_an_error_too() {
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
     let (r, _, _) = run(&mut *probe, &[Some(Value::F64(1.0)), Some(Value::I64(1))], 3);
     assert_eq!(r.unwrap_err().message, "input `flag`: not a bool");
 }
 
 #[test]
 fn short_output_slices_are_tolerated() {
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
     let (r, out, _) = run(&mut *probe, &[Some(Value::F64(1.0)), Some(Value::Bool(true))], 1);
     assert_eq!(r, Ok(()));
     assert_eq!(out, [Some(Value::F64(2.0))]);
@@ -385,7 +385,7 @@ fn short_output_slices_are_tolerated() {
 
 #[test]
 fn a_body_error_is_returned_and_no_output_written() {
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
     let (r, out, _) = run(&mut *probe, &[Some(Value::F64(-1.0)), Some(Value::Bool(true))], 3);
     assert_eq!(r, Err(SkillError::new("negative level")));
     assert_eq!(out, [None, None, None]);
@@ -394,7 +394,7 @@ fn a_body_error_is_returned_and_no_output_written() {
 #[test]
 fn set_param_changes_the_field_and_ignores_wrong_types() {
     let d = Probe::declaration();
-    let mut probe = Probe::create();
+    let mut probe = Probe::create(&situate::Resources::new()).unwrap();
     let idx = |name: &str| d.param(name).map(|(i, _)| i).unwrap();
 
     probe.set_param(idx("gain"), &Value::F64(4.0));
@@ -420,7 +420,7 @@ fn set_param_changes_the_field_and_ignores_wrong_types() {
 fn skill_types_built_from_derived_skills_make_working_instances() {
     let t = situate::SkillType::of::<Sonar>();
     assert_eq!(t.decl.type_name, "sonar");
-    let mut sonar = (t.make)().unwrap();
+    let mut sonar = (t.make)(&situate::Resources::new()).unwrap();
     let (r, out, _) = run(&mut *sonar, &[], 1);
     assert_eq!(r, Ok(()));
     assert_eq!(out, [Some(Value::F32s(vec![1.0, 2.0].into()))]);
@@ -431,7 +431,7 @@ fn generic_skills_declare_the_type_they_are_instantiated_with() {
     let d = Hold::<i64>::declaration();
     assert_eq!(d.type_name, "hold");
     assert_eq!((d.inputs[0].ty.clone(), d.outputs[0].ty.clone()), (SignalType::I64, SignalType::I64));
-    let mut hold = Hold::<Drive>::create();
+    let mut hold = Hold::<Drive>::create(&situate::Resources::new()).unwrap();
     let v = Drive { speed: 1.0, turn: 2.0 }.into_value();
     let (r, out, _) = run(&mut *hold, &[Some(v.clone())], 1);
     assert_eq!(r, Ok(()));
@@ -511,6 +511,6 @@ mod shadowed {
         assert!(d.inputs[1].optional);
         assert_eq!(d.params[2].default, situate::Value::F64(2.0));
         assert_eq!(d.params[3].default, situate::Value::F64(3.0));
-        let _ = Odd::create();
+        let _ = Odd::create(&situate::Resources::new()).unwrap();
     }
 }

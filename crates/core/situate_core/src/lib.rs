@@ -6,12 +6,14 @@
 
 pub mod decl;
 pub mod names;
+pub mod resources;
 pub mod skill;
 pub mod types;
 pub mod value;
 
 pub use decl::{ParamSpec, ParamType, ParamValue, ParamValueError, PortSpec, SkillDecl, SkillKind};
 pub use names::{did_you_mean, param_suggestion, suggestion};
+pub use resources::{ResourceError, Resources};
 pub use skill::{Body, Context, Declare, FnSkill, Io, Skill, SkillError, SkillMaker, SkillType};
 pub use types::{ElemType, RecordType, SignalType, TypeParseError};
 #[doc(hidden)]

@@ -11,6 +11,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use crate::decl::SkillDecl;
+use crate::resources::Resources;
 use crate::types::SignalType;
 use crate::value::Value;
 
@@ -214,11 +215,14 @@ pub trait Body {
 /// A skill type that can declare itself and make instances.
 pub trait Declare {
     fn declaration() -> SkillDecl;
-    fn create() -> Box<dyn Skill>;
+    /// A new instance, its parameters at their declared defaults and its
+    /// resources (`#[resource]` fields) taken from `resources`: an error
+    /// when one is missing or of another type.
+    fn create(resources: &Resources) -> Result<Box<dyn Skill>, SkillError>;
 }
 
-/// A constructor for instances of one skill type.
-pub type SkillMaker = Arc<dyn Fn() -> Result<Box<dyn Skill>, String> + Send + Sync>;
+/// A constructor for instances of one skill type, given the host's resources.
+pub type SkillMaker = Arc<dyn Fn(&Resources) -> Result<Box<dyn Skill>, String> + Send + Sync>;
 
 /// A skill type as the registry keeps it: its declaration and a constructor.
 #[derive(Clone)]
@@ -230,12 +234,24 @@ pub struct SkillType {
 impl SkillType {
     /// The skill type of a Rust type with `#[derive(Skill)]`.
     pub fn of<T: Declare>() -> Self {
-        SkillType { decl: Arc::new(T::declaration()), make: Arc::new(|| Ok(T::create())) }
+        SkillType {
+            decl: Arc::new(T::declaration()),
+            make: Arc::new(|resources| T::create(resources).map_err(|e| e.to_string())),
+        }
     }
 
-    /// A skill type from a declaration and any constructor (used by foreign
-    /// language bindings and tests).
+    /// A skill type from a declaration and any constructor that needs no
+    /// resource (used by foreign language bindings and tests).
     pub fn new(decl: SkillDecl, make: impl Fn() -> Result<Box<dyn Skill>, String> + Send + Sync + 'static) -> Self {
+        SkillType { decl: Arc::new(decl), make: Arc::new(move |_| make()) }
+    }
+
+    /// A skill type from a declaration and a constructor given the host's
+    /// [`Resources`] (foreign language bindings whose skills ask for some).
+    pub fn with_resources(
+        decl: SkillDecl,
+        make: impl Fn(&Resources) -> Result<Box<dyn Skill>, String> + Send + Sync + 'static,
+    ) -> Self {
         SkillType { decl: Arc::new(decl), make: Arc::new(make) }
     }
 }

@@ -83,7 +83,7 @@
 //! assert_eq!(decl.params[0].default, Value::F64(0.5));
 //!
 //! // One run, driven by hand the way the manager does it.
-//! let mut skill = Runaway::create();
+//! let mut skill = Runaway::create(&situate::Resources::new())?;
 //! let inputs = [Some(Value::F32s(vec![2.0, 0.3, 1.0, 2.5].into())), None];
 //! let mut outputs = [None, None];
 //! let mut cx = Context::new(0, 0.0);
@@ -142,7 +142,8 @@ use syn::{parse_macro_input, DeriveInput};
 
 /// Makes a struct a skill: implements `Declare` (its declaration and
 /// constructor) and `Skill` (the glue the manager runs) for it. The struct
-/// must also implement `Default` (derive it) and `Body` (write it).
+/// must also implement `Body` (write it), and `Default` (derive it) unless it
+/// has `#[resource]` fields.
 ///
 /// See the [crate docs](../situate_derive/index.html) for what a skill is and a full example.
 ///
@@ -174,9 +175,19 @@ use syn::{parse_macro_input, DeriveInput};
 ///   `false`, `""`). `min` and `max` are number literals and apply to numeric
 ///   params; a literal default must lie within them.
 ///
-/// Fields with none of these are the skill's state. `create()` starts from
-/// the struct's `Default` and then sets every param to its declared default,
-/// so a new instance always matches its declaration.
+/// - `#[resource]` / `#[resource(name = "can0")]`: what the program provides
+///   to the skills it builds (`Registry::provide(name, value)`: a driver's
+///   handle, the simulator's world), named after the field by default. The
+///   field gets a clone of it when the instance is made; it must be of the
+///   field's type. A missing one, or one of another type, is an error of
+///   `create` (the robot is not built), naming the skill, the resource and
+///   both types.
+///
+/// Fields with none of these are the skill's state. `create(resources)`
+/// starts from the struct's `Default` (with resource fields: field by field,
+/// each resource from `resources` and every other field its type's
+/// `Default`) and then sets every param to its declared default, so a new
+/// instance always matches its declaration.
 ///
 /// # Errors
 ///
@@ -260,7 +271,7 @@ use syn::{parse_macro_input, DeriveInput};
 /// #[derive(Skill, Default)]
 /// struct Tuple(f64);
 /// ```
-#[proc_macro_derive(Skill, attributes(skill, input, output, param))]
+#[proc_macro_derive(Skill, attributes(skill, input, output, param, resource))]
 pub fn derive_skill(input: TokenStream) -> TokenStream {
     let input = parse_macro_input!(input as DeriveInput);
     skill::expand(&input).unwrap_or_else(syn::Error::into_compile_error).into()

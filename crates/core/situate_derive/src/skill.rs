@@ -11,6 +11,9 @@ use crate::util::{self, Errors, SignedLit};
 const SKILL_KEYS: &[&str] = &["name", "kind", "priority", "claims"];
 const PORT_KEYS: &[&str] = &["signal"];
 const PARAM_KEYS: &[&str] = &["default", "min", "max", "unit"];
+const RESOURCE_KEYS: &[&str] = &["name"];
+/// A field's roles, each its own attribute.
+const ROLES: [&str; 4] = ["input", "output", "param", "resource"];
 
 /// An input or output port field.
 struct Port {
@@ -35,6 +38,14 @@ struct Param {
     max: Option<f64>,
     unit: String,
     doc: TokenStream,
+}
+
+/// A field the host's resources fill when an instance is made (`#[resource]`).
+struct Resource {
+    field: Ident,
+    /// The resource's name: the field's, or `#[resource(name = "…")]`.
+    name: String,
+    ty: Type,
 }
 
 /// The parameter types the macro knows by name, to check literals early.
@@ -88,7 +99,7 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
     let mut errors = Errors::default();
     let attrs = skill_attrs(&input.attrs, &mut errors);
     for attr in &input.attrs {
-        if let Some(which) = ["input", "output", "param"].into_iter().find(|w| attr.path().is_ident(w)) {
+        if let Some(which) = ROLES.into_iter().find(|w| attr.path().is_ident(w)) {
             errors.spanned(attr, format!("#[{which}] goes on a field of the struct"));
         }
     }
@@ -96,15 +107,18 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
     let mut inputs: Vec<Port> = Vec::new();
     let mut outputs: Vec<Port> = Vec::new();
     let mut params: Vec<Param> = Vec::new();
+    let mut resources: Vec<Resource> = Vec::new();
+    let mut all_fields: Vec<Ident> = Vec::new();
     for field in &fields.named {
         let Some(ident) = &field.ident else { continue };
+        all_fields.push(ident.clone());
         let mut role: Option<&Attribute> = None;
         for attr in &field.attrs {
             if attr.path().is_ident("skill") {
                 errors.spanned(attr, "#[skill(...)] goes on the struct, not on a field");
                 continue;
             }
-            let Some(which) = ["input", "output", "param"].into_iter().find(|w| attr.path().is_ident(w)) else {
+            let Some(which) = ROLES.into_iter().find(|w| attr.path().is_ident(w)) else {
                 continue;
             };
             if let Some(first) = role {
@@ -113,7 +127,7 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
                     format!("duplicate #[{which}] on field `{}`", ident.unraw())
                 } else {
                     format!(
-                        "field `{}` is already #[{first_name}]: a field is an input, an output or a param, not several",
+                        "field `{}` is already #[{first_name}]: a field is an input, an output, a param or a resource, not several",
                         ident.unraw()
                     )
                 };
@@ -127,6 +141,10 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
         if attr.path().is_ident("param") {
             if let Some(p) = param(ident, &field.ty, attr, doc, &mut errors) {
                 params.push(p);
+            }
+        } else if attr.path().is_ident("resource") {
+            if let Some(r) = resource(ident, &field.ty, attr, &mut errors) {
+                resources.push(r);
             }
         } else {
             let is_input = attr.path().is_ident("input");
@@ -152,7 +170,33 @@ pub fn expand(input: &DeriveInput) -> syn::Result<TokenStream> {
     }
 
     errors.finish()?;
-    Ok(generate(input, &attrs, &inputs, &outputs, &params))
+    Ok(generate(input, &attrs, &Fields { inputs, outputs, params, resources, all: all_fields }))
+}
+
+/// A skill struct's fields by role, and all of them in order.
+struct Fields {
+    inputs: Vec<Port>,
+    outputs: Vec<Port>,
+    params: Vec<Param>,
+    resources: Vec<Resource>,
+    all: Vec<Ident>,
+}
+
+fn resource(field: &Ident, ty: &Type, attr: &Attribute, errors: &mut Errors) -> Option<Resource> {
+    let mut name = field.unraw().to_string();
+    let mut ok = true;
+    for item in util::items(attr, RESOURCE_KEYS, &mut Vec::new(), errors) {
+        // The only key is `name`.
+        let r = item.value().and_then(|v| util::string(v, "`name`")).and_then(|s| util::check_name(&s, "`name`"));
+        match r {
+            Ok(s) => name = s,
+            Err(e) => {
+                errors.push(e);
+                ok = false;
+            }
+        }
+    }
+    ok.then(|| Resource { field: field.clone(), name, ty: ty.clone() })
 }
 
 fn skill_attrs(attrs: &[Attribute], errors: &mut Errors) -> SkillAttrs {
@@ -398,17 +442,12 @@ fn opt_f64(x: Option<f64>) -> TokenStream {
     }
 }
 
-fn generate(
-    input: &DeriveInput,
-    attrs: &SkillAttrs,
-    inputs: &[Port],
-    outputs: &[Port],
-    params: &[Param],
-) -> TokenStream {
+fn generate(input: &DeriveInput, attrs: &SkillAttrs, fields: &Fields) -> TokenStream {
+    let Fields { inputs, outputs, params, resources, all } = fields;
     let core = quote!(::situate::__core);
     // Locals the user's default expressions can't see or shadow.
-    let [decl, port, param, skill, io, value, x, slot, index, ty_param] =
-        ["decl", "port", "param", "skill", "io", "value", "x", "slot", "index", "ty"].map(util::local);
+    let [decl, port, param, skill, io, value, x, slot, index, ty_param, provided] =
+        ["decl", "port", "param", "skill", "io", "value", "x", "slot", "index", "ty", "resources"].map(util::local);
     let ident = &input.ident;
     let (impl_generics, ty_generics, where_clause) = input.generics.split_for_impl();
 
@@ -457,6 +496,25 @@ fn generate(
         quote!(#skill.#field = #default;)
     });
     let skill_binding = if params.is_empty() { quote!(#skill) } else { quote!(mut #skill) };
+    // Without resources, the struct's own `Default`; with them, field by field: each resource
+    // from the host's, every other field its type's `Default` (the struct needs none).
+    let made = if resources.is_empty() {
+        quote!(<Self as ::core::default::Default>::default())
+    } else {
+        let inits = all.iter().map(|f| match resources.iter().find(|r| &r.field == f) {
+            Some(Resource { field, name, ty }) => {
+                let get = quote_spanned!(ty.span()=> #provided.get::<#ty>(#name));
+                quote! {
+                    #field: ::core::clone::Clone::clone(#get.map_err(|e| {
+                        #core::SkillError::new(::std::format!("`{}` {}", #type_name, e))
+                    })?)
+                }
+            }
+            None => quote!(#f: ::core::default::Default::default()),
+        });
+        quote!(Self { #(#inits),* })
+    };
+    let provided_binding = if resources.is_empty() { quote!(_) } else { quote!(#provided) };
 
     let read_inputs = inputs.iter().enumerate().map(|(i, p)| {
         let Port { field, name, ty, .. } = p;
@@ -574,10 +632,12 @@ fn generate(
             }
 
             #allow_casts
-            fn create() -> ::std::boxed::Box<dyn #core::Skill> {
-                let #skill_binding = <Self as ::core::default::Default>::default();
+            fn create(
+                #provided_binding: &#core::Resources,
+            ) -> ::core::result::Result<::std::boxed::Box<dyn #core::Skill>, #core::SkillError> {
+                let #skill_binding = #made;
                 #(#set_defaults)*
-                ::std::boxed::Box::new(#skill)
+                ::core::result::Result::Ok(::std::boxed::Box::new(#skill))
             }
         }
 

@@ -66,7 +66,7 @@ fn ty(text: &str) -> SignalType {
 
 #[test]
 fn a_derived_skill_reports_its_built_in_outputs_typed() {
-    let s = Typed::create();
+    let s = Typed::create(&situate::Resources::new()).unwrap();
     assert!(s.output_typed(0, &ty("f32[3]")));
     assert!(s.output_typed(0, &ty("f32[]")), "a fixed array feeds a variable-length port");
     assert!(!s.output_typed(0, &ty("f32[4]")));
@@ -111,11 +111,11 @@ fn the_manager_still_checks_outputs_not_typed_by_construction() {
     let mut wrong = Array::declaration();
     wrong.type_name = "test.array_wrong".into();
     wrong.outputs[0].ty = ty("f32[4]");
-    assert!(Array::create().output_typed(0, &ty("f32[3]")));
+    assert!(Array::create(&situate::Resources::new()).unwrap().output_typed(0, &ty("f32[3]")));
     let mut reg = Registry::new();
     reg.register::<Array>();
     reg.add(SkillType::new(hand, || Ok(Box::new(ByHand) as Box<dyn SkillTrait>)));
-    reg.add(SkillType::new(wrong, || Ok(Array::create())));
+    reg.add(SkillType::new(wrong, || Ok(Array::create(&situate::Resources::new()).unwrap())));
     let spec = RobotSpec::new("typed")
         .clock(ClockKind::Simulated)
         .period_s(0.01)

@@ -34,7 +34,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::Receiver;
-use situate_core::{Skill, SkillKind, Value};
+use situate_core::{Resources, Skill, SkillKind, Value};
 
 use crate::config::{ClockKind, ExecutorKind};
 use crate::control::*;
@@ -202,6 +202,8 @@ struct Tally {
 pub struct Manager {
     /// Never changes once built; shared with handles (see `front`).
     graph: Arc<Graph>,
+    /// What its skills were made with: a body left behind is made again with them.
+    resources: Resources,
     clock: ClockKind,
     period_s: f64,
     pool: Option<Arc<rayon::ThreadPool>>,
@@ -318,12 +320,16 @@ impl Manager {
         let mut insts = Vec::with_capacity(graph.instances.len());
         let lockstep = spec.clock == ClockKind::Simulated;
         for def in &graph.instances {
-            let skill = (def.skill_type.make)().map_err(|e| BuildError {
-                diagnostics: vec![spec.diag(
-                    crate::spec::Severity::Error,
-                    None,
-                    format!("skill `{}`: could not create `{}`: {e}", def.name, def.skill_type.decl.type_name),
-                )],
+            let skill = (def.skill_type.make)(registry.resources()).map_err(|e| {
+                // At the skill's type in the robot file: what it is made as.
+                let at = spec.skills.iter().find(|s| s.name == def.name).and_then(|s| s.type_pos.or(s.pos));
+                BuildError {
+                    diagnostics: vec![spec.diag(
+                        crate::spec::Severity::Error,
+                        at,
+                        format!("skill `{}`: could not create `{}`: {e}", def.name, def.skill_type.decl.type_name),
+                    )],
+                }
             })?;
             let typed_outputs = outputs_typed(skill.as_ref(), def);
             let mut exec = Exec::new(skill, def.inputs.len(), def.outputs.len());
@@ -431,6 +437,7 @@ impl Manager {
             starved: None,
             generation: 0,
             graph,
+            resources: registry.resources().clone(),
         };
         let initially: Vec<usize> =
             (0..manager.graph.instances.len()).filter(|&i| manager.graph.instances[i].active).collect();
@@ -538,7 +545,7 @@ impl Manager {
     /// with the parameters it has now.
     fn revive(&mut self, i: usize) -> Result<(), String> {
         let def = &self.graph.instances[i];
-        let mut skill = (def.skill_type.make)()?;
+        let mut skill = (def.skill_type.make)(&self.resources)?;
         for (p, v) in self.insts[i].params.iter().enumerate() {
             skill.set_param(p, v);
         }

@@ -2,13 +2,15 @@
 
 use std::collections::BTreeMap;
 
-use situate_core::{suggestion, Declare, SkillType};
+use situate_core::{suggestion, Declare, Resources, SkillType};
 
-/// Skill types by name. The `situate` program registers the standard
-/// libraries; embedders register their own.
+/// Skill types by name, and the resources their instances are made with. The
+/// `situate` program registers the standard libraries (and provides the
+/// simulator's `world` to its devices); embedders register their own.
 #[derive(Default, Clone, Debug)]
 pub struct Registry {
     types: BTreeMap<String, SkillType>,
+    resources: Resources,
 }
 
 impl Registry {
@@ -39,5 +41,24 @@ impl Registry {
 
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.types.keys().map(String::as_str)
+    }
+
+    /// Provides `value` as the resource `name` to every skill made from this
+    /// registry (a later one of the same name replaces it). A skill asks for
+    /// it when it is made (`#[resource]`; docs/skills.md, "Resources").
+    pub fn provide<T: std::any::Any + Send + Sync>(&mut self, name: impl Into<String>, value: T) -> &mut Self {
+        self.resources.insert(name, value);
+        self
+    }
+
+    /// Provides every resource of `resources` (another registry's, say) too.
+    pub fn provide_all(&mut self, resources: &Resources) -> &mut Self {
+        self.resources.extend_from(resources);
+        self
+    }
+
+    /// The resources provided so far.
+    pub fn resources(&self) -> &Resources {
+        &self.resources
     }
 }

@@ -13,7 +13,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Map, Value as Json};
-use situate_core::{Context, Io, Skill, SkillDecl, SkillError, SkillType, Value};
+use situate_core::{Context, Io, Resources, Skill, SkillDecl, SkillError, SkillType, Value};
 use zenoh::{Session, Wait};
 
 use crate::json::{param_from_json, value_from_json, value_to_json};
@@ -142,7 +142,7 @@ impl RemoteSkill {
         let d = Arc::clone(&decl);
         SkillType {
             decl,
-            make: Arc::new(move || {
+            make: Arc::new(move |_resources| {
                 Ok(Box::new(RemoteSkill::with_timeout(&session, &robot, &name, Arc::clone(&d), timeout)?)
                     as Box<dyn Skill>)
             }),
@@ -306,16 +306,19 @@ struct Inbox {
 /// declaration (an unknown port, a wrong type, a parameter out of range) are
 /// answered with an error naming the port, never run.
 ///
-/// `ready` is called once the subscriptions are in place.
+/// The instance is made with `resources` (the registry's that `ty` came
+/// from). `ready` is called once the subscriptions are in place.
 pub fn serve_skill(
     session: &Session,
     robot: &str,
     name: &str,
     ty: &SkillType,
+    resources: &Resources,
     stop: &AtomicBool,
     ready: impl FnOnce(),
 ) -> Result<HostStats, HostError> {
-    let make = || (ty.make)().map_err(|message| HostError::Make { type_name: ty.decl.type_name.clone(), message });
+    let make =
+        || (ty.make)(resources).map_err(|message| HostError::Make { type_name: ty.decl.type_name.clone(), message });
     let mut host = Host { decl: Arc::clone(&ty.decl), skill: make()?, params: Vec::new(), cx: Context::default() };
     host.params = host.decl.params.iter().map(|p| p.default.clone()).collect();
 

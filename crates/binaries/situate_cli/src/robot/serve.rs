@@ -52,12 +52,13 @@ pub(crate) fn serve_skill(
             signals::bound_text()
         );
         let watchdog = stop.watchdog(move || stuck);
-        let stats = situate_link::serve_skill(client.session(), robot, &name, ty, stop.flag(), || {
-            out.note(format_args!(
-                "serving `{name}` (type `{skill}`) of robot `{robot}` on situate/{robot}/remote/{name}/inputs; \
+        let stats =
+            situate_link::serve_skill(client.session(), robot, &name, ty, registry.resources(), stop.flag(), || {
+                out.note(format_args!(
+                    "serving `{name}` (type `{skill}`) of robot `{robot}` on situate/{robot}/remote/{name}/inputs; \
                  Ctrl-C stops"
-            ));
-        });
+                ));
+            });
         drop(watchdog);
         let s = stats.map_err(|e| problem(Exit::Failure, e.to_string()))?;
         let stopped_by = stop.signal().map(signals::name);

@@ -31,7 +31,14 @@ impl Outputs {
 
 impl Harness {
     pub fn new<T: Declare>() -> Self {
-        Harness { skill: T::create(), decl: T::declaration(), cycle: 1, on: false, dt: 0.05, prints: Vec::new() }
+        Harness {
+            skill: T::create(&situate::Resources::new()).unwrap(),
+            decl: T::declaration(),
+            cycle: 1,
+            on: false,
+            dt: 0.05,
+            prints: Vec::new(),
+        }
     }
 
     pub fn decl(&self) -> &SkillDecl {
