@@ -95,7 +95,7 @@ from .info import (
     Timing,
     Winner,
 )
-from .skill import Param, Port, Skill, SkillDeclarationError, param, port, skill
+from .skill import MissingResource, Param, Port, Skill, SkillDeclarationError, param, port, skill
 
 if TYPE_CHECKING:
     from ._cli import data_dir
@@ -162,6 +162,7 @@ __all__ = [
     "ManagerStarted",
     "ManagerStopped",
     "MissingProviders",
+    "MissingResource",
     "MonitorCancelled",
     "MonitorEvent",
     "MonitorFired",

@@ -61,7 +61,11 @@ class LocalRobot:
     """A robot file's manager in this process."""
 
     def __init__(
-        self, path: str, clock: str | None = None, executor: str | None = None
+        self,
+        path: str,
+        clock: str | None = None,
+        executor: str | None = None,
+        resources: dict[str, Any] | None = None,
     ) -> None: ...
     @property
     def name(self) -> str: ...

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -41,6 +41,7 @@ class LocalRobot:
         *,
         clock: str | None = None,
         executor: str | None = None,
+        resources: Mapping[str, Any] | None = None,
     ) -> None:
         """Loads and builds the robot file.
 
@@ -49,12 +50,18 @@ class LocalRobot:
             clock: ``"simulated"`` (as fast as possible, every body in the cycle)
                 or ``"wall"``; default: the file's.
             executor: ``"serial"`` or ``"parallel"``; default: the file's.
+            resources: Objects the skills are made with, by name: a class
+                skill's ``__init__`` is given those its arguments name (a camera,
+                a model loaded once; docs/python.md, "Resources").
 
         Raises:
             ValueError: The file, one of its ``python:`` files or its wiring has
-                errors (the message lists them with their positions).
+                errors (the message lists them with their positions), or a skill
+                needs a resource that ``resources`` does not hold.
         """
-        self._native = _native.LocalRobot(os.fspath(path), clock, executor)
+        self._native = _native.LocalRobot(
+            os.fspath(path), clock, executor, dict(resources) if resources else None
+        )
         #: The robot's name.
         self.name: str = self._native.name
 
@@ -215,6 +222,7 @@ def run(
     clock: str | None = None,
     executor: str | None = None,
     record: Sequence[str] = (),
+    resources: Mapping[str, Any] | None = None,
 ) -> RunResult:
     """Runs a robot file for ``cycles`` cycles in this process and returns what happened.
 
@@ -224,8 +232,9 @@ def run(
         clock: ``"simulated"`` or ``"wall"`` (default: the file's).
         executor: ``"serial"`` or ``"parallel"`` (default: the file's).
         record: Signals to read after every cycle (``RunResult.records``).
+        resources: Objects the skills are made with, by name (as :class:`LocalRobot`'s).
     """
-    robot = LocalRobot(path, clock=clock, executor=executor)
+    robot = LocalRobot(path, clock=clock, executor=executor, resources=resources)
     records = robot.record(record, cycles) if record else {}
     if not record:
         robot.step(cycles)

@@ -71,6 +71,10 @@ __all__ = [
 ]
 
 
+class MissingResource(LookupError):
+    """A class skill's ``__init__`` needs a resource the program did not provide."""
+
+
 class SkillDeclarationError(TypeError):
     """A ``@situate.skill`` declaration that cannot be built; the message names the skill."""
 
@@ -276,6 +280,8 @@ class Skill:
         self.outputs: dict[str, str] = {}
         self.params: dict[str, Any] = {}
         self._is_class = isinstance(target, type)
+        #: A class skill's resources: its ``__init__``'s arguments, each ``(name, required)``.
+        self.resources: tuple[tuple[str, bool], ...] = ()
         try:
             self._declaration = self._declare(inputs or {}, outputs or {}, params or {})
         except SkillDeclarationError as e:
@@ -293,17 +299,18 @@ class Skill:
             except (TypeError, ValueError):
                 init = None
             if init is not None:
-                required = [
-                    p.name
-                    for p in init.parameters.values()
-                    if p.default is inspect.Parameter.empty
-                    and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
-                ]
-                if required:
-                    needs = ", ".join(required)
-                    raise SkillDeclarationError(
-                        f"the class is made with no arguments, but __init__ needs {needs}"
-                    )
+                # Each named argument is a resource the program provides (by that name).
+                resources: list[tuple[str, bool]] = []
+                for p in init.parameters.values():
+                    if p.kind == p.POSITIONAL_ONLY:
+                        raise SkillDeclarationError(
+                            f"__init__'s argument `{p.name}` is positional-only: a class skill"
+                            " is made with its resources by name"
+                        )
+                    if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+                        continue
+                    resources.append((p.name, p.default is inspect.Parameter.empty))
+                self.resources = tuple(resources)
             for hook in _HOOKS:
                 _check_hook(self.target, hook)
             sig = inspect.signature(step)
@@ -423,16 +430,32 @@ class Skill:
         return (name, ty, default, spec.min, spec.max, spec.unit, spec.doc)
 
     def _make_body(
-        self,
+        self, resources: Mapping[str, Any] | None = None
     ) -> tuple[Callable[..., Any], Callable[[], Any] | None, Callable[[], Any] | None]:
         """One new instance's body and hooks: ``(step, activate, deactivate)``.
 
         A class: a new object's ``step``, ``activate`` and ``deactivate`` (``None``
-        for a hook the class does not define). A function: the function, without
-        hooks.
+        for a hook the class does not define), the object made with the
+        ``resources`` its ``__init__`` names (:class:`MissingResource` when one
+        without a default is not there). A function: the function, without hooks.
         """
         if self._is_class:
-            instance = self.target()
+            given = resources or {}
+            kwargs: dict[str, Any] = {}
+            for name, required in self.resources:
+                if name in given:
+                    kwargs[name] = given[name]
+                elif required:
+                    provided = (
+                        "it provides " + ", ".join(f"`{n}`" for n in sorted(given))
+                        if given
+                        else "it provides no resources"
+                    )
+                    raise MissingResource(
+                        f"`{self.name}` needs the resource `{name}` (an argument of its"
+                        f" __init__), and the program provides none of that name ({provided})"
+                    )
+            instance = self.target(**kwargs)
             step: Callable[..., Any] = instance.step
             activate: Callable[[], Any] | None = getattr(instance, "activate", None)
             deactivate: Callable[[], Any] | None = getattr(instance, "deactivate", None)

@@ -199,16 +199,72 @@ def test_a_file_that_brings_a_skill_type_again_is_refused_naming_both(files: Wri
     assert situate("check", str(path)).returncode == 0
 
 
-def test_a_skill_class_must_be_made_without_arguments() -> None:
+def test_a_skill_class_takes_its_resources_by_name() -> None:
     class NeedsArgs:
-        def __init__(self, port: str) -> None:
+        def __init__(self, port: str, baud: int = 9600, **_more: object) -> None:
             self.port = port
 
         def step(self) -> None:
             pass
 
-    with pytest.raises(sit.SkillDeclarationError, match="__init__ needs port"):
-        sit.skill(NeedsArgs)
+    assert sit.skill(NeedsArgs).resources == (("port", True), ("baud", False))
+
+    class PositionalOnly:
+        def __init__(self, port: str, /) -> None:
+            self.port = port
+
+        def step(self) -> None:
+            pass
+
+    with pytest.raises(sit.SkillDeclarationError, match="`port` is positional-only"):
+        sit.skill(PositionalOnly)
+
+
+RESOURCES = """
+import situate
+
+
+@situate.skill(name="counting", outputs={"total": "f64"})
+class Counting:
+    \"\"\"Counts its runs into the host's list, scaled by the host's gain.\"\"\"
+
+    def __init__(self, runs: list[int], gain: float = 1.0) -> None:
+        self.runs = runs
+        self.gain = gain
+
+    def step(self) -> dict[str, float]:
+        self.runs.append(len(self.runs) + 1)
+        return {"total": len(self.runs) * self.gain}
+"""
+
+
+def test_a_class_skill_is_made_with_the_resources_the_host_provides(files: Write) -> None:
+    files("skills.py", RESOURCES)
+    path = files(
+        "robot.yaml",
+        "robot: res\ncycle: {rate_hz: 10, clock: simulated}\npython: [skills.py]\n"
+        "skills:\n  - {name: c, type: counting}\n",
+    )
+    runs: list[int] = []
+    robot = sit.LocalRobot(path, resources={"runs": runs, "gain": 2.5, "unused": object()})
+    robot.step(3)
+    assert runs == [1, 2, 3]  # the very list the host gave
+    assert robot.query("total").value == 7.5
+    # An argument with a default takes it when the host provides none of that name.
+    other: list[int] = []
+    robot = sit.LocalRobot(path, resources={"runs": other})
+    robot.step(2)
+    assert robot.query("total").value == 2.0
+    # One without a default is a build error naming the skill and the resource.
+    with pytest.raises(ValueError, match="needs the resource `runs`") as e:
+        sit.LocalRobot(path, resources={"gain": 1.0})
+    assert (
+        "skill `c`: could not create `counting`: `counting` needs the resource `runs` (an"
+        " argument of its __init__), and the program provides none of that name (it provides"
+        " `gain`)"
+    ) in str(e.value)
+    with pytest.raises(ValueError, match="it provides no resources"):
+        sit.LocalRobot(path)
 
 
 def test_the_in_process_robot_names_a_c_library_it_cannot_load(files: Write) -> None:

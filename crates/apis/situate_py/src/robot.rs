@@ -72,10 +72,17 @@ impl LocalRobot {
 
 #[pymethods]
 impl LocalRobot {
-    /// Loads and builds the robot file (`clock`: "wall" | "simulated", `executor`: "serial" | "parallel").
+    /// Loads and builds the robot file (`clock`: "wall" | "simulated", `executor`: "serial" |
+    /// "parallel"; `resources`: objects class skills are made with, by name).
     #[new]
-    #[pyo3(signature = (path, clock = None, executor = None))]
-    fn new(py: Python<'_>, path: PathBuf, clock: Option<&str>, executor: Option<&str>) -> PyResult<Self> {
+    #[pyo3(signature = (path, clock = None, executor = None, resources = None))]
+    fn new(
+        py: Python<'_>,
+        path: PathBuf,
+        clock: Option<&str>,
+        executor: Option<&str>,
+        resources: Option<&Bound<'_, pyo3::types::PyDict>>,
+    ) -> PyResult<Self> {
         let file = RobotFile::load(&path)
             .map_err(|errors| PyValueError::new_err(lines(errors.iter().map(|e| e.to_string()))))?;
         if let Ok(remote) = file.remote_decls() {
@@ -86,7 +93,13 @@ impl LocalRobot {
                 )));
             }
         }
-        let registry = registry_for(py, &file).map_err(PyValueError::new_err)?;
+        let mut registry = registry_for(py, &file).map_err(PyValueError::new_err)?;
+        for (name, value) in resources.into_iter().flat_map(|d| d.iter()) {
+            let name: String = name
+                .extract()
+                .map_err(|_| PyValueError::new_err(format!("a resource's name must be a str, got {name}")))?;
+            registry.provide(name, crate::skill::PyResource(value.unbind()));
+        }
         let mut spec = RobotSpec::from_file(&file);
         match clock {
             None => {}

@@ -499,8 +499,13 @@ impl Skill for PySkill {
 /// the instance's `activate` and `deactivate` hooks (`None` when absent).
 type Made = (Py<PyAny>, Option<Py<PyAny>>, Option<Py<PyAny>>);
 
+/// A Python object provided as a resource (`LocalRobot(..., resources=...)`): what a class
+/// skill's `__init__` is given by name.
+pub struct PyResource(pub Py<PyAny>);
+
 /// The skill type of a `@situate.skill` object: its `_declaration` and its
-/// `_make_body()` (a fresh body callable and its hooks per instance).
+/// `_make_body(resources)` (a fresh body callable and its hooks per instance,
+/// a class made with the resources its `__init__` names).
 pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType> {
     let declaration = obj.getattr("_declaration")?;
     let declaration = declaration.cast::<Declaration>()?;
@@ -515,14 +520,25 @@ pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType>
     if decl.inputs.iter().chain(&decl.outputs).any(|p| has_array(&p.ty)) {
         convert::have_numpy(py);
     }
-    Ok(SkillType::new(decl, move || {
+    Ok(SkillType::with_resources(decl, move |resources| {
         Python::attach(|py| {
             let d = declaration.bind(py).get();
-            let made = factory
-                .bind(py)
-                .call0()
-                .and_then(|made| made.extract::<Made>())
-                .map_err(|e| format!("creating python skill `{}`: {}", d.decl.type_name, traceback_text(py, &e)))?;
+            // The Python objects among the resources (others, the simulator's world say, are
+            // not for Python).
+            let given = PyDict::new(py);
+            for name in resources.names() {
+                if let Some(r) = resources.get_any(name).and_then(|a| a.downcast_ref::<PyResource>()) {
+                    given.set_item(name, r.0.clone_ref(py)).map_err(|e| e.to_string())?;
+                }
+            }
+            let made = factory.bind(py).call1((given,)).and_then(|made| made.extract::<Made>()).map_err(|e| {
+                if e.is_instance_of::<pyo3::exceptions::PyLookupError>(py) {
+                    // A resource it needs is missing: the message says which.
+                    e.value(py).to_string()
+                } else {
+                    format!("creating python skill `{}`: {}", d.decl.type_name, traceback_text(py, &e))
+                }
+            })?;
             let skill = PySkill::new(py, d, made).map_err(|e| e.to_string())?;
             Ok(Box::new(skill) as Box<dyn Skill>)
         })
