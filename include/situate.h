@@ -15,6 +15,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 
 /*
  The version of this ABI. A library built for another version is refused
@@ -24,7 +25,8 @@
  it: a library says how large its entries are (`skill_type_size`), the host
  reads a field only when that size covers it (else the field is NULL), and
  a host older than the library refuses its longer entries by their size.
- The lifecycle hooks (`activate`, `deactivate`) were appended so, in v2.
+ The lifecycle hooks (`activate`, `deactivate`) were appended so, in v2,
+ and then `init_with` (resources handed in at construction).
  */
 #define SITUATE_ABI_VERSION 2
 
@@ -266,6 +268,35 @@ typedef situate_status (*situate_deactivate_fn)(void *state,
                                                 struct situate_context *cx);
 
 /*
+ The resources the program running the skill provides to it, by name (a
+ bus handle, a device's driver, a model loaded once); valid during the
+ call to `init_with` only. Keep a resource's pointer, not this struct.
+ */
+typedef struct situate_resources {
+  /*
+   The resource `name` (UTF-8, `len` bytes): the pointer the program
+   provided under that name, or NULL when it provides none of that name
+   for C (`situate_resource` calls it).
+   */
+  void *(*get)(const void *host_data, const char *name, size_t len);
+  /*
+   Passed back to `get`.
+   */
+  const void *host_data;
+} situate_resources;
+
+/*
+ Constructs a skill instance as `situate_init_fn` does, with the
+ resources it needs (`situate_resource(resources, "bus")`): a missing one is
+ an error status (`situate_missing_resource(error, "bus")`), and the robot
+ is not built. Used instead of `init` when set.
+ */
+typedef situate_status (*situate_init_with_fn)(void *state,
+                                               const void *params,
+                                               const struct situate_resources *resources,
+                                               struct situate_error *error);
+
+/*
  One skill type of a library.
 
  Fields are only ever appended, each optional: a library built before a
@@ -324,6 +355,11 @@ typedef struct situate_skill_type {
    Optional (appended in ABI v2, as `activate`).
    */
   situate_deactivate_fn deactivate;
+  /*
+   Optional, appended after the hooks: `init` given the program's
+   resources; used instead of `init` when set.
+   */
+  situate_init_with_fn init_with;
 } situate_skill_type;
 
 /*
@@ -438,6 +474,22 @@ static inline void situate_print(situate_context *cx, const char *format, ...) {
     cx->host->print(cx->host_data, line, (size_t)n);
 }
 
+/* The resource `name` the program provides (in `init_with`), or NULL when it provides none of
+ * that name for C: `bus *b = situate_resource(resources, "bus");`. */
+static inline void *situate_resource(const situate_resources *resources, const char *name) {
+    if (resources == NULL || resources->get == NULL || name == NULL) {
+        return NULL;
+    }
+    return resources->get(resources->host_data, name, strlen(name));
+}
+
+/* The error of a missing resource, in the words every language uses:
+ * `if (b == NULL) return situate_missing_resource(error, "bus");`. */
+static inline situate_status situate_missing_resource(situate_error *error, const char *name) {
+    return situate_error_set(error, "needs the resource `%s`, and the program provides no C resource of that name",
+                             name);
+}
+
 /* A skill type of a C library with the hooks you choose: each of `init`, `fini`, `set_param`,
  * `activate` and `deactivate` is NULL or the generated glue to your function (`prefix##__init`,
  * `prefix##__fini`, `prefix##__set_param`, `prefix##__activate`, `prefix##__deactivate`):
@@ -446,7 +498,12 @@ static inline void situate_print(situate_context *cx, const char *format, ...) {
 #define SITUATE_SKILL_WITH(prefix, init, fini, set_param, activate, deactivate)                     \
     { prefix##_manifest, sizeof(prefix##_inputs), sizeof(prefix##_outputs), sizeof(prefix##_params), \
       sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), init, fini, prefix##__step, set_param, \
-      SITUATE__FIELDS(prefix), activate, deactivate }
+      SITUATE__FIELDS(prefix), activate, deactivate, NULL }
+
+/* A skill type of a C library made with the program's resources: `prefix_init_with` (instead of
+ * `prefix_init`), and the other hooks you choose as in SITUATE_SKILL_WITH:
+ * SITUATE_SKILL_WITH_RESOURCES(c_x, c_x__fini, NULL, NULL, NULL). */
+#define SITUATE_SKILL_WITH_RESOURCES(prefix, fini, set_param, activate, deactivate)                 { prefix##_manifest, sizeof(prefix##_inputs), sizeof(prefix##_outputs), sizeof(prefix##_params), sizeof(prefix##_state), SITUATE_ALIGNOF(prefix##_state), NULL, fini, prefix##__step, set_param, SITUATE__FIELDS(prefix), activate, deactivate, prefix##__init_with }
 
 /* A skill type of a C library: `prefix_step` only (the state starts zeroed). */
 #define SITUATE_SKILL(prefix) SITUATE_SKILL_WITH(prefix, NULL, NULL, NULL, NULL, NULL)

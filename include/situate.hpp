@@ -35,6 +35,7 @@
 #include <iterator>
 #include <exception>
 #include <new>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -68,6 +69,36 @@ class Context {
 };
 
 /// A string input or parameter as a view (valid during the call).
+/// The resources the program provides to a skill, by name, while it is made: a class
+/// constructible from `(const Params&, const situate::Resources&)` or
+/// `(const situate::Resources&)` gets them. Keep what you take, not this object.
+class Resources {
+ public:
+  explicit Resources(const situate_resources* r) noexcept : r_(r) {}
+
+  /// The resource `name` as a `T*`, or nullptr when the program provides none of that name.
+  template <class T = void>
+  T* get(std::string_view name) const noexcept {
+    if (r_ == nullptr || r_->get == nullptr) return nullptr;
+    return static_cast<T*>(r_->get(r_->host_data, name.data(), name.size()));
+  }
+
+  /// The resource `name` as a `T&`; throws (the skill is not made, and the robot not built)
+  /// when the program provides none of that name.
+  template <class T>
+  T& need(std::string_view name) const {
+    T* found = get<T>(name);
+    if (found == nullptr) {
+      throw std::runtime_error("needs the resource `" + std::string(name) +
+                               "`, and the program provides no C resource of that name");
+    }
+    return *found;
+  }
+
+ private:
+  const situate_resources* r_;
+};
+
 inline std::string_view view(const situate_str& s) noexcept {
   return s.len == 0 ? std::string_view() : std::string_view(s.ptr, s.len);
 }
@@ -148,6 +179,24 @@ situate_status init(void* state, const void* params, situate_error* error) noexc
 }
 
 template <class S>
+constexpr bool takes_resources =
+    std::is_constructible_v<S, const typename S::Params&, const Resources&> || std::is_constructible_v<S, const Resources&>;
+
+template <class S>
+situate_status init_with(void* state, const void* params, const situate_resources* resources,
+                         situate_error* error) noexcept {
+  using P = typename S::Params;
+  return guarded(error, [&] {
+    Resources given(resources);
+    if constexpr (std::is_constructible_v<S, const P&, const Resources&>) {
+      new (state) S(*static_cast<const P*>(params), given);
+    } else {
+      new (state) S(given);
+    }
+  });
+}
+
+template <class S>
 void fini(void* state) noexcept {
   static_cast<S*>(state)->~S();
 }
@@ -222,13 +271,22 @@ situate_skill_type skill_type() noexcept {
   if constexpr (deactivates) {
     on_deactivate = &detail::deactivate<S>;
   }
+  // Made with the program's resources when its constructor takes them (then `init` is never
+  // instantiated: the class may have no other constructor).
+  situate_init_fn init = nullptr;
+  situate_init_with_fn init_with = nullptr;
+  if constexpr (detail::takes_resources<S>) {
+    init_with = &detail::init_with<S>;
+  } else {
+    init = &detail::init<S>;
+  }
   return situate_skill_type{S::manifest(),
                             sizeof(typename S::Inputs),
                             sizeof(typename S::Outputs),
                             sizeof(typename S::Params),
                             sizeof(S),
                             alignof(S),
-                            &detail::init<S>,
+                            init,
                             &detail::fini<S>,
                             &detail::step<S>,
                             on_param,
@@ -239,7 +297,8 @@ situate_skill_type skill_type() noexcept {
                             S::outputs_field_count(),
                             S::params_field_count(),
                             on_activate,
-                            on_deactivate};
+                            on_deactivate,
+                            init_with};
 }
 
 /// The library table of skill classes `S...`.

@@ -18,7 +18,8 @@ use std::ffi::{c_char, c_void};
 /// it: a library says how large its entries are (`skill_type_size`), the host
 /// reads a field only when that size covers it (else the field is NULL), and
 /// a host older than the library refuses its longer entries by their size.
-/// The lifecycle hooks (`activate`, `deactivate`) were appended so, in v2.
+/// The lifecycle hooks (`activate`, `deactivate`) were appended so, in v2,
+/// and then `init_with` (resources handed in at construction).
 pub const SITUATE_ABI_VERSION: u32 = 2;
 
 /// A call succeeded.
@@ -96,10 +97,36 @@ pub struct situate_context {
     pub host_data: *mut c_void,
 }
 
+/// The resources the program running the skill provides to it, by name (a
+/// bus handle, a device's driver, a model loaded once); valid during the
+/// call to `init_with` only. Keep a resource's pointer, not this struct.
+#[repr(C)]
+pub struct situate_resources {
+    /// The resource `name` (UTF-8, `len` bytes): the pointer the program
+    /// provided under that name, or NULL when it provides none of that name
+    /// for C (`situate_resource` calls it).
+    pub get: Option<unsafe extern "C" fn(host_data: *const c_void, name: *const c_char, len: usize) -> *mut c_void>,
+    /// Passed back to `get`.
+    pub host_data: *const c_void,
+}
+
 /// Constructs a skill instance in `state` (host-allocated, zeroed,
 /// `state_size` bytes aligned to `state_align`) from its initial parameters.
 pub type situate_init_fn = Option<
     unsafe extern "C" fn(state: *mut c_void, params: *const c_void, error: *mut situate_error) -> situate_status,
+>;
+
+/// Constructs a skill instance as `situate_init_fn` does, with the
+/// resources it needs (`situate_resource(resources, "bus")`): a missing one is
+/// an error status (`situate_missing_resource(error, "bus")`), and the robot
+/// is not built. Used instead of `init` when set.
+pub type situate_init_with_fn = Option<
+    unsafe extern "C" fn(
+        state: *mut c_void,
+        params: *const c_void,
+        resources: *const situate_resources,
+        error: *mut situate_error,
+    ) -> situate_status,
 >;
 
 /// Destroys the instance in `state` (the host frees the memory).
@@ -222,6 +249,9 @@ pub struct situate_skill_type {
     pub activate: situate_activate_fn,
     /// Optional (appended in ABI v2, as `activate`).
     pub deactivate: situate_deactivate_fn,
+    /// Optional, appended after the hooks: `init` given the program's
+    /// resources; used instead of `init` when set.
+    pub init_with: situate_init_with_fn,
 }
 
 /// What a library's entry function returns.

@@ -245,7 +245,12 @@ fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> Stri
          sequencer or a fault); called once after its last step (an error status is only a warning).\n   \
          Both on the thread that runs the step; not at shutdown (then only fini). */\n\
          situate_status {p}_activate({p}_state* state, const {p}_params* params, situate_context* cx);\n\
-         situate_status {p}_deactivate({p}_state* state, const {p}_params* params, situate_context* cx);\n"
+         situate_status {p}_deactivate({p}_state* state, const {p}_params* params, situate_context* cx);\n\n\
+         /* With SITUATE_SKILL_WITH_RESOURCES({p}, ...) you write this instead of {p}_init: the state made\n   \
+         with the resources the program provides (`situate_resource(resources, \"bus\")`; a missing one:\n   \
+         `return situate_missing_resource(error, \"bus\");`). */\n\
+         situate_status {p}_init_with({p}_state* state, const {p}_params* params,\n    \
+         const situate_resources* resources, situate_error* error);\n"
     );
     let _ = writeln!(
         o,
@@ -260,7 +265,10 @@ fn c_header(decl: &SkillDecl, l: &SkillLayout, text: &str, origin: &str) -> Stri
          static inline situate_status {p}__activate(void* s, const void* p, situate_context* cx) {{\n    \
          return {p}_activate(({p}_state*)s, (const {p}_params*)p, cx);\n}}\n\
          static inline situate_status {p}__deactivate(void* s, const void* p, situate_context* cx) {{\n    \
-         return {p}_deactivate(({p}_state*)s, (const {p}_params*)p, cx);\n}}\n"
+         return {p}_deactivate(({p}_state*)s, (const {p}_params*)p, cx);\n}}\n\
+         static inline situate_status {p}__init_with(void* s, const void* p, const situate_resources* r,\n    \
+         situate_error* e) {{\n    \
+         return {p}_init_with(({p}_state*)s, (const {p}_params*)p, r, e);\n}}\n"
     );
     let _ = writeln!(o, "#ifdef __cplusplus\n}}\n#endif\n\n#endif /* {guard} */");
     o

@@ -14,12 +14,15 @@
 //! such a skill out of process as an async cskill over the link.
 
 pub mod abi;
+mod entry;
 pub mod gen;
 pub mod layout;
 pub mod loader;
 pub mod manifest;
+mod resource;
 
 pub use gen::{generate, generate_text, write_generated, GenError, GeneratedFile, Lang};
 pub use layout::{Field, FieldKind, SkillLayout, StructLayout};
 pub use loader::{load_library, LoadError};
 pub use manifest::{parse_manifest, ManifestError, ManifestProblem};
+pub use resource::CResource;

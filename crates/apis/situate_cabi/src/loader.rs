@@ -17,15 +17,18 @@ use std::path::{Path, PathBuf};
 use std::ptr::NonNull;
 use std::sync::Arc;
 
-use situate_core::{Context, ElemType, Io, ParamType, Skill, SkillDecl, SkillError, SkillType, Value};
+use situate_core::{Context, ElemType, Io, ParamType, Resources, Skill, SkillDecl, SkillError, SkillType, Value};
 
 use crate::abi::{
     situate_activate_fn, situate_context, situate_deactivate_fn, situate_entry_fn, situate_error, situate_field,
-    situate_fini_fn, situate_host, situate_init_fn, situate_library, situate_set_param_fn, situate_skill_type,
-    SITUATE_ABI_VERSION, SITUATE_ENTRY_SYMBOL, SITUATE_ERROR_CAPACITY, SITUATE_OK,
+    situate_fini_fn, situate_host, situate_init_fn, situate_init_with_fn, situate_library, situate_resources,
+    situate_set_param_fn, situate_skill_type, SITUATE_ABI_VERSION, SITUATE_ENTRY_SYMBOL, SITUATE_ERROR_CAPACITY,
+    SITUATE_OK,
 };
+use crate::entry::{read_entry, SKILL_TYPE_BASE_SIZE};
 use crate::layout::{code_c, flag_name, Field, FieldKind, SkillLayout, StructLayout};
 use crate::manifest::{parse_manifest, ManifestError};
+use crate::resource::resource_for_c;
 
 /// Why a library was not loaded. Every message names the library's path.
 #[derive(Debug, thiserror::Error)]
@@ -49,48 +52,12 @@ pub enum LoadError {
 /// The functions of one skill type, copied out of the library's table.
 struct Vtable {
     init: situate_init_fn,
+    init_with: situate_init_with_fn,
     fini: situate_fini_fn,
     step: unsafe extern "C" fn(*mut c_void, *const c_void, *mut c_void, *const c_void, *mut situate_context) -> i32,
     set_param: situate_set_param_fn,
     activate: situate_activate_fn,
     deactivate: situate_deactivate_fn,
-}
-
-/// The size of a skill type entry before the lifecycle hooks were appended
-/// (the first ABI v2 libraries): the shortest entry a library may declare.
-/// The old struct ended where `activate` starts: its last field was followed
-/// by padding up to the alignment of a pointer, which is `activate`'s.
-const SKILL_TYPE_BASE_SIZE: usize = std::mem::offset_of!(situate_skill_type, activate);
-
-/// Where each field appended after [`SKILL_TYPE_BASE_SIZE`] ends, in order:
-/// an entry of `skill_type_size` bytes has those that end within it.
-const SKILL_TYPE_APPENDED_ENDS: [usize; 2] = [
-    std::mem::offset_of!(situate_skill_type, activate) + std::mem::size_of::<situate_activate_fn>(),
-    std::mem::offset_of!(situate_skill_type, deactivate) + std::mem::size_of::<situate_deactivate_fn>(),
-];
-
-/// How many bytes of an entry of `entry_size` bytes the host reads: up to the
-/// end of the last appended field wholly inside it.
-fn covered_len(entry_size: usize) -> usize {
-    SKILL_TYPE_APPENDED_ENDS.iter().copied().filter(|&end| end <= entry_size).max().unwrap_or(SKILL_TYPE_BASE_SIZE)
-}
-
-/// Entry `index` of a table of `entry_size`-byte entries, as this host's
-/// struct: the fields the entry covers copied, the others NULL.
-///
-/// # Safety
-/// `skills` must hold `index + 1` entries of `entry_size` bytes, and
-/// `entry_size` must be at least [`SKILL_TYPE_BASE_SIZE`].
-unsafe fn read_entry(skills: *const situate_skill_type, entry_size: usize, index: usize) -> situate_skill_type {
-    let mut entry = std::mem::MaybeUninit::<situate_skill_type>::zeroed();
-    // SAFETY: per the contract, the bytes read lie in the library's entry; the
-    // struct is valid zeroed (null pointers, `None` functions, zero sizes) and
-    // the copied bytes are fields of the same types at the same offsets.
-    unsafe {
-        let src = skills.cast::<u8>().add(index * entry_size);
-        std::ptr::copy_nonoverlapping(src, entry.as_mut_ptr().cast::<u8>(), covered_len(entry_size));
-        entry.assume_init()
-    }
 }
 
 /// One loaded skill type: what every instance shares.
@@ -166,7 +133,9 @@ pub fn load_library(path: &Path) -> Result<Vec<SkillType>, LoadError> {
         }
         let ty = Arc::new(ty);
         let decl = (*ty.decl).clone();
-        types.push(SkillType::new(decl, move || CSkill::new(Arc::clone(&ty)).map(|s| Box::new(s) as Box<dyn Skill>)));
+        types.push(SkillType::with_resources(decl, move |resources| {
+            CSkill::new(Arc::clone(&ty), resources).map(|s| Box::new(s) as Box<dyn Skill>)
+        }));
     }
     tracing::debug!(path = %path.display(), types = types.len(), "loaded skill library");
     Ok(types)
@@ -245,6 +214,7 @@ fn load_type(
         block,
         vt: Vtable {
             init: raw.init,
+            init_with: raw.init_with,
             fini: raw.fini,
             step,
             set_param: raw.set_param,
@@ -405,7 +375,7 @@ fn error_text(e: &situate_error) -> String {
 }
 
 impl CSkill {
-    fn new(ty: Arc<CType>) -> Result<CSkill, String> {
+    fn new(ty: Arc<CType>, resources: &Resources) -> Result<CSkill, String> {
         // SAFETY: the layout has a non-zero size (it holds the error).
         let block = NonNull::new(unsafe { std::alloc::alloc_zeroed(ty.block.layout) })
             .ok_or_else(|| format!("{}: cannot allocate the instance", ty.decl.type_name))?;
@@ -414,9 +384,20 @@ impl CSkill {
             let default = s.ty.decl.params[i].default.clone();
             s.write_param(i, &default);
         }
-        if let Some(init) = s.ty.vt.init {
+        let (state, params) = (s.at(s.ty.block.state).cast(), s.at(s.ty.block.params).cast());
+        let status = if let Some(init_with) = s.ty.vt.init_with {
+            let given = situate_resources {
+                get: Some(resource_for_c),
+                host_data: std::ptr::from_ref(resources).cast::<std::ffi::c_void>(),
+            };
+            // SAFETY: state, params, the resources and error are valid for the call; `given`
+            // points at `resources`, which outlives it.
+            Some(unsafe { init_with(state, params, &given, s.error()) })
+        } else {
             // SAFETY: state, params and error are valid for the call.
-            let status = unsafe { init(s.at(s.ty.block.state).cast(), s.at(s.ty.block.params).cast(), s.error()) };
+            s.ty.vt.init.map(|init| unsafe { init(state, params, s.error()) })
+        };
+        if let Some(status) = status {
             if status != SITUATE_OK {
                 let msg = s.take_error(status);
                 return Err(format!("{}: init failed: {msg}", s.ty.decl.type_name));
@@ -778,23 +759,5 @@ mod tests {
         // SAFETY: as above.
         let e = unsafe { write_value(&f.kind, buf.as_mut_ptr().cast::<u8>().add(f.offset), &wrong) };
         assert!(e.is_err());
-    }
-
-    #[test]
-    fn an_entry_is_read_up_to_its_last_whole_field() {
-        let ours = std::mem::size_of::<situate_skill_type>();
-        let ptr = std::mem::size_of::<situate_activate_fn>();
-        assert_eq!(ours, SKILL_TYPE_BASE_SIZE + 2 * ptr, "two hooks appended, no padding after them");
-        assert_eq!(covered_len(SKILL_TYPE_BASE_SIZE), SKILL_TYPE_BASE_SIZE);
-        assert_eq!(covered_len(SKILL_TYPE_BASE_SIZE + ptr / 2), SKILL_TYPE_BASE_SIZE, "never half a pointer");
-        assert_eq!(covered_len(SKILL_TYPE_BASE_SIZE + ptr), SKILL_TYPE_BASE_SIZE + ptr);
-        assert_eq!(covered_len(ours), ours);
-        // An old entry followed by bytes a longer read would take for hooks: they stay NULL.
-        let mut bytes = vec![0xA5u8; 2 * ours];
-        bytes[..SKILL_TYPE_BASE_SIZE].fill(0);
-        let base = bytes.as_ptr().cast::<situate_skill_type>();
-        // SAFETY: the buffer holds more than one old entry.
-        let entry = unsafe { read_entry(base, SKILL_TYPE_BASE_SIZE, 0) };
-        assert!(entry.activate.is_none() && entry.deactivate.is_none() && entry.step.is_none());
     }
 }

@@ -27,7 +27,7 @@ fn table(manifest: &str, inputs_size: &str) -> String {
         "{STEP}static const situate_field fin[] = {{{{ \"x\", SITUATE_FIELD_F64, 1, 0, 8 }}}};\n\
          static const situate_field fnone[] = {{{{ \"_situate_empty\", SITUATE_FIELD_BOOL, 1, 0, 1 }}}};\n\
          static const situate_skill_type types[] = {{{{ \"{manifest}\", {inputs_size}, 1, 1, 1, 1, NULL, NULL, step, NULL, \
-         fin, fnone, fnone, 1, 1, 1, NULL, NULL }}}};\n\
+         fin, fnone, fnone, 1, 1, 1, NULL, NULL, NULL }}}};\n\
          static const situate_library lib = {{ SITUATE_ABI_VERSION, sizeof(situate_skill_type), 1, types }};\n\
          SITUATE_EXPORT const situate_library* situate_library_entry(void) {{ return &lib; }}"
     )
@@ -197,7 +197,7 @@ fn fields_of_the_right_types_in_another_order_are_refused() {
 fn a_library_without_field_tables_is_refused() {
     let body = format!(
         "{STEP}static const situate_skill_type types[] = {{ {{ \"name: c.t\\ninputs: {{x: f64}}\\n\", 8, 1, 1, 1, 1, \
-         NULL, NULL, step, NULL, NULL, NULL, NULL, 0, 0, 0, NULL, NULL }} }};\n\
+         NULL, NULL, step, NULL, NULL, NULL, NULL, 0, 0, 0, NULL, NULL, NULL }} }};\n\
          static const situate_library lib = {{ SITUATE_ABI_VERSION, sizeof(situate_skill_type), 1, types }};\n\
          SITUATE_EXPORT const situate_library* situate_library_entry(void) {{ return &lib; }}"
     );
