@@ -236,6 +236,22 @@ use syn::{parse_macro_input, DeriveInput};
 /// }
 /// ```
 ///
+/// A resource with an unknown key (its only key is `name`):
+///
+/// ```compile_fail
+/// use situate::prelude::*;
+/// #[derive(Skill)]
+/// struct Bumper {
+///     #[output]
+///     pressed: bool,
+///     #[resource(nme = "can0")] // unknown key `nme` (did you mean `name`?)
+///     bus: Arc<u8>,
+/// }
+/// impl Body for Bumper {
+///     fn step(&mut self, _: &mut Context) -> Result<(), SkillError> { Ok(()) }
+/// }
+/// ```
+///
 /// A float default for an integer param:
 ///
 /// ```compile_fail
