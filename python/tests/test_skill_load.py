@@ -267,6 +267,20 @@ def test_a_class_skill_is_made_with_the_resources_the_host_provides(files: Write
         sit.LocalRobot(path)
 
 
+def test_a_lookup_error_of_the_class_itself_keeps_its_traceback(files: Write) -> None:
+    """Only a resource not provided is told in a line; the class's own KeyError is its fault."""
+    files("skills.py", RESOURCES.replace("self.runs = runs", 'self.runs = {"a": runs}["b"]'))
+    path = files(
+        "robot.yaml",
+        "robot: res\ncycle: {rate_hz: 10, clock: simulated}\npython: [skills.py]\n"
+        "skills:\n  - {name: c, type: counting}\n",
+    )
+    with pytest.raises(ValueError, match="creating python skill `counting`") as e:
+        sit.LocalRobot(path, resources={"runs": []})
+    assert "KeyError: 'b'" in str(e.value)
+    assert "skills.py" in str(e.value)  # the traceback, down to the line
+
+
 def test_the_in_process_robot_names_a_c_library_it_cannot_load(files: Write) -> None:
     files("skills.py", GOOD)
     path = files(

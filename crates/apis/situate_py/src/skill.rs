@@ -532,8 +532,9 @@ pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType>
                 }
             }
             let made = factory.bind(py).call1((given,)).and_then(|made| made.extract::<Made>()).map_err(|e| {
-                if e.is_instance_of::<pyo3::exceptions::PyLookupError>(py) {
-                    // A resource it needs is missing: the message says which.
+                if is_missing_resource(py, &e) {
+                    // A resource it needs is missing: the message says which (a `KeyError` of
+                    // the class's own `__init__` is its fault, and gets its traceback).
                     e.value(py).to_string()
                 } else {
                     format!("creating python skill `{}`: {}", d.decl.type_name, traceback_text(py, &e))
@@ -543,6 +544,13 @@ pub fn skill_type(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<SkillType>
             Ok(Box::new(skill) as Box<dyn Skill>)
         })
     }))
+}
+
+/// Whether `e` is `situate.skill.MissingResource` (`_make_body`'s: a resource not provided).
+fn is_missing_resource(py: Python<'_>, e: &PyErr) -> bool {
+    py.import("situate.skill")
+        .and_then(|m| m.getattr("MissingResource"))
+        .is_ok_and(|class| e.value(py).is_instance(&class).unwrap_or(false))
 }
 
 /// Whether values of type `t` hold a numeric array (a record may hold one in a field).
