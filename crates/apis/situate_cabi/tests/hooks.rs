@@ -153,23 +153,12 @@ SITUATE_CPP_LIBRARY(Hooked)
 "#;
 
 fn registry(test: &str) -> Registry {
-    let dir = scratch(test);
-    for (prefix, extra, lang) in
-        [("c_hooked", "", "c"), ("c_hooked_async", "kind: async\n", "c"), ("cpp_hooked", "", "cpp")]
-    {
-        let manifest = dir.join(format!("{prefix}.yaml"));
-        std::fs::write(&manifest, format!("name: {}\n{extra}{MANIFEST}", prefix.replacen('_', ".", 1))).unwrap();
-        gen(lang, &manifest, &dir);
-    }
-    let c = shared_lib(&dir, "c_hooked", &[("c_hooked.c", C_SOURCE)], false);
-    let cpp = shared_lib(&dir, "cpp_hooked", &[("cpp_hooked.cpp", CPP_SOURCE)], true);
-    let mut r = Registry::new();
-    for lib in [c, cpp] {
-        for t in load_library(&lib).expect("load") {
-            r.add(t);
-        }
-    }
-    r
+    let async_manifest = format!("kind: async\n{MANIFEST}");
+    registry_of(
+        test,
+        &[("c_hooked", MANIFEST, "c"), ("c_hooked_async", &async_manifest, "c"), ("cpp_hooked", MANIFEST, "cpp")],
+        &[("c_hooked", "c_hooked.c", C_SOURCE, false), ("cpp_hooked", "cpp_hooked.cpp", CPP_SOURCE, true)],
+    )
 }
 
 fn prints(m: &mut impl Control, skill: &str) -> Vec<String> {

@@ -7,7 +7,7 @@ mod common;
 use std::ffi::c_void;
 
 use common::*;
-use situate_cabi::{load_library, CResource};
+use situate_cabi::CResource;
 use situate_core::Value;
 use situate_manager::{Control, Manager, Registry, SkillSpec};
 
@@ -72,21 +72,11 @@ struct Counter {
 
 /// The two libraries, built in a directory of the test's own (tests run at once).
 fn registry(test: &str) -> Registry {
-    let dir = scratch(test);
-    for (prefix, lang) in [("c_counting", "c"), ("cpp_counting", "cpp")] {
-        let manifest = dir.join(format!("{prefix}.yaml"));
-        std::fs::write(&manifest, format!("name: {}\n{MANIFEST}", prefix.replacen('_', ".", 1))).unwrap();
-        gen(lang, &manifest, &dir);
-    }
-    let c = shared_lib(&dir, "c_counting", &[("c_counting.c", C_SOURCE)], false);
-    let cpp = shared_lib(&dir, "cpp_counting", &[("cpp_counting.cpp", CPP_SOURCE)], true);
-    let mut r = Registry::new();
-    for lib in [c, cpp] {
-        for t in load_library(&lib).expect("load") {
-            r.add(t);
-        }
-    }
-    r
+    registry_of(
+        test,
+        &[("c_counting", MANIFEST, "c"), ("cpp_counting", MANIFEST, "cpp")],
+        &[("c_counting", "c_counting.c", C_SOURCE, false), ("cpp_counting", "cpp_counting.cpp", CPP_SOURCE, true)],
+    )
 }
 
 #[test]

@@ -183,20 +183,8 @@ struct Fields {
 }
 
 fn resource(field: &Ident, ty: &Type, attr: &Attribute, errors: &mut Errors) -> Option<Resource> {
-    let mut name = field.unraw().to_string();
-    let mut ok = true;
-    for item in util::items(attr, RESOURCE_KEYS, &mut Vec::new(), errors) {
-        // The only key is `name`.
-        let r = item.value().and_then(|v| util::string(v, "`name`")).and_then(|s| util::check_name(&s, "`name`"));
-        match r {
-            Ok(s) => name = s,
-            Err(e) => {
-                errors.push(e);
-                ok = false;
-            }
-        }
-    }
-    ok.then(|| Resource { field: field.clone(), name, ty: ty.clone() })
+    let name = one_name(attr, RESOURCE_KEYS, "`name`", field.unraw().to_string(), errors)?;
+    Some(Resource { field: field.clone(), name, ty: ty.clone() })
 }
 
 fn skill_attrs(attrs: &[Attribute], errors: &mut Errors) -> SkillAttrs {
@@ -261,26 +249,31 @@ fn claims(value: &Expr, errors: &mut Errors) -> Vec<String> {
     }
 }
 
-fn port(field: &Ident, ty: &Type, attr: &Attribute, doc: TokenStream, errors: &mut Errors) -> Option<Port> {
-    let name = field.unraw().to_string();
-    let mut signal = name.clone();
-    let mut ok = true;
-    for item in util::items(attr, PORT_KEYS, &mut Vec::new(), errors) {
-        // The only key is `signal`.
-        let r = item.value().and_then(|v| util::string(v, "`signal`")).and_then(|s| util::check_name(&s, "`signal`"));
+/// The value of an attribute whose one key (`keys[0]`, `what` in messages) names something:
+/// `default` without it; `None` after an error (pushed).
+fn one_name(attr: &Attribute, keys: &[&str], what: &str, default: String, errors: &mut Errors) -> Option<String> {
+    let mut name = Some(default);
+    for item in util::items(attr, keys, &mut Vec::new(), errors) {
+        let r = item.value().and_then(|v| util::string(v, what)).and_then(|s| util::check_name(&s, what));
         match r {
-            Ok(s) => signal = s,
+            Ok(s) => name = name.map(|_| s),
             Err(e) => {
                 errors.push(e);
-                ok = false;
+                name = None;
             }
         }
     }
+    name
+}
+
+fn port(field: &Ident, ty: &Type, attr: &Attribute, doc: TokenStream, errors: &mut Errors) -> Option<Port> {
+    let name = field.unraw().to_string();
+    let signal = one_name(attr, PORT_KEYS, "`signal`", name.clone(), errors)?;
     let (inner, optional) = match util::option_inner(ty) {
         Some(t) => (t.clone(), true),
         None => (ty.clone(), false),
     };
-    ok.then_some(Port { field: field.clone(), name, signal, ty: inner, optional, doc })
+    Some(Port { field: field.clone(), name, signal, ty: inner, optional, doc })
 }
 
 fn param(field: &Ident, ty: &Type, attr: &Attribute, doc: TokenStream, errors: &mut Errors) -> Option<Param> {

@@ -58,6 +58,27 @@ pub fn shared_lib(dir: &Path, name: &str, sources: &[(&str, &str)], cpp: bool) -
     out
 }
 
+/// A registry of skill types built from source in the scratch folder of `test`: each type
+/// `(prefix, manifest after its name, "c" | "cpp")` has its header generated (its name: the
+/// prefix with its first `_` a `.`, `c_x` → `c.x`), then each library `(name, file, source,
+/// cpp)` is compiled and every type it exports registered.
+pub fn registry_of(test: &str, types: &[(&str, &str, &str)], libs: &[(&str, &str, &str, bool)]) -> Registry {
+    let dir = scratch(test);
+    for (prefix, manifest, lang) in types {
+        let path = dir.join(format!("{prefix}.yaml"));
+        std::fs::write(&path, format!("name: {}\n{manifest}", prefix.replacen('_', ".", 1))).expect("write manifest");
+        gen(lang, &path, &dir);
+    }
+    let mut r = Registry::new();
+    for (name, file, source, cpp) in libs {
+        let lib = shared_lib(&dir, name, &[(file, source)], *cpp);
+        for t in situate_cabi::load_library(&lib).expect("load") {
+            r.add(t);
+        }
+    }
+    r
+}
+
 /// Compiles and runs a program (C or C++), returning its standard output.
 pub fn run_program(dir: &Path, name: &str, source: &str, cpp: bool) -> String {
     let src = dir.join(if cpp { format!("{name}.cpp") } else { format!("{name}.c") });
