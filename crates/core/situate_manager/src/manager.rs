@@ -209,15 +209,16 @@ pub struct Manager {
     pool: Option<Arc<rayon::ThreadPool>>,
     slots: Vec<Slot>,
     insts: Vec<Inst>,
-    /// Each boxed: a spawned manager takes a body out while it runs (see
-    /// `spawned`), and a box moves as a pointer (moved by value, an `Exec`
+    /// Each boxed: a spawned manager takes a body out while it runs on a
+    /// pool, and the watchdog moves a stuck one out (see `spawned`); a box
+    /// moves as a pointer (moved by value, an `Exec`
     /// cost some 130 instructions per body run: copied out and back, an
     /// empty one made and dropped).
     #[allow(clippy::vec_box)]
     execs: Vec<Box<Exec>>,
     /// Empty bodies, put in the place of those taken out (`take_exec`) and
     /// kept again when they are put back. One is made at build, which is
-    /// all a serial cycle needs; a parallel batch makes the others it needs
+    /// all a body left behind needs; a parallel batch makes the others it needs
     /// the first time (the vector has room for one a body from the start),
     /// so a steady cycle allocates nothing.
     #[allow(clippy::vec_box)]

@@ -129,7 +129,7 @@ impl Exec {
             }
         }
         self.cx.set(cycle, time_s);
-        let mark = clock.map(|c| c.enter(start.coarse()));
+        let mark = clock.map(|c| c.enter(start.coarse(), false));
         let inputs = match input {
             Some(input) => std::slice::from_ref(input),
             None => &self.inputs[..],
@@ -139,7 +139,8 @@ impl Exec {
             None => self.result = Err("the body is not here (it runs on its own thread)".into()),
         }
         if let (Some(clock), Some(mark)) = (clock, mark) {
-            clock.leave(mark);
+            // Left behind or not, a pool's thread finds out under the lock (`spawned`).
+            let _ = clock.leave(mark);
         }
         let end = start.again();
         self.elapsed_ns = end.since(start);
@@ -207,7 +208,7 @@ impl Stamp {
     }
 
     /// This time on the coarse clock's scale (for the watchdog's marks).
-    fn coarse(self) -> u64 {
+    pub fn coarse(self) -> u64 {
         match self {
             Stamp::Coarse(ns) => ns,
             Stamp::Precise(_) => coarse_ns(),
@@ -253,11 +254,16 @@ pub(crate) fn coarse_tick_ns() -> u64 {
 
 /// When the body of one instance started running, for the watchdog.
 ///
-/// Holds the [`coarse_ns`] time it started plus one while a body runs, and 0
-/// when none does. The cycle's thread writes it around every in-cycle body
-/// (two relaxed stores); the watchdog only reads it, and clears it when it
-/// leaves a stuck body behind. A body's own `leave` clears only its own
-/// mark, so a late return never clears the mark of a fresh body.
+/// Holds a *mark* while a body runs, and 0 when none does: the [`coarse_ns`]
+/// time it started plus one, shifted left by one, and in the low bit whether
+/// the thread running it holds the spawned manager's lock meanwhile
+/// ([`BodyClock::held`]; see `manager::spawned`). The running thread sets it
+/// before the body runs (a release store: what that thread wrote before is
+/// seen by a watchdog that takes the mark) and takes it back after (a
+/// compare-and-swap). The watchdog takes a stuck body's mark
+/// ([`BodyClock::forget`]) by a compare-and-swap too, so exactly one of them
+/// has it: a body that returns finds whether it was left behind, and a late
+/// return never clears the mark of a fresh body.
 ///
 /// It also counts the runs left behind that have not returned yet: a body
 /// left behind still holds a thread (and, if it computes, a core), so no
@@ -272,17 +278,25 @@ impl BodyClock {
         BodyClock { since: AtomicU64::new(0), behind: AtomicU32::new(0) }
     }
 
-    fn enter(&self, start_coarse_ns: u64) -> u64 {
-        let mark = start_coarse_ns + 1;
-        self.since.store(mark, Ordering::Relaxed);
+    /// Marks a body as started at `start_coarse_ns`; `held`: its thread holds
+    /// the manager's lock while it runs.
+    #[inline(always)]
+    pub fn enter(&self, start_coarse_ns: u64, held: bool) -> u64 {
+        let mark = ((start_coarse_ns + 1) << 1) | u64::from(held);
+        self.since.store(mark, Ordering::Release);
         mark
     }
 
-    fn leave(&self, mark: u64) {
-        if self.since.compare_exchange(mark, 0, Ordering::AcqRel, Ordering::Acquire).is_err() {
-            // Not its mark any more: the watchdog left this run behind, and it has now returned.
-            let _ = self.behind.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+    /// The body with `mark` returned: whether it is still this run's (`false`:
+    /// the watchdog left it behind meanwhile).
+    #[inline(always)]
+    pub fn leave(&self, mark: u64) -> bool {
+        if self.since.compare_exchange(mark, 0, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+            return true;
         }
+        // Not its mark any more: the watchdog left this run behind, and it has now returned.
+        let _ = self.behind.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+        false
     }
 
     /// The mark of the body running now (0: none).
@@ -290,21 +304,35 @@ impl BodyClock {
         self.since.load(Ordering::Relaxed)
     }
 
+    /// When the body with `mark` started, on the coarse clock.
+    pub fn started_ns(mark: u64) -> u64 {
+        (mark >> 1).saturating_sub(1)
+    }
+
+    /// Whether the thread running the body with `mark` holds the manager's
+    /// lock while it runs: the watchdog that takes the mark has the lock.
+    pub fn held(mark: u64) -> bool {
+        mark & 1 == 1
+    }
+
     /// How long the body with `mark` has been running, to within
     /// [`coarse_tick_ns`] either way.
     pub fn running_for(&self, mark: u64) -> Duration {
-        Duration::from_nanos((coarse_ns() + 1).saturating_sub(mark))
+        Duration::from_nanos(coarse_ns().saturating_sub(Self::started_ns(mark)))
     }
 
-    /// The watchdog left the body with `mark` behind: it no longer counts as
-    /// the running body, but as one left behind until it returns.
-    pub fn forget(&self, mark: u64) {
+    /// Leaves the body with `mark` behind: it no longer counts as the
+    /// running body, but as one left behind until it returns. `false` when it
+    /// returned just now (it was not left behind).
+    pub fn forget(&self, mark: u64) -> bool {
         // Counted before the mark is cleared: a return that finds its mark gone finds the count.
         self.behind.fetch_add(1, Ordering::AcqRel);
         if self.since.compare_exchange(mark, 0, Ordering::AcqRel, Ordering::Acquire).is_err() {
             // It returned just now: nothing left behind.
             let _ = self.behind.fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
+            return false;
         }
+        true
     }
 
     /// How many runs left behind have not returned yet.

@@ -18,7 +18,7 @@ use crate::runner::{Exec, Stamp};
 pub(super) struct InPlace<'m>(pub &'m mut Manager);
 
 impl Bodies for InPlace<'_> {
-    const LENDS: bool = true;
+    const IN_PLACE: bool = true;
 
     #[inline(always)]
     fn manager(&mut self) -> Option<&mut Manager> {

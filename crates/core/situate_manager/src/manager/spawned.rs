@@ -2,22 +2,31 @@
 //! a watchdog that leaves a stuck body behind so the cycle goes on.
 //!
 //! The manager sits behind one lock shared by its *cycle thread* and the
-//! watchdog. The cycle thread holds the lock for everything except while a
-//! body runs: it takes the body out (`Exec`, the body with its buffers),
-//! lets go of the lock, runs it, takes the lock back and returns it. Each
+//! watchdog. The cycle thread holds it while it cycles, and lets go of it
+//! only to wait (for a request, or for the next cycle to be due). Each
 //! body's [`BodyClock`] shows when it started. When one has been running
 //! past its deadline (`budget_ms` of a sync cskill; `liveness_ms` of a
 //! dskill or async cskill run in the cycle under the simulated clock), the
-//! watchdog takes the lock — free, since the body runs without it — faults
-//! the skill, bumps the manager's `generation` and starts a new cycle
-//! thread. The stuck thread is left behind with the body: should the body
-//! ever return, the thread sees that it is no longer the cycle, drops
-//! what it holds and ends. The cycle it was in is abandoned where it
-//! stood (no commands for the devices that cycle); the next one starts at
-//! once. See docs/decisions/0005-budgets-and-stuck-bodies.md.
+//! watchdog takes the body's mark from its clock, and with it the lock,
+//! which the stuck thread still holds: the thread that runs a body in the
+//! cycle forgets its guard first, and makes it again only if it takes the
+//! mark back itself when the body returns (a compare-and-swap each; exactly
+//! one of the two wins). The watchdog faults the skill, moves the body out
+//! of the manager (to be dropped by its thread, never while it runs), puts
+//! the inputs lent to it back in their slots as copies, bumps the manager's
+//! `generation` and starts a new cycle thread. The stuck thread is left
+//! behind with the body: should the body ever return, the thread finds its
+//! mark gone, takes its body back to drop it, and ends. The cycle it was in
+//! is abandoned where it stood (no commands for the devices that cycle);
+//! the next one starts at once. Bodies run on a pool (a parallel batch)
+//! run with the lock let go, as before: the watchdog takes the lock, and
+//! the pool's thread sees the new generation when it returns. See
+//! docs/decisions/0005-budgets-and-stuck-bodies.md.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
+
+use parking_lot::Mutex as Lock;
 use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
 
@@ -25,6 +34,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 
 use super::executor::run_parallel;
 use super::pacing::raise_thread_priority;
+use super::slots::Slot;
 use super::walk::{self, Bodies};
 use super::Manager;
 use crate::config::ClockKind;
@@ -33,12 +43,24 @@ use crate::handle::Envelope;
 use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
 use crate::starved::{self, Starvation, Suspect};
 
-type Guard<'a> = MutexGuard<'a, Option<Manager>>;
+type Guard<'a> = parking_lot::MutexGuard<'a, Option<Manager>>;
+
+/// What a body left behind on a thread that held the lock may still be
+/// using (see [`Manager::leave_behind_held`]).
+struct LeftBehind {
+    #[allow(dead_code, reason = "held until the body returns, then dropped")]
+    exec: Box<Exec>,
+    #[allow(dead_code, reason = "held until the body returns, then dropped")]
+    slots: Vec<Slot>,
+}
 
 /// What the cycle threads and the watchdog share.
 struct Core {
-    /// `None` once the manager has been handed back (shutdown).
-    manager: Mutex<Option<Manager>>,
+    /// `None` once the manager has been handed back (shutdown). A
+    /// `parking_lot` lock: held by a cycle thread while a body runs, it is
+    /// handed to the watchdog if the body gets stuck (see the module's
+    /// documentation), which `std`'s lock cannot do.
+    manager: Lock<Option<Manager>>,
     requests: Receiver<Envelope>,
     /// Where the manager goes when the last cycle thread ends.
     done: Mutex<Option<Sender<Manager>>>,
@@ -48,6 +70,12 @@ struct Core {
     robot: String,
     clocks: Arc<[BodyClock]>,
     pool: Option<Arc<rayon::ThreadPool>>,
+    /// The bodies left behind on a cycle thread that held the lock, by
+    /// instance and mark (one instance may have two: one that has returned
+    /// and not been dropped yet, and a fresh one stuck since): each dropped
+    /// by its thread once the body returns, never before (the body runs in
+    /// it). The stuck thread holds the core, so they outlive it.
+    left_behind: Mutex<Vec<(usize, u64, LeftBehind)>>,
     /// The reply to a `Step` being run: the watchdog answers it when it
     /// leaves the stepping thread behind.
     step_reply: Mutex<Option<Sender<Result<Reply, ControlError>>>>,
@@ -78,9 +106,32 @@ impl Core {
         self.deferred.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    /// Drops the box of body `i`'s run `mark` once the watchdog has left it
+    /// (see `OnThreads::run`).
+    #[cold]
+    fn drop_left_behind(&self, i: usize, mark: u64) {
+        let until = Instant::now() + Duration::from_secs(10);
+        loop {
+            let mut left = self.left_behind.lock().unwrap_or_else(|p| p.into_inner());
+            if let Some(at) = left.iter().position(|&(j, m, _)| (j, m) == (i, mark)) {
+                let (_, _, body) = left.swap_remove(at);
+                drop(left);
+                // Its drop may block: with no lock held.
+                drop(body);
+                return;
+            }
+            drop(left);
+            if Instant::now() > until {
+                // Never left (the watchdog ended first): nothing to drop.
+                return;
+            }
+            thread::sleep(Duration::from_millis(1));
+        }
+    }
+
     #[inline(always)]
     fn lock(&self) -> Guard<'_> {
-        self.manager.lock().unwrap_or_else(|p| p.into_inner())
+        self.manager.lock()
     }
 
     /// Hands the manager back to whoever joins, and ends the watchdog.
@@ -138,7 +189,8 @@ impl Drop for PanicGuard<'_> {
         if thread::panicking() {
             // A bug in the manager itself (bodies' panics are caught): never silent.
             tracing::error!(robot = %self.0.robot, "the skill manager's cycle thread panicked: the robot is stopped");
-            if let Some(m) = self.0.manager.lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+            // Bounded: never a second hang on top of the panic.
+            if let Some(m) = self.0.manager.try_lock_for(Duration::from_secs(1)).as_ref().and_then(|g| g.as_ref()) {
                 m.bus.report(crate::control::Event::WorkerFailed {
                     thread: thread::current().name().unwrap_or("cycle").to_string(),
                     cause: "panicked (see the log)".into(),
@@ -152,6 +204,30 @@ impl Drop for PanicGuard<'_> {
 }
 
 impl Manager {
+    /// Leaves behind body `i`, stuck on a cycle thread that holds the lock
+    /// (the caller has it now). Out of the manager, for that thread to drop
+    /// once the body returns (`Core::left_behind`): its box, an empty one in
+    /// its place, and the slots as they are, a copy of them in their place
+    /// (a reference count a value), since the body may be reading its input
+    /// in its slot, which the next cycle writes. The inputs lent to it are
+    /// put back in their slots as copies (the body may still read them).
+    fn leave_behind_held(&mut self, i: usize) -> LeftBehind {
+        let slots = self.slots.clone();
+        let old_slots = std::mem::replace(&mut self.slots, slots);
+        let def = &self.graph.instances[i];
+        for (port, input) in def.inputs.iter().zip(&self.execs[i].inputs) {
+            // A lent input's slot is empty (a gathered copy's is not, nor a record's leaves).
+            if let (Some(value), &[leaf]) = (input, &port.leaves[..]) {
+                let slot = &mut self.slots[leaf];
+                if slot.value.is_none() && !matches!(port.ty, situate_core::SignalType::Record(_)) {
+                    slot.value = Some(value.clone());
+                }
+            }
+        }
+        let empty = self.spare_execs.pop().unwrap_or_default();
+        LeftBehind { exec: std::mem::replace(&mut self.execs[i], empty), slots: old_slots }
+    }
+
     /// Takes body `i` out to run it with the lock let go, an empty one in
     /// its place (from the spares: one is made only when none is left, the
     /// first time a parallel batch takes several bodies out, or after a body
@@ -203,9 +279,10 @@ impl Manager {
             clocks: Arc::clone(&self.clocks),
             pool: self.pool.clone(),
             step_reply: Mutex::new(None),
+            left_behind: Mutex::new(Vec::new()),
             deferred: Mutex::new(Deferred::default()),
             starved: self.starved.clone(),
-            manager: Mutex::new(Some(self)),
+            manager: Lock::new(Some(self)),
         });
         start_cycle_thread(&core, 0);
         let watch = Arc::clone(&core);
@@ -526,9 +603,10 @@ fn cycle<'a>(core: &'a Core, g: Guard<'a>, generation: u64) -> Option<Guard<'a>>
 /// thread was left behind meanwhile (its late result is then dropped with
 /// it).
 ///
-/// A body gets copies of its inputs (a reference count each), not the
-/// slots' values lent or read in place: a body left behind holds its
-/// copies, and its inputs' slots keep their values.
+/// A body on the cycle thread runs where it is, in the manager, with the
+/// lock held (see the module's documentation); its inputs are lent, never
+/// read in their slots, which the next cycle writes while a body left
+/// behind may still read them.
 struct OnThreads<'a> {
     core: &'a Core,
     /// `Some` but while a body runs.
@@ -537,25 +615,44 @@ struct OnThreads<'a> {
 }
 
 impl Bodies for OnThreads<'_> {
-    const LENDS: bool = false;
+    const IN_PLACE: bool = true;
 
     #[inline(always)]
     fn manager(&mut self) -> Option<&mut Manager> {
         current(self.g.as_mut()?, self.generation)
     }
 
+    /// The lock is held throughout, by whichever of this thread and the
+    /// watchdog holds the body's mark: the guard is forgotten before the
+    /// body runs and made again only when this thread takes its mark back.
     #[inline(always)]
-    fn run(&mut self, i: usize, _in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
+    fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
+        let core = self.core;
         let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
-        let mut exec = m.take_exec(i);
-        self.g = None;
-        let end = exec.run(cycle, time_s, start, Some(&self.core.clocks[i]));
-        // Its copies of the inputs let go of at once, outside the lock.
-        exec.drop_copies();
-        self.g = Some(self.core.lock());
-        self.manager()?.put_exec(i, exec);
-        Some(end)
+        let input: Option<*const Option<situate_core::Value>> = in_place.map(|leaf| &m.slots[leaf].value as *const _);
+        let exec: *mut Exec = &mut *m.execs[i];
+        let clock = &core.clocks[i];
+        std::mem::forget(self.g.take());
+        // Released: what this thread wrote to the manager is seen by a watchdog that takes the mark.
+        let mark = clock.enter(start.coarse(), true);
+        // SAFETY: `exec` is the body's box in the manager, and `input` a value in the manager's
+        // slots, which this thread owns while it holds the mark. A watchdog that takes the mark
+        // meanwhile only reads the box's `inputs` (which the body only reads), and moves the
+        // box and the slots' vector, not what they point to, to `left_behind`, never dropped
+        // but by this thread (below), and never written again.
+        let end = unsafe { (*exec).run_on(input.map(|p| &*p), cycle, time_s, start, None) };
+        if clock.leave(mark) {
+            // SAFETY: this thread held the lock when it forgot its guard above, and the watchdog
+            // did not take the mark (the only way the lock could have moved): it still holds it.
+            self.g = Some(unsafe { core.manager.make_guard_unchecked() });
+            return Some(end);
+        }
+        // Left behind: the watchdog has the lock, and moves the body's box out of the manager
+        // for this thread to drop, now that the body returned (a moment's wait if it returned
+        // as the watchdog took the mark).
+        core.drop_left_behind(i, mark);
+        None
     }
 
     /// Batch by batch; each body goes back to the manager as soon as it
@@ -616,7 +713,7 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
                 // On the simulated clock the time its thread waited for a CPU does not count
                 // (`crate::starved`).
                 (Some(s), Some(reading)) => {
-                    let waited = s.waited(&reading, mark - 1);
+                    let waited = s.waited(&reading, BodyClock::started_ns(mark));
                     let ns = |d: Duration| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
                     starved::judge(&mut suspects[i], mark, ns(wall), waited, reading, ns(limit))
                         .map(Duration::from_nanos)
@@ -630,15 +727,40 @@ fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
         if stale.is_empty() {
             continue;
         }
-        let mut g = core.lock();
+        // A body run by a thread that holds the lock (the cycle thread, one body at a time): its
+        // mark taken, the lock is the watchdog's (see `OnThreads::run`).
+        let held = stale.iter().position(|&(_, mark, _)| BodyClock::held(mark));
+        let mut g = match held {
+            Some(k) => {
+                let (i, mark, _) = stale[k];
+                if !core.clocks[i].forget(mark) {
+                    // It returned just now.
+                    continue;
+                }
+                // SAFETY: the thread that runs the body held the lock and forgot its guard; it
+                // makes it again only if it takes the mark back, which the watchdog now has.
+                unsafe { core.manager.make_guard_unchecked() }
+            }
+            // Bodies run with the lock let go (a pool's). Never a wait without bound: the cycle
+            // thread may be running a body holding it meanwhile, stuck or not.
+            None => match core.manager.try_lock_for(tick) {
+                Some(g) => g,
+                None => continue,
+            },
+        };
         let Some(m) = g.as_mut() else { return };
         let mut left = false;
-        for &(i, mark, ran) in &stale {
-            // Still in that same run: its thread is stuck in the body.
+        for (k, &(i, mark, ran)) in stale.iter().enumerate() {
             let clock = &core.clocks[i];
-            if clock.mark() == mark {
+            if Some(k) == held {
                 suspects[i] = None;
-                clock.forget(mark);
+                let body = m.leave_behind_held(i);
+                core.left_behind.lock().unwrap_or_else(|p| p.into_inner()).push((i, mark, body));
+                m.abandon(i, ran);
+                left = true;
+            } else if !BodyClock::held(mark) && clock.mark() == mark && clock.forget(mark) {
+                // Still in that same run: its thread is stuck in the body.
+                suspects[i] = None;
                 m.abandon(i, ran);
                 left = true;
             }

@@ -1,7 +1,7 @@
 //! One cycle's walk over the plan, written once for both ways a manager
 //! runs: [`Manager::cycle`] on the caller's thread, and the spawned
-//! manager's cycle thread (`spawned`), which lets go of the manager's lock
-//! while each body runs so that a watchdog can leave a stuck one behind.
+//! manager's cycle thread (`spawned`), where a watchdog can leave a stuck
+//! body behind and start the cycle again on a fresh thread.
 //!
 //! What differs between the two is only how a body runs, behind
 //! [`Bodies`]; the walk — which steps are ready, how their inputs are
@@ -17,18 +17,20 @@ use crate::runner::Stamp;
 
 /// How the bodies of a cycle run.
 pub(super) trait Bodies {
-    /// Whether a body may read its inputs where they are: lent from their
-    /// slots or read in place. Only where no body can be left behind still
-    /// holding them; otherwise each body gets copies (a reference count
-    /// each), dropped as soon as it returns.
-    const LENDS: bool;
+    /// Whether a body with one plain input may read it in its slot. Only
+    /// where no body can be left behind: the slot is the manager's, written
+    /// again by the next cycle while a body left behind may still read it.
+    /// Otherwise it is lent, as the inputs of every step whose inputs are
+    /// all plain: moved into the body's buffers for the run (which the body
+    /// keeps if it is left behind) and back after.
+    const IN_PLACE: bool;
 
     /// The manager; `None` once this thread is no longer its cycle (a body
     /// it ran was left behind).
     fn manager(&mut self) -> Option<&mut Manager>;
 
     /// Runs instance `i`'s body once on its gathered inputs, or on the
-    /// value in slot `in_place` (only when [`Bodies::LENDS`]), timed from
+    /// value in slot `in_place` (only when [`Bodies::IN_PLACE`]), timed from
     /// `start`: the time it ended, on `start`'s clock, or `None` when this
     /// thread was left behind while it ran.
     fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp>;
@@ -93,8 +95,8 @@ pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
 /// The plan's steps `steps` one after the other: one level, or, with no
 /// pool, all of them in one pass (the steps are in topological order, level
 /// after level). Each step in order has its inputs checked and gathered (a
-/// plain step's lent, or read in place from its one slot, when the bodies
-/// [lend](Bodies::LENDS)), runs at once, and has its outputs committed at
+/// plain step's lent, or read in place from its one slot where the bodies
+/// [may](Bodies::IN_PLACE)), runs at once, and has its outputs committed at
 /// once. The same as running each level whole and committing after it: no
 /// step of a level reads what another one of it writes (it would be a level
 /// later), arbitration does not depend on the order of commits, and a lent
@@ -131,13 +133,13 @@ fn run_steps<B: Bodies>(
         };
         // One plain input, present: the body reads it where it is.
         let in_place = match step.one_input {
-            Some(leaf) if B::LENDS => {
+            Some(leaf) if B::IN_PLACE => {
                 let slot = &m.slots[leaf];
                 slot.value.is_some() && (!fresh || slot.stamp == m.cycle)
             }
             _ => false,
         };
-        let lent = B::LENDS && step.plain_ins && !in_place;
+        let lent = step.plain_ins && !in_place;
         let ready_now =
             in_place || if lent { m.lend_inputs(plan, step, fresh) } else { m.gather_step(plan, step, fresh) };
         if !ready_now {
@@ -148,8 +150,7 @@ fn run_steps<B: Bodies>(
         let m = b.manager()?;
         if lent {
             m.return_lent(plan, step);
-        } else if B::LENDS && !in_place {
-            // (Bodies that do not lend drop their copies themselves.)
+        } else if !in_place {
             m.execs[step.inst].drop_copies();
         }
         let ok = m.finish_step(plan, k);
