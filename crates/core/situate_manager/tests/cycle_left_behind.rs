@@ -106,3 +106,45 @@ fn inputs_lent_to_a_body_left_behind_stay_in_their_slots() {
     handle.request(Request::Shutdown).unwrap();
     assert!(join.join_timeout(BOUND).is_ok());
 }
+
+#[test]
+fn a_body_stuck_in_a_parallel_batch_is_left_behind_and_the_cycle_goes_on() {
+    let gate = Gate::default();
+    let mut reg = Registry::new();
+    let g = gate.clone();
+    // Long enough to be worth the pool: the two run as one batch, with the lock let go.
+    let d = with_param(decl("spinner", SkillKind::Sync, &[], &[("out", "f64")]), "mode", 0.0, 0.0, 1.0);
+    reg.add(fn_type(d, move |io, params| {
+        let until = Instant::now() + Duration::from_micros(200);
+        while Instant::now() < until {
+            std::hint::spin_loop();
+        }
+        if params[0].as_f64() == Some(1.0) {
+            g.pass();
+        }
+        io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+        Ok(())
+    }));
+    let spec = RobotSpec::new("batch")
+        .clock(ClockKind::Wall)
+        .period_s(0.005)
+        .executor(situate_manager::ExecutorKind::Parallel, Some(2))
+        .skill(skill("a", "spinner").remap("out", "ya").budget_ms(100.0))
+        .skill(skill("b", "spinner").remap("out", "yb"));
+    let m = build(&spec, &reg);
+    assert_eq!(m.executor(), situate_manager::ExecutorKind::Parallel);
+    let events = m.events();
+    let (mut handle, join) = m.spawn(true);
+    until("a few cycles", || handle.query("yb").unwrap().cycle > 5);
+    handle.set_param("a", "mode", Value::F64(1.0)).unwrap();
+    assert!(fault_of(&events, "a").contains("left behind"));
+    let at = handle.query("yb").unwrap().cycle;
+    until("cycles after the fault", || handle.query("yb").unwrap().cycle > at + 10);
+    handle.set_param("a", "mode", Value::F64(0.0)).unwrap();
+    gate.open();
+    until("the skill can be activated again", || handle.activate(&["a"]).is_ok());
+    let now = handle.stats().unwrap().cycle;
+    until("the fresh body's output", || handle.query("ya").unwrap().cycle > now);
+    handle.request(Request::Shutdown).unwrap();
+    assert!(join.join_timeout(BOUND).is_ok());
+}
