@@ -79,6 +79,10 @@ HINT_DOOR_AHEAD_M, HINT_DOOR_ASIDE_M = 1.0, 0.75
 OPENED_ON_WALL_M = 0.4
 #: An end wall of the lobby is taken from the sonars only nearer than this (their reach is 4 m), m.
 END_WALL_SEEN_M = 3.6
+#: A sonar that heard no echo reads its reach, m; each reads the nearest echo in its cone, this
+#: wide (the simulator's sonars), deg.
+NO_ECHO_READ_M = 4.0
+SONAR_CONE_DEG = 15.0
 
 
 def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
@@ -98,6 +102,29 @@ def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
         return False
     expect = r / math.cos(math.radians(15))
     return all(abs(ranges[(i + k) % SONARS] - expect) < 0.3 for k in (-1, 1))
+
+
+def wall_wider_than_people_at(ranges: Sequence[float], i: int) -> bool:
+    """Whether sonar ``i`` reads a wall across its axis wider than people standing together.
+
+    Nearer than `END_WALL_SEEN_M`, and a sonar 15° off the axis and one 30° off (either side)
+    read that wall too: each its cone's nearest echo from a wall square to the axis, the reading
+    over the cosine of its bearing less half a cone (`SONAR_CONE_DEG`), within a tenth (a wall
+    up to 10° off square). Someone standing (or two side by side) 0.7 to 2.5 m off fills
+    sonar ``i``'s cone and the edges of its neighbours', and reads as a short wall square to
+    the axis (`seen_wall_ends_at` takes it); the sonars 30° off read past them. A wall with a
+    way open on one side of the axis (a car's door, a corridor's mouth) still reads on the other.
+    """
+    r = ranges[i]
+    if r >= END_WALL_SEEN_M:
+        return False
+
+    def reads_wall(k: int) -> bool:
+        nearest = math.radians(max(0.0, abs(k) * 360 / SONARS - SONAR_CONE_DEG / 2))
+        expect = min(r / math.cos(nearest), NO_ECHO_READ_M)
+        return abs(ranges[(i + k) % SONARS] - expect) < 0.1 * expect + 0.03
+
+    return all(reads_wall(-n) or reads_wall(n) for n in (1, 2))
 
 
 @dataclass

@@ -16,7 +16,13 @@ from typing import Any
 import situate
 from courier.geometry import SONARS, Pose, bearing_of, wrap
 from courier.link import PhaseFailed
-from courier.mission import NORMAL, OPENED_ON_WALL_M, Mission, seen_wall_ends_at
+from courier.mission import (
+    NORMAL,
+    OPENED_ON_WALL_M,
+    Mission,
+    seen_wall_ends_at,
+    wall_wider_than_people_at,
+)
 from courier.sequenced.routes import RouteSequencer, way_made_expr
 
 #: The robot pushes the call button from this far from it (its centre from the barcode), m.
@@ -287,14 +293,16 @@ class Lobby(RouteSequencer):
         # other way, not only after the robot came to it and turned back there.
         ranges = await self.sonar()
         o = await self.odom()
-        # (Round three walls, the one behind is towards the entry.)
+        # (Round three walls, the one behind is towards the entry.) Someone standing in the
+        # lobby, taken for an end wall, would bound it short of the real one (a car opening
+        # there is then beyond the lobby) and read as a way opening in it when they walk off.
         for i in (0,) if legs else (0, SONARS // 2):
-            if seen_wall_ends_at(ranges, i):
+            if seen_wall_ends_at(ranges, i) and wall_wider_than_people_at(ranges, i):
                 toward = o.heading_of(bearing_of(i))
                 r = ranges[i]
                 walls.append((*o.ahead(r, toward), toward))
         if self.debug:
-            looks = [round(ranges[k % SONARS], 2) for k in (-1, 0, 1, 11, 12, 13)]
+            looks = [round(ranges[k % SONARS], 2) for k in (-2, -1, 0, 1, 2, 10, 11, 12, 13, 14)]
             await self.say(f"      walls known: {len(walls)} (sonars {looks})")
         # What else bounds the lobby (the entry's wall, or how deep the route came in): a
         # way seen open beyond it is no car's door.
@@ -354,11 +362,16 @@ class Lobby(RouteSequencer):
                 # The wall ahead, unless it is the entry's (the way out of the lobby): that
                 # only bounds it.
                 if got == 2:
-                    ahead = (await self.sonar())[0]
-                    end = (*o.ahead(ahead), o.theta)
-                    if not legs or legs[leg][2]:
-                        walls.append(end)
-                    bounds.append(end)
+                    # (Someone standing in the way is no wall: the patrol turns back there
+                    # all the same.)
+                    ahead = await self.sonar()
+                    end = (*o.ahead(ahead[0]), o.theta)
+                    if wall_wider_than_people_at(ahead, 0):
+                        if not legs or legs[leg][2]:
+                            walls.append(end)
+                        bounds.append(end)
+                    elif self.debug:
+                        await self.say(f"      no wall ahead but someone: {ahead[-2:] + ahead[:3]}")
                 if legs:
                     leg = (leg + 1) % len(legs)
                     await self.say("    end of the lobby's wall: along the next one")
