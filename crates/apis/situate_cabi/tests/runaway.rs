@@ -1,14 +1,35 @@
 //! The C and C++ runaway examples, built with CMake through the situate
 //! package, agree bit for bit with a Rust reference over 1,000 cycles of
-//! varying sonar input inside a real manager.
+//! varying sonar input inside a real manager; switched off, each says how
+//! many cycles it ran away since it was switched on (their lifecycle hooks).
 
 mod common;
 
-use std::sync::{Arc, Mutex};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use common::*;
 use situate_core::{ParamSpec, ParamType, PortSpec, SkillDecl, SkillKind, Value};
-use situate_manager::{Registry, SkillSpec};
+use situate_manager::{Control, Registry, SkillSpec};
+
+/// The two examples' libraries, built once for this test binary (its tests run at once).
+fn libraries() -> &'static [PathBuf; 2] {
+    static LIBRARIES: OnceLock<[PathBuf; 2]> = OnceLock::new();
+    LIBRARIES
+        .get_or_init(|| [cmake_example("c", "runaway", "c_runaway"), cmake_example("cpp", "runaway", "cpp_runaway")])
+}
+
+/// A registry with the C and C++ runaways and `test.sonar` writing [`sonar_at`] each cycle.
+fn registry() -> Registry {
+    let mut registry = Registry::new();
+    for lib in libraries() {
+        for t in situate_cabi::load_library(lib).expect("load") {
+            registry.add(t);
+        }
+    }
+    registry.add(source("test.sonar", "f32[24]", "sonar.range", |c| Value::F32s(Arc::from(&sonar_at(c)[..]))));
+    registry
+}
 
 /// The runaway algorithm every language implements (see examples/*/runaway).
 fn reference(range: &[f32], safe_distance: f64) -> Option<(f64, f64)> {
@@ -68,19 +89,11 @@ fn bits(v: &Option<Value>) -> Option<(u64, u64)> {
 
 #[test]
 fn c_and_cpp_runaway_equal_the_rust_reference_over_1000_cycles() {
-    let c_lib = cmake_example("c", "runaway", "c_runaway");
-    let cpp_lib = cmake_example("cpp", "runaway", "cpp_runaway");
-    let mut registry = Registry::new();
-    for lib in [&c_lib, &cpp_lib] {
-        for t in situate_cabi::load_library(lib).expect("load") {
-            registry.add(t);
-        }
-    }
+    let mut registry = registry();
     let c_decl = registry.get("c.runaway").expect("c.runaway").decl.clone();
     assert_eq!(c_decl.priority, 50);
     assert_eq!(c_decl.params[0].expectation(), "a number in [0.1, 3.0]");
     assert!(registry.get("cpp.runaway").is_some());
-    registry.add(source("test.sonar", "f32[24]", "sonar.range", |c| Value::F32s(Arc::from(&sonar_at(c)[..]))));
     registry.add(rust_runaway());
     let rows: Log<Row> = Arc::new(Mutex::new(Vec::new()));
     let mut d = SkillDecl::new("test.check", SkillKind::Sync);
@@ -113,4 +126,33 @@ fn c_and_cpp_runaway_equal_the_rust_reference_over_1000_cycles() {
         wrote += usize::from(expected.is_some());
     }
     assert!(wrote > 100 && wrote < 900, "the input should exercise both branches: {wrote} of 1000 wrote");
+}
+
+#[test]
+fn c_and_cpp_runaway_say_when_switched_off_how_long_they_ran_away_since_switched_on() {
+    let safe = Value::F64(0.8);
+    let spec = simulated("runaway_hooks")
+        .skill(SkillSpec::new("sonar", "test.sonar"))
+        .skill(SkillSpec::new("c", "c.runaway").remap("drive", "drive_c").param("safe_distance", safe.clone()))
+        .skill(SkillSpec::new("cpp", "cpp.runaway").remap("drive", "drive_cpp").param("safe_distance", safe));
+    let mut m = build(&spec, &registry());
+    // Twice: run, switch off (the count since the switch on is said), switch on again (counted
+    // afresh: the second count is not the sum of both).
+    let mut last = 0; // the last cycle run
+    for (round, cycles) in [(1, 300), (2, 200)] {
+        m.step(cycles).unwrap();
+        let ran = (last + 1..=last + cycles).filter(|&c| reference(&sonar_at(c), 0.8).is_some()).count();
+        assert!(ran > 10 && ran < cycles as usize - 10, "round {round}: the input should exercise both branches");
+        m.deactivate(&["c", "cpp"]).unwrap();
+        m.step(1).unwrap();
+        last += cycles + 1;
+        for skill in ["c", "cpp"] {
+            let info = m.skill(skill).unwrap();
+            assert!(!info.active && info.faulted.is_none(), "round {round}, {skill}: {info:?}");
+            let said = info.prints.last().map(|(_, line)| line.clone());
+            let expected = format!("switched off after running away {ran} cycles");
+            assert_eq!(said.as_deref(), Some(expected.as_str()), "round {round}, {skill}: {:?}", info.prints);
+        }
+        m.activate(&["c", "cpp"]).unwrap();
+    }
 }
