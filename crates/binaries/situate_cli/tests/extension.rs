@@ -196,12 +196,15 @@ fn program() -> &'static Path {
 }
 
 fn my_situate(args: &[&str]) -> std::process::Output {
-    let out = Command::new(program())
-        .args(args)
-        .current_dir(example())
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("my-situate runs");
+    my_situate_with(args, |_| ())
+}
+
+/// [`my_situate`] with more settings of the command (its environment).
+fn my_situate_with(args: &[&str], with: impl FnOnce(&mut Command)) -> std::process::Output {
+    let mut command = Command::new(program());
+    command.args(args).current_dir(example()).env_remove("RUST_LOG").env_remove("ESTOP_LINE");
+    with(&mut command);
+    let out = command.output().expect("my-situate runs");
     assert_no_panic(&out);
     out
 }
@@ -240,6 +243,51 @@ fn the_example_program_lists_checks_and_runs_its_own_types() {
     }
     let prints = skill("brake")["prints"].to_string();
     assert!(prints.contains("braking"), "{run}");
+}
+
+#[test]
+fn the_example_programs_emergency_stop_holds_the_robot_still_while_pressed() {
+    // The e-stop line the program follows (`ESTOP_LINE`): a file that reads `0` while released,
+    // read as the program starts. A bounded run on the simulated clock: brake (given the program's
+    // e-stop as a resource) wins the drive in every cycle with a sonar reading (all but the first).
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let line = dir.path().join("value");
+    let run = |state: Option<&str>| {
+        match state {
+            Some(state) => std::fs::write(&line, state).expect("the line is written"),
+            None => {
+                let _ = std::fs::remove_file(&line); // absent, as after a first run without one
+            }
+        }
+        let args = ["run", "robot.yaml", "--no-link", "--cycles", "20", "--clock", "simulated", "--json"];
+        let out = my_situate_with(&args, |c| {
+            c.env("ESTOP_LINE", &line);
+        });
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let run = json_of(&out);
+        let skill = |name: &str| {
+            run["skills"].as_array().and_then(|l| l.iter().find(|s| s["name"] == name)).cloned().unwrap_or_default()
+        };
+        let drive = skill("wheels")["inputs"][0]["value"].clone();
+        let theta = skill("wheels")["outputs"][0]["value"]["theta"].as_f64().expect("the odometry's heading");
+        (drive, theta, skill("brake")["prints"].to_string(), run)
+    };
+    // Released: brake turns on the spot, away from the drifting box (1 rad/s for ~19 cycles of
+    // 50 ms).
+    let (drive, theta, prints, json) = run(Some("0\n"));
+    assert_eq!(drive["v"], 0.0, "{json}");
+    assert_eq!(drive["w"].as_f64().map(f64::abs), Some(1.0), "{json}");
+    assert!(theta.abs() > 0.5, "released, the robot turned only {theta} rad: {json}");
+    assert!(prints.contains("braking") && !prints.contains("emergency stop"), "{json}");
+    // Pressed, or a line that cannot be read (a cut wire): zero velocity; the robot turns no more
+    // than wander's one command of the first cycle allows (0.05 s at most 1 rad/s or so).
+    for state in [Some("1\n"), None] {
+        let (drive, theta, prints, json) = run(state);
+        assert_eq!((&drive["v"], &drive["w"]), (&Json::from(0.0), &Json::from(0.0)), "{state:?}: {json}");
+        assert!(theta.abs() < 0.1, "{state:?}: pressed, the robot turned {theta} rad: {json}");
+        assert_eq!(prints.matches("emergency stop pressed: holding still").count(), 1, "{state:?}: {json}");
+        assert!(!prints.contains("braking"), "{state:?}: {json}");
+    }
 }
 
 #[test]

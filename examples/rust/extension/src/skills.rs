@@ -1,5 +1,8 @@
 //! This program's own skill types: `ext.nearest` finds the nearest obstacle in the sonar ring,
-//! `ext.brake` turns the robot on the spot while one is closer than `stop_distance`.
+//! `ext.brake` turns the robot on the spot while one is closer than `stop_distance`, and holds it
+//! still while the program's emergency stop is pressed.
+
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use situate::prelude::*;
 
@@ -42,8 +45,9 @@ impl Body for Nearest {
 }
 
 /// Turns on the spot, away from the nearest obstacle, while it is closer than `stop_distance`;
-/// otherwise writes nothing (so a lower-priority writer of `drive` wins).
-#[derive(Skill, Default)]
+/// otherwise writes nothing (so a lower-priority writer of `drive` wins). While the emergency stop
+/// is pressed, it holds the robot still instead: zero velocity, every cycle.
+#[derive(Skill)]
 #[skill(name = "ext.brake", priority = 30)]
 pub struct Brake {
     #[input(signal = "obstacle.range")]
@@ -59,8 +63,14 @@ pub struct Brake {
     /// Turn rate while stopped.
     #[param(default = 1.0, min = 0.0, max = 3.0, unit = "rad/s")]
     turn: f64,
+    /// The program's emergency stop, set while it is pressed (a resource: `src/main.rs` provides
+    /// it, and every skill made with it shares it).
+    #[resource]
+    estop: Arc<AtomicBool>,
     /// Cycles braked since the skill was last switched on.
     braked: u64,
+    /// Whether the emergency stop held the robot in the last run (said once per press).
+    held: bool,
 }
 
 impl Body for Brake {
@@ -71,6 +81,17 @@ impl Body for Brake {
     }
 
     fn step(&mut self, cx: &mut Context) -> Result<(), SkillError> {
+        if self.estop.load(Ordering::Acquire) {
+            self.drive = Some(Drive { v: 0.0, w: 0.0 });
+            if !self.held {
+                sprint!(cx, "emergency stop pressed: holding still");
+            }
+            self.held = true;
+            return Ok(());
+        }
+        if std::mem::take(&mut self.held) {
+            sprint!(cx, "emergency stop released");
+        }
         if self.range < self.stop_distance {
             let away = if self.bearing >= 0.0 { -self.turn } else { self.turn };
             self.drive = Some(Drive { v: 0.0, w: away });
