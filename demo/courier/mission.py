@@ -107,13 +107,14 @@ def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
 def wall_wider_than_people_at(ranges: Sequence[float], i: int) -> bool:
     """Whether sonar ``i`` reads a wall across its axis wider than people standing together.
 
-    Nearer than `END_WALL_SEEN_M`, and a sonar 15° off the axis and one 30° off (either side)
-    read that wall too: each its cone's nearest echo from a wall square to the axis, the reading
-    over the cosine of its bearing less half a cone (`SONAR_CONE_DEG`), within a tenth (a wall
-    up to 10° off square). Someone standing (or two side by side) 0.7 to 2.5 m off fills
-    sonar ``i``'s cone and the edges of its neighbours', and reads as a short wall square to
-    the axis (`seen_wall_ends_at` takes it); the sonars 30° off read past them. A wall with a
-    way open on one side of the axis (a car's door, a corridor's mouth) still reads on the other.
+    Nearer than `END_WALL_SEEN_M`, and on each side a sonar 15° off the axis and one 30° off
+    (either side) read no farther than that wall would be: its cone's nearest echo from a wall
+    square to the axis, the reading over the cosine of its bearing less half a cone
+    (`SONAR_CONE_DEG`), with a tenth to spare. A wall at a slant reads nearer on one side. Someone
+    standing (or two side by side) 0.7 to 2.5 m off fills sonar ``i``'s cone and the edges of its
+    neighbours', and reads as a short wall square to the axis (`seen_wall_ends_at` takes it); the
+    sonars 30° off, both sides, read past them. A wall with a way open on one side of the axis (a
+    car's door, a corridor's mouth) still reads on the other.
     """
     r = ranges[i]
     if r >= END_WALL_SEEN_M:
@@ -122,7 +123,7 @@ def wall_wider_than_people_at(ranges: Sequence[float], i: int) -> bool:
     def reads_wall(k: int) -> bool:
         nearest = math.radians(max(0.0, abs(k) * 360 / SONARS - SONAR_CONE_DEG / 2))
         expect = min(r / math.cos(nearest), NO_ECHO_READ_M)
-        return abs(ranges[(i + k) % SONARS] - expect) < 0.1 * expect + 0.03
+        return ranges[(i + k) % SONARS] <= 1.1 * expect + 0.03
 
     return all(reads_wall(-n) or reads_wall(n) for n in (1, 2))
 

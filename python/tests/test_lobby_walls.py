@@ -61,6 +61,12 @@ def test_someone_standing_ahead_is_no_wall() -> None:
     assert wall_wider_than_people_at(ring({-2: 0.77, -1: 0.68, 0: 0.7, 1: 4.0, 2: 0.76}), 0)
 
 
+def test_a_wall_at_a_slant_is_a_wall() -> None:
+    # As read where the patrol stopped short of a lobby's wall, facing it some 30° off square
+    # (generated building 30030, no one about): nearer on one side, past its end on the other.
+    assert wall_wider_than_people_at(ring({-2: 3.28, -1: 1.22, 0: 0.75, 1: 0.61, 2: 0.55}), 0)
+
+
 def test_nothing_in_reach_is_no_wall() -> None:
     assert not wall_wider_than_people_at(ring({}), 0)
     assert not wall_wider_than_people_at(wall(3.8), 0)
