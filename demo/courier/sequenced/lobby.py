@@ -48,10 +48,17 @@ OPEN_SEEN_M = 3.4
 #: A sonar reading this far heard no echo (its reach is 4 m), m.
 NO_ECHO_M = 3.95
 OPEN_BEYOND_M = 1.0
+#: A car is at most this deep behind its door (shafts are 1.8 to 2.4 m on each side:
+#: docs/maps.md, "Lobby"), m; a sonar that looks through an open car door hears its walls
+#: unless they are within this of the sonars' reach (odometry and noise), m.
+CAR_DEPTH_MAX_M = 2.4
+CAR_ECHO_SLACK_M = 0.15
 OPEN_INSIDE_M = 0.4
 #: Beyond the depth a route left the robot inside a lobby entered facing the button, nothing
 #: is a car's door (the entry's wall is 1 m on in generated buildings), m.
 ENTRY_BEYOND_M = 0.5
+#: A wall seen ahead is one known already if that near its line (of about its heading), m.
+KNOWN_WALL_M = 0.5
 #: Calls for a car made at least, and at most while the mission has time left for the rest.
 CALLS_MIN = 6
 CALLS_MAX = 20
@@ -75,8 +82,9 @@ def open_in_walls(
     Each wall is a point and its normal (towards it), odometry frame. A sonar whose axis meets
     a wall within 60° of square, nearer than `OPEN_SEEN_M`, at a point inside the lobby
     (short of every other wall and bound in ``bounds``), but that reads `OPEN_BEYOND_M`
-    farther, sees through it: its whole cone passes an opening there. Returns the point and
-    the wall's normal, the nearest such; None if there is none.
+    farther, sees through it: its whole cone passes an opening there (a car's door: it hears
+    the car's walls beyond, or reads no echo only where they may be out of its reach). Returns
+    the point and the wall's normal, the nearest such; None if there is none.
     """
     best: tuple[float, float, float] | None = None
     best_range = math.inf
@@ -92,6 +100,11 @@ def open_in_walls(
             # (Farther than the sonars' reach less the car's depth: no echo at all.)
             if not 0.3 < expect < OPEN_SEEN_M or r < min(expect + OPEN_BEYOND_M, NO_ECHO_M):
                 continue
+            # No echo at all where the car's own walls would echo: a missed echo (they come
+            # often, one sonar at a time, and two of them a poll apart near one spot of a wall
+            # passed close by looked like a door standing open), not an opening.
+            if r >= NO_ECHO_M and expect + CAR_DEPTH_MAX_M / square < NO_ECHO_M - CAR_ECHO_SLACK_M:
+                continue
             px, py = o.ahead(expect, a)
             inside = all(
                 Pose(bx, by, bn).along(px, py) < -OPEN_INSIDE_M
@@ -101,6 +114,42 @@ def open_in_walls(
             if inside and expect < best_range:
                 best, best_range = (px, py, wn), expect
     return best
+
+
+def new_wall_ahead(
+    o: Pose, ranges: Sequence[float], walls: Sequence[tuple[float, float, float]]
+) -> tuple[float, float, float] | None:
+    """The wall across sonar 0's axis (not someone standing there), unless already known.
+
+    Sonar 0 reads it nearer than `OPEN_SEEN_M`, and on one side at least the sonars 15° and
+    30° off read it too, square to the axis (each its cone's nearest echo, within 0.3 m): the
+    other side may see the wall the patrol walks along, nearer. Someone standing ahead fills
+    sonar 0's cone and its neighbours' edges; the sonars 30° off read past them (or the wall
+    beside, nearer). Returns a point on it and the normal towards it (the robot's heading),
+    odometry frame, as ``walls`` holds them; None if there is no such wall or a known wall of
+    about that heading lies within `KNOWN_WALL_M` of that point (along its normal).
+    """
+    r = ranges[0]
+    if r >= OPEN_SEEN_M:
+        return None
+
+    def square_wall_on(side: int) -> bool:
+        near = abs(ranges[side % SONARS] - r / math.cos(math.radians(15))) < 0.3
+        off = abs(ranges[2 * side % SONARS] - r / math.cos(math.radians(22.5))) < 0.3
+        return near and off
+
+    if not (square_wall_on(1) or square_wall_on(-1)):
+        return None
+    x, y = o.ahead(ranges[0])
+    return None if wall_known(walls, (x, y, o.theta)) else (x, y, o.theta)
+
+
+def wall_known(walls: Sequence[tuple[float, float, float]], w: tuple[float, float, float]) -> bool:
+    """Whether a known wall of about ``w``'s heading has ``w``'s point within `KNOWN_WALL_M`."""
+    return any(
+        abs(wrap(wn - w[2])) < 0.5 and abs(Pose(wx, wy, wn).along(w[0], w[1])) < KNOWN_WALL_M
+        for wx, wy, wn in walls
+    )
 
 
 class Lobby(RouteSequencer):
@@ -168,7 +217,17 @@ class Lobby(RouteSequencer):
             await self.use("track_barcode", "home", "push_button", restart=["push_button"])
             pushed = await self.wait(f"arm.presses > {presses}", within=10)
             if not pushed:
-                self.button_pose = await self.odom()
+                o = await self.odom()
+                if straight and self.button_pose is not None:
+                    # Homed on the barcode from in front of it, not lined up: the robot faces
+                    # the barcode, a little aslant, not the wall. The button's pose gives the
+                    # wall's normal (the patrol's headings, the button's wall watched): the
+                    # last one's, which lining up found. Taken from the heading here, the
+                    # slant grew call after call (each call comes back along the last one's
+                    # heading): the patrol ran aslant into the wall across the lobby, took it
+                    # for the lobby's end and never came to the cars beyond.
+                    o = Pose(o.x, o.y, self.button_pose.theta)
+                self.button_pose = o
             else:
                 await self.restore("runaway", "safe_distance")
                 continue
@@ -350,7 +409,17 @@ class Lobby(RouteSequencer):
                 # lobby. Twice in a row at one place (not a missed echo).
                 polled = True
                 self.prefetch("odom", "sonar.range")  # one round trip for both
-                seen = open_in_walls(await self.odom(), await self.sonar(), walls, bounds)
+                o, ranges = await self.odom(), await self.sonar()
+                # The wall the patrol walks towards is known as soon as it is in sight, not
+                # only once the robot stands at it: a car's door there may open (and close
+                # again) while the robot is still on its way. (Not on a leg that ends short
+                # of the wall ahead: that one is the entry's, or the button's.)
+                ahead_wall = new_wall_ahead(o, ranges, walls)
+                to_wall = not legs or (legs[leg][2] and legs[leg][1] is None)
+                if ahead_wall is not None and to_wall:
+                    walls.append(ahead_wall)
+                    bounds.append(ahead_wall)
+                seen = open_in_walls(o, ranges, walls, bounds)
                 if seen is None or last_open is None or dist(seen, last_open) > 0.5:
                     last_open = seen
                     continue
@@ -430,7 +499,8 @@ class Lobby(RouteSequencer):
                 if abreast > ABREAST_M or not 0.6 < off_wall < 1.6:
                     await self.set("runaway", "safe_distance", 0.12)
                     # Backwards if the door is just behind (the robot walked past it).
-                    await self.goto(gx, gy, within=10, speed=0.5, reverse_within=1.5)
+                    # (At the patrol's speed: some cars stay open only 8 s.)
+                    await self.goto(gx, gy, within=10, speed=0.8, reverse_within=1.5)
                     await self.restore_lobby_patrol()
                 bearing = (await self.odom()).turn_to(on[0])
             elif got == 0:
