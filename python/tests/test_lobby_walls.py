@@ -12,18 +12,8 @@ from __future__ import annotations
 import math
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
-from courier.geometry import SONARS
 from courier.mission import seen_wall_ends_at, wall_wider_than_people_at
-
-REACH_M = 4.0
-
-
-def ring(around: dict[int, float], rest: float = REACH_M) -> list[float]:
-    """A ring of readings: ``around`` (sonar offset from 0, negative clockwise), else ``rest``."""
-    ranges = [rest] * SONARS
-    for k, r in around.items():
-        ranges[k % SONARS] = r
-    return ranges
+from sonar_rings import REACH_M, ring
 
 
 def wall(distance: float, *, open_left: bool = False) -> list[float]:

@@ -19,16 +19,7 @@ from courier.sequenced.lobby import (
     new_wall_ahead,
     open_in_walls,
 )
-
-REACH_M = 4.0
-
-
-def ring(around: dict[int, float], rest: float = REACH_M) -> list[float]:
-    """A ring of readings: ``around`` (sonar offset from 0, negative clockwise), else ``rest``."""
-    ranges = [rest] * SONARS
-    for k, r in around.items():
-        ranges[k % SONARS] = r
-    return ranges
+from sonar_rings import REACH_M, ring
 
 
 def wall_ahead(distance: float, **instead: float) -> list[float]:
