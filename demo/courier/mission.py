@@ -104,13 +104,23 @@ def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
     return all(abs(ranges[(i + k) % SONARS] - expect) < 0.3 for k in (-1, 1))
 
 
+def square_wall_reading(r: float, k: int) -> float:
+    """What sonar ``k`` places off a sonar reading a wall square to its axis ``r`` m off reads.
+
+    Each sonar reads the nearest echo in its cone (`SONAR_CONE_DEG` wide): from that wall, the
+    edge of its cone nearest the axis, so ``r`` over the cosine of that edge's bearing, up to
+    the sonars' reach (`NO_ECHO_READ_M`).
+    """
+    nearest = math.radians(max(0.0, abs(k) * 360 / SONARS - SONAR_CONE_DEG / 2))
+    return min(r / math.cos(nearest), NO_ECHO_READ_M)
+
+
 def wall_wider_than_people_at(ranges: Sequence[float], i: int) -> bool:
     """Whether sonar ``i`` reads a wall across its axis wider than people standing together.
 
     Nearer than `END_WALL_SEEN_M`, and on each side a sonar 15° off the axis and one 30° off
-    (either side) read no farther than that wall would be: its cone's nearest echo from a wall
-    square to the axis, the reading over the cosine of its bearing less half a cone
-    (`SONAR_CONE_DEG`), with a tenth to spare. A wall at a slant reads nearer on one side. Someone
+    (either side) read no farther than a wall square to the axis would (`square_wall_reading`),
+    with a tenth to spare. A wall at a slant reads nearer on one side. Someone
     standing (or two side by side) 0.7 to 2.5 m off fills sonar ``i``'s cone and the edges of its
     neighbours', and reads as a short wall square to the axis (`seen_wall_ends_at` takes it); the
     sonars 30° off, both sides, read past them. A wall with a way open on one side of the axis (a
@@ -121,9 +131,7 @@ def wall_wider_than_people_at(ranges: Sequence[float], i: int) -> bool:
         return False
 
     def reads_wall(k: int) -> bool:
-        nearest = math.radians(max(0.0, abs(k) * 360 / SONARS - SONAR_CONE_DEG / 2))
-        expect = min(r / math.cos(nearest), NO_ECHO_READ_M)
-        return ranges[(i + k) % SONARS] <= 1.1 * expect + 0.03
+        return ranges[(i + k) % SONARS] <= 1.1 * square_wall_reading(r, k) + 0.03
 
     return all(reads_wall(-n) or reads_wall(n) for n in (1, 2))
 

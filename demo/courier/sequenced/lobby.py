@@ -21,6 +21,7 @@ from courier.mission import (
     OPENED_ON_WALL_M,
     Mission,
     seen_wall_ends_at,
+    square_wall_reading,
     wall_wider_than_people_at,
 )
 from courier.sequenced.routes import RouteSequencer, way_made_expr
@@ -122,7 +123,7 @@ def new_wall_ahead(
     """The wall across sonar 0's axis (not someone standing there), unless already known.
 
     Sonar 0 reads it nearer than `OPEN_SEEN_M`, and on one side at least the sonars 15° and
-    30° off read it too, square to the axis (each its cone's nearest echo, within 0.3 m): the
+    30° off read it too, square to the axis (`square_wall_reading`, within 0.3 m): the
     other side may see the wall the patrol walks along, nearer. Someone standing ahead fills
     sonar 0's cone and its neighbours' edges; the sonars 30° off read past them (or the wall
     beside, nearer). Returns a point on it and the normal towards it (the robot's heading),
@@ -134,9 +135,7 @@ def new_wall_ahead(
         return None
 
     def square_wall_on(side: int) -> bool:
-        near = abs(ranges[side % SONARS] - r / math.cos(math.radians(15))) < 0.3
-        off = abs(ranges[2 * side % SONARS] - r / math.cos(math.radians(22.5))) < 0.3
-        return near and off
+        return all(abs(ranges[k * side % SONARS] - square_wall_reading(r, k)) < 0.3 for k in (1, 2))
 
     if not (square_wall_on(1) or square_wall_on(-1)):
         return None
