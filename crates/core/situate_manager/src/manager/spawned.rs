@@ -604,9 +604,10 @@ fn cycle<'a>(core: &'a Core, g: Guard<'a>, generation: u64) -> Option<Guard<'a>>
 /// it).
 ///
 /// A body on the cycle thread runs where it is, in the manager, with the
-/// lock held (see the module's documentation); its inputs are lent, never
-/// read in their slots, which the next cycle writes while a body left
-/// behind may still read them.
+/// lock held (see the module's documentation), and reads its one input in
+/// its slot or its inputs lent, as in `Manager::cycle`: a body left behind
+/// takes the slots' vector with it (`Manager::leave_behind_held`), so the
+/// next cycles never write what it may still be reading.
 struct OnThreads<'a> {
     core: &'a Core,
     /// `Some` but while a body runs.
