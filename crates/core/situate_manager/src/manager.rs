@@ -288,6 +288,13 @@ pub struct Manager {
     step_until: Option<u64>,
     /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
     sampled: bool,
+    /// The next cycle times every body exactly: a stretch of bodies run
+    /// untimed took longer than the shortest of their deadlines
+    /// (`walk::run_steps`).
+    sample_next: bool,
+    /// The number of the last run of a body on the cycle thread or its pool,
+    /// for the watchdog's marks ([`BodyClock`]).
+    runs: u64,
     /// The ready steps of a level (kept to reuse its allocation).
     ready: Vec<usize>,
     /// Where every cycle's written values go, when something records them
@@ -428,6 +435,8 @@ impl Manager {
             external_clock: false,
             step_until: None,
             sampled: true,
+            sample_next: false,
+            runs: 0,
             ready: Vec::new(),
             exchanging: Vec::new(),
             taps: Vec::new(),

@@ -92,7 +92,7 @@ impl Exec {
     /// a short deadline); a [`Stamp::Coarse`] one costs a few nanoseconds
     /// and is enough to see a run past a long deadline (see [`coarse_ns`]).
     ///
-    /// While the body runs, `clock` holds when it started (see
+    /// While the body runs, `clock` holds the run's mark (its number; see
     /// [`BodyClock`]), so a watchdog can see a body that does not return
     /// (`None` where no watchdog looks: a manager not spawned).
     ///
@@ -102,7 +102,7 @@ impl Exec {
     /// (see `Manager::commit_plain`) is recycled here, or, when the body
     /// [fills its outputs](Skill::fills_outputs), left to it as a spare
     /// (a body that fails leaves its outputs to be cleared as before).
-    pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<&BodyClock>) -> Stamp {
+    pub fn run(&mut self, cycle: u64, time_s: f64, start: Stamp, clock: Option<(&BodyClock, u64)>) -> Stamp {
         self.run_on(None, cycle, time_s, start, clock)
     }
 
@@ -117,7 +117,7 @@ impl Exec {
         cycle: u64,
         time_s: f64,
         start: Stamp,
-        clock: Option<&BodyClock>,
+        clock: Option<(&BodyClock, u64)>,
     ) -> Stamp {
         if !self.fills {
             for out in &mut self.outputs {
@@ -129,7 +129,7 @@ impl Exec {
             }
         }
         self.cx.set(cycle, time_s);
-        let mark = clock.map(|c| c.enter(start.coarse(), false));
+        let mark = clock.map(|(c, run)| c.enter(run, false));
         let inputs = match input {
             Some(input) => std::slice::from_ref(input),
             None => &self.inputs[..],
@@ -138,7 +138,7 @@ impl Exec {
             Some(skill) => run_body_into(skill.as_mut(), inputs, &mut self.outputs, &mut self.cx, &mut self.result),
             None => self.result = Err("the body is not here (it runs on its own thread)".into()),
         }
-        if let (Some(clock), Some(mark)) = (clock, mark) {
+        if let (Some((clock, _)), Some(mark)) = (clock, mark) {
             // Left behind or not, a pool's thread finds out under the lock (`spawned`).
             let _ = clock.leave(mark);
         }
@@ -146,6 +146,32 @@ impl Exec {
         self.elapsed_ns = end.since(start);
         self.timed = matches!(start, Stamp::Precise(_));
         end
+    }
+
+    /// [`Exec::run_on`] for a step run the short way (`plan::Fast`): the
+    /// body reads its one input in place, and is not timed (its time is its
+    /// stretch of such steps', checked by the walk). Its outputs are set as
+    /// for a run on the coarse clock that read no time.
+    #[inline(always)]
+    pub fn run_untimed(&mut self, input: &Option<Value>, cycle: u64, time_s: f64) {
+        if !self.fills {
+            if let Some(old) = self.outputs.first_mut().and_then(Option::take) {
+                recycle(old);
+            }
+        }
+        self.cx.set(cycle, time_s);
+        match &mut self.skill {
+            Some(skill) => run_body_into(
+                skill.as_mut(),
+                std::slice::from_ref(input),
+                &mut self.outputs,
+                &mut self.cx,
+                &mut self.result,
+            ),
+            None => self.result = Err("the body is not here (it runs on its own thread)".into()),
+        }
+        self.elapsed_ns = 0;
+        self.timed = false;
     }
 }
 
@@ -206,14 +232,6 @@ impl Stamp {
             _ => 0,
         }
     }
-
-    /// This time on the coarse clock's scale (for the watchdog's marks).
-    pub fn coarse(self) -> u64 {
-        match self {
-            Stamp::Coarse(ns) => ns,
-            Stamp::Precise(_) => coarse_ns(),
-        }
-    }
 }
 
 /// The coarse monotonic clock in nanoseconds: `CLOCK_MONOTONIC_COARSE` on
@@ -254,10 +272,12 @@ pub(crate) fn coarse_tick_ns() -> u64 {
 
 /// When the body of one instance started running, for the watchdog.
 ///
-/// Holds a *mark* while a body runs, and 0 when none does: the [`coarse_ns`]
-/// time it started plus one, shifted left by one, and in the low bit whether
-/// the thread running it holds the spawned manager's lock meanwhile
-/// ([`BodyClock::held`]; see `manager::spawned`). The running thread sets it
+/// Holds a *mark* while a body runs, and 0 when none does: the run's number
+/// (never 0, never used twice by a manager), shifted left by one, and in the
+/// low bit whether the thread running it holds the spawned manager's lock
+/// meanwhile ([`BodyClock::held`]; see `manager::spawned`). The mark holds
+/// no time, so that a body costs no clock reading: the watchdog times a run
+/// from when it first saw its mark (it looks every tick of its own). The running thread sets it
 /// before the body runs (a release store: what that thread wrote before is
 /// seen by a watchdog that takes the mark) and takes it back after (a
 /// compare-and-swap). The watchdog takes a stuck body's mark
@@ -278,11 +298,12 @@ impl BodyClock {
         BodyClock { since: AtomicU64::new(0), behind: AtomicU32::new(0) }
     }
 
-    /// Marks a body as started at `start_coarse_ns`; `held`: its thread holds
-    /// the manager's lock while it runs.
+    /// Marks run number `run` (≥ 1) of a body as started; `held`: its thread
+    /// holds the manager's lock while it runs.
     #[inline(always)]
-    pub fn enter(&self, start_coarse_ns: u64, held: bool) -> u64 {
-        let mark = ((start_coarse_ns + 1) << 1) | u64::from(held);
+    pub fn enter(&self, run: u64, held: bool) -> u64 {
+        debug_assert!(run > 0, "run numbers start at 1");
+        let mark = (run << 1) | u64::from(held);
         self.since.store(mark, Ordering::Release);
         mark
     }
@@ -304,21 +325,10 @@ impl BodyClock {
         self.since.load(Ordering::Relaxed)
     }
 
-    /// When the body with `mark` started, on the coarse clock.
-    pub fn started_ns(mark: u64) -> u64 {
-        (mark >> 1).saturating_sub(1)
-    }
-
     /// Whether the thread running the body with `mark` holds the manager's
     /// lock while it runs: the watchdog that takes the mark has the lock.
     pub fn held(mark: u64) -> bool {
         mark & 1 == 1
-    }
-
-    /// How long the body with `mark` has been running, to within
-    /// [`coarse_tick_ns`] either way.
-    pub fn running_for(&self, mark: u64) -> Duration {
-        Duration::from_nanos(coarse_ns().saturating_sub(Self::started_ns(mark)))
     }
 
     /// Leaves the body with `mark` behind: it no longer counts as the

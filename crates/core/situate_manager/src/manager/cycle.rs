@@ -50,7 +50,7 @@ impl Manager {
     /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
     pub(super) fn begin_cycle(&mut self) {
         self.cycle += 1;
-        self.sampled = self.cycle % TIMING_SAMPLE == 1;
+        self.sampled = self.cycle % TIMING_SAMPLE == 1 || std::mem::take(&mut self.sample_next);
         self.cycle_timed = self.sampled || self.clock == ClockKind::Wall || self.speed.is_some() || self.due.is_some();
         if self.cycle_timed {
             self.cycle_start = Instant::now();

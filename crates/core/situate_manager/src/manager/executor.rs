@@ -32,6 +32,13 @@ impl Bodies for InPlace<'_> {
         Some(m.execs[i].run_on(input, m.cycle, m.time_s, start, None))
     }
 
+    #[inline(always)]
+    fn run_untimed(&mut self, i: usize, input: usize) -> Option<()> {
+        let m = &mut *self.0;
+        m.execs[i].run_untimed(&m.slots[input].value, m.cycle, m.time_s);
+        Some(())
+    }
+
     fn run_batch(&mut self, batch: &[usize]) -> Option<()> {
         let m = &mut *self.0;
         let (cycle, time_s) = (m.cycle, m.time_s);

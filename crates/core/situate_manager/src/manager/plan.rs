@@ -66,6 +66,20 @@ pub(crate) struct Step {
     /// The slot of its input when it has exactly one, plain: the body reads
     /// it there, in place (kept inline: one look-up fewer per run).
     pub one_input: Option<usize>,
+    /// The common step, run the short way (see [`Fast`]).
+    pub fast: Option<Fast>,
+}
+
+/// The leaves of a step that may run the short way (`walk::run_steps`): a
+/// sync cskill with one required plain input, read in place, and one plain
+/// output of its type by construction, on a leaf no other skill writes (so
+/// never contested), with a deadline long enough to be checked on the
+/// coarse clock. Its body is not timed on its own outside the sampled
+/// cycles: the bodies run back to back this way are timed together.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fast {
+    pub input: usize,
+    pub output: usize,
 }
 
 /// An input port: `leaf` is its slot when `plain` (one leaf, not a
@@ -217,7 +231,17 @@ impl Plan {
                         [InPort { leaf, plain: true, .. }] => Some(leaf),
                         _ => None,
                     },
+                    fast: None,
                 });
+                let step = plan.steps.last_mut().expect("a step was just pushed");
+                if let ([InPort { leaf: input, plain: true, optional: false }], [out]) =
+                    (&plan.ins[ins0 as usize..], &plan.outs[outs0 as usize..])
+                {
+                    let sole_writer = graph.leaves[out.leaf].writers.len() == 1;
+                    if step.kind == StepKind::Sync && step.typed_outs && !step.precise && sole_writer {
+                        step.fast = Some(Fast { input: *input, output: out.leaf });
+                    }
+                }
             }
             plan.levels.push((first, plan.steps.len() as u32));
         }

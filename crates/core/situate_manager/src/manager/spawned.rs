@@ -40,8 +40,11 @@ use super::Manager;
 use crate::config::ClockKind;
 use crate::control::{ControlError, Handle, Reply, Request};
 use crate::handle::Envelope;
-use crate::runner::{coarse_tick_ns, BodyClock, Exec, Stamp};
-use crate::starved::{self, Starvation, Suspect};
+use crate::runner::{BodyClock, Exec, Stamp};
+use watchdog::watchdog;
+
+mod watchdog;
+use crate::starved::Starvation;
 
 type Guard<'a> = parking_lot::MutexGuard<'a, Option<Manager>>;
 
@@ -628,32 +631,12 @@ impl Bodies for OnThreads<'_> {
     /// body runs and made again only when this thread takes its mark back.
     #[inline(always)]
     fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp> {
-        let core = self.core;
-        let m = self.manager()?;
-        let (cycle, time_s) = (m.cycle, m.time_s);
-        let input: Option<*const Option<situate_core::Value>> = in_place.map(|leaf| &m.slots[leaf].value as *const _);
-        let exec: *mut Exec = &mut *m.execs[i];
-        let clock = &core.clocks[i];
-        std::mem::forget(self.g.take());
-        // Released: what this thread wrote to the manager is seen by a watchdog that takes the mark.
-        let mark = clock.enter(start.coarse(), true);
-        // SAFETY: `exec` is the body's box in the manager, and `input` a value in the manager's
-        // slots, which this thread owns while it holds the mark. A watchdog that takes the mark
-        // meanwhile only reads the box's `inputs` (which the body only reads), and moves the
-        // box and the slots' vector, not what they point to, to `left_behind`, never dropped
-        // but by this thread (below), and never written again.
-        let end = unsafe { (*exec).run_on(input.map(|p| &*p), cycle, time_s, start, None) };
-        if clock.leave(mark) {
-            // SAFETY: this thread held the lock when it forgot its guard above, and the watchdog
-            // did not take the mark (the only way the lock could have moved): it still holds it.
-            self.g = Some(unsafe { core.manager.make_guard_unchecked() });
-            return Some(end);
-        }
-        // Left behind: the watchdog has the lock, and moves the body's box out of the manager
-        // for this thread to drop, now that the body returned (a moment's wait if it returned
-        // as the watchdog took the mark).
-        core.drop_left_behind(i, mark);
-        None
+        self.held(i, in_place, |exec, input, cycle, time_s| exec.run_on(input, cycle, time_s, start, None))
+    }
+
+    #[inline(always)]
+    fn run_untimed(&mut self, i: usize, input: usize) -> Option<()> {
+        self.held(i, Some(input), |exec, input, cycle, time_s| exec.run_untimed(input.unwrap_or(&None), cycle, time_s))
     }
 
     /// Batch by batch; each body goes back to the manager as soon as it
@@ -664,12 +647,17 @@ impl Bodies for OnThreads<'_> {
         let generation = self.generation;
         let m = self.manager()?;
         let (cycle, time_s) = (m.cycle, m.time_s);
-        let jobs: Vec<(usize, Mutex<Option<Box<Exec>>>)> =
-            batch.iter().map(|&i| (i, Mutex::new(Some(m.take_exec(i))))).collect();
+        // Each run its own number (see `BodyClock`).
+        let first = m.runs + 1;
+        m.runs += batch.len() as u64;
+        // Each job: the instance, its run's number, its body (taken by the thread that runs it).
+        type Job = (usize, u64, Mutex<Option<Box<Exec>>>);
+        let jobs: Vec<Job> =
+            batch.iter().zip(first..).map(|(&i, number)| (i, number, Mutex::new(Some(m.take_exec(i))))).collect();
         self.g = None;
-        run_parallel(pool, &jobs, |(i, job)| {
+        run_parallel(pool, &jobs, |(i, number, job)| {
             let Some(mut exec) = job.lock().unwrap_or_else(|p| p.into_inner()).take() else { return };
-            exec.run(cycle, time_s, Stamp::now(true), Some(&core.clocks[*i]));
+            exec.run(cycle, time_s, Stamp::now(true), Some((&core.clocks[*i], *number)));
             let mut g = core.lock();
             if let Some(m) = current(&mut g, generation) {
                 m.put_exec(*i, exec);
@@ -681,103 +669,44 @@ impl Bodies for OnThreads<'_> {
     }
 }
 
-/// Watches the bodies running on cycle threads; leaves behind one past its
-/// deadline and starts a new cycle thread.
-fn watchdog(core: Arc<Core>, deadlines: Vec<Duration>) {
-    let shortest = deadlines.iter().min().copied().unwrap_or(Duration::from_secs(1));
-    let tick = (shortest / 4).clamp(Duration::from_millis(1), Duration::from_millis(25));
-    // Room for every body up front: a body seen past its deadline for a
-    // moment (its thread preempted on a loaded machine) must not make the
-    // watchdog allocate while the robot runs.
-    let mut stale: Vec<(usize, u64, Duration)> = Vec::with_capacity(core.clocks.len());
-    // On the simulated clock, what an earlier reading saw of each body (`crate::starved::judge`).
-    let mut suspects: Vec<Option<Suspect>> = vec![None; core.clocks.len()];
-    loop {
-        thread::park_timeout(tick);
-        if core.stop.load(Ordering::Acquire) {
-            return;
+impl OnThreads<'_> {
+    /// Runs instance `i`'s body by `run` (given its box, its input in slot
+    /// `in_place` if any, the cycle and its time) holding the lock, which
+    /// the watchdog takes with the body's mark if it leaves the body behind.
+    #[inline(always)]
+    fn held<R>(
+        &mut self,
+        i: usize,
+        in_place: Option<usize>,
+        run: impl FnOnce(&mut Exec, Option<&Option<situate_core::Value>>, u64, f64) -> R,
+    ) -> Option<R> {
+        let core = self.core;
+        let m = self.manager()?;
+        let (cycle, time_s) = (m.cycle, m.time_s);
+        m.runs += 1;
+        let number = m.runs;
+        let input: Option<*const Option<situate_core::Value>> = in_place.map(|leaf| &m.slots[leaf].value as *const _);
+        let exec: *mut Exec = &mut *m.execs[i];
+        let clock = &core.clocks[i];
+        std::mem::forget(self.g.take());
+        // Released: what this thread wrote to the manager is seen by a watchdog that takes the mark.
+        let mark = clock.enter(number, true);
+        // SAFETY: `exec` is the body's box in the manager, and `input` a value in the manager's
+        // slots, which this thread owns while it holds the mark. A watchdog that takes the mark
+        // meanwhile only reads the box's `inputs` (which the body only reads), and moves the
+        // box and the slots' vector, not what they point to, to `left_behind`, never dropped
+        // but by this thread (below), and never written again.
+        let out = unsafe { run(&mut *exec, input.map(|p| &*p), cycle, time_s) };
+        if clock.leave(mark) {
+            // SAFETY: this thread held the lock when it forgot its guard above, and the watchdog
+            // did not take the mark (the only way the lock could have moved): it still holds it.
+            self.g = Some(unsafe { core.manager.make_guard_unchecked() });
+            return Some(out);
         }
-        stale.clear();
-        let reading = core.starved.as_ref().and_then(|s| s.sample());
-        // Marks are on the coarse clock: a body is stuck only when it
-        // certainly ran past its deadline.
-        let slack = Duration::from_nanos(coarse_tick_ns());
-        for (i, clock) in core.clocks.iter().enumerate() {
-            let mark = clock.mark();
-            if mark == 0 {
-                suspects[i] = None;
-                continue;
-            }
-            let wall = clock.running_for(mark);
-            let limit = deadlines[i] + slack;
-            let over = match (&core.starved, reading) {
-                // On the simulated clock the time its thread waited for a CPU does not count
-                // (`crate::starved`).
-                (Some(s), Some(reading)) => {
-                    let waited = s.waited(&reading, BodyClock::started_ns(mark));
-                    let ns = |d: Duration| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
-                    starved::judge(&mut suspects[i], mark, ns(wall), waited, reading, ns(limit))
-                        .map(Duration::from_nanos)
-                }
-                _ => (wall > limit).then_some(wall),
-            };
-            if let Some(ran) = over {
-                stale.push((i, mark, ran));
-            }
-        }
-        if stale.is_empty() {
-            continue;
-        }
-        // A body run by a thread that holds the lock (the cycle thread, one body at a time): its
-        // mark taken, the lock is the watchdog's (see `OnThreads::run`).
-        let held = stale.iter().position(|&(_, mark, _)| BodyClock::held(mark));
-        let mut g = match held {
-            Some(k) => {
-                let (i, mark, _) = stale[k];
-                if !core.clocks[i].forget(mark) {
-                    // It returned just now.
-                    continue;
-                }
-                // SAFETY: the thread that runs the body held the lock and forgot its guard; it
-                // makes it again only if it takes the mark back, which the watchdog now has.
-                unsafe { core.manager.make_guard_unchecked() }
-            }
-            // Bodies run with the lock let go (a pool's). Never a wait without bound: the cycle
-            // thread may be running a body holding it meanwhile, stuck or not.
-            None => match core.manager.try_lock_for(tick) {
-                Some(g) => g,
-                None => continue,
-            },
-        };
-        let Some(m) = g.as_mut() else { return };
-        let mut left = false;
-        for (k, &(i, mark, ran)) in stale.iter().enumerate() {
-            let clock = &core.clocks[i];
-            if Some(k) == held {
-                suspects[i] = None;
-                let body = m.leave_behind_held(i);
-                core.left_behind.lock().unwrap_or_else(|p| p.into_inner()).push((i, mark, body));
-                m.abandon(i, ran);
-                left = true;
-            } else if !BodyClock::held(mark) && clock.mark() == mark && clock.forget(mark) {
-                // Still in that same run: its thread is stuck in the body.
-                suspects[i] = None;
-                m.abandon(i, ran);
-                left = true;
-            }
-        }
-        if left {
-            // The stuck thread holds the plan (see `cycle`).
-            m.schedule_dirty = true;
-            m.generation += 1;
-            let generation = m.generation;
-            if let Some(reply) = core.step_reply().take() {
-                let _ = reply.send(Err(ControlError::Interrupted(
-                    "a body got stuck during the step and was left behind; the cycle goes on".into(),
-                )));
-            }
-            drop(g);
-            start_cycle_thread(&core, generation);
-        }
+        // Left behind: the watchdog has the lock, and moves the body's box out of the manager
+        // for this thread to drop, now that the body returned (a moment's wait if it returned
+        // as the watchdog took the mark).
+        core.drop_left_behind(i, mark);
+        None
     }
 }

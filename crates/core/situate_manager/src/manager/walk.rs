@@ -10,10 +10,10 @@
 
 use situate_core::value::recycle;
 
-use super::plan::{Plan, Step, StepKind};
+use super::plan::{Fast, Plan, Step, StepKind};
 use super::slots::Slot;
 use super::Manager;
-use crate::runner::Stamp;
+use crate::runner::{coarse_ns, coarse_tick_ns, Stamp};
 
 /// How the bodies of a cycle run.
 pub(super) trait Bodies {
@@ -34,6 +34,10 @@ pub(super) trait Bodies {
     /// `start`: the time it ended, on `start`'s clock, or `None` when this
     /// thread was left behind while it ran.
     fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp>;
+
+    /// Runs instance `i`'s body once, untimed, on the value in slot `input`
+    /// (a step run the short way, [`Fast`]). `None` as for [`Bodies::run`].
+    fn run_untimed(&mut self, i: usize, input: usize) -> Option<()>;
 
     /// Runs the bodies of `batch` (instances that share no claim, their
     /// inputs gathered) at the same time, on the pool. `None` as for
@@ -111,6 +115,13 @@ pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
 /// counted in the next body's coarse time, well within a tick). An exact
 /// reading is never shared: a timed body's exact time holds no commits; nor
 /// is one after a fault. The outer `None`: left behind.
+///
+/// A step that may run the short way ([`Fast`]: one required input read in
+/// place, one output on a leaf no other skill writes, of its type by
+/// construction) does, outside the sampled cycles, while it holds its
+/// output's slot: checked, run untimed, its output swapped into its slot.
+/// Back to back such steps are a *stretch*, timed as one on the coarse
+/// clock ([`Manager::end_stretch`]): a body costs no clock reading.
 #[inline(always)]
 fn run_steps<B: Bodies>(
     b: &mut B,
@@ -118,9 +129,38 @@ fn run_steps<B: Bodies>(
     steps: std::ops::Range<usize>,
     mut t: Option<Stamp>,
 ) -> Option<Option<Stamp>> {
+    // The stretch of steps run the short way under way: when it started on
+    // the coarse clock, and the shortest deadline of its steps.
+    let mut stretch: Option<(u64, u64)> = None;
     for k in steps {
         let step = &plan.steps[k];
         let m = b.manager()?;
+        if let Some(fast) = step.fast {
+            // The sampled cycles time every body exactly, the usual way; a
+            // slot another writer holds is committed the usual way too.
+            let held = |m: &Manager| {
+                let out = &m.slots[fast.output];
+                out.writer as usize == step.inst && out.stamp > 0
+            };
+            if !m.sampled && held(m) {
+                let input = &m.slots[fast.input];
+                if input.value.is_none() || input.stamp != m.cycle {
+                    continue;
+                }
+                // The stretch starts where the body before ended, on the coarse clock.
+                let (_, shortest) = stretch.get_or_insert_with(|| match t {
+                    Some(Stamp::Coarse(ns)) => (ns, u64::MAX),
+                    _ => (coarse_ns(), u64::MAX),
+                });
+                *shortest = (*shortest).min(step.deadline_ns);
+                b.run_untimed(step.inst, fast.input)?;
+                b.manager()?.commit_fast(plan, k, fast);
+                continue;
+            }
+        }
+        if let Some((start, shortest)) = stretch.take() {
+            t = Some(m.end_stretch(start, shortest));
+        }
         let fresh = match step.kind {
             StepKind::AsyncThreaded => {
                 m.exchange_async(step.inst);
@@ -159,6 +199,9 @@ fn run_steps<B: Bodies>(
             _ => None,
         };
     }
+    if let Some((start, shortest)) = stretch {
+        t = Some(b.manager()?.end_stretch(start, shortest));
+    }
     Some(t)
 }
 
@@ -189,6 +232,46 @@ fn run_level<B: Bodies>(b: &mut B, plan: &Plan, level: usize, ready: &mut Vec<us
 }
 
 impl Manager {
+    /// Commits the output of step `k`, run the short way ([`Fast`]): moved
+    /// into its slot, which it holds, with no check (it is of its type by
+    /// construction, and no other skill writes the leaf). A run that failed
+    /// or printed goes the usual way ([`Manager::finish_step`]).
+    #[inline(always)]
+    fn commit_fast(&mut self, plan: &Plan, k: usize, fast: Fast) {
+        let step = &plan.steps[k];
+        let exec = &mut self.execs[step.inst];
+        if exec.result.is_err() || exec.cx.has_prints() {
+            self.finish_step(plan, k);
+            return;
+        }
+        exec.untimed_runs += 1;
+        let out = &mut exec.outputs[0];
+        if out.is_some() {
+            // Swapped, as in `commit_plain_port`: the output buffer then
+            // holds the value it replaced, recycled (or filled) next run.
+            let slot = &mut self.slots[fast.output];
+            std::mem::swap(&mut slot.value, out);
+            slot.stamp = self.cycle;
+            slot.rank = step.rank;
+        }
+    }
+
+    /// Ends a stretch of steps run the short way that started at `start`
+    /// (coarse clock): the time now, for the next body to start from. A body
+    /// of the stretch may have run past its deadline only if the whole
+    /// stretch did; then the next cycle is a sampled one, timing every body
+    /// exactly, so that a body late every run is faulted from then on (the
+    /// watchdog of a spawned manager leaves one past its deadline behind
+    /// while it runs, in any cycle).
+    #[inline(never)]
+    fn end_stretch(&mut self, start: u64, shortest: u64) -> Stamp {
+        let now = coarse_ns();
+        if now.saturating_sub(start) > shortest.saturating_add(coarse_tick_ns()) {
+            self.sample_next = true;
+        }
+        Stamp::Coarse(now)
+    }
+
     /// The clock reading to time `step`'s body from: `t`, the end of the
     /// body before, when it is on the clock this one needs (exact in a
     /// sampled cycle or for a short deadline, else coarse); else now.

@@ -1,0 +1,191 @@
+//! Steps run the short way (`plan::Fast`): a sync cskill with one required
+//! plain input, and one output of its type by construction on a leaf no
+//! other skill writes, run back to back untimed outside the sampled cycles.
+//! They must compute what the usual way computes, and keep its promises:
+//! a print or an error goes the usual way, a body late in such a stretch
+//! is faulted from the next cycle on, a stuck one is left behind.
+//!
+//! No timing is asserted: a slow body sleeps far past its budget, a stuck
+//! one waits at a gate the test holds closed, and every wait is for a
+//! condition with a generous bound.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use common::*;
+use situate_core::{FnSkill, Io, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType, Value};
+use situate_manager::{ClockKind, Control, Registry, Request, RobotSpec};
+
+/// A body that says its output is of its port's type by construction, as
+/// the derive's bodies do: the manager may then run its step the short way.
+struct Typed(Box<dyn Skill>);
+
+impl Skill for Typed {
+    fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
+        self.0.step(io)
+    }
+
+    fn set_param(&mut self, index: usize, value: &Value) {
+        self.0.set_param(index, value)
+    }
+
+    fn output_typed(&self, _port: usize, _ty: &SignalType) -> bool {
+        true
+    }
+}
+
+/// [`fn_type`], typed ([`Typed`]) when `typed`.
+fn body_type<F>(d: SkillDecl, typed: bool, body: F) -> SkillType
+where
+    F: Fn(&mut Io<'_>, &[Value]) -> Result<(), SkillError> + Clone + Send + Sync + 'static,
+{
+    if !typed {
+        return fn_type(d, body);
+    }
+    let decl = d.clone();
+    SkillType::new(d, move || {
+        let body = body.clone();
+        let inner = FnSkill::new(&decl, move |io: &mut Io<'_>, params: &[Value]| body(io, params));
+        Ok(Box::new(Typed(Box::new(inner))) as _)
+    })
+}
+
+/// `x + 1` to `y`; with parameter `mode` 1 it prints, 2 it fails, 3 it
+/// sleeps 400 ms, 4 it waits at `gate`.
+fn plus_one(name: &str, typed: bool, gate: &Gate) -> SkillType {
+    let d = with_param(decl(name, SkillKind::Sync, &[("x", "f64")], &[("y", "f64")]), "mode", 0.0, 0.0, 4.0);
+    let gate = gate.clone();
+    body_type(d, typed, move |io, params| {
+        match params[0].as_f64() {
+            Some(1.0) => io.cx.print(format!("x is {:?}", io.inputs[0])),
+            Some(2.0) => return Err("no can do".into()),
+            Some(3.0) => std::thread::sleep(Duration::from_millis(400)),
+            Some(4.0) => gate.pass(),
+            _ => {}
+        }
+        let x = io.inputs[0].as_ref().and_then(Value::as_f64).ok_or("no x")?;
+        io.outputs[0] = Some(Value::F64(x + 1.0));
+        Ok(())
+    })
+}
+
+/// The cycle number to `out`.
+fn counter() -> SkillType {
+    fn_type(decl("count", SkillKind::Sync, &[], &[("out", "f64")]), |io, _| {
+        io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
+        Ok(())
+    })
+}
+
+/// A chain `count → s1 → … → sN` of [`plus_one`] on `x0, x1, …`.
+fn chain(spec: RobotSpec, n: usize, budget_ms: f64) -> RobotSpec {
+    let mut spec = spec.skill(skill("count", "count").remap("out", "x0"));
+    for k in 1..=n {
+        let s = skill(&format!("s{k}"), "plus_one").remap("x", &format!("x{}", k - 1)).remap("y", &format!("x{k}"));
+        spec = spec.skill(s.budget_ms(budget_ms));
+    }
+    spec
+}
+
+fn registry(typed: bool, gate: &Gate) -> Registry {
+    let mut reg = Registry::new();
+    reg.add(counter());
+    reg.add(plus_one("plus_one", typed, gate));
+    reg
+}
+
+fn value(m: &mut impl Control, path: &str) -> Option<Value> {
+    m.query(path).unwrap().value
+}
+
+#[test]
+fn a_chain_run_the_short_way_computes_what_the_usual_way_does_in_every_cycle() {
+    let gate = Gate::default();
+    let mut fast = build(&chain(simulated("fast"), 6, 500.0), &registry(true, &gate));
+    let mut usual = build(&chain(simulated("usual"), 6, 500.0), &registry(false, &gate));
+    // Past a sampled cycle (every 32nd), run the usual way in both.
+    for cycle in 1..=70u64 {
+        fast.step(1).unwrap();
+        usual.step(1).unwrap();
+        for k in 0..=6 {
+            let x = format!("x{k}");
+            assert_eq!(value(&mut fast, &x), value(&mut usual, &x), "{x} in cycle {cycle}");
+            assert_eq!(value(&mut fast, &x), Some(Value::F64((cycle + k) as f64)), "{x} in cycle {cycle}");
+        }
+    }
+    // Switched off and on again: the short way's slot is written afresh.
+    fast.deactivate(&["s3"]).unwrap();
+    fast.step(2).unwrap();
+    assert_eq!(value(&mut fast, "x4"), Some(Value::F64(70.0 + 4.0)), "x4 keeps its value of cycle 70");
+    fast.activate(&["s3"]).unwrap();
+    fast.step(1).unwrap();
+    assert_eq!(value(&mut fast, "x6"), Some(Value::F64(73.0 + 6.0)));
+}
+
+#[test]
+fn a_print_and_an_error_of_a_step_run_the_short_way_go_the_usual_way() {
+    let gate = Gate::default();
+    let mut m = build(&chain(simulated("prints"), 2, 500.0), &registry(true, &gate));
+    let events = m.events();
+    m.step(2).unwrap();
+    m.set_param("s1", "mode", Value::F64(1.0)).unwrap();
+    m.step(1).unwrap();
+    let prints = m.skill("s1").unwrap().prints;
+    assert!(prints.iter().any(|(_, p)| p.contains("x is Some(F64(3.0))")), "the print is kept: {prints:?}");
+    assert_eq!(value(&mut m, "x2"), Some(Value::F64(5.0)), "a run that printed is committed");
+    m.set_param("s1", "mode", Value::F64(2.0)).unwrap();
+    m.step(1).unwrap();
+    assert!(fault_of(&events, "s1").contains("no can do"));
+    assert_eq!(value(&mut m, "x1"), Some(Value::F64(4.0)), "a failed run commits nothing");
+}
+
+#[test]
+fn a_body_late_in_a_stretch_run_the_short_way_is_faulted_by_the_next_cycle() {
+    let gate = Gate::default();
+    // Budgets above the exact-timing bound (100 ms): these bodies run the short way.
+    let mut m = build(&chain(simulated("late"), 3, 150.0), &registry(true, &gate));
+    let events = m.events();
+    m.step(2).unwrap();
+    m.set_param("s2", "mode", Value::F64(3.0)).unwrap();
+    // Cycle 3 runs s2 untimed (400 ms): the stretch ran past the shortest budget, so cycle 4
+    // times every body and finds s2 late (the next sampled cycle would be the 33rd).
+    m.step(2).unwrap();
+    let cause = fault_of(&events, "s2");
+    assert!(cause.contains("over its execution budget"), "{cause}");
+}
+
+#[test]
+fn a_body_stuck_in_a_stretch_run_the_short_way_is_left_behind_and_the_cycle_goes_on() {
+    let gate = Gate::default();
+    let spec = chain(RobotSpec::new("stuck").clock(ClockKind::Wall).period_s(0.002), 3, 150.0);
+    let mut m = build(&spec, &registry(true, &gate));
+    m.set_param("s2", "mode", Value::F64(4.0)).unwrap();
+    let events = m.events();
+    let (mut handle, join) = m.spawn(true);
+    let cause = fault_of(&events, "s2");
+    assert!(cause.contains("left behind"), "{cause}");
+    // The cycle goes on without it: its source still counts, the skills before it still run.
+    let at = handle.stats().unwrap().cycle;
+    until("cycles after the fault", || handle.query("x1").unwrap().cycle > at + 10);
+    gate.open();
+    // The body returns and its thread drops what it held; the manager is unharmed.
+    until("the skill can be activated again", || handle.activate(&["s2"]).is_ok());
+    handle.set_param("s2", "mode", Value::F64(0.0)).unwrap();
+    let now = handle.stats().unwrap().cycle;
+    until("the chain whole again", || {
+        let q = handle.query("x3").unwrap();
+        q.cycle > now + 5
+            && q.value == handle.query("x0").unwrap().value.and_then(|v| v.as_f64()).map(|x| Value::F64(x + 3.0))
+    });
+    handle.request(Request::Shutdown).unwrap();
+    assert!(join.join_timeout(BOUND).is_ok());
+}
+
+fn until(what: &str, mut f: impl FnMut() -> bool) {
+    let deadline = Instant::now() + BOUND;
+    while !f() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
