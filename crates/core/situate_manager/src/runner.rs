@@ -149,25 +149,23 @@ impl Exec {
     }
 
     /// [`Exec::run_on`] for a step run the short way (`plan::Fast`): the
-    /// body reads its one input in place, and is not timed (its time is its
+    /// body reads its one input in place (or has none), and is not timed (its time is its
     /// stretch of such steps', checked by the walk). Its outputs are set as
     /// for a run on the coarse clock that read no time.
     #[inline(always)]
-    pub fn run_untimed(&mut self, input: &Option<Value>, cycle: u64, time_s: f64) {
+    pub fn run_untimed(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) {
         if !self.fills {
             if let Some(old) = self.outputs.first_mut().and_then(Option::take) {
                 recycle(old);
             }
         }
         self.cx.set(cycle, time_s);
+        let inputs = match input {
+            Some(input) => std::slice::from_ref(input),
+            None => &self.inputs[..],
+        };
         match &mut self.skill {
-            Some(skill) => run_body_into(
-                skill.as_mut(),
-                std::slice::from_ref(input),
-                &mut self.outputs,
-                &mut self.cx,
-                &mut self.result,
-            ),
+            Some(skill) => run_body_into(skill.as_mut(), inputs, &mut self.outputs, &mut self.cx, &mut self.result),
             None => self.result = Err("the body is not here (it runs on its own thread)".into()),
         }
         self.elapsed_ns = 0;

@@ -70,9 +70,9 @@ fn plus_one(name: &str, typed: bool, gate: &Gate) -> SkillType {
     })
 }
 
-/// The cycle number to `out`.
-fn counter() -> SkillType {
-    fn_type(decl("count", SkillKind::Sync, &[], &[("out", "f64")]), |io, _| {
+/// The cycle number to `out` (a source: typed, it runs the short way too).
+fn counter(typed: bool) -> SkillType {
+    body_type(decl("count", SkillKind::Sync, &[], &[("out", "f64")]), typed, |io, _| {
         io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
         Ok(())
     })
@@ -90,7 +90,7 @@ fn chain(spec: RobotSpec, n: usize, budget_ms: f64) -> RobotSpec {
 
 fn registry(typed: bool, gate: &Gate) -> Registry {
     let mut reg = Registry::new();
-    reg.add(counter());
+    reg.add(counter(typed));
     reg.add(plus_one("plus_one", typed, gate));
     reg
 }

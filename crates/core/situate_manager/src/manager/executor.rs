@@ -33,9 +33,9 @@ impl Bodies for InPlace<'_> {
     }
 
     #[inline(always)]
-    fn run_untimed(&mut self, i: usize, input: usize) -> Option<()> {
+    fn run_untimed(&mut self, i: usize, input: Option<usize>) -> Option<()> {
         let m = &mut *self.0;
-        m.execs[i].run_untimed(&m.slots[input].value, m.cycle, m.time_s);
+        m.execs[i].run_untimed(input.map(|leaf| &m.slots[leaf].value), m.cycle, m.time_s);
         Some(())
     }
 

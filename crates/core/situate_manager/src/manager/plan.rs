@@ -71,14 +71,15 @@ pub(crate) struct Step {
 }
 
 /// The leaves of a step that may run the short way (`walk::run_steps`): a
-/// sync cskill with one required plain input, read in place, and one plain
+/// sync cskill with one required plain input, read in place, or none (a
+/// source, run every cycle), and one plain
 /// output of its type by construction, on a leaf no other skill writes (so
 /// never contested), with a deadline long enough to be checked on the
 /// coarse clock. Its body is not timed on its own outside the sampled
 /// cycles: the bodies run back to back this way are timed together.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Fast {
-    pub input: usize,
+    pub input: Option<usize>,
     pub output: usize,
 }
 
@@ -234,12 +235,15 @@ impl Plan {
                     fast: None,
                 });
                 let step = plan.steps.last_mut().expect("a step was just pushed");
-                if let ([InPort { leaf: input, plain: true, optional: false }], [out]) =
-                    (&plan.ins[ins0 as usize..], &plan.outs[outs0 as usize..])
-                {
+                let input = match plan.ins[ins0 as usize..] {
+                    [] => Some(None),
+                    [InPort { leaf, plain: true, optional: false }] => Some(Some(leaf)),
+                    _ => None,
+                };
+                if let (Some(input), [out]) = (input, &plan.outs[outs0 as usize..]) {
                     let sole_writer = graph.leaves[out.leaf].writers.len() == 1;
                     if step.kind == StepKind::Sync && step.typed_outs && !step.precise && sole_writer {
-                        step.fast = Some(Fast { input: *input, output: out.leaf });
+                        step.fast = Some(Fast { input, output: out.leaf });
                     }
                 }
             }

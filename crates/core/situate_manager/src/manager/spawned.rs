@@ -635,8 +635,8 @@ impl Bodies for OnThreads<'_> {
     }
 
     #[inline(always)]
-    fn run_untimed(&mut self, i: usize, input: usize) -> Option<()> {
-        self.held(i, Some(input), |exec, input, cycle, time_s| exec.run_untimed(input.unwrap_or(&None), cycle, time_s))
+    fn run_untimed(&mut self, i: usize, input: Option<usize>) -> Option<()> {
+        self.held(i, input, |exec, input, cycle, time_s| exec.run_untimed(input, cycle, time_s))
     }
 
     /// Batch by batch; each body goes back to the manager as soon as it

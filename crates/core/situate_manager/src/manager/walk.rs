@@ -36,8 +36,9 @@ pub(super) trait Bodies {
     fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp>;
 
     /// Runs instance `i`'s body once, untimed, on the value in slot `input`
-    /// (a step run the short way, [`Fast`]). `None` as for [`Bodies::run`].
-    fn run_untimed(&mut self, i: usize, input: usize) -> Option<()>;
+    /// or on no input (a step run the short way, [`Fast`]). `None` as for
+    /// [`Bodies::run`].
+    fn run_untimed(&mut self, i: usize, input: Option<usize>) -> Option<()>;
 
     /// Runs the bodies of `batch` (instances that share no claim, their
     /// inputs gathered) at the same time, on the pool. `None` as for
@@ -117,7 +118,7 @@ pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
 /// is one after a fault. The outer `None`: left behind.
 ///
 /// A step that may run the short way ([`Fast`]: one required input read in
-/// place, one output on a leaf no other skill writes, of its type by
+/// place or none, one output on a leaf no other skill writes, of its type by
 /// construction) does, outside the sampled cycles, while it holds its
 /// output's slot: checked, run untimed, its output swapped into its slot.
 /// Back to back such steps are a *stretch*, timed as one on the coarse
@@ -143,9 +144,11 @@ fn run_steps<B: Bodies>(
                 out.writer as usize == step.inst && out.stamp > 0
             };
             if !m.sampled && held(m) {
-                let input = &m.slots[fast.input];
-                if input.value.is_none() || input.stamp != m.cycle {
-                    continue;
+                if let Some(input) = fast.input {
+                    let input = &m.slots[input];
+                    if input.value.is_none() || input.stamp != m.cycle {
+                        continue;
+                    }
                 }
                 // The stretch starts where the body before ended, on the coarse clock.
                 let (_, shortest) = stretch.get_or_insert_with(|| match t {
