@@ -41,10 +41,10 @@ use crate::config::ClockKind;
 use crate::control::{ControlError, Handle, Reply, Request};
 use crate::handle::Envelope;
 use crate::runner::{BodyClock, Exec, Stamp};
+use crate::starved::Starvation;
 use watchdog::watchdog;
 
 mod watchdog;
-use crate::starved::Starvation;
 
 type Guard<'a> = parking_lot::MutexGuard<'a, Option<Manager>>;
 
