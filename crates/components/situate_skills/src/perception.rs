@@ -421,7 +421,11 @@ impl Body for DetectIntersection {
                 let d = self.corridor.wall(k).unwrap_or(1.0);
                 Some(self.path - start + 2.0 * d * HALF_CONE.tan())
             } else {
-                if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() {
+                // Turned off the way, the robot also moves across it (round someone): the wall
+                // line the side sonar was judged against no longer holds, so an opening's travel
+                // is never carried across a turn (a door passed before it, plus the wall after it
+                // read as "beyond" a stale line, would add up to a side corridor).
+                if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() || turned {
                     self.since[k] = None;
                     self.deep[k] = false;
                 }

@@ -464,3 +464,73 @@ fn turning_in_place_or_someone_walking_out_of_view_is_no_opening() {
         assert!(!o.seen, "cycle {k}: someone walking off taken for an opening: {o:?}");
     }
 }
+
+/// A robot going along `corridor`'s way at 0.4 m/s swerves right round someone walking
+/// towards it on the left half (standing at x 9.8 from t 48.8 to 51.7, then walking back
+/// east, or gone when `gone`), as in hand-drawn building h1, run 7 (a person turned back by
+/// the robot beside a store's door); then it turns back towards its way and goes on to
+/// x `until`. The first junction the detector reports: (t, pose, junction).
+fn swerve_past(scene: &Scene, seed: u64, gone: bool, until: f64) -> Option<(f64, Pose, Junction)> {
+    let r = 0.25;
+    let mut h = Harness::new::<DetectIntersection>();
+    let mut noise = Noise::new(seed, 0.03, 0.02);
+    let mut pose = Pose::new(5.0, 0.0, 0.0);
+    let mut t = 39.3;
+    while pose.x < until && t < 90.0 {
+        let px: f64 = if t < 48.8 {
+            12.5 - 0.6 * (t - 44.3)
+        } else if t < 51.7 {
+            9.8
+        } else if gone {
+            40.0
+        } else {
+            9.8 + 0.6 * (t - 51.7)
+        };
+        let (px, py) = (px.min(14.0), 0.3);
+        let scene = scene
+            .clone()
+            .wall(px - r, py - r, px + r, py - r)
+            .wall(px + r, py - r, px + r, py + r)
+            .wall(px - r, py + r, px + r, py + r)
+            .wall(px - r, py - r, px - r, py + r);
+        let drive = if pose.x < 8.73 {
+            situate_robot::Drive { v: 0.4, w: 0.0 }
+        } else if t < 53.3 {
+            situate_robot::Drive { v: 0.13, w: if pose.theta > -0.6 { -0.4 } else { 0.0 } }
+        } else {
+            situate_robot::Drive { v: 0.3, w: if pose.theta < -0.02 { 0.4 } else { 0.0 } }
+        };
+        pose = pose.step(drive, 0.1);
+        t += 0.1;
+        let ranges = noise.apply(scene.sonar(pose));
+        let out = h.run(&[("sonar", val::<[f32; SONARS]>(ranges)), ("odom", val(pose.odom(drive)))]);
+        let j: Junction = out.get("junction").expect("written every run");
+        if j.left || j.right {
+            return Some((t, pose, j));
+        }
+    }
+    None
+}
+
+#[test]
+fn with_odometry_a_door_passed_while_swerving_round_someone_is_no_junction() {
+    // Before: the way travelled past the 1.1 m door was carried across the swerve, and the
+    // wall after it, read farther than the wall line seen before the swerve, added to it.
+    for seed in 1..=6u64 {
+        let seen = swerve_past(&corridor(1.1, 0.0), seed, false, 9.6);
+        assert!(seen.is_none(), "seed {seed}: the door taken for a junction: {seen:?}");
+    }
+    // A side corridor on the left after the swerve is still found.
+    let with_side = Scene::new()
+        .wall(-1.0, 1.0, 8.0, 1.0)
+        .wall(9.1, 1.0, 10.5, 1.0)
+        .wall(12.5, 1.0, 20.0, 1.0)
+        .wall(10.5, 1.0, 10.5, 6.0)
+        .wall(12.5, 1.0, 12.5, 6.0)
+        .wall(-1.0, -1.0, 20.0, -1.0);
+    for seed in 1..=6u64 {
+        let seen = swerve_past(&with_side, seed, true, 14.0);
+        let (_, pose, j) = seen.unwrap_or_else(|| panic!("seed {seed}: the side corridor missed"));
+        assert!(j.left && pose.x > 10.5, "seed {seed}: {pose:?} {j:?}");
+    }
+}
