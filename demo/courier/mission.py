@@ -85,6 +85,18 @@ NO_ECHO_READ_M = 4.0
 SONAR_CONE_DEG = 15.0
 
 
+#: Inside a car, the robot's centre is at most this far from the car's panel (the middle of its
+#: back wall; shafts are 1.8 to 2.4 m on each side: docs/maps.md, "Lobby"), m. Stopped short
+#: outside the door (someone in the way), with walls and people near all round, the robot reads
+#: the panel through the open door from farther.
+PANEL_INSIDE_M = 2.4
+#: In a car, facing its door: the sonar nearest ahead reads it open beyond this, m; the live ones
+#: 15° either side of it (their cones reach the door's plane a little farther off, from 7.5°)
+#: beyond this, m. Shut, the door is at most 2.4 m less the robot's radius away.
+DOOR_OPEN_AHEAD_M = 2.2
+DOOR_OPEN_BESIDE_M = 2.5
+
+
 def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
     """The route's hint for the door of step ``n``: the last turn before it (docs/maps.md)."""
     return next((str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None)
@@ -102,6 +114,27 @@ def seen_wall_ends_at(ranges: Sequence[float], i: int) -> bool:
         return False
     expect = r / math.cos(math.radians(15))
     return all(abs(ranges[(i + k) % SONARS] - expect) < 0.3 for k in (-1, 1))
+
+
+def inside_car_by_panel(panel_distance: float) -> bool:
+    """Whether the robot is inside a car, its panel read ``panel_distance`` m off."""
+    return panel_distance <= PANEL_INSIDE_M
+
+
+def car_door_open_expr(look: int, dead_mask: int) -> str:
+    """The monitor condition of a car's door open ahead, facing it from inside with sonar ``look``.
+
+    Sonar ``look`` reads farther than `DOOR_OPEN_AHEAD_M`, or a live neighbour of it (bit i of
+    ``dead_mask``: sonar i is dead) farther than `DOOR_OPEN_BESIDE_M`. A robot off the car's
+    middle (its sideways centring misled by a dead sonar on a side, or the car wider than the
+    door) looks past the door's middle: the sonar ahead reads a jamb while the door stands open,
+    one beside it looks out through the opening.
+    """
+    parts = [f"sonar.range[{look}] > {DOOR_OPEN_AHEAD_M!r}"]
+    for k in ((look - 1) % SONARS, (look + 1) % SONARS):
+        if not dead_mask >> k & 1:
+            parts.append(f"sonar.range[{k}] > {DOOR_OPEN_BESIDE_M!r}")
+    return "(" + " || ".join(parts) + ")"
 
 
 def square_wall_reading(r: float, k: int) -> float:

@@ -28,7 +28,7 @@ from collections.abc import Sequence
 
 from courier.geometry import Pose, bearing_of, sonar_toward, wrap
 from courier.link import PhaseFailed
-from courier.mission import NORMAL, SKILLS, Stop
+from courier.mission import DOOR_OPEN_AHEAD_M, NORMAL, SKILLS, Stop, car_door_open_expr
 from courier.sequenced.behaviours import BEYOND_WALL_M
 from courier.sequenced.explore import Explorer
 
@@ -54,6 +54,9 @@ SQUARE_OUT_NEVER_RAD = math.radians(60)
 SQUARE_OUT_CLEARER_M = 1.0
 #: Stopped in the lab's doorway, the robot goes on this far through it, m.
 ON_THROUGH_M = 0.8
+#: A car's door opens in at most this long (the elevator's `door_move_s`, 1.5 s by default,
+#: and some slack), s.
+DOOR_OPENING_S = 2.5
 #: Stopped in a car's doorway on the way out, the robot waits for this much room ahead, m.
 LEAVE_CLEAR_M = 1.0
 
@@ -257,8 +260,17 @@ class Delivery(Explorer):
         look = await self.live_sonar_ahead()
         if look != 0 and not await self.turn(-bearing_of(look), keep=["runaway"]):
             raise PhaseFailed("could not turn round in the car")
-        if await self.wait(f"floor == {self.to} && sonar.range[{look}] > 2.2", within=90):
+        # Off the car's middle, the sonar ahead reads a jamb with the door open: one beside it
+        # looks out (`car_door_open_expr`). The door slides open: while it opens, give the
+        # sonar ahead the time the door takes to look out too.
+        health = await self.value("sonar.health")
+        door_open = car_door_open_expr(look, int(health["mask"]) if health else 0)
+        ahead = f"floor == {self.to} && sonar.range[{look}] > {DOOR_OPEN_AHEAD_M!r}"
+        got = await self.wait(ahead, f"floor == {self.to} && {door_open}", within=90)
+        if got == 2:
             raise PhaseFailed(f"the car never opened on floor {self.to}")
+        if got == 1 and await self.wait(ahead, within=DOOR_OPENING_S) and self.debug:
+            await self.say(f"      the door open beside sonar {look}, which reads a jamb")
         await self.phase(10, f"floor {self.to}: leaving the car")
         await self.set("leave_car", "distance", 3.0)
         # As fast as the robot enters: the doors may stay open only 8 s (docs/maps.md), and

@@ -20,6 +20,7 @@ from courier.mission import (
     NORMAL,
     OPENED_ON_WALL_M,
     Mission,
+    inside_car_by_panel,
     seen_wall_ends_at,
     square_wall_reading,
     wall_wider_than_people_at,
@@ -558,9 +559,20 @@ class Lobby(RouteSequencer):
                     await self.wait("car_entered", within=15)
                     if await self.enclosed():
                         break
-            if self.car > 0 and await self.enclosed() and await self.look_round(code):
-                await self.say(f"    inside car {self.car}")
-                return True
+            for again in range(2):
+                if not (self.car > 0 and await self.enclosed() and await self.look_round(code)):
+                    break
+                # Walls and people near all round, the panel in view through the open door:
+                # stopped short outside (someone in the way) unless the panel is near.
+                if inside_car_by_panel(float((await self.value("target"))["distance"])):
+                    await self.say(f"    inside car {self.car}")
+                    return True
+                if self.debug:
+                    await self.say("      the panel is too far: outside the car")
+                if again or not await self.face_barcode(code):
+                    break
+                await self.use("runaway", "enter_car", restart=["enter_car"])
+                await self.wait("car_entered", within=15)
             if self.debug:
                 await self.say(f"      car {self.car} target {await self.value('target')}")
             await self.say("    the car left before the robot got in")
