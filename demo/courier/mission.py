@@ -96,6 +96,9 @@ PANEL_INSIDE_M = 2.4
 DOOR_OPEN_AHEAD_M = 2.2
 DOOR_OPEN_BESIDE_M = 2.5
 
+#: Lined up with a barcode, the wall ahead reads this near square, m.
+SQUARE_AHEAD_SLACK_M = 0.25
+
 
 def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
     """The route's hint for the door of step ``n``: the last turn before it (docs/maps.md)."""
@@ -146,6 +149,26 @@ def square_wall_reading(r: float, k: int) -> float:
     """
     nearest = math.radians(max(0.0, abs(k) * 360 / SONARS - SONAR_CONE_DEG / 2))
     return min(r / math.cos(nearest), NO_ECHO_READ_M)
+
+
+def square_wall_ahead(ranges: Sequence[float], distance: float) -> bool:
+    """Whether the robot faces a wall square, about ``distance`` m ahead (a lined-up barcode's).
+
+    Sonar 0 reads within `SQUARE_AHEAD_SLACK_M` of ``distance``; none of the sonars 15° and
+    30° off reads nearer than a wall square to the axis would (`square_wall_reading`) by more
+    than that (a wall seen aslant reads nearer on one side: 22° off square, 1 m ahead, the
+    sonar 30° off some 0.45 m nearer; a wall beside the barcode's, 1 m clear of it as the
+    call button is of a lobby's corners (docs/maps.md, "Generated buildings"), is out of their
+    cones), and one of those 15° off reads it (the other may look into a car's open door
+    beside the button).
+    """
+    r = ranges[0]
+    if abs(r - distance) > SQUARE_AHEAD_SLACK_M:
+        return False
+    off = {k: ranges[k % SONARS] - square_wall_reading(r, k) for k in (1, -1, 2, -2)}
+    return min(off.values()) > -SQUARE_AHEAD_SLACK_M and (
+        abs(off[1]) < SQUARE_AHEAD_SLACK_M or abs(off[-1]) < SQUARE_AHEAD_SLACK_M
+    )
 
 
 def wall_wider_than_people_at(ranges: Sequence[float], i: int) -> bool:

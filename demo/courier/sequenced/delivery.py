@@ -272,6 +272,7 @@ class Delivery(Explorer):
         if got == 1 and await self.wait(ahead, within=DOOR_OPENING_S) and self.debug:
             await self.say(f"      the door open beside sonar {look}, which reads a jamb")
         await self.phase(10, f"floor {self.to}: leaving the car")
+        axis = (await self.odom()).heading_of(bearing_of(look))  # out of the car
         await self.set("leave_car", "distance", 3.0)
         # As fast as the robot enters: the doors may stay open only 8 s (docs/maps.md), and
         # at the skill's 0.2 m/s the way from the back wall to the doorway took 6 of them.
@@ -301,6 +302,7 @@ class Delivery(Explorer):
         self.patrols = 0
         self.entry_heading = None
         self.entered_at = None
+        self.lobby_axis = axis
 
     async def to_office(self) -> None:
         """Phases 11 to 13: the route hints from the car to the office, then deliver."""

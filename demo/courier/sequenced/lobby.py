@@ -22,6 +22,7 @@ from courier.mission import (
     Mission,
     inside_car_by_panel,
     seen_wall_ends_at,
+    square_wall_ahead,
     square_wall_reading,
     wall_wider_than_people_at,
 )
@@ -169,6 +170,10 @@ class Lobby(RouteSequencer):
         #: and where the route left it inside.
         self.entry_heading: float | None = None
         self.entered_at: Pose | None = None
+        #: The way out of the car the robot came to this floor in (odometry): the lobby's
+        #: walls are square to it (the shafts' sides are: docs/maps.md, "Lobby"). None on the
+        #: start floor.
+        self.lobby_axis: float | None = None
 
     @property
     def button_here(self) -> int:
@@ -240,13 +245,71 @@ class Lobby(RouteSequencer):
         """Phase 11: about 1 m in front of this floor's call button, facing it."""
         await self.phase(11, f"finding this floor's call button (barcode {button})")
         # Someone passing between may hide the barcode while lining up: look again.
-        for _attempt in range(3):
+        for attempt in range(3):
             if not await self.look_round(button) and not await self.search(button, 120):
                 raise PhaseFailed(f"the call button of floor {self.here} is nowhere in sight")
             if await self.line_up(button, 1.0):
-                return
+                # The barcode ahead, but no wall square ahead: lined up with a wrong wall (a
+                # line fitted through people, or another wall near the corner), the barcode
+                # read up to 80° off its facing; the route's turns would then all be off.
+                # The lobby's walls are square to the car's door the robot came out of.
+                if (
+                    attempt == 2
+                    or self.lobby_axis is None
+                    or square_wall_ahead(await self.sonar(), 1.0)
+                ):
+                    return
+                # Still turning, or someone passing: once more, standing still.
+                await self.wait("abs(odom.v) < 0.02 && abs(odom.w) < 0.02", within=1)
+                if square_wall_ahead(await self.sonar(), 1.0):
+                    return
+                await self.say(f"    lined up with barcode {button} aslant: square to the lobby")
+                if await self.square_up_on_axes(button, self.lobby_axis, 1.0):
+                    return
+                continue
             await self.say(f"    could not line up with barcode {button}: again")
         raise PhaseFailed(f"could not line up with barcode {button}")
+
+    async def square_up_on_axes(self, barcode: int, axis: float, standoff: float) -> bool:
+        """To ``standoff`` m in front of ``barcode`` (in view), square to a wall on the axes.
+
+        The barcode's wall's normal is one of ``axis`` + k·90° (odometry) within 80° of the
+        way to it: each of those, nearest first, until the barcode is straight ahead and a
+        wall square ahead (`square_wall_ahead`). False if neither is.
+        """
+        self.prefetch("target", "odom")
+        t = await self.value("target")
+        if not (t["seen"] and int(t["id"]) == barcode):
+            return False
+        o = await self.odom()
+        px, py = o.seen_at(float(t["bearing"]), float(t["distance"]))
+        toward = math.atan2(py - o.y, px - o.x)
+        normals = [wrap(axis + k * math.pi / 2) for k in range(4)]
+        normals = [n for n in normals if abs(wrap(n - toward)) < math.radians(80)]
+        normals.sort(key=lambda n: abs(wrap(n - toward)))
+        if self.debug:
+            await self.say(
+                f"      barcode at ({px:.2f}, {py:.2f}), normals "
+                f"{[round(math.degrees(n)) for n in normals]}, heading {math.degrees(o.theta):.0f}"
+            )
+        await self.set("runaway", "safe_distance", 0.15)
+        try:
+            for n in normals:
+                # (A wrong wall's point may be out of reach: next to a wall across the way.)
+                gx, gy = px - standoff * math.cos(n), py - standoff * math.sin(n)
+                await self.goto(gx, gy, within=20)
+                if not await self.turn((await self.odom()).turn_to(n)):
+                    continue
+                ahead, ranges = await self.barcode_ahead(barcode, standoff), await self.sonar()
+                if self.debug:
+                    looks = [round(ranges[k % SONARS], 2) for k in (-1, 0, 1)]
+                    await self.say(f"      facing {math.degrees(n):.0f}: {ahead}, {looks}")
+                if ahead and square_wall_ahead(ranges, standoff):
+                    self.wall_fix = (px, py, n)
+                    return True
+        finally:
+            await self.restore("runaway", "safe_distance")
+        return False
 
     async def restore_lobby_patrol(self) -> None:
         """The parameters of the lobby patrol (a crowded lobby: nearer to things)."""
