@@ -34,6 +34,10 @@ PEOPLE_PAUSE_S = 6.0
 #: (m), the robot has gone round a corner into a side corridor.
 SIDE_EXIT_RAD = math.radians(60)
 SIDE_EXIT_M = 1.0
+#: Following to a wall: how often the robot notes where it follows the way (s), facing
+#: within this of it (rad): the way's line runs through there, not through where it began.
+LINE_CHECK_S = 4.0
+ON_LINE_RAD = math.radians(10)
 #: Walls on both sides nearer together than this: a corridor (they are 1.8 to 2.6 m wide), m.
 CORRIDOR_MAX_M = 3.0
 #: Following to a wall: the time budget, renewed while way is made, up to the longest, s.
@@ -87,6 +91,23 @@ def heading_off(along: float, rad: float) -> str:
     if lo < -math.pi:
         return f"odom.theta > {hi!r} && odom.theta < {lo + 2 * math.pi!r}"
     return f"(odom.theta < {lo!r} || odom.theta > {hi!r})"
+
+
+def off_the_way(start: Pose, line: Pose, along: float) -> str:
+    """The condition: following ``along``, the robot has gone round a corner off the way.
+
+    Turned more than `SIDE_EXIT_RAD` off ``along`` and more than `SIDE_EXIT_M` to a side of
+    both the line along it through ``start`` (where the step began) and the one through
+    ``line`` (where the robot last followed the way): the first drifts aside with the
+    heading's error over a long corridor (3° off, 1 m in 19 m), the second with where the
+    robot stood in the corridor then.
+    """
+    c, s = math.cos(along), math.sin(along)
+    aside = [
+        f"abs((odom.y - {p.y!r}) * {c!r} - (odom.x - {p.x!r}) * {s!r}) > {SIDE_EXIT_M!r}"
+        for p in (start, line)
+    ]
+    return " && ".join([heading_off(along, SIDE_EXIT_RAD), *aside])
 
 
 def side_walls(ranges: Sequence[float], spread_deg: float = 60.0) -> tuple[float, float]:
@@ -262,11 +283,6 @@ class RouteSequencer(Sequencer):
         start = await self.odom()
         along = start.theta if self.corridor_heading is None else self.corridor_heading
 
-        def side_exit(start: Pose, along: float) -> str:
-            c, s = math.cos(along), math.sin(along)
-            lateral = f"(odom.y - {start.y!r}) * {c!r} - (odom.x - {start.x!r}) * {s!r}"
-            return f"{heading_off(along, SIDE_EXIT_RAD)} && abs({lateral}) > {SIDE_EXIT_M!r}"
-
         ahead = await self.wall_ahead_condition()
 
         async def watch_ahead() -> None:
@@ -278,10 +294,16 @@ class RouteSequencer(Sequencer):
         began = await self.now()
         deadline = began + WALL_BUDGET_S
         best = 0.0
+        # A point of the way's line: where the robot last followed it, facing along it. The
+        # line drawn from ``start`` alone drifts aside with the heading's error (3° off, 1 m
+        # in 19 m): a robot going round clutter then seems to have left the way, and going
+        # back onto it takes it through a door. Off the way means off both lines.
+        line = start
+        progress_t = began
         try:
             while self.t < deadline:
-                within = min(FOLLOW_SLICE_S, deadline - self.t)
-                held = await self.wait(ahead, side_exit(start, along), within=within)
+                within = min(LINE_CHECK_S, deadline - self.t)
+                held = await self.wait(ahead, off_the_way(start, line, along), within=within)
                 if held == 0:
                     off = (await self.odom()).turn_to(along)
                     if abs(off) < math.radians(30):
@@ -305,22 +327,26 @@ class RouteSequencer(Sequencer):
                     if left + right > CORRIDOR_MAX_M:
                         # Not in a corridor (a lobby, a hall): the way bends with the room
                         # (the heading planned out of it is only roughly the corridor's).
-                        start = await self.odom()
+                        start = line = await self.odom()
                         along, best = start.theta, 0.0
                         continue
-                    if await self.wall_from_the_way(start, along):
+                    if await self.wall_from_the_way(line, along):
                         return True
                     await watch_ahead()
                     await self.use("runaway", "avoid", "follow_hallway", "fit_wall")
                 o = await self.odom()
+                if held == 2 and abs(o.turn_to(along)) < ON_LINE_RAD:
+                    line = o
                 made = start.along(o.x, o.y, along)
                 if made > best + 0.5:
                     best = made
+                    progress_t = self.t
                     renewed = max(deadline, self.t + WALL_BUDGET_S / 2)
                     deadline = min(renewed, began + WALL_LONGEST_S)
-                elif held == 2:
+                elif held == 2 and self.t - progress_t >= FOLLOW_SLICE_S:
                     # No way made in a whole slice (turned into a doorway beside the way):
                     # facing the way again from the corridor's middle, on.
+                    progress_t = self.t
                     await self.say(
                         f"    no way made in {FOLLOW_SLICE_S:.0f} s: to the corridor's middle"
                     )

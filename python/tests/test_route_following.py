@@ -1,0 +1,47 @@
+"""How the sequencer follows a route's corridor steps (demo/courier/sequenced/routes.py).
+
+Pure tests: no link, no simulator. Following to a wall, the robot took itself for gone round a
+corner into a side corridor by measuring how far aside it was from a line drawn from where the
+step began, along the route's heading: 3° off, that line was 1 m aside after 19 m, and a robot
+going round a box there was off the way; going back onto that line took it through a door,
+into a room whose wall it stopped at (generated building 30069).
+"""
+
+from __future__ import annotations
+
+import math
+
+import reactive_support  # noqa: F401  (first: puts demo/ on the path)
+from courier.geometry import Pose, wrap
+from courier.sequenced.routes import off_the_way
+
+
+def holds(condition: str, x: float, y: float, theta: float) -> bool:
+    """``condition`` (the monitor language's &&, ||, abs) for the odometry pose (x, y, theta)."""
+    text = condition.replace("&&", " and ").replace("||", " or ")
+    text = text.replace("odom.x", repr(x)).replace("odom.y", repr(y))
+    return bool(eval(text.replace("odom.theta", repr(theta)), {"abs": abs}))
+
+
+def test_round_clutter_after_a_long_corridor_is_still_on_the_way() -> None:
+    along = math.pi  # west; the corridor really runs 3° off that
+    start = Pose(30.0, 14.0, along)
+    drift = math.radians(3)
+    # 22 m on, in the corridor's middle, turned 65° off round a box on its wall.
+    here = (30.0 - 22 * math.cos(drift), 14.0 + 22 * math.sin(drift))
+    line = Pose(here[0] + 4.0, here[1] - 0.2, along)  # where it followed the way 4 m back
+    theta = wrap(along + math.radians(65))
+    assert holds(off_the_way(start, start, along), *here, theta)  # the start's line alone
+    assert not holds(off_the_way(start, line, along), *here, theta)
+
+
+def test_into_a_side_corridor_is_off_the_way() -> None:
+    along = math.pi
+    start = Pose(30.0, 14.0, along)
+    line = Pose(11.0, 14.0, along)
+    # Round the corner at the corridor's end, 1.5 m into the side corridor, facing down it.
+    assert holds(off_the_way(start, line, along), 7.0, 12.5, -math.pi / 2)
+    # Turned as much but in the corridor (going round someone): not off it.
+    assert not holds(off_the_way(start, line, along), 8.0, 13.8, -math.pi / 2)
+    # As far aside facing the way (sidestepping): not off it.
+    assert not holds(off_the_way(start, line, along), 7.0, 12.5, along)
