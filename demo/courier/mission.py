@@ -4,9 +4,10 @@ The mission is the map's `mission:` section (`Mission`), and the task the stops 
 message is said (`Stop`, `parse_task`). Both designs drive the same skills of demo/robot.yaml
 (`SKILLS`), from the same parameters (`NORMAL`), and read the building the same way where
 they agree: how near a wall ahead ends a corridor, where a door is beside its barcode, how long
-a closed door is waited for, where the route's hint puts a door (`door_hint`), which way that
-opened in a lobby is a car's door, and which sonar reading is a wall rather than someone
-standing there (`seen_wall_ends_at`).
+a closed door is waited for, where a leg's first distance runs from (`distance_from_door`),
+where the route's hint puts a door (`door_hint`), which way that opened in a lobby is a car's
+door, and which sonar reading is a wall rather than someone standing there
+(`seen_wall_ends_at`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from courier.geometry import SONARS
+from courier.geometry import SONARS, Pose
 
 #: Every skill of demo/robot.yaml.
 SKILLS = (
@@ -98,6 +99,31 @@ DOOR_OPEN_BESIDE_M = 2.5
 
 #: Lined up with a barcode, the wall ahead reads this near square, m.
 SQUARE_AHEAD_SLACK_M = 0.25
+
+#: A route leg's first `distance` is measured from the middle of the door the leg begins
+#: out of when the robot stands more than the first and at most the second this far along
+#: the corridor from it, m (nearer, the 1.5 m a junction step's distance leaves before the
+#: junction is room enough; farther, the door's middle was misplaced).
+ORIGIN_MIN_M = 0.75
+ORIGIN_MAX_M = 3.0
+
+
+def distance_from_door(
+    metres: float, door: tuple[float, float], here: Pose, heading: float
+) -> float:
+    """Of a route step's ``metres`` from the ``door``'s middle along ``heading``, those left.
+
+    A leg's first `distance` runs from the middle of the door the leg begins out of
+    (docs/maps.md, route hints: a junction step's to 1.5 m before the junction). Out through
+    it aslant or round someone, the robot may stand a metre or more along the corridor from
+    there (``here``), and the junction is that much nearer (or farther) than the step says.
+    Within `ORIGIN_MIN_M` of the door's middle, or farther than `ORIGIN_MAX_M`, ``metres``.
+    At least 0.1 m.
+    """
+    on = Pose(door[0], door[1], heading).along(here.x, here.y)
+    if not ORIGIN_MIN_M < abs(on) <= ORIGIN_MAX_M:
+        return metres
+    return max(0.1, metres - on)
 
 
 def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:

@@ -4,7 +4,10 @@ Pure tests: no link, no simulator. Following to a wall, the robot took itself fo
 corner into a side corridor by measuring how far aside it was from a line drawn from where the
 step began, along the route's heading: 3° off, that line was 1 m aside after 19 m, and a robot
 going round a box there was off the way; going back onto that line took it through a door,
-into a room whose wall it stopped at (generated building 30069).
+into a room whose wall it stopped at (generated building 30069). A leg's first `distance` ran
+from where the robot stood out of the lab door, 1.6 m along the corridor from the door's
+middle (where the map measures it from): it ended inside the junction it led to, which the
+detector, started there, never saw (generated building 30054).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ import math
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
 from courier.geometry import Pose, wrap
+from courier.mission import ORIGIN_MAX_M, distance_from_door
 from courier.sequenced.routes import off_the_way
 
 
@@ -45,3 +49,25 @@ def test_into_a_side_corridor_is_off_the_way() -> None:
     assert not holds(off_the_way(start, line, along), 8.0, 13.8, -math.pi / 2)
     # As far aside facing the way (sidestepping): not off it.
     assert not holds(off_the_way(start, line, along), 7.0, 12.5, along)
+
+
+def test_a_first_distance_runs_from_the_doors_middle() -> None:
+    west = math.pi
+    door = (30.04, 5.83)  # in the lab's wall; the corridor runs west along it
+    # Out through the door 1.6 m west of its middle: the junction is that much nearer.
+    left = distance_from_door(22.16, door, Pose(28.47, 7.09, 2.8), west)
+    assert math.isclose(left, 22.16 - 1.57, abs_tol=1e-9)
+    # Short of the middle (out aslant the other way): farther.
+    assert math.isclose(distance_from_door(10.0, door, Pose(31.24, 6.9, 0.0), west), 11.2)
+
+
+def test_near_the_doors_middle_or_far_from_it_the_step_is_as_written() -> None:
+    west = math.pi
+    door = (30.0, 5.83)
+    # Half a metre along: the 1.5 m left before the junction is room enough.
+    assert distance_from_door(22.16, door, Pose(29.5, 6.9, west), west) == 22.16
+    # Farther than a door's middle can be misplaced by: not that door's.
+    far = Pose(30.0 - ORIGIN_MAX_M - 1.0, 6.9, west)
+    assert distance_from_door(22.16, door, far, west) == 22.16
+    # Never down to nothing.
+    assert distance_from_door(1.0, door, Pose(28.0, 6.9, west), west) == 0.1

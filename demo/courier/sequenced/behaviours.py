@@ -106,6 +106,8 @@ class Sequencer(Link):
         self.barcode_place: tuple[int, float, float] | None = None
         #: The odometry heading the last door was passed at (out through it).
         self.passed_heading: float | None = None
+        #: The middle of the last door passed (odometry frame, m), as it was found.
+        self.passed_door: tuple[float, float] | None = None
         #: The heading the route planned for its last `follow` step (odometry frame).
         self.followed_heading: float | None = None
         #: Sonars that heard an echo in the run (bit k: sonar k), noted after each turn.
@@ -621,6 +623,7 @@ class Sequencer(Link):
                 await self.use()
                 return False
             self.passed_heading = start.theta
+            self.passed_door = pose.from_robot(*centre)
             return True
         finally:
             await self.restore("runaway", "safe_distance")

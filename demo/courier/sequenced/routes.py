@@ -16,7 +16,7 @@ from typing import Any
 
 from courier.geometry import SONARS, Pose, bearing_of, wrap
 from courier.link import PhaseFailed
-from courier.mission import WALL_AHEAD_M, door_hint
+from courier.mission import WALL_AHEAD_M, distance_from_door, door_hint
 from courier.sequenced.behaviours import DOOR_STANDOFF, Sequencer
 
 #: Following for a distance: the time in which some way must be made, s.
@@ -132,6 +132,10 @@ def side_walls(ranges: Sequence[float], spread_deg: float = 60.0) -> tuple[float
 class RouteSequencer(Sequencer):
     """A `Sequencer` that follows a map's route hints (`run_route`)."""
 
+    #: Where the leg's first `distance` runs from (odometry frame): the middle of the door
+    #: it began out of, until its first `follow` step; None otherwise.
+    leg_origin: tuple[float, float] | None = None
+
     async def follow(self, step: Mapping[str, Any]) -> bool:
         """A route step ``follow: hallway, until: …`` (docs/maps.md, "Route steps").
 
@@ -146,7 +150,10 @@ class RouteSequencer(Sequencer):
         count = int(step.get("count", 1))
         await self.restore("follow_hallway", "speed")
         if step.get("distance") is not None:
-            if not await self.follow_for(float(step["distance"])):
+            metres = float(step["distance"])
+            if self.leg_origin is not None:
+                metres = await self.distance_left(metres, self.leg_origin)
+            if not await self.follow_for(metres):
                 return False
             if until == "distance":
                 return True
@@ -194,6 +201,18 @@ class RouteSequencer(Sequencer):
                 o.theta if self.corridor_heading is None else self.corridor_heading
             )
         return True
+
+    async def distance_left(self, metres: float, origin: tuple[float, float]) -> float:
+        """Of a step's ``metres`` measured from the door's middle ``origin``, what is left.
+
+        See `distance_from_door`: along the route's heading, from where the robot stands.
+        """
+        o = await self.odom()
+        heading = o.theta if self.corridor_heading is None else self.corridor_heading
+        left = distance_from_door(metres, origin, o, heading)
+        if self.debug and left != metres:
+            await self.say(f"      {metres - left:+.2f} m along the way from the door's middle")
+        return left
 
     async def junction_centre(self, along: float) -> None:
         """Into the middle of the junction the detector saw, going ``along``, before turning.
@@ -664,10 +683,15 @@ class RouteSequencer(Sequencer):
         """Interprets the route hints ``steps`` of ``leg`` (docs/maps.md, "Route steps").
 
         Stops before a ``home`` on ``stop_before_home``; ``on_home`` is told each barcode homed on.
-        ``heading`` is the way the leg begins facing, in the odometry frame (default: the robot's).
+        ``heading`` is the way the leg begins facing, in the odometry frame (default: the robot's);
+        given, the leg begins out through the door just passed, and its first ``distance`` runs
+        from that door's middle (`distance_from_door`).
         """
         pending_home: int | None = None
         self.followed_heading = None
+        # Out through a door (``heading`` given): its middle is where the first distance runs
+        # from.
+        self.leg_origin = self.passed_door if heading is not None else None
         # The way the leg begins facing: ``heading`` (odometry) when the caller knows it (out
         # through the door just passed, however the robot ended up turned), else the robot's.
         self.corridor_heading = (await self.odom()).theta if heading is None else heading
@@ -679,6 +703,7 @@ class RouteSequencer(Sequencer):
             ok = True
             if step.get("follow"):
                 ok = await self.follow(step)
+                self.leg_origin = None
                 # The way the leg went last (into a lobby: the way in, from its entry).
                 self.followed_heading = self.corridor_heading
             if ok and step.get("home") is not None:
