@@ -126,6 +126,32 @@ def distance_from_door(
     return max(0.1, metres - on)
 
 
+#: Following a corridor for a distance, the way travelled squares the route's heading when
+#: at least `TRAVEL_MIN_M` long and between `TRAVEL_MIN_RAD` and `TRAVEL_MAX_RAD` off it (a
+#: step that began half a metre off the corridor's middle, 5 m long, is some 6° off it).
+TRAVEL_MIN_M = 5.0
+TRAVEL_MIN_RAD = math.radians(15)
+TRAVEL_MAX_RAD = math.radians(35)
+
+
+def travelled_heading(start: Pose, here: Pose, planned: float) -> float | None:
+    """The corridor's heading as travelled from ``start`` to ``here``, if ``planned`` is off.
+
+    Turns are made from the heading the route planned (docs/maps.md, route hints); planned
+    from a way out of a door misjudged (passed aslant), it is off by as much, and so is every
+    turn from it: into a side corridor's corner instead of its mouth, along the next corridor
+    aslant. Following the hallway keeps the robot in the corridor's middle whatever the plan,
+    so the straight line it travelled is the corridor's way. None when the line is too short
+    to tell, or the plan is near enough (or so far off that the robot went some other way).
+    """
+    dx, dy = here.x - start.x, here.y - start.y
+    if math.hypot(dx, dy) < TRAVEL_MIN_M:
+        return None
+    travel = math.atan2(dy, dx)
+    off = abs(math.remainder(travel - planned, 2 * math.pi))
+    return travel if TRAVEL_MIN_RAD < off < TRAVEL_MAX_RAD else None
+
+
 def door_hint(steps: Sequence[Mapping[str, Any]], n: int) -> str | None:
     """The route's hint for the door of step ``n``: the last turn before it (docs/maps.md)."""
     return next((str(s.get("turn")) for s in reversed(steps[:n]) if s.get("turn")), None)

@@ -7,7 +7,9 @@ going round a box there was off the way; going back onto that line took it throu
 into a room whose wall it stopped at (generated building 30069). A leg's first `distance` ran
 from where the robot stood out of the lab door, 1.6 m along the corridor from the door's
 middle (where the map measures it from): it ended inside the junction it led to, which the
-detector, started there, never saw (generated building 30054).
+detector, started there, never saw (generated building 30054). Out of a door aslant, the
+route's heading was 25° off the corridor's: the turn into the junction the route led to,
+made from it, faced the corner and the next corridor was followed aslant (62080, a dev set).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import math
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
 from courier.geometry import Pose, wrap
-from courier.mission import ORIGIN_MAX_M, distance_from_door
+from courier.mission import ORIGIN_MAX_M, distance_from_door, travelled_heading
 from courier.sequenced.routes import off_the_way
 
 
@@ -71,3 +73,21 @@ def test_near_the_doors_middle_or_far_from_it_the_step_is_as_written() -> None:
     assert distance_from_door(22.16, door, far, west) == 22.16
     # Never down to nothing.
     assert distance_from_door(1.0, door, Pose(28.0, 6.9, west), west) == 0.1
+
+
+def test_the_way_travelled_squares_a_plan_far_off() -> None:
+    planned = math.radians(-154)  # the corridor runs west, 180°
+    start, here = Pose(17.35, 8.51, planned), Pose(9.22, 8.30, math.pi)
+    travel = travelled_heading(start, here, planned)
+    assert travel is not None
+    assert abs(wrap(travel - math.pi)) < math.radians(2)
+
+
+def test_a_plan_near_enough_a_short_way_or_another_way_is_kept() -> None:
+    west = math.pi
+    # Started half a metre off the middle, back in it 6 m on: some 5° off the plan.
+    assert travelled_heading(Pose(20.0, 8.5, west), Pose(14.0, 9.0, west), west) is None
+    # Pushed about by people for a metre or two: too short to tell.
+    assert travelled_heading(Pose(20.0, 8.5, west), Pose(17.0, 9.6, west), west) is None
+    # Round a corner into the crossing corridor: no corridor of the plan's.
+    assert travelled_heading(Pose(20.0, 8.5, west), Pose(15.0, 14.0, west), west) is None

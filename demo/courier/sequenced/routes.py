@@ -16,7 +16,12 @@ from typing import Any
 
 from courier.geometry import SONARS, Pose, bearing_of, wrap
 from courier.link import PhaseFailed
-from courier.mission import WALL_AHEAD_M, distance_from_door, door_hint
+from courier.mission import (
+    WALL_AHEAD_M,
+    distance_from_door,
+    door_hint,
+    travelled_heading,
+)
 from courier.sequenced.behaviours import DOOR_STANDOFF, Sequencer
 
 #: Following for a distance: the time in which some way must be made, s.
@@ -552,7 +557,8 @@ class RouteSequencer(Sequencer):
         on along the wrong one, pressing towards its way. Making less than 0.5 m of way in
         ``FOLLOW_SLICE_S``, it goes back to where the step began, faces the way, moves to the
         corridor's middle (`recentre`) and starts again (twice at most), each time with the
-        whole time budget.
+        whole time budget. Done, the way it travelled squares the route's heading
+        (`travelled_heading`).
         """
         start = await self.odom()
         heading = start.theta if self.corridor_heading is None else self.corridor_heading
@@ -564,6 +570,13 @@ class RouteSequencer(Sequencer):
         while self.t < deadline:
             within = min(FOLLOW_SLICE_S, deadline - self.t)
             if await self.wait(f"{made_expr} > {metres!r}", within=within) == 0:
+                here = await self.odom()
+                travel = travelled_heading(start, here, heading)
+                if travel is not None:
+                    if self.debug:
+                        off = math.degrees(wrap(travel - heading))
+                        await self.say(f"      the corridor runs {off:+.0f}° off the way planned")
+                    self.corridor_heading = travel
                 return True
             o = await self.odom()
             made = start.along(o.x, o.y, heading)
