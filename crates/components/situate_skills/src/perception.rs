@@ -326,6 +326,9 @@ pub struct DetectIntersection {
     deep: [bool; 2],
     /// Per side: the side sonar read beyond the wall line in the last scan.
     beyond: [bool; 2],
+    /// Per side: turned off the way since the side sonar last read on the wall line (which
+    /// may then have moved: see `step`).
+    stale: [bool; 2],
     /// The last opening's centre: along the path travelled (m) with odometry, else ahead.
     centre: f64,
     /// The corridor's way in the odometry frame (the heading at activation, tracked).
@@ -374,6 +377,7 @@ impl Body for DetectIntersection {
             self.seen_at = [0.0; 2];
             self.deep = [false; 2];
             self.beyond = [false; 2];
+            self.stale = [false; 2];
             self.centre = 0.0;
             self.axis = None;
         }
@@ -413,7 +417,22 @@ impl Body for DetectIntersection {
             let side = [LEFT, RIGHT][k];
             // In this scan and the last: a missed echo also reads far, but one scan only.
             let beyond = self.corridor.wall(k).is_some_and(|d| centre_range(&self.sonar, side) > d + SHALLOW_M);
-            let shallow = std::mem::replace(&mut self.beyond[k], beyond) && beyond && self.odom.is_some() && !turned;
+            // Turned off the way, the robot also moves across it (round someone): the wall line
+            // seen before may be nearer or farther now, so a reading just beyond it sees through
+            // nothing until the side sonar reads on the line again, or sees an opening deep (a
+            // door passed before the swerve, plus the wall after it read beyond a stale line,
+            // made a side corridor). An opening seen deep counts as ever, its way travelled
+            // carried across the turn.
+            if turned {
+                self.stale[k] = true;
+            } else if !beyond || openings[k].is_some() {
+                self.stale[k] = false;
+            }
+            let shallow = std::mem::replace(&mut self.beyond[k], beyond)
+                && beyond
+                && self.odom.is_some()
+                && !turned
+                && !self.stale[k];
             let travelled = if self.odom.is_some() && (openings[k].is_some() || shallow) {
                 let start = *self.since[k].get_or_insert(self.path);
                 self.seen_at[k] = self.path;
@@ -421,11 +440,7 @@ impl Body for DetectIntersection {
                 let d = self.corridor.wall(k).unwrap_or(1.0);
                 Some(self.path - start + 2.0 * d * HALF_CONE.tan())
             } else {
-                // Turned off the way, the robot also moves across it (round someone): the wall
-                // line the side sonar was judged against no longer holds, so an opening's travel
-                // is never carried across a turn (a door passed before it, plus the wall after it
-                // read as "beyond" a stale line, would add up to a side corridor).
-                if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() || turned {
+                if self.path - self.seen_at[k] > GAP_M || self.odom.is_none() {
                     self.since[k] = None;
                     self.deep[k] = false;
                 }
