@@ -119,6 +119,30 @@ impl Exec {
         start: Stamp,
         clock: Option<(&BodyClock, u64)>,
     ) -> Stamp {
+        self.run_body(input, cycle, time_s, clock);
+        let end = start.again();
+        self.elapsed_ns = end.since(start);
+        self.timed = matches!(start, Stamp::Precise(_));
+        end
+    }
+
+    /// [`Exec::run_on`] for a step run the short way (`plan::Fast`): the
+    /// body reads its one input in place (or has none), and is not timed (its time is its
+    /// stretch of such steps', checked by the walk). Its outputs are set as
+    /// for a run on the coarse clock that read no time.
+    #[inline(always)]
+    pub fn run_untimed(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) {
+        self.run_body(input, cycle, time_s, None);
+        self.elapsed_ns = 0;
+        self.timed = false;
+    }
+}
+
+impl Exec {
+    /// One run of the body, untimed: its outputs made ready (see [`Exec::run`]), the cycle
+    /// and its time set, its mark held while it runs when `clock` is given, its outcome kept.
+    #[inline(always)]
+    fn run_body(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64, clock: Option<(&BodyClock, u64)>) {
         if !self.fills {
             for out in &mut self.outputs {
                 if out.is_some() {
@@ -142,38 +166,8 @@ impl Exec {
             // Left behind or not, a pool's thread finds out under the lock (`spawned`).
             let _ = clock.leave(mark);
         }
-        let end = start.again();
-        self.elapsed_ns = end.since(start);
-        self.timed = matches!(start, Stamp::Precise(_));
-        end
     }
 
-    /// [`Exec::run_on`] for a step run the short way (`plan::Fast`): the
-    /// body reads its one input in place (or has none), and is not timed (its time is its
-    /// stretch of such steps', checked by the walk). Its outputs are set as
-    /// for a run on the coarse clock that read no time.
-    #[inline(always)]
-    pub fn run_untimed(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) {
-        if !self.fills {
-            if let Some(old) = self.outputs.first_mut().and_then(Option::take) {
-                recycle(old);
-            }
-        }
-        self.cx.set(cycle, time_s);
-        let inputs = match input {
-            Some(input) => std::slice::from_ref(input),
-            None => &self.inputs[..],
-        };
-        match &mut self.skill {
-            Some(skill) => run_body_into(skill.as_mut(), inputs, &mut self.outputs, &mut self.cx, &mut self.result),
-            None => self.result = Err("the body is not here (it runs on its own thread)".into()),
-        }
-        self.elapsed_ns = 0;
-        self.timed = false;
-    }
-}
-
-impl Exec {
     /// Drops the copies of its inputs the body was given, as soon as it has
     /// returned: the buffers they share are then again their slots' own
     /// when their producers next write them (reused, nothing allocated). A
