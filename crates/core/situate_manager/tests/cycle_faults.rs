@@ -16,15 +16,6 @@ use common::*;
 use situate_core::{FnSkill, Io, SkillKind, SkillType, Value};
 use situate_manager::{ClockKind, Control, ControlError, Event, Registry, Request, RobotSpec};
 
-/// Waits until `f` holds.
-fn until(what: &str, mut f: impl FnMut() -> bool) {
-    let deadline = Instant::now() + BOUND;
-    while !f() {
-        assert!(Instant::now() < deadline, "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(2));
-    }
-}
-
 /// A sync cskill writing the cycle to `y`; with parameter `mode` 1 its body
 /// blocks on `gate`, with 2 it sleeps 500 ms. `made` counts its bodies.
 fn blocker(gate: &Gate, made: &Arc<AtomicUsize>) -> SkillType {

@@ -15,14 +15,6 @@ use common::*;
 use situate_core::{SkillKind, Value};
 use situate_manager::{ClockKind, Control, Registry, Request, RobotSpec};
 
-fn until(what: &str, mut f: impl FnMut() -> bool) {
-    let deadline = Instant::now() + BOUND;
-    while !f() {
-        assert!(Instant::now() < deadline, "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(2));
-    }
-}
-
 /// A source writing the cycle number to `out` in cycles up to `last`.
 fn counter(name: &str, last: u64) -> situate_core::SkillType {
     fn_type(decl(name, SkillKind::Sync, &[], &[("out", "f64")]), move |io, _| {

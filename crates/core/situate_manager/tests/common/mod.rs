@@ -144,3 +144,12 @@ pub fn fault_of(events: &crossbeam_channel::Receiver<situate_manager::Event>, sk
         }
     }
 }
+
+/// Waits until `f` holds, within [`BOUND`] (a condition, never a time).
+pub fn until(what: &str, mut f: impl FnMut() -> bool) {
+    let deadline = std::time::Instant::now() + BOUND;
+    while !f() {
+        assert!(std::time::Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
