@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from courier.geometry import SONARS, Pose
+from courier.geometry import SONARS, Pose, wrap
 
 #: Every skill of demo/robot.yaml.
 SKILLS = (
@@ -148,7 +148,7 @@ def travelled_heading(start: Pose, here: Pose, planned: float) -> float | None:
     if math.hypot(dx, dy) < TRAVEL_MIN_M:
         return None
     travel = math.atan2(dy, dx)
-    off = abs(math.remainder(travel - planned, 2 * math.pi))
+    off = abs(wrap(travel - planned))
     return travel if TRAVEL_MIN_RAD < off < TRAVEL_MAX_RAD else None
 
 
