@@ -119,8 +119,12 @@ impl TapReceiver {
 }
 
 /// The cycle times every body exactly once in this many cycles (and the
-/// bodies with a short deadline always); in the others it reads only the
-/// coarse clock, enough to see a run past its deadline.
+/// bodies with a short deadline always), and at most once a tick of the
+/// coarse clock (a few ms): cycles run back to back on a simulated clock
+/// are sampled about as often in a second as a robot's 100–250 Hz cycles
+/// are, so the exact timing costs them no more than it costs a robot. In
+/// the others the cycle reads only the coarse clock, enough to see a run
+/// past its deadline.
 pub const TIMING_SAMPLE: u64 = 32;
 
 const PRINT_HISTORY: usize = 64;
@@ -234,8 +238,8 @@ pub struct Manager {
     /// When it started on the coarse clock (a cycle not timed exactly).
     cycle_start_coarse: u64,
     /// This cycle is timed on the exact clock: every cycle of a paced
-    /// manager (wall clock, or a simulated one at a set speed), one in
-    /// [`TIMING_SAMPLE`] of an unpaced simulated clock, where cycles run back
+    /// manager (wall clock, or a simulated one at a set speed), the sampled
+    /// ones ([`TIMING_SAMPLE`]) of an unpaced simulated clock, where cycles run back
     /// to back and two exact readings would be a noticeable part of a small
     /// cycle. The others are timed on the coarse clock, for the maximum.
     cycle_timed: bool,
@@ -288,6 +292,9 @@ pub struct Manager {
     step_until: Option<u64>,
     /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
     sampled: bool,
+    /// When the last sampled cycle due by [`TIMING_SAMPLE`] started, on the
+    /// coarse clock (0: none yet).
+    last_sample_coarse: u64,
     /// The next cycle times every body exactly: a stretch of bodies run
     /// untimed took longer than the shortest of their deadlines
     /// (`walk::run_steps`).
@@ -435,6 +442,7 @@ impl Manager {
             external_clock: false,
             step_until: None,
             sampled: true,
+            last_sample_coarse: 0,
             sample_next: false,
             runs: 0,
             ready: Vec::new(),

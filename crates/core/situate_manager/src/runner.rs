@@ -129,12 +129,19 @@ impl Exec {
     /// [`Exec::run_on`] for a step run the short way (`plan::Fast`): the
     /// body reads its one input in place (or has none), and is not timed (its time is its
     /// stretch of such steps', checked by the walk). Its outputs are set as
-    /// for a run on the coarse clock that read no time.
+    /// for a run on the coarse clock that read no time when the run is
+    /// committed the usual way. Returns whether the run was clean (no
+    /// error, no print): only then may its output be committed the short
+    /// way, which looks at no time.
     #[inline(always)]
-    pub fn run_untimed(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) {
+    pub fn run_untimed(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) -> bool {
         self.run_body(input, cycle, time_s, None);
-        self.elapsed_ns = 0;
-        self.timed = false;
+        let clean = self.result.is_ok() && !self.cx.has_prints();
+        if !clean {
+            self.elapsed_ns = 0;
+            self.timed = false;
+        }
+        clean
     }
 }
 

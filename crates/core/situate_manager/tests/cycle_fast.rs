@@ -104,7 +104,7 @@ fn a_chain_run_the_short_way_computes_what_the_usual_way_does_in_every_cycle() {
     let gate = Gate::default();
     let mut fast = build(&chain(simulated("fast"), 6, 500.0), &registry(true, &gate));
     let mut usual = build(&chain(simulated("usual"), 6, 500.0), &registry(false, &gate));
-    // Past a sampled cycle (every 32nd), run the usual way in both.
+    // From the first cycle, sampled (run the usual way in both), on.
     for cycle in 1..=70u64 {
         fast.step(1).unwrap();
         usual.step(1).unwrap();
@@ -182,4 +182,42 @@ fn a_body_stuck_in_a_stretch_run_the_short_way_is_left_behind_and_the_cycle_goes
     });
     handle.request(Request::Shutdown).unwrap();
     assert!(join.join_timeout(BOUND).is_ok());
+}
+
+/// The resolution of the kernel's coarse monotonic clock, which paces the
+/// sampled cycles (1 ns where there is none to ask).
+fn coarse_tick_ns() -> u64 {
+    #[cfg(target_os = "linux")]
+    {
+        let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+        // SAFETY: `ts` is a valid, writable timespec; the call only writes it.
+        if unsafe { libc::clock_getres(libc::CLOCK_MONOTONIC_COARSE, &mut ts) } == 0 {
+            return (ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64).max(1);
+        }
+    }
+    1
+}
+
+#[test]
+fn cycles_back_to_back_are_sampled_at_most_once_a_tick_of_the_coarse_clock() {
+    let gate = Gate::default();
+    let mut m = build(&chain(simulated("sampling"), 2, 500.0), &registry(true, &gate));
+    let cycles = 3200;
+    let started = std::time::Instant::now();
+    m.step(cycles).unwrap();
+    let elapsed_ns = started.elapsed().as_nanos() as u64;
+    let timing = m.skill("s1").unwrap().timing;
+    assert_eq!(timing.runs, cycles, "every run is counted, timed or not");
+    // By number alone, one cycle in TIMING_SAMPLE would be (100 here); sampled
+    // cycles start a tick apart on the coarse clock, which lags by less than a
+    // tick: at most two more than the ticks the cycles took.
+    let by_number = cycles.div_ceil(situate_manager::manager::TIMING_SAMPLE);
+    let by_ticks = elapsed_ns / coarse_tick_ns() + 2;
+    assert!(timing.timed_runs >= 1, "the first cycle is sampled");
+    assert!(
+        timing.timed_runs <= by_number.min(by_ticks),
+        "{} runs timed in {cycles} cycles over {elapsed_ns} ns (ticks of {} ns)",
+        timing.timed_runs,
+        coarse_tick_ns()
+    );
 }

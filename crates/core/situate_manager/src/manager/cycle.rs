@@ -47,10 +47,22 @@ impl Manager {
         let _ = super::walk::cycle(&mut super::executor::InPlace(self));
     }
 
+    /// Whether a cycle due to be sampled by its number is (see
+    /// [`TIMING_SAMPLE`]): the first, and then one at least a tick of the
+    /// coarse clock after the last.
+    fn sample_due(&mut self) -> bool {
+        let now = coarse_ns();
+        let due = self.last_sample_coarse == 0 || now.saturating_sub(self.last_sample_coarse) >= coarse_tick_ns();
+        if due {
+            self.last_sample_coarse = now.max(1);
+        }
+        due
+    }
+
     /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
     pub(super) fn begin_cycle(&mut self) {
         self.cycle += 1;
-        self.sampled = self.cycle % TIMING_SAMPLE == 1 || std::mem::take(&mut self.sample_next);
+        self.sampled = std::mem::take(&mut self.sample_next) || (self.cycle % TIMING_SAMPLE == 1 && self.sample_due());
         self.cycle_timed = self.sampled || self.clock == ClockKind::Wall || self.speed.is_some() || self.due.is_some();
         if self.cycle_timed {
             self.cycle_start = Instant::now();

@@ -6,8 +6,8 @@
 
 use std::sync::{Arc, Mutex};
 
-use super::plan::Plan;
-use super::walk::Bodies;
+use super::plan::{Fast, Plan};
+use super::walk::{commit_fast, Bodies};
 use super::Manager;
 use crate::config::ExecutorKind;
 use crate::runner::{Exec, Stamp};
@@ -33,10 +33,15 @@ impl Bodies for InPlace<'_> {
     }
 
     #[inline(always)]
-    fn run_untimed(&mut self, i: usize, input: Option<usize>) -> Option<()> {
+    fn run_fast(&mut self, i: usize, fast: Fast, rank: (i32, u32)) -> Option<bool> {
         let m = &mut *self.0;
-        m.execs[i].run_untimed(input.map(|leaf| &m.slots[leaf].value), m.cycle, m.time_s);
-        Some(())
+        let (cycle, time_s) = (m.cycle, m.time_s);
+        let exec = &mut m.execs[i];
+        let clean = exec.run_untimed(fast.input.map(|leaf| &m.slots[leaf].value), cycle, time_s);
+        if clean {
+            commit_fast(exec, &mut m.slots[fast.output], cycle, rank);
+        }
+        Some(clean)
     }
 
     fn run_batch(&mut self, batch: &[usize]) -> Option<()> {

@@ -34,8 +34,9 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 
 use super::executor::run_parallel;
 use super::pacing::raise_thread_priority;
+use super::plan::Fast;
 use super::slots::Slot;
-use super::walk::{self, Bodies};
+use super::walk::{self, commit_fast, Bodies};
 use super::Manager;
 use crate::config::ClockKind;
 use crate::control::{ControlError, Handle, Reply, Request};
@@ -635,8 +636,13 @@ impl Bodies for OnThreads<'_> {
     }
 
     #[inline(always)]
-    fn run_untimed(&mut self, i: usize, input: Option<usize>) -> Option<()> {
-        self.held(i, input, |exec, input, cycle, time_s| exec.run_untimed(input, cycle, time_s))
+    fn run_fast(&mut self, i: usize, fast: Fast, rank: (i32, u32)) -> Option<bool> {
+        let clean = self.held(i, fast.input, |exec, input, cycle, time_s| exec.run_untimed(input, cycle, time_s))?;
+        if clean {
+            let m = self.manager()?;
+            commit_fast(&mut m.execs[i], &mut m.slots[fast.output], m.cycle, rank);
+        }
+        Some(clean)
     }
 
     /// Batch by batch; each body goes back to the manager as soon as it

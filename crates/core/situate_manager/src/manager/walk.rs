@@ -13,7 +13,7 @@ use situate_core::value::recycle;
 use super::plan::{Fast, Plan, Step, StepKind};
 use super::slots::Slot;
 use super::Manager;
-use crate::runner::{coarse_ns, coarse_tick_ns, Stamp};
+use crate::runner::{coarse_ns, coarse_tick_ns, Exec, Stamp};
 
 /// How the bodies of a cycle run.
 pub(super) trait Bodies {
@@ -35,10 +35,13 @@ pub(super) trait Bodies {
     /// thread was left behind while it ran.
     fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp>;
 
-    /// Runs instance `i`'s body once, untimed, on the value in slot `input`
-    /// or on no input (a step run the short way, [`Fast`]). `None` as for
-    /// [`Bodies::run`].
-    fn run_untimed(&mut self, i: usize, input: Option<usize>) -> Option<()>;
+    /// Runs instance `i`'s body once, untimed, on the value in slot
+    /// `fast.input` or on no input (a step run the short way, [`Fast`]),
+    /// and, if the run was clean (no error, no print), commits its output
+    /// the short way ([`commit_fast`]; `rank`: its step's). `Some(false)`:
+    /// the run was not clean, its outcome is left for
+    /// [`Manager::finish_step`]. `None` as for [`Bodies::run`].
+    fn run_fast(&mut self, i: usize, fast: Fast, rank: (i32, u32)) -> Option<bool>;
 
     /// Runs the bodies of `batch` (instances that share no claim, their
     /// inputs gathered) at the same time, on the pool. `None` as for
@@ -130,82 +133,122 @@ fn run_steps<B: Bodies>(
     steps: std::ops::Range<usize>,
     mut t: Option<Stamp>,
 ) -> Option<Option<Stamp>> {
-    // The stretch of steps run the short way under way: when it started on
-    // the coarse clock, and the shortest deadline of its steps.
-    let mut stretch: Option<(u64, u64)> = None;
-    for k in steps {
-        let step = &plan.steps[k];
-        let m = b.manager()?;
-        if let Some(fast) = step.fast {
-            // The sampled cycles time every body exactly, the usual way; a
-            // slot another writer holds is committed the usual way too.
-            let held = |m: &Manager| {
-                let out = &m.slots[fast.output];
-                out.writer as usize == step.inst && out.stamp > 0
-            };
-            if !m.sampled && held(m) {
-                if let Some(input) = fast.input {
-                    let input = &m.slots[input];
-                    if input.value.is_none() || input.stamp != m.cycle {
-                        continue;
-                    }
-                }
-                // The stretch starts where the body before ended, on the coarse clock.
-                let (_, shortest) = stretch.get_or_insert_with(|| match t {
-                    Some(Stamp::Coarse(ns)) => (ns, u64::MAX),
-                    _ => (coarse_ns(), u64::MAX),
-                });
-                *shortest = (*shortest).min(step.deadline_ns);
-                b.run_untimed(step.inst, fast.input)?;
-                b.manager()?.commit_fast(plan, k, fast);
+    let mut k = steps.start;
+    while k < steps.end {
+        // The sampled cycles time every body exactly, the usual way.
+        if plan.steps[k].fast.is_some() && !b.manager()?.sampled {
+            let next;
+            (next, t) = run_stretch(b, plan, k..steps.end, t)?;
+            if next > k {
+                k = next;
                 continue;
             }
         }
-        if let Some((start, shortest)) = stretch.take() {
-            t = Some(m.end_stretch(start, shortest));
-        }
-        let fresh = match step.kind {
-            StepKind::AsyncThreaded => {
-                m.exchange_async(step.inst);
-                // Not the time of a body: the next one reads the clock.
-                t = None;
-                continue;
-            }
-            StepKind::AsyncInCycle => false,
-            StepKind::Sync => true,
-        };
-        // One plain input, present: the body reads it where it is.
-        let in_place = match step.one_input {
-            Some(leaf) if B::IN_PLACE => {
-                let slot = &m.slots[leaf];
-                slot.value.is_some() && (!fresh || slot.stamp == m.cycle)
-            }
-            _ => false,
-        };
-        let lent = step.plain_ins && !in_place;
-        let ready_now =
-            in_place || if lent { m.lend_inputs(plan, step, fresh) } else { m.gather_step(plan, step, fresh) };
-        if !ready_now {
-            continue;
-        }
-        let start = m.start_of(t, step);
-        let end = b.run(step.inst, if in_place { step.one_input } else { None }, start)?;
-        let m = b.manager()?;
-        if lent {
-            m.return_lent(plan, step);
-        } else if !in_place {
-            m.execs[step.inst].drop_copies();
-        }
-        let ok = m.finish_step(plan, k);
-        t = match end {
-            Stamp::Coarse(_) if ok => Some(end),
-            _ => None,
-        };
-    }
-    if let Some((start, shortest)) = stretch {
-        t = Some(b.manager()?.end_stretch(start, shortest));
+        t = run_step(b, plan, k, t)?;
+        k += 1;
     }
     Some(t)
+}
+
+/// The steps from `steps.start` on that run the short way ([`Fast`]),
+/// while they hold their outputs' slots (a slot another writer holds, or
+/// none yet, is committed the usual way): each checked, run untimed, its
+/// output swapped into its slot; a step whose input is not fresh is passed
+/// over. Returns the first step it did not take (`steps.start` if none),
+/// and the coarse clock's reading where the stretch of those that ran ends
+/// (`t` if none ran). The outer `None`: left behind.
+#[inline(always)]
+fn run_stretch<B: Bodies>(
+    b: &mut B,
+    plan: &Plan,
+    steps: std::ops::Range<usize>,
+    t: Option<Stamp>,
+) -> Option<(usize, Option<Stamp>)> {
+    let first = steps.start;
+    // When the stretch started on the coarse clock (where the body before
+    // ended), and the shortest deadline of its steps.
+    let mut start = None;
+    let mut shortest = u64::MAX;
+    let mut k = first;
+    for step in &plan.steps[steps] {
+        let Some(fast) = step.fast else { break };
+        let m = b.manager()?;
+        let out = &m.slots[fast.output];
+        if out.writer as usize != step.inst || out.stamp == 0 {
+            break;
+        }
+        let fresh = match fast.input {
+            Some(input) => {
+                let input = &m.slots[input];
+                input.value.is_some() && input.stamp == m.cycle
+            }
+            None => true,
+        };
+        if fresh {
+            if start.is_none() {
+                start = Some(match t {
+                    Some(Stamp::Coarse(ns)) => ns,
+                    _ => coarse_ns(),
+                });
+            }
+            shortest = shortest.min(step.deadline_ns);
+            if !b.run_fast(step.inst, fast, step.rank)? {
+                b.manager()?.finish_step(plan, k);
+            }
+        }
+        k += 1;
+    }
+    let t = match start {
+        Some(start) => Some(b.manager()?.end_stretch(start, shortest)),
+        None => t,
+    };
+    Some((k, t))
+}
+
+/// Step `k` the usual way: its inputs checked and gathered (a plain step's
+/// lent, or read in place from its one slot where the bodies
+/// [may](Bodies::IN_PLACE)), run timed from `t` (see [`run_steps`]), its
+/// outputs committed. Returns the clock's reading to time the next body
+/// from, as [`run_steps`] does.
+#[inline(always)]
+fn run_step<B: Bodies>(b: &mut B, plan: &Plan, k: usize, t: Option<Stamp>) -> Option<Option<Stamp>> {
+    let step = &plan.steps[k];
+    let m = b.manager()?;
+    let fresh = match step.kind {
+        StepKind::AsyncThreaded => {
+            m.exchange_async(step.inst);
+            // Not the time of a body: the next one reads the clock.
+            return Some(None);
+        }
+        StepKind::AsyncInCycle => false,
+        StepKind::Sync => true,
+    };
+    // One plain input, present: the body reads it where it is.
+    let in_place = match step.one_input {
+        Some(leaf) if B::IN_PLACE => {
+            let slot = &m.slots[leaf];
+            slot.value.is_some() && (!fresh || slot.stamp == m.cycle)
+        }
+        _ => false,
+    };
+    let lent = step.plain_ins && !in_place;
+    let ready_now = in_place || if lent { m.lend_inputs(plan, step, fresh) } else { m.gather_step(plan, step, fresh) };
+    if !ready_now {
+        return Some(t);
+    }
+    let start = m.start_of(t, step);
+    let end = b.run(step.inst, if in_place { step.one_input } else { None }, start)?;
+    let m = b.manager()?;
+    if lent {
+        m.return_lent(plan, step);
+    } else if !in_place {
+        m.execs[step.inst].drop_copies();
+    }
+    let ok = m.finish_step(plan, k);
+    Some(match end {
+        Stamp::Coarse(_) if ok => Some(end),
+        _ => None,
+    })
 }
 
 /// A level that may go parallel: copies of its steps' inputs gathered, its
@@ -235,30 +278,6 @@ fn run_level<B: Bodies>(b: &mut B, plan: &Plan, level: usize, ready: &mut Vec<us
 }
 
 impl Manager {
-    /// Commits the output of step `k`, run the short way ([`Fast`]): moved
-    /// into its slot, which it holds, with no check (it is of its type by
-    /// construction, and no other skill writes the leaf). A run that failed
-    /// or printed goes the usual way ([`Manager::finish_step`]).
-    #[inline(always)]
-    fn commit_fast(&mut self, plan: &Plan, k: usize, fast: Fast) {
-        let step = &plan.steps[k];
-        let exec = &mut self.execs[step.inst];
-        if exec.result.is_err() || exec.cx.has_prints() {
-            self.finish_step(plan, k);
-            return;
-        }
-        exec.untimed_runs += 1;
-        let out = &mut exec.outputs[0];
-        if out.is_some() {
-            // Swapped, as in `commit_plain_port`: the output buffer then
-            // holds the value it replaced, recycled (or filled) next run.
-            let slot = &mut self.slots[fast.output];
-            std::mem::swap(&mut slot.value, out);
-            slot.stamp = self.cycle;
-            slot.rank = step.rank;
-        }
-    }
-
     /// Ends a stretch of steps run the short way that started at `start`
     /// (coarse clock): the time now, for the next body to start from. A body
     /// of the stretch may have run past its deadline only if the whole
@@ -333,6 +352,23 @@ impl Manager {
                     }
                 }
             }
+        }
+    }
+}
+
+/// Commits the output of a step run the short way ([`Fast`]) whose run was
+/// clean: moved into its slot, which it holds, with no check (it is of its
+/// type by construction, and no other skill writes the leaf).
+#[inline(always)]
+pub(super) fn commit_fast(exec: &mut Exec, slot: &mut Slot, cycle: u64, rank: (i32, u32)) {
+    exec.untimed_runs += 1;
+    if let Some(out) = exec.outputs.first_mut() {
+        if out.is_some() {
+            // Swapped, as in `commit_plain_port`: the output buffer then
+            // holds the value it replaced, recycled (or filled) next run.
+            std::mem::swap(&mut slot.value, out);
+            slot.stamp = cycle;
+            slot.rank = rank;
         }
     }
 }
