@@ -32,7 +32,9 @@ Usage, from the repository's top directory::
         [--bin target/release/situate] [--no-report]
 
 A set the ``situate`` program cannot build (an option it does not know) is reported as not run,
-with the reason. Failures are rerun once without ``--json`` to show the sequencer's last lines.
+with the reason. Failures are rerun once without ``--json`` to show the sequencer's last lines;
+a failure that second run does not reproduce (it delivered, or ended at another time: the run was
+not a function of its seed) is reported as not reproduced, with the first run's own outcome.
 
 The report's coverage table counts the generated sets' runs by the features each building drew
 (the comment block ``situate map generate`` writes at the top of the map: where the cars are
@@ -104,6 +106,14 @@ class Case:
     extra: list[str] = field(default_factory=list)
     outcome: dict[str, Any] = field(default_factory=dict)
     tail: list[str] = field(default_factory=list)
+    #: A failure's second run (the one ``tail`` is from): its outcome line, and whether it
+    #: ended as the first run did (a headless run is a function of its seed: when it did not,
+    #: ``tail`` tells nothing about the failure, `failure_class` says so).
+    again: str = ""
+    reproduced: bool = True
+    #: What the failed first run itself said besides its outcome (its standard error's last
+    #: lines: a sequencer's traceback, say).
+    stderr: list[str] = field(default_factory=list)
     #: What the generated building drew (its map's comment block); empty for a drawn map.
     features: dict[str, str | list[str]] = field(default_factory=dict)
     #: More arguments of ``situate map generate`` (``--family 1``).
@@ -287,10 +297,39 @@ def run(binary: Path, case: Case) -> Case:
     else:
         case.outcome = {"delivered": False, "error": (done.stderr.strip() or "no outcome")[-400:]}
     if not case.outcome.get("delivered"):
+        case.stderr = [ln for ln in done.stderr.splitlines() if ln.strip()][-3:]
         again = subprocess.run(base, cwd=ROOT, capture_output=True, text=True, check=False)
         narrative = [ln for ln in again.stdout.splitlines() if ln.startswith("[")]
         case.tail = narrative[-6:]
+        case.again, case.reproduced = rerun_outcome(case.outcome, again.stdout)
     return case
+
+
+#: The demo's outcome line (without ``--json``; ``demo --physics:`` for the physics robot's):
+#: delivered at, or not after, a simulated time.
+OUTCOME_LINE = re.compile(
+    r"^demo(?: --physics)?: "
+    r"(?:message delivered at t = (?P<at>[\d.]+) s|NOT delivered after (?P<after>[\d.]+) s)"
+)
+
+
+def rerun_outcome(first: dict[str, Any], text: str) -> tuple[str, bool]:
+    """The second run's outcome line in ``text``, and whether it ended as ``first`` did.
+
+    The same seed must give the same run: not delivered, at the same simulated time (to the
+    line's tenth of a second). A second run that delivered, or ended at another time, or said
+    no outcome, went another way than the first (a fault on a loaded machine, say). A first run
+    that said no outcome (an error) is reproduced by a second that says none either.
+    """
+    line = next((ln for ln in text.splitlines() if OUTCOME_LINE.match(ln)), "")
+    m = OUTCOME_LINE.match(line)
+    if "mission_time_s" not in first:
+        return line, m is None
+    if m is None or m["after"] is None or first.get("delivered"):
+        return line, False
+    ended = first.get("mission_time_s")
+    same = isinstance(ended, (int, float)) and f"{ended:.1f}" == f"{float(m['after']):.1f}"
+    return line, same
 
 
 def digest(path: Path) -> dict[str, str]:
@@ -327,8 +366,19 @@ def same_twice(binary: Path, case: Case, tmp: Path) -> str:
     )
 
 
+#: The class of a failure its second run did not reproduce (see `rerun_outcome`).
+NOT_REPRODUCED = "not reproduced: the same seed run again went another way"
+
+
 def failure_class(case: Case) -> str:
-    """A short name for why a run failed: the failure's text without its particulars."""
+    """A short name for why a run failed: the failure's text without its particulars.
+
+    Read from the second run's narrative (the first is run with ``--json``, quiet): a failure
+    that run did not reproduce is classed as such, never by the lines of a run that went
+    another way (a run that delivered ends in phase 13, and was once counted there).
+    """
+    if not case.reproduced:
+        return NOT_REPRODUCED
     failed = next((ln for ln in reversed(case.tail) if "mission failed" in ln), "")
     text = failed.split("mission failed: ", 1)[-1]
     if text.startswith("route "):
@@ -411,6 +461,18 @@ def report(
     return "\n".join(out)
 
 
+#: What a failure that was not reproduced shows of its own outcome (``situate demo --json``).
+FIRST_RUN_KEYS = (
+    "delivered",
+    "mission_time_s",
+    "cycles",
+    "sequencer_exit",
+    "phase",
+    "skills_faulted",
+    "error",
+)
+
+
 def failures_section(sets: dict[str, list[Case]], title: str) -> list[str]:
     """Every failed run by class, with the command that reproduces it."""
     out: list[str] = []
@@ -437,7 +499,17 @@ def failures_section(sets: dict[str, list[Case]], title: str) -> list[str]:
             )
             out.append(f"- {c.set}: {where}`situate demo --headless {args}`")
         out.append("")
-        out += ["Last lines of the first one:", "", "```", *cases[0].tail, "```", ""]
+        first = cases[0]
+        if not first.reproduced:
+            out += ["The first one's own outcome, and its second run's:", "", "```"]
+            out += [
+                json.dumps({k: first.outcome.get(k) for k in FIRST_RUN_KEYS if k in first.outcome}),
+                *first.stderr,
+                first.again or "(no outcome line)",
+                "```",
+                "",
+            ]
+        out += ["Last lines of the first one, run again:", "", "```", *first.tail, "```", ""]
     return out
 
 

@@ -38,3 +38,52 @@ def test_the_coverage_table_counts_runs_by_feature_and_never_drops_a_set_silentl
     assert "Not counted: the features of generated were not read." in lines, lines
     # The default building has no features: no table, and nothing to say.
     assert d.coverage_section({"default": [d.Case("default", 10000)]}) == []
+
+
+#: A run's narrative as `situate demo` prints it without ``--json`` (the benchmark's second run).
+DELIVERED = """\
+[  994.4 s] phase 13: delivering the message
+[  994.6 s]     said: "Hello! I have a message for you."
+[  994.6 s] mission complete
+demo: message delivered at t = 994.5 s (seed 60000)
+demo: 9947 cycles, 39229 skill runs, 33.0 ms in skills, 1.1 s wall (890x real time)
+"""
+SILENT = """\
+[  994.4 s] phase 13: delivering the message
+[  999.4 s] mission failed: the speaker said nothing
+demo: NOT delivered after 999.4 s (seed 60000)
+"""
+
+
+def test_a_failure_its_second_run_does_not_reproduce_is_never_classed_by_that_run() -> None:
+    d = _delivery()
+    # The first run (--json) failed; its second run, for the narrative, delivered: its last
+    # phase line is phase 13's, and the failure was once counted as "phase 13".
+    first = {"delivered": False, "mission_time_s": 999.4, "sequencer_exit": 1}
+    case = d.Case("generated-hard", 60000, Path("m.yaml"), 60000)
+    case.outcome = first
+    case.stderr = ["situate.errors.NotRunning: no skill manager answered"]
+    case.tail = [ln for ln in DELIVERED.splitlines() if ln.startswith("[")]
+    case.again, case.reproduced = d.rerun_outcome(first, DELIVERED)
+    assert not case.reproduced
+    assert case.again == "demo: message delivered at t = 994.5 s (seed 60000)"
+    assert d.failure_class(case) == d.NOT_REPRODUCED
+    lines = d.failures_section({"generated-hard": [case]}, "## Failures")
+    assert f"### {d.NOT_REPRODUCED} (1)" in lines, lines
+    assert not any("phase 13" in line and line.startswith("###") for line in lines), lines
+    # The first run's own outcome and what it said are shown, with the second's outcome line.
+    assert any('"mission_time_s": 999.4' in line for line in lines), lines
+    assert case.stderr[0] in lines, lines
+    assert case.again in lines, lines
+    # Not delivered at another time: another way too.
+    assert d.rerun_outcome({**first, "mission_time_s": 1000.0}, SILENT)[1] is False
+    # The same failure run again: classed by its own narrative.
+    same = d.Case("generated-hard", 60000, Path("m.yaml"), 60000)
+    same.outcome = first
+    same.tail = [ln for ln in SILENT.splitlines() if ln.startswith("[")]
+    same.again, same.reproduced = d.rerun_outcome(first, SILENT)
+    assert same.reproduced
+    assert d.failure_class(same) == "the speaker said nothing"
+    # A first run that said no outcome (an error) and a second that says none either: the same.
+    assert d.rerun_outcome({"delivered": False, "error": "no outcome"}, "")[1] is True
+    assert d.rerun_outcome({"delivered": False, "error": "no outcome"}, SILENT)[1] is False
