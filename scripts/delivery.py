@@ -35,6 +35,8 @@ A set the ``situate`` program cannot build (an option it does not know) is repor
 with the reason. Failures are rerun once without ``--json`` to show the sequencer's last lines;
 a failure that second run does not reproduce (it delivered, or ended at another time: the run was
 not a function of its seed) is reported as not reproduced, with the first run's own outcome.
+Every run is of copies taken when the benchmark begins (the program, ``demo/`` and ``maps/``), so
+that a build or an edit of the checkout beside it changes no run.
 
 The report's coverage table counts the generated sets' runs by the features each building drew
 (the comment block ``situate map generate`` writes at the top of the map: where the cars are
@@ -49,6 +51,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -285,9 +288,39 @@ def knows(binary: Path, command: str, option: str) -> bool:
     return option in done.stdout
 
 
-def run(binary: Path, case: Case) -> Case:
+def snapshot(binary: Path, into: Path) -> Path:
+    """Copies the program, and the demo with its maps, into ``into``; the program's copy.
+
+    Every run of the benchmark uses these copies (`run`), so that a build or an edit of the
+    checkout while the benchmark runs (a release build beside it replaces the program) changes
+    no run: each is a function of its seed and of the program as it was when the benchmark began.
+    """
+    into.mkdir(parents=True, exist_ok=True)
+    program = into / binary.name
+    shutil.copy2(binary, program)
+    for part in ("demo", "maps"):
+        shutil.copytree(ROOT / part, into / part, ignore=shutil.ignore_patterns("__pycache__"))
+    return program
+
+
+def demo_command(binary: Path, case: Case, snap: Path | None = None) -> list[str]:
+    """The command that runs ``case`` headless.
+
+    With ``snap`` (see `snapshot`): on the snapshot's robot file, sequencer and hand-drawn maps
+    (the physics robot's demo finds its own).
+    """
+    args = case.demo_args()
+    if snap is not None and "--physics" not in case.extra:
+        if case.map is not None and not case.map.is_absolute():
+            args[args.index(str(case.map))] = str(snap / case.map)
+        demo = snap / "demo"
+        args += ["--robot", str(demo / "robot.yaml"), "--sequencer", str(demo / "deliver.py")]
+    return [str(binary), "demo", "--headless", "--python", sys.executable, *args]
+
+
+def run(binary: Path, case: Case, snap: Path | None = None) -> Case:
     """Runs one headless demo; fills ``case.outcome`` (and ``tail`` for a failure)."""
-    base = [str(binary), "demo", "--headless", "--python", sys.executable, *case.demo_args()]
+    base = demo_command(binary, case, snap)
     done = subprocess.run(
         [*base, "--json"], cwd=ROOT, capture_output=True, text=True, check=False, timeout=600
     )
@@ -611,7 +644,18 @@ def main() -> int:
     p.add_argument("--bin", default=None)
     p.add_argument("--no-report", action="store_true", help="print the report, write nothing")
     a = p.parse_args()
-    binary = find_binary(a.bin)
+    snap = Path(tempfile.mkdtemp(prefix="situate-delivery-program-"))
+    try:
+        return measure(a, snapshot(find_binary(a.bin), snap), snap)
+    finally:
+        shutil.rmtree(snap, ignore_errors=True)
+
+
+def measure(a: argparse.Namespace, binary: Path, snap: Path) -> int:
+    """Runs the sets ``a`` asks for, and writes (or prints) the report; the exit status.
+
+    Every run is of ``binary`` on the demo of ``snap``, copies taken at the start (`snapshot`).
+    """
     started = time.monotonic()
     physics_text = ""
     with tempfile.TemporaryDirectory(prefix="situate-delivery-") as tmp:
@@ -687,7 +731,7 @@ def main() -> int:
                 sets[name] = cases
         everything = [c for cases in sets.values() for c in cases]
         with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
-            for n, case in enumerate(pool.map(lambda c: run(binary, c), everything), 1):
+            for n, case in enumerate(pool.map(lambda c: run(binary, c, snap), everything), 1):
                 mark = "." if case.outcome.get("delivered") else "F"
                 print(mark, end="" if n % 50 else "\n", flush=True)
         print()

@@ -87,3 +87,47 @@ def test_a_failure_its_second_run_does_not_reproduce_is_never_classed_by_that_ru
     # A first run that said no outcome (an error) and a second that says none either: the same.
     assert d.rerun_outcome({"delivered": False, "error": "no outcome"}, "")[1] is True
     assert d.rerun_outcome({"delivered": False, "error": "no outcome"}, SILENT)[1] is False
+
+
+#: A stand-in for the `situate` program: prints an outcome naming itself and its arguments.
+FAKE_PROGRAM = """#!{python}
+import json, sys
+print(json.dumps({{"delivered": {delivered}, "argv": sys.argv}}))
+"""
+
+
+def test_the_benchmark_runs_the_program_and_demo_as_they_were_when_it_began(tmp_path: Path) -> None:
+    d = _delivery()
+    program = tmp_path / "build" / "situate"
+    program.parent.mkdir()
+    program.write_text(FAKE_PROGRAM.format(python=sys.executable, delivered=True))
+    program.chmod(0o755)
+    snap = tmp_path / "snap"
+    copy = d.snapshot(program, snap)
+    # A build beside the benchmark replaces the program (the first of its runs after that
+    # once found it half-written): the runs still use the copy taken at the start.
+    program.write_text(FAKE_PROGRAM.format(python=sys.executable, delivered=False))
+    drawn = d.Case("hand-drawn", 40000, Path("maps/hand-drawn/one.yaml"), None, [])
+    ran = d.run(copy, drawn, snap)
+    assert ran.outcome["delivered"] is True, ran.outcome
+    argv = ran.outcome["argv"]
+    assert argv[0] == str(copy)
+    # The robot file, the sequencer and a drawn map are the snapshot's, not the checkout's.
+    assert argv[argv.index("--robot") + 1] == str(snap / "demo" / "robot.yaml")
+    assert argv[argv.index("--sequencer") + 1] == str(snap / "demo" / "deliver.py")
+    assert argv[argv.index("--map") + 1] == str(snap / "maps" / "hand-drawn" / "one.yaml")
+    for part in ("demo/deliver.py", "demo/robot.yaml", "maps/hand-drawn/one.yaml"):
+        assert (snap / part).read_bytes() == (ROOT / part).read_bytes(), part
+    # A generated building's map is the benchmark's own file already; the physics robot's
+    # demo finds its own robot file and sequencer.
+    generated = d.Case("generated", 30000, tmp_path / "m.yaml", 30000)
+    assert d.demo_command(copy, generated, snap)[-6:] == [
+        "--map",
+        str(tmp_path / "m.yaml"),
+        "--robot",
+        str(snap / "demo" / "robot.yaml"),
+        "--sequencer",
+        str(snap / "demo" / "deliver.py"),
+    ]
+    physics = d.Case("physics-default", 10000, None, None, ["--physics"])
+    assert "--robot" not in d.demo_command(copy, physics, snap)
