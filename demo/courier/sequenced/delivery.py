@@ -27,7 +27,7 @@ import math
 from collections.abc import Sequence
 
 from courier.geometry import Pose, bearing_of, sonar_toward, wrap
-from courier.link import PhaseFailed
+from courier.link import EVENT_KINDS, PhaseFailed
 from courier.mission import DOOR_OPEN_AHEAD_M, NORMAL, SKILLS, Stop, car_door_open_expr
 from courier.sequenced.behaviours import BEYOND_WALL_M
 from courier.sequenced.explore import Explorer
@@ -359,7 +359,9 @@ class Delivery(Explorer):
 
         A task other than the delivery alone runs its ``stops`` instead.
         """
-        async with self.r.events("monitor_fired") as stream:
+        # Faults too: `Link.on_fault` switches a faulted skill in use on again (or fails the
+        # mission, naming it, when it keeps faulting), as the reactive design does.
+        async with self.r.events(*EVENT_KINDS) as stream:
             self.stream = stream
             try:
                 if stops and list(stops) != [("office", self.m.goal_floor)]:
