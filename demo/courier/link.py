@@ -103,6 +103,9 @@ class Link:
         trace = os.environ.get("DELIVER_TRACE")
         self.trace = open(trace, "w") if trace else None  # noqa: SIM115 (open for the run)
         self.active: set[str] = set()
+        #: Skills on from the start that the sequencer never switches (devices, the sonar
+        #: filter): a fault switches them on again too (`on_fault`).
+        self.kept_on: set[str] = set()
         #: The simulated time at the last pause (a monitor fired); `step` makes it stale.
         self.t = 0.0
         self.t_stale = False
@@ -273,7 +276,7 @@ class Link:
         """
         self.faults.append((event.cycle, event.skill, event.cause))
         await self.say(f"    skill {event.skill!r} faulted: {event.cause}")
-        if event.skill not in self.active:
+        if event.skill not in self.active and event.skill not in self.kept_on:
             return
         # Counted in cycles: while a wait runs, `t` is the time it began.
         window = FAULT_WINDOW_S / (self.period_s or 0.1)

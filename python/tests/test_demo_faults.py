@@ -61,35 +61,45 @@ robot: faultbot
 cycle: {{rate_hz: 50, clock: wall, executor: serial}}
 python: [{skills}]
 skills:
-  - {{name: flaky, type: flaky, active: false, params: {{faults: {faults}}}, remap: {{n: flaky.n}}}}
+  - name: flaky
+    type: flaky
+    active: {active}
+    params: {{faults: {faults}}}
+    remap: {{n: flaky.n}}
   - {{name: still, type: still, remap: {{range: sonar.range}}}}
 """
 
 
 @pytest.fixture
-def faultbot(
-    tmp_path: Path, manager_for: Callable[[str, str], Manager]
-) -> Callable[[int], Manager]:
+def faultbot(tmp_path: Path, manager_for: Callable[[str, str], Manager]) -> Callable[..., Manager]:
     """A robot whose one skill faults ``faults`` times (on the wall clock: the cycle does not
-    race ahead of the sequencer's answers, so the faults come within a few cycles)."""
+    race ahead of the sequencer's answers, so the faults come within a few cycles); on from
+    the start when ``active``, as a device is."""
     skills = tmp_path / "flaky.py"
     skills.write_text(textwrap.dedent(SKILLS))
 
-    def start(faults: int) -> Manager:
-        return manager_for(ROBOT.format(skills=skills, faults=faults), "faultbot")
+    def start(faults: int, active: bool = False) -> Manager:
+        text = ROBOT.format(skills=skills, faults=faults, active=str(active).lower())
+        return manager_for(text, "faultbot")
 
     return start
 
 
-async def waited(manager: Manager) -> tuple[int, Link]:
-    """Switches `flaky` on and waits (at most 60 s) until it counted to 20."""
+async def waited(manager: Manager, kept_on: bool = False) -> tuple[int, Link]:
+    """Switches `flaky` on (or, ``kept_on``, takes it as on from the start, never switched, as
+    a device is) and waits (at most 60 s) until it counted to 20."""
     async with situate.connect(manager.robot, endpoint=manager.endpoint) as robot:
         seq = Link(robot, normal={}, quiet=True)
         async with robot.events(*EVENT_KINDS) as stream:
             seq.stream = stream
             await robot.stop()
             seq.t_stale = True
-            await seq.use("flaky")
+            if kept_on:
+                # On all along without faults; it faults once from now on, seen on the stream.
+                seq.kept_on = {"flaky"}
+                await seq.set("flaky", "faults", 1)
+            else:
+                await seq.use("flaky")
             index = await seq.wait("flaky.n >= 20", within=60.0)
         return index, seq
 
@@ -103,6 +113,15 @@ def test_a_sequencer_switches_a_skill_that_faulted_on_again(
     assert [(skill, "RuntimeError: a hiccup" in cause) for _, skill, cause in seq.faults] == [
         ("flaky", True)
     ]
+
+
+def test_a_skill_on_from_the_start_that_faulted_is_switched_on_again(
+    faultbot: Callable[..., Manager],
+) -> None:
+    """A device or the sonar filter: never switched by the sequencer, on all along."""
+    index, seq = run(waited(faultbot(0, True), kept_on=True))
+    assert index == 0
+    assert [skill for _, skill, _ in seq.faults] == ["flaky"]
 
 
 def test_a_skill_that_keeps_faulting_fails_the_mission_naming_it(
