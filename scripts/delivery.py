@@ -525,9 +525,10 @@ def failures_section(sets: dict[str, list[Case]], title: str) -> list[str]:
                 if c.map_seed is not None
                 else ""
             )
+            # A generated map is MAP, made by the command before; a drawn one is named.
             args = (
                 " ".join(c.demo_args()).replace(str(c.map), "MAP")
-                if c.map
+                if c.map and c.map_seed is not None
                 else " ".join(c.demo_args())
             )
             out.append(f"- {c.set}: {where}`situate demo --headless {args}`")

@@ -84,6 +84,16 @@ def test_a_failure_its_second_run_does_not_reproduce_is_never_classed_by_that_ru
     same.again, same.reproduced = d.rerun_outcome(first, SILENT)
     assert same.reproduced
     assert d.failure_class(same) == "the speaker said nothing"
+    # A drawn building's failure names its map (a generated one's is made by the command given).
+    drawn = d.Case("hand-drawn", 40000, Path("maps/hand-drawn/two.yaml"), None)
+    drawn.outcome = first
+    drawn.tail = same.tail
+    drawn.again, drawn.reproduced = d.rerun_outcome(first, SILENT)
+    lines = d.failures_section({"hand-drawn": [drawn]}, "## Failures")
+    assert (
+        "- hand-drawn: `situate demo --headless --seed 40000 --map maps/hand-drawn/two.yaml`"
+        in lines
+    ), lines
     # A first run that said no outcome (an error) and a second that says none either: the same.
     assert d.rerun_outcome({"delivered": False, "error": "no outcome"}, "")[1] is True
     assert d.rerun_outcome({"delivered": False, "error": "no outcome"}, SILENT)[1] is False
