@@ -237,11 +237,18 @@ def test_the_demo_is_reached_by_the_cli_where_it_says_with_listen_or_without() -
     held = socket.socket()
     # As servers do (Zenoh too): a connection of an earlier run in TIME_WAIT does not stop it.
     held.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    try:
-        held.bind(("127.0.0.1", 7447))
-        held.listen()
-    except OSError:
-        pass  # someone else holds it: as good
+    # Held here, for sure: another test's demo may hold it a while (make test runs the GUI
+    # tests beside these), and let it go before this demo starts.
+    deadline = time.monotonic() + WAIT_S
+    while True:
+        try:
+            held.bind(("127.0.0.1", 7447))
+            held.listen()
+            break
+        except OSError:
+            if time.monotonic() > deadline:
+                pytest.fail("tcp/127.0.0.1:7447 stayed held by another process")
+            time.sleep(0.2)
     try:
         with Program(*args, session=True) as demo:
             demo.wait_for("the link listens on")
