@@ -23,7 +23,7 @@ import copy
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import situate
@@ -288,6 +288,14 @@ class Link:
             )
         self.send("activate", skills=[event.skill], with_providers=False)
         await self.say(f"    skill {event.skill!r} switched on again")
+
+    async def keep_on_the_rest(self, switched: Iterable[str]) -> None:
+        """Notes the skills on now that the design never switches, as `kept_on`.
+
+        They are those not among ``switched`` (the devices, the sonar filter: on from the
+        start), switched on again after a fault like the ones the design switched on.
+        """
+        self.kept_on = {s.name for s in await self.r.skills() if s.active} - set(switched)
 
     def take_faults(self) -> list[SkillFaulted]:
         """The faults that arrived on the stream since the last look (a polling loop's)."""

@@ -753,6 +753,7 @@ class Reactive(CarRider, RouteFollower, Link):
         await self.set("identify_car", "first_id", self.m.car_barcode_first)
         await self.set("identify_car", "cars", self.m.cars)
         self.send("deactivate", skills=sorted(SKILLS))
+        await self.keep_on_the_rest(SKILLS)
         await self.use(*PERCEPTION)
         self.t_stale = True
         await self.now()  # the clock and the cycle's period: `step` advances `t` by it

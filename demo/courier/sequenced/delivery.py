@@ -347,8 +347,7 @@ class Delivery(Explorer):
         else:
             self.send("activate", skills=list(SKILLS), with_providers=False)
             self.active = set(SKILLS)
-        # The devices and the sonar filter, on from the start: kept on through a fault too.
-        self.kept_on = {s.name for s in await self.r.skills() if s.active} - set(SKILLS)
+        await self.keep_on_the_rest(SKILLS)
         # A few cycles, so that every device's signal has a value.
         for _ in range(10):
             self.prefetch("odom", "sonar.range")
