@@ -18,9 +18,9 @@
 //! | `std.runaway` | `sonar.range` | `drive` (only when something is within `safe_distance`) |
 //! | `std.avoid` | `sonar.range` | `drive` (only when an obstacle is in the path within `distance`) |
 //! | `std.wander` | — | `drive` (every cycle) |
-//! | `std.follow_hallway` | `sonar.range` | `drive` (every cycle) |
+//! | `std.follow_hallway` | `sonar.range`, `odom` (optional) | `drive` (every cycle) |
 //! | `std.detect_door` | `sonar.range` | `door` (every cycle) |
-//! | `std.detect_intersection` | `sonar.range` | `junction` (every cycle) |
+//! | `std.detect_intersection` | `sonar.range`, `odom` (optional) | `junction` (every cycle) |
 //! | `std.watch_openings` | `sonar.range`, `odom` (optional) | `opened` (every cycle) |
 //! | `std.sonar_filter` | `sonar.raw`, `odom` (optional) | `sonar.range`, `sonar.health` (every cycle) |
 //! | `std.fit_wall` | `sonar.range` | `wall` (every cycle) |
