@@ -29,9 +29,9 @@ ROUTE: dict[str, list[dict[str, Any]]] = {
 }
 
 
-def robot() -> Reactive:
-    """The reactive controller for a made-up mission (office on floor 2), without a robot."""
-    mission = Mission(
+def mission() -> Mission:
+    """A made-up mission: the office on floor 2, the lab and the route on floor 0."""
+    return Mission(
         goal_floor=2,
         start_floor=0,
         lab_door_barcode=10,
@@ -44,7 +44,11 @@ def robot() -> Reactive:
         goal_button_barcode=32,
         lobbies={0: 30, 1: 31, 2: 32},
     )
-    return Reactive(None, mission, [("office", 2)], quiet=True)  # type: ignore[arg-type]
+
+
+def robot() -> Reactive:
+    """The reactive controller for `mission`, without a robot."""
+    return Reactive(None, mission(), [("office", 2)], quiet=True)  # type: ignore[arg-type]
 
 
 def senses(t: float, **kw: Any) -> Senses:

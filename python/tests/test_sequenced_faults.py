@@ -10,9 +10,8 @@ import contextlib
 from collections.abc import AsyncIterator
 from typing import Any
 
-import reactive_support  # noqa: F401  (first: puts demo/ on the path)
+import reactive_support  # (first: puts demo/ on the path)
 from courier.link import EVENT_KINDS
-from courier.mission import Mission
 from courier.sequenced.delivery import Delivery
 
 
@@ -30,17 +29,7 @@ class Robot:
 
 def test_the_sequenced_phases_run_on_a_stream_that_carries_faults() -> None:
     robot = Robot()
-    mission = Mission(
-        goal_floor=1,
-        start_floor=0,
-        lab_door_barcode=10,
-        call_button_barcode=30,
-        office_barcode=40,
-        car_barcode_first=201,
-        cars=1,
-        message="hello",
-    )
-    seq = Delivery(robot, mission, quiet=True)  # type: ignore[arg-type]
+    seq = Delivery(robot, reactive_support.mission(), quiet=True)  # type: ignore[arg-type]
     ran: list[tuple[str, str]] = []
 
     async def run_phases(first: str, last: str) -> None:
