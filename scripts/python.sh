@@ -71,7 +71,7 @@ if [[ ${1:-} == test ]]; then
     ruff check python demo scripts examples bench/python
     ruff format --check python demo scripts examples bench/python
     say "mypy --strict"
-    mypy python/situate demo/deliver.py demo/reactive.py demo/courier scripts/experiment.py scripts/experiment_report.py scripts/delivery.py
+    mypy python/situate demo/deliver.py demo/reactive.py demo/courier scripts/experiment.py scripts/experiment_report.py scripts/delivery.py scripts/delivery_report.py
     # The tests too, as their own run: they import the demo's package, `courier` (demo/ on the path).
     MYPYPATH=demo mypy python/tests
     # In parallel processes (pytest-xdist): the tests pick free ports and lock what they build.

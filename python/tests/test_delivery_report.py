@@ -1,4 +1,5 @@
-"""scripts/delivery.py's report: the coverage table of the generated sets (no robot is run)."""
+"""The delivery benchmark's report (scripts/delivery_report.py: the coverage table, the failures)
+and how scripts/delivery.py runs its cases (no robot is run)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,9 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _delivery() -> ModuleType:
+    """scripts/delivery.py as a module (it imports scripts/delivery_report.py beside it)."""
+    if str(ROOT / "scripts") not in sys.path:
+        sys.path.insert(0, str(ROOT / "scripts"))
     spec = importlib.util.spec_from_file_location("delivery", ROOT / "scripts" / "delivery.py")
     assert spec is not None
     assert spec.loader is not None
@@ -20,8 +24,14 @@ def _delivery() -> ModuleType:
     return module
 
 
+def _report() -> ModuleType:
+    """scripts/delivery_report.py: what the benchmark writes of its runs."""
+    _delivery()
+    return importlib.import_module("delivery_report")
+
+
 def test_the_coverage_table_counts_runs_by_feature_and_never_drops_a_set_silently() -> None:
-    d = _delivery()
+    d = _report()
     features = {"lobby": "corner", "car_walls": ["across"], "open_s_bucket": "short"}
     ok = d.Case("no-route", 30000, Path("m.yaml"), 30000, features=features)
     ok.outcome = {"delivered": True}
@@ -56,7 +66,7 @@ demo: NOT delivered after 999.4 s (seed 60000)
 
 
 def test_a_failure_its_second_run_does_not_reproduce_is_never_classed_by_that_run() -> None:
-    d = _delivery()
+    d = _report()
     # The first run (--json) failed; its second run, for the narrative, delivered: its last
     # phase line is phase 13's, and the failure was once counted as "phase 13".
     first = {"delivered": False, "mission_time_s": 999.4, "sequencer_exit": 1}
