@@ -60,6 +60,7 @@ DESIGN_SOURCES: dict[str, tuple[str, ...]] = {
         "demo/courier/reactive/rules.py",
         "demo/courier/reactive/route.py",
         "demo/courier/reactive/car.py",
+        "demo/courier/reactive/door.py",
         "demo/courier/reactive/state.py",
     ),
 }

@@ -14,8 +14,9 @@ import reactive_support  # noqa: F401  (first: puts demo/ on the path)
 from courier.geometry import SONARS, Pose, wrap
 from courier.mission import HINT_DOOR_ASIDE_M
 from courier.reactive.car import PANEL_LOST_S, PATROL_MAX_M
+from courier.reactive.door import DOOR_PUSHES
 from courier.reactive.route import DOOR_STANDOFF
-from courier.reactive.rules import DOOR_PUSHES, SIGHTING_SHORT_M, STUCK_S, Reactive
+from courier.reactive.rules import SIGHTING_SHORT_M, STUCK_S, Reactive
 from courier.reactive.state import RouteState
 from reactive_support import robot as _robot
 from reactive_support import senses as _senses
