@@ -53,6 +53,7 @@ NORMAL = {
     ("track_barcode", "hold"): 15,
     ("fit_wall", "bearing_deg"): 0.0,
     ("fit_wall", "half_angle_deg"): 80.0,
+    ("fit_wall", "through_distance"): 0.0,
     ("locate_door", "wall_distance"): 0.0,
     ("locate_door", "wall_normal_deg"): 0.0,
     ("locate_door", "max_width"): 1.8,

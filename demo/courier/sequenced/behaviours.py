@@ -332,7 +332,14 @@ class Sequencer(Link):
         self.barcode_place = (barcode, px, py)
         # Looking towards the barcode first; a door beside it may hide most of that wall from
         # the sonars, so then wider. The wall must be the barcode's: it lies on its line.
+        # In the lab, the skill also gives the barcode's wall (`barcode_wall`): seen aslant
+        # with furniture on the wall beside the barcode (a bin), the scan's best line may run
+        # through the jamb, the bin's corner and the lab beyond, and still pass near the
+        # barcode; the line through the barcode's point is then its wall. In a corridor its
+        # walls decide (below).
         normal: float | None = None  # in the odometry frame
+        await self.set("fit_wall", "through_distance", distance)
+        await self.set("fit_wall", "through_bearing_deg", math.degrees(bearing))
         try:
             for look, half in ((bearing, 60.0), (bearing, 90.0), (0.0, 80.0)):
                 await self.set("fit_wall", "bearing_deg", math.degrees(look))
@@ -342,6 +349,15 @@ class Sequencer(Link):
                     continue
                 w = await self.odom()
                 n = w.theta + float(wall["normal"])
+                own = await self.value("barcode_wall")
+                if self.corridor_heading is None and own and own.get("seen"):
+                    on = w.theta + float(own["normal"])
+                    if abs(wrap(on - n)) > 1e-9:
+                        await self.say(
+                            f"    the wall fitted is {math.degrees(wrap(n - on)):+.0f}° off "
+                            f"barcode {barcode}'s: that one"
+                        )
+                        n, wall = on, own
                 along = w.along(px, py, n)
                 # Along the corridor the route followed or across it (docs/maps.md): a line
                 # fitted through a door's jamb, the room beyond and someone standing by is not.
@@ -353,6 +369,7 @@ class Sequencer(Link):
                     normal = n
                     break
         finally:
+            await self.restore("fit_wall", "through_distance")
             await self.restore("fit_wall", "bearing_deg")
             await self.restore("fit_wall", "half_angle_deg")
         if self.corridor_heading is not None:

@@ -23,7 +23,7 @@
 //! | `std.detect_intersection` | `sonar.range`, `odom` (optional) | `junction` (every cycle) |
 //! | `std.watch_openings` | `sonar.range`, `odom` (optional) | `opened` (every cycle) |
 //! | `std.sonar_filter` | `sonar.raw`, `odom` (optional) | `sonar.range`, `sonar.health` (every cycle) |
-//! | `std.fit_wall` | `sonar.range` | `wall` (every cycle) |
+//! | `std.fit_wall` | `sonar.range` | `wall`, `barcode_wall` (every cycle) |
 //! | `std.locate_door` | `sonar.range` | `opening` (every cycle) |
 //! | `std.track_barcode` | `barcodes` | `target` (every cycle) |
 //! | `std.identify_car` | `barcodes` | `car` (every cycle) |
@@ -57,7 +57,7 @@ pub use actions::{PushButton, Say};
 pub use health::SonarFilter;
 pub use motion::{Avoid, EnterCar, FollowHallway, Home, HomePosition, LeaveCar, PassDoor, Runaway, Turn, Wander};
 pub use perception::{DetectDoor, DetectIntersection, IdentifyCar, TrackBarcode, WatchOpenings};
-pub use scan::{door_in_wall, fit_wall, locate_door, FitWall, LocateDoor, ScanModel};
+pub use scan::{barcode_wall, door_in_wall, fit_wall, fit_wall_through, locate_door, FitWall, LocateDoor, ScanModel};
 
 /// Adds every standard skill type to `registry`.
 pub fn register(registry: &mut Registry) {

@@ -2,6 +2,7 @@
 //! their real glue (see `harness`), and one real manager.
 
 mod actions;
+mod barcode_wall;
 mod harness;
 mod health;
 mod manager;
