@@ -108,6 +108,11 @@ COVERAGE: list[tuple[str, str, list[tuple[str, str]]]] = [
         [("yes", "a box within 0.6 m, on its wall"), ("no", "none")],
     ),
     (
+        "furniture beside the lab door's barcode",
+        "clutter_near_lab_barcode",
+        [("yes", "a bin within 0.6 m, on its wall"), ("no", "none")],
+    ),
+    (
         "corridor widths",
         "corridor_width",
         [

@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use situate_sim::check::lint;
 use situate_sim::generate::{generate, Features, Generated, Options, NEAR_BARCODE_M};
 use situate_sim::geom::{Seg, P2};
-use situate_sim::map::{Car, Side};
+use situate_sim::map::{Barcode, Car, Floor, Side};
 use situate_sim::Map;
 
 const SEEDS: u64 = 200;
@@ -70,8 +70,18 @@ fn side_car_offsets(m: &Map) -> Vec<f64> {
 /// Whether a box stands on the office barcode's wall within 0.6 m of it.
 fn box_near_office_barcode(m: &Map) -> bool {
     let f = m.floor(m.mission.goal_floor).expect("a goal floor");
-    let Some(office) = &f.office else { return false };
-    let b = &office.barcode;
+    f.office.as_ref().is_some_and(|office| box_near(f, &office.barcode))
+}
+
+/// Whether furniture stands within 0.6 m of the lab door's barcode, on its wall.
+fn box_near_lab_barcode(m: &Map) -> bool {
+    let f = m.floor(m.mission.start_floor).expect("a start floor");
+    let mut bars = f.doors.iter().filter_map(|d| d.barcode.as_ref());
+    bars.find(|b| b.id == m.mission.lab_door_barcode).is_some_and(|b| box_near(f, b))
+}
+
+/// Whether an obstacle of floor `f` stands within 0.6 m of barcode `b`, on its wall.
+fn box_near(f: &Floor, b: &Barcode) -> bool {
     let Some(facing) = b.facing else { return false };
     let out = P2::dir(facing);
     f.obstacles.iter().any(|poly| {
@@ -89,6 +99,7 @@ fn box_near_office_barcode(m: &Map) -> bool {
 
 #[test]
 fn every_building_passes_map_check_and_records_what_it_drew() {
+    let mut labs_with_a_bin = 0;
     for seed in 0..SEEDS {
         let (g, m) = gen(seed);
         let findings = lint(&m);
@@ -102,6 +113,8 @@ fn every_building_passes_map_check_and_records_what_it_drew() {
         assert_eq!(walls, recorded, "seed {seed}: car walls");
         assert_eq!(f.open_s, m.elevator.open_s, "seed {seed}");
         assert_eq!(box_near_office_barcode(&m), f.clutter_near_barcode, "seed {seed}: box near barcode 40");
+        assert_eq!(box_near_lab_barcode(&m), f.clutter_near_lab_barcode, "seed {seed}: bin near barcode 10");
+        labs_with_a_bin += usize::from(f.clutter_near_lab_barcode);
         let (lo, hi) = f.corridor_width;
         assert!(g.corridor_widths.iter().all(|w| (lo..=hi).contains(w)), "seed {seed}");
         // The comment block at the top of the file says the same, and the file stays YAML.
@@ -111,9 +124,13 @@ fn every_building_passes_map_check_and_records_what_it_drew() {
         assert!(block.contains(&format!("#   open_s: [{}, {}]", f.open_s.0, f.open_s.1)), "{block}");
         let near = if f.clutter_near_barcode { "yes" } else { "no" };
         assert!(block.contains(&format!("#   clutter_near_barcode: {near}")), "{block}");
+        let near = if f.clutter_near_lab_barcode { "yes" } else { "no" };
+        assert!(block.contains(&format!("#   clutter_near_lab_barcode: {near}")), "{block}");
         assert!(block.contains(&format!("#   corridor_width: {}", f.corridor_band)), "{block}");
         assert!(block.contains(&format!("#   junction_lobby: {}", f.junction_lobby)), "{block}");
     }
+    // About a third of the labs have a bin beside their door's barcode (a stream of its own).
+    assert!((40..=95).contains(&labs_with_a_bin), "{labs_with_a_bin} of {SEEDS} labs with a bin");
 }
 
 #[test]

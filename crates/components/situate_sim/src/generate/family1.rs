@@ -40,6 +40,7 @@ fn features_of(
         car_walls: walls_of.iter().map(|&w| if w == 'N' { "same" } else { "side" }).collect(),
         open_s: b.open_s,
         clutter_near_barcode: near,
+        clutter_near_lab_barcode: false,
         corridor_band: "mixed",
         corridor_width: (
             widths.iter().copied().min().unwrap_or(0) as f64 / 100.0,

@@ -11,6 +11,11 @@ use super::{
     cm, lobby, metres, norm_deg, Bar, Building, Built, CarB, DoorB, Features, FloorB, Options, Pt, Rng, Step,
     NEAR_BARCODE,
 };
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+/// The seed of the lab bin's own stream is the building's, xor this.
+const LAB_BIN_STREAM: u64 = 0x6c61_625f_6269_6e73;
 
 pub(super) fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     let mut widths = Vec::new();
@@ -104,6 +109,22 @@ pub(super) fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
             break;
         }
     }
+    // In a third of the buildings a bin beside the lab door's barcode, on its wall (the far side
+    // from the door; docs/maps.md allows furniture there, and seen aslant it pulls the scan's
+    // best line off the wall). Drawn from a stream of its own: the rest of the building is the
+    // one drawn without it.
+    let mut own = Rng(ChaCha8Rng::seed_from_u64(seed ^ LAB_BIN_STREAM));
+    let clutter_near_lab_barcode = match fs.doors.last().and_then(|d| d.barcode) {
+        Some(bar) if own.int(0, 2) == 0 => {
+            let near = (true, 0, -1, bar.at.0, (lab_x0, lab_x0 + dw), (0, lab_w));
+            let placed = box_beside(&mut own, &mut fs, near, &mut Vec::new());
+            if let Some(last) = fs.obstacles.last_mut().filter(|_| placed) {
+                last.0 = "bin".to_string();
+            }
+            placed
+        }
+        _ => false,
+    };
     // The corridor: west end, the features, the junction to the lobby, the east end.
     let xw = -rng.int(0, 150);
     let nj = rng.int(opts.junctions.0, opts.junctions.1);
@@ -436,6 +457,7 @@ pub(super) fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
         car_walls: lobby.relations.clone(),
         open_s,
         clutter_near_barcode,
+        clutter_near_lab_barcode,
         corridor_band,
         corridor_width: (
             widths.iter().copied().min().unwrap_or(0) as f64 / 100.0,

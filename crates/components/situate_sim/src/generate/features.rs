@@ -20,6 +20,9 @@ pub struct Features {
     pub open_s: (f64, f64),
     /// A box within [`NEAR_BARCODE_M`] of the office barcode, on its wall.
     pub clutter_near_barcode: bool,
+    /// A bin within [`NEAR_BARCODE_M`] of the lab door's barcode, on its wall
+    /// (inside the lab, the far side from the door).
+    pub clutter_near_lab_barcode: bool,
     /// How the corridors' widths were drawn: `narrow`, `middle` or `wide`
     /// (every one from that third of `--corridor-width`) or `mixed` (each
     /// from the whole range).
@@ -37,7 +40,7 @@ pub struct Features {
     pub junctions_passed: Vec<&'static str>,
 }
 
-/// "Near" the office barcode, m.
+/// "Near" the office barcode (and the lab door's), m.
 pub const NEAR_BARCODE_M: f64 = 0.6;
 
 impl Features {
@@ -60,6 +63,7 @@ impl Features {
             "open_s": [self.open_s.0, self.open_s.1],
             "open_s_bucket": self.open_s_bucket(),
             "clutter_near_barcode": self.clutter_near_barcode,
+            "clutter_near_lab_barcode": self.clutter_near_lab_barcode,
             "corridor_width": self.corridor_band,
             "corridor_widths": [self.corridor_width.0, self.corridor_width.1],
             "junction_lobby": self.junction_lobby,
@@ -82,7 +86,9 @@ impl Features {
         let _ = writeln!(s, "#   car_walls: {}", list(&self.car_walls));
         let _ = writeln!(s, "#   open_s: [{}, {}]", self.open_s.0, self.open_s.1);
         let _ = writeln!(s, "#   open_s_bucket: {}", self.open_s_bucket());
-        let _ = writeln!(s, "#   clutter_near_barcode: {}", if self.clutter_near_barcode { "yes" } else { "no" });
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        let _ = writeln!(s, "#   clutter_near_barcode: {}", yes(self.clutter_near_barcode));
+        let _ = writeln!(s, "#   clutter_near_lab_barcode: {}", yes(self.clutter_near_lab_barcode));
         let _ = writeln!(s, "#   corridor_width: {}", self.corridor_band);
         let _ = writeln!(s, "#   corridor_widths: [{}, {}]", self.corridor_width.0, self.corridor_width.1);
         let _ = writeln!(s, "#   junction_lobby: {}", self.junction_lobby);
