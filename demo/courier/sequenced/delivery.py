@@ -120,8 +120,13 @@ class Delivery(Explorer):
             if await self.pass_door(m.lab_door_barcode, None) and (
                 await self.beyond_wall() or await self.on_through_the_door()
             ):
-                await self.square_the_way_out()
-                return
+                if await self.square_the_way_out(m.lab_door_barcode):
+                    return
+                await self.say(
+                    f"    still in the lab (barcode {m.lab_door_barcode} in view behind): "
+                    "looking again"
+                )
+                continue
             await self.say("    could not pass the door: looking again")
             await self.escape(5)
         raise PhaseFailed("could not leave the lab")
@@ -147,7 +152,7 @@ class Delivery(Explorer):
         await self.wait("door_passed", within=20)
         return await self.beyond_wall()
 
-    async def square_the_way_out(self) -> None:
+    async def square_the_way_out(self, lab_barcode: int) -> bool:
         """Takes the way out of the lab square to the corridor's far wall, just ahead.
 
         The route's first turn is from the way the robot came out (docs/maps.md, "Route
@@ -157,9 +162,15 @@ class Delivery(Explorer):
         `SQUARE_OUT_MAX_RAD` the wall decides; beyond it (and short of `SQUARE_OUT_NEVER_RAD`)
         the wall or the passed way may be wrong, and the sonars' reach along the corridor
         each would make decides (`along_corridor`).
+
+        False when the robot is still in the lab: a wall ahead more than `SQUARE_OUT_MAX_RAD`
+        off the way it passed may be the lab's own (an "opening" passed in a line fitted
+        through the door's jamb and furniture beside the barcode), and then the lab door's
+        barcode, which faces into the lab (docs/maps.md), is in view when the robot faces
+        where it was read; from the corridor its wall hides it.
         """
         if self.passed_heading is None:
-            return
+            return True
         await self.set("fit_wall", "bearing_deg", 0.0)
         await self.set("fit_wall", "half_angle_deg", 60.0)
         try:
@@ -168,10 +179,12 @@ class Delivery(Explorer):
             await self.restore("fit_wall", "bearing_deg")
             await self.restore("fit_wall", "half_angle_deg")
         if wall is None or float(wall["distance"]) > FAR_WALL_M:
-            return
+            return True
         o = await self.odom()
         out = o.heading_of(float(wall["normal"]))
         off = wrap(out - self.passed_heading)
+        if abs(off) > SQUARE_OUT_MAX_RAD and await self.barcode_behind(lab_barcode):
+            return False
         way = out if abs(off) <= SQUARE_OUT_MAX_RAD else self.passed_heading
         if SQUARE_OUT_MAX_RAD < abs(off) < SQUARE_OUT_NEVER_RAD:
             # The wall and the way the door was passed disagree: one of them is wrong (a line
@@ -196,6 +209,26 @@ class Delivery(Explorer):
                 f"      the way out: far wall {math.degrees(off):+.0f}° off, turned {turned:+.0f}°"
             )
         self.passed_heading = way
+        return True
+
+    async def barcode_behind(self, barcode: int) -> bool:
+        """Whether ``barcode`` is in view facing where it was last read (then faced back).
+
+        False without a place for it, or when it is not in view from there.
+        """
+        if self.barcode_place is None or self.barcode_place[0] != barcode:
+            return False
+        _id, px, py = self.barcode_place
+        back = (await self.odom()).theta
+        await self.set("track_barcode", "id", barcode)
+        if not await self.turn((await self.odom()).bearing_to(px, py), keep=["runaway"]):
+            return False
+        await self.use("runaway", "track_barcode", restart=["track_barcode"])
+        self.send("step", cycles=3)
+        t = await self.value("target")
+        seen = bool(t["seen"] and int(t["id"]) == barcode)
+        await self.turn((await self.odom()).turn_to(back), keep=["runaway"])
+        return seen
 
     async def to_lobby(self) -> None:
         """Phase 4: the route hints from the lab door to the elevator lobby."""
