@@ -152,8 +152,8 @@ const OTHER_WALL: f64 = 45.0 * std::f64::consts::PI / 180.0;
 /// it: how far along the line the nearest one starts on each side of `p`
 /// (left, right; infinite: none seen). An opening is where a sonar sees
 /// through the line (more than `SEES_THROUGH` beyond it over its whole cone);
-/// sonars within 78° of parallel to the line are not asked. None when the
-/// sonars see through the line at `p` itself.
+/// sonars whose cone comes within 12° of parallel to the line are not asked.
+/// None when the sonars see through the line at `p` itself.
 fn openings_beside(sonars: &[(usize, f64)], m: &ScanModel, p: (f64, f64), phi: f64, d: f64) -> Option<(f64, f64)> {
     let (nx, ny) = (phi.cos(), phi.sin());
     let at = p.0 * -ny + p.1 * nx; // the point along the line (left of the foot)
@@ -388,7 +388,9 @@ pub fn door_in_wall(
 /// `wall.distance` from the centre, and the echoes on it; `wall.seen` is
 /// false when no line is supported by `min_inliers` echoes. A sequencer
 /// squares up to a wall (a car's back wall) or lines up with a barcode's
-/// normal from it.
+/// normal from it. Told where a barcode is (`through_distance`,
+/// `through_bearing_deg`), it also gives the wall that barcode is on
+/// (`barcode_wall`, see [`barcode_wall`]).
 #[derive(Skill, Default)]
 #[skill(name = "std.fit_wall")]
 pub struct FitWall {
