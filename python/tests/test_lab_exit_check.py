@@ -26,7 +26,7 @@ class JustThrough(Delivery):
     reader reads barcode 10 when facing back (behind) if ``in_view``.
     """
 
-    def __init__(self, off: float | None, in_view: bool) -> None:  # no link set-up
+    def __init__(self, off: float, in_view: bool) -> None:  # no link set-up
         self.params: dict[tuple[str, str], Any] = dict(NORMAL)
         self.normal = dict(NORMAL)
         self.debug = False
@@ -37,8 +37,6 @@ class JustThrough(Delivery):
         self.off, self.in_view = off, in_view
         self.said: list[str] = []
         self.looked_from: list[float] = []
-        #: The sonar ring (sonar k at 15° k, left of ahead), m.
-        self.ranges = [4.0] * 24
 
     async def set(self, skill: str, param: str, value: Any) -> None:
         self.params[(skill, param)] = value
@@ -59,7 +57,7 @@ class JustThrough(Delivery):
         return self.pose
 
     async def sonar(self) -> list[float]:
-        return list(self.ranges)
+        return [4.0] * 24
 
     async def turn(self, angle: float, *, keep: Any = ()) -> bool:
         p = self.pose
@@ -68,8 +66,6 @@ class JustThrough(Delivery):
 
     async def clue(self, skill: str, signal: str, *, keep: Any = ()) -> dict[str, Any] | None:
         assert (skill, signal) == ("fit_wall", "wall")
-        if self.off is None:
-            return None  # no wall ahead
         normal = self.off - self.pose.theta
         return {"seen": True, "normal": normal, "distance": 1.5, "inliers": 5}
 
@@ -102,28 +98,3 @@ def test_a_wall_square_ahead_costs_no_look_back() -> None:
     assert robot.looked_from == []
     assert robot.passed_heading is not None
     assert abs(robot.passed_heading - SQUARE_OUT_MAX_RAD / 2) < 1e-9
-
-
-def corridor_along(ranges: list[float], heading_k: int) -> None:
-    """Walls 1 m to each side of a corridor running along sonar ``heading_k`` (and back)."""
-    for k in range(24):
-        along = min((k - heading_k) % 12, (heading_k - k) % 12)
-        ranges[k] = 4.0 if along <= 1 else 1.0
-
-
-def test_no_wall_ahead_facing_along_the_corridor_turns_the_way_out_square_to_it() -> None:
-    # Through the door aslant, the robot faces along the corridor: nothing ahead within reach,
-    # the walls 1 m to each side. The way out is square to where the sonars see far.
-    robot = JustThrough(None, in_view=True)
-    corridor_along(robot.ranges, 0)
-    assert asyncio.run(robot.square_the_way_out(10))
-    assert robot.passed_heading is not None
-    assert abs(abs(robot.passed_heading) - math.pi / 2) < 1e-9, robot.passed_heading
-    assert robot.looked_from == []
-
-
-def test_no_wall_ahead_with_the_corridor_across_the_way_keeps_it() -> None:
-    robot = JustThrough(None, in_view=True)
-    corridor_along(robot.ranges, 6)  # the corridor runs across the way passed
-    assert asyncio.run(robot.square_the_way_out(10))
-    assert robot.passed_heading == 0.0

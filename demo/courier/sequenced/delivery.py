@@ -179,7 +179,6 @@ class Delivery(Explorer):
             await self.restore("fit_wall", "bearing_deg")
             await self.restore("fit_wall", "half_angle_deg")
         if wall is None or float(wall["distance"]) > FAR_WALL_M:
-            await self.along_the_reach()
             return True
         o = await self.odom()
         out = o.heading_of(float(wall["normal"]))
@@ -211,36 +210,6 @@ class Delivery(Explorer):
             )
         self.passed_heading = way
         return True
-
-    async def along_the_reach(self) -> None:
-        """No wall just ahead out of the lab: the way out square to where the sonars see far.
-
-        The door passed aslant (its wall misjudged beside furniture), the robot may stand in
-        the corridor facing along it, where no far wall is ahead and every route turn would
-        be off by as much. The corridor runs where the sonars see farthest both ways
-        (`along_corridor`): of the ways within 90° of the passed one, the one square to that
-        reach is taken when it sees `SQUARE_OUT_CLEARER_M` farther along than the passed one
-        and lies more than `SQUARE_OUT_MAX_RAD` off it.
-        """
-        assert self.passed_heading is not None
-        passed = self.passed_heading
-        ranges = await self.sonar()
-        o = await self.odom()
-
-        def room(h: float) -> float:
-            return along_corridor(ranges, o.turn_to(h))
-
-        around = [passed + math.radians(d) for d in range(-90, 91, 15)]
-        best = max(around, key=room)
-        if abs(wrap(best - passed)) > SQUARE_OUT_MAX_RAD and room(best) > room(passed) + (
-            SQUARE_OUT_CLEARER_M
-        ):
-            if self.debug:
-                await self.say(
-                    f"      the way out: no wall ahead, the corridor "
-                    f"{math.degrees(wrap(best - passed)):+.0f}° off"
-                )
-            self.passed_heading = best
 
     async def barcode_behind(self, barcode: int) -> bool:
         """Whether ``barcode`` is in view facing where it was last read (then faced back).
