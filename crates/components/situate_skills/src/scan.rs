@@ -49,6 +49,24 @@ impl Default for ScanModel {
     }
 }
 
+/// The distance of a wall in direction `phi` that sonar `i`'s reading `r`
+/// says: a sonar reads the nearest point of the wall within its cone, so
+/// `r` times the cosine of how far the cone's nearer edge is off `phi`
+/// (`r` itself when `phi` is within the cone: cos 0 = 1 exactly, so no
+/// cosine on the axis). None when the sonar looks too far aside to see it.
+#[inline]
+fn wall_estimate(i: usize, r: f64, phi: f64, m: &ScanModel) -> Option<f64> {
+    let off = crate::util::wrap(sonar_bearing(i) - phi).abs();
+    (off < std::f64::consts::FRAC_PI_2 - m.half_cone).then(|| {
+        let outside = off - m.half_cone;
+        if outside > 0.0 {
+            r * outside.cos()
+        } else {
+            r
+        }
+    })
+}
+
 /// The wall around `m.bearing` as `(normal, distance, inliers)` in the
 /// robot frame.
 ///
@@ -72,12 +90,8 @@ pub fn fit_wall(range: &[f32; SONARS], m: &ScanModel) -> Option<(f64, f64, usize
         let mut buf = [0.0f64; SONARS];
         let mut n_est = 0;
         for &(i, r) in &sonars {
-            // What sonar i reads of a wall in direction `phi` at distance 1: the nearest
-            // point within its cone (cos 0 = 1 exactly, so no cosine on the axis).
-            let off = crate::util::wrap(sonar_bearing(i) - phi).abs();
-            if off < std::f64::consts::FRAC_PI_2 - m.half_cone {
-                let outside = off - m.half_cone;
-                buf[n_est] = if outside > 0.0 { r * outside.cos() } else { r };
+            if let Some(e) = wall_estimate(i, r, phi, m) {
+                buf[n_est] = e;
                 n_est += 1;
             }
         }
@@ -202,29 +216,26 @@ fn readings(range: &[f32; SONARS], m: &ScanModel) -> Vec<(usize, f64)> {
 /// ranks one echo higher (a line through clutter beside the barcode is
 /// mostly seen through on its far side too, where the wall itself runs on).
 pub fn fit_wall_through(range: &[f32; SONARS], m: &ScanModel, p: (f64, f64)) -> Option<(f64, f64, usize)> {
-    let sonars = readings(range, m);
+    through_line(&readings(range, m), m, p)
+}
+
+/// [`fit_wall_through`] on the sonars' readings ([`readings`]).
+fn through_line(sonars: &[(usize, f64)], m: &ScanModel, p: (f64, f64)) -> Option<(f64, f64, usize)> {
     // For direction `phi`: (rank, inliers, off square, distance).
     let score = |phi: f64| -> Option<(usize, usize, f64, f64)> {
         let d = p.0 * phi.cos() + p.1 * phi.sin() + BARCODE_OFF_WALL;
         if !(0.3..3.0).contains(&d) {
             return None;
         }
-        let (left, right) = openings_beside(&sonars, m, p, phi, d)?;
+        let (left, right) = openings_beside(sonars, m, p, phi, d)?;
         let far = left.max(right);
         if far < BOTH_SIDES_OPEN {
             return None;
         }
-        let mut inliers = 1; // the point itself
-        for &(i, r) in &sonars {
-            let off = crate::util::wrap(sonar_bearing(i) - phi).abs();
-            if r < m.max_range && off < std::f64::consts::FRAC_PI_2 - m.half_cone {
-                let outside = off - m.half_cone;
-                let e = if outside > 0.0 { r * outside.cos() } else { r };
-                if (e - d).abs() < m.tolerance / 2.0 {
-                    inliers += 1;
-                }
-            }
-        }
+        let echoes = sonars.iter().filter(|&&(i, r)| {
+            r < m.max_range && wall_estimate(i, r, phi, m).is_some_and(|e| (e - d).abs() < m.tolerance / 2.0)
+        });
+        let inliers = 1 + echoes.count(); // and the point itself
         let rank = inliers + usize::from(far >= ONE_SIDE_CLEAR);
         Some((rank, inliers, crate::util::wrap(phi - m.bearing).abs(), d))
     };
@@ -251,8 +262,9 @@ pub fn fit_wall_through(range: &[f32; SONARS], m: &ScanModel, p: (f64, f64)) -> 
 }
 
 /// The wall the barcode at `p` (robot frame) is on, as `(normal, distance,
-/// inliers)`: the scan's own line ([`fit_wall`]) or the line through the
-/// barcode ([`fit_wall_through`]), whichever is the barcode's wall.
+/// inliers)`: the scan's own line (`own`, as [`fit_wall`] fits it from the
+/// same scan and model) or the line through the barcode
+/// ([`fit_wall_through`]), whichever is the barcode's wall.
 ///
 /// The scan's own line stands when the two are within 10° (one wall), when
 /// there is no line through the barcode, or when it is a wall clear of
@@ -264,9 +276,14 @@ pub fn fit_wall_through(range: &[f32; SONARS], m: &ScanModel, p: (f64, f64)) -> 
 /// wall). Measured on 550 fits of lab walls in the benchmark's dev sets and
 /// hand-drawn building two: fits within 10° of the truth from 447 (the
 /// scan's own) to 493; 20 to 70° off from 38 to 12.
-pub fn barcode_wall(range: &[f32; SONARS], m: &ScanModel, p: (f64, f64)) -> Option<(f64, f64, usize)> {
-    let own = fit_wall(range, m);
-    let Some(through) = fit_wall_through(range, m, p) else {
+pub fn barcode_wall(
+    range: &[f32; SONARS],
+    m: &ScanModel,
+    p: (f64, f64),
+    own: Option<(f64, f64, usize)>,
+) -> Option<(f64, f64, usize)> {
+    let sonars = readings(range, m);
+    let Some(through) = through_line(&sonars, m, p) else {
         return own;
     };
     let Some((phi, d, n)) = own else {
@@ -276,7 +293,7 @@ pub fn barcode_wall(range: &[f32; SONARS], m: &ScanModel, p: (f64, f64)) -> Opti
     if apart <= SAME_WALL {
         return own;
     }
-    let clear = openings_beside(&readings(range, m), m, p, phi, d).map_or(0.0, |(l, r)| l.max(r));
+    let clear = openings_beside(&sonars, m, p, phi, d).map_or(0.0, |(l, r)| l.max(r));
     if clear >= ONE_SIDE_CLEAR && apart <= OTHER_WALL {
         Some((phi, d, n))
     } else {
@@ -454,12 +471,13 @@ impl Body for FitWall {
             tolerance: self.tolerance,
             min_inliers: usize::try_from(self.min_inliers).unwrap_or(4),
         };
-        self.wall = as_wall(fit_wall(&self.sonar, &model), self.wall);
+        let own = fit_wall(&self.sonar, &model);
+        self.wall = as_wall(own, self.wall);
         let through = (self.through_distance > 0.0).then(|| {
             let b = self.through_bearing_deg.to_radians();
             (self.through_distance * b.cos(), self.through_distance * b.sin())
         });
-        let fit = through.and_then(|p| barcode_wall(&self.sonar, &model, p));
+        let fit = through.and_then(|p| barcode_wall(&self.sonar, &model, p, own));
         self.barcode_wall = as_wall(fit, self.barcode_wall);
         Ok(())
     }

@@ -141,7 +141,7 @@ fn told_where_the_barcode_is_no_line_elsewhere_is_a_wall() {
     let r = scene.sonar(pose);
     let m = ScanModel { half_angle: 60f64.to_radians(), ..ScanModel::default() };
     assert_eq!(fit_wall_through(&r, &m, (1.0, 0.0)), None);
-    assert_eq!(barcode_wall(&r, &m, (1.0, 0.0)), fit_wall(&r, &m));
+    assert_eq!(barcode_wall(&r, &m, (1.0, 0.0), fit_wall(&r, &m)), fit_wall(&r, &m));
 }
 
 #[test]
