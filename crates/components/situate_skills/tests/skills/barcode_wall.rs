@@ -13,10 +13,6 @@ use situate_skills::{barcode_wall, fit_wall, fit_wall_through, FitWall, ScanMode
 /// The barcode, 1.5 cm off the lab's east wall (x = 6), facing west.
 const BARCODE: (f64, f64) = (5.985, 2.5);
 
-fn rect(s: Scene, x0: f64, y0: f64, x1: f64, y1: f64) -> Scene {
-    s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
-}
-
 /// The lab (x 0..6, y 0..6) with its door 1.0..2.2 in the east wall, the
 /// corridor beyond (far wall x = 7.85), a room across it; with or without a
 /// 0.4 m bin on the east wall 0.3 m past the barcode, away from the door.
@@ -30,9 +26,9 @@ fn lab(bin: bool) -> Scene {
         .wall(6.0, 2.2, 6.0, 6.5)
         .wall(7.85, 0.0, 7.85, 4.0)
         .wall(7.85, 5.2, 7.85, 8.5);
-    let s = rect(s, 2.8, 3.4, 4.2, 4.4); // a table
+    let s = s.rect(2.8, 3.4, 4.2, 4.4); // a table
     if bin {
-        rect(s, 5.6, 2.8, 6.0, 3.2)
+        s.rect(5.6, 2.8, 6.0, 3.2)
     } else {
         s
     }
@@ -46,20 +42,33 @@ fn facing_barcode(dist: f64, off: f64) -> Pose {
     Pose::new(x, y, (BARCODE.1 - y).atan2(BARCODE.0 - x))
 }
 
+/// The barcode as the reader sees it from `pose`: bearing (robot frame, rad), distance.
+fn barcode_seen_from(pose: Pose) -> (f64, f64) {
+    let (dx, dy) = (BARCODE.0 - pose.x, BARCODE.1 - pose.y);
+    (dy.atan2(dx) - pose.theta, dx.hypot(dy))
+}
+
+/// One run of `std.fit_wall` on the scan `r`, looking towards the barcode at
+/// `bearing` (±60°, as the sequencer does), told its distance or not:
+/// `(wall, barcode_wall)`.
+fn fit_wall_run(r: [f32; SONARS], bearing: f64, told: Option<f64>) -> (Wall, Wall) {
+    let mut h =
+        Harness::new::<FitWall>().param("bearing_deg", val(bearing.to_degrees())).param("half_angle_deg", val(60.0));
+    if let Some(distance) = told {
+        h = h.param("through_distance", val(distance)).param("through_bearing_deg", val(bearing.to_degrees()));
+    }
+    let out = h.run(&[("sonar", val(r))]);
+    (out.get::<Wall>("wall").expect("written every run"), out.get::<Wall>("barcode_wall").expect("written every run"))
+}
+
 /// The wall `std.fit_wall` fits looking towards the barcode (as the sequencer
 /// does: ±60° of it), told where the barcode is or not: its normal in the
 /// world (rad) and its distance at the barcode's foot from the wall x = 6.
 fn fit(scene: &Scene, pose: Pose, seed: u64, told: bool) -> Option<(f64, f64)> {
-    let (dx, dy) = (BARCODE.0 - pose.x, BARCODE.1 - pose.y);
-    let (bearing, distance) = (dy.atan2(dx) - pose.theta, dx.hypot(dy));
-    let mut h =
-        Harness::new::<FitWall>().param("bearing_deg", val(bearing.to_degrees())).param("half_angle_deg", val(60.0));
-    if told {
-        h = h.param("through_distance", val(distance)).param("through_bearing_deg", val(bearing.to_degrees()));
-    }
+    let (bearing, distance) = barcode_seen_from(pose);
     let r = Noise::new(seed, 0.02, 0.0).apply(scene.sonar(pose));
-    let out = h.run(&[("sonar", val::<[f32; SONARS]>(r))]);
-    let wall = out.get::<Wall>(if told { "barcode_wall" } else { "wall" }).expect("written every run");
+    let (wall, its) = fit_wall_run(r, bearing, told.then_some(distance));
+    let wall = if told { its } else { wall };
     wall.seen.then(|| {
         let normal = scene::wrap(wall.normal + pose.theta);
         // Where the fitted line crosses the barcode's normal (y = 2.5), off the true wall.
@@ -78,13 +87,8 @@ fn is_the_wall(f: Option<(f64, f64)>) -> bool {
 /// on the wall 0.3 m past the barcode. Told where the barcode is or not: the normal in the
 /// robot frame, degrees.
 fn demo_fit(r: [f32; SONARS], bearing: f64, distance: f64, told: bool) -> Option<f64> {
-    let mut h =
-        Harness::new::<FitWall>().param("bearing_deg", val(bearing.to_degrees())).param("half_angle_deg", val(60.0));
-    if told {
-        h = h.param("through_distance", val(distance)).param("through_bearing_deg", val(bearing.to_degrees()));
-    }
-    let out = h.run(&[("sonar", val(r))]);
-    let wall = out.get::<Wall>(if told { "barcode_wall" } else { "wall" }).expect("written every run");
+    let (wall, its) = fit_wall_run(r, bearing, told.then_some(distance));
+    let wall = if told { its } else { wall };
     wall.seen.then(|| wall.normal.to_degrees())
 }
 
@@ -153,22 +157,10 @@ fn the_scans_own_wall_is_fitted_as_without_a_point() {
         let scene = lab(bin);
         for (k, (dist, off)) in [(1.0, 35.0), (1.6, 0.0), (1.3, -30.0)].into_iter().enumerate() {
             let pose = facing_barcode(dist, off);
-            let (dx, dy) = (BARCODE.0 - pose.x, BARCODE.1 - pose.y);
-            let (bearing, distance) = (dy.atan2(dx) - pose.theta, dx.hypot(dy));
+            let (bearing, distance) = barcode_seen_from(pose);
             let r = Noise::new(k as u64 + 3, 0.02, 0.0).apply(scene.sonar(pose));
-            let run = |told: bool| {
-                let mut h = Harness::new::<FitWall>()
-                    .param("bearing_deg", val(bearing.to_degrees()))
-                    .param("half_angle_deg", val(60.0));
-                if told {
-                    h = h
-                        .param("through_distance", val(distance))
-                        .param("through_bearing_deg", val(bearing.to_degrees()));
-                }
-                let out = h.run(&[("sonar", val::<[f32; SONARS]>(r))]);
-                (out.get::<Wall>("wall").expect("written"), out.get::<Wall>("barcode_wall").expect("written"))
-            };
-            let ((plain, none), (beside, its)) = (run(false), run(true));
+            let (plain, none) = fit_wall_run(r, bearing, None);
+            let (beside, its) = fit_wall_run(r, bearing, Some(distance));
             assert_eq!(plain, beside, "{dist} m, {off}°: the scan's own wall changed with a point");
             assert!(!none.seen, "no point, yet a barcode's wall: {none:?}");
             assert!(its.seen, "{dist} m, {off}°: no wall for the barcode");

@@ -352,9 +352,6 @@ fn enter_car_stops_inside_and_leave_car_stops_outside() {
 /// x 5..6.14 and bins against the walls before the junction, as in a
 /// generated building.
 fn plus_junction() -> Scene {
-    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
-        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
-    };
     let s = Scene::new()
         .wall(-1.0, 1.21, 10.0, 1.21)
         .wall(12.03, 1.21, 24.0, 1.21)
@@ -367,8 +364,8 @@ fn plus_junction() -> Scene {
         .wall(10.0, -1.2, 10.0, -4.2)
         .wall(12.03, -1.2, 12.03, -4.2)
         .wall(10.0, -4.2, 12.03, -4.2);
-    let s = rect(s, 8.6, -1.2, 9.07, -0.78);
-    rect(s, 7.3, 0.73, 7.61, 1.21)
+    let s = s.rect(8.6, -1.2, 9.07, -0.78);
+    s.rect(7.3, 0.73, 7.61, 1.21)
 }
 
 #[test]
@@ -455,9 +452,6 @@ fn follow_hallway_with_odometry_returns_to_its_line_across_a_lobby() {
 /// on its left past the corner and a bin in that corner: a T, as in
 /// generated building 20027's floor 3.
 fn t_end() -> Scene {
-    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
-        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
-    };
     let s = Scene::new()
         .wall(7.43, 6.51, 12.79, 6.51)
         .wall(7.43, 9.0, 12.79, 9.0)
@@ -469,8 +463,8 @@ fn t_end() -> Scene {
         .wall(12.79, 12.82, 12.79, 30.0)
         .wall(14.61, 3.2, 14.61, 30.0)
         .wall(12.79, 3.2, 14.61, 3.2);
-    let s = rect(s, 12.8, 9.38, 13.15, 9.64);
-    rect(s, 14.18, 11.9, 14.6, 12.37)
+    let s = s.rect(12.8, 9.38, 13.15, 9.64);
+    s.rect(14.18, 11.9, 14.6, 12.37)
 }
 
 #[test]

@@ -192,9 +192,6 @@ fn cluttered() -> Scene {
         s = s.wall(a, 1.18, b, 1.18);
     }
     s = s.wall(30.6, 1.18, 30.6, 8.0).wall(32.69, 1.18, 32.69, 8.0).wall(0.0, -1.15, 40.0, -1.15);
-    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
-        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
-    };
     for (x0, y0, x1, y1) in [
         (19.89, 0.75, 20.21, 1.18),
         (20.88, 0.76, 21.28, 1.18),
@@ -204,7 +201,7 @@ fn cluttered() -> Scene {
         (23.57, -1.15, 23.93, -0.86),
         (27.82, -1.15, 28.08, -0.89),
     ] {
-        s = rect(s, x0, y0, x1, y1);
+        s = s.rect(x0, y0, x1, y1);
     }
     s
 }
@@ -276,18 +273,15 @@ fn with_odometry_a_wide_door_is_never_a_junction_and_a_narrow_side_corridor_is()
 /// a box on the corridor's wall just past it and a bin on the right wall
 /// across it: generated building 20023's way to its lobby (floor 0).
 fn bin_in_the_mouth() -> Scene {
-    let rect = |s: Scene, x0: f64, y0: f64, x1: f64, y1: f64| {
-        s.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
-    };
     let s = Scene::new()
         .wall(-1.0, 1.07, 7.87, 1.07)
         .wall(9.68, 1.07, 14.0, 1.07)
         .wall(7.87, 1.07, 7.87, 7.26)
         .wall(9.68, 1.07, 9.68, 7.26)
         .wall(-1.0, -1.08, 14.0, -1.08);
-    let s = rect(s, 7.88, 1.23, 8.25, 1.63);
-    let s = rect(s, 10.08, 0.77, 10.48, 1.06);
-    rect(s, 8.93, -1.07, 9.16, -0.58)
+    let s = s.rect(7.88, 1.23, 8.25, 1.63);
+    let s = s.rect(10.08, 0.77, 10.48, 1.06);
+    s.rect(8.93, -1.07, 9.16, -0.58)
 }
 
 #[test]

@@ -54,6 +54,11 @@ impl Scene {
         self
     }
 
+    /// A box (a bin, a table) with corners `(x0, y0)` and `(x1, y1)`: its four walls.
+    pub fn rect(self, x0: f64, y0: f64, x1: f64, y1: f64) -> Self {
+        self.wall(x0, y0, x1, y0).wall(x1, y0, x1, y1).wall(x1, y1, x0, y1).wall(x0, y1, x0, y0)
+    }
+
     pub fn barcode(mut self, id: i64, x: f64, y: f64) -> Self {
         self.barcodes.push((id, x, y));
         self
