@@ -15,43 +15,24 @@ from typing import Any
 
 import reactive_support  # noqa: F401  (first: puts demo/ on the path)
 from courier.geometry import Pose
-from courier.mission import NORMAL
 from courier.sequenced.delivery import SQUARE_OUT_MAX_RAD, Delivery
+from unlinked import Unlinked
 
 
-class JustThrough(Delivery):
+class JustThrough(Unlinked, Delivery):
     """A `Delivery` with no link, just through a door (heading 0), the lab's barcode behind.
 
     `std.fit_wall` sees a wall ``off`` rad off the way passed, 1.5 m ahead; the barcode
     reader reads barcode 10 when facing back (behind) if ``in_view``.
     """
 
-    def __init__(self, off: float, in_view: bool) -> None:  # no link set-up
-        self.params: dict[tuple[str, str], Any] = dict(NORMAL)
-        self.normal = dict(NORMAL)
-        self.debug = False
-        self.t = 0.0
+    def __init__(self, off: float, in_view: bool) -> None:
+        self.unlink()
         self.pose = Pose(0.0, 0.0, 0.0)
         self.passed_heading: float | None = 0.0
         self.barcode_place = (10, -1.5, 0.1)
         self.off, self.in_view = off, in_view
-        self.said: list[str] = []
         self.looked_from: list[float] = []
-
-    async def set(self, skill: str, param: str, value: Any) -> None:
-        self.params[(skill, param)] = value
-
-    async def use(self, *skills: str, restart: Any = ()) -> None:
-        return None
-
-    def send(self, verb: str, **args: Any) -> None:
-        return None
-
-    def prefetch(self, *signals: str) -> None:
-        return None
-
-    async def say(self, text: str) -> None:
-        self.said.append(text)
 
     async def odom(self) -> Pose:
         return self.pose

@@ -338,8 +338,10 @@ class Sequencer(Link):
         # barcode; the line through the barcode's point is then its wall. In a corridor its
         # walls decide (below).
         normal: float | None = None  # in the odometry frame
-        await self.set("fit_wall", "through_distance", distance)
-        await self.set("fit_wall", "through_bearing_deg", math.degrees(bearing))
+        in_lab = self.corridor_heading is None
+        if in_lab:
+            await self.set("fit_wall", "through_distance", distance)
+            await self.set("fit_wall", "through_bearing_deg", math.degrees(bearing))
         try:
             for look, half in ((bearing, 60.0), (bearing, 90.0), (0.0, 80.0)):
                 await self.set("fit_wall", "bearing_deg", math.degrees(look))
@@ -349,8 +351,8 @@ class Sequencer(Link):
                     continue
                 w = await self.odom()
                 n = w.theta + float(wall["normal"])
-                own = await self.value("barcode_wall")
-                if self.corridor_heading is None and own and own.get("seen"):
+                own = await self.value("barcode_wall") if in_lab else None
+                if own and own.get("seen"):
                     on = w.theta + float(own["normal"])
                     if abs(wrap(on - n)) > 1e-9:
                         await self.say(
