@@ -62,7 +62,9 @@ pub(super) fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     let (lab_w, lab_h) = (rng.int(500, 900), rng.int(400, 700));
     let dw = rng.cm(opts.door_width);
     let lab_x0 = rng.int(off_hi + 50, lab_w - dw - off_hi - 50);
-    fs.doors.push(hdoor(rng, "lab", 0, lab_x0, dw, off, 10, -90));
+    let lab_door = hdoor(rng, "lab", 0, lab_x0, dw, off, 10, -90);
+    let lab_bar = lab_door.barcode;
+    fs.doors.push(lab_door);
     fs.vwall(0, -lab_h, 0, &[]);
     fs.hwall(-lab_h, 0, lab_w, &[]);
     fs.vwall(lab_w, -lab_h, 0, &[]);
@@ -114,7 +116,7 @@ pub(super) fn build(rng: &mut Rng, seed: u64, opts: &Options) -> Built {
     // best line off the wall). Drawn from a stream of its own: the rest of the building is the
     // one drawn without it.
     let mut own = Rng(ChaCha8Rng::seed_from_u64(seed ^ LAB_BIN_STREAM));
-    let clutter_near_lab_barcode = match fs.doors.last().and_then(|d| d.barcode) {
+    let clutter_near_lab_barcode = match lab_bar {
         Some(bar) if own.int(0, 2) == 0 => {
             let near = (true, 0, -1, bar.at.0, (lab_x0, lab_x0 + dw), (0, lab_w));
             let placed = box_beside(&mut own, &mut fs, near, &mut Vec::new());
