@@ -161,6 +161,41 @@ pub trait Skill: Send + 'static {
         false
     }
 
+    /// Whether every run of [`Skill::step`] that returns `Ok` sets output
+    /// `port` to `Some`, and whether a run splits in two:
+    /// [`Skill::run_unwritten`], which reads the inputs and runs the body
+    /// but writes no output, then [`Skill::write_outputs`], which writes
+    /// them all. With [`Skill::fills_outputs`] and every output so, the
+    /// manager may write a run's outputs straight into their slots (no
+    /// spare, no move), once the body has returned clean. By default no.
+    /// `#[derive(Skill)]` says yes for an output field that is not an
+    /// `Option`.
+    ///
+    /// A performance hook between the derive and the manager, hidden from
+    /// the author's API (a skill written by hand keeps the default).
+    #[doc(hidden)]
+    fn writes_output(&self, port: usize) -> bool {
+        let _ = port;
+        false
+    }
+
+    /// [`Skill::step`] without writing any output (see
+    /// [`Skill::writes_output`]): they are written by
+    /// [`Skill::write_outputs`] after it returned `Ok`. By default the whole
+    /// [`Skill::step`] (for a skill that does not split its run).
+    #[doc(hidden)]
+    fn run_unwritten(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
+        self.step(io)
+    }
+
+    /// Writes the outputs of the last run of [`Skill::run_unwritten`] (see
+    /// [`Skill::writes_output`]) into `outputs`, filling the buffers they
+    /// hold. By default nothing.
+    #[doc(hidden)]
+    fn write_outputs(&mut self, outputs: &mut [Option<Value>]) {
+        let _ = outputs;
+    }
+
     /// Whether every value [`Skill::step`] puts in output `port` is, by
     /// construction, a value of type `ty` (the port's type in the robot
     /// being built). The manager then does not check that output's values

@@ -439,8 +439,9 @@ fn generate(input: &DeriveInput, attrs: &SkillAttrs, fields: &Fields) -> TokenSt
     let Fields { inputs, outputs, params, resources, all } = fields;
     let core = quote!(::situate::__core);
     // Locals the user's default expressions can't see or shadow.
-    let [decl, port, param, skill, io, value, x, slot, index, ty_param, provided] =
-        ["decl", "port", "param", "skill", "io", "value", "x", "slot", "index", "ty", "resources"].map(util::local);
+    let [decl, port, param, skill, io, outs, value, x, slot, index, ty_param, provided] =
+        ["decl", "port", "param", "skill", "io", "outputs", "value", "x", "slot", "index", "ty", "resources"]
+            .map(util::local);
     let ident = &input.ident;
     let (impl_generics, ty_generics, where_clause) = input.generics.split_for_impl();
 
@@ -509,64 +510,80 @@ fn generate(input: &DeriveInput, attrs: &SkillAttrs, fields: &Fields) -> TokenSt
     };
     let provided_binding = if resources.is_empty() { quote!(_) } else { quote!(#provided) };
 
-    let read_inputs = inputs.iter().enumerate().map(|(i, p)| {
-        let Port { field, name, ty, .. } = p;
-        let from = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::from_value);
-        let signal_type = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::signal_type());
-        let input = quote!(#io.inputs.get(#i).and_then(::core::option::Option::as_ref));
-        if p.optional {
-            quote! {
-                self.#field = match #input {
-                    ::core::option::Option::None => ::core::option::Option::None,
-                    ::core::option::Option::Some(#value) => match #from(#value) {
-                        ::core::option::Option::Some(#x) => ::core::option::Option::Some(#x),
-                        ::core::option::Option::None => {
+    let read_inputs: Vec<TokenStream> = inputs
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let Port { field, name, ty, .. } = p;
+            let from = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::from_value);
+            let signal_type = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::signal_type());
+            let input = quote!(#io.inputs.get(#i).and_then(::core::option::Option::as_ref));
+            if p.optional {
+                quote! {
+                    self.#field = match #input {
+                        ::core::option::Option::None => ::core::option::Option::None,
+                        ::core::option::Option::Some(#value) => match #from(#value) {
+                            ::core::option::Option::Some(#x) => ::core::option::Option::Some(#x),
+                            ::core::option::Option::None => {
+                                return ::core::result::Result::Err(#core::SkillError::new(::std::format!(
+                                    "input `{}`: not a {}", #name, #signal_type
+                                )));
+                            }
+                        },
+                    };
+                }
+            } else {
+                // Read straight into the field (no copy through a temporary).
+                let read = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::read_input);
+                quote! {
+                    match #input {
+                        ::core::option::Option::Some(#value) if #read(#value, &mut self.#field) => {}
+                        _ => {
                             return ::core::result::Result::Err(#core::SkillError::new(::std::format!(
-                                "input `{}`: not a {}", #name, #signal_type
+                                "input `{}`: missing or not a {}", #name, #signal_type
                             )));
                         }
-                    },
-                };
-            }
-        } else {
-            // Read straight into the field (no copy through a temporary).
-            let read = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::read_input);
-            quote! {
-                match #input {
-                    ::core::option::Option::Some(#value) if #read(#value, &mut self.#field) => {}
-                    _ => {
-                        return ::core::result::Result::Err(#core::SkillError::new(::std::format!(
-                            "input `{}`: missing or not a {}", #name, #signal_type
-                        )));
                     }
                 }
             }
-        }
-    });
+        })
+        .collect();
 
-    let write_outputs = outputs.iter().enumerate().map(|(j, p)| {
-        let Port { field, ty, .. } = p;
-        // The output may hold a spare on entry (see `fills_outputs`): the
-        // value is written into its buffer when it can be.
-        if p.optional {
-            let put = quote_spanned!(ty.span()=> #core::value::optional_output::<#ty>);
-            quote! {
-                let #value = ::core::option::Option::take(&mut self.#field);
-                if let ::core::option::Option::Some(#slot) = #io.outputs.get_mut(#j) {
-                    #put(#value, #slot);
+    let write_outputs: Vec<TokenStream> = outputs
+        .iter()
+        .enumerate()
+        .map(|(j, p)| {
+            let Port { field, ty, .. } = p;
+            // The output may hold a spare on entry (see `fills_outputs`): the
+            // value is written into its buffer when it can be.
+            if p.optional {
+                let put = quote_spanned!(ty.span()=> #core::value::optional_output::<#ty>);
+                quote! {
+                    let #value = ::core::option::Option::take(&mut self.#field);
+                    if let ::core::option::Option::Some(#slot) = #outs.get_mut(#j) {
+                        #put(#value, #slot);
+                    }
+                }
+            } else {
+                // Written from the field itself: a fixed-size array is copied
+                // straight into the spare's buffer, not through a clone.
+                let write = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::write_output);
+                quote! {
+                    if let ::core::option::Option::Some(#slot) = #outs.get_mut(#j) {
+                        #write(&self.#field, #slot);
+                    }
                 }
             }
-        } else {
-            // Written from the field itself: a fixed-size array is copied
-            // straight into the spare's buffer, not through a clone.
-            let write = quote_spanned!(ty.span()=> <#ty as #core::SignalValue>::write_output);
-            quote! {
-                if let ::core::option::Option::Some(#slot) = #io.outputs.get_mut(#j) {
-                    #write(&self.#field, #slot);
-                }
-            }
-        }
-    });
+        })
+        .collect();
+
+    // The outputs every `Ok` run sets to `Some` (see `Skill::writes_output`):
+    // those that are not an `Option`. `usize::MAX` matches no port.
+    let mut required_outputs: Vec<TokenStream> =
+        outputs.iter().enumerate().filter(|(_, p)| !p.optional).map(|(j, _)| quote!(#j)).collect();
+    if required_outputs.is_empty() {
+        required_outputs.push(quote!(::core::primitive::usize::MAX));
+    }
 
     // Whether an output's values are of the port's type by construction
     // (see `Skill::output_typed`).
@@ -640,10 +657,24 @@ fn generate(input: &DeriveInput, attrs: &SkillAttrs, fields: &Fields) -> TokenSt
                 &mut self,
                 #io: &mut #core::Io<'_>,
             ) -> ::core::result::Result<(), #core::SkillError> {
+                // `run_unwritten` then `write_outputs`, written out: one call.
                 #(#read_inputs)*
                 <Self as #core::Body>::step(self, &mut *#io.cx)?;
+                let #outs = &mut *#io.outputs;
                 #(#write_outputs)*
                 ::core::result::Result::Ok(())
+            }
+
+            fn run_unwritten(
+                &mut self,
+                #io: &mut #core::Io<'_>,
+            ) -> ::core::result::Result<(), #core::SkillError> {
+                #(#read_inputs)*
+                <Self as #core::Body>::step(self, &mut *#io.cx)
+            }
+
+            fn write_outputs(&mut self, #outs: &mut [::core::option::Option<#core::Value>]) {
+                #(#write_outputs)*
             }
 
             fn set_param(&mut self, #index: ::core::primitive::usize, #value: &#core::Value) {
@@ -666,6 +697,10 @@ fn generate(input: &DeriveInput, attrs: &SkillAttrs, fields: &Fields) -> TokenSt
 
             fn fills_outputs(&self) -> bool {
                 true
+            }
+
+            fn writes_output(&self, #index: ::core::primitive::usize) -> bool {
+                ::core::matches!(#index, #(#required_outputs)|*)
             }
 
             fn output_typed(

@@ -60,7 +60,7 @@ use front::PreparedMonitor;
 /// A prepared monitor, boxed for the request queue.
 pub(crate) type PreparedMonitorBox = Box<PreparedMonitor>;
 pub use crate::control::EventBus;
-use plan::Plan;
+use plan::{Outputs, Plan};
 use slots::Slot;
 pub use spawned::Joiner;
 
@@ -173,10 +173,10 @@ struct Inst {
     /// condition never holds on a restarted skill's old result (its first cycle may come
     /// before its inputs do, a ROS 2 robot's say).
     active_from: u64,
-    /// Every output of its body is of its port's type by construction
-    /// ([`Skill::output_typed`], asked when the body is made): the plan
-    /// does not check them.
-    typed_outputs: bool,
+    /// How its body writes its outputs (asked when the body is made): the
+    /// plan does not check those of their type by construction, and lets a
+    /// body write straight into its output's slot where it may.
+    outputs_by: Outputs,
     /// Switched on or off since the last cycle began: listed in `Manager::switched`.
     switched: bool,
 }
@@ -228,7 +228,10 @@ pub struct Manager {
     #[allow(clippy::vec_box)]
     spare_execs: Vec<Box<Exec>>,
     /// The compiled schedule of the active skills.
-    schedule: Plan,
+    schedule: Box<Plan>,
+    /// An empty plan left in `schedule`'s place while a cycle walks it (made
+    /// once: the walk moves a pointer, not the plan).
+    empty_plan: Option<Box<Plan>>,
     schedule_dirty: bool,
     cycle: u64,
     time_s: f64,
@@ -346,7 +349,7 @@ impl Manager {
                     )],
                 }
             })?;
-            let typed_outputs = outputs_typed(skill.as_ref(), def);
+            let outputs_by = outputs_by(skill.as_ref(), def);
             let mut exec = Exec::new(skill, def.inputs.len(), def.outputs.len());
             if let Some(skill) = exec.skill.as_mut() {
                 for (i, v) in def.params.iter().enumerate() {
@@ -371,7 +374,7 @@ impl Manager {
                 behind_worker: None,
                 params_from: 0,
                 active_from: 0,
-                typed_outputs,
+                outputs_by,
                 switched: false,
             });
         }
@@ -406,7 +409,8 @@ impl Manager {
                 spares
             },
             execs,
-            schedule: Plan::default(),
+            schedule: Box::default(),
+            empty_plan: Some(Box::default()),
             schedule_dirty: true,
             cycle: 0,
             time_s: 0.0,
@@ -567,10 +571,10 @@ impl Manager {
         for (p, v) in self.insts[i].params.iter().enumerate() {
             skill.set_param(p, v);
         }
-        let typed_outputs = outputs_typed(skill.as_ref(), def);
+        let outputs_by = outputs_by(skill.as_ref(), def);
         *self.execs[i] = Exec::new(skill, def.inputs.len(), def.outputs.len());
         let inst = &mut self.insts[i];
-        inst.typed_outputs = typed_outputs;
+        inst.outputs_by = outputs_by;
         if inst.worker.is_some() {
             inst.worker = Some(Worker::new(def.inputs.len(), def.outputs.len()));
         }
@@ -683,8 +687,13 @@ pub(crate) fn fmt_duration(d: Duration) -> String {
     }
 }
 
-/// Whether every output of `skill` is of its port's type by construction
-/// ([`Skill::output_typed`]); asked once per body made, never per run.
-fn outputs_typed(skill: &dyn Skill, def: &InstanceDef) -> bool {
-    def.outputs.iter().enumerate().all(|(p, port)| skill.output_typed(p, &port.ty))
+/// How `skill` writes its outputs: whether every one is of its port's type
+/// by construction ([`Skill::output_typed`]), and whether its slots may be
+/// its buffers ([`Skill::fills_outputs`], [`Skill::writes_output`]); asked
+/// once per body made, never per run.
+fn outputs_by(skill: &dyn Skill, def: &InstanceDef) -> Outputs {
+    Outputs {
+        typed: def.outputs.iter().enumerate().all(|(p, port)| skill.output_typed(p, &port.ty)),
+        in_slot: skill.fills_outputs() && (0..def.outputs.len()).all(|p| skill.writes_output(p)),
+    }
 }

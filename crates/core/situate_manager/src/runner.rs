@@ -23,23 +23,27 @@ use situate_core::{Context, Io, Skill, SkillKind, Value};
 /// `Default` is the empty placeholder left in the manager while the real
 /// one is out running on a cycle thread (see `manager::Core`), or after its
 /// body was left behind: it has no body and its buffers hold nothing.
+#[repr(C, align(64))]
 pub(crate) struct Exec {
+    // The first cache line holds what a run the short way touches (its
+    // body, its context, its count of untimed runs): `repr(C)` keeps them
+    // there, `align(64)` keeps them in one line.
     /// `None` once the body has moved to its worker thread.
     pub skill: Option<Box<dyn Skill>>,
-    pub inputs: Vec<Option<Value>>,
-    pub outputs: Vec<Option<Value>>,
     pub cx: Context,
-    pub result: Result<(), String>,
-    /// How long the last run took, exactly when `timed`, else on the coarse clock.
-    pub elapsed_ns: u64,
-    pub timed: bool,
     /// Runs not timed exactly since the last one that was: counted here,
     /// where the cycle looks anyway, and added to the skill's timing (in
     /// memory the cycle does not touch otherwise) at its next timed run, or
     /// when the timing is asked for (see `Manager::count_run`).
     pub untimed_runs: u64,
+    pub inputs: Vec<Option<Value>>,
+    pub outputs: Vec<Option<Value>>,
+    pub result: Result<(), String>,
+    /// How long the last run took, exactly when `timed`, else on the coarse clock.
+    pub elapsed_ns: u64,
     /// Their times on the coarse clock, summed (see [`SkillTiming::add_untimed`]).
     pub untimed_ns: u64,
+    pub timed: bool,
     /// The body [fills its outputs](Skill::fills_outputs): an output buffer
     /// holding the value its last output replaced is handed to the body as
     /// a spare instead of being recycled on entry.
@@ -146,6 +150,102 @@ impl Exec {
 }
 
 impl Exec {
+    /// [`Exec::run_untimed`] with the body's one output written straight
+    /// into `output`, its slot's value, where no body can be left behind
+    /// (`plan::Fast::in_slot`: the body sets its output on every `Ok` run,
+    /// and a run that fails writes none, see `Skill::writes_output`).
+    /// Clean (true): the slot holds the run's output, counted as an untimed
+    /// run; only its stamp and rank are left to set. A run that printed has
+    /// its output moved into its buffer, to be committed the usual way; a
+    /// failed one left the slot as it was.
+    #[inline(always)]
+    pub fn run_in_slot(
+        &mut self,
+        input: Option<&Option<Value>>,
+        output: &mut Option<Value>,
+        cycle: u64,
+        time_s: f64,
+    ) -> bool {
+        self.cx.set(cycle, time_s);
+        let inputs = match input {
+            Some(input) => std::slice::from_ref(input),
+            None => &[],
+        };
+        match self.skill.as_deref_mut() {
+            Some(skill) => {
+                let mut io = Io { inputs, outputs: std::slice::from_mut(output), cx: &mut self.cx };
+                match catch_unwind(AssertUnwindSafe(|| skill.step(&mut io))) {
+                    // `result` is `Ok` between runs (a failed run's is taken
+                    // when it is accounted): nothing to write.
+                    Ok(Ok(())) if !self.cx.has_prints() => {
+                        self.untimed_runs += 1;
+                        return true;
+                    }
+                    Ok(Ok(())) => {
+                        if let Some(out) = self.outputs.first_mut() {
+                            std::mem::swap(out, output);
+                        }
+                    }
+                    Ok(Err(e)) => self.result = Err(e.message),
+                    Err(panic) => self.result = Err(format!("panicked: {}", panic_message(&*panic))),
+                }
+            }
+            None => self.result = Err(NOT_HERE.into()),
+        }
+        self.elapsed_ns = 0;
+        self.timed = false;
+        false
+    }
+
+    /// [`Exec::run_in_slot`] where a body may be left behind (a spawned
+    /// manager's): only the first half of the body's run, which writes no
+    /// output (`Skill::writes_output`), so that its output is written into
+    /// its slot only once the thread knows it was not left behind. Clean (true): its outputs are for
+    /// [`Exec::write_into`] to write, counted as an untimed run. A run that
+    /// printed has them written into its buffers, to be committed the usual
+    /// way; a failed one wrote none.
+    #[inline(always)]
+    pub fn run_unwritten(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) -> bool {
+        self.cx.set(cycle, time_s);
+        let inputs = match input {
+            Some(input) => std::slice::from_ref(input),
+            None => &[],
+        };
+        match self.skill.as_deref_mut() {
+            Some(skill) => {
+                let mut io = Io { inputs, outputs: &mut [], cx: &mut self.cx };
+                match catch_unwind(AssertUnwindSafe(|| skill.run_unwritten(&mut io))) {
+                    // `result` is `Ok` between runs (a failed run's is taken
+                    // when it is accounted): nothing to write.
+                    Ok(Ok(())) if !self.cx.has_prints() => {
+                        self.untimed_runs += 1;
+                        return true;
+                    }
+                    Ok(Ok(())) => self.write_into(None),
+                    Ok(Err(e)) => self.result = Err(e.message),
+                    Err(panic) => self.result = Err(format!("panicked: {}", panic_message(&*panic))),
+                }
+            }
+            None => self.result = Err(NOT_HERE.into()),
+        }
+        self.elapsed_ns = 0;
+        self.timed = false;
+        false
+    }
+
+    /// Writes the outputs of a clean [`Exec::run_unwritten`]: into `slot`,
+    /// the value of its one output's slot (filled in place where nobody
+    /// else holds it), or with `None` into its output buffers.
+    #[inline(always)]
+    pub fn write_into(&mut self, slot: Option<&mut Option<Value>>) {
+        let Some(skill) = self.skill.as_deref_mut() else { return };
+        let outputs = match slot {
+            Some(slot) => std::slice::from_mut(slot),
+            None => &mut self.outputs[..],
+        };
+        skill.write_outputs(outputs);
+    }
+
     /// One run of the body, untimed: its outputs made ready (see [`Exec::run`]), the cycle
     /// and its time set, its mark held while it runs when `clock` is given, its outcome kept.
     #[inline(always)]
@@ -167,7 +267,7 @@ impl Exec {
         };
         match &mut self.skill {
             Some(skill) => run_body_into(skill.as_mut(), inputs, &mut self.outputs, &mut self.cx, &mut self.result),
-            None => self.result = Err("the body is not here (it runs on its own thread)".into()),
+            None => self.result = Err(NOT_HERE.into()),
         }
         if let (Some((clock, _)), Some(mark)) = (clock, mark) {
             // Left behind or not, a pool's thread finds out under the lock (`spawned`).
@@ -198,6 +298,9 @@ impl Exec {
         }
     }
 }
+
+/// A run's error when its body is on its worker thread.
+const NOT_HERE: &str = "the body is not here (it runs on its own thread)";
 
 /// A time read from one of two clocks: exact, or the kernel's coarse
 /// monotonic clock (the time of its last tick: about 3 ns to read instead

@@ -3,7 +3,9 @@
 //! other skill writes, run back to back untimed outside the sampled cycles.
 //! They must compute what the usual way computes, and keep its promises:
 //! a print or an error goes the usual way, a body late in such a stretch
-//! is faulted from the next cycle on, a stuck one is left behind.
+//! is faulted from the next cycle on, a stuck one is left behind. Each
+//! holds too for a body that writes its output straight into its slot
+//! (`plan::Fast::in_slot`: it says so by `Skill::writes_output`).
 //!
 //! No timing is asserted: a slow body sleeps far past its budget, a stuck
 //! one waits at a gate the test holds closed, and every wait is for a
@@ -17,46 +19,87 @@ use common::*;
 use situate_core::{FnSkill, Io, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType, Value};
 use situate_manager::{ClockKind, Control, Registry, Reply, Request, RobotSpec};
 
+/// How a test's bodies let the manager run them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Way {
+    /// No hook: the usual way only.
+    Usual,
+    /// Outputs typed by construction: the short way.
+    Fast,
+    /// Also filled and set on every `Ok` run (`Skill::writes_output`), as
+    /// the derive's are: the short way, written in the output's slot.
+    InSlot,
+}
+
 /// A body that says its output is of its port's type by construction, as
-/// the derive's bodies do: the manager may then run its step the short way.
-struct Typed(Box<dyn Skill>);
+/// the derive's bodies do: the manager may then run its step the short way;
+/// with `in_slot`, that it sets it on every `Ok` run (the bodies here do)
+/// and splits its run in two, as the derive's do: the body, its outputs
+/// kept in `outputs`, then those written.
+struct Typed {
+    body: Box<dyn Skill>,
+    in_slot: bool,
+    outputs: Vec<Option<Value>>,
+}
 
 impl Skill for Typed {
     fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
-        self.0.step(io)
+        self.run_unwritten(io)?;
+        self.write_outputs(io.outputs);
+        Ok(())
+    }
+
+    fn run_unwritten(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
+        self.outputs.fill(None);
+        self.body.step(&mut Io { inputs: io.inputs, outputs: &mut self.outputs, cx: io.cx })
+    }
+
+    fn write_outputs(&mut self, outputs: &mut [Option<Value>]) {
+        for (out, value) in outputs.iter_mut().zip(&mut self.outputs) {
+            *out = value.take();
+        }
     }
 
     fn set_param(&mut self, index: usize, value: &Value) {
-        self.0.set_param(index, value)
+        self.body.set_param(index, value)
     }
 
     fn output_typed(&self, _port: usize, _ty: &SignalType) -> bool {
         true
     }
+
+    fn fills_outputs(&self) -> bool {
+        self.in_slot
+    }
+
+    fn writes_output(&self, _port: usize) -> bool {
+        self.in_slot
+    }
 }
 
-/// [`fn_type`], typed ([`Typed`]) when `typed`.
-fn body_type<F>(d: SkillDecl, typed: bool, body: F) -> SkillType
+/// [`fn_type`], typed ([`Typed`]) unless `way` is [`Way::Usual`].
+fn body_type<F>(d: SkillDecl, way: Way, body: F) -> SkillType
 where
     F: Fn(&mut Io<'_>, &[Value]) -> Result<(), SkillError> + Clone + Send + Sync + 'static,
 {
-    if !typed {
+    if way == Way::Usual {
         return fn_type(d, body);
     }
     let decl = d.clone();
     SkillType::new(d, move || {
         let body = body.clone();
         let inner = FnSkill::new(&decl, move |io: &mut Io<'_>, params: &[Value]| body(io, params));
-        Ok(Box::new(Typed(Box::new(inner))) as _)
+        let outputs = vec![None; decl.outputs.len()];
+        Ok(Box::new(Typed { body: Box::new(inner), in_slot: way == Way::InSlot, outputs }) as _)
     })
 }
 
 /// `x + 1` to `y`; with parameter `mode` 1 it prints, 2 it fails, 3 it
 /// sleeps 400 ms, 4 it waits at `gate`.
-fn plus_one(name: &str, typed: bool, gate: &Gate) -> SkillType {
+fn plus_one(name: &str, way: Way, gate: &Gate) -> SkillType {
     let d = with_param(decl(name, SkillKind::Sync, &[("x", "f64")], &[("y", "f64")]), "mode", 0.0, 0.0, 4.0);
     let gate = gate.clone();
-    body_type(d, typed, move |io, params| {
+    body_type(d, way, move |io, params| {
         match params[0].as_f64() {
             Some(1.0) => io.cx.print(format!("x is {:?}", io.inputs[0])),
             Some(2.0) => return Err("no can do".into()),
@@ -71,8 +114,8 @@ fn plus_one(name: &str, typed: bool, gate: &Gate) -> SkillType {
 }
 
 /// The cycle number to `out` (a source: typed, it runs the short way too).
-fn counter(typed: bool) -> SkillType {
-    body_type(decl("count", SkillKind::Sync, &[], &[("out", "f64")]), typed, |io, _| {
+fn counter(way: Way) -> SkillType {
+    body_type(decl("count", SkillKind::Sync, &[], &[("out", "f64")]), way, |io, _| {
         io.outputs[0] = Some(Value::F64(io.cx.cycle() as f64));
         Ok(())
     })
@@ -88,10 +131,10 @@ fn chain(spec: RobotSpec, n: usize, budget_ms: f64) -> RobotSpec {
     spec
 }
 
-fn registry(typed: bool, gate: &Gate) -> Registry {
+fn registry(way: Way, gate: &Gate) -> Registry {
     let mut reg = Registry::new();
-    reg.add(counter(typed));
-    reg.add(plus_one("plus_one", typed, gate));
+    reg.add(counter(way));
+    reg.add(plus_one("plus_one", way, gate));
     reg
 }
 
@@ -101,17 +144,23 @@ fn value(m: &mut impl Control, path: &str) -> Option<Value> {
 
 #[test]
 fn a_chain_run_the_short_way_computes_what_the_usual_way_does_in_every_cycle() {
+    for way in [Way::Fast, Way::InSlot] {
+        a_chain_computes_what_the_usual_way_does(way);
+    }
+}
+
+fn a_chain_computes_what_the_usual_way_does(way: Way) {
     let gate = Gate::default();
-    let mut fast = build(&chain(simulated("fast"), 6, 500.0), &registry(true, &gate));
-    let mut usual = build(&chain(simulated("usual"), 6, 500.0), &registry(false, &gate));
+    let mut fast = build(&chain(simulated("fast"), 6, 500.0), &registry(way, &gate));
+    let mut usual = build(&chain(simulated("usual"), 6, 500.0), &registry(Way::Usual, &gate));
     // From the first cycle, sampled (run the usual way in both), on.
     for cycle in 1..=70u64 {
         fast.step(1).unwrap();
         usual.step(1).unwrap();
         for k in 0..=6 {
             let x = format!("x{k}");
-            assert_eq!(value(&mut fast, &x), value(&mut usual, &x), "{x} in cycle {cycle}");
-            assert_eq!(value(&mut fast, &x), Some(Value::F64((cycle + k) as f64)), "{x} in cycle {cycle}");
+            assert_eq!(value(&mut fast, &x), value(&mut usual, &x), "{way:?}: {x} in cycle {cycle}");
+            assert_eq!(value(&mut fast, &x), Some(Value::F64((cycle + k) as f64)), "{way:?}: {x} in cycle {cycle}");
         }
     }
     // Switched off and on again: the short way's slot is written afresh.
@@ -125,26 +174,34 @@ fn a_chain_run_the_short_way_computes_what_the_usual_way_does_in_every_cycle() {
 
 #[test]
 fn a_print_and_an_error_of_a_step_run_the_short_way_go_the_usual_way() {
+    for way in [Way::Fast, Way::InSlot] {
+        a_print_and_an_error_go_the_usual_way(way);
+    }
+}
+
+fn a_print_and_an_error_go_the_usual_way(way: Way) {
     let gate = Gate::default();
-    let mut m = build(&chain(simulated("prints"), 2, 500.0), &registry(true, &gate));
+    let mut m = build(&chain(simulated("prints"), 2, 500.0), &registry(way, &gate));
     let events = m.events();
     m.step(2).unwrap();
     m.set_param("s1", "mode", Value::F64(1.0)).unwrap();
     m.step(1).unwrap();
     let prints = m.skill("s1").unwrap().prints;
-    assert!(prints.iter().any(|(_, p)| p.contains("x is Some(F64(3.0))")), "the print is kept: {prints:?}");
-    assert_eq!(value(&mut m, "x2"), Some(Value::F64(5.0)), "a run that printed is committed");
+    assert!(prints.iter().any(|(_, p)| p.contains("x is Some(F64(3.0))")), "{way:?}: the print is kept: {prints:?}");
+    assert_eq!(value(&mut m, "x2"), Some(Value::F64(5.0)), "{way:?}: a run that printed is committed");
+    assert_eq!(m.query("x1").unwrap().cycle, 3, "{way:?}: in its cycle");
     m.set_param("s1", "mode", Value::F64(2.0)).unwrap();
     m.step(1).unwrap();
-    assert!(fault_of(&events, "s1").contains("no can do"));
-    assert_eq!(value(&mut m, "x1"), Some(Value::F64(4.0)), "a failed run commits nothing");
+    assert!(fault_of(&events, "s1").contains("no can do"), "{way:?}");
+    assert_eq!(value(&mut m, "x1"), Some(Value::F64(4.0)), "{way:?}: a failed run commits nothing");
+    assert_eq!(m.query("x1").unwrap().cycle, 3, "{way:?}: nor stamps its slot");
 }
 
 #[test]
 fn a_body_late_in_a_stretch_run_the_short_way_is_faulted_by_the_next_cycle() {
     let gate = Gate::default();
     // Budgets above the exact-timing bound (100 ms): these bodies run the short way.
-    let mut m = build(&chain(simulated("late"), 3, 150.0), &registry(true, &gate));
+    let mut m = build(&chain(simulated("late"), 3, 150.0), &registry(Way::InSlot, &gate));
     let events = m.events();
     m.step(2).unwrap();
     m.set_param("s2", "mode", Value::F64(3.0)).unwrap();
@@ -159,7 +216,7 @@ fn a_body_late_in_a_stretch_run_the_short_way_is_faulted_by_the_next_cycle() {
 fn a_body_stuck_in_a_stretch_run_the_short_way_is_left_behind_and_the_cycle_goes_on() {
     let gate = Gate::default();
     let spec = chain(RobotSpec::new("stuck").clock(ClockKind::Wall).period_s(0.002), 3, 150.0);
-    let mut m = build(&spec, &registry(true, &gate));
+    let mut m = build(&spec, &registry(Way::InSlot, &gate));
     m.set_param("s2", "mode", Value::F64(4.0)).unwrap();
     let events = m.events();
     let (mut handle, join) = m.spawn(true);
@@ -202,7 +259,7 @@ fn coarse_tick_ns() -> u64 {
 fn cycles_back_to_back_are_sampled_at_most_once_a_tick_of_the_coarse_clock() {
     let gate = Gate::default();
     // Budgets no stall of a loaded machine reaches: no stretch makes the next cycle sampled.
-    let mut m = build(&chain(simulated("sampling"), 2, 10_000.0), &registry(true, &gate));
+    let mut m = build(&chain(simulated("sampling"), 2, 10_000.0), &registry(Way::InSlot, &gate));
     let cycles = 3200;
     let started = std::time::Instant::now();
     m.step(cycles).unwrap();

@@ -20,12 +20,12 @@ use crate::runner::{coarse_ns, coarse_tick_ns, WorkerStats};
 impl Manager {
     pub(super) fn compile_schedule(&mut self) {
         let insts = &self.insts;
-        self.schedule = Plan::compile(
+        *self.schedule = Plan::compile(
             &self.graph,
             |i| insts[i].active,
             |i| insts[i].priority,
             |i| insts[i].worker.is_some(),
-            |i| insts[i].typed_outputs,
+            |i| insts[i].outputs_by,
         );
         self.schedule_dirty = false;
         // Input buffers may hold copies from a run under the last plan (a
@@ -169,6 +169,10 @@ impl Manager {
     /// the lockstep ones whose device exchange runs in the cycle go to
     /// `self.exchanging`.
     pub(super) fn prepare_exchanges(&mut self) {
+        if self.schedule.devices.is_empty() {
+            self.exchanging.clear();
+            return;
+        }
         let devices = std::mem::take(&mut self.schedule.devices);
         let mut exchanging = std::mem::take(&mut self.exchanging);
         exchanging.clear();
@@ -181,16 +185,25 @@ impl Manager {
         self.schedule.devices = devices;
     }
 
-    /// Steps 5 and 6: monitors, then the cycle's statistics.
-    pub(super) fn end_cycle(&mut self) {
+    /// Steps 5 and 6: monitors, then the cycle's statistics. `coarse`: the
+    /// coarse clock's reading where the last body ended, if nothing that
+    /// may take time (an exchange with a device) ran since.
+    pub(super) fn end_cycle(&mut self, coarse: Option<u64>) {
+        let watched = !self.monitors.list.is_empty() || !self.taps.is_empty();
         self.evaluate_monitors();
         self.tally_winners();
         if !self.taps.is_empty() {
             self.send_frame();
         }
         if !self.cycle_timed {
-            // Between samples: the coarse clock catches a long cycle.
-            let elapsed = coarse_ns().saturating_sub(self.cycle_start_coarse);
+            // Between samples: the coarse clock catches a long cycle. The
+            // last body's reading is as good where no monitor or tap ran
+            // since (the rest of the cycle is well within a tick).
+            let now = match coarse {
+                Some(ns) if !watched => ns,
+                _ => coarse_ns(),
+            };
+            let elapsed = now.saturating_sub(self.cycle_start_coarse);
             self.cycle_timing.seen(elapsed);
             return;
         }

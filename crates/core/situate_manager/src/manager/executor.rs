@@ -33,13 +33,38 @@ impl Bodies for InPlace<'_> {
     }
 
     #[inline(always)]
-    fn run_fast(&mut self, i: usize, fast: Fast, rank: (i32, u32)) -> Option<bool> {
+    fn run_fast(&mut self, fast: &Fast) -> Option<bool> {
         let m = &mut *self.0;
         let (cycle, time_s) = (m.cycle, m.time_s);
-        let exec = &mut m.execs[i];
-        let clean = exec.run_untimed(fast.input.map(|leaf| &m.slots[leaf].value), cycle, time_s);
+        let exec = &mut m.execs[fast.inst as usize];
+        let output = fast.output as usize;
+        if fast.in_slot {
+            // No body is left behind here: its output's slot is its buffer.
+            let clean = match fast.input() {
+                Some(input) if input != output => {
+                    let Ok([input, slot]) = m.slots.get_disjoint_mut([input, output]) else { return None };
+                    exec.run_in_slot(Some(&input.value), &mut slot.value, cycle, time_s)
+                }
+                None => exec.run_in_slot(None, &mut m.slots[output].value, cycle, time_s),
+                // It reads the leaf it writes: written after the run.
+                Some(_) => {
+                    let clean = exec.run_unwritten(Some(&m.slots[output].value), cycle, time_s);
+                    if clean {
+                        exec.write_into(Some(&mut m.slots[output].value));
+                    }
+                    clean
+                }
+            };
+            if clean {
+                let slot = &mut m.slots[output];
+                slot.stamp = cycle;
+                slot.rank = fast.rank;
+            }
+            return Some(clean);
+        }
+        let clean = exec.run_untimed(fast.input().map(|leaf| &m.slots[leaf].value), cycle, time_s);
         if clean {
-            commit_fast(exec, &mut m.slots[fast.output], cycle, rank);
+            commit_fast(exec, &mut m.slots[output], cycle, fast.rank);
         }
         Some(clean)
     }

@@ -26,6 +26,8 @@ pub(crate) struct Plan {
     /// Ranges of `steps`, one per level.
     pub levels: Vec<(u32, u32)>,
     pub steps: Vec<Step>,
+    /// The steps that may run the short way, in the order of `steps`.
+    pub fast: Vec<Fast>,
     pub ins: Vec<InPort>,
     pub outs: Vec<OutPort>,
 }
@@ -66,21 +68,61 @@ pub(crate) struct Step {
     /// The slot of its input when it has exactly one, plain: the body reads
     /// it there, in place (kept inline: one look-up fewer per run).
     pub one_input: Option<usize>,
-    /// The common step, run the short way (see [`Fast`]).
-    pub fast: Option<Fast>,
+    /// The common step, run the short way: its entry in [`Plan::fast`].
+    pub fast: Option<u32>,
 }
 
-/// The leaves of a step that may run the short way (`walk::run_steps`): a
-/// sync cskill with one required plain input, read in place, or none (a
-/// source, run every cycle), and one plain
-/// output of its type by construction, on a leaf no other skill writes (so
-/// never contested), with a deadline long enough to be checked on the
-/// coarse clock. Its body is not timed on its own outside the sampled
-/// cycles: the bodies run back to back this way are timed together.
+/// A step that may run the short way (`walk::run_steps`): a sync cskill
+/// with one required plain input, read in place, or none (a source, run
+/// every cycle), and one plain output of its type by construction, on a
+/// leaf no other skill writes (so never contested), with a deadline long
+/// enough to be checked on the coarse clock. Its body is not timed on its
+/// own outside the sampled cycles: the bodies run back to back this way are
+/// timed together.
+///
+/// Kept apart from [`Step`], in [`Plan::fast`], in the order of the steps:
+/// a stretch of such steps reads 32 bytes a step (two to a cache line)
+/// instead of the step's two lines.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Fast {
-    pub input: Option<usize>,
-    pub output: usize,
+    /// Its step in [`Plan::steps`].
+    pub step: u32,
+    pub inst: u32,
+    /// The slot of its one input; [`Fast::NO_INPUT`] for a source.
+    pub input: u32,
+    pub output: u32,
+    /// Its step's rank (see [`Step::rank`]).
+    pub rank: (i32, u32),
+    /// Its step's deadline in µs (at least [`PRECISE_DEADLINE_NS`]; a
+    /// longer one than `u32` holds is cut to `u32::MAX` µs, over an hour).
+    pub deadline_us: u32,
+    /// Its body's run splits in two, and its output is written straight
+    /// into its slot after the body returned clean (`Skill::writes_output`
+    /// and `Skill::fills_outputs`), with no spare buffer.
+    pub in_slot: bool,
+}
+
+impl Fast {
+    pub const NO_INPUT: u32 = u32::MAX;
+
+    /// The slot of its one input, if it has one.
+    #[inline(always)]
+    pub fn input(&self) -> Option<usize> {
+        (self.input != Fast::NO_INPUT).then_some(self.input as usize)
+    }
+}
+
+/// How a body writes its outputs, asked once when it is made (the hidden
+/// hooks of `Skill`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Outputs {
+    /// Every output is of its port's type by construction
+    /// (`Skill::output_typed`): not checked when committed.
+    pub typed: bool,
+    /// Every output is filled (`Skill::fills_outputs`) and set by every
+    /// `Ok` run, and a run splits in two (`Skill::writes_output`): its
+    /// outputs may be written straight into their slots.
+    pub in_slot: bool,
 }
 
 /// An input port: `leaf` is its slot when `plain` (one leaf, not a
@@ -153,14 +195,14 @@ impl Plan {
     /// Compiles the schedule of the skills `active` says are active:
     /// cskills in topological order (ties: declaration order), grouped into
     /// levels (a skill is one level after the latest of its writers).
-    /// `typed(i)`: every output of instance `i` is of its port's type by
-    /// construction (`Skill::output_typed`, read when the body was made).
+    /// `outputs(i)`: how instance `i`'s body writes its outputs (read when
+    /// the body was made).
     pub fn compile(
         graph: &Graph,
         active: impl Fn(usize) -> bool,
         priority: impl Fn(usize) -> i32,
         threaded: impl Fn(usize) -> bool,
-        typed: impl Fn(usize) -> bool,
+        outputs: impl Fn(usize) -> Outputs,
     ) -> Plan {
         let order = topo_order(&graph.instances, &graph.leaves, &active);
         let mut level = vec![0usize; graph.instances.len()];
@@ -221,7 +263,7 @@ impl Plan {
                     ins: (ins0, plan.ins.len() as u32),
                     outs: (outs0, plan.outs.len() as u32),
                     plain_outs,
-                    typed_outs: plain_outs && typed(i),
+                    typed_outs: plain_outs && outputs(i).typed,
                     plain_ins: {
                         // Lent inputs must come from distinct slots.
                         let ins = &plan.ins[ins0 as usize..];
@@ -234,16 +276,26 @@ impl Plan {
                     },
                     fast: None,
                 });
-                let step = plan.steps.last_mut().expect("a step was just pushed");
+                let k = plan.steps.len() - 1;
+                let step = &mut plan.steps[k];
                 let input = match plan.ins[ins0 as usize..] {
-                    [] => Some(None),
-                    [InPort { leaf, plain: true, optional: false }] => Some(Some(leaf)),
+                    [] => Some(Fast::NO_INPUT),
+                    [InPort { leaf, plain: true, optional: false }] => Some(leaf as u32),
                     _ => None,
                 };
                 if let (Some(input), [out]) = (input, &plan.outs[outs0 as usize..]) {
                     let sole_writer = graph.leaves[out.leaf].writers.len() == 1;
                     if step.kind == StepKind::Sync && step.typed_outs && !step.precise && sole_writer {
-                        step.fast = Some(Fast { input, output: out.leaf });
+                        step.fast = Some(plan.fast.len() as u32);
+                        plan.fast.push(Fast {
+                            step: k as u32,
+                            inst: i as u32,
+                            input,
+                            output: out.leaf as u32,
+                            rank: step.rank,
+                            deadline_us: (deadline_ns / 1_000).min(u32::MAX as u64) as u32,
+                            in_slot: outputs(i).in_slot,
+                        });
                     }
                 }
             }

@@ -636,11 +636,27 @@ impl Bodies for OnThreads<'_> {
     }
 
     #[inline(always)]
-    fn run_fast(&mut self, i: usize, fast: Fast, rank: (i32, u32)) -> Option<bool> {
-        let clean = self.held(i, fast.input, |exec, input, cycle, time_s| exec.run_untimed(input, cycle, time_s))?;
+    fn run_fast(&mut self, fast: &Fast) -> Option<bool> {
+        let i = fast.inst as usize;
+        if fast.in_slot {
+            // Its output is written into its slot only once this thread has
+            // its mark back: a body left behind writes nothing a later cycle
+            // reads, and the slot keeps its last value meanwhile.
+            let clean =
+                self.held(i, fast.input(), |exec, input, cycle, time_s| exec.run_unwritten(input, cycle, time_s))?;
+            if clean {
+                let m = self.manager()?;
+                let slot = &mut m.slots[fast.output as usize];
+                m.execs[i].write_into(Some(&mut slot.value));
+                slot.stamp = m.cycle;
+                slot.rank = fast.rank;
+            }
+            return Some(clean);
+        }
+        let clean = self.held(i, fast.input(), |exec, input, cycle, time_s| exec.run_untimed(input, cycle, time_s))?;
         if clean {
             let m = self.manager()?;
-            commit_fast(&mut m.execs[i], &mut m.slots[fast.output], m.cycle, rank);
+            commit_fast(&mut m.execs[i], &mut m.slots[fast.output as usize], m.cycle, fast.rank);
         }
         Some(clean)
     }

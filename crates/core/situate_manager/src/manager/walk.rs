@@ -35,13 +35,13 @@ pub(super) trait Bodies {
     /// thread was left behind while it ran.
     fn run(&mut self, i: usize, in_place: Option<usize>, start: Stamp) -> Option<Stamp>;
 
-    /// Runs instance `i`'s body once, untimed, on the value in slot
-    /// `fast.input` or on no input (a step run the short way, [`Fast`]),
-    /// and, if the run was clean (no error, no print), commits its output
-    /// the short way ([`commit_fast`]; `rank`: its step's). `Some(false)`:
-    /// the run was not clean, its outcome is left for
-    /// [`Manager::finish_step`]. `None` as for [`Bodies::run`].
-    fn run_fast(&mut self, i: usize, fast: Fast, rank: (i32, u32)) -> Option<bool>;
+    /// Runs the body of a step run the short way ([`Fast`]) once, untimed,
+    /// on the value in its input's slot or on no input, and, if the run was
+    /// clean (no error, no print), commits its output the short way
+    /// ([`commit_fast`], or written in its slot where it may:
+    /// [`Fast::in_slot`]). `Some(false)`: the run was not clean, its outcome
+    /// is left for [`Manager::finish_step`]. `None` as for [`Bodies::run`].
+    fn run_fast(&mut self, fast: &Fast) -> Option<bool>;
 
     /// Runs the bodies of `batch` (instances that share no claim, their
     /// inputs gathered) at the same time, on the pool. `None` as for
@@ -58,17 +58,21 @@ pub(super) trait Bodies {
 pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
     let m = b.manager()?;
     m.begin_cycle();
-    let plan = std::mem::take(&mut m.schedule);
+    // Out by its box (a pointer moved, nothing copied), an empty one in its
+    // place (made once).
+    let empty = m.empty_plan.take().unwrap_or_default();
+    let plan = std::mem::replace(&mut m.schedule, empty);
     let mut ready = std::mem::take(&mut m.ready);
+    // The coarse clock's reading at the end of the last body, carried to
+    // the next one (see `run_steps`), and to the cycle's end.
+    let mut t;
     if m.pool.is_none() {
         // Serial: one pass, levels make no difference (see `run_steps`).
         // An untimed cycle's coarse start is the first body's too.
-        let t = (!m.cycle_timed).then_some(Stamp::Coarse(m.cycle_start_coarse));
-        run_steps(b, &plan, 0..plan.steps.len(), t)?;
+        t = (!m.cycle_timed).then_some(Stamp::Coarse(m.cycle_start_coarse));
+        t = run_steps(b, &plan, 0..plan.steps.len(), t)?;
     } else {
-        // The coarse clock's reading at the end of the last body, carried
-        // to the next one (see `run_steps`).
-        let mut t = None;
+        t = None;
         for level in 0..plan.levels.len() {
             let Some(steps) = plan.level(level) else { break };
             if plan.parallel_level(level) {
@@ -82,10 +86,11 @@ pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
     }
     let m = b.manager()?;
     m.ready = ready;
-    m.schedule = plan;
+    m.empty_plan = Some(std::mem::replace(&mut m.schedule, plan));
     m.prepare_exchanges();
     let exchanging = std::mem::take(&mut m.exchanging);
     if !exchanging.is_empty() {
+        t = None;
         let mut t = Stamp::now(true);
         for &d in &exchanging {
             t = b.run(d, None, t)?;
@@ -96,7 +101,10 @@ pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
         m.finish_exchange(d);
     }
     m.exchanging = exchanging;
-    m.end_cycle();
+    m.end_cycle(match t {
+        Some(Stamp::Coarse(ns)) => Some(ns),
+        _ => None,
+    });
     Some(())
 }
 
@@ -136,12 +144,14 @@ fn run_steps<B: Bodies>(
     let mut k = steps.start;
     while k < steps.end {
         // The sampled cycles time every body exactly, the usual way.
-        if plan.steps[k].fast.is_some() && !b.manager()?.sampled {
-            let next;
-            (next, t) = run_stretch(b, plan, k..steps.end, t)?;
-            if next > k {
-                k = next;
-                continue;
+        if let Some(f) = plan.steps[k].fast {
+            if !b.manager()?.sampled {
+                let next;
+                (next, t) = run_stretch(b, plan, &plan.fast[f as usize..], k..steps.end, t)?;
+                if next > k {
+                    k = next;
+                    continue;
+                }
             }
         }
         t = run_step(b, plan, k, t)?;
@@ -150,34 +160,39 @@ fn run_steps<B: Bodies>(
     Some(t)
 }
 
-/// The steps from `steps.start` on that run the short way ([`Fast`]),
-/// while they hold their outputs' slots (a slot another writer holds, or
-/// none yet, is committed the usual way): each checked, run untimed, its
-/// output swapped into its slot; a step whose input is not fresh is passed
-/// over. Returns the first step it did not take (`steps.start` if none),
-/// and the coarse clock's reading where the stretch of those that ran ends
-/// (`t` if none ran). The outer `None`: left behind.
+/// The steps from `steps.start` on that run the short way (`fast`: their
+/// entries, from that step's), while they hold their outputs' slots (a
+/// slot another writer holds, or none yet, is committed the usual way):
+/// each checked, run untimed, its output committed the short way; a step
+/// whose input is not fresh is passed over. Returns the first step it did
+/// not take (`steps.start` if none), and the coarse clock's reading where
+/// the stretch of those that ran ends (`t` if none ran). The outer `None`:
+/// left behind.
 #[inline(always)]
 fn run_stretch<B: Bodies>(
     b: &mut B,
     plan: &Plan,
+    fast: &[Fast],
     steps: std::ops::Range<usize>,
     t: Option<Stamp>,
 ) -> Option<(usize, Option<Stamp>)> {
-    let first = steps.start;
     // When the stretch started on the coarse clock (where the body before
     // ended), and the shortest deadline of its steps.
     let mut start = None;
-    let mut shortest = u64::MAX;
-    let mut k = first;
-    for step in &plan.steps[steps] {
-        let Some(fast) = step.fast else { break };
-        let m = b.manager()?;
-        let out = &m.slots[fast.output];
-        if out.writer as usize != step.inst || out.stamp == 0 {
+    let mut shortest = u32::MAX;
+    let mut k = steps.start;
+    for f in fast {
+        // Its entries are in the order of the steps: the stretch ends at
+        // the first step that is not one of them.
+        if f.step as usize != k || k >= steps.end {
             break;
         }
-        let fresh = match fast.input {
+        let m = b.manager()?;
+        let out = &m.slots[f.output as usize];
+        if out.writer != f.inst || out.stamp == 0 {
+            break;
+        }
+        let fresh = match f.input() {
             Some(input) => {
                 let input = &m.slots[input];
                 input.value.is_some() && input.stamp == m.cycle
@@ -191,15 +206,15 @@ fn run_stretch<B: Bodies>(
                     _ => coarse_ns(),
                 });
             }
-            shortest = shortest.min(step.deadline_ns);
-            if !b.run_fast(step.inst, fast, step.rank)? {
+            shortest = shortest.min(f.deadline_us);
+            if !b.run_fast(f)? {
                 b.manager()?.finish_step(plan, k);
             }
         }
         k += 1;
     }
     let t = match start {
-        Some(start) => Some(b.manager()?.end_stretch(start, shortest)),
+        Some(start) => Some(b.manager()?.end_stretch(start, u64::from(shortest) * 1_000)),
         None => t,
     };
     Some((k, t))
