@@ -17,7 +17,7 @@ use std::time::Duration;
 
 use common::*;
 use situate_core::{FnSkill, Io, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType, Value};
-use situate_manager::{ClockKind, Control, Registry, Reply, Request, RobotSpec};
+use situate_manager::{ClockKind, Control, Registry, Reply, Request, RobotSpec, SignalReading};
 
 /// How a test's bodies let the manager run them.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -237,6 +237,35 @@ fn a_body_stuck_in_a_stretch_run_the_short_way_is_left_behind_and_the_cycle_goes
         let start = r[0].value.as_ref().and_then(Value::as_f64);
         r[1].cycle > now + 5 && r[1].value == start.map(|x| Value::F64(x + 3.0))
     });
+    handle.request(Request::Shutdown).unwrap();
+    assert!(join.join_timeout(BOUND).is_ok());
+}
+
+#[test]
+fn a_body_left_behind_in_a_stretch_leaves_its_output_its_last_value() {
+    let gate = Gate::default();
+    let spec = chain(RobotSpec::new("kept").clock(ClockKind::Wall).period_s(0.002), 3, 150.0);
+    let mut m = build(&spec, &registry(Way::InSlot, &gate));
+    let events = m.events();
+    let (mut handle, join) = m.spawn(true);
+    // Written by a whole chain in its cycle: `x2` is its cycle plus 2.
+    let whole = |r: &SignalReading| r.value == Some(Value::F64(r.cycle as f64 + 2.0));
+    until("x2 written a few times", || handle.query("x2").unwrap().cycle > 5);
+    handle.set_param("s2", "mode", Value::F64(4.0)).unwrap();
+    let cause = fault_of(&events, "s2");
+    assert!(cause.contains("left behind"), "{cause}");
+    let kept = handle.query("x2").unwrap();
+    assert!(whole(&kept), "the last value, whole: {kept:?}");
+    let at = handle.stats().unwrap().cycle;
+    until("cycles after the fault", || handle.query("x1").unwrap().cycle > at + 10);
+    let later = handle.query("x2").unwrap();
+    assert_eq!((&later.value, later.cycle), (&kept.value, kept.cycle), "kept while the body is stuck");
+    // The body returns (its output goes nowhere); then it runs again and writes anew.
+    gate.open();
+    until("the skill can be activated again", || handle.activate(&["s2"]).is_ok());
+    until("x2 written again", || handle.query("x2").unwrap().cycle > kept.cycle);
+    let again = handle.query("x2").unwrap();
+    assert!(whole(&again), "{again:?}");
     handle.request(Request::Shutdown).unwrap();
     assert!(join.join_timeout(BOUND).is_ok());
 }
