@@ -105,9 +105,12 @@
 //! - **Outputs** (`#[output] x: T`) are written after every run from the
 //!   field (`SignalValue::write_output`: a clone, so `T: Clone`; `Arc`-backed
 //!   values clone a pointer; a fixed-size array is copied straight into the
-//!   buffer its last value left, when nobody else holds that). An output of
-//!   a built-in type is of its port's type by construction, so the manager
-//!   does not check it (`Skill::output_typed`).
+//!   buffer its last value left, when nobody else holds that). They are
+//!   written only after the body returned `Ok`: a run that fails writes
+//!   none. Where a step runs the short way, a required output is written
+//!   straight into its slot's value (`Skill::writes_output`; decision 0018).
+//!   An output of a built-in type is of its port's type by construction, so
+//!   the manager does not check it (`Skill::output_typed`).
 //!   An `Option<T>` output is written only in the runs where the body set it
 //!   to `Some`, and is taken (left `None`) after each run, so a value is
 //!   produced once.

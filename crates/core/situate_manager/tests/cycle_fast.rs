@@ -16,83 +16,8 @@ mod common;
 use std::time::Duration;
 
 use common::*;
-use situate_core::{FnSkill, Io, SignalType, Skill, SkillDecl, SkillError, SkillKind, SkillType, Value};
+use situate_core::{SkillKind, SkillType, Value};
 use situate_manager::{ClockKind, Control, Registry, Reply, Request, RobotSpec, SignalReading};
-
-/// How a test's bodies let the manager run them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Way {
-    /// No hook: the usual way only.
-    Usual,
-    /// Outputs typed by construction: the short way.
-    Fast,
-    /// Also filled and set on every `Ok` run (`Skill::writes_output`), as
-    /// the derive's are: the short way, written in the output's slot.
-    InSlot,
-}
-
-/// A body that says its output is of its port's type by construction, as
-/// the derive's bodies do: the manager may then run its step the short way;
-/// with `in_slot`, that it sets it on every `Ok` run (the bodies here do)
-/// and splits its run in two, as the derive's do: the body, its outputs
-/// kept in `outputs`, then those written.
-struct Typed {
-    body: Box<dyn Skill>,
-    in_slot: bool,
-    outputs: Vec<Option<Value>>,
-}
-
-impl Skill for Typed {
-    fn step(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
-        self.run_unwritten(io)?;
-        self.write_outputs(io.outputs);
-        Ok(())
-    }
-
-    fn run_unwritten(&mut self, io: &mut Io<'_>) -> Result<(), SkillError> {
-        self.outputs.fill(None);
-        self.body.step(&mut Io { inputs: io.inputs, outputs: &mut self.outputs, cx: io.cx })
-    }
-
-    fn write_outputs(&mut self, outputs: &mut [Option<Value>]) {
-        for (out, value) in outputs.iter_mut().zip(&mut self.outputs) {
-            *out = value.take();
-        }
-    }
-
-    fn set_param(&mut self, index: usize, value: &Value) {
-        self.body.set_param(index, value)
-    }
-
-    fn output_typed(&self, _port: usize, _ty: &SignalType) -> bool {
-        true
-    }
-
-    fn fills_outputs(&self) -> bool {
-        self.in_slot
-    }
-
-    fn writes_output(&self, _port: usize) -> bool {
-        self.in_slot
-    }
-}
-
-/// [`fn_type`], typed ([`Typed`]) unless `way` is [`Way::Usual`].
-fn body_type<F>(d: SkillDecl, way: Way, body: F) -> SkillType
-where
-    F: Fn(&mut Io<'_>, &[Value]) -> Result<(), SkillError> + Clone + Send + Sync + 'static,
-{
-    if way == Way::Usual {
-        return fn_type(d, body);
-    }
-    let decl = d.clone();
-    SkillType::new(d, move || {
-        let body = body.clone();
-        let inner = FnSkill::new(&decl, move |io: &mut Io<'_>, params: &[Value]| body(io, params));
-        let outputs = vec![None; decl.outputs.len()];
-        Ok(Box::new(Typed { body: Box::new(inner), in_slot: way == Way::InSlot, outputs }) as _)
-    })
-}
 
 /// `x + 1` to `y`; with parameter `mode` 1 it prints, 2 it fails, 3 it
 /// sleeps 400 ms, 4 it waits at `gate`.
@@ -245,7 +170,7 @@ fn a_body_stuck_in_a_stretch_run_the_short_way_is_left_behind_and_the_cycle_goes
 fn a_body_left_behind_in_a_stretch_leaves_its_output_its_last_value() {
     let gate = Gate::default();
     let spec = chain(RobotSpec::new("kept").clock(ClockKind::Wall).period_s(0.002), 3, 150.0);
-    let mut m = build(&spec, &registry(Way::InSlot, &gate));
+    let m = build(&spec, &registry(Way::InSlot, &gate));
     let events = m.events();
     let (mut handle, join) = m.spawn(true);
     // Written by a whole chain in its cycle: `x2` is its cycle plus 2.
