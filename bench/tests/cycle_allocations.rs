@@ -65,8 +65,10 @@ fn allocations() -> u64 {
 }
 
 /// Allocations on this thread during `cycles` cycles, after a warm-up
-/// (the first cycles compile the plan and size the buffers; timing is
-/// sampled every few cycles, so the warm-up and the count span many samples).
+/// (the first cycles compile the plan and size the buffers; the first is
+/// sampled, and the next ones, run back to back, are not). The count spans
+/// sampled cycles, which run every body the usual way
+/// ([`cycle_spanning_samples`]).
 fn allocations_per_steady_cycles(m: &mut Manager, cycles: u64) -> u64 {
     for _ in 0..200 {
         m.cycle();
@@ -74,10 +76,22 @@ fn allocations_per_steady_cycles(m: &mut Manager, cycles: u64) -> u64 {
     let before = allocations();
     // The build allocated: the counter counts.
     assert!(before > 0);
-    for _ in 0..cycles {
-        m.cycle();
+    for k in 0..cycles {
+        cycle_spanning_samples(m, k);
     }
     allocations() - before
+}
+
+/// Cycle `k` of a count: before every 32nd, a pause of two ticks of the
+/// kernel's coarse clock (at most 4 ms each), so that the next cycle due to
+/// be sampled is (at most one a tick is: `TIMING_SAMPLE`), however fast
+/// the cycles run. A sampled cycle runs every body the usual way, the others
+/// run the common step the short way: a count must see both.
+fn cycle_spanning_samples(m: &mut Manager, k: u64) {
+    if k.is_multiple_of(32) {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    m.cycle();
 }
 
 #[test]
@@ -177,18 +191,18 @@ fn a_tapped_cycle_whose_reader_gives_frames_back_allocates_nothing() {
     let mut m = skills::build(&spec);
     skills::check_chain(&mut m, "c", 50);
     let tap = m.tap(16);
-    let cycle_and_read = |m: &mut Manager| {
-        m.cycle();
+    let cycle_and_read = |m: &mut Manager, k: u64| {
+        cycle_spanning_samples(m, k);
         let frame = tap.frames.try_recv().unwrap_or_else(|e| panic!("no frame: {e}"));
         assert!(frame.values.iter().any(|(_, v)| matches!(v, ValueRef::F32s(a) if a.len() == 24)));
         tap.give_back(frame);
     };
-    for _ in 0..200 {
-        cycle_and_read(&mut m);
+    for k in 1..=200 {
+        cycle_and_read(&mut m, k);
     }
     let before = allocations();
-    for _ in 0..1000 {
-        cycle_and_read(&mut m);
+    for k in 0..1000 {
+        cycle_and_read(&mut m, k);
     }
     assert_eq!(allocations() - before, 0, "1000 tapped cycles allocated");
     assert_eq!(tap.dropped(), 0);

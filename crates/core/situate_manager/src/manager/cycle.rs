@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use situate_core::value::recycle;
-use situate_core::{SignalType, Value};
+use situate_core::{ElemType, SignalType, Value};
 
 use super::plan::{Plan, Step, StepKind};
 use super::slots::{assemble_into, Slot};
@@ -37,6 +37,34 @@ impl Manager {
                 if let Some(old) = input.take() {
                     recycle(old);
                 }
+            }
+        }
+    }
+
+    /// A step that writes its fixed-size array into its slot keeps no spare
+    /// of its own, but a sampled cycle runs it the usual way, writing into
+    /// its output buffer, and its commit leaves there the value it replaced
+    /// in the slot: none, the first time. A spare is made then, at the end
+    /// of that cycle (the first one: not a steady cycle), so that neither
+    /// way allocates again. Called at the end of a sampled cycle (a walk
+    /// over the short way's steps at most once a tick of the coarse clock).
+    fn spares_for_in_slot(&mut self) {
+        for f in &self.schedule.fast {
+            if !f.in_slot {
+                continue;
+            }
+            let i = f.inst as usize;
+            let (Some(port), Some(out)) = (self.graph.instances[i].outputs.first(), self.execs[i].outputs.first_mut())
+            else {
+                continue;
+            };
+            if out.is_none() {
+                *out = match port.ty {
+                    SignalType::Array { elem: ElemType::F32, len: Some(n) } => Some(Value::F32s(vec![0.0; n].into())),
+                    SignalType::Array { elem: ElemType::F64, len: Some(n) } => Some(Value::F64s(vec![0.0; n].into())),
+                    SignalType::Array { elem: ElemType::I64, len: Some(n) } => Some(Value::I64s(vec![0; n].into())),
+                    _ => None,
+                };
             }
         }
     }
@@ -189,6 +217,9 @@ impl Manager {
     /// coarse clock's reading where the last body ended, if nothing that
     /// may take time (an exchange with a device) ran since.
     pub(super) fn end_cycle(&mut self, coarse: Option<u64>) {
+        if self.sampled {
+            self.spares_for_in_slot();
+        }
         let watched = !self.monitors.list.is_empty() || !self.taps.is_empty();
         self.evaluate_monitors();
         self.tally_winners();
