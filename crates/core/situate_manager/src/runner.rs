@@ -166,67 +166,71 @@ impl Exec {
         cycle: u64,
         time_s: f64,
     ) -> bool {
-        self.cx.set(cycle, time_s);
-        let inputs = match input {
-            Some(input) => std::slice::from_ref(input),
-            None => &[],
-        };
-        match self.skill.as_deref_mut() {
-            Some(skill) => {
-                let mut io = Io { inputs, outputs: std::slice::from_mut(output), cx: &mut self.cx };
-                match catch_unwind(AssertUnwindSafe(|| skill.step(&mut io))) {
-                    // `result` is `Ok` between runs (a failed run's is taken
-                    // when it is accounted): nothing to write.
-                    Ok(Ok(())) if !self.cx.has_prints() => {
-                        self.untimed_runs += 1;
-                        return true;
-                    }
-                    Ok(Ok(())) => {
-                        if let Some(out) = self.outputs.first_mut() {
-                            std::mem::swap(out, output);
-                        }
-                    }
-                    Ok(Err(e)) => self.result = Err(e.message),
-                    Err(panic) => self.result = Err(format!("panicked: {}", panic_message(&*panic))),
-                }
-            }
-            None => self.result = Err(NOT_HERE.into()),
-        }
-        self.elapsed_ns = 0;
-        self.timed = false;
-        false
+        self.run_short(input, Some(output), cycle, time_s)
     }
 
     /// [`Exec::run_in_slot`] where a body may be left behind (a spawned
     /// manager's): only the first half of the body's run, which writes no
     /// output (`Skill::writes_output`), so that its output is written into
-    /// its slot only once the thread knows it was not left behind. Clean (true): its outputs are for
-    /// [`Exec::write_into`] to write, counted as an untimed run. A run that
-    /// printed has them written into its buffers, to be committed the usual
-    /// way; a failed one wrote none.
+    /// its slot only once the thread knows it was not left behind. Clean
+    /// (true): its outputs are for [`Exec::write_into`] to write, counted
+    /// as an untimed run. A run that printed has them written into its
+    /// buffers, to be committed the usual way; a failed one wrote none.
     #[inline(always)]
     pub fn run_unwritten(&mut self, input: Option<&Option<Value>>, cycle: u64, time_s: f64) -> bool {
+        self.run_short(input, None, cycle, time_s)
+    }
+
+    /// [`Exec::run_in_slot`] with `output`, else [`Exec::run_unwritten`].
+    #[inline(always)]
+    fn run_short(
+        &mut self,
+        input: Option<&Option<Value>>,
+        mut output: Option<&mut Option<Value>>,
+        cycle: u64,
+        time_s: f64,
+    ) -> bool {
         self.cx.set(cycle, time_s);
         let inputs = match input {
             Some(input) => std::slice::from_ref(input),
             None => &[],
         };
-        match self.skill.as_deref_mut() {
+        let outcome = match self.skill.as_deref_mut() {
             Some(skill) => {
-                let mut io = Io { inputs, outputs: &mut [], cx: &mut self.cx };
-                match catch_unwind(AssertUnwindSafe(|| skill.run_unwritten(&mut io))) {
-                    // `result` is `Ok` between runs (a failed run's is taken
-                    // when it is accounted): nothing to write.
-                    Ok(Ok(())) if !self.cx.has_prints() => {
-                        self.untimed_runs += 1;
-                        return true;
+                let cx = &mut self.cx;
+                let run = match output.as_deref_mut() {
+                    Some(out) => catch_unwind(AssertUnwindSafe(|| {
+                        skill.step(&mut Io { inputs, outputs: std::slice::from_mut(out), cx })
+                    })),
+                    None => {
+                        catch_unwind(AssertUnwindSafe(|| skill.run_unwritten(&mut Io { inputs, outputs: &mut [], cx })))
                     }
-                    Ok(Ok(())) => self.write_into(None),
-                    Ok(Err(e)) => self.result = Err(e.message),
-                    Err(panic) => self.result = Err(format!("panicked: {}", panic_message(&*panic))),
+                };
+                match run {
+                    Ok(Ok(())) => Ok(()),
+                    Ok(Err(e)) => Err(e.message),
+                    Err(panic) => Err(format!("panicked: {}", panic_message(&*panic))),
                 }
             }
-            None => self.result = Err(NOT_HERE.into()),
+            None => Err(NOT_HERE.into()),
+        };
+        match outcome {
+            // `result` is `Ok` between runs (a failed run's is taken when it
+            // is accounted): nothing to write.
+            Ok(()) if !self.cx.has_prints() => {
+                self.untimed_runs += 1;
+                return true;
+            }
+            // Printed: its output into its buffer, committed the usual way.
+            Ok(()) => match output {
+                Some(out) => {
+                    if let Some(buf) = self.outputs.first_mut() {
+                        std::mem::swap(buf, out);
+                    }
+                }
+                None => self.write_into(None),
+            },
+            Err(e) => self.result = Err(e),
         }
         self.elapsed_ns = 0;
         self.timed = false;
