@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use situate_core::value::recycle;
-use situate_core::{ElemType, SignalType, Value};
+use situate_core::{SignalType, Value};
 
 use super::plan::{Plan, Step, StepKind};
 use super::slots::{assemble_into, Slot};
@@ -58,13 +58,10 @@ impl Manager {
             else {
                 continue;
             };
-            if out.is_none() {
-                *out = match port.ty {
-                    SignalType::Array { elem: ElemType::F32, len: Some(n) } => Some(Value::F32s(vec![0.0; n].into())),
-                    SignalType::Array { elem: ElemType::F64, len: Some(n) } => Some(Value::F64s(vec![0.0; n].into())),
-                    SignalType::Array { elem: ElemType::I64, len: Some(n) } => Some(Value::I64s(vec![0; n].into())),
-                    _ => None,
-                };
+            // Only a fixed-size array is written into its buffer; any other
+            // value is made anew whatever the buffer holds.
+            if out.is_none() && matches!(port.ty, SignalType::Array { len: Some(_), .. }) {
+                *out = Some(Value::zero(&port.ty));
             }
         }
     }
