@@ -124,9 +124,15 @@ fn a_print_and_an_error_go_the_usual_way(way: Way) {
 
 #[test]
 fn a_body_late_in_a_stretch_run_the_short_way_is_faulted_by_the_next_cycle() {
+    for way in [Way::Fast, Way::InSlot] {
+        a_late_body_is_faulted_by_the_next_cycle(way);
+    }
+}
+
+fn a_late_body_is_faulted_by_the_next_cycle(way: Way) {
     let gate = Gate::default();
     // Budgets above the exact-timing bound (100 ms): these bodies run the short way.
-    let mut m = build(&chain(simulated("late"), 3, 150.0), &registry(Way::InSlot, &gate));
+    let mut m = build(&chain(simulated("late"), 3, 150.0), &registry(way, &gate));
     let events = m.events();
     m.step(2).unwrap();
     m.set_param("s2", "mode", Value::F64(3.0)).unwrap();
@@ -134,19 +140,25 @@ fn a_body_late_in_a_stretch_run_the_short_way_is_faulted_by_the_next_cycle() {
     // times every body and finds s2 late (the next sampled cycle would be the 33rd).
     m.step(2).unwrap();
     let cause = fault_of(&events, "s2");
-    assert!(cause.contains("over its execution budget"), "{cause}");
+    assert!(cause.contains("over its execution budget"), "{way:?}: {cause}");
 }
 
 #[test]
 fn a_body_stuck_in_a_stretch_run_the_short_way_is_left_behind_and_the_cycle_goes_on() {
+    for way in [Way::Fast, Way::InSlot] {
+        a_stuck_body_is_left_behind_and_the_cycle_goes_on(way);
+    }
+}
+
+fn a_stuck_body_is_left_behind_and_the_cycle_goes_on(way: Way) {
     let gate = Gate::default();
     let spec = chain(RobotSpec::new("stuck").clock(ClockKind::Wall).period_s(0.002), 3, 150.0);
-    let mut m = build(&spec, &registry(Way::InSlot, &gate));
+    let mut m = build(&spec, &registry(way, &gate));
     m.set_param("s2", "mode", Value::F64(4.0)).unwrap();
     let events = m.events();
     let (mut handle, join) = m.spawn(true);
     let cause = fault_of(&events, "s2");
-    assert!(cause.contains("left behind"), "{cause}");
+    assert!(cause.contains("left behind"), "{way:?}: {cause}");
     // The cycle goes on without it: its source still counts, the skills before it still run.
     let at = handle.stats().unwrap().cycle;
     until("cycles after the fault", || handle.query("x1").unwrap().cycle > at + 10);
