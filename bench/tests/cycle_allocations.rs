@@ -173,11 +173,15 @@ fn robot() -> RobotSpec {
 #[test]
 fn a_steady_cycle_of_derived_array_skills_allocates_nothing() {
     let _serial = one_at_a_time();
-    let mut spec = robot();
-    spec.skills.extend(skills::chain("c", 50, Flavor::Derive, true));
-    let mut m = skills::build(&spec);
-    skills::check_chain(&mut m, "c", 50);
-    assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0);
+    // Of 50 steps; and of more than a sampled cycle times, whose windows
+    // run every step the usual way in turn.
+    for n in [50, 3 * situate::manager::manager::SAMPLED_STEPS] {
+        let mut spec = robot();
+        spec.skills.extend(skills::chain("c", n, Flavor::Derive, true));
+        let mut m = skills::build(&spec);
+        skills::check_chain(&mut m, "c", n);
+        assert_eq!(allocations_per_steady_cycles(&mut m, 1000), 0, "a chain of {n}");
+    }
 }
 
 #[test]

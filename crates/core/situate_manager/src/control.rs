@@ -314,8 +314,9 @@ pub struct PortInfo {
 /// Per-skill timing of its body: how often it ran, and how long its timed
 /// runs took. The cycle times a sample of the runs of in-cycle bodies (one
 /// cycle in [`TIMING_SAMPLE`](crate::manager::TIMING_SAMPLE), at most one a
-/// tick of the coarse clock, and every
-/// run of a body with a short deadline); threaded bodies are timed at each run.
+/// tick of the coarse clock, each such cycle a window of at most
+/// [`SAMPLED_STEPS`](crate::manager::SAMPLED_STEPS) of the plan's steps, and
+/// every run of a body with a short deadline); threaded bodies are timed at each run.
 /// The manager keeps its cycles' timing in one too (see [`ManagerStats`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SkillTiming {

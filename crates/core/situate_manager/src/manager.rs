@@ -118,14 +118,24 @@ impl TapReceiver {
     }
 }
 
-/// The cycle times every body exactly once in this many cycles (and the
+/// The cycle times bodies exactly once in this many cycles (and the
 /// bodies with a short deadline always), and at most once a tick of the
 /// coarse clock (a few ms): cycles run back to back on a simulated clock
 /// are sampled about as often in a second as a robot's 100–250 Hz cycles
 /// are, so the exact timing costs them no more than it costs a robot. In
 /// the others the cycle reads only the coarse clock, enough to see a run
-/// past its deadline.
+/// past its deadline. Such a sampled cycle times at most
+/// [`SAMPLED_STEPS`] of the plan's steps.
 pub const TIMING_SAMPLE: u64 = 32;
+
+/// The most steps a sampled cycle due by its number ([`TIMING_SAMPLE`])
+/// times exactly: a window of the plan's steps that moves on at each, so
+/// that in a plan of more steps each is timed once in ⌈steps / 64⌉ sampled
+/// cycles, and a sampled cycle costs about the same whatever the robot's
+/// size (an exact reading and the usual way cost some 50 ns a body: 50 µs
+/// in a cycle of 1,000 that otherwise takes 12 µs). A cycle sampled because
+/// bodies ran late (`walk::run_stretch`) times every step.
+pub const SAMPLED_STEPS: usize = 64;
 
 const PRINT_HISTORY: usize = 64;
 
@@ -293,8 +303,14 @@ pub struct Manager {
     /// On an external clock, a client's step under way: the clock's ticks run cycles up to this
     /// one even while the manager is stopped (the spawned manager; see `spawned::Deferred`).
     step_until: Option<u64>,
-    /// This cycle times every body exactly (see [`TIMING_SAMPLE`]).
+    /// This cycle times bodies exactly (see [`TIMING_SAMPLE`]): those of
+    /// the steps in `exact`.
     sampled: bool,
+    /// The plan's steps this cycle times exactly, `from..to`, when it is
+    /// sampled (see [`SAMPLED_STEPS`]; stale otherwise).
+    exact: (usize, usize),
+    /// Where the window of the next sampled cycle due by its number starts.
+    sample_from: usize,
     /// When the last sampled cycle due by [`TIMING_SAMPLE`] started, on the
     /// coarse clock (0: none yet).
     last_sample_coarse: u64,
@@ -446,6 +462,8 @@ impl Manager {
             external_clock: false,
             step_until: None,
             sampled: true,
+            exact: (0, usize::MAX),
+            sample_from: 0,
             last_sample_coarse: 0,
             sample_next: false,
             runs: 0,

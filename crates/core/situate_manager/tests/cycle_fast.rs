@@ -17,7 +17,8 @@ use std::time::Duration;
 
 use common::*;
 use situate_core::{SkillKind, SkillType, Value};
-use situate_manager::{ClockKind, Control, Registry, Reply, Request, RobotSpec, SignalReading};
+use situate_manager::manager::SAMPLED_STEPS;
+use situate_manager::{ClockKind, Control, Manager, Registry, Reply, Request, RobotSpec, SignalReading};
 
 /// `x + 1` to `y`; with parameter `mode` 1 it prints, 2 it fails, 3 it
 /// sleeps 400 ms, 4 it waits at `gate`.
@@ -130,17 +131,22 @@ fn a_body_late_in_a_stretch_run_the_short_way_is_faulted_by_the_next_cycle() {
 }
 
 fn a_late_body_is_faulted_by_the_next_cycle(way: Way) {
-    let gate = Gate::default();
-    // Budgets above the exact-timing bound (100 ms): these bodies run the short way.
-    let mut m = build(&chain(simulated("late"), 3, 150.0), &registry(way, &gate));
-    let events = m.events();
-    m.step(2).unwrap();
-    m.set_param("s2", "mode", Value::F64(3.0)).unwrap();
-    // Cycle 3 runs s2 untimed (400 ms): the stretch ran past the shortest budget, so cycle 4
-    // times every body and finds s2 late (the next sampled cycle would be the 33rd).
-    m.step(2).unwrap();
-    let cause = fault_of(&events, "s2");
-    assert!(cause.contains("over its execution budget"), "{way:?}: {cause}");
+    // In a plan of more steps than a sampled cycle times (`SAMPLED_STEPS`)
+    // too, the late body far out of the first cycle's window.
+    for (n, late) in [(3, 2), (3 * SAMPLED_STEPS + 10, 2 * SAMPLED_STEPS + 5)] {
+        let gate = Gate::default();
+        // Budgets above the exact-timing bound (100 ms): these bodies run the short way.
+        let mut m = build(&chain(simulated("late"), n, 150.0), &registry(way, &gate));
+        let events = m.events();
+        let late = format!("s{late}");
+        m.step(2).unwrap();
+        m.set_param(&late, "mode", Value::F64(3.0)).unwrap();
+        // Cycle 3 runs it untimed (400 ms): the stretch ran past the shortest budget, so cycle 4
+        // times every body and finds it late (the next sampled cycle would be the 33rd).
+        m.step(2).unwrap();
+        let cause = fault_of(&events, &late);
+        assert!(cause.contains("over its execution budget"), "{way:?}, {n} steps: {cause}");
+    }
 }
 
 #[test]
@@ -244,4 +250,27 @@ fn cycles_back_to_back_are_sampled_at_most_once_a_tick_of_the_coarse_clock() {
         timing.timed_runs,
         coarse_tick_ns()
     );
+}
+
+#[test]
+fn a_sampled_cycle_of_a_large_plan_times_a_window_of_its_steps_and_every_step_in_turn() {
+    let gate = Gate::default();
+    let n = 3 * SAMPLED_STEPS + 10;
+    // Budgets no stall of a loaded machine reaches: no stretch makes the next cycle sampled.
+    let mut m = build(&chain(simulated("window"), n, 10_000.0), &registry(Way::InSlot, &gate));
+    let names: Vec<String> = (1..=n).map(|k| format!("s{k}")).collect();
+    let timed = |m: &mut Manager| -> Vec<u64> { names.iter().map(|s| m.skill(s).unwrap().timing.timed_runs).collect() };
+    let mut last = timed(&mut m);
+    let mut sampled = 0;
+    // One cycle at a time, a few ms apart: each one due by its number is sampled.
+    until("every step timed exactly", || {
+        m.step(1).unwrap();
+        let now = timed(&mut m);
+        let newly = now.iter().zip(&last).filter(|(a, b)| a > b).count();
+        assert!(newly <= SAMPLED_STEPS, "{newly} steps timed exactly in cycle {}", m.cycle_count());
+        sampled += usize::from(newly > 0);
+        last = now;
+        last.iter().all(|&t| t > 0)
+    });
+    assert!(sampled >= n.div_ceil(SAMPLED_STEPS), "{sampled} sampled cycles timed all {n} steps");
 }

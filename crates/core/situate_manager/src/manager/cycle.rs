@@ -11,7 +11,7 @@ use situate_core::{SignalType, Value};
 
 use super::plan::{Plan, Step, StepKind};
 use super::slots::{assemble_into, Slot};
-use super::{fmt_duration, Frame, Inst, Manager, RefTarget, TIMING_SAMPLE};
+use super::{fmt_duration, Frame, Inst, Manager, RefTarget, SAMPLED_STEPS, TIMING_SAMPLE};
 use crate::config::ClockKind;
 use crate::control::{Event, Request};
 use crate::expr::Lookup;
@@ -42,7 +42,8 @@ impl Manager {
     }
 
     /// A step that writes its fixed-size array into its slot keeps no spare
-    /// of its own, but a sampled cycle runs it the usual way, writing into
+    /// of its own, but a sampled cycle whose window holds it (or a cycle
+    /// where its slot was never written) runs it the usual way, writing into
     /// its output buffer, and its commit leaves there the value it replaced
     /// in the slot: none, the first time. A spare is made then, at the end
     /// of that cycle (the first one: not a steady cycle), so that neither
@@ -84,10 +85,32 @@ impl Manager {
         due
     }
 
+    /// The plan's steps a sampled cycle times exactly: all of them when
+    /// `forced` (bodies ran late) or when they are few, else the next
+    /// [`SAMPLED_STEPS`] of them, from where the last window ended.
+    fn sample_window(&mut self, forced: bool) -> (usize, usize) {
+        let n = self.schedule.steps.len();
+        if forced || n <= SAMPLED_STEPS {
+            return (0, n);
+        }
+        let from = if self.sample_from < n { self.sample_from } else { 0 };
+        let to = (from + SAMPLED_STEPS).min(n);
+        self.sample_from = if to < n { to } else { 0 };
+        (from, to)
+    }
+
+    /// Whether this cycle times step `k` of its plan exactly (one flag
+    /// read in a cycle that is not sampled).
+    #[inline(always)]
+    pub(super) fn timed_exactly(&self, k: usize) -> bool {
+        self.sampled && (self.exact.0..self.exact.1).contains(&k)
+    }
+
     /// Steps 0–2 of a cycle: the boundary and the dskills' readings.
     pub(super) fn begin_cycle(&mut self) {
         self.cycle += 1;
-        self.sampled = std::mem::take(&mut self.sample_next) || (self.cycle % TIMING_SAMPLE == 1 && self.sample_due());
+        let forced = std::mem::take(&mut self.sample_next);
+        self.sampled = forced || (self.cycle % TIMING_SAMPLE == 1 && self.sample_due());
         self.cycle_timed = self.sampled || self.clock == ClockKind::Wall || self.speed.is_some() || self.due.is_some();
         if self.cycle_timed {
             self.cycle_start = Instant::now();
@@ -126,6 +149,10 @@ impl Manager {
         }
         if self.schedule_dirty {
             self.compile_schedule();
+        }
+        // Of the plan this cycle walks (read only when it is sampled).
+        if self.sampled {
+            self.exact = self.sample_window(forced);
         }
         let devices = std::mem::take(&mut self.schedule.devices);
         for &d in &devices {

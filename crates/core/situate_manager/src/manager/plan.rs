@@ -16,7 +16,7 @@ use crate::graph::{topo_order, Graph, PortBinding};
 
 /// A run of a body in the cycle with a deadline below this is always
 /// timed exactly; longer ones are checked on the coarse clock, except in
-/// the sampled cycles (see `Manager::sampled`).
+/// a sampled cycle's window (see `Manager::exact`).
 pub(crate) const PRECISE_DEADLINE_NS: u64 = 100_000_000;
 
 #[derive(Default)]
@@ -77,8 +77,8 @@ pub(crate) struct Step {
 /// every cycle), and one plain output of its type by construction, on a
 /// leaf no other skill writes (so never contested), with a deadline long
 /// enough to be checked on the coarse clock. Its body is not timed on its
-/// own outside the sampled cycles: the bodies run back to back this way are
-/// timed together.
+/// own outside a sampled cycle's window: the bodies run back to back this
+/// way are timed together.
 ///
 /// Kept apart from [`Step`], in [`Plan::fast`], in the order of the steps:
 /// a stretch of such steps reads 32 bytes a step (two to a cache line)

@@ -130,7 +130,7 @@ pub(super) fn cycle<B: Bodies>(b: &mut B) -> Option<()> {
 ///
 /// A step that may run the short way ([`Fast`]: one required input read in
 /// place or none, one output on a leaf no other skill writes, of its type by
-/// construction) does, outside the sampled cycles, while it holds its
+/// construction) does, outside a sampled cycle's window, while it holds its
 /// output's slot: checked, run untimed, its output swapped into its slot.
 /// Back to back such steps are a *stretch*, timed as one on the coarse
 /// clock ([`Manager::end_stretch`]): a body costs no clock reading.
@@ -143,11 +143,14 @@ fn run_steps<B: Bodies>(
 ) -> Option<Option<Stamp>> {
     let mut k = steps.start;
     while k < steps.end {
-        // The sampled cycles time every body exactly, the usual way.
+        // A sampled cycle times the steps of its window exactly, the usual
+        // way; a stretch before the window ends where it starts.
         if let Some(f) = plan.steps[k].fast {
-            if !b.manager()?.sampled {
+            let m = b.manager()?;
+            if !m.timed_exactly(k) {
+                let end = if m.sampled && k < m.exact.0 { steps.end.min(m.exact.0) } else { steps.end };
                 let next;
-                (next, t) = run_stretch(b, plan, &plan.fast[f as usize..], k..steps.end, t)?;
+                (next, t) = run_stretch(b, plan, &plan.fast[f as usize..], k..end, t)?;
                 if next > k {
                     k = next;
                     continue;
@@ -251,7 +254,7 @@ fn run_step<B: Bodies>(b: &mut B, plan: &Plan, k: usize, t: Option<Stamp>) -> Op
     if !ready_now {
         return Some(t);
     }
-    let start = m.start_of(t, step);
+    let start = m.start_of(t, step, k);
     let end = b.run(step.inst, if in_place { step.one_input } else { None }, start)?;
     let m = b.manager()?;
     if lent {
@@ -280,7 +283,7 @@ fn run_level<B: Bodies>(b: &mut B, plan: &Plan, level: usize, ready: &mut Vec<us
         let mut t = None;
         for &k in ready.iter() {
             let step = &plan.steps[k];
-            let start = b.manager()?.start_of(t, step);
+            let start = b.manager()?.start_of(t, step, k);
             t = Some(b.run(step.inst, None, start)?);
         }
     }
@@ -309,12 +312,13 @@ impl Manager {
         Stamp::Coarse(now)
     }
 
-    /// The clock reading to time `step`'s body from: `t`, the end of the
-    /// body before, when it is on the clock this one needs (exact in a
-    /// sampled cycle or for a short deadline, else coarse); else now.
+    /// The clock reading to time `step`'s body (step `k` of the plan) from:
+    /// `t`, the end of the body before, when it is on the clock this one
+    /// needs (exact in a sampled cycle's window or for a short deadline,
+    /// else coarse); else now.
     #[inline(always)]
-    fn start_of(&self, t: Option<Stamp>, step: &Step) -> Stamp {
-        let precise = self.sampled || step.precise;
+    fn start_of(&self, t: Option<Stamp>, step: &Step, k: usize) -> Stamp {
+        let precise = step.precise || self.timed_exactly(k);
         match t {
             Some(t) if precise == matches!(t, Stamp::Precise(_)) => t,
             _ => Stamp::now(precise),
