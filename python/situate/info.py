@@ -139,7 +139,11 @@ class PortInfo:
 
 @dataclass(frozen=True)
 class Timing:
-    """How often a skill's body ran and how long it took, in nanoseconds."""
+    """How often a skill's body ran and how long it took, in nanoseconds.
+
+    `runs` and `total_ns` count every run; `last_ns` and `max_ns` are of the
+    runs timed exactly, a sample of them (see docs/protocol.md, "skill info").
+    """
 
     runs: int
     last_ns: int
