@@ -47,9 +47,11 @@ fn counter(way: Way) -> SkillType {
     })
 }
 
-/// A chain `count → s1 → … → sN` of [`plus_one`] on `x0, x1, …`.
+/// A chain `count → s1 → … → sN` of [`plus_one`] on `x0, x1, …`, every
+/// skill on a budget of `budget_ms` (the source's too: a stretch is late
+/// past the shortest budget in it).
 fn chain(spec: RobotSpec, n: usize, budget_ms: f64) -> RobotSpec {
-    let mut spec = spec.skill(skill("count", "count").remap("out", "x0"));
+    let mut spec = spec.skill(skill("count", "count").remap("out", "x0").budget_ms(budget_ms));
     for k in 1..=n {
         let s = skill(&format!("s{k}"), "plus_one").remap("x", &format!("x{}", k - 1)).remap("y", &format!("x{k}"));
         spec = spec.skill(s.budget_ms(budget_ms));
